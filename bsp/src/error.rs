@@ -1,0 +1,70 @@
+//! The one error type of `chisel_bsp`.
+
+use core::fmt;
+
+use crate::exact::budget::{MAX_COORD, MAX_NORMAL, MAX_OFFSET};
+
+/// Everything that can go wrong when values enter the exact kernel.
+///
+/// Each variant says what was wrong with the input and how to fix it. None of
+/// them signals an internal bug: the kernel's own arithmetic cannot fail once
+/// its inputs are inside the bit budget.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Error {
+    /// An input coordinate is outside `±2^26` (`MAX_COORD`).
+    CoordinateOutOfRange {
+        /// Which coordinate: 0 = x, 1 = y, 2 = z.
+        axis: usize,
+        /// The offending value.
+        value: i64,
+    },
+    /// A plane normal component is outside `±2^55` (`MAX_NORMAL`).
+    NormalOutOfRange {
+        /// Which component: 0 = a, 1 = b, 2 = c.
+        component: usize,
+        /// The offending value.
+        value: i64,
+    },
+    /// A plane offset `d` is outside `±2^83` (`MAX_OFFSET`).
+    OffsetOutOfRange {
+        /// The offending value.
+        value: i128,
+    },
+    /// A plane has the zero normal `(0, 0, 0)`, which defines no plane.
+    ZeroNormal,
+    /// Three points meant to define a plane are collinear (or coincide).
+    CollinearPoints,
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const AXES: [char; 3] = ['x', 'y', 'z'];
+        const COEFFS: [char; 3] = ['a', 'b', 'c'];
+        match self {
+            Error::CoordinateOutOfRange { axis, value } => write!(
+                f,
+                "coordinate {}={value} is outside the exact range ±{MAX_COORD} (2^26); \
+                 scale the input down or use a coarser quantization unit",
+                AXES[(*axis).min(2)]
+            ),
+            Error::NormalOutOfRange { component, value } => write!(
+                f,
+                "plane normal component {}={value} is outside ±{MAX_NORMAL} (2^55); \
+                 divide the plane by the gcd of its coefficients or build it from in-range points",
+                COEFFS[(*component).min(2)]
+            ),
+            Error::OffsetOutOfRange { value } => write!(
+                f,
+                "plane offset d={value} is outside ±{MAX_OFFSET} (2^83); \
+                 the plane lies too far from the origin for the exact range"
+            ),
+            Error::ZeroNormal => write!(f, "a plane needs a non-zero normal (a, b, c)"),
+            Error::CollinearPoints => write!(
+                f,
+                "the three points are collinear or coincide, so they define no plane"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for Error {}

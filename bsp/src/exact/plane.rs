@@ -1,0 +1,224 @@
+//! Planes with integer coefficients and the plane constructors of Table 1.
+
+use core::hash::{Hash, Hasher};
+
+use super::budget::{MAX_NORMAL, MAX_OFFSET};
+use super::point::IntPoint;
+use super::sign::Sign;
+use crate::Error;
+
+/// The plane `a·x + b·y + c·z + d = 0` with integer coefficients,
+/// `|a|, |b|, |c| ≤ 2^55` and `|d| ≤ 2^83` (see [`super::budget`]).
+///
+/// The normal `n = (a, b, c)` points into the *positive* half-space
+/// `n·p + d > 0`. The plane also caches the `f64` values of its coefficients
+/// (each correctly rounded) for the classification filter; equality and
+/// hashing use the exact coefficients only.
+#[derive(Clone, Copy, Debug)]
+pub struct Plane {
+    pub(crate) a: i64,
+    pub(crate) b: i64,
+    pub(crate) c: i64,
+    pub(crate) d: i128,
+    pub(crate) approx: [f64; 4],
+}
+
+impl Plane {
+    /// The plane `a·x + b·y + c·z + d = 0`.
+    ///
+    /// # Errors
+    /// [`Error::NormalOutOfRange`] or [`Error::OffsetOutOfRange`] outside the
+    /// budget, [`Error::ZeroNormal`] for `a = b = c = 0`.
+    pub fn new(a: i64, b: i64, c: i64, d: i128) -> Result<Self, Error> {
+        for (component, &value) in [a, b, c].iter().enumerate() {
+            if !(-MAX_NORMAL..=MAX_NORMAL).contains(&value) {
+                return Err(Error::NormalOutOfRange { component, value });
+            }
+        }
+        if !(-MAX_OFFSET..=MAX_OFFSET).contains(&d) {
+            return Err(Error::OffsetOutOfRange { value: d });
+        }
+        if a == 0 && b == 0 && c == 0 {
+            return Err(Error::ZeroNormal);
+        }
+        Ok(Self::new_unchecked(a, b, c, d))
+    }
+
+    /// Builds a plane whose coefficients are already known to be in budget.
+    #[inline]
+    pub(crate) fn new_unchecked(a: i64, b: i64, c: i64, d: i128) -> Self {
+        debug_assert!(
+            [a, b, c]
+                .iter()
+                .all(|v| v.unsigned_abs() <= MAX_NORMAL as u64)
+        );
+        debug_assert!(d.unsigned_abs() <= MAX_OFFSET as u128);
+        Self {
+            a,
+            b,
+            c,
+            d,
+            approx: [a as f64, b as f64, c as f64, d as f64],
+        }
+    }
+
+    /// The normal `(a, b, c)`.
+    #[must_use]
+    #[inline]
+    pub fn normal(&self) -> [i64; 3] {
+        [self.a, self.b, self.c]
+    }
+
+    /// The offset `d`.
+    #[must_use]
+    #[inline]
+    pub fn offset(&self) -> i128 {
+        self.d
+    }
+
+    /// The cached `f64` values of `[a, b, c, d]`, each correctly rounded.
+    #[must_use]
+    #[inline]
+    pub fn approx(&self) -> [f64; 4] {
+        self.approx
+    }
+
+    /// The same plane with the opposite orientation (`−a, −b, −c, −d`).
+    #[must_use]
+    #[inline]
+    pub fn flipped(&self) -> Plane {
+        Plane::new_unchecked(-self.a, -self.b, -self.c, -self.d)
+    }
+
+    /// `n·p + d`, exactly: the signed distance of `p` to the plane scaled by
+    /// `|n|`. Its magnitude is below `3·2^81 + 2^83 < 2^85`, so it cannot
+    /// overflow.
+    #[must_use]
+    #[inline]
+    pub fn eval(&self, p: IntPoint) -> i128 {
+        let [x, y, z] = p.coords();
+        self.a as i128 * x as i128
+            + self.b as i128 * y as i128
+            + self.c as i128 * z as i128
+            + self.d
+    }
+
+    /// The Euclidean signed distance of `p` to the plane, in `f64` (for
+    /// display and tolerances outside the kernel; decisions use
+    /// [`Plane::side_of`]).
+    #[must_use]
+    pub fn signed_distance(&self, p: IntPoint) -> f64 {
+        let [a, b, c, _] = self.approx;
+        self.eval(p) as f64 / (a * a + b * b + c * c).sqrt()
+    }
+
+    /// Which side of the plane the input point `p` is on, exactly.
+    #[must_use]
+    #[inline]
+    pub fn side_of(&self, p: IntPoint) -> Sign {
+        Sign::of_i128(self.eval(p))
+    }
+}
+
+impl PartialEq for Plane {
+    fn eq(&self, other: &Self) -> bool {
+        (self.a, self.b, self.c, self.d) == (other.a, other.b, other.c, other.d)
+    }
+}
+
+impl Eq for Plane {}
+
+impl Hash for Plane {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        (self.a, self.b, self.c, self.d).hash(state);
+    }
+}
+
+/// The plane through `p`, `q`, `r` with normal `(q − p) × (r − p)`: the
+/// points run counter-clockwise seen from the positive side.
+///
+/// Coefficients are not reduced; for inputs in budget they always are in
+/// budget (`|n| ≤ 2^55`, `|d| < 2^83`).
+///
+/// # Errors
+/// [`Error::CollinearPoints`] when the points are collinear or coincide.
+pub fn plane_from_points(p: IntPoint, q: IntPoint, r: IntPoint) -> Result<Plane, Error> {
+    let [px, py, pz] = p.coords();
+    let [qx, qy, qz] = q.coords();
+    let [rx, ry, rz] = r.coords();
+    // Edges fit 28 bits, their products 55 bits: i64 is exact here.
+    let (ux, uy, uz) = (qx - px, qy - py, qz - pz);
+    let (vx, vy, vz) = (rx - px, ry - py, rz - pz);
+    let a = uy * vz - uz * vy;
+    let b = uz * vx - ux * vz;
+    let c = ux * vy - uy * vx;
+    if a == 0 && b == 0 && c == 0 {
+        return Err(Error::CollinearPoints);
+    }
+    let d = -(a as i128 * px as i128 + b as i128 * py as i128 + c as i128 * pz as i128);
+    Ok(Plane::new_unchecked(a, b, c, d))
+}
+
+/// [`plane_from_points`] divided by the gcd of its four coefficients: the
+/// canonical form of the plane, so equal oriented planes compare equal.
+///
+/// # Errors
+/// [`Error::CollinearPoints`] when the points are collinear or coincide.
+pub fn plane_from_points_normalized(p: IntPoint, q: IntPoint, r: IntPoint) -> Result<Plane, Error> {
+    plane_from_points(p, q, r).map(|plane| plane.normalized())
+}
+
+impl Plane {
+    /// The plane divided by the gcd of `|a|, |b|, |c|, |d|` (same
+    /// orientation, same point set, smallest coefficients).
+    #[must_use]
+    pub fn normalized(&self) -> Plane {
+        let g_abc = gcd_u64(
+            gcd_u64(self.a.unsigned_abs(), self.b.unsigned_abs()),
+            self.c.unsigned_abs(),
+        );
+        // g_abc > 0 because the normal is non-zero.
+        let g = gcd_u128(g_abc as u128, self.d.unsigned_abs()) as u64;
+        if g == 1 {
+            return *self;
+        }
+        let gi = g as i64;
+        Plane::new_unchecked(self.a / gi, self.b / gi, self.c / gi, self.d / g as i128)
+    }
+}
+
+/// Binary (Stein) gcd over an unsigned integer type; `gcd(0, 0) = 0`.
+macro_rules! binary_gcd {
+    ($name:ident, $t:ty) => {
+        fn $name(mut a: $t, mut b: $t) -> $t {
+            if a == 0 || b == 0 {
+                return a | b;
+            }
+            let shift = (a | b).trailing_zeros();
+            a >>= a.trailing_zeros();
+            loop {
+                b >>= b.trailing_zeros();
+                if a > b {
+                    core::mem::swap(&mut a, &mut b);
+                }
+                b -= a;
+                if b == 0 {
+                    return a << shift;
+                }
+            }
+        }
+    };
+}
+binary_gcd!(gcd_u64, u64);
+binary_gcd!(gcd_u128, u128);
+
+/// True when the normals of `p` and `q` are parallel (eq. 1:
+/// `n_p × n_q = 0`), whichever their orientations.
+#[must_use]
+#[inline]
+pub fn are_planes_parallel(p: &Plane, q: &Plane) -> bool {
+    // Products of 55-bit components fit 110 bits: i128 is exact.
+    let (pa, pb, pc) = (p.a as i128, p.b as i128, p.c as i128);
+    let (qa, qb, qc) = (q.a as i128, q.b as i128, q.c as i128);
+    pb * qc == pc * qb && pc * qa == pa * qc && pa * qb == pb * qa
+}

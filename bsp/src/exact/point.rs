@@ -1,0 +1,149 @@
+//! Points: integer input points and exact homogeneous vertices.
+
+use super::budget::MAX_COORD;
+use super::wide::{I192, I256, Int};
+use crate::Error;
+
+/// An input point with integer coordinates, each within `±2^26`
+/// ([`MAX_COORD`]). The only way in is [`IntPoint::new`], which checks the
+/// budget, so every `IntPoint` is safe for the exact predicates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct IntPoint {
+    coords: [i64; 3],
+}
+
+impl IntPoint {
+    /// The origin.
+    pub const ORIGIN: IntPoint = IntPoint { coords: [0; 3] };
+
+    /// A point from integer coordinates.
+    ///
+    /// # Errors
+    /// [`Error::CoordinateOutOfRange`] when a coordinate exceeds `±2^26`.
+    pub fn new(x: i64, y: i64, z: i64) -> Result<Self, Error> {
+        Self::from_array([x, y, z])
+    }
+
+    /// A point from an `[x, y, z]` array; see [`IntPoint::new`].
+    ///
+    /// # Errors
+    /// [`Error::CoordinateOutOfRange`] when a coordinate exceeds `±2^26`.
+    pub fn from_array(coords: [i64; 3]) -> Result<Self, Error> {
+        for (axis, &value) in coords.iter().enumerate() {
+            if !(-MAX_COORD..=MAX_COORD).contains(&value) {
+                return Err(Error::CoordinateOutOfRange { axis, value });
+            }
+        }
+        Ok(Self { coords })
+    }
+
+    /// The coordinates `[x, y, z]`.
+    #[must_use]
+    #[inline]
+    pub const fn coords(&self) -> [i64; 3] {
+        self.coords
+    }
+
+    /// The x coordinate.
+    #[must_use]
+    #[inline]
+    pub const fn x(&self) -> i64 {
+        self.coords[0]
+    }
+
+    /// The y coordinate.
+    #[must_use]
+    #[inline]
+    pub const fn y(&self) -> i64 {
+        self.coords[1]
+    }
+
+    /// The z coordinate.
+    #[must_use]
+    #[inline]
+    pub const fn z(&self) -> i64 {
+        self.coords[2]
+    }
+}
+
+/// An exact vertex in homogeneous coordinates: the point `(X/W, Y/W, Z/W)`.
+///
+/// Vertices are intersections of three planes ([`super::intersect_3_planes`])
+/// or lifted input points. `W > 0` always (the sign is normalised when the
+/// vertex is built), so classification needs no sign correction (paper
+/// eq. 6 with `sign(x₄) = 1`). `X, Y, Z` fit 197 bits and `W` 168 bits
+/// (see [`super::budget`]).
+///
+/// The vertex also caches the correctly rounded `f64` value of each
+/// coordinate, which the floating-point filter of
+/// [`super::classify_vertex`] uses.
+#[derive(Clone, Copy, Debug)]
+pub struct Point4 {
+    pub(crate) x: I256,
+    pub(crate) y: I256,
+    pub(crate) z: I256,
+    pub(crate) w: I192,
+    pub(crate) approx: [f64; 4],
+}
+
+impl Point4 {
+    /// Builds a vertex from exact parts with `w > 0`, caching the `f64`s.
+    #[inline]
+    pub(crate) fn from_parts(x: I256, y: I256, z: I256, w: I192) -> Self {
+        debug_assert!(!w.is_negative() && !w.is_zero());
+        let approx = [x.to_f64(), y.to_f64(), z.to_f64(), w.to_f64()];
+        Self { x, y, z, w, approx }
+    }
+
+    /// Homogeneous numerators `[X, Y, Z]`.
+    #[must_use]
+    #[inline]
+    pub fn xyz(&self) -> [I256; 3] {
+        [self.x, self.y, self.z]
+    }
+
+    /// Homogeneous denominator `W` (always positive).
+    #[must_use]
+    #[inline]
+    pub fn w(&self) -> I192 {
+        self.w
+    }
+
+    /// The cached `f64` values of `[X, Y, Z, W]`, each correctly rounded.
+    #[must_use]
+    #[inline]
+    pub fn approx(&self) -> [f64; 4] {
+        self.approx
+    }
+
+    /// The Cartesian position in `f64` (for export and display only; the
+    /// relative error of each coordinate is below `2^-51`).
+    #[must_use]
+    pub fn to_f64(&self) -> [f64; 3] {
+        let [x, y, z, w] = self.approx;
+        [x / w, y / w, z / w]
+    }
+
+    /// True when both vertices are the same point (exact cross-multiplied
+    /// comparison `X₁·W₂ = X₂·W₁`, etc., in 384-bit arithmetic).
+    #[must_use]
+    pub fn same_position(&self, other: &Point4) -> bool {
+        let cross = |a: &I256, wb: &I192| -> Int<6> { a.wrapping_mul(wb) };
+        cross(&self.x, &other.w) == cross(&other.x, &self.w)
+            && cross(&self.y, &other.w) == cross(&other.y, &self.w)
+            && cross(&self.z, &other.w) == cross(&other.z, &self.w)
+    }
+}
+
+impl From<IntPoint> for Point4 {
+    /// Lifts an input point to `(x, y, z, 1)`.
+    fn from(p: IntPoint) -> Self {
+        let [x, y, z] = p.coords();
+        Point4::from_parts(
+            I256::from_i64(x),
+            I256::from_i64(y),
+            I256::from_i64(z),
+            I192::from_i64(1),
+        )
+    }
+}
