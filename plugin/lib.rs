@@ -1,1 +1,20 @@
-//! placeholder
+//! # bevy_chisel — exact, local solid modelling for Bevy
+//!
+//! `bevy_chisel` brings two kernels into Bevy:
+//!
+//! - [`chisel_bsp`] (re-exported as [`bsp`]): exact integer plane geometry,
+//!   the foundation of destructible octree-BSP terrain whose carves never
+//!   fail, never crack and are bit-identical on every machine.
+//! - [`chisel_quadric`] (re-exported as [`quadric`]): quadric CSG trees for
+//!   level-design props drawn pixel-exact by splat ray tracing.
+//!
+//! The [`presentation`] module runs any app either in a window or, where
+//! there is no display, headless on an offscreen target with PNG
+//! screenshots — the examples and the render tests use it.
+
+#![warn(missing_docs)]
+
+pub mod presentation;
+
+pub use chisel_bsp as bsp;
+pub use chisel_quadric as quadric;

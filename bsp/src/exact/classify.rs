@@ -35,7 +35,7 @@
 use super::plane::Plane;
 use super::point::Point4;
 use super::sign::Sign;
-use super::wide::{I128, I256};
+use super::wide::{I64, I128, I256};
 
 /// Relative error bound of the filter: `2^-50 = 8u` (see the module docs).
 pub const FILTER_EPSILON: f64 = 1.0 / (1u64 << 50) as f64;
@@ -57,14 +57,12 @@ pub fn classify_vertex(v: &Point4, s: &Plane) -> Sign {
 #[must_use]
 #[inline]
 pub fn classify_vertex_exact(v: &Point4, s: &Plane) -> Sign {
-    let xa = v.x.wrapping_mul_i64(s.a);
-    let yb = v.y.wrapping_mul_i64(s.b);
-    let zc = v.z.wrapping_mul_i64(s.c);
-    let wd: I256 = v.w.wrapping_mul(&I128::from_i128(s.d));
-    xa.wrapping_add(&yb)
-        .wrapping_add(&zc)
-        .wrapping_add(&wd)
-        .sign()
+    let mut t = I256::ZERO;
+    t.add_product(&v.x, &I64::from_i64(s.a));
+    t.add_product(&v.y, &I64::from_i64(s.b));
+    t.add_product(&v.z, &I64::from_i64(s.c));
+    t.add_product(&v.w, &I128::from_i128(s.d));
+    t.sign()
 }
 
 /// The floating-point filter alone: `Some(side)` when the `f64` evaluation

@@ -27,4 +27,4 @@ pub use intersect::intersect_3_planes;
 pub use plane::{Plane, are_planes_parallel, plane_from_points, plane_from_points_normalized};
 pub use point::{IntPoint, Point4};
 pub use sign::Sign;
-pub use wide::{I128, I192, I256, Int};
+pub use wide::{I64, I128, I192, I256, Int};

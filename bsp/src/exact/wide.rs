@@ -23,6 +23,8 @@ use super::sign::Sign;
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Int<const N: usize>(pub(crate) [u64; N]);
 
+/// 64-bit signed integer as one limb (an operand of mixed-width products).
+pub type I64 = Int<1>;
 /// 128-bit signed integer over two limbs.
 pub type I128 = Int<2>;
 /// 192-bit signed integer over three limbs.
@@ -173,49 +175,75 @@ impl<const N: usize> Int<N> {
     }
 
     /// `self × m` modulo `2^(64·N)` for a small signed factor.
-    ///
-    /// One limb product per limb: the two's-complement limbs of `self` are
-    /// multiplied by `|m|` (exact modulo `2^(64·N)`), then negated if `m < 0`.
     #[must_use]
     #[inline]
     pub fn wrapping_mul_i64(&self, m: i64) -> Self {
-        let factor = m.unsigned_abs() as u128;
-        let mut out = [0u64; N];
-        let mut carry = 0u128;
-        for (i, o) in out.iter_mut().enumerate() {
-            let t = self.0[i] as u128 * factor + carry;
-            *o = t as u64;
-            carry = t >> 64;
-        }
-        let p = Self(out);
-        if m < 0 { p.wrapping_neg() } else { p }
+        let mut out = Self::ZERO;
+        out.add_product(self, &I64::from_i64(m));
+        out
     }
 
     /// The product `self × rhs` truncated to `M` limbs (exact modulo
     /// `2^(64·M)`).
-    ///
-    /// Sign–magnitude long multiplication that skips every limb product of
-    /// weight `≥ 2^(64·M)`: for an `N × K → M` product it computes only the
-    /// pairs `i + j < M`.
     #[must_use]
     #[inline]
     pub fn wrapping_mul<const K: usize, const M: usize>(&self, rhs: &Int<K>) -> Int<M> {
-        let (a, neg_a) = self.unsigned_abs();
-        let (b, neg_b) = rhs.unsigned_abs();
-        let mut out = [0u64; M];
-        for (i, &ai) in a.iter().enumerate().take(M) {
-            let mut carry = 0u128;
-            for (j, &bj) in b.iter().enumerate().take(M - i) {
-                let t = ai as u128 * bj as u128 + out[i + j] as u128 + carry;
-                out[i + j] = t as u64;
-                carry = t >> 64;
+        let mut out = Int::<M>::ZERO;
+        out.add_product(self, rhs);
+        out
+    }
+
+    /// `self += a × b` modulo `2^(64·N)`: the multiply–accumulate step of
+    /// every predicate.
+    ///
+    /// Works on the two's-complement limbs directly. Reading `a` and `b` as
+    /// unsigned (`a_u = a + 2^(64A)·[a < 0]`, likewise `b_u`),
+    ///
+    /// ```text
+    ///     a·b = a_u·b_u − [a < 0]·2^(64A)·b_u − [b < 0]·2^(64B)·a_u   (mod 2^(64N))
+    /// ```
+    ///
+    /// whenever `A + B ≥ N` (the `2^(64(A+B))` term vanishes), which holds
+    /// for every use in the kernel and is checked at compile time. The
+    /// unsigned product computes only limb pairs `i + j < N`, and the top
+    /// one only to 64 bits; the corrections are branch-free masked
+    /// subtractions.
+    #[inline]
+    pub fn add_product<const A: usize, const B: usize>(&mut self, a: &Int<A>, b: &Int<B>) {
+        const { assert!(A + B >= N, "add_product needs A + B >= N") };
+        let acc = &mut self.0;
+        // Unsigned long multiplication, truncated to N limbs.
+        for i in 0..A.min(N) {
+            let ai = a.0[i];
+            let mut carry = 0u64;
+            for j in 0..B {
+                let k = i + j;
+                if k + 1 >= N {
+                    if k + 1 == N {
+                        acc[k] = acc[k]
+                            .wrapping_add(ai.wrapping_mul(b.0[j]))
+                            .wrapping_add(carry);
+                    }
+                    carry = 0;
+                    break;
+                }
+                let t = ai as u128 * b.0[j] as u128 + acc[k] as u128 + carry as u128;
+                acc[k] = t as u64;
+                carry = (t >> 64) as u64;
             }
-            if i + K < M {
-                out[i + K] = carry as u64;
+            let mut k = i + B;
+            while k < N {
+                let (sum, c) = acc[k].overflowing_add(carry);
+                acc[k] = sum;
+                carry = c as u64;
+                k += 1;
             }
         }
-        let p = Int(out);
-        if neg_a != neg_b { p.wrapping_neg() } else { p }
+        // Sign corrections: subtract (b_u masked) << 64A and (a_u masked) << 64B.
+        let mask_a = ((a.0[A - 1] as i64) >> 63) as u64;
+        let mask_b = ((b.0[B - 1] as i64) >> 63) as u64;
+        sub_shifted(acc, &b.0, A, mask_a);
+        sub_shifted(acc, &a.0, B, mask_b);
     }
 
     /// Number of significant bits of `|self|` (0 for zero).
@@ -260,6 +288,30 @@ impl<const N: usize> Int<N> {
             (bits | lower_nonzero as u64) as f64 * pow2(shift)
         };
         if neg { -magnitude } else { magnitude }
+    }
+}
+
+/// `acc −= (limbs & mask) << (64·shift)` modulo `2^(64·N)`.
+#[inline]
+fn sub_shifted<const N: usize, const L: usize>(
+    acc: &mut [u64; N],
+    limbs: &[u64; L],
+    shift: usize,
+    mask: u64,
+) {
+    let mut borrow = false;
+    let mut k = shift;
+    while k < N {
+        let v = if k - shift < L {
+            limbs[k - shift] & mask
+        } else {
+            0
+        };
+        let (d1, b1) = acc[k].overflowing_sub(v);
+        let (d2, b2) = d1.overflowing_sub(borrow as u64);
+        acc[k] = d2;
+        borrow = b1 | b2;
+        k += 1;
     }
 }
 
