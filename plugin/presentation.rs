@@ -190,15 +190,20 @@ fn create_offscreen_target(mut state: ResMut<HeadlessState>, mut images: ResMut<
     state.target = Some(images.add(image));
 }
 
+/// Points every new camera at the offscreen image; the first one also draws
+/// the UI (which otherwise looks for a camera on the primary window).
 fn redirect_cameras_offscreen(
     add: On<Add, Camera>,
     state: Res<HeadlessState>,
+    ui_cameras: Query<(), With<IsDefaultUiCamera>>,
     mut commands: Commands,
 ) {
     if let Some(target) = &state.target {
-        commands
-            .entity(add.entity)
-            .insert(RenderTarget::Image(target.clone().into()));
+        let mut camera = commands.entity(add.entity);
+        camera.insert(RenderTarget::Image(target.clone().into()));
+        if ui_cameras.is_empty() {
+            camera.insert(IsDefaultUiCamera);
+        }
     }
 }
 

@@ -32,10 +32,10 @@
 //! Otherwise (about one random case in 10^14, but every vertex that lies on
 //! or extremely close to the plane) it falls back to the exact path.
 
+use super::digits::{mul, mul_limb, sign_of_digits, split_balanced};
 use super::plane::Plane;
 use super::point::Point4;
 use super::sign::Sign;
-use super::wide::{I64, I128, I256};
 
 /// Relative error bound of the filter: `2^-50 = 8u` (see the module docs).
 pub const FILTER_EPSILON: f64 = 1.0 / (1u64 << 50) as f64;
@@ -57,12 +57,27 @@ pub fn classify_vertex(v: &Point4, s: &Plane) -> Sign {
 #[must_use]
 #[inline]
 pub fn classify_vertex_exact(v: &Point4, s: &Plane) -> Sign {
-    let mut t = I256::ZERO;
-    t.add_product(&v.x, &I64::from_i64(s.a));
-    t.add_product(&v.y, &I64::from_i64(s.b));
-    t.add_product(&v.z, &I64::from_i64(s.c));
-    t.add_product(&v.w, &I128::from_i128(s.d));
-    t.sign()
+    // Digit sums by weight 2^(64k) (see `digits`): X, Y, Z contribute
+    // limb·coefficient products below 2^64·2^55 = 2^119 (three per digit);
+    // W·d contributes products of balanced digits, below 2^126 at k = 0, 1,
+    // and below 2^63·2^41 at k = 2, 3. Every digit sum stays below 2^127.
+    let n = [s.a, s.b, s.c];
+    let mut g = [0i128; 4];
+    for (coord, &a) in [&v.x, &v.y, &v.z].into_iter().zip(&n) {
+        let l = coord.limbs();
+        g[0] += mul_limb(l[0], a);
+        g[1] += mul_limb(l[1], a);
+        g[2] += mul_limb(l[2], a);
+        g[3] += mul(l[3] as i64, a);
+    }
+    let [w0, w1, w2] = v.w_digits;
+    let (d0, d1) = split_balanced(s.d);
+    let d1 = d1 as i64;
+    g[0] += mul(w0, d0);
+    g[1] += mul(w0, d1) + mul(w1, d0);
+    g[2] += mul(w1, d1) + mul(w2, d0);
+    g[3] += mul(w2, d1);
+    sign_of_digits(g)
 }
 
 /// The floating-point filter alone: `Some(side)` when the `f64` evaluation

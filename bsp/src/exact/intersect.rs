@@ -14,9 +14,10 @@
 //! three `i128 × i64 → 192-bit` products for `W` and nine
 //! `i128 × i128 → 256-bit` products for `X`. Bounds are in [`super::budget`].
 
+use super::digits::{assemble, mul, split_balanced};
 use super::plane::Plane;
 use super::point::Point4;
-use super::wide::{I64, I128, I192, I256};
+use super::wide::{I192, I256};
 
 /// `u × v` for 55-bit vectors; each component fits 111 bits.
 #[inline]
@@ -29,36 +30,25 @@ fn cross(u: [i64; 3], v: [i64; 3]) -> [i128; 3] {
     ]
 }
 
-/// `Σ d_j·c_j` exactly, for offsets `|d_j| ≤ 2^83` and minors `|c_j| < 2^112`.
+/// `Σ_j d_j·c_j` for offsets `d_j = d1·2^64 + d0` (balanced, `|d1| ≤ 2^19 + 1`)
+/// and minors `|c_j| < 2^112`, split the same way (`|c1| ≤ 2^47 + 1`).
 ///
-/// Each product is formed in sign–magnitude from 64-bit halves: with
-/// `|d| = d₁·2^64 + d₀` (`d₁ < 2^20`) and `|c| = c₁·2^64 + c₀` (`c₁ < 2^48`),
-/// `|d·c| = d₀c₀ + (d₁c₀ + d₀c₁)·2^64 + d₁c₁·2^128`, where the middle sum is
-/// below `2^113` and `d₁c₁` below `2^68`, so four `64 × 64` multiplies and
-/// `u128` additions suffice. The signed sum is kept as a 256-bit wrapping
-/// value in two `u128` halves.
-#[inline]
-fn sum_of_products(d: [i128; 3], c: [i128; 3]) -> I256 {
-    let (mut lo, mut hi) = (0u128, 0u128);
+/// Digit sums: `d0·c0` terms are up to `2^126` each, so each is split
+/// into its low limb (into `g0`, below `3·2^64`) and high part (into `g1`,
+/// below `2^63` each); `g1` adds `d0·c1 + d1·c0 < 2^111 + 2^83` per term;
+/// `g2 = Σ d1·c1 < 2^69`. All far inside `i128`.
+#[inline(always)]
+fn sum_offset_minor_products(d: &[(i64, i128); 3], c: [i128; 3]) -> I256 {
+    let mut g = [0i128; 4];
     for j in 0..3 {
-        let (dm, cm) = (d[j].unsigned_abs(), c[j].unsigned_abs());
-        let (d0, d1) = (dm as u64 as u128, dm >> 64);
-        let (c0, c1) = (cm as u64 as u128, cm >> 64);
-        let low = d0 * c0;
-        let mid = d1 * c0 + d0 * c1;
-        let (plo, carry) = low.overflowing_add(mid << 64);
-        let phi = (mid >> 64) + d1 * c1 + carry as u128;
-        // Negate (phi, plo) when the signs differ: (x ^ mask) − mask, with
-        // the carry out of the low half being `plo == 0`.
-        let negative = (d[j] < 0) != (c[j] < 0);
-        let mask = (negative as u128).wrapping_neg();
-        let nlo = (plo ^ mask).wrapping_sub(mask);
-        let nhi = (phi ^ mask).wrapping_add((negative & (plo == 0)) as u128);
-        let (slo, carry) = lo.overflowing_add(nlo);
-        lo = slo;
-        hi = hi.wrapping_add(nhi).wrapping_add(carry as u128);
+        let (d0, d1) = d[j];
+        let (c0, c1) = split_balanced(c[j]);
+        let low = mul(d0, c0);
+        g[0] += low as u64 as i128;
+        g[1] += (low >> 64) + d0 as i128 * c1 + d1 * c0 as i128;
+        g[2] += d1 * c1;
     }
-    I256::from_limbs([lo as u64, (lo >> 64) as u64, hi as u64, (hi >> 64) as u64])
+    assemble(g)
 }
 
 /// The unique common point of three planes as an exact homogeneous vertex
@@ -72,16 +62,21 @@ pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
     let rp = cross(nr, np);
     let pq = cross(np, nq);
 
-    let mut w = I192::ZERO;
+    // W = Σ_i n_p,i·qr_i with qr_i = q1·2^64 + q0 (balanced): the digit
+    // sums are below 3·2^55·2^63 < 2^120 and 3·2^55·2^48 < 2^104.
+    let mut gw = [0i128; 3];
     for i in 0..3 {
-        w.add_product(&I128::from_i128(qr[i]), &I64::from_i64(np[i]));
+        let (q0, q1) = split_balanced(qr[i]);
+        gw[0] += mul(np[i], q0);
+        gw[1] += np[i] as i128 * q1;
     }
+    let w: I192 = assemble(gw);
     if w.is_zero() {
         return None;
     }
 
-    let d = [p.d, q.d, r.d];
-    let coord = |i: usize| -> I256 { sum_of_products([d[0], d[1], d[2]], [qr[i], rp[i], pq[i]]) };
+    let d = [p.d, q.d, r.d].map(split_balanced);
+    let coord = |i: usize| -> I256 { sum_offset_minor_products(&d, [qr[i], rp[i], pq[i]]) };
     // X = −Σ d·(n×n); normalising to W > 0 flips the sign of all four.
     let flip = !w.is_negative();
     let (x, y, z) = (

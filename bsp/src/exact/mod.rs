@@ -14,6 +14,7 @@
 
 pub mod budget;
 mod classify;
+mod digits;
 mod intersect;
 mod plane;
 mod point;

@@ -1,6 +1,7 @@
 //! Points: integer input points and exact homogeneous vertices.
 
 use super::budget::MAX_COORD;
+use super::digits::split_balanced;
 use super::wide::{I192, I256, Int};
 use crate::Error;
 
@@ -83,6 +84,9 @@ pub struct Point4 {
     pub(crate) y: I256,
     pub(crate) z: I256,
     pub(crate) w: I192,
+    /// `W` in balanced base-`2^64` digits (`W = Σ w_k·2^(64k)`, the low
+    /// two in `[−2^63, 2^63)`), the form the exact classification uses.
+    pub(crate) w_digits: [i64; 3],
     pub(crate) approx: [f64; 4],
 }
 
@@ -92,7 +96,19 @@ impl Point4 {
     pub(crate) fn from_parts(x: I256, y: I256, z: I256, w: I192) -> Self {
         debug_assert!(!w.is_negative() && !w.is_zero());
         let approx = [x.to_f64(), y.to_f64(), z.to_f64(), w.to_f64()];
-        Self { x, y, z, w, approx }
+        // W in balanced digits: W = w0 + 2^64·(w1 + 2^64·w2), W < 2^168.
+        let [l0, l1, l2] = w.limbs();
+        let w0 = l0 as i64;
+        let rest = ((l2 as i128) << 64 | l1 as i128) + (l0 >> 63) as i128;
+        let (w1, w2) = split_balanced(rest);
+        Self {
+            x,
+            y,
+            z,
+            w,
+            w_digits: [w0, w1, w2 as i64],
+            approx,
+        }
     }
 
     /// Homogeneous numerators `[X, Y, Z]`.

@@ -271,21 +271,23 @@ impl<const N: usize> Int<N> {
         let magnitude = if top <= 1 {
             if top == 0 { 0.0 } else { m[0] as f64 }
         } else {
-            // Gather the 64 bits below the leading one (normalised so bit 63
-            // is set), OR a sticky bit for anything lower, convert (the
-            // hardware rounds correctly: 64 ≥ 53 + 2 bits plus sticky), and
-            // scale by an exact power of two.
+            // Gather the 64 bits from the leading one down (bit 63 set), keep
+            // the top 63 of them with a sticky bit for everything lower, and
+            // convert as a signed 64-bit integer: the hardware rounds
+            // correctly since the sticky bit lies 9 bits below the rounding
+            // position. Then scale by an exact power of two.
             let hi = m[top - 1];
             let lz = hi.leading_zeros();
             let mid = m[top - 2];
-            let (bits, rest_nonzero) = if lz == 0 {
-                (hi, mid != 0)
+            let bits = if lz == 0 {
+                hi
             } else {
-                (hi << lz | mid >> (64 - lz), mid << lz != 0)
+                hi << lz | mid >> (64 - lz)
             };
-            let lower_nonzero = rest_nonzero || m[..top - 2].iter().any(|&l| l != 0);
-            let shift = 64 * (top as i32 - 1) - lz as i32;
-            (bits | lower_nonzero as u64) as f64 * pow2(shift)
+            let below = (mid << lz) | m[..top - 2].iter().fold(0, |acc, &l| acc | l);
+            let sticky = ((bits & 1) | below != 0) as u64;
+            let shift = 64 * (top as i32 - 1) - lz as i32 + 1;
+            ((bits >> 1) | sticky) as i64 as f64 * pow2(shift)
         };
         if neg { -magnitude } else { magnitude }
     }
