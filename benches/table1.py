@@ -28,11 +28,15 @@ ROWS = [
 
 
 def median_ns(group, variant):
-    path = os.path.join(ROOT, group, variant, "new", "estimates.json")
+    """Median time per operation: criterion's median per batch over the batch size."""
+    base = os.path.join(ROOT, group, variant, "new")
     try:
-        with open(path) as f:
-            return json.load(f)["median"]["point_estimate"]
-    except (OSError, KeyError, ValueError):
+        with open(os.path.join(base, "estimates.json")) as f:
+            per_batch = json.load(f)["median"]["point_estimate"]
+        with open(os.path.join(base, "benchmark.json")) as f:
+            elements = (json.load(f).get("throughput") or {}).get("Elements", 1)
+        return per_batch / elements
+    except (OSError, KeyError, ValueError, TypeError):
         return None
 
 

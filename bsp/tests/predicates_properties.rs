@@ -63,6 +63,14 @@ proptest! {
         prop_assert_eq!(n.normalized(), n);
     }
 
+    /// The cached f64 coefficients of a plane are the nearest f64s (the
+    /// filter's error bound assumes correct rounding).
+    #[test]
+    fn plane_cache_is_correctly_rounded(s in full_plane()) {
+        let [a, b, c] = s.normal();
+        prop_assert_eq!(s.approx(), [a as f64, b as f64, c as f64, s.offset() as f64]);
+    }
+
     /// A lifted input point classifies like its exact evaluation.
     #[test]
     fn lifted_points_classify_like_evaluation(p in int_point(), s in full_plane()) {

@@ -18,17 +18,17 @@
 //! `2^256`, no underflow since non-zero integers are at least 1):
 //!
 //! ```text
-//!     t_i = fl(x_i·a_i),   s = fl(((t_1 + t_2) + t_3) + t_4),
-//!     m = fl(((|t_1| + |t_2|) + |t_3|) + |t_4|).
+//!     t_i = fl(x_i·a_i),   s = fl((t_1 + t_2) + (t_3 + t_4)),
+//!     m = fl((|t_1| + |t_2|) + (|t_3| + |t_4|)).
 //! ```
 //!
-//! Each term of `s` carries at most six relative roundings (two conversions,
-//! one product, three sums), so `|s − T| ≤ γ₆ Σ|X_i A_i|` with
-//! `γ₆ = 6u/(1 − 6u)`. Since `|t_i| ≥ (1 − u)³|X_i A_i|` and
-//! `m ≥ (1 − u)³ Σ|t_i|`, we get `|s − T| ≤ γ₆ (1 − u)⁻⁶ m < 6.001·u·m`.
+//! Each term of `s` carries at most five relative roundings (two
+//! conversions, one product, two sums), so `|s − T| ≤ γ₅ Σ|X_i A_i|` with
+//! `γ₅ = 5u/(1 − 5u)`. Since `|t_i| ≥ (1 − u)³|X_i A_i|` and
+//! `m ≥ (1 − u)² Σ|t_i|`, we get `|s − T| ≤ γ₅ (1 − u)⁻⁵ m < 5.001·u·m`.
 //! The filter accepts the sign of `s` only when `|s| > 2^-50·m = 8u·m`
 //! (a power-of-two product, so computed exactly); then
-//! `|T| ≥ |s| − |s − T| > (8 − 6.001)·u·m > 0` and `T` has the sign of `s`.
+//! `|T| ≥ |s| − |s − T| > (8 − 5.001)·u·m > 0` and `T` has the sign of `s`.
 //! Otherwise (about one random case in 10^14, but every vertex that lies on
 //! or extremely close to the plane) it falls back to the exact path.
 
@@ -89,8 +89,8 @@ pub fn classify_vertex_filtered(v: &Point4, s: &Plane) -> Option<Sign> {
     let [x, y, z, w] = v.approx;
     let [a, b, c, d] = s.approx;
     let (t0, t1, t2, t3) = (x * a, y * b, z * c, w * d);
-    let sum = ((t0 + t1) + t2) + t3;
-    let magnitude = ((t0.abs() + t1.abs()) + t2.abs()) + t3.abs();
+    let sum = (t0 + t1) + (t2 + t3);
+    let magnitude = (t0.abs() + t1.abs()) + (t2.abs() + t3.abs());
     let bound = magnitude * FILTER_EPSILON;
     if sum > bound {
         Some(Sign::Positive)

@@ -38,15 +38,16 @@ fn cross(u: [i64; 3], v: [i64; 3]) -> [i128; 3] {
 /// below `2^63` each); `g1` adds `d0·c1 + d1·c0 < 2^111 + 2^83` per term;
 /// `g2 = Σ d1·c1 < 2^69`. All far inside `i128`.
 #[inline(always)]
-fn sum_offset_minor_products(d: &[(i64, i128); 3], c: [i128; 3]) -> I256 {
+fn sum_offset_minor_products(d: &[(i64, i64); 3], c: [i128; 3]) -> I256 {
     let mut g = [0i128; 4];
     for j in 0..3 {
         let (d0, d1) = d[j];
         let (c0, c1) = split_balanced(c[j]);
+        let c1 = c1 as i64;
         let low = mul(d0, c0);
         g[0] += low as u64 as i128;
-        g[1] += (low >> 64) + d0 as i128 * c1 + d1 * c0 as i128;
-        g[2] += d1 * c1;
+        g[1] += (low >> 64) + mul(d0, c1) + mul(d1, c0);
+        g[2] += mul(d1, c1);
     }
     assemble(g)
 }
@@ -68,14 +69,17 @@ pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
     for i in 0..3 {
         let (q0, q1) = split_balanced(qr[i]);
         gw[0] += mul(np[i], q0);
-        gw[1] += np[i] as i128 * q1;
+        gw[1] += mul(np[i], q1 as i64);
     }
     let w: I192 = assemble(gw);
     if w.is_zero() {
         return None;
     }
 
-    let d = [p.d, q.d, r.d].map(split_balanced);
+    let d = [p.d, q.d, r.d].map(|d| {
+        let (d0, d1) = split_balanced(d);
+        (d0, d1 as i64)
+    });
     let coord = |i: usize| -> I256 { sum_offset_minor_products(&d, [qr[i], rp[i], pq[i]]) };
     // X = −Σ d·(n×n); normalising to W > 0 flips the sign of all four.
     let flip = !w.is_negative();

@@ -58,7 +58,7 @@ impl Plane {
             b,
             c,
             d,
-            approx: [a as f64, b as f64, c as f64, d as f64],
+            approx: [a as f64, b as f64, c as f64, offset_to_f64(d)],
         }
     }
 
@@ -120,6 +120,16 @@ impl Plane {
     }
 }
 
+/// The nearest `f64` to an offset `|d| ≤ 2^83`, without the slow generic
+/// `i128` conversion: `d = h·2^32 + l` with `|h| < 2^52` and `0 ≤ l < 2^32`
+/// are both exact in `f64`, so the one rounded addition is correctly rounded.
+#[inline]
+fn offset_to_f64(d: i128) -> f64 {
+    let h = (d >> 32) as i64;
+    let l = (d as u64 & 0xffff_ffff) as f64;
+    h as f64 * 4_294_967_296.0 + l
+}
+
 impl PartialEq for Plane {
     fn eq(&self, other: &Self) -> bool {
         (self.a, self.b, self.c, self.d) == (other.a, other.b, other.c, other.d)
@@ -177,8 +187,9 @@ impl Plane {
             gcd_u64(self.a.unsigned_abs(), self.b.unsigned_abs()),
             self.c.unsigned_abs(),
         );
-        // g_abc > 0 because the normal is non-zero.
-        let g = gcd_u128(g_abc as u128, self.d.unsigned_abs()) as u64;
+        // g_abc > 0 because the normal is non-zero; gcd(g, d) = gcd(g, d mod g)
+        // keeps the last gcd in 64 bits.
+        let g = gcd_u64(g_abc, (self.d.unsigned_abs() % g_abc as u128) as u64);
         if g == 1 {
             return *self;
         }
@@ -210,7 +221,6 @@ macro_rules! binary_gcd {
     };
 }
 binary_gcd!(gcd_u64, u64);
-binary_gcd!(gcd_u128, u128);
 
 /// True when the normals of `p` and `q` are parallel (eq. 1:
 /// `n_p × n_q = 0`), whichever their orientations.
