@@ -2,8 +2,37 @@
 //!
 //! CSG trees of quadrics (spheres, cylinders, cones, planes and the other
 //! quadric surfaces), sampled into splats with a coverage guarantee, and a
-//! CPU reference ray tracer of the same trees (paper 2: point/splat sampling
-//! of quadric CSG). No Bevy: the plugin's render pass builds on it.
+//! CPU reference ray tracer of the same trees (paper 2: *Sampling from
+//! Quadric-Based CSG Surfaces*). No Bevy: the plugin's render pass builds on it.
 //!
-//! This crate is being built; its modules land with the quadric sampling
-//! work.
+//! All geometry is `f64` with `glam`'s `DVec3` / `DMat4` at the API.
+//! Sign convention everywhere: `Q(x) < 0` is inside, `Q(x) > 0` outside.
+//!
+//! ## Map
+//!
+//! - [`Quadric`] — the symmetric 4×4 matrix as ten coefficients: value,
+//!   gradient, normal, affine transform (`quadric`), and constructors for
+//!   the named types (`shapes`).
+//! - [`eigen`] — robust symmetric 3×3 eigen solver (Jacobi);
+//!   [`PrincipalFrame`] — centre and principal axes (§3.2).
+//! - [`Ray`], [`LineHits`] — stable line–quadric intersection (§3.1).
+//! - [`QuadricDistance`] — conservative signed distance (§3.3, eq. 12).
+//! - [`Error`] — the one error type: what was wrong with the input and how
+//!   to fix it.
+
+#![warn(missing_docs)]
+
+pub mod distance;
+pub mod eigen;
+mod error;
+pub mod frame;
+mod quadric;
+pub mod ray;
+mod shapes;
+
+pub use distance::{QuadricDistance, conservative_distance};
+pub use eigen::SymmetricEigen;
+pub use error::{Error, Result};
+pub use frame::PrincipalFrame;
+pub use quadric::{Quadric, affine_inverse};
+pub use ray::{Hit, LineHits, Ray, Span};

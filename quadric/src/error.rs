@@ -1,0 +1,167 @@
+//! The one error type of `chisel_quadric`.
+
+use core::fmt;
+
+/// Everything that can go wrong when values enter `chisel_quadric`.
+///
+/// Each variant says what was wrong with the input and how to fix it. None of
+/// them signals an internal bug.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Error {
+    /// A number given to a constructor or transform is NaN or infinite.
+    NonFinite {
+        /// Which input held the value (e.g. `"sphere radius"`).
+        what: &'static str,
+    },
+    /// A size that must be strictly positive (radius, semi-axis, angle) is not.
+    NonPositive {
+        /// Which input held the value.
+        what: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A direction vector (axis, plane normal, ray direction) is zero.
+    ZeroDirection {
+        /// Which input held the vector.
+        what: &'static str,
+    },
+    /// A raw matrix given as a quadric is not symmetric.
+    NotSymmetric {
+        /// Row of the first mismatching entry.
+        row: usize,
+        /// Column of the first mismatching entry.
+        col: usize,
+    },
+    /// The quadratic and linear coefficients are all zero: the quadric is a
+    /// constant and has no surface.
+    ZeroQuadric,
+    /// A transform matrix cannot be inverted (it flattens space).
+    SingularTransform,
+    /// A transform matrix is projective; only affine matrices (last row
+    /// `0 0 0 1`) keep the inside/outside sign of a quadric.
+    NotAffine,
+    /// A half-open angle is outside `(0°, 90°)`.
+    AngleOutOfRange {
+        /// The offending angle in degrees.
+        degrees: f64,
+    },
+    /// A CSG operation was given no operands.
+    EmptyOperation {
+        /// The operation (`"union"`, `"intersection"`, `"difference"`).
+        op: &'static str,
+    },
+    /// A CSG node id does not belong to the DAG it was used with.
+    UnknownNode {
+        /// The offending id.
+        id: usize,
+    },
+    /// The DAG has no node to use as the root.
+    EmptyTree,
+    /// Normalizing to disjunctive normal form would exceed the product budget.
+    DnfTooLarge {
+        /// The product limit that was hit.
+        limit: usize,
+    },
+    /// A scene file could not be read, parsed or understood.
+    Scene {
+        /// 1-based line of the problem (0 when unknown).
+        line: usize,
+        /// 1-based column of the problem (0 when unknown).
+        column: usize,
+        /// What is wrong and how to fix it.
+        message: String,
+    },
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::NonFinite { what } => {
+                write!(f, "{what} is NaN or infinite; give a finite number")
+            }
+            Error::NonPositive { what, value } => {
+                write!(f, "{what} is {value}; it must be strictly positive")
+            }
+            Error::ZeroDirection { what } => {
+                write!(f, "{what} is the zero vector; give a non-zero direction")
+            }
+            Error::NotSymmetric { row, col } => write!(
+                f,
+                "quadric matrix entry ({row}, {col}) differs from ({col}, {row}); \
+                 a quadric matrix must be symmetric"
+            ),
+            Error::ZeroQuadric => write!(
+                f,
+                "the quadratic and linear quadric coefficients are all zero, so it is a \
+                 constant with no surface"
+            ),
+            Error::SingularTransform => write!(
+                f,
+                "the transform is singular (it flattens space); use a non-zero scale"
+            ),
+            Error::NotAffine => write!(
+                f,
+                "the transform is projective; its last row must be (0, 0, 0, 1)"
+            ),
+            Error::AngleOutOfRange { degrees } => {
+                write!(f, "the cone half-angle {degrees}° is outside (0°, 90°)")
+            }
+            Error::EmptyOperation { op } => {
+                write!(f, "a {op} needs at least one operand")
+            }
+            Error::UnknownNode { id } => write!(
+                f,
+                "node id {id} does not belong to this CSG DAG; use ids it returned"
+            ),
+            Error::EmptyTree => write!(f, "the CSG tree is empty: add a primitive first"),
+            Error::DnfTooLarge { limit } => write!(
+                f,
+                "the disjunctive normal form would have more than {limit} products; \
+                 simplify the tree (fewer unions below intersections or differences)"
+            ),
+            Error::Scene {
+                line,
+                column,
+                message,
+            } => {
+                if *line == 0 {
+                    write!(f, "scene: {message}")
+                } else {
+                    write!(f, "scene line {line}, column {column}: {message}")
+                }
+            }
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// Shorthand for results of this crate.
+pub type Result<T, E = Error> = core::result::Result<T, E>;
+
+/// Returns `Ok(x)` if `x` is finite, otherwise [`Error::NonFinite`].
+pub(crate) fn finite(x: f64, what: &'static str) -> Result<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::NonFinite { what })
+    }
+}
+
+/// Returns `Ok(x)` if `x` is finite and strictly positive.
+pub(crate) fn positive(x: f64, what: &'static str) -> Result<f64> {
+    finite(x, what)?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::NonPositive { what, value: x })
+    }
+}
+
+/// Returns the unit vector along `v`, or an error if it is zero or not finite.
+pub(crate) fn direction(v: glam::DVec3, what: &'static str) -> Result<glam::DVec3> {
+    if !v.is_finite() {
+        return Err(Error::NonFinite { what });
+    }
+    v.try_normalize().ok_or(Error::ZeroDirection { what })
+}
