@@ -32,7 +32,7 @@
 //! Otherwise (about one random case in 10^14, but every vertex that lies on
 //! or extremely close to the plane) it falls back to the exact path.
 
-use super::digits::{mul, mul_limb, sign_of_digits, split_balanced};
+use super::digits::{mul, sign_of_digits, split_balanced};
 use super::plane::Plane;
 use super::point::Point4;
 use super::sign::Sign;
@@ -58,17 +58,16 @@ pub fn classify_vertex(v: &Point4, s: &Plane) -> Sign {
 #[inline]
 pub fn classify_vertex_exact(v: &Point4, s: &Plane) -> Sign {
     // Digit sums by weight 2^(64k) (see `digits`): X, Y, Z contribute
-    // limb·coefficient products below 2^64·2^55 = 2^119 (three per digit);
-    // W·d contributes products of balanced digits, below 2^126 at k = 0, 1,
-    // and below 2^63·2^41 at k = 2, 3. Every digit sum stays below 2^127.
+    // balanced digit × coefficient products, at most 2^63·2^55 = 2^118
+    // (three per digit); W·d contributes products of balanced digits, at
+    // most 2^126 at k = 0, 1 and below 2^63·2^41 at k = 2, 3. Every digit
+    // sum, plus a carry below 2^64, stays below 2^127.
     let n = [s.a, s.b, s.c];
     let mut g = [0i128; 4];
-    for (coord, &a) in [&v.x, &v.y, &v.z].into_iter().zip(&n) {
-        let l = coord.limbs();
-        g[0] += mul_limb(l[0], a);
-        g[1] += mul_limb(l[1], a);
-        g[2] += mul_limb(l[2], a);
-        g[3] += mul(l[3] as i64, a);
+    for (digits, &a) in v.xyz_digits.iter().zip(&n) {
+        for k in 0..4 {
+            g[k] += mul(digits[k], a);
+        }
     }
     let [w0, w1, w2] = v.w_digits;
     let (d0, d1) = split_balanced(s.d);

@@ -20,16 +20,27 @@ pub(crate) fn split_balanced(v: i128) -> (i64, i128) {
     (lo, (v - lo as i128) >> 64)
 }
 
+/// Balanced digits of a two's-complement value: `v = Σ d_k·2^(64k)` with
+/// `d_k ∈ [−2^63, 2^63)` for `k < N − 1`. The top digit absorbs the last
+/// carry, so it must have room: the caller's value is below `2^(64N − 2)`.
+#[inline(always)]
+pub(crate) fn to_balanced<const N: usize>(v: &Int<N>) -> [i64; N] {
+    let limbs = v.limbs();
+    let mut digits = [0i64; N];
+    let mut carry = 0u64;
+    for k in 0..N - 1 {
+        // limb + carry may be 2^64, whose balanced digit is 0 with carry 1.
+        let (t, overflow) = limbs[k].overflowing_add(carry);
+        digits[k] = t as i64;
+        carry = overflow as u64 + (t >> 63);
+    }
+    digits[N - 1] = (limbs[N - 1] as i64).wrapping_add(carry as i64);
+    digits
+}
+
 /// `a·b` for 64-bit digits, exact.
 #[inline(always)]
 pub(crate) fn mul(a: i64, b: i64) -> i128 {
-    a as i128 * b as i128
-}
-
-/// `a·b` for an unsigned limb and a signed factor; exact when
-/// `|b| < 2^63` (the product stays below `2^127`).
-#[inline(always)]
-pub(crate) fn mul_limb(a: u64, b: i64) -> i128 {
     a as i128 * b as i128
 }
 

@@ -1,7 +1,7 @@
 //! Points: integer input points and exact homogeneous vertices.
 
 use super::budget::MAX_COORD;
-use super::digits::split_balanced;
+use super::digits::{assemble, to_balanced};
 use super::wide::{I192, I256, Int};
 use crate::Error;
 
@@ -80,12 +80,11 @@ impl IntPoint {
 /// [`super::classify_vertex`] uses.
 #[derive(Clone, Copy, Debug)]
 pub struct Point4 {
-    pub(crate) x: I256,
-    pub(crate) y: I256,
-    pub(crate) z: I256,
-    pub(crate) w: I192,
-    /// `W` in balanced base-`2^64` digits (`W = Σ w_k·2^(64k)`, the low
-    /// two in `[−2^63, 2^63)`), the form the exact classification uses.
+    /// `X, Y, Z` in balanced base-`2^64` digits (`X = Σ x_k·2^(64k)`, the
+    /// low three in `[−2^63, 2^63)`), the form the exact classification
+    /// multiplies with single `64 × 64` products.
+    pub(crate) xyz_digits: [[i64; 4]; 3],
+    /// `W` in balanced digits likewise.
     pub(crate) w_digits: [i64; 3],
     pub(crate) approx: [f64; 4],
 }
@@ -95,19 +94,10 @@ impl Point4 {
     #[inline]
     pub(crate) fn from_parts(x: I256, y: I256, z: I256, w: I192) -> Self {
         debug_assert!(!w.is_negative() && !w.is_zero());
-        let approx = [x.to_f64(), y.to_f64(), z.to_f64(), w.to_f64()];
-        // W in balanced digits: W = w0 + 2^64·(w1 + 2^64·w2), W < 2^168.
-        let [l0, l1, l2] = w.limbs();
-        let w0 = l0 as i64;
-        let rest = ((l2 as i128) << 64 | l1 as i128) + (l0 >> 63) as i128;
-        let (w1, w2) = split_balanced(rest);
         Self {
-            x,
-            y,
-            z,
-            w,
-            w_digits: [w0, w1, w2 as i64],
-            approx,
+            xyz_digits: [to_balanced(&x), to_balanced(&y), to_balanced(&z)],
+            w_digits: to_balanced(&w),
+            approx: [x.to_f64(), y.to_f64(), z.to_f64(), w.to_f64()],
         }
     }
 
@@ -115,14 +105,14 @@ impl Point4 {
     #[must_use]
     #[inline]
     pub fn xyz(&self) -> [I256; 3] {
-        [self.x, self.y, self.z]
+        self.xyz_digits.map(|d| assemble(d.map(i128::from)))
     }
 
     /// Homogeneous denominator `W` (always positive).
     #[must_use]
     #[inline]
     pub fn w(&self) -> I192 {
-        self.w
+        assemble(self.w_digits.map(i128::from))
     }
 
     /// The cached `f64` values of `[X, Y, Z, W]`, each correctly rounded.
@@ -145,9 +135,9 @@ impl Point4 {
     #[must_use]
     pub fn same_position(&self, other: &Point4) -> bool {
         let cross = |a: &I256, wb: &I192| -> Int<6> { a.wrapping_mul(wb) };
-        cross(&self.x, &other.w) == cross(&other.x, &self.w)
-            && cross(&self.y, &other.w) == cross(&other.y, &self.w)
-            && cross(&self.z, &other.w) == cross(&other.z, &self.w)
+        let (a, b) = (self.xyz(), other.xyz());
+        let (wa, wb) = (self.w(), other.w());
+        (0..3).all(|i| cross(&a[i], &wb) == cross(&b[i], &wa))
     }
 }
 
