@@ -16,12 +16,15 @@
 //! - [`eigen`] — robust symmetric 3×3 eigen solver (Jacobi);
 //!   [`PrincipalFrame`] — centre and principal axes (§3.2).
 //! - [`Ray`], [`LineHits`] — stable line–quadric intersection (§3.1).
+//! - [`csg`] — the CSG DAG ([`CsgDag`]), its normal form ([`Dnf`], §5) and
+//!   the CSG distances of eqs. 19 and 22 ([`CsgDistance`]).
 //! - [`QuadricDistance`] — conservative signed distance (§3.3, eq. 12).
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 
 #![warn(missing_docs)]
 
+pub mod csg;
 pub mod distance;
 pub mod eigen;
 mod error;
@@ -30,6 +33,7 @@ mod quadric;
 pub mod ray;
 mod shapes;
 
+pub use csg::{CsgDag, CsgDistance, Dnf, Literal, NodeId, Side};
 pub use distance::{QuadricDistance, conservative_distance};
 pub use eigen::SymmetricEigen;
 pub use error::{Error, Result};

@@ -1,0 +1,120 @@
+//! Conservative distances to a CSG surface in normal form (paper 2, §5, eqs. 19–22).
+//!
+//! Notation: `d(Q, p)` the conservative signed distance of eq. 12 (negative
+//! inside); a literal `Lᵢⱼ` on the outside side uses `d(−Q, p) = −d(Q, p)`.
+//!
+//! - Eq. 19: `d(S, p) = minᵢ maxⱼ d(Lᵢⱼ, p)`, negative inside the solid.
+//! - Eq. 22, relative to the literal `L_ab` (its quadric `Q_ab` being sampled):
+//!   `d_ab(S, p) = max( −min_{i≠a} maxⱼ d(Lᵢⱼ, p),  max_{j≠b} d(L_aj, p) )`.
+//!   Negative: `p` and every point of `Q_ab` within `|d_ab|` lie on the CSG
+//!   surface; positive: none of them does. Empty minima are `+∞`, empty
+//!   maxima `−∞`.
+
+use glam::DVec3;
+
+use crate::csg::dnf::{Dnf, Side};
+use crate::distance::QuadricDistance;
+
+/// The distance bounds of every quadric of a [`Dnf`], ready for eqs. 19 and 22.
+#[derive(Clone, Debug)]
+pub struct CsgDistance<'a> {
+    dnf: &'a Dnf,
+    quadrics: Vec<QuadricDistance>,
+}
+
+impl<'a> CsgDistance<'a> {
+    /// Prepares `dnf` (one eigen decomposition per quadric).
+    #[must_use]
+    pub fn new(dnf: &'a Dnf) -> Self {
+        let quadrics = dnf
+            .quadrics()
+            .iter()
+            .map(|q| QuadricDistance::new(&q.quadric))
+            .collect();
+        Self { dnf, quadrics }
+    }
+
+    /// The normal form these distances belong to.
+    #[must_use]
+    pub fn dnf(&self) -> &'a Dnf {
+        self.dnf
+    }
+
+    fn literal(&self, product: usize, literal: usize, p: DVec3) -> f64 {
+        let l = self.dnf.products()[product][literal];
+        let d = self.quadrics[l.quadric].distance(p);
+        match l.side {
+            Side::Inside => d,
+            Side::Outside => -d,
+        }
+    }
+
+    /// `maxⱼ d(L_ij, p)` over the literals of product `i` except `skip`.
+    fn product_distance(&self, i: usize, skip: Option<usize>, p: DVec3) -> f64 {
+        (0..self.dnf.products()[i].len())
+            .filter(|&j| Some(j) != skip)
+            .map(|j| self.literal(i, j, p))
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// The conservative signed distance to the CSG surface, eq. 19: negative
+    /// inside the solid, `+∞` for an empty solid.
+    #[must_use]
+    pub fn distance(&self, p: DVec3) -> f64 {
+        (0..self.dnf.products().len())
+            .map(|i| self.product_distance(i, None, p))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The quadric-relative distance `d_ab(S, p)` of eq. 22 for literal `b` of
+    /// product `a`, meant for points `p` on that literal's quadric.
+    ///
+    /// Precondition: `a < products().len()` and `b < products()[a].len()`
+    /// (panics otherwise; indices come from iterating the [`Dnf`]).
+    #[must_use]
+    pub fn relative_distance(&self, a: usize, b: usize, p: DVec3) -> f64 {
+        let others = (0..self.dnf.products().len())
+            .filter(|&i| i != a)
+            .map(|i| self.product_distance(i, None, p))
+            .fold(f64::INFINITY, f64::min);
+        let own = self.product_distance(a, Some(b), p);
+        (-others).max(own)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Quadric;
+    use crate::csg::CsgDag;
+
+    #[test]
+    fn three_spheres_relative_distance() {
+        // (A ∩ B) ∪ C with A, B overlapping and C far away.
+        let mut dag = CsgDag::new();
+        let s = |x: f64| Quadric::sphere(DVec3::new(x, 0.0, 0.0), 1.0).unwrap();
+        let a = dag.primitive(s(0.0), [1.0; 3]);
+        let b = dag.primitive(s(1.0), [1.0; 3]);
+        let c = dag.primitive(s(10.0), [1.0; 3]);
+        let ab = dag.intersection(&[a, b]).unwrap();
+        let root = dag.union(&[ab, c]).unwrap();
+        let dnf = Dnf::from_dag(&dag, root).unwrap();
+        let d = CsgDistance::new(&dnf);
+        // Products are sorted: [C], [A, B].
+        assert_eq!(dnf.products()[1].len(), 2);
+        // On A at (1, 0, 0): inside B (its centre), far from C → on the surface.
+        let on_a_in_b = d.relative_distance(1, 0, DVec3::new(1.0, 0.0, 0.0));
+        assert!(on_a_in_b < 0.0 && (on_a_in_b + 1.0).abs() < 1e-9);
+        // On A at (−1, 0, 0): outside B by 1 → cut away.
+        let on_a_out_b = d.relative_distance(1, 0, DVec3::new(-1.0, 0.0, 0.0));
+        assert!(on_a_out_b > 0.0 && (on_a_out_b - 1.0).abs() < 1e-9);
+        // On C at (11, 0, 0): the only literal of its product, and A ∩ B is
+        // at least max(d_A, d_B) = 10 away.
+        let on_c = d.relative_distance(0, 0, DVec3::new(11.0, 0.0, 0.0));
+        assert!((on_c + 10.0).abs() < 1e-9);
+        // Eq. 19 at (1, 0, 0): on A's surface and inside B, so 0 from A ∩ B.
+        assert!(d.distance(DVec3::new(1.0, 0.0, 0.0)).abs() < 1e-9);
+        // Eq. 19 at (5, 0, 0): 4 outside both A and C, 3 outside B → max 4.
+        assert!((d.distance(DVec3::new(5.0, 0.0, 0.0)) - 4.0).abs() < 1e-9);
+    }
+}
