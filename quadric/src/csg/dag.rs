@@ -58,13 +58,20 @@ pub enum Node {
     Complement(NodeId),
     /// The child moved by an affine matrix.
     Transform {
-        /// The affine matrix applied to the child's geometry.
-        matrix: DMat4,
-        /// Its inverse (maps world points into the child's frame).
-        inverse: DMat4,
+        /// The matrix and its inverse.
+        transform: Box<Affine>,
         /// The transformed node.
         child: NodeId,
     },
+}
+
+/// An affine matrix with its inverse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Affine {
+    /// The affine matrix applied to a child's geometry (last row `0 0 0 1`).
+    pub matrix: DMat4,
+    /// Its inverse (maps world points into the child's frame).
+    pub inverse: DMat4,
 }
 
 /// A CSG directed acyclic graph over quadric primitives.
@@ -163,8 +170,7 @@ impl CsgDag {
         let child = self.check(child)?;
         let inverse = affine_inverse(&matrix)?;
         Ok(self.push(Node::Transform {
-            matrix,
-            inverse,
+            transform: Box::new(Affine { matrix, inverse }),
             child,
         }))
     }
@@ -195,8 +201,8 @@ impl CsgDag {
                     && !subtracted.iter().any(|&k| self.contains_unchecked(k, p))
             }
             Node::Complement(c) => !self.contains_unchecked(*c, p),
-            Node::Transform { inverse, child, .. } => {
-                self.contains_unchecked(*child, inverse.transform_point3(p))
+            Node::Transform { transform, child } => {
+                self.contains_unchecked(*child, transform.inverse.transform_point3(p))
             }
         }
     }

@@ -191,7 +191,9 @@ impl Builder<'_> {
                 }
             }
             Node::Complement(child) => self.normalize(child, m, !positive)?,
-            Node::Transform { matrix, child, .. } => self.normalize(child, m * matrix, positive)?,
+            Node::Transform { transform, child } => {
+                self.normalize(child, m * transform.matrix, positive)?
+            }
         };
         Ok(products)
     }

@@ -10,6 +10,6 @@ mod dag;
 mod distance;
 mod dnf;
 
-pub use dag::{Color, CsgDag, Node, NodeId, Primitive};
+pub use dag::{Affine, Color, CsgDag, Node, NodeId, Primitive};
 pub use distance::CsgDistance;
 pub use dnf::{Dnf, DnfQuadric, Literal, MAX_PRODUCTS, Side};
