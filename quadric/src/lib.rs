@@ -19,6 +19,8 @@
 //! - [`csg`] — the CSG DAG ([`CsgDag`]), its normal form ([`Dnf`], §5) and
 //!   the CSG distances of eqs. 19 and 22 ([`CsgDistance`]).
 //! - [`QuadricDistance`] — conservative signed distance (§3.3, eq. 12).
+//! - [`Scene`] — the RON scene file format (primitives, operations,
+//!   transforms, colours) and its loader.
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 
@@ -31,6 +33,7 @@ mod error;
 pub mod frame;
 mod quadric;
 pub mod ray;
+pub mod scene;
 mod shapes;
 
 pub use csg::{CsgDag, CsgDistance, Dnf, Literal, NodeId, Side};
@@ -40,3 +43,4 @@ pub use error::{Error, Result};
 pub use frame::PrincipalFrame;
 pub use quadric::{Quadric, affine_inverse};
 pub use ray::{Hit, LineHits, Ray, Span};
+pub use scene::Scene;
