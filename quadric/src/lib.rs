@@ -41,6 +41,6 @@ pub use distance::{QuadricDistance, conservative_distance};
 pub use eigen::SymmetricEigen;
 pub use error::{Error, Result};
 pub use frame::PrincipalFrame;
-pub use quadric::{Quadric, affine_inverse};
+pub use quadric::{AFFINE_TOLERANCE, Quadric, affine_inverse, snap_affine};
 pub use ray::{Hit, LineHits, Ray, Span};
 pub use scene::Scene;

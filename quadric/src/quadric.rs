@@ -233,19 +233,19 @@ impl Quadric {
     }
 }
 
+/// Largest deviation of a matrix's last row from `0 0 0 1` still taken as
+/// affine (rounding in computed matrices, e.g. an inverse); the row is then
+/// snapped to exactly `0 0 0 1`.
+pub const AFFINE_TOLERANCE: f64 = 1e-12;
+
 /// Checks that `m` is a finite, invertible affine transform and returns its inverse.
 ///
-/// Errors: [`Error::NonFinite`], [`Error::NotAffine`], [`Error::SingularTransform`].
+/// A last row within [`AFFINE_TOLERANCE`] of `0 0 0 1` counts as affine and
+/// is snapped. Errors: [`Error::NonFinite`], [`Error::NotAffine`],
+/// [`Error::SingularTransform`].
 pub fn affine_inverse(m: &DMat4) -> Result<DMat4> {
-    if !m.is_finite() {
-        return Err(Error::NonFinite {
-            what: "transform matrix",
-        });
-    }
-    if m.row(3) != DVec4::W {
-        return Err(Error::NotAffine);
-    }
-    let linear = DMat3::from_mat4(*m);
+    let m = snap_affine(m)?;
+    let linear = DMat3::from_mat4(m);
     let scale = linear
         .to_cols_array()
         .iter()
@@ -259,6 +259,26 @@ pub fn affine_inverse(m: &DMat4) -> Result<DMat4> {
         return Err(Error::SingularTransform);
     }
     Ok(inv)
+}
+
+/// `m` with its last row set to exactly `0 0 0 1`, if it is affine.
+///
+/// Errors: [`Error::NonFinite`], [`Error::NotAffine`].
+pub fn snap_affine(m: &DMat4) -> Result<DMat4> {
+    if !m.is_finite() {
+        return Err(Error::NonFinite {
+            what: "transform matrix",
+        });
+    }
+    if (m.row(3) - DVec4::W).abs().max_element() > AFFINE_TOLERANCE {
+        return Err(Error::NotAffine);
+    }
+    let mut s = *m;
+    s.x_axis.w = 0.0;
+    s.y_axis.w = 0.0;
+    s.z_axis.w = 0.0;
+    s.w_axis.w = 1.0;
+    Ok(s)
 }
 
 #[cfg(test)]

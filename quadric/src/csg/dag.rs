@@ -12,7 +12,7 @@
 use glam::{DMat4, DVec3};
 
 use crate::error::{Error, Result};
-use crate::quadric::{Quadric, affine_inverse};
+use crate::quadric::{Quadric, affine_inverse, snap_affine};
 
 /// Linear RGB colour of a primitive, each channel in `[0, 1]`.
 pub type Color = [f32; 3];
@@ -168,6 +168,7 @@ impl CsgDag {
     /// [`Error::SingularTransform`], [`Error::UnknownNode`].
     pub fn transform(&mut self, matrix: DMat4, child: NodeId) -> Result<NodeId> {
         let child = self.check(child)?;
+        let matrix = snap_affine(&matrix)?;
         let inverse = affine_inverse(&matrix)?;
         Ok(self.push(Node::Transform {
             transform: Box::new(Affine { matrix, inverse }),

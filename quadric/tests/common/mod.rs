@@ -1,0 +1,97 @@
+//! Seeded random inputs shared by the property tests.
+
+#![allow(dead_code)]
+
+use chisel_quadric::Quadric;
+use glam::{DMat4, DQuat, DVec2, DVec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A deterministic generator for test `seed`.
+pub fn rng(seed: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed)
+}
+
+/// A uniform point in the cube `[-h, h]³`.
+pub fn point(rng: &mut ChaCha8Rng, h: f64) -> DVec3 {
+    DVec3::new(
+        rng.random_range(-h..h),
+        rng.random_range(-h..h),
+        rng.random_range(-h..h),
+    )
+}
+
+/// A uniform unit vector.
+pub fn unit(rng: &mut ChaCha8Rng) -> DVec3 {
+    loop {
+        let v = point(rng, 1.0);
+        let l = v.length();
+        if l > 0.1 && l <= 1.0 {
+            return v / l;
+        }
+    }
+}
+
+/// A uniform rotation.
+pub fn rotation(rng: &mut ChaCha8Rng) -> DQuat {
+    let axis = unit(rng);
+    DQuat::from_axis_angle(axis, rng.random_range(0.0..std::f64::consts::TAU))
+}
+
+/// A random affine map: rotation, per-axis scale in `[0.3, 3]`, a shear and
+/// a translation in `[-2, 2]³`.
+pub fn affine(rng: &mut ChaCha8Rng) -> DMat4 {
+    let scale = DVec3::new(
+        rng.random_range(0.3..3.0),
+        rng.random_range(0.3..3.0),
+        rng.random_range(0.3..3.0),
+    );
+    let mut shear = DMat4::IDENTITY;
+    shear.y_axis.x = rng.random_range(-0.5..0.5);
+    let trs = DMat4::from_scale_rotation_translation(scale, rotation(rng), point(rng, 2.0));
+    trs * shear
+}
+
+/// A rigid motion (rotation and translation).
+pub fn rigid(rng: &mut ChaCha8Rng) -> DMat4 {
+    DMat4::from_rotation_translation(rotation(rng), point(rng, 2.0))
+}
+
+/// The kinds of quadric the generators produce.
+pub const KINDS: usize = 12;
+
+/// A quadric of kind `kind % KINDS`, roughly of unit size near the origin,
+/// randomly placed.
+pub fn quadric_of_kind(rng: &mut ChaCha8Rng, kind: usize) -> Quadric {
+    let r = |rng: &mut ChaCha8Rng| rng.random_range(0.4..1.5);
+    let c = point(rng, 0.5);
+    let base = match kind % KINDS {
+        0 => Quadric::sphere(c, r(rng)),
+        1 => Quadric::ellipsoid(c, DVec3::new(r(rng), r(rng), r(rng))),
+        2 => Quadric::half_space(unit(rng), rng.random_range(-0.5..0.5)),
+        3 => Quadric::cylinder(c, unit(rng), r(rng)),
+        4 => Quadric::elliptic_cylinder(DVec2::new(r(rng), r(rng))),
+        5 => Quadric::cone(c, unit(rng), rng.random_range(0.2..1.2)),
+        6 => Quadric::elliptic_cone(DVec2::new(r(rng), r(rng))),
+        7 => Quadric::elliptic_paraboloid(DVec2::new(r(rng), r(rng))),
+        8 => Quadric::hyperbolic_paraboloid(DVec2::new(r(rng), r(rng))),
+        9 => Quadric::hyperboloid_one_sheet(DVec3::new(r(rng), r(rng), r(rng))),
+        10 => Quadric::hyperboloid_two_sheets(DVec3::new(r(rng), r(rng), r(rng))),
+        _ => {
+            let mut k = [0.0; 10];
+            for x in &mut k {
+                *x = rng.random_range(-1.0..1.0);
+            }
+            Quadric::from_coefficients(k)
+        }
+    }
+    .expect("generated parameters are valid");
+    base.transformed(&rigid(rng))
+        .expect("rigid motions are invertible")
+}
+
+/// A random quadric of any kind.
+pub fn quadric(rng: &mut ChaCha8Rng) -> Quadric {
+    let kind = rng.random_range(0..KINDS);
+    quadric_of_kind(rng, kind)
+}
