@@ -21,8 +21,14 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
 
-/// Relative size below which a coefficient of the line quadratic counts as zero.
+/// Relative size below which `β` and `γ` count as zero (deciding whether a
+/// line with `a = 0` lies in the surface).
 pub const ZERO_RELATIVE: f64 = 1e-13;
+
+/// Relative size below which `a` counts as zero: the rounding noise of
+/// `vᵀAv`. Above it the quadratic is solved as such (its far root may be
+/// huge); below it `a` is not resolvable and the equation is taken as linear.
+pub const A_ZERO_RELATIVE: f64 = 64.0 * f64::EPSILON;
 
 /// A ray or line `origin + t·direction`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -198,7 +204,7 @@ impl LineQuadratic {
     /// Solves for the inside spans.
     #[must_use]
     pub fn solve(&self) -> LineHits {
-        let a_zero = self.a.abs() <= ZERO_RELATIVE * self.scale_a;
+        let a_zero = self.a.abs() <= A_ZERO_RELATIVE * self.scale_a;
         if a_zero {
             return self.solve_linear();
         }
