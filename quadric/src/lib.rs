@@ -24,6 +24,35 @@
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 
+//! ## Example
+//!
+//! ```
+//! use chisel_quadric::{CsgDag, CsgDistance, Dnf, Quadric, Ray};
+//! use glam::DVec3;
+//!
+//! // A unit cube with a spherical bite taken out of one corner.
+//! let mut dag = CsgDag::new();
+//! let cube = dag.cuboid(DVec3::ZERO, DVec3::ONE, [0.8, 0.6, 0.3])?;
+//! let ball = dag.primitive(Quadric::sphere(DVec3::ONE, 0.5)?, [0.3, 0.5, 0.9]);
+//! let root = dag.difference(cube, &[ball])?;
+//!
+//! // Normal form: one product, six planes inside and the sphere outside.
+//! let dnf = Dnf::from_dag(&dag, root)?;
+//! assert_eq!(dnf.products().len(), 1);
+//! assert_eq!(dnf.products()[0].len(), 7);
+//! assert!(dnf.contains(DVec3::splat(0.25)) && !dnf.contains(DVec3::splat(0.9)));
+//!
+//! // A ray along the diagonal enters the ball's surface at |x − (1,1,1)| = 0.5.
+//! let ray = Ray::new(DVec3::ZERO, DVec3::ONE.normalize())?;
+//! let hit = dnf.quadrics()[6].quadric.intersect_line(&ray).first_hit_after(0.0).unwrap();
+//! assert!((hit.t - (3f64.sqrt() - 0.5)).abs() < 1e-12);
+//!
+//! // Conservative distance to the CSG surface: never more than the truth.
+//! let d = CsgDistance::new(&dnf).distance(DVec3::splat(0.25));
+//! assert!(d < 0.0 && -d <= 0.25);
+//! # Ok::<(), chisel_quadric::Error>(())
+//! ```
+
 #![warn(missing_docs)]
 
 pub mod csg;
