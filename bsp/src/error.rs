@@ -34,6 +34,13 @@ pub enum Error {
     ZeroNormal,
     /// Three points meant to define a plane are collinear (or coincide).
     CollinearPoints,
+    /// A box needs `min < max` on every axis.
+    DegenerateBox {
+        /// The requested minimum corner.
+        min: [i64; 3],
+        /// The requested maximum corner.
+        max: [i64; 3],
+    },
 }
 
 impl fmt::Display for Error {
@@ -59,6 +66,11 @@ impl fmt::Display for Error {
                  the plane lies too far from the origin for the exact range"
             ),
             Error::ZeroNormal => write!(f, "a plane needs a non-zero normal (a, b, c)"),
+            Error::DegenerateBox { min, max } => write!(
+                f,
+                "box from {min:?} to {max:?} has no volume; every coordinate of min must be \
+                 below the same coordinate of max"
+            ),
             Error::CollinearPoints => write!(
                 f,
                 "the three points are collinear or coincide, so they define no plane"

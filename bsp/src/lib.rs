@@ -13,6 +13,8 @@
 //!
 //! - [`exact`] — fixed-width integers, the bit budget, planes, homogeneous
 //!   vertices and the predicates of §3.2.
+//! - [`convex`] — convex polyhedra as half-edge meshes with exact vertices,
+//!   and cutting them by planes (§3.3).
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 //!
@@ -39,6 +41,7 @@
 
 #![warn(missing_docs)]
 
+pub mod convex;
 mod error;
 pub mod exact;
 

@@ -1,0 +1,252 @@
+//! The half-edge arena of convex polyhedra.
+//!
+//! Notation: `h` — a half-edge from `origin(h)` to `dest(h) =
+//! origin(twin(h))`; `next(h)` — the following half-edge counter-clockwise
+//! around `face(h)` seen from outside; a face's plane has its positive side
+//! outside the polyhedron, so the interior is where every face plane is
+//! negative.
+
+use std::collections::HashMap;
+
+use crate::Error;
+use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes};
+
+/// Tag of a face with no opposite BSP node.
+pub const NO_TAG: u32 = u32::MAX;
+
+/// A vertex: its exact position and one half-edge leaving it.
+#[derive(Clone, Copy, Debug)]
+pub struct Vertex {
+    /// Exact homogeneous position.
+    pub point: Point4,
+    /// A half-edge whose origin is this vertex.
+    pub half_edge: u32,
+}
+
+/// A directed edge of one face.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HalfEdge {
+    /// The vertex it leaves.
+    pub origin: u32,
+    /// The opposite half-edge, on the neighbouring face.
+    pub twin: u32,
+    /// The next half-edge around the same face.
+    pub next: u32,
+    /// The face it bounds.
+    pub face: u32,
+}
+
+/// A planar convex face.
+#[derive(Clone, Copy, Debug)]
+pub struct Face {
+    /// Supporting plane, positive side outside.
+    pub plane: Plane,
+    /// One half-edge of the face.
+    pub half_edge: u32,
+    /// The BSP node on the other side of the face, or [`NO_TAG`].
+    pub tag: u32,
+}
+
+/// Names one polyhedron in an arena by one of its half-edges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PolyId(pub u32);
+
+/// Flat storage for half-edge meshes of convex polyhedra.
+#[derive(Clone, Debug, Default)]
+pub struct ConvexArena {
+    pub(crate) vertices: Vec<Vertex>,
+    pub(crate) half_edges: Vec<HalfEdge>,
+    pub(crate) faces: Vec<Face>,
+}
+
+impl ConvexArena {
+    /// An empty arena.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// All vertices (of every polyhedron in the arena).
+    #[must_use]
+    pub fn vertices(&self) -> &[Vertex] {
+        &self.vertices
+    }
+
+    /// All half-edges.
+    #[must_use]
+    pub fn half_edges(&self) -> &[HalfEdge] {
+        &self.half_edges
+    }
+
+    /// All faces.
+    #[must_use]
+    pub fn faces(&self) -> &[Face] {
+        &self.faces
+    }
+
+    /// The axis-aligned box `[min, max]` as a polyhedron with six faces.
+    ///
+    /// # Errors
+    /// [`Error::DegenerateBox`] unless `min < max` on every axis.
+    pub fn add_box(&mut self, min: IntPoint, max: IntPoint) -> Result<PolyId, Error> {
+        let (lo, hi) = (min.coords(), max.coords());
+        if (0..3).any(|i| lo[i] >= hi[i]) {
+            return Err(Error::DegenerateBox { min: lo, max: hi });
+        }
+        // Outward planes: −x, +x, −y, +y, −z, +z.
+        let mut planes = Vec::with_capacity(6);
+        for axis in 0..3 {
+            let mut n = [0i64; 3];
+            n[axis] = -1;
+            planes.push(Plane::new(n[0], n[1], n[2], lo[axis] as i128)?);
+            n[axis] = 1;
+            planes.push(Plane::new(n[0], n[1], n[2], -(hi[axis] as i128))?);
+        }
+        // Vertex i has x from bit 0, y from bit 1, z from bit 2; each face
+        // lists its corners counter-clockwise seen from outside.
+        let corner = |i: usize| -> Point4 {
+            let (px, py, pz) = (
+                &planes[i & 1],
+                &planes[2 + (i >> 1 & 1)],
+                &planes[4 + (i >> 2)],
+            );
+            intersect_3_planes(px, py, pz).expect("axis planes are independent")
+        };
+        let points: Vec<Point4> = (0..8).map(corner).collect();
+        let faces: [(usize, [u32; 4]); 6] = [
+            (0, [0, 4, 6, 2]),
+            (1, [1, 3, 7, 5]),
+            (2, [0, 1, 5, 4]),
+            (3, [2, 6, 7, 3]),
+            (4, [0, 2, 3, 1]),
+            (5, [4, 5, 7, 6]),
+        ];
+        let faces: Vec<(Plane, Vec<u32>)> = faces
+            .iter()
+            .map(|&(p, corners)| (planes[p], corners.to_vec()))
+            .collect();
+        Ok(self.add_polyhedron(&points, &faces))
+    }
+
+    /// Adds a closed polyhedron given its vertices and, per face, its plane
+    /// and its vertex indices counter-clockwise seen from outside. The input
+    /// must be a valid convex polyhedron (see [`ConvexArena::validate`]).
+    pub(crate) fn add_polyhedron(
+        &mut self,
+        points: &[Point4],
+        faces: &[(Plane, Vec<u32>)],
+    ) -> PolyId {
+        let v0 = self.vertices.len() as u32;
+        let h0 = self.half_edges.len() as u32;
+        self.vertices.extend(points.iter().map(|&point| Vertex {
+            point,
+            half_edge: u32::MAX,
+        }));
+        let mut by_ends: HashMap<(u32, u32), u32> = HashMap::new();
+        for (plane, corners) in faces {
+            let face = self.faces.len() as u32;
+            let first = self.half_edges.len() as u32;
+            let n = corners.len() as u32;
+            for (k, &c) in corners.iter().enumerate() {
+                let h = first + k as u32;
+                let to = corners[(k + 1) % corners.len()];
+                self.half_edges.push(HalfEdge {
+                    origin: v0 + c,
+                    twin: u32::MAX,
+                    next: first + (k as u32 + 1) % n,
+                    face,
+                });
+                self.vertices[(v0 + c) as usize].half_edge = h;
+                by_ends.insert((c, to), h);
+            }
+            self.faces.push(Face {
+                plane: *plane,
+                half_edge: first,
+                tag: NO_TAG,
+            });
+        }
+        for (&(a, b), &h) in &by_ends {
+            if let Some(&t) = by_ends.get(&(b, a)) {
+                self.half_edges[h as usize].twin = t;
+            }
+        }
+        PolyId(h0)
+    }
+
+    /// The destination vertex of half-edge `h`.
+    #[must_use]
+    #[inline]
+    pub fn dest(&self, h: u32) -> u32 {
+        self.half_edges[self.half_edges[h as usize].next as usize].origin
+    }
+
+    /// The half-edges around a face, starting at its stored half-edge.
+    pub fn face_loop(&self, face: u32) -> impl Iterator<Item = u32> + '_ {
+        let first = self.faces[face as usize].half_edge;
+        let mut h = Some(first);
+        std::iter::from_fn(move || {
+            let cur = h?;
+            let next = self.half_edges[cur as usize].next;
+            h = (next != first).then_some(next);
+            Some(cur)
+        })
+    }
+
+    /// The faces of polyhedron `poly`, in breadth-first order from the face
+    /// of its half-edge.
+    #[must_use]
+    pub fn faces_of(&self, poly: PolyId) -> Vec<u32> {
+        let mut seen = HashMap::new();
+        let start = self.half_edges[poly.0 as usize].face;
+        let mut order = vec![start];
+        seen.insert(start, ());
+        let mut i = 0;
+        while i < order.len() {
+            let face = order[i];
+            for h in self.face_loop(face) {
+                let neighbour = self.half_edges[self.half_edges[h as usize].twin as usize].face;
+                if seen.insert(neighbour, ()).is_none() {
+                    order.push(neighbour);
+                }
+            }
+            i += 1;
+        }
+        order
+    }
+
+    /// The vertices of polyhedron `poly` (each once, in first-seen order).
+    #[must_use]
+    pub fn vertices_of(&self, poly: PolyId) -> Vec<u32> {
+        let mut seen = HashMap::new();
+        let mut out = Vec::new();
+        for face in self.faces_of(poly) {
+            for h in self.face_loop(face) {
+                let v = self.half_edges[h as usize].origin;
+                if seen.insert(v, ()).is_none() {
+                    out.push(v);
+                }
+            }
+        }
+        out
+    }
+
+    /// Each face of `poly` as its plane and its vertices' `f64` positions
+    /// counter-clockwise from outside (for export and display).
+    #[must_use]
+    pub fn face_polygons(&self, poly: PolyId) -> Vec<(Plane, Vec<[f64; 3]>)> {
+        self.faces_of(poly)
+            .into_iter()
+            .map(|f| {
+                let corners = self
+                    .face_loop(f)
+                    .map(|h| {
+                        self.vertices[self.half_edges[h as usize].origin as usize]
+                            .point
+                            .to_f64()
+                    })
+                    .collect();
+                (self.faces[f as usize].plane, corners)
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,21 @@
+//! Convex polyhedra with exact homogeneous vertices (paper 1 §3.3).
+//!
+//! A [`ConvexArena`] stores half-edge meshes of convex polyhedra in three
+//! flat arrays. One arena holds many polyhedra: cutting a polyhedron by a
+//! plane splits it in place into two, which stay in the same arena and are
+//! named by a [`PolyId`] (any half-edge on them). Faces carry their exact
+//! supporting [`Plane`](crate::exact::Plane), oriented outwards, and a tag
+//! (the BSP node on the other side of the face, for boundary extraction).
+//!
+//! - [`mesh`] — the arena, its elements, constructors and traversal.
+//! - [`validate`] — every invariant, checked exactly (tests call it after
+//!   every step).
+//! - [`cut`] — cutting a polyhedron by a plane.
+
+pub mod cut;
+pub mod mesh;
+pub mod validate;
+
+pub use cut::CutOutcome;
+pub use mesh::{ConvexArena, Face, HalfEdge, NO_TAG, PolyId, Vertex};
+pub use validate::InvariantError;

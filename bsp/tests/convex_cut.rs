@@ -1,0 +1,195 @@
+//! Cutting convex polyhedra by planes: every outcome is checked against
+//! exact classification of the vertices, and every part is validated
+//! (closed, consistent, strictly convex) after every cut.
+
+use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
+use chisel_bsp::exact::{IntPoint, Plane, Sign, classify_vertex, plane_from_points};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn p(x: i64, y: i64, z: i64) -> IntPoint {
+    IntPoint::new(x, y, z).unwrap()
+}
+
+fn unit_box(arena: &mut ConvexArena, size: i64) -> PolyId {
+    arena.add_box(p(0, 0, 0), p(size, size, size)).unwrap()
+}
+
+fn sides(arena: &ConvexArena, poly: PolyId, s: &Plane) -> Vec<Sign> {
+    arena
+        .vertices_of(poly)
+        .iter()
+        .map(|&v| classify_vertex(&arena.vertices()[v as usize].point, s))
+        .collect()
+}
+
+/// Cuts, then checks the outcome against the vertices' sides and validates
+/// the parts; returns the parts that have volume.
+fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> {
+    let before = sides(arena, poly, s);
+    let outcome = arena.cut_naive(poly, s, NO_TAG, NO_TAG);
+    let has = |x| before.contains(&x);
+    match outcome {
+        CutOutcome::Above => {
+            assert!(!has(Sign::Negative));
+            arena.validate(poly).unwrap();
+            vec![poly]
+        }
+        CutOutcome::Below => {
+            assert!(!has(Sign::Positive));
+            arena.validate(poly).unwrap();
+            vec![poly]
+        }
+        CutOutcome::Split { below, above } => {
+            assert!(has(Sign::Negative) && has(Sign::Positive));
+            arena
+                .validate(below)
+                .unwrap_or_else(|e| panic!("below part: {e}"));
+            arena
+                .validate(above)
+                .unwrap_or_else(|e| panic!("above part: {e}"));
+            assert!(sides(arena, below, s).iter().all(|&x| x != Sign::Positive));
+            assert!(sides(arena, above, s).iter().all(|&x| x != Sign::Negative));
+            assert!(sides(arena, below, s).contains(&Sign::Negative));
+            assert!(sides(arena, above, s).contains(&Sign::Positive));
+            // The parts share no vertex.
+            let a = arena.vertices_of(below);
+            assert!(arena.vertices_of(above).iter().all(|v| !a.contains(v)));
+            vec![below, above]
+        }
+    }
+}
+
+#[test]
+fn a_box_is_a_valid_polyhedron() {
+    let mut arena = ConvexArena::new();
+    let b = unit_box(&mut arena, 10);
+    arena.validate(b).unwrap();
+    assert_eq!(arena.faces_of(b).len(), 6);
+    assert_eq!(arena.vertices_of(b).len(), 8);
+    assert!(arena.add_box(p(0, 0, 0), p(0, 1, 1)).is_err());
+}
+
+#[test]
+fn an_axis_plane_halves_a_box() {
+    let mut arena = ConvexArena::new();
+    let b = unit_box(&mut arena, 10);
+    let s = Plane::new(1, 0, 0, -4).unwrap();
+    let parts = checked_cut(&mut arena, b, &s);
+    assert_eq!(parts.len(), 2);
+    for part in parts {
+        assert_eq!(arena.faces_of(part).len(), 6);
+        assert_eq!(arena.vertices_of(part).len(), 8);
+    }
+}
+
+#[test]
+fn planes_touching_a_box_do_not_cut_it() {
+    let mut arena = ConvexArena::new();
+    let b = unit_box(&mut arena, 10);
+    // Coplanar with a face, through an edge, through a corner, outside.
+    for s in [
+        Plane::new(0, 0, 1, -10).unwrap(),
+        Plane::new(0, 0, -1, 0).unwrap(),
+        Plane::new(1, 1, 0, -20).unwrap(),
+        Plane::new(1, 1, 1, -30).unwrap(),
+        Plane::new(1, 1, 1, 1).unwrap(),
+    ] {
+        let parts = checked_cut(&mut arena, b, &s);
+        assert_eq!(parts, vec![b]);
+    }
+}
+
+#[test]
+fn a_diagonal_plane_through_two_edges_splits_into_prisms() {
+    let mut arena = ConvexArena::new();
+    let b = unit_box(&mut arena, 10);
+    // x = y contains the edges (0,0,z) and (10,10,z).
+    let s = plane_from_points(p(0, 0, 0), p(0, 0, 10), p(10, 10, 0)).unwrap();
+    let parts = checked_cut(&mut arena, b, &s);
+    assert_eq!(parts.len(), 2);
+    for part in parts {
+        assert_eq!(arena.faces_of(part).len(), 5, "a triangular prism");
+        assert_eq!(arena.vertices_of(part).len(), 6);
+    }
+}
+
+#[test]
+fn a_corner_cut_gives_a_tetrahedron() {
+    let mut arena = ConvexArena::new();
+    let b = unit_box(&mut arena, 10);
+    let s = Plane::new(1, 1, 1, -5).unwrap();
+    let parts = checked_cut(&mut arena, b, &s);
+    let tet = parts[0];
+    assert_eq!(arena.faces_of(tet).len(), 4);
+    assert_eq!(arena.vertices_of(tet).len(), 4);
+    assert_eq!(arena.faces_of(parts[1]).len(), 7);
+}
+
+/// Hundreds of random cuts, many through existing vertices and edges, each
+/// part validated after every cut.
+#[test]
+fn random_cut_sequences_keep_every_part_valid() {
+    for seed in 0..12 {
+        let (arena, parts) = random_cuts(seed, 200);
+        assert!(
+            parts.len() > 50,
+            "most cuts split something: {} parts",
+            parts.len()
+        );
+        assert!(!arena.faces().is_empty());
+    }
+}
+
+/// Same cuts, same arena, bit for bit.
+#[test]
+fn cutting_is_deterministic() {
+    let (a, pa) = random_cuts(99, 120);
+    let (b, pb) = random_cuts(99, 120);
+    assert_eq!(pa, pb);
+    assert_eq!(a.half_edges(), b.half_edges());
+    assert_eq!(a.faces().len(), b.faces().len());
+    for (x, y) in a.faces().iter().zip(b.faces()) {
+        assert_eq!((x.plane, x.half_edge, x.tag), (y.plane, y.half_edge, y.tag));
+    }
+    for (x, y) in a.vertices().iter().zip(b.vertices()) {
+        assert!(x.point.same_position(&y.point) && x.point.xyz() == y.point.xyz());
+    }
+}
+
+/// Applies `steps` random cuts to random parts of a box, checking each.
+fn random_cuts(seed: u64, steps: usize) -> (ConvexArena, Vec<PolyId>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let size = 1 << 20;
+    {
+        let mut arena = ConvexArena::new();
+        let mut parts = vec![unit_box(&mut arena, size)];
+        for _ in 0..steps {
+            let k = rng.random_range(0..parts.len());
+            let poly = parts.swap_remove(k);
+            // Through three points: random ones, or the polyhedron's own
+            // vertices (rounded), which produces plenty of degenerate cuts.
+            let verts = arena.vertices_of(poly);
+            let pick = |rng: &mut ChaCha8Rng| -> IntPoint {
+                if rng.random_bool(0.5) {
+                    let v = verts[rng.random_range(0..verts.len())];
+                    let [x, y, z] = arena.vertices()[v as usize].point.to_f64();
+                    p(x.round() as i64, y.round() as i64, z.round() as i64)
+                } else {
+                    p(
+                        rng.random_range(0..=size),
+                        rng.random_range(0..=size),
+                        rng.random_range(0..=size),
+                    )
+                }
+            };
+            let (a, b, c) = (pick(&mut rng), pick(&mut rng), pick(&mut rng));
+            let Ok(s) = plane_from_points(a, b, c) else {
+                parts.push(poly);
+                continue;
+            };
+            parts.extend(checked_cut(&mut arena, poly, &s.normalized()));
+        }
+        (arena, parts)
+    }
+}
