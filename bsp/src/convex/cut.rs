@@ -181,8 +181,8 @@ impl ConvexArena {
         });
         self.half_edges[loop_[(j + n - 1) % n] as usize].next = a;
         self.half_edges[loop_[(i + n - 1) % n] as usize].next = b;
-        for k in i..j {
-            self.half_edges[loop_[k] as usize].face = face_ij;
+        for &h in &loop_[i..j] {
+            self.half_edges[h as usize].face = face_ij;
         }
         for k in j..i + n {
             self.half_edges[loop_[k % n] as usize].face = face_ji;
