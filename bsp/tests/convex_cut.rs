@@ -1,6 +1,7 @@
-//! Cutting convex polyhedra by planes: every outcome is checked against
-//! exact classification of the vertices, and every part is validated
-//! (closed, consistent, strictly convex) after every cut.
+//! Cutting convex polyhedra by planes: every edge-descent cut is compared
+//! element for element with the classify-all-vertices cut, its outcome is
+//! checked against exact classification of the vertices, and every part is
+//! validated (closed, consistent, strictly convex) after every cut.
 
 use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane, Sign, classify_vertex, plane_from_points};
@@ -27,7 +28,11 @@ fn sides(arena: &ConvexArena, poly: PolyId, s: &Plane) -> Vec<Sign> {
 /// the parts; returns the parts that have volume.
 fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> {
     let before = sides(arena, poly, s);
-    let outcome = arena.cut_naive(poly, s, NO_TAG, NO_TAG);
+    let mut reference = arena.clone();
+    let expected = reference.cut_naive(poly, s, NO_TAG, NO_TAG);
+    let outcome = arena.cut(poly, s, NO_TAG, NO_TAG);
+    assert_eq!(outcome, expected, "edge descent and classify-all disagree");
+    assert_same_arena(arena, &reference);
     let has = |x| before.contains(&x);
     match outcome {
         CutOutcome::Above => {
@@ -57,6 +62,20 @@ fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> 
             assert!(arena.vertices_of(above).iter().all(|v| !a.contains(v)));
             vec![below, above]
         }
+    }
+}
+
+/// Element-for-element equality of two arenas.
+fn assert_same_arena(a: &ConvexArena, b: &ConvexArena) {
+    assert_eq!(a.half_edges(), b.half_edges());
+    assert_eq!(a.faces().len(), b.faces().len());
+    for (x, y) in a.faces().iter().zip(b.faces()) {
+        assert_eq!((x.plane, x.half_edge, x.tag), (y.plane, y.half_edge, y.tag));
+    }
+    assert_eq!(a.vertices().len(), b.vertices().len());
+    for (x, y) in a.vertices().iter().zip(b.vertices()) {
+        assert_eq!(x.half_edge, y.half_edge);
+        assert!(x.point.xyz() == y.point.xyz() && x.point.w() == y.point.w());
     }
 }
 
@@ -147,14 +166,7 @@ fn cutting_is_deterministic() {
     let (a, pa) = random_cuts(99, 120);
     let (b, pb) = random_cuts(99, 120);
     assert_eq!(pa, pb);
-    assert_eq!(a.half_edges(), b.half_edges());
-    assert_eq!(a.faces().len(), b.faces().len());
-    for (x, y) in a.faces().iter().zip(b.faces()) {
-        assert_eq!((x.plane, x.half_edge, x.tag), (y.plane, y.half_edge, y.tag));
-    }
-    for (x, y) in a.vertices().iter().zip(b.vertices()) {
-        assert!(x.point.same_position(&y.point) && x.point.xyz() == y.point.xyz());
-    }
+    assert_same_arena(&a, &b);
 }
 
 /// Applies `steps` random cuts to random parts of a box, checking each.

@@ -18,10 +18,12 @@
 //! [`ConvexArena::cut_naive`] finds the crossing edges by classifying every
 //! vertex; the edge-descent search of the paper replaces only that step.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use super::mesh::{ConvexArena, Face, HalfEdge, PolyId, Vertex};
-use crate::exact::{Plane, Sign, classify_vertex, intersect_3_planes};
+use crate::exact::{
+    Plane, Sign, classify_vertex, compare_offsets, intersect_3_planes, offset_estimate,
+};
 
 /// The result of cutting a polyhedron `P` by a plane `s`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,8 +54,8 @@ impl ConvexArena {
         below_tag: u32,
         above_tag: u32,
     ) -> CutOutcome {
-        let vertices = self.vertices_of(poly);
-        let sides: HashMap<u32, Sign> = vertices
+        let sides: HashMap<u32, Sign> = self
+            .vertices_of(poly)
             .iter()
             .map(|&v| (v, classify_vertex(&self.vertices[v as usize].point, s)))
             .collect();
@@ -63,11 +65,199 @@ impl ConvexArena {
             (false, _) => return CutOutcome::Above,
             (true, false) => return CutOutcome::Below,
         }
-        let faces = self.faces_of(poly);
-        let mut sides = sides;
+        let relevant: Vec<u32> = self
+            .faces_of(poly)
+            .into_iter()
+            .filter(|&f| self.meets_section(f, &sides))
+            .collect();
+        self.split_along(relevant, sides, s, below_tag, above_tag)
+    }
+
+    /// Cuts `poly` by `s` by edge descent and marching (paper 1 §3.3):
+    /// walks from vertex to neighbouring vertex towards the far side of `s`
+    /// until it finds the section or proves there is none (a vertex with no
+    /// neighbour closer to the far side is a global extremum on a convex
+    /// polyhedron), then marches around the section, classifying only the
+    /// vertices of faces it visits. The result is identical, element for
+    /// element, to [`ConvexArena::cut_naive`].
+    pub fn cut(&mut self, poly: PolyId, s: &Plane, below_tag: u32, above_tag: u32) -> CutOutcome {
+        let mut sides: HashMap<u32, Sign> = HashMap::new();
+        let v0 = self.half_edges[poly.0 as usize].origin;
+        let side0 = self.side(v0, s, &mut sides);
+        // Walk towards the side v0 is not on; a `(from, to)` step onto that
+        // side brackets the section. From a vertex on s, both sides must
+        // exist for a proper cut, and v0 itself is on the section.
+        let seeds = match side0 {
+            Sign::Positive => match self.descend(v0, s, Sign::Negative, &mut sides) {
+                Some((from, to)) => [from, to],
+                None => return CutOutcome::Above,
+            },
+            Sign::Negative => match self.descend(v0, s, Sign::Positive, &mut sides) {
+                Some((from, to)) => [from, to],
+                None => return CutOutcome::Below,
+            },
+            Sign::Zero => {
+                if self.descend(v0, s, Sign::Negative, &mut sides).is_none() {
+                    return CutOutcome::Above;
+                }
+                if self.descend(v0, s, Sign::Positive, &mut sides).is_none() {
+                    return CutOutcome::Below;
+                }
+                [v0, v0]
+            }
+        };
+        let relevant = self.march(&seeds, s, &mut sides);
+        self.split_along(relevant, sides, s, below_tag, above_tag)
+    }
+
+    /// The side of vertex `v`, classified once and cached.
+    fn side(&self, v: u32, s: &Plane, sides: &mut HashMap<u32, Sign>) -> Sign {
+        *sides
+            .entry(v)
+            .or_insert_with(|| classify_vertex(&self.vertices[v as usize].point, s))
+    }
+
+    /// The outgoing half-edges of vertex `v`.
+    fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+        let first = self.vertices[v as usize].half_edge;
+        let mut h = Some(first);
+        std::iter::from_fn(move || {
+            let cur = h?;
+            let next = self.half_edges[self.half_edges[cur as usize].twin as usize].next;
+            h = (next != first).then_some(next);
+            Some(cur)
+        })
+    }
+
+    /// Edge descent from `start` towards side `target` of `s`: returns an
+    /// adjacent pair `(from, to)` with `to` on side `target` (`from == to`
+    /// when `start` already is), or `None` when no vertex is on that side.
+    fn descend(
+        &self,
+        start: u32,
+        s: &Plane,
+        target: Sign,
+        sides: &mut HashMap<u32, Sign>,
+    ) -> Option<(u32, u32)> {
+        use core::cmp::Ordering;
+        // Towards `target`: smaller offsets for Negative, larger for Positive.
+        let toward = |a: f64| if target == Sign::Negative { -a } else { a };
+        let mut cur = start;
+        if self.side(cur, s, sides) == target {
+            return Some((cur, cur));
+        }
+        loop {
+            let (cur_value, cur_error) = offset_estimate(&self.vertices[cur as usize].point, s);
+            let mut best: Option<(u32, f64)> = None;
+            let mut uncertain = Vec::new();
+            let neighbours: Vec<u32> = self.outgoing(cur).map(|h| self.dest(h)).collect();
+            for &n in &neighbours {
+                if self.side(n, s, sides) == target {
+                    return Some((cur, n));
+                }
+                let (value, error) = offset_estimate(&self.vertices[n as usize].point, s);
+                let gain = toward(value) - toward(cur_value);
+                if gain > error + cur_error {
+                    if best.is_none_or(|(_, g)| gain > g) {
+                        best = Some((n, gain));
+                    }
+                } else if gain >= -(error + cur_error) {
+                    uncertain.push(n);
+                }
+            }
+            let next = best.map(|(n, _)| n).or_else(|| {
+                // Only exact comparison can tell: move to a neighbour that is
+                // strictly closer to the target side, if any.
+                let wanted = if target == Sign::Negative {
+                    Ordering::Less
+                } else {
+                    Ordering::Greater
+                };
+                uncertain.into_iter().find(|&n| {
+                    compare_offsets(
+                        &self.vertices[n as usize].point,
+                        &self.vertices[cur as usize].point,
+                        s,
+                    ) == wanted
+                })
+            });
+            cur = next?;
+        }
+    }
+
+    /// Marches around the section from the faces around `seeds`: visits the
+    /// faces that meet the section, crossing from one to the next through
+    /// crossing edges, edges in `s` and vertices on `s`. Returns them sorted.
+    fn march(&self, seeds: &[u32], s: &Plane, sides: &mut HashMap<u32, Sign>) -> Vec<u32> {
+        let mut queued: HashSet<u32> = HashSet::new();
+        let mut rotated: HashSet<u32> = HashSet::new();
+        let mut queue: Vec<u32> = Vec::new();
+        let mut relevant = Vec::new();
+        let around = |v: u32, queue: &mut Vec<u32>, queued: &mut HashSet<u32>| {
+            for h in self.outgoing(v) {
+                let f = self.half_edges[h as usize].face;
+                if queued.insert(f) {
+                    queue.push(f);
+                }
+            }
+        };
+        for &v in seeds {
+            if rotated.insert(v) {
+                around(v, &mut queue, &mut queued);
+            }
+        }
+        while let Some(f) = queue.pop() {
+            for h in self.face_loop(f) {
+                self.side(self.half_edges[h as usize].origin, s, sides);
+            }
+            if !self.meets_section(f, sides) {
+                continue;
+            }
+            relevant.push(f);
+            for h in self.face_loop(f) {
+                let e = self.half_edges[h as usize];
+                let (a, b) = (sides[&e.origin], sides[&self.dest(h)]);
+                if a.as_i32() * b.as_i32() < 0 || (a == Sign::Zero && b == Sign::Zero) {
+                    let g = self.half_edges[e.twin as usize].face;
+                    if queued.insert(g) {
+                        queue.push(g);
+                    }
+                }
+                if a == Sign::Zero && rotated.insert(e.origin) {
+                    around(e.origin, &mut queue, &mut queued);
+                }
+            }
+        }
+        relevant
+    }
+
+    /// True when face `f` contains a section edge once crossing edges are
+    /// split: it has vertices on both sides, or an edge lying in `s`.
+    fn meets_section(&self, f: u32, sides: &HashMap<u32, Sign>) -> bool {
+        let (mut plus, mut minus, mut in_plane) = (false, false, false);
+        for h in self.face_loop(f) {
+            let a = sides[&self.half_edges[h as usize].origin];
+            plus |= a == Sign::Positive;
+            minus |= a == Sign::Negative;
+            in_plane |= a == Sign::Zero && sides[&self.dest(h)] == Sign::Zero;
+        }
+        (plus && minus) || in_plane
+    }
+
+    /// Splits along the section, given the faces that meet it and the sides
+    /// of all their vertices (steps 1–3 of the module docs).
+    fn split_along(
+        &mut self,
+        mut relevant: Vec<u32>,
+        mut sides: HashMap<u32, Sign>,
+        s: &Plane,
+        below_tag: u32,
+        above_tag: u32,
+    ) -> CutOutcome {
+        relevant.sort_unstable();
         // 1. Split crossing edges (each once: from its + end).
         let mut crossing = Vec::new();
-        for &f in &faces {
+        for &f in &relevant {
             for h in self.face_loop(f) {
                 let e = self.half_edges[h as usize];
                 if sides[&e.origin] == Sign::Positive && sides[&self.dest(h)] == Sign::Negative {
@@ -80,18 +270,18 @@ impl ConvexArena {
             sides.insert(m, Sign::Zero);
         }
         // 2. Split straddling faces.
-        let mut all_faces = faces.clone();
-        for &f in &faces {
+        let mut faces = relevant.clone();
+        for &f in &relevant {
             let has = |sign| {
                 self.face_loop(f)
                     .any(|h| sides[&self.half_edges[h as usize].origin] == sign)
             };
             if has(Sign::Positive) && has(Sign::Negative) {
-                all_faces.push(self.split_face(f, &sides));
+                faces.push(self.split_face(f, &sides));
             }
         }
         // 3. Caps from the half-edges lying in s.
-        self.add_caps(&all_faces, &sides, s, below_tag, above_tag)
+        self.add_caps(&faces, &sides, s, below_tag, above_tag)
     }
 
     /// Splits the edge of half-edge `h` at its intersection with `s`;
@@ -225,36 +415,6 @@ impl ConvexArena {
                 }
             }
         }
-        // Duplicate the section vertices for the upper part.
-        let mut upper_copy: HashMap<u32, u32> = HashMap::new();
-        for &(h, side) in &section {
-            if side == Sign::Positive {
-                for v in [self.half_edges[h as usize].origin, self.dest(h)] {
-                    upper_copy.entry(v).or_insert_with(|| {
-                        self.vertices.push(self.vertices[v as usize]);
-                        self.vertices.len() as u32 - 1
-                    });
-                }
-            }
-        }
-        for &f in faces {
-            if face_side(self, f) == Sign::Positive {
-                for h in self.face_loop(f).collect::<Vec<_>>() {
-                    let o = self.half_edges[h as usize].origin;
-                    if let Some(&copy) = upper_copy.get(&o) {
-                        self.half_edges[h as usize].origin = copy;
-                        self.vertices[copy as usize].half_edge = h;
-                    }
-                }
-            } else {
-                for h in self.face_loop(f).collect::<Vec<_>>() {
-                    let o = self.half_edges[h as usize].origin;
-                    if upper_copy.contains_key(&o) {
-                        self.vertices[o as usize].half_edge = h;
-                    }
-                }
-            }
-        }
         // One cap per side: for each section half-edge u→v on a face of that
         // side, the cap gets v→u, and cap edges chain by shared vertices.
         let mut caps = [
@@ -291,6 +451,33 @@ impl ConvexArena {
                 tag: *tag,
             });
             *cap_edge = cap_edges[0].0;
+            if *side == Sign::Negative {
+                // The lower part keeps the section vertices.
+                for &(c, _) in &cap_edges {
+                    let v = self.half_edges[c as usize].origin;
+                    self.vertices[v as usize].half_edge = c;
+                }
+            } else {
+                // The upper part gets copies: rotate around each section
+                // vertex through the upper part's half-edges (now closed off
+                // by the cap) and re-point their origins.
+                for &(c, _) in &cap_edges {
+                    let v = self.half_edges[c as usize].origin;
+                    let copy = self.vertices.len() as u32;
+                    self.vertices.push(Vertex {
+                        point: self.vertices[v as usize].point,
+                        half_edge: c,
+                    });
+                    let mut h = c;
+                    loop {
+                        self.half_edges[h as usize].origin = copy;
+                        h = self.half_edges[self.half_edges[h as usize].twin as usize].next;
+                        if h == c {
+                            break;
+                        }
+                    }
+                }
+            }
         }
         CutOutcome::Split {
             below: PolyId(caps[0].3),

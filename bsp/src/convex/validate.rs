@@ -95,7 +95,10 @@ impl ConvexArena {
             ensure!(len >= 3, "face {f} has {len} edges");
             half_edge_count += len;
         }
-        ensure!(half_edge_count.is_multiple_of(2), "odd number of half-edges");
+        ensure!(
+            half_edge_count.is_multiple_of(2),
+            "odd number of half-edges"
+        );
         let (v, e, f) = (
             vertex_set.len() as i64,
             half_edge_count as i64 / 2,

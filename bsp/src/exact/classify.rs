@@ -32,10 +32,11 @@
 //! Otherwise (about one random case in 10^14, but every vertex that lies on
 //! or extremely close to the plane) it falls back to the exact path.
 
-use super::digits::{mul, sign_of_digits, split_balanced};
+use super::digits::{assemble, mul, sign_of_digits, split_balanced};
 use super::plane::Plane;
 use super::point::Point4;
 use super::sign::Sign;
+use super::wide::{I256, Int};
 
 /// Relative error bound of the filter: `2^-50 = 8u` (see the module docs).
 pub const FILTER_EPSILON: f64 = 1.0 / (1u64 << 50) as f64;
@@ -57,11 +58,16 @@ pub fn classify_vertex(v: &Point4, s: &Plane) -> Sign {
 #[must_use]
 #[inline]
 pub fn classify_vertex_exact(v: &Point4, s: &Plane) -> Sign {
-    // Digit sums by weight 2^(64k) (see `digits`): X, Y, Z contribute
-    // balanced digit × coefficient products, at most 2^63·2^55 = 2^118
-    // (three per digit); W·d contributes products of balanced digits, at
-    // most 2^126 at k = 0, 1 and below 2^63·2^41 at k = 2, 3. Every digit
-    // sum, plus a carry below 2^64, stays below 2^127.
+    sign_of_digits(dot_digits(v, s))
+}
+
+/// `T` as digit sums by weight `2^(64k)` (see `digits`): X, Y, Z contribute
+/// balanced digit × coefficient products, at most `2^63·2^55 = 2^118`
+/// (three per digit); W·d contributes products of balanced digits, at most
+/// `2^126` at `k = 0, 1` and below `2^63·2^41` at `k = 2, 3`. Every digit
+/// sum, plus a carry below `2^64`, stays below `2^127`.
+#[inline]
+fn dot_digits(v: &Point4, s: &Plane) -> [i128; 4] {
     let n = [s.a, s.b, s.c];
     let mut g = [0i128; 4];
     for (digits, &a) in v.xyz_digits.iter().zip(&n) {
@@ -76,7 +82,44 @@ pub fn classify_vertex_exact(v: &Point4, s: &Plane) -> Sign {
     g[1] += mul(w0, d1) + mul(w1, d0);
     g[2] += mul(w1, d1) + mul(w2, d0);
     g[3] += mul(w2, d1);
-    sign_of_digits(g)
+    g
+}
+
+/// The exact value `T = X·a + Y·b + Z·c + W·d`: the signed distance of
+/// `v` to `s` times `W·|n|` (at most `2^252` in magnitude).
+#[must_use]
+pub fn plane_dot_exact(v: &Point4, s: &Plane) -> I256 {
+    assemble(dot_digits(v, s))
+}
+
+/// An estimate of `T / W` (the signed distance of `v` to `s`, times `|n|`)
+/// and a bound on its absolute error, from the cached `f64`s: the filter's
+/// bound on `T` (module docs), widened for the division by `W̃` (relative
+/// error `u`) and the rounding of the quotient, with a generous margin.
+#[must_use]
+#[inline]
+pub fn offset_estimate(v: &Point4, s: &Plane) -> (f64, f64) {
+    let [x, y, z, w] = v.approx;
+    let [a, b, c, d] = s.approx;
+    let (t0, t1, t2, t3) = (x * a, y * b, z * c, w * d);
+    let sum = (t0 + t1) + (t2 + t3);
+    let magnitude = (t0.abs() + t1.abs()) + (t2.abs() + t3.abs());
+    let value = sum / w;
+    let u = f64::EPSILON / 2.0;
+    let error =
+        ((magnitude * FILTER_EPSILON + 4.0 * u * sum.abs()) / w + 4.0 * u * value.abs()) * 1.25;
+    (value, error)
+}
+
+/// Compares the signed distances of `a` and `b` to `s` exactly:
+/// `T_a / W_a` against `T_b / W_b`, i.e. `T_a·W_b` against `T_b·W_a` in
+/// 448-bit arithmetic (`|T|·W < 2^(252+168)`).
+#[must_use]
+pub fn compare_offsets(a: &Point4, b: &Point4, s: &Plane) -> core::cmp::Ordering {
+    let (ta, tb) = (plane_dot_exact(a, s), plane_dot_exact(b, s));
+    let lhs: Int<7> = ta.wrapping_mul(&b.w());
+    let rhs: Int<7> = tb.wrapping_mul(&a.w());
+    lhs.cmp(&rhs)
 }
 
 /// The floating-point filter alone: `Some(side)` when the `f64` evaluation

@@ -23,6 +23,7 @@ pub mod wide;
 
 pub use classify::{
     FILTER_EPSILON, classify_vertex, classify_vertex_exact, classify_vertex_filtered,
+    compare_offsets, offset_estimate, plane_dot_exact,
 };
 pub use intersect::intersect_3_planes;
 pub use plane::{Plane, are_planes_parallel, plane_from_points, plane_from_points_normalized};
