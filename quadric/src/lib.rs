@@ -62,8 +62,10 @@ mod error;
 pub mod frame;
 mod quadric;
 pub mod ray;
+pub mod sampling;
 pub mod scene;
 mod shapes;
+pub mod trace;
 
 pub use csg::{CsgDag, CsgDistance, Dnf, Literal, NodeId, Side};
 pub use distance::{QuadricDistance, conservative_distance};
@@ -72,4 +74,6 @@ pub use error::{Error, Result};
 pub use frame::PrincipalFrame;
 pub use quadric::{AFFINE_TOLERANCE, Quadric, affine_inverse, snap_affine};
 pub use ray::{Hit, LineHits, Ray, Span};
+pub use sampling::{BoundingSphere, Sample, SampleOptions, SampleSet, sample};
 pub use scene::Scene;
+pub use trace::{Camera, NO_HIT, TraceHit, TraceImage, trace_image, trace_ray};

@@ -95,3 +95,27 @@ pub fn quadric(rng: &mut ChaCha8Rng) -> Quadric {
     let kind = rng.random_range(0..KINDS);
     quadric_of_kind(rng, kind)
 }
+
+/// Loads a shipped scene from `assets/scenes/NAME.ron`.
+pub fn scene(name: &str) -> chisel_quadric::Scene {
+    let path = format!("{}/../assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+    chisel_quadric::Scene::load(&path).expect("shipped scenes parse")
+}
+
+/// Cameras on a ring and the two poles around `centre` at `distance`.
+pub fn cameras(centre: DVec3, distance: f64, size: u32) -> Vec<chisel_quadric::Camera> {
+    let mut dirs: Vec<DVec3> = (0..6)
+        .map(|i| {
+            let a = f64::from(i) * std::f64::consts::TAU / 6.0 + 0.3;
+            DVec3::new(a.cos(), a.sin(), 0.45 * if i % 2 == 0 { 1.0 } else { -1.0 })
+        })
+        .collect();
+    dirs.push(DVec3::new(0.1, 0.2, 1.0));
+    dirs.push(DVec3::new(-0.2, 0.1, -1.0));
+    dirs.into_iter()
+        .map(|d| {
+            chisel_quadric::Camera::new(centre + d.normalize() * distance, centre, 40.0, size, size)
+                .expect("valid camera")
+        })
+        .collect()
+}

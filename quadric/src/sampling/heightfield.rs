@@ -1,0 +1,527 @@
+//! Sampling planes and heightfields of a quadric (paper 2, §3.2, §3.4, §4.1).
+//!
+//! Notation: the principal frame (centre `q`, axes `u₀ u₁ u₂`, eigenvalues
+//! `λ`) turns `Q` into the *local form*
+//!
+//! `Q(q + Σ xₘ uₘ) = Σ λₘ xₘ² + 2 βₘ xₘ + γ`, `βₘ = uₘ·(Aq − b)`, `γ = Q(q)`,
+//!
+//! with `βₘ = 0` wherever `λₘ ≠ 0`. The sampling plane `P_ij` (axes `i < j`,
+//! normal axis `k`) sees the surface as a heightfield over `(x, y) = (xᵢ, xⱼ)`:
+//!
+//! - `λₖ ≠ 0` (*root* heightfield, eq. 7): `t = ±√r(x, y)` with
+//!   `r = −(λᵢx² + 2βᵢx + λⱼy² + 2βⱼy + γ) / λₖ`; for `β = 0` this is
+//!   `αₓx² + α_y y² + α_c` of the paper. Two branches, `t ≥ 0` and `t ≤ 0`.
+//!   Normal `∝ (r_x/2, r_y/2, −t)`, distortion `δ² = 1 + (r_x² + r_y²)/4r` (eq. 13).
+//! - `λₖ = 0, βₖ ≠ 0` (*polynomial* heightfield: paraboloids along their
+//!   axis, planes): `t = p(x, y) = −(λᵢx² + 2βᵢx + λⱼy² + 2βⱼy + γ) / 2βₖ`,
+//!   one branch, normal `∝ (−p_x, −p_y, 1)`, `δ² = 1 + p_x² + p_y²`.
+//! - `λₖ = 0, βₖ = 0` (a cylinder seen along its axis): no heightfield.
+//!
+//! A point belongs to plane `k`'s low-distortion region (§4.1) when its
+//! normal's largest component is `k`: `|nₖ| ≥ |nᵢ|` and `|nₖ| ≥ |nⱼ|`. For a
+//! root heightfield these are `r − r_x²/4 ≥ 0` and `r − r_y²/4 ≥ 0` (the
+//! conics of eqs. 15–16), for a polynomial one `1 − p_x² ≥ 0` and
+//! `1 − p_y² ≥ 0`. Every one of these functions, like `r` and `p`, is
+//! *separable*: a quadratic in `x` plus a quadratic in `y`, so its exact
+//! range over an axis-aligned box is the sum of two 1D ranges.
+
+use glam::{DMat3, DVec2, DVec3};
+
+use crate::frame::PrincipalFrame;
+use crate::quadric::Quadric;
+
+/// Relative size below which a local linear coefficient `βₘ` counts as zero.
+const BETA_ZERO_RELATIVE: f64 = 1e-11;
+
+/// A quadratic `a x² + b x + c` in one variable.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quad1 {
+    /// Coefficient of `x²`.
+    pub a: f64,
+    /// Coefficient of `x`.
+    pub b: f64,
+    /// Constant.
+    pub c: f64,
+}
+
+impl Quad1 {
+    /// The value at `x`.
+    #[must_use]
+    #[inline]
+    pub fn value(&self, x: f64) -> f64 {
+        (self.a * x + self.b) * x + self.c
+    }
+
+    /// The derivative `2a x + b` at `x`.
+    #[must_use]
+    #[inline]
+    pub fn slope(&self, x: f64) -> f64 {
+        2.0 * self.a * x + self.b
+    }
+
+    /// The exact range `(min, max)` over `[lo, hi]`.
+    #[must_use]
+    pub fn range(&self, lo: f64, hi: f64) -> (f64, f64) {
+        let (u, v) = (self.value(lo), self.value(hi));
+        let (mut min, mut max) = (u.min(v), u.max(v));
+        if self.a != 0.0 {
+            let vertex = -self.b / (2.0 * self.a);
+            if lo < vertex && vertex < hi {
+                let w = self.value(vertex);
+                min = min.min(w);
+                max = max.max(w);
+            }
+        }
+        (min, max)
+    }
+
+    /// The exact range of the squared slope `(2a x + b)²` over `[lo, hi]`.
+    #[must_use]
+    pub fn slope_squared_range(&self, lo: f64, hi: f64) -> (f64, f64) {
+        let (u, v) = (self.slope(lo), self.slope(hi));
+        let max = (u * u).max(v * v);
+        let min = if u.signum() != v.signum() {
+            0.0
+        } else {
+            (u * u).min(v * v)
+        };
+        (min, max)
+    }
+}
+
+/// A separable function `f(x) + g(y)` (constants folded into `f`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Separable {
+    /// The part in `x`, with the constant.
+    pub x: Quad1,
+    /// The part in `y` (its constant is zero).
+    pub y: Quad1,
+}
+
+impl Separable {
+    /// The value at `p`.
+    #[must_use]
+    #[inline]
+    pub fn value(&self, p: DVec2) -> f64 {
+        self.x.value(p.x) + self.y.value(p.y)
+    }
+
+    /// The exact range `(min, max)` over the box `[lo, hi]`.
+    #[must_use]
+    pub fn range(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
+        let (a, b) = self.x.range(lo.x, hi.x);
+        let (c, d) = self.y.range(lo.y, hi.y);
+        (a + c, b + d)
+    }
+}
+
+/// How a sampling plane's heightfield is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HeightKind {
+    /// `t = branch · √r(x, y)`, with `branch = ±1`.
+    Root {
+        /// `true` for the `t ≥ 0` branch.
+        positive: bool,
+    },
+    /// `t = p(x, y)`.
+    Polynomial,
+}
+
+/// One heightfield of a quadric: a sampling plane, a branch, and the
+/// separable functions that describe surface, normal and ownership.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Heightfield {
+    /// The quadric's centre `q` (world).
+    pub centre: DVec3,
+    /// Columns: the plane's `x` axis `uᵢ`, `y` axis `uⱼ`, and normal axis `uₖ`.
+    pub axes: DMat3,
+    /// Index `k` of the plane's normal axis in the principal frame.
+    pub normal_axis: usize,
+    /// Root or polynomial, and the branch.
+    pub kind: HeightKind,
+    /// `r(x, y)` (root) or `p(x, y)` (polynomial).
+    pub value: Separable,
+    /// `≥ 0` where `|nₖ| ≥ |nᵢ|` (eq. 15).
+    pub owns_x: Separable,
+    /// `≥ 0` where `|nₖ| ≥ |nⱼ|` (eq. 16).
+    pub owns_y: Separable,
+}
+
+/// The local form of a quadric: its frame with `λ`, `β` and `γ`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalForm {
+    /// Centre `q`.
+    pub centre: DVec3,
+    /// Orthonormal axes as columns; within the null space of `A`, the first
+    /// null axis carries all of `β`.
+    pub axes: DMat3,
+    /// `λₘ` (exactly zero for singular axes).
+    pub lambda: DVec3,
+    /// `βₘ` (zero for non-singular axes).
+    pub beta: DVec3,
+    /// `γ = Q(q)`.
+    pub gamma: f64,
+}
+
+impl LocalForm {
+    /// The local form of `quadric`.
+    #[must_use]
+    pub fn new(quadric: &Quadric) -> Self {
+        let frame = PrincipalFrame::new(quadric);
+        let centre = frame.centre;
+        let mut axes = frame.axes;
+        let null: Vec<usize> = (0..3).filter(|&m| frame.singular[m]).collect();
+        // Align the null space so that the linear part lies along one axis.
+        let g = quadric.half_gradient(centre);
+        let bn: DVec3 = null.iter().map(|&m| axes.col(m) * axes.col(m).dot(g)).sum();
+        if let (true, Some(dir)) = (null.len() >= 2, bn.try_normalize()) {
+            let first = dir;
+            let second = if null.len() == 2 {
+                let fixed = (0..3).find(|m| !frame.singular[*m]).unwrap_or(0);
+                axes.col(fixed).cross(first).normalize()
+            } else {
+                first.any_orthonormal_vector()
+            };
+            let mut cols = [axes.x_axis, axes.y_axis, axes.z_axis];
+            cols[null[0]] = first;
+            cols[null[1]] = second;
+            if null.len() == 3 {
+                cols[null[2]] = first.cross(second);
+            }
+            axes = DMat3::from_cols(cols[0], cols[1], cols[2]);
+        }
+        let scale = quadric.max_abs_coefficient() * (1.0 + centre.abs().element_sum());
+        let mut lambda = frame.eigenvalues;
+        let mut beta = axes.transpose() * g;
+        for m in 0..3 {
+            if frame.singular[m] {
+                lambda[m] = 0.0;
+                if beta[m].abs() <= BETA_ZERO_RELATIVE * scale {
+                    beta[m] = 0.0;
+                }
+            } else {
+                beta[m] = 0.0;
+            }
+        }
+        Self {
+            centre,
+            axes,
+            lambda,
+            beta,
+            gamma: quadric.value(centre),
+        }
+    }
+
+    /// The heightfields of the three sampling planes (up to six: two
+    /// branches for root heightfields, none along a cylinder's axis).
+    #[must_use]
+    pub fn heightfields(&self) -> Vec<Heightfield> {
+        let mut out = Vec::with_capacity(6);
+        for k in (0..3).rev() {
+            let (i, j) = match k {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            let axes = DMat3::from_cols(self.axes.col(i), self.axes.col(j), self.axes.col(k));
+            let (li, lj, lk) = (self.lambda[i], self.lambda[j], self.lambda[k]);
+            let (bi, bj, bk) = (self.beta[i], self.beta[j], self.beta[k]);
+            let base = Heightfield {
+                centre: self.centre,
+                axes,
+                normal_axis: k,
+                kind: HeightKind::Polynomial,
+                value: zero_separable(),
+                owns_x: zero_separable(),
+                owns_y: zero_separable(),
+            };
+            if lk != 0.0 {
+                // r = ρx(x) + ρy(y) + ρc.
+                let s = -1.0 / lk;
+                let fx = Quad1 {
+                    a: s * li,
+                    b: s * 2.0 * bi,
+                    c: s * self.gamma,
+                };
+                let fy = Quad1 {
+                    a: s * lj,
+                    b: s * 2.0 * bj,
+                    c: 0.0,
+                };
+                let value = Separable { x: fx, y: fy };
+                // r − r_x²/4: the x part minus (2a x + b)²/4.
+                let minus_slope = |f: Quad1| Quad1 {
+                    a: f.a - f.a * f.a,
+                    b: f.b - f.a * f.b,
+                    c: f.c - f.b * f.b / 4.0,
+                };
+                let owns_x = Separable {
+                    x: minus_slope(fx),
+                    y: fy,
+                };
+                let owns_y = Separable {
+                    x: fx,
+                    y: minus_slope(fy),
+                };
+                for positive in [true, false] {
+                    out.push(Heightfield {
+                        kind: HeightKind::Root { positive },
+                        value,
+                        owns_x,
+                        owns_y,
+                        ..base
+                    });
+                }
+            } else if bk != 0.0 {
+                let s = -1.0 / (2.0 * bk);
+                let px = Quad1 {
+                    a: s * li,
+                    b: s * 2.0 * bi,
+                    c: s * self.gamma,
+                };
+                let py = Quad1 {
+                    a: s * lj,
+                    b: s * 2.0 * bj,
+                    c: 0.0,
+                };
+                // 1 − (2a x + b)².
+                let one_minus_slope = |f: Quad1| Quad1 {
+                    a: -4.0 * f.a * f.a,
+                    b: -4.0 * f.a * f.b,
+                    c: 1.0 - f.b * f.b,
+                };
+                let zero = Quad1 {
+                    a: 0.0,
+                    b: 0.0,
+                    c: 0.0,
+                };
+                out.push(Heightfield {
+                    kind: HeightKind::Polynomial,
+                    value: Separable { x: px, y: py },
+                    owns_x: Separable {
+                        x: one_minus_slope(px),
+                        y: zero,
+                    },
+                    owns_y: Separable {
+                        x: zero,
+                        y: one_minus_slope(py),
+                    },
+                    ..base
+                });
+            }
+        }
+        out
+    }
+}
+
+fn zero_separable() -> Separable {
+    let z = Quad1 {
+        a: 0.0,
+        b: 0.0,
+        c: 0.0,
+    };
+    Separable { x: z, y: z }
+}
+
+impl Heightfield {
+    /// The height `t` above `p`, or `None` outside the heightfield's domain (`r < 0`).
+    #[must_use]
+    #[inline]
+    pub fn height(&self, p: DVec2) -> Option<f64> {
+        let v = self.value.value(p);
+        match self.kind {
+            HeightKind::Polynomial => Some(v),
+            HeightKind::Root { positive } => {
+                (v >= 0.0).then(|| if positive { v.sqrt() } else { -v.sqrt() })
+            }
+        }
+    }
+
+    /// The world point above `p` (eq. 7), or `None` outside the domain.
+    #[must_use]
+    #[inline]
+    pub fn point(&self, p: DVec2) -> Option<DVec3> {
+        let t = self.height(p)?;
+        Some(self.centre + self.axes * DVec3::new(p.x, p.y, t))
+    }
+
+    /// The plane coordinates `(x, y)` of a world point.
+    #[must_use]
+    pub fn project(&self, world: DVec3) -> DVec2 {
+        let local = self.axes.transpose() * (world - self.centre);
+        DVec2::new(local.x, local.y)
+    }
+
+    /// The distortion `δ(x, y) = |n| / |nₖ|` (eq. 13); `+∞` on the domain's rim.
+    #[must_use]
+    pub fn distortion(&self, p: DVec2) -> f64 {
+        let sx = self.value.x.slope(p.x);
+        let sy = self.value.y.slope(p.y);
+        match self.kind {
+            HeightKind::Polynomial => (1.0 + sx * sx + sy * sy).sqrt(),
+            HeightKind::Root { .. } => {
+                let r = self.value.value(p);
+                if r <= 0.0 {
+                    f64::INFINITY
+                } else {
+                    (1.0 + (sx * sx + sy * sy) / (4.0 * r)).sqrt()
+                }
+            }
+        }
+    }
+
+    /// Bounds `(min, max)` of the distortion over the box `[lo, hi]` (§3.4).
+    ///
+    /// Polynomial heightfields: exact (both slopes are separable). Root
+    /// heightfields without linear terms, on a box inside one quadrant: the
+    /// extrema lie at the corners (the paper's property of eq. 13). Otherwise
+    /// interval bounds `δ² ∈ 1 + [N₋/r₊, N₊/r₋]`, `N = (r_x² + r_y²)/4`.
+    /// The maximum is `+∞` when the box reaches the domain's rim.
+    #[must_use]
+    pub fn distortion_bounds(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
+        let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
+        let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
+        match self.kind {
+            HeightKind::Polynomial => ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt()),
+            HeightKind::Root { .. } => {
+                let (r0, r1) = self.value.range(lo, hi);
+                if r1 <= 0.0 {
+                    return (f64::INFINITY, f64::INFINITY);
+                }
+                let pure = self.value.x.b == 0.0 && self.value.y.b == 0.0;
+                let quadrant = lo.x * hi.x >= 0.0 && lo.y * hi.y >= 0.0;
+                if pure && quadrant && r0 > 0.0 {
+                    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+                    let d = corners.map(|c| self.distortion(c));
+                    let min = d.iter().copied().fold(f64::INFINITY, f64::min);
+                    let max = d.iter().copied().fold(0.0, f64::max);
+                    return (min, max);
+                }
+                let min = (1.0 + (ax0 + ay0) / (4.0 * r1)).sqrt();
+                let max = if r0 > 0.0 {
+                    (1.0 + (ax1 + ay1) / (4.0 * r0)).sqrt()
+                } else {
+                    f64::INFINITY
+                };
+                (min, max)
+            }
+        }
+    }
+
+    /// Whether no point of the box `[lo, hi]` is in this plane's
+    /// low-distortion region or in the heightfield's domain (exact for boxes).
+    #[must_use]
+    pub fn box_is_foreign(&self, lo: DVec2, hi: DVec2) -> bool {
+        if matches!(self.kind, HeightKind::Root { .. }) && self.value.range(lo, hi).1 < 0.0 {
+            return true;
+        }
+        self.owns_x.range(lo, hi).1 < 0.0 || self.owns_y.range(lo, hi).1 < 0.0
+    }
+
+    /// Whether the whole box `[lo, hi]` lies in this plane's low-distortion region.
+    #[must_use]
+    pub fn box_is_owned(&self, lo: DVec2, hi: DVec2) -> bool {
+        self.owns_x.range(lo, hi).0 >= 0.0 && self.owns_y.range(lo, hi).0 >= 0.0
+    }
+
+    /// `Some((sx, sy))` when the line where `|nᵢ| = |nⱼ|` is `|sx·x| = |sy·y|`
+    /// (no linear terms, both slopes non-zero): the octant diagonals of §4.1.
+    #[must_use]
+    pub fn octant_slopes(&self) -> Option<(f64, f64)> {
+        let (fx, fy) = (self.value.x, self.value.y);
+        (fx.b == 0.0 && fy.b == 0.0 && fx.a != 0.0 && fy.a != 0.0).then_some((fx.a, fy.a))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_heightfields_lie_on_the_sphere() {
+        let q = Quadric::sphere(DVec3::new(1.0, 2.0, 3.0), 2.0).unwrap();
+        let local = LocalForm::new(&q);
+        let hfs = local.heightfields();
+        assert_eq!(hfs.len(), 6);
+        for h in &hfs {
+            let p = h.point(DVec2::new(0.5, -0.7)).unwrap();
+            assert!(q.value(p).abs() < 1e-12);
+            assert!(h.point(DVec2::new(3.0, 0.0)).is_none());
+            // At the pole the distortion is 1.
+            assert!((h.distortion(DVec2::ZERO) - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn paraboloid_and_plane_have_polynomial_heightfields() {
+        let para = Quadric::elliptic_paraboloid(DVec2::new(1.0, 2.0)).unwrap();
+        let hfs = LocalForm::new(&para).heightfields();
+        let poly: Vec<_> = hfs
+            .iter()
+            .filter(|h| h.kind == HeightKind::Polynomial)
+            .collect();
+        assert_eq!(poly.len(), 1);
+        let p = poly[0].point(DVec2::new(0.3, 0.4)).unwrap();
+        assert!(para.value(p).abs() < 1e-12);
+        for h in &hfs {
+            if let Some(p) = h.point(DVec2::new(0.2, 0.9)) {
+                assert!(para.value(p).abs() < 1e-9, "{h:?}");
+            }
+        }
+        let plane = Quadric::half_space(DVec3::new(1.0, 2.0, 2.0), 3.0).unwrap();
+        let hfs = LocalForm::new(&plane).heightfields();
+        assert_eq!(hfs.len(), 1);
+        assert!((hfs[0].distortion(DVec2::new(5.0, 7.0)) - 1.0).abs() < 1e-12);
+        let p = hfs[0].point(DVec2::new(5.0, 7.0)).unwrap();
+        assert!(plane.value(p).abs() < 1e-9);
+    }
+
+    #[test]
+    fn cylinder_has_no_axial_heightfield() {
+        let q = Quadric::cylinder(DVec3::ZERO, DVec3::Z, 1.0).unwrap();
+        assert_eq!(LocalForm::new(&q).heightfields().len(), 4);
+    }
+
+    #[test]
+    fn corner_distortion_bounds_hold_inside() {
+        // Dense check of the corner property for all sign patterns.
+        for (ax, ay, ac) in [
+            (-1.0, -2.0, 4.0),
+            (1.0, -0.5, 1.0),
+            (0.5, 2.0, -0.3),
+            (-0.3, 1.5, 2.0),
+            (2.0, 3.0, 0.5),
+        ] {
+            let f = |a: f64, c: f64| Quad1 { a, b: 0.0, c };
+            let h = Heightfield {
+                centre: DVec3::ZERO,
+                axes: DMat3::IDENTITY,
+                normal_axis: 2,
+                kind: HeightKind::Root { positive: true },
+                value: Separable {
+                    x: f(ax, ac),
+                    y: f(ay, 0.0),
+                },
+                owns_x: zero_separable(),
+                owns_y: zero_separable(),
+            };
+            for (lo, hi) in [
+                (DVec2::new(0.1, 0.2), DVec2::new(0.9, 0.6)),
+                (DVec2::new(0.0, 0.0), DVec2::new(0.5, 0.5)),
+                (DVec2::new(0.7, 0.1), DVec2::new(1.3, 1.1)),
+            ] {
+                if h.value.range(lo, hi).0 <= 0.0 {
+                    continue;
+                }
+                let (min, max) = h.distortion_bounds(lo, hi);
+                for s in 0..=20 {
+                    for t in 0..=20 {
+                        let p = lo + (hi - lo) * DVec2::new(f64::from(s), f64::from(t)) / 20.0;
+                        let d = h.distortion(p);
+                        assert!(d <= max * (1.0 + 1e-12) && d >= min * (1.0 - 1e-12));
+                    }
+                }
+            }
+        }
+    }
+}

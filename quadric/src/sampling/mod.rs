@@ -1,0 +1,264 @@
+//! Adaptive sampling of a CSG surface with a coverage guarantee (paper 2, §3.2, §3.4, §4).
+//!
+//! Guarantee: with splat radius `r`, every point of the CSG surface inside
+//! the bounding sphere has a sample on the same quadric within distance `r`
+//! (up to the paper's threshold: unclassified regions smaller than
+//! `min_region_fraction · r` are dropped), and every sample lies on the CSG
+//! surface.
+//!
+//! Pipeline, per literal `L_ab` of the normal form (each product's copy of a
+//! quadric is its own surface instance, §5):
+//! 1. the quadric's local form and up to six heightfields
+//!    ([`heightfield`], §3.2);
+//! 2. each heightfield's domain box, cut into basic regions ([`regions`],
+//!    §4.1: rectangles, triangles, elliptic and hyperbolic triangles);
+//! 3. each basic region subdivided and classified with the quadric-relative
+//!    CSG distance (eq. 22) and distortion bounds (§3.4), filled with samples
+//!    where it lies on the surface (`subdivide`, §4.2).
+//!
+//! Basic regions run in parallel (rayon); the output order is the order of
+//! the basic regions, so it does not depend on the number of threads.
+
+pub mod heightfield;
+pub mod regions;
+mod subdivide;
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use crate::csg::{CsgDistance, Dnf, Side};
+use crate::error::{Error, Result, positive};
+use heightfield::{Heightfield, LocalForm};
+use regions::{Region, RegionKind, basic_regions};
+pub use subdivide::DISTORTION_CAP;
+use subdivide::RegionJob;
+
+/// The sphere outside which no surface is sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundingSphere {
+    /// Centre.
+    pub centre: DVec3,
+    /// Radius (positive).
+    pub radius: f64,
+}
+
+impl BoundingSphere {
+    /// A sphere with finite `centre` and positive `radius`.
+    ///
+    /// Errors: [`Error::NonFinite`], [`Error::NonPositive`].
+    pub fn new(centre: DVec3, radius: f64) -> Result<Self> {
+        if !centre.is_finite() {
+            return Err(Error::NonFinite {
+                what: "bounding sphere centre",
+            });
+        }
+        positive(radius, "bounding sphere radius")?;
+        Ok(Self { centre, radius })
+    }
+
+    /// `|p − centre| − radius`: negative inside.
+    #[must_use]
+    #[inline]
+    pub fn signed_distance(&self, p: DVec3) -> f64 {
+        (p - self.centre).length() - self.radius
+    }
+}
+
+/// Parameters of [`sample`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleOptions {
+    /// The splat radius `r`: every surface point gets a sample within `r`.
+    pub radius: f64,
+    /// Only the surface inside this sphere is sampled.
+    pub bounds: BoundingSphere,
+    /// Unclassified regions smaller than this fraction of `r` (plane
+    /// diameter) are dropped (§4.2; the paper suggests `0.1`).
+    pub min_region_fraction: f64,
+}
+
+impl SampleOptions {
+    /// Options with splat radius `radius` inside `bounds` and the default
+    /// threshold `0.1`.
+    ///
+    /// Errors: [`Error::NonPositive`] / [`Error::NonFinite`] for the radius.
+    pub fn new(radius: f64, bounds: BoundingSphere) -> Result<Self> {
+        positive(radius, "splat radius")?;
+        Ok(Self {
+            radius,
+            bounds,
+            min_region_fraction: 0.1,
+        })
+    }
+}
+
+/// One surface sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// The point on the quadric and on the CSG surface.
+    pub position: DVec3,
+    /// The solid's outward unit normal there (zero at a singular point).
+    pub normal: DVec3,
+    /// Index into [`Dnf::quadrics`].
+    pub quadric: u32,
+    /// The product `a` of the literal `L_ab` it was sampled for.
+    pub product: u32,
+    /// The literal `b` within that product.
+    pub literal: u32,
+    /// Index into [`SampleSet::patches`]: the heightfield it came from.
+    pub patch: u32,
+    /// Its plane coordinates on that heightfield.
+    pub uv: DVec2,
+    /// The radius it must cover, `≤ r` (reduced where regions are small, §6.1).
+    pub radius: f64,
+}
+
+/// A heightfield of one literal, as referenced by [`Sample::patch`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Patch {
+    /// Product of the literal.
+    pub product: u32,
+    /// Literal within the product.
+    pub literal: u32,
+    /// Index into [`Dnf::quadrics`].
+    pub quadric: u32,
+    /// The heightfield.
+    pub heightfield: Heightfield,
+}
+
+/// Counters of one sampling run (paper 2, Table 2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SamplingStats {
+    /// Basic regions built (§4.1).
+    pub basic_regions: u64,
+    /// Basic regions by kind: triangles, rectangles, elliptic, hyperbolic.
+    pub kinds: [u64; 4],
+    /// Regions visited during subdivision.
+    pub regions: u64,
+    /// Evaluations of the eq.-22 distance.
+    pub distance_queries: u64,
+}
+
+impl SamplingStats {
+    fn add(&mut self, other: &Self) {
+        self.basic_regions += other.basic_regions;
+        for (a, b) in self.kinds.iter_mut().zip(other.kinds) {
+            *a += b;
+        }
+        self.regions += other.regions;
+        self.distance_queries += other.distance_queries;
+    }
+}
+
+/// The result of [`sample`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleSet {
+    /// The samples, in a deterministic order.
+    pub samples: Vec<Sample>,
+    /// The heightfields the samples refer to.
+    pub patches: Vec<Patch>,
+    /// Counters.
+    pub stats: SamplingStats,
+    /// The options used.
+    pub options: SampleOptions,
+}
+
+/// Samples the surface of `dnf` inside `options.bounds` with radius
+/// `options.radius`, in parallel on the current rayon pool.
+///
+/// An empty normal form gives no samples. Errors: [`Error::NonPositive`] /
+/// [`Error::NonFinite`] for invalid options.
+pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
+    positive(options.radius, "splat radius")?;
+    BoundingSphere::new(options.bounds.centre, options.bounds.radius)?;
+    if !options.min_region_fraction.is_finite() || options.min_region_fraction < 0.0 {
+        return Err(Error::NonPositive {
+            what: "minimum region fraction",
+            value: options.min_region_fraction,
+        });
+    }
+    let distance = CsgDistance::new(dnf);
+    let sphere = options.bounds;
+    let mut patches = Vec::new();
+    let mut jobs: Vec<(usize, Region, RegionKind)> = Vec::new();
+    let forms: Vec<LocalForm> = dnf
+        .quadrics()
+        .iter()
+        .map(|q| LocalForm::new(&q.quadric))
+        .collect();
+    for (a, product) in dnf.products().iter().enumerate() {
+        for (b, literal) in product.iter().enumerate() {
+            for hf in forms[literal.quadric].heightfields() {
+                let c = hf.project(sphere.centre);
+                let lo = c - DVec2::splat(sphere.radius);
+                let hi = c + DVec2::splat(sphere.radius);
+                let index = patches.len();
+                patches.push(Patch {
+                    product: index_u32(a),
+                    literal: index_u32(b),
+                    quadric: index_u32(literal.quadric),
+                    heightfield: hf,
+                });
+                for (region, kind) in basic_regions(&hf, lo, hi) {
+                    jobs.push((index, region, kind));
+                }
+            }
+        }
+    }
+    let results: Vec<(Vec<Sample>, SamplingStats)> = jobs
+        .par_iter()
+        .map(|(patch_index, region, kind)| {
+            let patch = &patches[*patch_index];
+            let literal = dnf.products()[patch.product as usize][patch.literal as usize];
+            let quadric = &dnf.quadrics()[literal.quadric].quadric;
+            let job = RegionJob {
+                distance: &distance,
+                quadric,
+                quadric_index: patch.quadric,
+                product: patch.product,
+                literal: patch.literal,
+                patch: index_u32(*patch_index),
+                outward_sign: match literal.side {
+                    Side::Inside => 1.0,
+                    Side::Outside => -1.0,
+                },
+                heightfield: &patch.heightfield,
+                sphere,
+                options,
+            };
+            let mut stats = SamplingStats {
+                basic_regions: 1,
+                ..SamplingStats::default()
+            };
+            stats.kinds[kind_index(*kind)] = 1;
+            let mut out = Vec::new();
+            job.run(region, &mut out, &mut stats);
+            (out, stats)
+        })
+        .collect();
+    let mut stats = SamplingStats::default();
+    let mut samples = Vec::with_capacity(results.iter().map(|r| r.0.len()).sum());
+    for (s, st) in results {
+        samples.extend(s);
+        stats.add(&st);
+    }
+    Ok(SampleSet {
+        samples,
+        patches,
+        stats,
+        options: *options,
+    })
+}
+
+fn kind_index(kind: RegionKind) -> usize {
+    match kind {
+        RegionKind::Triangle => 0,
+        RegionKind::Rectangle => 1,
+        RegionKind::EllipticTriangle => 2,
+        RegionKind::HyperbolicTriangle => 3,
+    }
+}
+
+/// Indices into normal forms fit in `u32` (the product limit is far lower).
+fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
+}

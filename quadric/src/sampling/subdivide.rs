@@ -1,0 +1,185 @@
+//! Adaptive subdivision of one basic region with the coverage guarantee
+//! (paper 2, §4.2, Fig. 8b–c).
+//!
+//! Notation: `r` the splat radius (world), `d(v)` the quadric-relative CSG
+//! distance of eq. 22 at the surface point above corner `v`, also bounded by
+//! the bounding sphere (`max(d₂₂, |x − C| − R)`, still a valid eq.-22
+//! distance for the solid clipped to the sphere), `δ₊` the region's maximum
+//! distortion (§3.4). A world radius `ρ` maps to at least `ρ/δ₊` in the
+//! plane, since the heightfield stretches plane lengths by at most `δ₊`.
+//!
+//! Per region:
+//! 1. drop it if no point is in the plane's low-distortion region, the
+//!    heightfield's domain or the bounding sphere;
+//! 2. subdivide while `δ₊` exceeds [`DISTORTION_CAP`] (only near the rim,
+//!    outside the low-distortion region);
+//! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
+//!    region's cover radius and all signs agree: fill (negative) or drop
+//!    (positive);
+//! 4. if a corner is on the CSG surface and the region lies within plane
+//!    distance `r/δ₊` of it, emit that one sample with the reduced radius
+//!    `reach·δ₊` (§6.1);
+//! 5. else halve the longest edge and recurse; unclassified regions smaller
+//!    than `min_region_fraction·r` are dropped (the paper's threshold).
+
+use glam::{DVec2, DVec3};
+
+use crate::csg::CsgDistance;
+use crate::quadric::Quadric;
+use crate::sampling::heightfield::Heightfield;
+use crate::sampling::regions::Region;
+use crate::sampling::{BoundingSphere, Sample, SampleOptions, SamplingStats};
+
+/// Regions whose distortion bound exceeds this are subdivided before they
+/// are classified. Any value `≥ √3` keeps the guarantee; larger values
+/// stop earlier near ownership seams at the cost of overlap there.
+pub const DISTORTION_CAP: f64 = 2.5;
+
+/// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
+const MAX_DEPTH: u32 = 50;
+
+/// Everything one basic region's subdivision reads.
+pub(crate) struct RegionJob<'a> {
+    pub distance: &'a CsgDistance<'a>,
+    pub quadric: &'a Quadric,
+    pub quadric_index: u32,
+    pub product: u32,
+    pub literal: u32,
+    pub patch: u32,
+    pub outward_sign: f64,
+    pub heightfield: &'a Heightfield,
+    pub sphere: BoundingSphere,
+    pub options: &'a SampleOptions,
+}
+
+impl RegionJob<'_> {
+    /// Subdivides `region`, appending samples to `out`.
+    pub(crate) fn run(&self, region: &Region, out: &mut Vec<Sample>, stats: &mut SamplingStats) {
+        self.visit(region, 0, out, stats);
+    }
+
+    fn visit(&self, region: &Region, depth: u32, out: &mut Vec<Sample>, stats: &mut SamplingStats) {
+        stats.regions += 1;
+        let hf = self.heightfield;
+        let (lo, hi) = region.bounds();
+        if hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
+            return;
+        }
+        let r = self.options.radius;
+        let small = region.diameter() < self.options.min_region_fraction * r;
+        if depth >= MAX_DEPTH {
+            return;
+        }
+        let (_, delta) = hf.distortion_bounds(lo, hi);
+        if delta <= DISTORTION_CAP {
+            let mut corners = [(DVec3::ZERO, f64::NAN); 4];
+            let verts = region.vertices();
+            let mut all_known = true;
+            for (c, v) in corners.iter_mut().zip(verts) {
+                match hf.point(*v) {
+                    Some(p) => {
+                        stats.distance_queries += 1;
+                        *c = (p, self.classify(p));
+                    }
+                    None => all_known = false,
+                }
+            }
+            let corners = &corners[..verts.len()];
+            if all_known {
+                let cover = region.cover_radius();
+                let negative = corners.iter().all(|c| c.1 < 0.0);
+                let positive = corners.iter().all(|c| c.1 > 0.0);
+                let reached = corners.iter().all(|c| c.1.abs() / delta >= cover);
+                if reached && positive {
+                    return;
+                }
+                if reached && negative {
+                    self.fill(region, delta, out);
+                    return;
+                }
+            }
+            // One sample at a surface corner covers a small enough region.
+            for (i, c) in corners.iter().enumerate() {
+                let reach = region.reach(i) * delta;
+                if c.1 < 0.0 && reach <= r {
+                    out.push(self.sample(verts[i], reach.max(f64::MIN_POSITIVE)));
+                    return;
+                }
+            }
+        }
+        if small {
+            return;
+        }
+        for child in region.split() {
+            self.visit(&child, depth + 1, out, stats);
+        }
+    }
+
+    /// `max(d₂₂(p), |p − C| − R)`.
+    fn classify(&self, p: DVec3) -> f64 {
+        let d = self
+            .distance
+            .relative_distance(self.product as usize, self.literal as usize, p);
+        d.max(self.sphere.signed_distance(p))
+    }
+
+    fn outside_sphere(&self, lo: DVec2, hi: DVec2) -> bool {
+        let c = self.heightfield.project(self.sphere.centre);
+        c.clamp(lo, hi).distance(c) > self.sphere.radius
+    }
+
+    /// Covers a region that lies wholly on the CSG surface: a grid of cells
+    /// with half-diagonal at most `r/δ₊`, one sample per cell at its centre
+    /// moved into the region.
+    fn fill(&self, region: &Region, delta: f64, out: &mut Vec<Sample>) {
+        let (lo, hi) = region.bounds();
+        let size = hi - lo;
+        let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
+        let nx = (size.x / step).ceil().max(1.0);
+        let ny = (size.y / step).ceil().max(1.0);
+        let cell = DVec2::new(size.x / nx, size.y / ny);
+        let half_diagonal = 0.5 * cell.length();
+        let radius = (half_diagonal * delta).min(self.options.radius);
+        // Cell counts are small positive integers stored in f64.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let (nx, ny) = (nx as u32, ny as u32);
+        for j in 0..ny {
+            for i in 0..nx {
+                let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, f64::from(j) + 0.5);
+                let p = region.closest_point(centre);
+                if p.distance(centre) <= half_diagonal {
+                    out.push(self.sample(p, radius));
+                }
+            }
+        }
+    }
+
+    /// The sample above plane point `uv`, polished onto the quadric.
+    fn sample(&self, uv: DVec2, radius: f64) -> Sample {
+        let raw = self
+            .heightfield
+            .point(uv)
+            .unwrap_or(self.heightfield.centre);
+        let g = self.quadric.gradient(raw);
+        let g2 = g.length_squared();
+        let position = if g2 > 0.0 {
+            raw - g * (self.quadric.value(raw) / g2)
+        } else {
+            raw
+        };
+        let normal = self
+            .quadric
+            .normal(position)
+            .map_or(DVec3::ZERO, |n| n * self.outward_sign);
+        Sample {
+            position,
+            normal,
+            quadric: self.quadric_index,
+            product: self.product,
+            literal: self.literal,
+            patch: self.patch,
+            uv,
+            radius,
+        }
+    }
+}
