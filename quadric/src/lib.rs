@@ -19,6 +19,12 @@
 //! - [`csg`] — the CSG DAG ([`CsgDag`]), its normal form ([`Dnf`], §5) and
 //!   the CSG distances of eqs. 19 and 22 ([`CsgDistance`]).
 //! - [`QuadricDistance`] — conservative signed distance (§3.3, eq. 12).
+//! - [`sampling`] — adaptive sampling with the coverage guarantee (§3.2,
+//!   §3.4, §4): heightfields, basic regions, subdivision; [`sample`].
+//! - [`splats`] — splats, quadric buffer and deduplicated clip lists for
+//!   the renderer (§6); [`SplatSet`].
+//! - [`trace`] — the CPU reference ray tracer ([`Camera`], [`trace_image`]),
+//!   ground truth for the renderer.
 //! - [`Scene`] — the RON scene file format (primitives, operations,
 //!   transforms, colours) and its loader.
 //! - [`Error`] — the one error type: what was wrong with the input and how
@@ -65,6 +71,7 @@ pub mod ray;
 pub mod sampling;
 pub mod scene;
 mod shapes;
+pub mod splats;
 pub mod trace;
 
 pub use csg::{CsgDag, CsgDistance, Dnf, Literal, NodeId, Side};
@@ -76,4 +83,5 @@ pub use quadric::{AFFINE_TOLERANCE, Quadric, affine_inverse, snap_affine};
 pub use ray::{Hit, LineHits, Ray, Span};
 pub use sampling::{BoundingSphere, Sample, SampleOptions, SampleSet, sample};
 pub use scene::Scene;
+pub use splats::{GpuQuadric, GpuSplat, OUTSIDE_FLAG, QuadricRecord, Splat, SplatSet};
 pub use trace::{Camera, NO_HIT, TraceHit, TraceImage, trace_image, trace_ray};

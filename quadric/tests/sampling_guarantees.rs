@@ -5,8 +5,6 @@
 
 mod common;
 
-use std::collections::HashMap;
-
 use chisel_quadric::csg::Dnf;
 use chisel_quadric::{BoundingSphere, SampleOptions, SampleSet, sample, trace_image};
 use glam::DVec3;
@@ -27,65 +25,13 @@ fn sampled(name: &str, centre: [f64; 3], bound: f64, radius: f64) -> (Dnf, Sampl
     (dnf, set)
 }
 
-/// Sample positions and radii per `(quadric, grid cell)`.
-type Buckets = HashMap<(u32, [i64; 3]), Vec<(DVec3, f64)>>;
-
-/// Samples bucketed by quadric and grid cell of size `cell`.
-struct Grid {
-    cell: f64,
-    buckets: Buckets,
-}
-
-impl Grid {
-    fn key(&self, p: DVec3) -> [i64; 3] {
-        let k = (p / self.cell).floor();
-        #[allow(clippy::cast_possible_truncation)]
-        [k.x as i64, k.y as i64, k.z as i64]
-    }
-
-    fn new(set: &SampleSet, cell: f64) -> Self {
-        let mut grid = Self {
-            cell,
-            buckets: HashMap::new(),
-        };
-        for s in &set.samples {
-            let key = grid.key(s.position);
-            grid.buckets
-                .entry((s.quadric, key))
-                .or_default()
-                .push((s.position, s.radius));
-        }
-        grid
-    }
-
-    /// Whether some sample of `quadric` covers `p` (within its own radius).
-    fn covered(&self, quadric: u32, p: DVec3, slack: f64) -> bool {
-        let k = self.key(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let key = (quadric, [k[0] + dx, k[1] + dy, k[2] + dz]);
-                    let near = self
-                        .buckets
-                        .get(&key)
-                        .is_some_and(|v| v.iter().any(|(s, r)| s.distance(p) <= r * (1.0 + slack)));
-                    if near {
-                        return true;
-                    }
-                }
-            }
-        }
-        false
-    }
-}
-
 #[test]
 fn traced_surface_is_covered() {
     for (name, centre, bound) in SCENES {
         for radius in [bound / 8.0, bound / 25.0] {
             let (dnf, set) = sampled(name, centre, bound, radius);
             assert!(!set.samples.is_empty(), "{name}: no samples");
-            let grid = Grid::new(&set, radius);
+            let grid = common::SampleGrid::new(&set, radius);
             let sphere = set.options.bounds;
             let (mut checked, mut missed) = (0, 0);
             for camera in common::cameras(DVec3::from(centre), 2.5 * bound, 48) {

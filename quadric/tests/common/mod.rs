@@ -6,6 +6,9 @@ use chisel_quadric::Quadric;
 use glam::{DMat4, DQuat, DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::collections::HashMap;
+
+use chisel_quadric::SampleSet;
 
 /// A deterministic generator for test `seed`.
 pub fn rng(seed: u64) -> ChaCha8Rng {
@@ -118,4 +121,57 @@ pub fn cameras(centre: DVec3, distance: f64, size: u32) -> Vec<chisel_quadric::C
                 .expect("valid camera")
         })
         .collect()
+}
+
+/// Sample positions and radii per `(quadric, grid cell)`.
+pub type Buckets = HashMap<(u32, [i64; 3]), Vec<(DVec3, f64)>>;
+
+/// Samples bucketed by quadric and grid cell of size `cell`.
+pub struct SampleGrid {
+    cell: f64,
+    buckets: Buckets,
+}
+
+impl SampleGrid {
+    fn key(&self, p: DVec3) -> [i64; 3] {
+        let k = (p / self.cell).floor();
+        #[allow(clippy::cast_possible_truncation)]
+        [k.x as i64, k.y as i64, k.z as i64]
+    }
+
+    /// Buckets the samples of `set` in cells of size `cell`.
+    pub fn new(set: &SampleSet, cell: f64) -> Self {
+        let mut grid = Self {
+            cell,
+            buckets: HashMap::new(),
+        };
+        for s in &set.samples {
+            let key = grid.key(s.position);
+            grid.buckets
+                .entry((s.quadric, key))
+                .or_default()
+                .push((s.position, s.radius));
+        }
+        grid
+    }
+
+    /// Whether some sample of `quadric` covers `p` (within its own radius).
+    pub fn covered(&self, quadric: u32, p: DVec3, slack: f64) -> bool {
+        let k = self.key(p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let key = (quadric, [k[0] + dx, k[1] + dy, k[2] + dz]);
+                    let near = self
+                        .buckets
+                        .get(&key)
+                        .is_some_and(|v| v.iter().any(|(s, r)| s.distance(p) <= r * (1.0 + slack)));
+                    if near {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
 }
