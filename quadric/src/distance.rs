@@ -74,11 +74,14 @@ impl QuadricDistance {
     #[must_use]
     #[inline]
     pub fn distance(&self, x0: DVec3) -> f64 {
-        let q0 = self.quadric.value(x0);
+        // Q(x) = x·(Ax − b) − b·x + c: the value from the half gradient.
+        let h = self.quadric.half_gradient(x0);
+        let k = self.quadric.coefficients();
+        let q0 = x0.dot(h) + (k[3] * x0.x + k[6] * x0.y + k[8] * x0.z) + k[9];
         if q0 == 0.0 {
             return 0.0;
         }
-        let g = self.quadric.half_gradient(x0).length();
+        let g = h.length();
         let lambda = if q0 < 0.0 {
             self.lambda_max
         } else {

@@ -40,30 +40,66 @@ impl<'a> CsgDistance<'a> {
         self.dnf
     }
 
-    fn literal(&self, product: usize, literal: usize, p: DVec3) -> f64 {
-        let l = self.dnf.products()[product][literal];
-        let d = self.quadrics[l.quadric].distance(p);
-        match l.side {
-            Side::Inside => d,
-            Side::Outside => -d,
-        }
-    }
-
     /// `maxⱼ d(L_ij, p)` over the literals of product `i` except `skip`.
     fn product_distance(&self, i: usize, skip: Option<usize>, p: DVec3) -> f64 {
-        (0..self.dnf.products()[i].len())
-            .filter(|&j| Some(j) != skip)
-            .map(|j| self.literal(i, j, p))
-            .fold(f64::NEG_INFINITY, f64::max)
+        self.product_distance_capped(i, skip, p, f64::INFINITY)
+    }
+
+    /// As [`product_distance`](Self::product_distance), but stops as soon as
+    /// the running maximum reaches `cap` (the result is then `≥ cap`, which
+    /// is all a surrounding minimum needs to know).
+    fn product_distance_capped(&self, i: usize, skip: Option<usize>, p: DVec3, cap: f64) -> f64 {
+        let mut max = f64::NEG_INFINITY;
+        for (j, l) in self.dnf.products()[i].iter().enumerate() {
+            if Some(j) == skip {
+                continue;
+            }
+            let d = self.quadrics[l.quadric].distance(p);
+            let d = match l.side {
+                Side::Inside => d,
+                Side::Outside => -d,
+            };
+            max = max.max(d);
+            if max >= cap {
+                break;
+            }
+        }
+        max
+    }
+
+    /// `minᵢ maxⱼ d(L_ij, p)` over the products other than `skip`.
+    fn union_distance(&self, skip: Option<usize>, p: DVec3) -> f64 {
+        let mut hint = usize::MAX;
+        self.union_distance_hinted(skip, p, &mut hint)
+    }
+
+    /// As [`union_distance`](Self::union_distance), evaluating product
+    /// `hint` first (a good guess makes the others stop early) and storing
+    /// the minimizing product in it.
+    fn union_distance_hinted(&self, skip: Option<usize>, p: DVec3, hint: &mut usize) -> f64 {
+        let n = self.dnf.products().len();
+        let mut min = f64::INFINITY;
+        let first = (*hint < n && Some(*hint) != skip).then_some(*hint);
+        if let Some(h) = first {
+            min = self.product_distance(h, None, p);
+        }
+        for i in 0..n {
+            if Some(i) != skip && Some(i) != first {
+                let d = self.product_distance_capped(i, None, p, min);
+                if d < min {
+                    min = d;
+                    *hint = i;
+                }
+            }
+        }
+        min
     }
 
     /// The conservative signed distance to the CSG surface, eq. 19: negative
     /// inside the solid, `+∞` for an empty solid.
     #[must_use]
     pub fn distance(&self, p: DVec3) -> f64 {
-        (0..self.dnf.products().len())
-            .map(|i| self.product_distance(i, None, p))
-            .fold(f64::INFINITY, f64::min)
+        self.union_distance(None, p)
     }
 
     /// The quadric-relative distance `d_ab(S, p)` of eq. 22 for literal `b` of
@@ -73,11 +109,20 @@ impl<'a> CsgDistance<'a> {
     /// (panics otherwise; indices come from iterating the [`Dnf`]).
     #[must_use]
     pub fn relative_distance(&self, a: usize, b: usize, p: DVec3) -> f64 {
-        let others = (0..self.dnf.products().len())
-            .filter(|&i| i != a)
-            .map(|i| self.product_distance(i, None, p))
-            .fold(f64::INFINITY, f64::min);
+        let mut hint = usize::MAX;
+        self.relative_distance_hinted(a, b, p, &mut hint)
+    }
+
+    /// [`relative_distance`](Self::relative_distance) with a hint: the
+    /// product of the other terms evaluated first, updated to the nearest
+    /// one. Queries at nearby points that share a hint skip most literals of
+    /// far products; the result is the same for every hint.
+    ///
+    /// Preconditions as [`relative_distance`](Self::relative_distance).
+    #[must_use]
+    pub fn relative_distance_hinted(&self, a: usize, b: usize, p: DVec3, hint: &mut usize) -> f64 {
         let own = self.product_distance(a, Some(b), p);
+        let others = self.union_distance_hinted(Some(a), p, hint);
         (-others).max(own)
     }
 }

@@ -224,6 +224,7 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
                 heightfield: &patch.heightfield,
                 sphere,
                 options,
+                hint: std::cell::Cell::new(usize::MAX),
             };
             let mut stats = SamplingStats {
                 basic_regions: 1,

@@ -22,6 +22,8 @@
 //! 5. else halve the longest edge and recurse; unclassified regions smaller
 //!    than `min_region_fraction·r` are dropped (the paper's threshold).
 
+use std::cell::Cell;
+
 use glam::{DVec2, DVec3};
 
 use crate::csg::CsgDistance;
@@ -50,46 +52,71 @@ pub(crate) struct RegionJob<'a> {
     pub heightfield: &'a Heightfield,
     pub sphere: BoundingSphere,
     pub options: &'a SampleOptions,
+    /// The product nearest to the last query (see [`CsgDistance::relative_distance_hinted`]).
+    pub hint: Cell<usize>,
+}
+
+/// A region corner: not yet evaluated, outside the heightfield's domain, or
+/// its surface point with the classification `d`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Corner {
+    Unknown,
+    OutsideDomain,
+    Known(DVec3, f64),
 }
 
 impl RegionJob<'_> {
     /// Subdivides `region`, appending samples to `out`.
     pub(crate) fn run(&self, region: &Region, out: &mut Vec<Sample>, stats: &mut SamplingStats) {
-        self.visit(region, 0, out, stats);
+        self.visit(region, [Corner::Unknown; 4], 0, out, stats);
     }
 
-    fn visit(&self, region: &Region, depth: u32, out: &mut Vec<Sample>, stats: &mut SamplingStats) {
+    fn evaluate(&self, v: DVec2, stats: &mut SamplingStats) -> Corner {
+        match self.heightfield.point(v) {
+            Some(p) => {
+                stats.distance_queries += 1;
+                Corner::Known(p, self.classify(p))
+            }
+            None => Corner::OutsideDomain,
+        }
+    }
+
+    fn visit(
+        &self,
+        region: &Region,
+        mut corners: [Corner; 4],
+        depth: u32,
+        out: &mut Vec<Sample>,
+        stats: &mut SamplingStats,
+    ) {
         stats.regions += 1;
         let hf = self.heightfield;
         let (lo, hi) = region.bounds();
-        if hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
+        if depth >= MAX_DEPTH || hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
             return;
         }
         let r = self.options.radius;
         let small = region.diameter() < self.options.min_region_fraction * r;
-        if depth >= MAX_DEPTH {
-            return;
-        }
+        let verts = region.vertices();
         let (_, delta) = hf.distortion_bounds(lo, hi);
         if delta <= DISTORTION_CAP {
-            let mut corners = [(DVec3::ZERO, f64::NAN); 4];
-            let verts = region.vertices();
-            let mut all_known = true;
             for (c, v) in corners.iter_mut().zip(verts) {
-                match hf.point(*v) {
-                    Some(p) => {
-                        stats.distance_queries += 1;
-                        *c = (p, self.classify(p));
-                    }
-                    None => all_known = false,
+                if *c == Corner::Unknown {
+                    *c = self.evaluate(*v, stats);
                 }
             }
-            let corners = &corners[..verts.len()];
-            if all_known {
+            let known: Vec<(DVec3, f64)> = corners[..verts.len()]
+                .iter()
+                .filter_map(|c| match c {
+                    Corner::Known(p, d) => Some((*p, *d)),
+                    _ => None,
+                })
+                .collect();
+            if known.len() == verts.len() {
                 let cover = region.cover_radius();
-                let negative = corners.iter().all(|c| c.1 < 0.0);
-                let positive = corners.iter().all(|c| c.1 > 0.0);
-                let reached = corners.iter().all(|c| c.1.abs() / delta >= cover);
+                let negative = known.iter().all(|c| c.1 < 0.0);
+                let positive = known.iter().all(|c| c.1 > 0.0);
+                let reached = known.iter().all(|c| c.1.abs() / delta >= cover);
                 if reached && positive {
                     return;
                 }
@@ -99,27 +126,46 @@ impl RegionJob<'_> {
                 }
             }
             // One sample at a surface corner covers a small enough region.
-            for (i, c) in corners.iter().enumerate() {
-                let reach = region.reach(i) * delta;
-                if c.1 < 0.0 && reach <= r {
-                    out.push(self.sample(verts[i], reach.max(f64::MIN_POSITIVE)));
-                    return;
+            for (i, c) in corners[..verts.len()].iter().enumerate() {
+                if let Corner::Known(_, d) = c {
+                    let reach = region.reach(i) * delta;
+                    if *d < 0.0 && reach <= r {
+                        out.push(self.sample(verts[i], reach.max(f64::MIN_POSITIVE)));
+                        return;
+                    }
                 }
             }
         }
         if small {
             return;
         }
+        // Children reuse the parent's corners and share the new midpoint(s).
+        let mut seen: Vec<(DVec2, Corner)> = verts.iter().copied().zip(corners).collect();
         for child in region.split() {
-            self.visit(&child, depth + 1, out, stats);
+            let mut inherited = [Corner::Unknown; 4];
+            for (slot, v) in inherited.iter_mut().zip(child.vertices()) {
+                if let Some((_, c)) = seen.iter().find(|(w, _)| w == v) {
+                    *slot = *c;
+                } else if delta <= DISTORTION_CAP {
+                    let c = self.evaluate(*v, stats);
+                    seen.push((*v, c));
+                    *slot = c;
+                }
+            }
+            self.visit(&child, inherited, depth + 1, out, stats);
         }
     }
 
     /// `max(d₂₂(p), |p − C| − R)`.
     fn classify(&self, p: DVec3) -> f64 {
-        let d = self
-            .distance
-            .relative_distance(self.product as usize, self.literal as usize, p);
+        let mut hint = self.hint.get();
+        let d = self.distance.relative_distance_hinted(
+            self.product as usize,
+            self.literal as usize,
+            p,
+            &mut hint,
+        );
+        self.hint.set(hint);
         d.max(self.sphere.signed_distance(p))
     }
 
