@@ -152,3 +152,33 @@ fn bad_options_are_errors() {
     let dnf = dnf_of(Quadric::sphere(DVec3::ZERO, 0.5).unwrap());
     assert!(sample(&dnf, &options).is_err());
 }
+
+#[test]
+fn shared_surfaces_are_covered() {
+    // A bore through two unioned, overlapping blocks: its wall in the
+    // overlap belongs to both products (the same literal twice).
+    let mut dag = CsgDag::new();
+    let a = dag
+        .cuboid(
+            DVec3::new(-1.5, -1.0, -1.0),
+            DVec3::new(0.2, 1.0, 1.0),
+            [1.0; 3],
+        )
+        .unwrap();
+    let b = dag
+        .cuboid(
+            DVec3::new(-0.2, -1.0, -1.0),
+            DVec3::new(1.5, 1.0, 1.0),
+            [1.0; 3],
+        )
+        .unwrap();
+    let bore = dag.primitive(
+        Quadric::cylinder(DVec3::ZERO, DVec3::X, 0.5).unwrap(),
+        [1.0; 3],
+    );
+    let blocks = dag.union(&[a, b]).unwrap();
+    let root = dag.difference(blocks, &[bore]).unwrap();
+    let dnf = Dnf::from_dag(&dag, root).unwrap();
+    assert_eq!(dnf.products().len(), 2);
+    assert!(check(&dnf, 0.03, "shared bore") > 1000);
+}

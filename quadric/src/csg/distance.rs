@@ -9,10 +9,20 @@
 //!   Negative: `p` and every point of `Q_ab` within `|d_ab|` lie on the CSG
 //!   surface; positive: none of them does. Empty minima are `+∞`, empty
 //!   maxima `−∞`.
+//! - Shared surfaces: for `p` on `Q_ab`, another product `i` that contains
+//!   the same literal `L_ab` lies on the same side of `Q_ab` as product `a`,
+//!   so it cannot make `p` interior and is left out of the minimum; one that
+//!   contains the opposite literal `¬L_ab` is evaluated without it (its
+//!   distance is 0 on `Q_ab` and says nothing). Without this, a surface
+//!   shared by two products (a bore through two unioned parts) would have
+//!   `d_ab = 0` and never be classified. A quadric and its exact negation
+//!   count as one surface.
+
+use std::collections::HashMap;
 
 use glam::DVec3;
 
-use crate::csg::dnf::{Dnf, Side};
+use crate::csg::dnf::{Dnf, Literal, Side};
 use crate::distance::QuadricDistance;
 
 /// The distance bounds of every quadric of a [`Dnf`], ready for eqs. 19 and 22.
@@ -20,6 +30,9 @@ use crate::distance::QuadricDistance;
 pub struct CsgDistance<'a> {
     dnf: &'a Dnf,
     quadrics: Vec<QuadricDistance>,
+    /// Per quadric: the index of the first quadric with the same surface
+    /// (the quadric itself or its exact negation) and whether it is negated.
+    canonical: Vec<(usize, bool)>,
 }
 
 impl<'a> CsgDistance<'a> {
@@ -31,7 +44,31 @@ impl<'a> CsgDistance<'a> {
             .iter()
             .map(|q| QuadricDistance::new(&q.quadric))
             .collect();
-        Self { dnf, quadrics }
+        let mut first: HashMap<[u64; 10], usize> = HashMap::new();
+        let mut canonical = Vec::with_capacity(dnf.quadrics().len());
+        for (i, q) in dnf.quadrics().iter().enumerate() {
+            // `+ 0.0` turns −0 into +0, so that bit patterns compare as numbers.
+            let key = q.quadric.coefficients().map(|c| (c + 0.0).to_bits());
+            let negated = q.quadric.coefficients().map(|c| (0.0 - c).to_bits());
+            if let Some(&j) = first.get(&negated) {
+                canonical.push((j, true));
+            } else {
+                first.entry(key).or_insert(i);
+                canonical.push((i, false));
+            }
+        }
+        Self {
+            dnf,
+            quadrics,
+            canonical,
+        }
+    }
+
+    /// A literal as `(canonical quadric, holds inside it)`: `Q < 0` and
+    /// `−Q ≥ 0` give the same key up to the surface itself.
+    fn literal_key(&self, l: Literal) -> (usize, bool) {
+        let (q, negated) = self.canonical[l.quadric];
+        (q, (l.side == Side::Inside) != negated)
     }
 
     /// The normal form these distances belong to.
@@ -70,29 +107,64 @@ impl<'a> CsgDistance<'a> {
     /// `minᵢ maxⱼ d(L_ij, p)` over the products other than `skip`.
     fn union_distance(&self, skip: Option<usize>, p: DVec3) -> f64 {
         let mut hint = usize::MAX;
-        self.union_distance_hinted(skip, p, &mut hint)
+        self.union_distance_hinted(skip, None, p, &mut hint)
     }
 
-    /// As [`union_distance`](Self::union_distance), evaluating product
-    /// `hint` first (a good guess makes the others stop early) and storing
-    /// the minimizing product in it.
-    fn union_distance_hinted(&self, skip: Option<usize>, p: DVec3, hint: &mut usize) -> f64 {
+    /// As [`union_distance`](Self::union_distance) for points on the
+    /// surface of literal `on` (see the module notes on shared surfaces),
+    /// evaluating product `hint` first (a good guess makes the others stop
+    /// early) and storing the minimizing product in it.
+    fn union_distance_hinted(
+        &self,
+        skip: Option<usize>,
+        on: Option<Literal>,
+        p: DVec3,
+        hint: &mut usize,
+    ) -> f64 {
         let n = self.dnf.products().len();
         let mut min = f64::INFINITY;
-        let first = (*hint < n && Some(*hint) != skip).then_some(*hint);
-        if let Some(h) = first {
-            min = self.product_distance(h, None, p);
+        let mut first = None;
+        let hinted = (*hint < n && Some(*hint) != skip)
+            .then(|| self.shared_literal(*hint, on))
+            .flatten();
+        if let Some(left_out) = hinted {
+            min = self.product_distance(*hint, left_out, p);
+            first = Some(*hint);
         }
         for i in 0..n {
-            if Some(i) != skip && Some(i) != first {
-                let d = self.product_distance_capped(i, None, p, min);
-                if d < min {
-                    min = d;
-                    *hint = i;
-                }
+            if Some(i) == skip || Some(i) == first {
+                continue;
+            }
+            let Some(left_out) = self.shared_literal(i, on) else {
+                continue;
+            };
+            let d = self.product_distance_capped(i, left_out, p, min);
+            if d < min {
+                min = d;
+                *hint = i;
             }
         }
         min
+    }
+
+    /// How product `i` takes part for points on the surface of `on`:
+    /// `None` to leave it out (it contains `on`), `Some(Some(j))` to
+    /// evaluate it without its literal `j` (the opposite of `on`),
+    /// `Some(None)` to evaluate it whole.
+    fn shared_literal(&self, i: usize, on: Option<Literal>) -> Option<Option<usize>> {
+        let Some(on) = on else {
+            return Some(None);
+        };
+        let (surface, side) = self.literal_key(on);
+        let product = &self.dnf.products()[i];
+        let found = product
+            .iter()
+            .position(|l| self.literal_key(*l).0 == surface);
+        match found {
+            Some(j) if self.literal_key(product[j]).1 == side => None,
+            Some(j) => Some(Some(j)),
+            None => Some(None),
+        }
     }
 
     /// The conservative signed distance to the CSG surface, eq. 19: negative
@@ -122,7 +194,8 @@ impl<'a> CsgDistance<'a> {
     #[must_use]
     pub fn relative_distance_hinted(&self, a: usize, b: usize, p: DVec3, hint: &mut usize) -> f64 {
         let own = self.product_distance(a, Some(b), p);
-        let others = self.union_distance_hinted(Some(a), p, hint);
+        let on = self.dnf.products()[a][b];
+        let others = self.union_distance_hinted(Some(a), Some(on), p, hint);
         (-others).max(own)
     }
 }
@@ -161,5 +234,55 @@ mod tests {
         assert!(d.distance(DVec3::new(1.0, 0.0, 0.0)).abs() < 1e-9);
         // Eq. 19 at (5, 0, 0): 4 outside both A and C, 3 outside B → max 4.
         assert!((d.distance(DVec3::new(5.0, 0.0, 0.0)) - 4.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn shared_surfaces_are_classified() {
+        // Two unioned boxes whose top faces share the plane z = 1 over x ∈ [1, 2].
+        let mut dag = CsgDag::new();
+        let a = dag
+            .cuboid(DVec3::ZERO, DVec3::new(2.0, 1.0, 1.0), [1.0; 3])
+            .unwrap();
+        let b = dag
+            .cuboid(
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(3.0, 1.0, 1.0),
+                [1.0; 3],
+            )
+            .unwrap();
+        let root = dag.union(&[a, b]).unwrap();
+        let dnf = Dnf::from_dag(&dag, root).unwrap();
+        let d = CsgDistance::new(&dnf);
+        let top = Quadric::half_space(DVec3::Z, 1.0).unwrap();
+        let p = DVec3::new(1.5, 0.5, 1.0);
+        for (i, product) in dnf.products().iter().enumerate() {
+            let j = product
+                .iter()
+                .position(|l| dnf.quadrics()[l.quadric].quadric == top)
+                .unwrap();
+            // On the surface, with a radius of 0.5 (the nearest other face).
+            assert!((d.relative_distance(i, j, p) + 0.5).abs() < 1e-9);
+        }
+        // A slab on each side of z = 0: the shared plane is interior.
+        let mut dag = CsgDag::new();
+        let below = dag
+            .cuboid(-DVec3::ONE, DVec3::new(1.0, 1.0, 0.0), [1.0; 3])
+            .unwrap();
+        let above = dag
+            .cuboid(DVec3::new(-1.0, -1.0, 0.0), DVec3::ONE, [1.0; 3])
+            .unwrap();
+        let root = dag.union(&[below, above]).unwrap();
+        let dnf = Dnf::from_dag(&dag, root).unwrap();
+        let d = CsgDistance::new(&dnf);
+        let floor = Quadric::half_space(DVec3::Z, 0.0).unwrap();
+        for (i, product) in dnf.products().iter().enumerate() {
+            let Some(j) = product.iter().position(|l| {
+                let q = dnf.quadrics()[l.quadric].quadric;
+                q == floor || q == floor.complement()
+            }) else {
+                continue;
+            };
+            assert!(d.relative_distance(i, j, DVec3::new(0.2, 0.1, 0.0)) > 0.5);
+        }
     }
 }

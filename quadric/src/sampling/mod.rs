@@ -136,6 +136,12 @@ pub struct SamplingStats {
     pub regions: u64,
     /// Evaluations of the eq.-22 distance.
     pub distance_queries: u64,
+    /// Regions filled with samples as a whole.
+    pub filled: u64,
+    /// Regions proven off the CSG surface.
+    pub discarded: u64,
+    /// Unclassified regions dropped at the size threshold (§4.2).
+    pub dropped_small: u64,
 }
 
 impl SamplingStats {
@@ -146,6 +152,9 @@ impl SamplingStats {
         }
         self.regions += other.regions;
         self.distance_queries += other.distance_queries;
+        self.filled += other.filled;
+        self.discarded += other.discarded;
+        self.dropped_small += other.dropped_small;
     }
 }
 

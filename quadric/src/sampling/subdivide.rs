@@ -118,9 +118,11 @@ impl RegionJob<'_> {
                 let positive = known.iter().all(|c| c.1 > 0.0);
                 let reached = known.iter().all(|c| c.1.abs() / delta >= cover);
                 if reached && positive {
+                    stats.discarded += 1;
                     return;
                 }
                 if reached && negative {
+                    stats.filled += 1;
                     self.fill(region, delta, out);
                     return;
                 }
@@ -137,6 +139,7 @@ impl RegionJob<'_> {
             }
         }
         if small {
+            stats.dropped_small += 1;
             return;
         }
         // Children reuse the parent's corners and share the new midpoint(s).
