@@ -90,6 +90,27 @@ fn a_box_is_a_valid_polyhedron() {
 }
 
 #[test]
+fn extracting_a_part_gives_the_same_polyhedron_compactly() {
+    let (arena, parts) = random_cuts(5, 60);
+    for &part in &parts {
+        let (copy, id) = arena.extract(part);
+        copy.validate(id).unwrap();
+        assert_eq!(copy.faces().len(), arena.faces_of(part).len());
+        assert_eq!(copy.vertices().len(), arena.vertices_of(part).len());
+        let planes = |a: &ConvexArena, p: PolyId| {
+            let mut v: Vec<_> = a
+                .faces_of(p)
+                .iter()
+                .map(|&f| a.faces()[f as usize].plane.normal())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(planes(&copy, id), planes(&arena, part));
+    }
+}
+
+#[test]
 fn an_axis_plane_halves_a_box() {
     let mut arena = ConvexArena::new();
     let b = unit_box(&mut arena, 10);

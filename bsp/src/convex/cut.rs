@@ -18,9 +18,8 @@
 //! [`ConvexArena::cut_naive`] finds the crossing edges by classifying every
 //! vertex; the edge-descent search of the paper replaces only that step.
 
-use std::collections::{HashMap, HashSet};
-
 use super::mesh::{ConvexArena, Face, HalfEdge, PolyId, Vertex};
+use super::scratch::Scratch;
 use crate::exact::{
     Plane, Sign, classify_vertex, compare_offsets, intersect_3_planes, offset_estimate,
 };
@@ -54,23 +53,27 @@ impl ConvexArena {
         below_tag: u32,
         above_tag: u32,
     ) -> CutOutcome {
-        let sides: HashMap<u32, Sign> = self
-            .vertices_of(poly)
-            .iter()
-            .map(|&v| (v, classify_vertex(&self.vertices[v as usize].point, s)))
-            .collect();
-        let any = |sign: Sign| sides.values().any(|&x| x == sign);
-        match (any(Sign::Negative), any(Sign::Positive)) {
-            (true, true) => {}
-            (false, _) => return CutOutcome::Above,
-            (true, false) => return CutOutcome::Below,
-        }
-        let relevant: Vec<u32> = self
-            .faces_of(poly)
-            .into_iter()
-            .filter(|&f| self.meets_section(f, &sides))
-            .collect();
-        self.split_along(relevant, sides, s, below_tag, above_tag)
+        self.with_scratch(|arena, scratch| {
+            let faces = arena.faces_of(poly);
+            let (mut plus, mut minus) = (false, false);
+            for &f in &faces {
+                for h in arena.face_loop(f) {
+                    let side = arena.side(arena.half_edges[h as usize].origin, s, scratch);
+                    plus |= side == Sign::Positive;
+                    minus |= side == Sign::Negative;
+                }
+            }
+            match (minus, plus) {
+                (true, true) => {}
+                (false, _) => return CutOutcome::Above,
+                (true, false) => return CutOutcome::Below,
+            }
+            let relevant = faces
+                .into_iter()
+                .filter(|&f| arena.meets_section(f, scratch))
+                .collect();
+            arena.split_along(relevant, scratch, s, below_tag, above_tag)
+        })
     }
 
     /// Cuts `poly` by `s` by edge descent and marching (paper 1 §3.3):
@@ -81,40 +84,58 @@ impl ConvexArena {
     /// vertices of faces it visits. The result is identical, element for
     /// element, to [`ConvexArena::cut_naive`].
     pub fn cut(&mut self, poly: PolyId, s: &Plane, below_tag: u32, above_tag: u32) -> CutOutcome {
-        let mut sides: HashMap<u32, Sign> = HashMap::new();
-        let v0 = self.half_edges[poly.0 as usize].origin;
-        let side0 = self.side(v0, s, &mut sides);
-        // Walk towards the side v0 is not on; a `(from, to)` step onto that
-        // side brackets the section. From a vertex on s, both sides must
-        // exist for a proper cut, and v0 itself is on the section.
-        let seeds = match side0 {
-            Sign::Positive => match self.descend(v0, s, Sign::Negative, &mut sides) {
-                Some((from, to)) => [from, to],
-                None => return CutOutcome::Above,
-            },
-            Sign::Negative => match self.descend(v0, s, Sign::Positive, &mut sides) {
-                Some((from, to)) => [from, to],
-                None => return CutOutcome::Below,
-            },
-            Sign::Zero => {
-                if self.descend(v0, s, Sign::Negative, &mut sides).is_none() {
-                    return CutOutcome::Above;
+        self.with_scratch(|arena, scratch| {
+            let v0 = arena.half_edges[poly.0 as usize].origin;
+            // Walk towards the side v0 is not on; a `(from, to)` step onto
+            // that side brackets the section. From a vertex on s, both sides
+            // must exist for a proper cut, and v0 itself is on the section.
+            let seeds = match arena.side(v0, s, scratch) {
+                Sign::Positive => match arena.descend(v0, s, Sign::Negative, scratch) {
+                    Some((from, to)) => [from, to],
+                    None => return CutOutcome::Above,
+                },
+                Sign::Negative => match arena.descend(v0, s, Sign::Positive, scratch) {
+                    Some((from, to)) => [from, to],
+                    None => return CutOutcome::Below,
+                },
+                Sign::Zero => {
+                    if arena.descend(v0, s, Sign::Negative, scratch).is_none() {
+                        return CutOutcome::Above;
+                    }
+                    if arena.descend(v0, s, Sign::Positive, scratch).is_none() {
+                        return CutOutcome::Below;
+                    }
+                    [v0, v0]
                 }
-                if self.descend(v0, s, Sign::Positive, &mut sides).is_none() {
-                    return CutOutcome::Below;
-                }
-                [v0, v0]
-            }
-        };
-        let relevant = self.march(&seeds, s, &mut sides);
-        self.split_along(relevant, sides, s, below_tag, above_tag)
+            };
+            let relevant = arena.march(&seeds, s, scratch);
+            arena.split_along(relevant, scratch, s, below_tag, above_tag)
+        })
     }
 
-    /// The side of vertex `v`, classified once and cached.
-    fn side(&self, v: u32, s: &Plane, sides: &mut HashMap<u32, Sign>) -> Sign {
-        *sides
-            .entry(v)
-            .or_insert_with(|| classify_vertex(&self.vertices[v as usize].point, s))
+    /// Runs `op` with the arena's scratch space, cleared.
+    fn with_scratch<T>(&mut self, op: impl FnOnce(&mut Self, &mut Scratch) -> T) -> T {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.clear();
+        let out = op(self, &mut scratch);
+        self.scratch = scratch;
+        out
+    }
+
+    /// The side of vertex `v`, classified once per operation.
+    #[inline]
+    fn side(&self, v: u32, s: &Plane, scratch: &mut Scratch) -> Sign {
+        scratch.sides.get(v).unwrap_or_else(|| {
+            let side = classify_vertex(&self.vertices[v as usize].point, s);
+            scratch.sides.insert(v, side);
+            side
+        })
+    }
+
+    /// The side of an already classified vertex.
+    #[inline]
+    fn known_side(v: u32, scratch: &Scratch) -> Sign {
+        scratch.sides.get(v).expect("vertex classified before use")
     }
 
     /// The outgoing half-edges of vertex `v`.
@@ -129,30 +150,37 @@ impl ConvexArena {
         })
     }
 
-    /// Edge descent from `start` towards side `target` of `s`: returns an
-    /// adjacent pair `(from, to)` with `to` on side `target` (`from == to`
-    /// when `start` already is), or `None` when no vertex is on that side.
+    /// Edge descent from `start` (not on side `target`) towards side
+    /// `target` of `s`: returns an adjacent pair `(from, to)` with `to` on
+    /// side `target`, or `None` when no vertex is on that side.
+    ///
+    /// Each step moves to a neighbour certified to lie strictly closer to
+    /// the target side — by the `f64` estimates and their error bounds, or
+    /// else by exact comparison — so the walk never cycles, and it stops
+    /// only at a vertex no neighbour improves on: a global extremum of the
+    /// (linear) offset over the convex polyhedron.
     fn descend(
         &self,
         start: u32,
         s: &Plane,
         target: Sign,
-        sides: &mut HashMap<u32, Sign>,
+        scratch: &mut Scratch,
     ) -> Option<(u32, u32)> {
         use core::cmp::Ordering;
-        // Towards `target`: smaller offsets for Negative, larger for Positive.
         let toward = |a: f64| if target == Sign::Negative { -a } else { a };
+        let wanted = if target == Sign::Negative {
+            Ordering::Less
+        } else {
+            Ordering::Greater
+        };
         let mut cur = start;
-        if self.side(cur, s, sides) == target {
-            return Some((cur, cur));
-        }
         loop {
             let (cur_value, cur_error) = offset_estimate(&self.vertices[cur as usize].point, s);
             let mut best: Option<(u32, f64)> = None;
-            let mut uncertain = Vec::new();
-            let neighbours: Vec<u32> = self.outgoing(cur).map(|h| self.dest(h)).collect();
-            for &n in &neighbours {
-                if self.side(n, s, sides) == target {
+            let mut uncertain: Option<u32> = None;
+            for h in self.outgoing(cur) {
+                let n = self.dest(h);
+                if self.side(n, s, scratch) == target {
                     return Some((cur, n));
                 }
                 let (value, error) = offset_estimate(&self.vertices[n as usize].point, s);
@@ -161,127 +189,124 @@ impl ConvexArena {
                     if best.is_none_or(|(_, g)| gain > g) {
                         best = Some((n, gain));
                     }
-                } else if gain >= -(error + cur_error) {
-                    uncertain.push(n);
-                }
-            }
-            let next = best.map(|(n, _)| n).or_else(|| {
-                // Only exact comparison can tell: move to a neighbour that is
-                // strictly closer to the target side, if any.
-                let wanted = if target == Sign::Negative {
-                    Ordering::Less
-                } else {
-                    Ordering::Greater
-                };
-                uncertain.into_iter().find(|&n| {
-                    compare_offsets(
+                } else if gain >= -(error + cur_error)
+                    && uncertain.is_none()
+                    && compare_offsets(
                         &self.vertices[n as usize].point,
                         &self.vertices[cur as usize].point,
                         s,
                     ) == wanted
-                })
-            });
-            cur = next?;
+                {
+                    // Too close to call in f64: exactly closer.
+                    uncertain = Some(n);
+                }
+            }
+            cur = best.map(|(n, _)| n).or(uncertain)?;
         }
     }
 
     /// Marches around the section from the faces around `seeds`: visits the
     /// faces that meet the section, crossing from one to the next through
-    /// crossing edges, edges in `s` and vertices on `s`. Returns them sorted.
-    fn march(&self, seeds: &[u32], s: &Plane, sides: &mut HashMap<u32, Sign>) -> Vec<u32> {
-        let mut queued: HashSet<u32> = HashSet::new();
-        let mut rotated: HashSet<u32> = HashSet::new();
-        let mut queue: Vec<u32> = Vec::new();
-        let mut relevant = Vec::new();
-        let around = |v: u32, queue: &mut Vec<u32>, queued: &mut HashSet<u32>| {
-            for h in self.outgoing(v) {
-                let f = self.half_edges[h as usize].face;
-                if queued.insert(f) {
-                    queue.push(f);
+    /// crossing edges, edges in `s` and vertices on `s`.
+    fn march(&self, seeds: &[u32], s: &Plane, scratch: &mut Scratch) -> Vec<u32> {
+        let mut queue: Vec<u32> = Vec::with_capacity(64);
+        let mut relevant = Vec::with_capacity(64);
+        let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
+            if scratch.vertices.insert(v, true) {
+                for h in self.outgoing(v) {
+                    let f = self.half_edges[h as usize].face;
+                    if scratch.faces.insert(f, true) {
+                        queue.push(f);
+                    }
                 }
             }
         };
         for &v in seeds {
-            if rotated.insert(v) {
-                around(v, &mut queue, &mut queued);
-            }
+            around(v, &mut queue, scratch);
         }
         while let Some(f) = queue.pop() {
             for h in self.face_loop(f) {
-                self.side(self.half_edges[h as usize].origin, s, sides);
+                self.side(self.half_edges[h as usize].origin, s, scratch);
             }
-            if !self.meets_section(f, sides) {
+            if !self.meets_section(f, scratch) {
                 continue;
             }
             relevant.push(f);
             for h in self.face_loop(f) {
                 let e = self.half_edges[h as usize];
-                let (a, b) = (sides[&e.origin], sides[&self.dest(h)]);
+                let (a, b) = (
+                    Self::known_side(e.origin, scratch),
+                    Self::known_side(self.dest(h), scratch),
+                );
                 if a.as_i32() * b.as_i32() < 0 || (a == Sign::Zero && b == Sign::Zero) {
                     let g = self.half_edges[e.twin as usize].face;
-                    if queued.insert(g) {
+                    if scratch.faces.insert(g, true) {
                         queue.push(g);
                     }
                 }
-                if a == Sign::Zero && rotated.insert(e.origin) {
-                    around(e.origin, &mut queue, &mut queued);
+                if a == Sign::Zero {
+                    around(e.origin, &mut queue, scratch);
                 }
             }
         }
         relevant
     }
 
-    /// True when face `f` contains a section edge once crossing edges are
-    /// split: it has vertices on both sides, or an edge lying in `s`.
-    fn meets_section(&self, f: u32, sides: &HashMap<u32, Sign>) -> bool {
+    /// True when face `f` (all vertices classified) contains a section edge
+    /// once crossing edges are split: it has vertices on both sides, or an
+    /// edge lying in `s`.
+    fn meets_section(&self, f: u32, scratch: &Scratch) -> bool {
         let (mut plus, mut minus, mut in_plane) = (false, false, false);
         for h in self.face_loop(f) {
-            let a = sides[&self.half_edges[h as usize].origin];
+            let a = Self::known_side(self.half_edges[h as usize].origin, scratch);
             plus |= a == Sign::Positive;
             minus |= a == Sign::Negative;
-            in_plane |= a == Sign::Zero && sides[&self.dest(h)] == Sign::Zero;
+            in_plane |= a == Sign::Zero && Self::known_side(self.dest(h), scratch) == Sign::Zero;
         }
         (plus && minus) || in_plane
     }
 
-    /// Splits along the section, given the faces that meet it and the sides
-    /// of all their vertices (steps 1–3 of the module docs).
+    /// Splits along the section, given the faces that meet it, their
+    /// vertices classified (steps 1–3 of the module docs).
     fn split_along(
         &mut self,
         mut relevant: Vec<u32>,
-        mut sides: HashMap<u32, Sign>,
+        scratch: &mut Scratch,
         s: &Plane,
         below_tag: u32,
         above_tag: u32,
     ) -> CutOutcome {
         relevant.sort_unstable();
         // 1. Split crossing edges (each once: from its + end).
-        let mut crossing = Vec::new();
+        let mut crossing = Vec::with_capacity(relevant.len());
         for &f in &relevant {
             for h in self.face_loop(f) {
                 let e = self.half_edges[h as usize];
-                if sides[&e.origin] == Sign::Positive && sides[&self.dest(h)] == Sign::Negative {
+                if Self::known_side(e.origin, scratch) == Sign::Positive
+                    && Self::known_side(self.dest(h), scratch) == Sign::Negative
+                {
                     crossing.push(h);
                 }
             }
         }
         for h in crossing {
             let m = self.split_edge(h, s);
-            sides.insert(m, Sign::Zero);
+            scratch.sides.insert(m, Sign::Zero);
         }
         // 2. Split straddling faces.
-        let mut faces = relevant.clone();
+        let mut faces = Vec::with_capacity(2 * relevant.len());
+        faces.extend_from_slice(&relevant);
         for &f in &relevant {
             let has = |sign| {
                 self.face_loop(f)
-                    .any(|h| sides[&self.half_edges[h as usize].origin] == sign)
+                    .any(|h| Self::known_side(self.half_edges[h as usize].origin, scratch) == sign)
             };
             if has(Sign::Positive) && has(Sign::Negative) {
-                faces.push(self.split_face(f, &sides));
+                faces.push(self.split_face(f, scratch));
             }
         }
         // 3. Caps from the half-edges lying in s.
-        self.add_caps(&faces, &sides, s, below_tag, above_tag)
+        self.add_caps(&faces, scratch, s, below_tag, above_tag)
     }
 
     /// Splits the edge of half-edge `h` at its intersection with `s`;
@@ -327,21 +352,24 @@ impl ConvexArena {
     /// Splits face `f` (with `+` and `−` vertices and exactly two `0`
     /// vertices) along the segment between its `0` vertices. The half of
     /// the loop on the `+` side gets a new face, which is returned.
-    fn split_face(&mut self, f: u32, sides: &HashMap<u32, Sign>) -> u32 {
-        let loop_: Vec<u32> = self.face_loop(f).collect();
+    fn split_face(&mut self, f: u32, scratch: &mut Scratch) -> u32 {
+        let mut loop_ = std::mem::take(&mut scratch.face_loop);
+        loop_.clear();
+        loop_.extend(self.face_loop(f));
         let n = loop_.len();
         let origin = |k: usize| self.half_edges[loop_[k % n] as usize].origin;
-        let zeros: Vec<usize> = (0..n)
-            .filter(|&k| sides[&origin(k)] == Sign::Zero)
-            .collect();
-        debug_assert_eq!(
-            zeros.len(),
-            2,
-            "a straddling face has two vertices on the plane"
+        let side = |k: usize| Self::known_side(origin(k), scratch);
+        let mut zeros = (0..n).filter(|&k| side(k) == Sign::Zero);
+        let (i, j) = (
+            zeros
+                .next()
+                .expect("a straddling face has a vertex on the plane"),
+            zeros
+                .next()
+                .expect("a straddling face has two vertices on the plane"),
         );
-        let (i, j) = (zeros[0], zeros[1]);
         // Chain i..j (half-edges loop_[i], …, loop_[j−1]) and chain j..i.
-        let chain_ij_positive = sides[&origin(i + 1)] == Sign::Positive;
+        let chain_ij_positive = side(i + 1) == Sign::Positive;
         let (z1, z2) = (origin(i), origin(j));
         let (a, b) = (
             self.half_edges.len() as u32,
@@ -383,51 +411,54 @@ impl ConvexArena {
             tag,
         });
         self.faces[f as usize].half_edge = if chain_ij_positive { b } else { a };
+        scratch.face_loop = loop_;
         new_face
     }
 
     /// Builds the two caps along the section and separates the parts;
-    /// `faces` lists every face of both parts.
+    /// `faces` lists every face that meets the section.
     fn add_caps(
         &mut self,
         faces: &[u32],
-        sides: &HashMap<u32, Sign>,
+        scratch: &mut Scratch,
         s: &Plane,
         below_tag: u32,
         above_tag: u32,
     ) -> CutOutcome {
-        // A face is on the + side when one of its vertices is +.
-        let face_side = |arena: &Self, f: u32| -> Sign {
-            arena
-                .face_loop(f)
-                .map(|h| sides[&arena.half_edges[h as usize].origin])
-                .find(|&x| x != Sign::Zero)
-                .unwrap_or(Sign::Zero)
-        };
-        // The half-edges lying in s, with the side of their face.
-        let mut section: Vec<(u32, Sign)> = Vec::new();
+        // The half-edges lying in s, with the side of their face (the side
+        // of any vertex of the face off s).
+        let mut section: Vec<(u32, Sign)> = Vec::with_capacity(2 * faces.len());
         for &f in faces {
-            let side = face_side(self, f);
+            let side = self
+                .face_loop(f)
+                .map(|h| Self::known_side(self.half_edges[h as usize].origin, scratch))
+                .find(|&x| x != Sign::Zero)
+                .unwrap_or(Sign::Zero);
             for h in self.face_loop(f) {
                 let e = self.half_edges[h as usize];
-                if sides[&e.origin] == Sign::Zero && sides[&self.dest(h)] == Sign::Zero {
+                if Self::known_side(e.origin, scratch) == Sign::Zero
+                    && Self::known_side(self.dest(h), scratch) == Sign::Zero
+                {
                     section.push((h, side));
                 }
             }
         }
         // One cap per side: for each section half-edge u→v on a face of that
         // side, the cap gets v→u, and cap edges chain by shared vertices.
-        let mut caps = [
+        let mut first_cap_edge = [u32::MAX; 2];
+        for (k, (side, plane, tag)) in [
             (Sign::Negative, *s, below_tag),
             (Sign::Positive, s.flipped(), above_tag),
         ]
-        .map(|(side, plane, tag)| (side, plane, tag, u32::MAX));
-        for (side, plane, tag, cap_edge) in caps.iter_mut() {
+        .into_iter()
+        .enumerate()
+        {
             let cap = self.faces.len() as u32;
-            let mut starting_at: HashMap<u32, u32> = HashMap::new();
-            let mut cap_edges = Vec::new();
+            let first = self.half_edges.len() as u32;
+            scratch.cap_starts.clear();
+            let mut cap_edges = Vec::with_capacity(section.len());
             for &(h, hside) in &section {
-                if hside != *side {
+                if hside != side {
                     continue;
                 }
                 let (u, v) = (self.half_edges[h as usize].origin, self.dest(h));
@@ -439,19 +470,22 @@ impl ConvexArena {
                     face: cap,
                 });
                 self.half_edges[h as usize].twin = c;
-                starting_at.insert(v, c);
+                scratch.cap_starts.insert(v, c);
                 cap_edges.push((c, u));
             }
             for &(c, u) in &cap_edges {
-                self.half_edges[c as usize].next = starting_at[&u];
+                self.half_edges[c as usize].next = scratch
+                    .cap_starts
+                    .get(u)
+                    .expect("the section is a closed loop");
             }
             self.faces.push(Face {
-                plane: *plane,
-                half_edge: cap_edges[0].0,
-                tag: *tag,
+                plane,
+                half_edge: first,
+                tag,
             });
-            *cap_edge = cap_edges[0].0;
-            if *side == Sign::Negative {
+            first_cap_edge[k] = first;
+            if side == Sign::Negative {
                 // The lower part keeps the section vertices.
                 for &(c, _) in &cap_edges {
                     let v = self.half_edges[c as usize].origin;
@@ -480,8 +514,8 @@ impl ConvexArena {
             }
         }
         CutOutcome::Split {
-            below: PolyId(caps[0].3),
-            above: PolyId(caps[1].3),
+            below: PolyId(first_cap_edge[0]),
+            above: PolyId(first_cap_edge[1]),
         }
     }
 }

@@ -8,6 +8,7 @@
 
 use std::collections::HashMap;
 
+use super::scratch::Scratch;
 use crate::Error;
 use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes};
 
@@ -57,6 +58,8 @@ pub struct ConvexArena {
     pub(crate) vertices: Vec<Vertex>,
     pub(crate) half_edges: Vec<HalfEdge>,
     pub(crate) faces: Vec<Face>,
+    /// Reused working memory of the cuts (no part of the geometry).
+    pub(crate) scratch: Scratch,
 }
 
 impl ConvexArena {
@@ -64,6 +67,18 @@ impl ConvexArena {
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Reserves room for `additional` more vertices, faces and (six times
+    /// as many) half-edges, so that the next cuts do not reallocate.
+    pub fn reserve(&mut self, additional: usize) {
+        self.vertices.reserve(additional);
+        self.faces.reserve(additional);
+        self.half_edges.reserve(6 * additional);
+        self.scratch.reserve(
+            self.vertices.len() + additional,
+            self.faces.len() + additional,
+        );
     }
 
     /// All vertices (of every polyhedron in the arena).
@@ -171,6 +186,56 @@ impl ConvexArena {
             }
         }
         PolyId(h0)
+    }
+
+    /// A new arena holding only polyhedron `poly`, compactly renumbered
+    /// (faces in [`ConvexArena::faces_of`] order), and its id there.
+    #[must_use]
+    pub fn extract(&self, poly: PolyId) -> (ConvexArena, PolyId) {
+        let faces = self.faces_of(poly);
+        let mut out = ConvexArena::new();
+        let mut vertex_index: HashMap<u32, u32> = HashMap::new();
+        let mut edge_index: HashMap<u32, u32> = HashMap::new();
+        for &f in &faces {
+            for h in self.face_loop(f) {
+                edge_index.insert(h, edge_index.len() as u32);
+                let v = self.half_edges[h as usize].origin;
+                vertex_index.entry(v).or_insert_with(|| {
+                    out.vertices.push(self.vertices[v as usize]);
+                    out.vertices.len() as u32 - 1
+                });
+            }
+        }
+        out.half_edges = vec![
+            HalfEdge {
+                origin: 0,
+                twin: 0,
+                next: 0,
+                face: 0
+            };
+            edge_index.len()
+        ];
+        for (new_face, &f) in faces.iter().enumerate() {
+            for h in self.face_loop(f) {
+                let e = self.half_edges[h as usize];
+                out.half_edges[edge_index[&h] as usize] = HalfEdge {
+                    origin: vertex_index[&e.origin],
+                    twin: edge_index[&e.twin],
+                    next: edge_index[&e.next],
+                    face: new_face as u32,
+                };
+            }
+            let face = self.faces[f as usize];
+            out.faces.push(Face {
+                half_edge: edge_index[&face.half_edge],
+                ..face
+            });
+        }
+        for (old, &new) in &vertex_index {
+            out.vertices[new as usize].half_edge =
+                edge_index[&self.vertices[*old as usize].half_edge];
+        }
+        (out, PolyId(edge_index[&poly.0]))
     }
 
     /// The destination vertex of half-edge `h`.

@@ -14,6 +14,7 @@
 
 pub mod cut;
 pub mod mesh;
+mod scratch;
 pub mod validate;
 
 pub use cut::CutOutcome;

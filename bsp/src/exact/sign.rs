@@ -8,12 +8,13 @@ use core::ops::{Mul, Neg};
 /// For a plane `a·x + b·y + c·z + d = 0` with normal `n = (a, b, c)`,
 /// `Positive` means `n·p + d > 0` (the side `n` points to), `Negative` means
 /// `n·p + d < 0`, and `Zero` means the point lies exactly on the plane.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[repr(i8)]
 pub enum Sign {
     /// Strictly below zero: the negative half-space.
     Negative = -1,
     /// Exactly zero: on the plane.
+    #[default]
     Zero = 0,
     /// Strictly above zero: the positive half-space.
     Positive = 1,
