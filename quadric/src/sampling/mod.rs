@@ -18,6 +18,27 @@
 //!
 //! Basic regions run in parallel (rayon); the output order is the order of
 //! the basic regions, so it does not depend on the number of threads.
+//!
+//! ```
+//! use chisel_quadric::{BoundingSphere, CsgDag, Dnf, Quadric, SampleOptions, sample};
+//! use glam::DVec3;
+//!
+//! // A unit ball minus a half-space: a hemisphere with a flat face.
+//! let mut dag = CsgDag::new();
+//! let ball = dag.primitive(Quadric::sphere(DVec3::ZERO, 1.0)?, [0.8; 3]);
+//! let cut = dag.primitive(Quadric::half_space(DVec3::Z, 0.0)?, [0.3; 3]);
+//! let root = dag.difference(ball, &[cut])?;
+//! let dnf = Dnf::from_dag(&dag, root)?;
+//! let options = SampleOptions::new(0.05, BoundingSphere::new(DVec3::ZERO, 1.5)?)?;
+//! let set = sample(&dnf, &options)?;
+//! // Every sample is on the sphere (z ≥ 0) or on the disc z = 0.
+//! for s in &set.samples {
+//!     let p = s.position;
+//!     assert!(((p.length() - 1.0).abs() < 1e-12 && p.z >= -1e-12)
+//!         || (p.z.abs() < 1e-12 && p.length() <= 1.0 + 1e-12));
+//! }
+//! # Ok::<(), chisel_quadric::Error>(())
+//! ```
 
 pub mod heightfield;
 pub mod regions;

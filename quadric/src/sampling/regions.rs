@@ -83,7 +83,7 @@ impl Region {
         v.iter().map(|w| w.distance(v[i])).fold(0.0, f64::max)
     }
 
-    /// The longest edge's length.
+    /// The largest distance between two vertices (the diameter of a convex polygon).
     #[must_use]
     pub fn diameter(&self) -> f64 {
         (0..self.vertices().len())

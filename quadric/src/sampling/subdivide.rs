@@ -105,18 +105,19 @@ impl RegionJob<'_> {
                     *c = self.evaluate(*v, stats);
                 }
             }
-            let known: Vec<(DVec3, f64)> = corners[..verts.len()]
-                .iter()
-                .filter_map(|c| match c {
-                    Corner::Known(p, d) => Some((*p, *d)),
-                    _ => None,
-                })
-                .collect();
-            if known.len() == verts.len() {
+            // Corner classifications; NaN where a corner is outside the domain.
+            let mut ds = [f64::NAN; 4];
+            for (d, c) in ds.iter_mut().zip(&corners[..verts.len()]) {
+                if let Corner::Known(_, v) = c {
+                    *d = *v;
+                }
+            }
+            let ds = &ds[..verts.len()];
+            if ds.iter().all(|d| !d.is_nan()) {
                 let cover = region.cover_radius();
-                let negative = known.iter().all(|c| c.1 < 0.0);
-                let positive = known.iter().all(|c| c.1 > 0.0);
-                let reached = known.iter().all(|c| c.1.abs() / delta >= cover);
+                let negative = ds.iter().all(|d| *d < 0.0);
+                let positive = ds.iter().all(|d| *d > 0.0);
+                let reached = ds.iter().all(|d| d.abs() / delta >= cover);
                 if reached && positive {
                     stats.discarded += 1;
                     return;
@@ -143,15 +144,21 @@ impl RegionJob<'_> {
             return;
         }
         // Children reuse the parent's corners and share the new midpoint(s).
-        let mut seen: Vec<(DVec2, Corner)> = verts.iter().copied().zip(corners).collect();
+        // At most 4 parent corners and 2 new midpoints.
+        let mut seen = [(DVec2::NAN, Corner::Unknown); 6];
+        let mut count = verts.len();
+        for (slot, (v, c)) in seen.iter_mut().zip(verts.iter().zip(corners)) {
+            *slot = (*v, c);
+        }
         for child in region.split() {
             let mut inherited = [Corner::Unknown; 4];
             for (slot, v) in inherited.iter_mut().zip(child.vertices()) {
-                if let Some((_, c)) = seen.iter().find(|(w, _)| w == v) {
+                if let Some((_, c)) = seen[..count].iter().find(|(w, _)| w == v) {
                     *slot = *c;
-                } else if delta <= DISTORTION_CAP {
+                } else if delta <= DISTORTION_CAP && count < seen.len() {
                     let c = self.evaluate(*v, stats);
-                    seen.push((*v, c));
+                    seen[count] = (*v, c);
+                    count += 1;
                     *slot = c;
                 }
             }

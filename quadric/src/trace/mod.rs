@@ -9,6 +9,21 @@
 //! camera (the ray parameter of a unit direction), `+∞` where nothing is hit;
 //! normals are the solid's outward unit normals; ids are indices into
 //! [`Dnf::quadrics`], [`NO_HIT`] for the background. Row 0 is the top.
+//!
+//! ```
+//! use chisel_quadric::{Camera, CsgDag, Dnf, NO_HIT, Quadric, trace_image};
+//! use glam::DVec3;
+//!
+//! let mut dag = CsgDag::new();
+//! let ball = dag.primitive(Quadric::sphere(DVec3::ZERO, 1.0)?, [0.8; 3]);
+//! let dnf = Dnf::from_dag(&dag, ball)?;
+//! let camera = Camera::new(DVec3::new(0.0, -5.0, 0.0), DVec3::ZERO, 30.0, 33, 33)?;
+//! let image = trace_image(&dnf, &camera);
+//! let centre = 16 * 33 + 16;
+//! assert!((image.depth[centre] - 4.0).abs() < 1e-9);
+//! assert_eq!(image.quadric[0], NO_HIT);
+//! # Ok::<(), chisel_quadric::Error>(())
+//! ```
 
 pub mod intervals;
 

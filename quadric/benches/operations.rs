@@ -1,0 +1,112 @@
+//! Paper 2, Table 1: single-core cost of the basic operations (ns/op).
+//!
+//! Each benchmark runs its operation over a fixed batch of 1024 seeded
+//! random inputs, so the reported time per iteration divided by 1024 is the
+//! cost per operation.
+
+use chisel_quadric::sampling::heightfield::LocalForm;
+use chisel_quadric::{Quadric, QuadricDistance, Ray};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::{DVec2, DVec3};
+use std::hint::black_box;
+
+const BATCH: usize = 1024;
+
+/// A small deterministic generator (no extra dependency in the bench).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        // 53 random bits to [-1, 1).
+        #[allow(clippy::cast_precision_loss)]
+        let u = (self.0 >> 11) as f64 / (1u64 << 53) as f64;
+        2.0 * u - 1.0
+    }
+
+    fn vec3(&mut self) -> DVec3 {
+        DVec3::new(self.next(), self.next(), self.next())
+    }
+}
+
+fn operations(c: &mut Criterion) {
+    let mut rng = Lcg(7);
+    let quadric = Quadric::ellipsoid(DVec3::new(0.1, -0.2, 0.3), DVec3::new(1.0, 0.7, 0.5))
+        .unwrap()
+        .transformed(&glam::DMat4::from_rotation_y(0.4))
+        .unwrap();
+    let points: Vec<DVec3> = (0..BATCH).map(|_| rng.vec3() * 2.0).collect();
+    let uvs: Vec<DVec2> = (0..BATCH)
+        .map(|_| DVec2::new(rng.next(), rng.next()) * 0.6)
+        .collect();
+    let rays: Vec<Ray> = (0..BATCH)
+        .map(|_| Ray::new(rng.vec3() * 3.0, rng.vec3() + DVec3::splat(1e-3)).unwrap())
+        .collect();
+    let distance = QuadricDistance::new(&quadric);
+    let hf = LocalForm::new(&quadric).heightfields()[0];
+
+    let mut group = c.benchmark_group("table1");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    group.bench_function("quadric_value", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .map(|p| quadric.value(black_box(*p)))
+                .sum::<f64>()
+        });
+    });
+    group.bench_function("quadric_normal", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .map(|p| quadric.normal(black_box(*p)).unwrap_or(DVec3::ZERO))
+                .sum::<DVec3>()
+        });
+    });
+    group.bench_function("heightfield_value", |b| {
+        b.iter(|| {
+            uvs.iter()
+                .map(|p| hf.height(black_box(*p)).unwrap_or(0.0))
+                .sum::<f64>()
+        });
+    });
+    group.bench_function("heightfield_distortion", |b| {
+        b.iter(|| {
+            uvs.iter()
+                .map(|p| hf.distortion(black_box(*p)))
+                .sum::<f64>()
+        });
+    });
+    group.bench_function("heightfield_distortion_bounds", |b| {
+        b.iter(|| {
+            uvs.iter()
+                .map(|p| {
+                    let lo = black_box(*p).abs();
+                    hf.distortion_bounds(lo, lo + DVec2::splat(0.05)).1
+                })
+                .sum::<f64>()
+        });
+    });
+    group.bench_function("line_intersection", |b| {
+        b.iter(|| {
+            rays.iter()
+                .map(|r| quadric.intersect_line(black_box(r)).spans().len())
+                .sum::<usize>()
+        });
+    });
+    group.bench_function("conservative_distance", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .map(|p| distance.distance(black_box(*p)))
+                .sum::<f64>()
+        });
+    });
+    group.finish();
+}
+
+criterion_group!(benches, operations);
+criterion_main!(benches);

@@ -1,0 +1,66 @@
+//! Paper 2, Table 2: sampling the four scenes of `SCENARIOS.md` at three
+//! splat radii (1/10, 1/30 and 1/100 of the bounding radius) on one core,
+//! plus `machine80` on two cores.
+//!
+//! Before the timings, one line per configuration on stderr gives the
+//! counts of Table 2: samples, distance queries, clip-index buffer size.
+
+use chisel_quadric::{BoundingSphere, SampleOptions, Scene, SplatSet, sample};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::DVec3;
+use std::hint::black_box;
+
+/// `(scene, bounding centre, bounding radius)`.
+const SCENES: [(&str, [f64; 3], f64); 4] = [
+    ("three_spheres", [0.0, 0.0, 10.0], 75.0),
+    ("classic", [0.0, 0.0, 0.0], 90.0),
+    ("sharp8", [0.0, 0.0, 0.0], 60.0),
+    ("machine80", [0.0, 0.0, 35.0], 100.0),
+];
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool")
+}
+
+fn sampling(c: &mut Criterion) {
+    let one = pool(1);
+    let two = pool(2);
+    let mut group = c.benchmark_group("table2");
+    group.sample_size(10);
+    for (name, centre, bound) in SCENES {
+        let path = format!("{}/../assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+        let scene = Scene::load(&path).expect("shipped scene");
+        let dnf = scene.dnf().expect("normal form");
+        let sphere = BoundingSphere::new(DVec3::from(centre), bound).expect("sphere");
+        for (label, divisor) in [("large", 10.0), ("medium", 30.0), ("small", 100.0)] {
+            let options = SampleOptions::new(bound / divisor, sphere).expect("options");
+            let set = one.install(|| sample(&dnf, &options)).expect("sampling");
+            let splats = SplatSet::new(&dnf, &scene.dag, &set);
+            eprintln!(
+                "{name} {label} (r = {:.2}): {} quadrics, {} samples, {} distance queries, \
+                 {} clip indices",
+                options.radius,
+                dnf.quadrics().len(),
+                set.samples.len(),
+                set.stats.distance_queries,
+                splats.clip_indices.len()
+            );
+            group.throughput(Throughput::Elements(set.samples.len() as u64));
+            group.bench_function(format!("{name}/{label}/1-thread"), |b| {
+                b.iter(|| one.install(|| sample(black_box(&dnf), &options)));
+            });
+            if name == "machine80" {
+                group.bench_function(format!("{name}/{label}/2-threads"), |b| {
+                    b.iter(|| two.install(|| sample(black_box(&dnf), &options)));
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, sampling);
+criterion_main!(benches);
