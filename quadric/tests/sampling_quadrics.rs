@@ -31,6 +31,16 @@ fn check(dnf: &Dnf, r: f64, what: &str) -> usize {
             s.position
         );
         assert!(sphere.signed_distance(s.position) <= 1e-9);
+        // On the CSG surface: inside just behind, outside just in front.
+        if s.normal != DVec3::ZERO {
+            let eps = 1e-9;
+            assert!(
+                dnf.contains(s.position - s.normal * eps)
+                    && !dnf.contains(s.position + s.normal * eps),
+                "{what}: sample {} not on the CSG surface",
+                s.position
+            );
+        }
     }
     let grid = common::SampleGrid::new(&set, r);
     let mut checked = 0;
@@ -181,4 +191,31 @@ fn shared_surfaces_are_covered() {
     let dnf = Dnf::from_dag(&dag, root).unwrap();
     assert_eq!(dnf.products().len(), 2);
     assert!(check(&dnf, 0.03, "shared bore") > 1000);
+}
+
+#[test]
+fn random_trees_are_covered_and_sound() {
+    use rand::Rng;
+    let mut rng = common::rng(2024);
+    let mut checked = 0;
+    for case in 0..64 {
+        let mut dag = CsgDag::new();
+        let mut terms = Vec::new();
+        for _ in 0..2 {
+            let mut factors = Vec::new();
+            for _ in 0..rng.random_range(1..=3) {
+                let q = common::quadric(&mut rng);
+                let mut node = dag.primitive(q, [1.0; 3]);
+                if rng.random_bool(0.3) {
+                    node = dag.complement(node).unwrap();
+                }
+                factors.push(node);
+            }
+            terms.push(dag.intersection(&factors).unwrap());
+        }
+        let root = dag.union(&terms).unwrap();
+        let dnf = Dnf::from_dag(&dag, root).unwrap();
+        checked += check(&dnf, 0.12, &format!("random tree {case}"));
+    }
+    assert!(checked > 10_000, "{checked}");
 }
