@@ -198,6 +198,99 @@ impl<'a> CsgDistance<'a> {
         let others = self.union_distance_hinted(Some(a), Some(on), p, hint);
         (-others).max(own)
     }
+
+    /// The other products as seen from literal `b` of product `a` (see the
+    /// module notes on shared surfaces), for
+    /// [`relative_distance_among`](Self::relative_distance_among).
+    ///
+    /// Preconditions as [`relative_distance`](Self::relative_distance).
+    #[must_use]
+    pub fn other_terms(&self, a: usize, b: usize) -> OtherTerms {
+        let on = Some(self.dnf.products()[a][b]);
+        let terms = (0..self.dnf.products().len())
+            .filter(|&i| i != a)
+            .filter_map(|i| self.shared_literal(i, on).map(|left_out| (i, left_out)))
+            .collect();
+        OtherTerms {
+            terms,
+            floor: f64::INFINITY,
+        }
+    }
+
+    /// Eq. 22 for literal `b` of product `a` with the other products given
+    /// by `others` (from [`other_terms`](Self::other_terms), possibly
+    /// [`cull`](Self::cull)ed). `hint` as in
+    /// [`relative_distance_hinted`](Self::relative_distance_hinted).
+    #[must_use]
+    pub fn relative_distance_among(
+        &self,
+        a: usize,
+        b: usize,
+        p: DVec3,
+        others: &OtherTerms,
+        hint: &mut usize,
+    ) -> f64 {
+        let own = self.product_distance(a, Some(b), p);
+        let mut min = others.floor;
+        let first = others.terms.iter().position(|t| t.0 == *hint);
+        if let Some(k) = first {
+            let (i, left_out) = others.terms[k];
+            min = min.min(self.product_distance(i, left_out, p));
+        }
+        for (k, &(i, left_out)) in others.terms.iter().enumerate() {
+            if Some(k) == first {
+                continue;
+            }
+            let d = self.product_distance_capped(i, left_out, p, min);
+            if d < min {
+                min = d;
+                *hint = i;
+            }
+        }
+        (-min).max(own)
+    }
+
+    /// `others` for points within distance `radius` of `centre`: products
+    /// whose distance from `centre` exceeds `3·radius` are replaced by the
+    /// constant lower bound `d − radius` of their true distance (valid
+    /// everywhere in the ball). `None` when nothing can be dropped.
+    #[must_use]
+    pub fn cull(&self, others: &OtherTerms, centre: DVec3, radius: f64) -> Option<OtherTerms> {
+        let mut floor = others.floor;
+        let mut terms = Vec::with_capacity(others.terms.len());
+        for &(i, left_out) in &others.terms {
+            let d = self.product_distance(i, left_out, centre);
+            if d > 3.0 * radius {
+                floor = floor.min(d - radius);
+            } else {
+                terms.push((i, left_out));
+            }
+        }
+        (terms.len() < others.terms.len()).then_some(OtherTerms { terms, floor })
+    }
+}
+
+/// The other products of the normal form as seen from one literal: each
+/// with the literal to leave out, plus a constant lower bound for the
+/// products dropped by [`CsgDistance::cull`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct OtherTerms {
+    terms: Vec<(usize, Option<usize>)>,
+    floor: f64,
+}
+
+impl OtherTerms {
+    /// The number of products still evaluated.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.terms.len()
+    }
+
+    /// `true` when no product is evaluated any more.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty()
+    }
 }
 
 #[cfg(test)]

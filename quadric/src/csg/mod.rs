@@ -11,5 +11,5 @@ mod distance;
 mod dnf;
 
 pub use dag::{Affine, Color, CsgDag, Node, NodeId, Primitive};
-pub use distance::CsgDistance;
+pub use distance::{CsgDistance, OtherTerms};
 pub use dnf::{Dnf, DnfQuadric, Literal, MAX_PRODUCTS, Side};

@@ -255,6 +255,7 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
                 sphere,
                 options,
                 hint: std::cell::Cell::new(usize::MAX),
+                others: distance.other_terms(patch.product as usize, patch.literal as usize),
             };
             let mut stats = SamplingStats {
                 basic_regions: 1,

@@ -26,7 +26,7 @@ use std::cell::Cell;
 
 use glam::{DVec2, DVec3};
 
-use crate::csg::CsgDistance;
+use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::regions::Region;
@@ -36,6 +36,10 @@ use crate::sampling::{BoundingSphere, Sample, SampleOptions, SamplingStats};
 /// are classified. Any value `≥ √3` keeps the guarantee; larger values
 /// stop earlier near ownership seams at the cost of overlap there.
 pub const DISTORTION_CAP: f64 = 2.5;
+
+/// Subdivision levels between two cullings of far products
+/// ([`CsgDistance::cull`]); each level halves a region's area.
+const CULL_EVERY: u32 = 4;
 
 /// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
 const MAX_DEPTH: u32 = 50;
@@ -54,6 +58,8 @@ pub(crate) struct RegionJob<'a> {
     pub options: &'a SampleOptions,
     /// The product nearest to the last query (see [`CsgDistance::relative_distance_hinted`]).
     pub hint: Cell<usize>,
+    /// The other products of the normal form as seen from this literal.
+    pub others: OtherTerms,
 }
 
 /// A region corner: not yet evaluated, outside the heightfield's domain, or
@@ -68,23 +74,46 @@ enum Corner {
 impl RegionJob<'_> {
     /// Subdivides `region`, appending samples to `out`.
     pub(crate) fn run(&self, region: &Region, out: &mut Vec<Sample>, stats: &mut SamplingStats) {
-        self.visit(region, [Corner::Unknown; 4], 0, out, stats);
+        self.visit(region, [Corner::Unknown; 4], &self.others, 0, out, stats);
     }
 
-    fn evaluate(&self, v: DVec2, stats: &mut SamplingStats) -> Corner {
+    fn evaluate(&self, v: DVec2, others: &OtherTerms, stats: &mut SamplingStats) -> Corner {
         match self.heightfield.point(v) {
             Some(p) => {
                 stats.distance_queries += 1;
-                Corner::Known(p, self.classify(p))
+                Corner::Known(p, self.classify(p, others))
             }
             None => Corner::OutsideDomain,
         }
+    }
+
+    /// `others` restricted to the region's patch, every [`CULL_EVERY`] levels.
+    fn culled(
+        &self,
+        region: &Region,
+        delta: f64,
+        depth: u32,
+        others: &OtherTerms,
+    ) -> Option<OtherTerms> {
+        if !depth.is_multiple_of(CULL_EVERY) || others.is_empty() || !delta.is_finite() {
+            return None;
+        }
+        let verts = region.vertices();
+        #[allow(clippy::cast_precision_loss)]
+        let centroid = verts.iter().copied().sum::<DVec2>() / verts.len() as f64;
+        let centre = self.heightfield.point(centroid)?;
+        let reach = verts
+            .iter()
+            .map(|v| v.distance(centroid))
+            .fold(0.0, f64::max);
+        self.distance.cull(others, centre, reach * delta)
     }
 
     fn visit(
         &self,
         region: &Region,
         mut corners: [Corner; 4],
+        others: &OtherTerms,
         depth: u32,
         out: &mut Vec<Sample>,
         stats: &mut SamplingStats,
@@ -102,7 +131,7 @@ impl RegionJob<'_> {
         if delta <= DISTORTION_CAP {
             for (c, v) in corners.iter_mut().zip(verts) {
                 if *c == Corner::Unknown {
-                    *c = self.evaluate(*v, stats);
+                    *c = self.evaluate(*v, others, stats);
                 }
             }
             // Corner classifications; NaN where a corner is outside the domain.
@@ -144,6 +173,12 @@ impl RegionJob<'_> {
             return;
         }
         // Children reuse the parent's corners and share the new midpoint(s).
+        let culled = if delta <= DISTORTION_CAP {
+            self.culled(region, delta, depth, others)
+        } else {
+            None
+        };
+        let others = culled.as_ref().unwrap_or(others);
         // At most 4 parent corners and 2 new midpoints.
         let mut seen = [(DVec2::NAN, Corner::Unknown); 6];
         let mut count = verts.len();
@@ -156,23 +191,24 @@ impl RegionJob<'_> {
                 if let Some((_, c)) = seen[..count].iter().find(|(w, _)| w == v) {
                     *slot = *c;
                 } else if delta <= DISTORTION_CAP && count < seen.len() {
-                    let c = self.evaluate(*v, stats);
+                    let c = self.evaluate(*v, others, stats);
                     seen[count] = (*v, c);
                     count += 1;
                     *slot = c;
                 }
             }
-            self.visit(&child, inherited, depth + 1, out, stats);
+            self.visit(&child, inherited, others, depth + 1, out, stats);
         }
     }
 
     /// `max(d₂₂(p), |p − C| − R)`.
-    fn classify(&self, p: DVec3) -> f64 {
+    fn classify(&self, p: DVec3, others: &OtherTerms) -> f64 {
         let mut hint = self.hint.get();
-        let d = self.distance.relative_distance_hinted(
+        let d = self.distance.relative_distance_among(
             self.product as usize,
             self.literal as usize,
             p,
+            others,
             &mut hint,
         );
         self.hint.set(hint);
