@@ -21,6 +21,12 @@
 //!    `reach·δ₊` (§6.1);
 //! 5. else halve the longest edge and recurse; unclassified regions smaller
 //!    than `min_region_fraction·r` are dropped (the paper's threshold).
+//!
+//! Corner classifications are handed down to the children (a split adds
+//! one or two new corners), and every [`CULL_EVERY`] levels the products
+//! farther than three times the region's world radius are replaced by a
+//! constant lower bound of their distance ([`CsgDistance::cull`]), so deep
+//! regions only evaluate the products near them.
 
 use std::cell::Cell;
 
@@ -33,8 +39,10 @@ use crate::sampling::regions::Region;
 use crate::sampling::{BoundingSphere, Sample, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
-/// are classified. Any value `≥ √3` keeps the guarantee; larger values
-/// stop earlier near ownership seams at the cost of overlap there.
+/// are classified. It must be at least `√3`, the largest distortion inside
+/// a low-distortion region (§4.1), so that every owned region gets
+/// classified; larger values stop earlier near ownership seams, where
+/// regions then overlap a neighbouring plane's (extra samples, no holes).
 pub const DISTORTION_CAP: f64 = 2.5;
 
 /// Subdivision levels between two cullings of far products
