@@ -418,6 +418,29 @@ impl Heightfield {
         self.owns_x.range(lo, hi).1 < 0.0 || self.owns_y.range(lo, hi).1 < 0.0
     }
 
+    /// A world ball `(centre, radius)` containing the surface over the box
+    /// `[lo, hi]`: the circumscribed ball of the local box spanned by the
+    /// plane box and the range of heights over it. `None` where the box has
+    /// no surface.
+    #[must_use]
+    pub fn patch_ball(&self, lo: DVec2, hi: DVec2) -> Option<(DVec3, f64)> {
+        let (v0, v1) = self.value.range(lo, hi);
+        let (t0, t1) = match self.kind {
+            HeightKind::Polynomial => (v0, v1),
+            HeightKind::Root { positive } => {
+                if v1 < 0.0 {
+                    return None;
+                }
+                let (a, b) = (v0.max(0.0).sqrt(), v1.sqrt());
+                if positive { (a, b) } else { (-b, -a) }
+            }
+        };
+        let local_lo = DVec3::new(lo.x, lo.y, t0);
+        let local_hi = DVec3::new(hi.x, hi.y, t1);
+        let centre = self.centre + self.axes * (0.5 * (local_lo + local_hi));
+        Some((centre, 0.5 * local_lo.distance(local_hi)))
+    }
+
     /// Whether the whole box `[lo, hi]` lies in this plane's low-distortion region.
     #[must_use]
     pub fn box_is_owned(&self, lo: DVec2, hi: DVec2) -> bool {

@@ -11,8 +11,10 @@
 //! Per region:
 //! 1. drop it if no point is in the plane's low-distortion region, the
 //!    heightfield's domain or the bounding sphere;
-//! 2. subdivide while `δ₊` exceeds [`DISTORTION_CAP`] (only near the rim,
-//!    outside the low-distortion region);
+//! 2. while `δ₊` exceeds [`DISTORTION_CAP`] (only near the rim, outside
+//!    the low-distortion region): drop the region if the distance at the
+//!    centre of a ball around its patch exceeds the ball's radius, else
+//!    subdivide;
 //! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
 //!    region's cover radius and all signs agree: fill (negative) or drop
 //!    (positive);
@@ -136,6 +138,10 @@ impl RegionJob<'_> {
         let small = region.diameter() < self.options.min_region_fraction * r;
         let verts = region.vertices();
         let (_, delta) = hf.distortion_bounds(lo, hi);
+        if delta > DISTORTION_CAP && self.ball_is_off_surface(lo, hi, others, stats) {
+            stats.discarded += 1;
+            return;
+        }
         if delta <= DISTORTION_CAP {
             for (c, v) in corners.iter_mut().zip(verts) {
                 if *c == Corner::Unknown {
@@ -207,6 +213,24 @@ impl RegionJob<'_> {
             }
             self.visit(&child, inherited, others, depth + 1, out, stats);
         }
+    }
+
+    /// Whether the surface over the box `[lo, hi]` is off the CSG surface as
+    /// a whole, judged from the centre of a ball around it (needs no
+    /// distortion bound): eq. 22's positive case holds for every point of
+    /// `Q` within `d` of any point.
+    fn ball_is_off_surface(
+        &self,
+        lo: DVec2,
+        hi: DVec2,
+        others: &OtherTerms,
+        stats: &mut SamplingStats,
+    ) -> bool {
+        let Some((centre, radius)) = self.heightfield.patch_ball(lo, hi) else {
+            return true;
+        };
+        stats.distance_queries += 1;
+        self.classify(centre, others) > radius
     }
 
     /// `max(d₂₂(p), |p − C| − R)`.
