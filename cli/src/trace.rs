@@ -1,0 +1,68 @@
+//! `chisel trace`: the CPU reference ray tracer, shaded to a PNG.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use chisel_quadric::{Camera, NO_HIT, Scene, trace_image};
+use glam::DVec3;
+
+/// What `chisel trace` was asked to do.
+pub struct TraceArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// Output PNG.
+    pub output: PathBuf,
+    /// Bounding sphere, which places the default camera.
+    pub bounds: (DVec3, f64),
+    /// Camera position (default: outside the bounds, looking at the centre).
+    pub eye: Option<DVec3>,
+    /// Point looked at (default: the centre of the bounds).
+    pub look_at: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    pub fov: f64,
+    /// Image size in pixels.
+    pub size: (u32, u32),
+}
+
+/// Runs the command; errors are messages for the user.
+pub fn run(args: &TraceArgs) -> Result<(), String> {
+    let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    let dnf = scene.dnf().map_err(|e| e.to_string())?;
+    let (centre, radius) = args.bounds;
+    let eye = args
+        .eye
+        .unwrap_or(centre + DVec3::new(1.8, -2.4, 1.5) * radius);
+    let look_at = args.look_at.unwrap_or(centre);
+    let camera =
+        Camera::new(eye, look_at, args.fov, args.size.0, args.size.1).map_err(|e| e.to_string())?;
+    let start = Instant::now();
+    let image = trace_image(&dnf, &camera);
+    let seconds = start.elapsed().as_secs_f64();
+    // Lambert shading from a light over the camera's shoulder, plus ambient.
+    let light = (eye - look_at).normalize() + DVec3::new(0.3, 0.2, 0.8);
+    let light = light.normalize();
+    let mut png = image::RgbImage::new(image.width, image.height);
+    for (i, pixel) in png.pixels_mut().enumerate() {
+        let q = image.quadric[i];
+        *pixel = if q == NO_HIT {
+            image::Rgb([235, 238, 242])
+        } else {
+            let primitive = dnf.quadrics()[q as usize].primitive;
+            let colour = scene.color(primitive).unwrap_or([0.7, 0.7, 0.7]);
+            let lambert = image.normal[i].dot(light).max(0.0);
+            let shade = (0.25 + 0.75 * lambert) as f32;
+            let byte = |c: f32| ((c * shade).clamp(0.0, 1.0) * 255.0).round() as u8;
+            image::Rgb([byte(colour[0]), byte(colour[1]), byte(colour[2])])
+        };
+    }
+    png.save(&args.output)
+        .map_err(|e| format!("{}: {e}", args.output.display()))?;
+    let hits = image.quadric.iter().filter(|&&q| q != NO_HIT).count();
+    println!(
+        "traced {}x{} ({hits} surface pixels) in {seconds:.3} s; wrote {}",
+        image.width,
+        image.height,
+        args.output.display()
+    );
+    Ok(())
+}

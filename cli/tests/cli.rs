@@ -1,0 +1,127 @@
+//! The `chisel` binary end to end: real scenes in, summaries and files out,
+//! bad input reported with exit code 2.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn chisel() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_chisel"))
+}
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../assets/scenes")
+        .join(name)
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("chisel-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn sample_reports_json_and_writes_ply() {
+    let ply = temp("classic.ply");
+    let out = chisel()
+        .args(["sample", scene("classic.ron").to_str().unwrap()])
+        .args(["--radius", "4", "--bounds", "0,0,0,90", "--json", "-o"])
+        .arg(&ply)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = String::from_utf8(out.stdout).unwrap();
+    let samples: usize = line
+        .split("\"samples\":")
+        .nth(1)
+        .and_then(|rest| rest.split(',').next())
+        .and_then(|n| n.parse().ok())
+        .expect("a samples field");
+    assert!(samples > 1000, "{line}");
+    let text = std::fs::read_to_string(&ply).unwrap();
+    assert!(text.starts_with("ply\n"));
+    assert!(text.contains(&format!("element vertex {samples}\n")));
+}
+
+#[test]
+fn trace_writes_an_image_with_the_object_in_it() {
+    let png = temp("classic.png");
+    let out = chisel()
+        .args(["trace", scene("classic.ron").to_str().unwrap()])
+        .args(["--bounds", "0,0,0,90", "--size", "64x48", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    let report = String::from_utf8(out.stdout).unwrap();
+    let hits: usize = report
+        .split('(')
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("a surface pixel count");
+    assert!(hits > 64 * 48 / 10 && hits < 64 * 48, "{report}");
+}
+
+#[test]
+fn bad_input_is_a_clear_error_with_exit_code_2() {
+    let bad = temp("bad.ron");
+    std::fs::write(&bad, "Scene(primitives: [], root: Ref(\"x\"))").unwrap();
+    for args in [
+        vec![
+            "sample",
+            "missing.ron",
+            "--radius",
+            "1",
+            "--bounds",
+            "0,0,0,1",
+        ],
+        vec![
+            "sample",
+            bad.to_str().unwrap(),
+            "--radius",
+            "1",
+            "--bounds",
+            "0,0,0,1",
+        ],
+        vec![
+            "sample",
+            scene("classic.ron").to_str().unwrap(),
+            "--radius=-1",
+            "--bounds",
+            "0,0,0,90",
+        ],
+    ] {
+        let out = chisel().args(&args).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let message = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            message.starts_with("chisel: ") && message.len() > 20,
+            "{message}"
+        );
+    }
+    // Unparsable arguments are rejected by the parser (also exit code 2).
+    let out = chisel()
+        .args(["sample", "x.ron", "--radius", "1", "--bounds", "0,0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn budget_prints_the_bit_widths() {
+    let out = chisel().args(["budget", "--json"]).output().unwrap();
+    assert!(out.status.success());
+    let line = String::from_utf8(out.stdout).unwrap();
+    assert!(line.contains("\"max_coord\":67108864") && line.contains("\"magnitude_bits\":252"));
+}
