@@ -42,6 +42,7 @@
 
 pub mod heightfield;
 pub mod regions;
+pub mod separable;
 mod subdivide;
 
 use glam::{DVec2, DVec3};
