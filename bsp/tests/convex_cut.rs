@@ -3,8 +3,11 @@
 //! checked against exact classification of the vertices, and every part is
 //! validated (closed, consistent, strictly convex) after every cut.
 
+mod common;
+
 use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane, Sign, classify_vertex, plane_from_points};
+use common::volume::volume;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -28,6 +31,7 @@ fn sides(arena: &ConvexArena, poly: PolyId, s: &Plane) -> Vec<Sign> {
 /// the parts; returns the parts that have volume.
 fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> {
     let before = sides(arena, poly, s);
+    let volume_before = volume(arena, poly);
     let mut reference = arena.clone();
     let expected = reference.cut_naive(poly, s, NO_TAG, NO_TAG);
     let outcome = arena.cut(poly, s, NO_TAG, NO_TAG);
@@ -57,6 +61,14 @@ fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> 
             assert!(sides(arena, above, s).iter().all(|&x| x != Sign::Negative));
             assert!(sides(arena, below, s).contains(&Sign::Negative));
             assert!(sides(arena, above, s).contains(&Sign::Positive));
+            // Volume is conserved exactly, and both parts have some.
+            let (vb, va) = (volume(arena, below), volume(arena, above));
+            assert!(vb.is_positive() && va.is_positive());
+            assert_eq!(
+                vb.add(&va),
+                volume_before,
+                "the parts' volumes add up exactly"
+            );
             // The parts share no vertex.
             let a = arena.vertices_of(below);
             assert!(arena.vertices_of(above).iter().all(|v| !a.contains(v)));
@@ -84,6 +96,7 @@ fn a_box_is_a_valid_polyhedron() {
     let mut arena = ConvexArena::new();
     let b = unit_box(&mut arena, 10);
     arena.validate(b).unwrap();
+    assert_eq!(volume(&arena, b).num, 1000.into());
     assert_eq!(arena.faces_of(b).len(), 6);
     assert_eq!(arena.vertices_of(b).len(), 8);
     assert!(arena.add_box(p(0, 0, 0), p(0, 1, 1)).is_err());
@@ -161,6 +174,8 @@ fn a_corner_cut_gives_a_tetrahedron() {
     let s = Plane::new(1, 1, 1, -5).unwrap();
     let parts = checked_cut(&mut arena, b, &s);
     let tet = parts[0];
+    let v = volume(&arena, tet);
+    assert_eq!((v.num, v.den), (125.into(), 6.into()), "5³/6");
     assert_eq!(arena.faces_of(tet).len(), 4);
     assert_eq!(arena.vertices_of(tet).len(), 4);
     assert_eq!(arena.faces_of(parts[1]).len(), 7);

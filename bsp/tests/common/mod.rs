@@ -3,3 +3,4 @@
 pub mod backends;
 pub mod bigint_reference;
 pub mod inputs;
+pub mod volume;
