@@ -15,6 +15,7 @@
 //!   vertices and the predicates of §3.2.
 //! - [`convex`] — convex polyhedra as half-edge meshes with exact vertices,
 //!   and cutting them by planes (§3.3).
+//! - [`tree`] — BSP trees with material labels, and their convex cells.
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 //!
@@ -44,5 +45,6 @@
 pub mod convex;
 mod error;
 pub mod exact;
+pub mod tree;
 
 pub use error::Error;

@@ -1,0 +1,16 @@
+//! BSP trees with material labels (paper 1 §3.1, §3.4–3.5).
+//!
+//! A [`Bsp`] is a flat array of nodes over a palette of exact planes. An
+//! inner node splits space by its plane into the part below it
+//! (`n·x + d < 0`) and the part above; a leaf carries a material label
+//! ([`Label`], `0` = empty). Node `0` is the root.
+//!
+//! - [`bsp`] — the structure, constructors and `validate()`.
+//! - [`cells`] — the convex cells of the leaves inside a bounding
+//!   polyhedron, by recursive exact cutting (first step of §3.4).
+
+pub mod bsp;
+pub mod cells;
+
+pub use bsp::{Bsp, EMPTY, Label, Node, NodeId};
+pub use cells::Cell;
