@@ -82,6 +82,11 @@ impl Bsp {
         bsp
     }
 
+    /// A tree from a builder's parts, root first.
+    pub(crate) fn from_parts(planes: Vec<Plane>, nodes: Vec<Node>) -> Self {
+        Self { planes, nodes }
+    }
+
     /// The node array.
     #[must_use]
     pub fn nodes(&self) -> &[Node] {

@@ -8,9 +8,12 @@
 //! - [`bsp`] — the structure, constructors and `validate()`.
 //! - [`cells`] — the convex cells of the leaves inside a bounding
 //!   polyhedron, by recursive exact cutting (first step of §3.4).
+//! - [`merge`] — Booleans (and painting) by merging two BSPs (§3.5).
 
 pub mod bsp;
 pub mod cells;
+pub mod merge;
 
 pub use bsp::{Bsp, EMPTY, Label, Node, NodeId};
 pub use cells::Cell;
+pub use merge::BooleanOp;

@@ -1,0 +1,195 @@
+//! Boolean operations by merging two BSPs (paper 1 §3.5).
+//!
+//! Notation: `A`, `B` — the operands; `f(a, b)` — the label function
+//! ([`BooleanOp::apply`]); `C` — the convex cell of the current recursion,
+//! cut exactly from the bounds.
+//!
+//! The merge recurses on `A`. At an inner node it cuts `C` by the node's
+//! plane: a proper cut recurses into both children, otherwise only into the
+//! child that holds `C`, dropping the plane. At a leaf of `A` with label
+//! `a`, it inserts `B` restricted to `C` the same way, with leaf labels
+//! `f(a, b)` — so the result never keeps a plane that does not cut its cell.
+//! A final pass collapses splits whose two children are equal leaves.
+
+use std::collections::HashMap;
+
+use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
+use crate::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
+use crate::exact::Plane;
+
+/// How the labels of two overlapping regions combine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BooleanOp {
+    /// `A ∪ B`: material of `A` where it has some, else that of `B`
+    /// (adding material never replaces existing material).
+    Union,
+    /// `A ∩ B`: material of `A` where `B` has material.
+    Intersection,
+    /// `A − B`: material of `A` where `B` is empty.
+    Difference,
+    /// Material of `A`, repainted with the label where `B` has material.
+    Paint(Label),
+}
+
+impl BooleanOp {
+    /// The label of a region labelled `a` in `A` and `b` in `B`.
+    #[must_use]
+    #[inline]
+    pub fn apply(self, a: Label, b: Label) -> Label {
+        match self {
+            BooleanOp::Union => {
+                if a != EMPTY {
+                    a
+                } else {
+                    b
+                }
+            }
+            BooleanOp::Intersection => {
+                if b != EMPTY {
+                    a
+                } else {
+                    EMPTY
+                }
+            }
+            BooleanOp::Difference => {
+                if b != EMPTY {
+                    EMPTY
+                } else {
+                    a
+                }
+            }
+            BooleanOp::Paint(m) => {
+                if a != EMPTY && b != EMPTY {
+                    m
+                } else {
+                    a
+                }
+            }
+        }
+    }
+}
+
+/// Builds the merged tree.
+struct Merger<'a> {
+    a: &'a Bsp,
+    b: &'a Bsp,
+    op: BooleanOp,
+    arena: &'a mut ConvexArena,
+    planes: Vec<Plane>,
+    plane_index: HashMap<Plane, u32>,
+    nodes: Vec<Node>,
+}
+
+impl Merger<'_> {
+    fn plane(&mut self, plane: Plane) -> u32 {
+        let next = self.planes.len() as u32;
+        *self.plane_index.entry(plane).or_insert_with(|| {
+            self.planes.push(plane);
+            next
+        })
+    }
+
+    /// Appends the merge of `A`'s subtree `n` restricted to `cell`; returns
+    /// its node.
+    fn merge_a(&mut self, n: NodeId, cell: PolyId) -> NodeId {
+        match self.a.nodes()[n as usize] {
+            Node::Leaf(label) => self.insert_b(0, cell, label),
+            Node::Split {
+                plane,
+                below,
+                above,
+            } => {
+                let s = self.a.planes()[plane as usize];
+                self.split(s, cell, below, above, Self::merge_a)
+            }
+        }
+    }
+
+    /// Appends `B`'s subtree `n` restricted to `cell`, labels combined with
+    /// `a`; returns its node.
+    fn insert_b(&mut self, n: NodeId, cell: PolyId, a: Label) -> NodeId {
+        match self.b.nodes()[n as usize] {
+            Node::Leaf(b) => self.push(Node::Leaf(self.op.apply(a, b))),
+            Node::Split {
+                plane,
+                below,
+                above,
+            } => {
+                let s = self.b.planes()[plane as usize];
+                self.split(s, cell, below, above, |m, child, c| m.insert_b(child, c, a))
+            }
+        }
+    }
+
+    /// Cuts `cell` by `s` and recurses with `step` into the children it
+    /// reaches; a split node only when the cut is proper.
+    fn split(
+        &mut self,
+        s: Plane,
+        cell: PolyId,
+        below: NodeId,
+        above: NodeId,
+        mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
+    ) -> NodeId {
+        match self.arena.cut(cell, &s, NO_TAG, NO_TAG) {
+            CutOutcome::Below => step(self, below, cell),
+            CutOutcome::Above => step(self, above, cell),
+            CutOutcome::Split {
+                below: cb,
+                above: ca,
+            } => {
+                let plane = self.plane(s);
+                let node = self.push(Node::Leaf(EMPTY));
+                let b = step(self, below, cb);
+                let a = step(self, above, ca);
+                self.nodes[node as usize] = match (self.nodes[b as usize], self.nodes[a as usize]) {
+                    // Equal leaves on both sides: the plane separates nothing.
+                    (Node::Leaf(x), Node::Leaf(y)) if x == y => {
+                        self.nodes.truncate(node as usize);
+                        return self.push(Node::Leaf(x));
+                    }
+                    _ => Node::Split {
+                        plane,
+                        below: b,
+                        above: a,
+                    },
+                };
+                node
+            }
+        }
+    }
+
+    fn push(&mut self, node: Node) -> NodeId {
+        self.nodes.push(node);
+        self.nodes.len() as NodeId - 1
+    }
+}
+
+impl Bsp {
+    /// `self op other` inside the convex polyhedron `bounds` of `arena`
+    /// (which is cut up in place; outside `bounds` the result is empty).
+    /// Exact: the result's regions are exactly those of the label function.
+    #[must_use]
+    pub fn merge(
+        &self,
+        other: &Bsp,
+        op: BooleanOp,
+        arena: &mut ConvexArena,
+        bounds: PolyId,
+    ) -> Bsp {
+        let mut merger = Merger {
+            a: self,
+            b: other,
+            op,
+            arena,
+            planes: Vec::new(),
+            plane_index: HashMap::new(),
+            nodes: Vec::new(),
+        };
+        // Nodes are appended in depth-first order, so the first one is the
+        // root (a collapsed split is replaced in place).
+        let root = merger.merge_a(0, bounds);
+        debug_assert_eq!(root, 0);
+        Bsp::from_parts(merger.planes, merger.nodes)
+    }
+}

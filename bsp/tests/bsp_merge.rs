@@ -1,0 +1,157 @@
+//! Booleans by BSP merging, checked by exact volume identities on random
+//! convex operands and on random Boolean sequences:
+//! `vol(A ∪ B) + vol(A ∩ B) = vol(A) + vol(B)`,
+//! `vol(A − B) = vol(A) − vol(A ∩ B)`, painting keeps the solid volume,
+//! and every tree and cell stays valid.
+
+mod common;
+
+use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
+use chisel_bsp::exact::{IntPoint, plane_from_points};
+use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
+use common::volume::{Fraction, volume};
+use num_bigint::BigInt;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const H: i64 = 1 << 16;
+
+fn p(x: i64, y: i64, z: i64) -> IntPoint {
+    IntPoint::new(x, y, z).unwrap()
+}
+
+fn bounds(arena: &mut ConvexArena) -> PolyId {
+    arena.add_box(p(-H, -H, -H), p(H, H, H)).unwrap()
+}
+
+/// A random convex polyhedron inside the bounds, centred within `spread` of
+/// the origin, as a BSP.
+fn random_convex_bsp(rng: &mut ChaCha8Rng, label: Label, spread: i64) -> Bsp {
+    let mut arena = ConvexArena::new();
+    let (c, r) = (
+        [0; 3].map(|_| rng.random_range(-spread..spread)),
+        rng.random_range(H / 8..H / 2),
+    );
+    let mut poly = arena
+        .add_box(
+            p(c[0] - r, c[1] - r, c[2] - r),
+            p(c[0] + r, c[1] + r, c[2] + r),
+        )
+        .unwrap();
+    let mut q = || {
+        p(
+            c[0] + rng.random_range(-r..r),
+            c[1] + rng.random_range(-r..r),
+            c[2] + rng.random_range(-r..r),
+        )
+    };
+    for _ in 0..6 {
+        let Ok(s) = plane_from_points(q(), q(), q()) else {
+            continue;
+        };
+        if let CutOutcome::Split { below, .. } = arena.cut(poly, &s.normalized(), NO_TAG, NO_TAG) {
+            poly = below;
+        }
+    }
+    Bsp::from_convex(&arena, poly, label)
+}
+
+/// Exact volume of the material (any non-empty label) of `bsp` in the bounds.
+fn solid_volume(bsp: &Bsp) -> Fraction {
+    bsp.validate().unwrap();
+    let mut arena = ConvexArena::new();
+    let b = bounds(&mut arena);
+    let mut total = Fraction::zero();
+    for cell in bsp.cells(&mut arena, b) {
+        arena.validate(cell.poly).unwrap();
+        if cell.label != EMPTY {
+            total = total.add(&volume(&arena, cell.poly));
+        }
+    }
+    total
+}
+
+fn merge(a: &Bsp, b: &Bsp, op: BooleanOp) -> Bsp {
+    let mut arena = ConvexArena::new();
+    let bounds = bounds(&mut arena);
+    let out = a.merge(b, op, &mut arena, bounds);
+    out.validate().unwrap();
+    out
+}
+
+fn neg(f: &Fraction) -> Fraction {
+    Fraction {
+        num: -f.num.clone(),
+        den: f.den.clone(),
+    }
+}
+
+#[test]
+fn label_functions() {
+    use BooleanOp::*;
+    assert_eq!(Union.apply(0, 2), 2);
+    assert_eq!(Union.apply(1, 2), 1);
+    assert_eq!(Intersection.apply(1, 0), 0);
+    assert_eq!(Intersection.apply(1, 2), 1);
+    assert_eq!(Difference.apply(1, 2), 0);
+    assert_eq!(Difference.apply(1, 0), 1);
+    assert_eq!(Paint(5).apply(1, 2), 5);
+    assert_eq!(Paint(5).apply(0, 2), 0);
+}
+
+#[test]
+fn volume_identities_hold_exactly_on_random_operands() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    for _ in 0..25 {
+        let a = random_convex_bsp(&mut rng, 1, H / 2);
+        let b = random_convex_bsp(&mut rng, 2, H / 2);
+        let (va, vb) = (solid_volume(&a), solid_volume(&b));
+        let union = solid_volume(&merge(&a, &b, BooleanOp::Union));
+        let inter = solid_volume(&merge(&a, &b, BooleanOp::Intersection));
+        let diff = solid_volume(&merge(&a, &b, BooleanOp::Difference));
+        let paint = merge(&a, &b, BooleanOp::Paint(9));
+        assert_eq!(
+            union.add(&inter),
+            va.add(&vb),
+            "vol(A∪B) + vol(A∩B) = vol(A) + vol(B)"
+        );
+        assert_eq!(diff, va.add(&neg(&inter)), "vol(A−B) = vol(A) − vol(A∩B)");
+        assert_eq!(solid_volume(&paint), va, "painting keeps the solid");
+    }
+}
+
+/// Random Boolean sequences: the running result keeps satisfying the
+/// identities and stays a valid tree.
+#[test]
+fn random_boolean_sequences_keep_the_identities() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut overlapping = 0;
+    for _ in 0..3 {
+        let mut acc = random_convex_bsp(&mut rng, 1, H / 8);
+        let mut v_acc = solid_volume(&acc);
+        for step in 0..12 {
+            let tool = random_convex_bsp(&mut rng, 1 + (step % 3) as Label, H / 8);
+            let v_tool = solid_volume(&tool);
+            let inter = solid_volume(&merge(&acc, &tool, BooleanOp::Intersection));
+            let op = if rng.random_bool(0.5) {
+                BooleanOp::Union
+            } else {
+                BooleanOp::Difference
+            };
+            acc = merge(&acc, &tool, op);
+            let v_new = solid_volume(&acc);
+            let expected = match op {
+                BooleanOp::Union => v_acc.add(&v_tool).add(&neg(&inter)),
+                _ => v_acc.add(&neg(&inter)),
+            };
+            assert_eq!(v_new, expected, "step {step}: {op:?}");
+            assert!(v_new.num >= BigInt::from(0));
+            overlapping += usize::from(inter.is_positive());
+            v_acc = v_new;
+        }
+    }
+    assert!(
+        overlapping >= 10,
+        "tools overlap the solid: {overlapping} of 36"
+    );
+}
