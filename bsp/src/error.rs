@@ -34,6 +34,13 @@ pub enum Error {
     ZeroNormal,
     /// Three points meant to define a plane are collinear (or coincide).
     CollinearPoints,
+    /// The points of a convex tool span no volume: fewer than four distinct
+    /// points, or all on one line or one plane.
+    DegenerateHull {
+        /// What kind of degeneracy: `"fewer than four distinct points"`,
+        /// `"collinear"` or `"coplanar"`.
+        reason: &'static str,
+    },
     /// A box needs `min < max` on every axis.
     DegenerateBox {
         /// The requested minimum corner.
@@ -66,6 +73,11 @@ impl fmt::Display for Error {
                  the plane lies too far from the origin for the exact range"
             ),
             Error::ZeroNormal => write!(f, "a plane needs a non-zero normal (a, b, c)"),
+            Error::DegenerateHull { reason } => write!(
+                f,
+                "the tool's points are {reason}, so their convex hull has no volume; \
+                 give at least four points that do not all lie in one plane"
+            ),
             Error::DegenerateBox { min, max } => write!(
                 f,
                 "box from {min:?} to {max:?} has no volume; every coordinate of min must be \

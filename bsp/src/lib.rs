@@ -15,6 +15,7 @@
 //!   vertices and the predicates of §3.2.
 //! - [`convex`] — convex polyhedra as half-edge meshes with exact vertices,
 //!   and cutting them by planes (§3.3).
+//! - [`tools`] — convex tools: exact convex hulls of integer points.
 //! - [`tree`] — BSP trees with material labels, and their convex cells.
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
@@ -45,6 +46,7 @@
 pub mod convex;
 mod error;
 pub mod exact;
+pub mod tools;
 pub mod tree;
 
 pub use error::Error;
