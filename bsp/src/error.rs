@@ -30,6 +30,12 @@ pub enum Error {
         /// The offending value.
         value: i128,
     },
+    /// A floating-point input (a coordinate, scale or rotation entry) is
+    /// NaN or infinite.
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+    },
     /// A plane has the zero normal `(0, 0, 0)`, which defines no plane.
     ZeroNormal,
     /// Three points meant to define a plane are collinear (or coincide).
@@ -72,6 +78,9 @@ impl fmt::Display for Error {
                 "plane offset d={value} is outside ±{MAX_OFFSET} (2^83); \
                  the plane lies too far from the origin for the exact range"
             ),
+            Error::NonFinite { what } => {
+                write!(f, "{what} is not a finite number (NaN or infinite)")
+            }
             Error::ZeroNormal => write!(f, "a plane needs a non-zero normal (a, b, c)"),
             Error::DegenerateHull { reason } => write!(
                 f,

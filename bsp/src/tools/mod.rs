@@ -1,6 +1,8 @@
-//! Convex tools: exact convex hulls of integer points (paper 1 §3.3's
-//! carving tools are convex polyhedra).
+//! Convex tools: exact convex hulls of integer points, and the shapes built
+//! from them (prisms, dodecahedra, swept volumes).
 
 pub mod hull;
+pub mod shapes;
 
 pub use hull::convex_hull;
+pub use shapes::{Pose, dodecahedron_corners, placed_tool, prism_corners, swept_tool};
