@@ -1,6 +1,7 @@
 //! Paper 2, Table 2: sampling the four scenes of `SCENARIOS.md` at three
 //! splat radii (1/10, 1/30 and 1/100 of the bounding radius) on one core,
-//! plus `machine80` on two cores.
+//! plus `machine80` on two cores, and a single sphere (no CSG) for the
+//! raw sampling rate.
 //!
 //! Before the timings, one line per configuration on stderr gives the
 //! counts of Table 2: samples, distance queries, clip-index buffer size.
@@ -58,6 +59,30 @@ fn sampling(c: &mut Criterion) {
                 });
             }
         }
+    }
+    group.finish();
+
+    // A single quadric: no CSG pruning, every region is filled directly.
+    let mut group = c.benchmark_group("single_quadric");
+    group.sample_size(10);
+    let scene = Scene::from_ron(
+        r#"Scene(primitives: [(name: "ball", shape: Sphere(center: (0, 0, 0), radius: 50))], root: Ref("ball"))"#,
+    )
+    .expect("a one-sphere scene");
+    let dnf = scene.dnf().expect("normal form");
+    let sphere = BoundingSphere::new(DVec3::ZERO, 60.0).expect("sphere");
+    for radius in [1.0, 0.25] {
+        let options = SampleOptions::new(radius, sphere).expect("options");
+        let set = one.install(|| sample(&dnf, &options)).expect("sampling");
+        eprintln!(
+            "sphere (r = {radius}): {} samples, {} distance queries",
+            set.samples.len(),
+            set.stats.distance_queries
+        );
+        group.throughput(Throughput::Elements(set.samples.len() as u64));
+        group.bench_function(format!("sphere/r={radius}/1-thread"), |b| {
+            b.iter(|| one.install(|| sample(black_box(&dnf), &options)));
+        });
     }
     group.finish();
 }
