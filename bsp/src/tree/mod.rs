@@ -9,9 +9,11 @@
 //! - [`cells`] — the convex cells of the leaves inside a bounding
 //!   polyhedron, by recursive exact cutting (first step of §3.4).
 //! - [`merge`] — Booleans (and painting) by merging two BSPs (§3.5).
+//! - [`import`] — a BSP from a closed triangle soup (§3.6).
 
 pub mod bsp;
 pub mod cells;
+pub mod import;
 pub mod merge;
 
 pub use bsp::{Bsp, EMPTY, Label, Node, NodeId};
