@@ -15,6 +15,7 @@ pub mod bsp;
 pub mod cells;
 pub mod import;
 pub mod merge;
+mod polygon;
 
 pub use bsp::{Bsp, EMPTY, Label, Node, NodeId};
 pub use cells::Cell;
