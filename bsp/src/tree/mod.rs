@@ -10,13 +10,16 @@
 //!   polyhedron, by recursive exact cutting (first step of §3.4).
 //! - [`merge`] — Booleans (and painting) by merging two BSPs (§3.5).
 //! - [`import`] — a BSP from a closed triangle soup (§3.6).
+//! - [`boundary`] — the solid's boundary without interior faces (§3.4).
 
+pub mod boundary;
 pub mod bsp;
 pub mod cells;
 pub mod import;
 pub mod merge;
 mod polygon;
 
+pub use boundary::BoundaryFace;
 pub use bsp::{Bsp, EMPTY, Label, Node, NodeId};
 pub use cells::Cell;
 pub use merge::BooleanOp;

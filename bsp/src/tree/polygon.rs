@@ -75,11 +75,16 @@ impl Polygon {
         } else {
             p.flipped()
         };
+        // The boundary leaves the kept side after edge k when the next
+        // vertex is strictly across `p`, or on `p` with the next edge going
+        // across; that is where `p` closes the part.
+        let across = -keep;
         let mut edges = Vec::with_capacity(n + 1);
         for k in 0..n {
             if reaches(k) {
                 edges.push(self.edges[k]);
-                if !reaches((k + 1) % n) {
+                let next = (k + 1) % n;
+                if sides[next] == across || !reaches(next) {
                     edges.push(closing);
                 }
             }

@@ -89,3 +89,30 @@ pub fn volume(arena: &ConvexArena, poly: PolyId) -> Fraction {
     }
     Fraction::new(total.num, total.den * 6)
 }
+
+/// The exact volume enclosed by outward polygons with exact vertices
+/// (divergence theorem: fan tetrahedra from the origin).
+pub fn polygons_volume(polygons: &[Vec<chisel_bsp::exact::Point4>]) -> Fraction {
+    let point = |p: &chisel_bsp::exact::Point4| -> ([BigInt; 3], BigInt) {
+        let [x, y, z] = p.xyz();
+        (
+            [to_big(&x.limbs()), to_big(&y.limbs()), to_big(&z.limbs())],
+            to_big(&p.w().limbs()),
+        )
+    };
+    let det = |a: &[BigInt; 3], b: &[BigInt; 3], c: &[BigInt; 3]| -> BigInt {
+        &a[0] * (&b[1] * &c[2] - &b[2] * &c[1]) - &a[1] * (&b[0] * &c[2] - &b[2] * &c[0])
+            + &a[2] * (&b[0] * &c[1] - &b[1] * &c[0])
+    };
+    let mut total = Fraction::zero();
+    for polygon in polygons {
+        let corners: Vec<_> = polygon.iter().map(point).collect();
+        let (x0, w0) = &corners[0];
+        for k in 1..corners.len() - 1 {
+            let (x1, w1) = &corners[k];
+            let (x2, w2) = &corners[k + 1];
+            total = total.add(&Fraction::new(det(x0, x1, x2), w0 * w1 * w2));
+        }
+    }
+    Fraction::new(total.num, total.den * 6)
+}
