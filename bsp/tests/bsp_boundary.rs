@@ -3,19 +3,15 @@
 
 mod common;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
-use chisel_bsp::exact::{IntPoint, plane_from_points};
+use chisel_bsp::convex::{ConvexArena, PolyId};
 use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY};
+use common::shapes::{self, p};
 use common::volume::{Fraction, polygons_volume, volume};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 const H: i64 = 1 << 16;
 const CUTS: usize = 5;
-
-fn p(x: i64, y: i64, z: i64) -> IntPoint {
-    IntPoint::new(x, y, z).unwrap()
-}
 
 fn bounds(arena: &mut ConvexArena) -> PolyId {
     arena.add_box(p(-H, -H, -H), p(H, H, H)).unwrap()
@@ -85,35 +81,8 @@ fn the_union_of_two_overlapping_boxes_has_no_interior_faces() {
 #[test]
 fn boundaries_enclose_exactly_the_solid_volume() {
     let mut rng = ChaCha8Rng::seed_from_u64(12);
-    let convex = |rng: &mut ChaCha8Rng| {
-        let mut arena = ConvexArena::new();
-        let c = [0; 3].map(|_| rng.random_range(-H / 4..H / 4));
-        let r = rng.random_range(H / 8..H / 3);
-        let mut poly = arena
-            .add_box(
-                p(c[0] - r, c[1] - r, c[2] - r),
-                p(c[0] + r, c[1] + r, c[2] + r),
-            )
-            .unwrap();
-        let mut q = || {
-            p(
-                c[0] + rng.random_range(-r..r),
-                c[1] + rng.random_range(-r..r),
-                c[2] + rng.random_range(-r..r),
-            )
-        };
-        for _ in 0..CUTS {
-            let Ok(s) = plane_from_points(q(), q(), q()) else {
-                continue;
-            };
-            if let CutOutcome::Split { below, .. } =
-                arena.cut(poly, &s.normalized(), NO_TAG, NO_TAG)
-            {
-                poly = below;
-            }
-        }
-        Bsp::from_convex(&arena, poly, 1)
-    };
+    let convex =
+        |rng: &mut ChaCha8Rng| shapes::random_convex_bsp(rng, 1, H / 4, (H / 8, H / 3), CUTS);
     for _ in 0..15 {
         let (a, b) = (convex(&mut rng), convex(&mut rng));
         for single in [&a, &b] {

@@ -5,38 +5,12 @@
 
 mod common;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
-use chisel_bsp::exact::{IntPoint, plane_from_points};
+use chisel_bsp::convex::{ConvexArena, PolyId};
 use chisel_bsp::tree::{Bsp, EMPTY};
+use common::shapes::{self, p};
 use common::volume::{Fraction, volume};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-
-fn p(x: i64, y: i64, z: i64) -> IntPoint {
-    IntPoint::new(x, y, z).unwrap()
-}
-
-/// A random convex polyhedron inside `[−h, h]³`: a box cut by random
-/// planes through points near its centre, keeping the part below.
-fn random_convex(arena: &mut ConvexArena, rng: &mut ChaCha8Rng, h: i64, cuts: usize) -> PolyId {
-    let mut poly = arena.add_box(p(-h, -h, -h), p(h, h, h)).unwrap();
-    let mut q = || {
-        p(
-            rng.random_range(-h..h),
-            rng.random_range(-h..h),
-            rng.random_range(-h..h),
-        )
-    };
-    for _ in 0..cuts {
-        let Ok(s) = plane_from_points(q(), q(), q()) else {
-            continue;
-        };
-        if let CutOutcome::Split { below, .. } = arena.cut(poly, &s.normalized(), NO_TAG, NO_TAG) {
-            poly = below;
-        }
-    }
-    poly
-}
 
 #[test]
 fn a_uniform_bsp_has_one_cell_the_bounds() {
@@ -55,7 +29,7 @@ fn a_convex_polyhedron_round_trips_through_its_linear_bsp() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for _ in 0..20 {
         let mut source = ConvexArena::new();
-        let poly = random_convex(&mut source, &mut rng, 1 << 16, 12);
+        let poly = shapes::random_convex(&mut source, &mut rng, [0; 3], 1 << 16, 12);
         let expected = volume(&source, poly);
         let bsp = Bsp::from_convex(&source, poly, 7);
         bsp.validate().unwrap();

@@ -6,54 +6,22 @@
 
 mod common;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
-use chisel_bsp::exact::{IntPoint, plane_from_points};
+use chisel_bsp::convex::{ConvexArena, PolyId};
 use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
+use common::shapes::{self, p};
 use common::volume::{Fraction, volume};
 use num_bigint::BigInt;
-use rand::{Rng, SeedableRng};
+use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 const H: i64 = 1 << 16;
-
-fn p(x: i64, y: i64, z: i64) -> IntPoint {
-    IntPoint::new(x, y, z).unwrap()
-}
 
 fn bounds(arena: &mut ConvexArena) -> PolyId {
     arena.add_box(p(-H, -H, -H), p(H, H, H)).unwrap()
 }
 
-/// A random convex polyhedron inside the bounds, centred within `spread` of
-/// the origin, as a BSP.
 fn random_convex_bsp(rng: &mut ChaCha8Rng, label: Label, spread: i64) -> Bsp {
-    let mut arena = ConvexArena::new();
-    let (c, r) = (
-        [0; 3].map(|_| rng.random_range(-spread..spread)),
-        rng.random_range(H / 8..H / 2),
-    );
-    let mut poly = arena
-        .add_box(
-            p(c[0] - r, c[1] - r, c[2] - r),
-            p(c[0] + r, c[1] + r, c[2] + r),
-        )
-        .unwrap();
-    let mut q = || {
-        p(
-            c[0] + rng.random_range(-r..r),
-            c[1] + rng.random_range(-r..r),
-            c[2] + rng.random_range(-r..r),
-        )
-    };
-    for _ in 0..6 {
-        let Ok(s) = plane_from_points(q(), q(), q()) else {
-            continue;
-        };
-        if let CutOutcome::Split { below, .. } = arena.cut(poly, &s.normalized(), NO_TAG, NO_TAG) {
-            poly = below;
-        }
-    }
-    Bsp::from_convex(&arena, poly, label)
+    shapes::random_convex_bsp(rng, label, spread, (H / 8, H / 2), 6)
 }
 
 /// Exact volume of the material (any non-empty label) of `bsp` in the bounds.

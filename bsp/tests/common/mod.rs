@@ -3,4 +3,5 @@
 pub mod backends;
 pub mod bigint_reference;
 pub mod inputs;
+pub mod shapes;
 pub mod volume;

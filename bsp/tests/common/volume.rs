@@ -62,32 +62,17 @@ impl Fraction {
 
 /// The exact volume of polyhedron `poly`.
 pub fn volume(arena: &ConvexArena, poly: PolyId) -> Fraction {
-    let point = |v: u32| -> ([BigInt; 3], BigInt) {
-        let p = &arena.vertices()[v as usize].point;
-        let [x, y, z] = p.xyz();
-        (
-            [to_big(&x.limbs()), to_big(&y.limbs()), to_big(&z.limbs())],
-            to_big(&p.w().limbs()),
-        )
-    };
-    let det = |a: &[BigInt; 3], b: &[BigInt; 3], c: &[BigInt; 3]| -> BigInt {
-        &a[0] * (&b[1] * &c[2] - &b[2] * &c[1]) - &a[1] * (&b[0] * &c[2] - &b[2] * &c[0])
-            + &a[2] * (&b[0] * &c[1] - &b[1] * &c[0])
-    };
-    let mut total = Fraction::zero();
-    for face in arena.faces_of(poly) {
-        let corners: Vec<_> = arena
-            .face_loop(face)
-            .map(|h| point(arena.half_edges()[h as usize].origin))
-            .collect();
-        let (x0, w0) = &corners[0];
-        for k in 1..corners.len() - 1 {
-            let (x1, w1) = &corners[k];
-            let (x2, w2) = &corners[k + 1];
-            total = total.add(&Fraction::new(det(x0, x1, x2), w0 * w1 * w2));
-        }
-    }
-    Fraction::new(total.num, total.den * 6)
+    let faces: Vec<Vec<chisel_bsp::exact::Point4>> = arena
+        .faces_of(poly)
+        .into_iter()
+        .map(|f| {
+            arena
+                .face_loop(f)
+                .map(|h| arena.vertices()[arena.half_edges()[h as usize].origin as usize].point)
+                .collect()
+        })
+        .collect();
+    polygons_volume(&faces)
 }
 
 /// The exact volume enclosed by outward polygons with exact vertices
