@@ -8,34 +8,84 @@
 //! Each face of a solid cell is clipped against the subtree on its other
 //! side, as a plane-based polygon ([`super::polygon`]): at an inner node the
 //! pieces go to the side(s) they reach, split exactly when they straddle;
-//! at a leaf a piece is kept when that leaf is empty (a solid–empty
-//! transition) and dropped otherwise (solid–solid). Faces on the bounds are
-//! kept: outside the bounds is empty. T-junction splitting is not done yet.
+//! at a leaf a piece is kept when that leaf's label differs (a transition)
+//! and dropped otherwise (same material on both sides). A transition
+//! between two materials is reported once, from the side with the larger
+//! label, so solid–empty faces always face out of the solid. Faces on the
+//! bounds are kept and marked: what lies outside the bounds is not known
+//! here. T-junctions are removed later, on the assembled surface
+//! ([`crate::mesh`]).
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
+use super::cells::Cell;
 use super::polygon::Polygon;
 use crate::convex::{ConvexArena, NO_TAG, PolyId};
 use crate::exact::{Plane, Point4, Sign, classify_vertex};
 
-/// One boundary polygon: outward plane, exact vertices counter-clockwise
-/// from outside, and the label of the solid behind it.
+/// One boundary polygon: outward plane, exact corners counter-clockwise
+/// from outside (with the edge planes that define them), and the labels on
+/// both sides.
 #[derive(Clone, Debug)]
 pub struct BoundaryFace {
-    /// Supporting plane, positive side outside the solid.
+    /// Supporting plane, positive side outside (towards [`Self::outside`]).
     pub plane: Plane,
+    /// Edge planes: edge `k` runs from corner `k` to corner `k + 1`, lies in
+    /// `edges[k]`, and the polygon is on its negative side. Corner `k` is
+    /// the meet of `plane`, `edges[k − 1]` and `edges[k]`.
+    pub edges: Vec<Plane>,
     /// Exact corners, counter-clockwise seen from outside.
     pub vertices: Vec<Point4>,
-    /// The material behind the face.
+    /// The material behind the face (never empty).
     pub label: Label,
+    /// The material in front of it: [`EMPTY`] for a surface face, another
+    /// material for an interface between two materials. Unknown (reported
+    /// as [`EMPTY`]) for faces on the bounds.
+    pub outside: Label,
+    /// Whether the face lies on the bounds rather than on a BSP plane.
+    pub on_bounds: bool,
+}
+
+impl BoundaryFace {
+    fn new(polygon: Polygon, label: Label, outside: Label, on_bounds: bool) -> Self {
+        Self {
+            plane: polygon.support,
+            vertices: polygon.vertices(),
+            edges: polygon.edges,
+            label,
+            outside,
+            on_bounds,
+        }
+    }
+
+    /// The face as a plane-based polygon.
+    pub(crate) fn polygon(&self) -> Polygon {
+        Polygon {
+            support: self.plane,
+            edges: self.edges.clone(),
+        }
+    }
 }
 
 impl Bsp {
     /// The boundary of the solid inside `bounds` (a polyhedron of `arena`,
-    /// cut up in place): every solid–empty face piece, none between solid
-    /// cells.
+    /// cut up in place): every solid–empty face piece and every interface
+    /// between different materials (once), none between cells of the same
+    /// material; pieces of the bounds that enclose solid are included and
+    /// marked [`BoundaryFace::on_bounds`].
     pub fn boundary(&self, arena: &mut ConvexArena, bounds: PolyId) -> Vec<BoundaryFace> {
+        let cells = self.cells(arena, bounds);
+        self.boundary_of_cells(arena, &cells)
+    }
+
+    /// The boundary pieces of the given cells (from [`Bsp::cells`] on
+    /// `arena`).
+    pub(crate) fn boundary_of_cells(
+        &self,
+        arena: &ConvexArena,
+        cells: &[Cell],
+    ) -> Vec<BoundaryFace> {
         let mut out = Vec::new();
-        for cell in self.cells(arena, bounds) {
+        for cell in cells {
             if cell.label == EMPTY {
                 continue;
             }
@@ -52,11 +102,7 @@ impl Bsp {
                         .collect(),
                 };
                 if face.tag == NO_TAG {
-                    out.push(BoundaryFace {
-                        plane: face.plane,
-                        vertices: polygon.vertices(),
-                        label: cell.label,
-                    });
+                    out.push(BoundaryFace::new(polygon, cell.label, EMPTY, true));
                 } else {
                     self.clip(face.tag, polygon, cell.label, &mut out);
                 }
@@ -66,18 +112,14 @@ impl Bsp {
     }
 
     /// Clips `polygon` against the subtree at `n`, keeping the pieces that
-    /// reach empty leaves.
+    /// reach leaves with a smaller label.
     fn clip(&self, n: NodeId, polygon: Polygon, label: Label, out: &mut Vec<BoundaryFace>) {
         let mut stack = vec![(n, polygon)];
         while let Some((n, polygon)) = stack.pop() {
             match self.nodes()[n as usize] {
                 Node::Leaf(other) => {
-                    if other == EMPTY {
-                        out.push(BoundaryFace {
-                            plane: polygon.support,
-                            vertices: polygon.vertices(),
-                            label,
-                        });
+                    if other < label {
+                        out.push(BoundaryFace::new(polygon, label, other, false));
                     }
                 }
                 Node::Split {

@@ -14,7 +14,7 @@ use crate::Error;
 use crate::exact::{IntPoint, Plane, Sign, classify_vertex};
 
 /// Deterministic shuffle (xorshift64*), so imports are reproducible.
-fn shuffle<T>(items: &mut [T], seed: u64) {
+pub(super) fn shuffle<T>(items: &mut [T], seed: u64) {
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
     for i in (1..items.len()).rev() {
         state ^= state >> 12;
@@ -48,23 +48,36 @@ impl Bsp {
         let mut planes: Vec<Plane> = Vec::new();
         let mut nodes = vec![Node::Leaf(EMPTY)];
         for polygon in polygons {
-            insert(&mut planes, &mut nodes, polygon, label);
+            insert(&mut planes, &mut nodes, polygon, label, EMPTY);
         }
         Ok(Bsp::from_parts(planes, nodes))
     }
 }
 
-fn insert(planes: &mut Vec<Plane>, nodes: &mut Vec<Node>, polygon: Polygon, label: Label) {
+/// Inserts one face: where it reaches a leaf, that leaf becomes a split by
+/// the face's plane with `behind` below and `in_front` above.
+pub(super) fn insert(
+    planes: &mut Vec<Plane>,
+    nodes: &mut Vec<Node>,
+    polygon: Polygon,
+    behind: Label,
+    in_front: Label,
+) {
+    // Every piece of the face shares its plane: one palette entry.
+    let mut palette_index = None;
     let mut stack: Vec<(NodeId, Polygon)> = vec![(0, polygon)];
     while let Some((n, polygon)) = stack.pop() {
         match nodes[n as usize] {
             Node::Leaf(_) => {
-                planes.push(polygon.support);
+                let plane = *palette_index.get_or_insert_with(|| {
+                    planes.push(polygon.support);
+                    planes.len() as u32 - 1
+                });
                 let below = nodes.len() as NodeId;
-                nodes.push(Node::Leaf(label));
-                nodes.push(Node::Leaf(EMPTY));
+                nodes.push(Node::Leaf(behind));
+                nodes.push(Node::Leaf(in_front));
                 nodes[n as usize] = Node::Split {
-                    plane: planes.len() as u32 - 1,
+                    plane,
                     below,
                     above: below + 1,
                 };

@@ -11,6 +11,7 @@
 //! - [`merge`] — Booleans (and painting) by merging two BSPs (§3.5).
 //! - [`import`] — a BSP from a closed triangle soup (§3.6).
 //! - [`boundary`] — the solid's boundary without interior faces (§3.4).
+//! - [`simplify`] — redundancy removal by extraction and rebuilding (§3.7).
 
 pub mod boundary;
 pub mod bsp;
@@ -18,6 +19,7 @@ pub mod cells;
 pub mod import;
 pub mod merge;
 mod polygon;
+pub mod simplify;
 
 pub use boundary::BoundaryFace;
 pub use bsp::{Bsp, EMPTY, Label, Node, NodeId};
