@@ -54,6 +54,20 @@ pub enum Error {
         /// The requested maximum corner.
         max: [i64; 3],
     },
+    /// An octree root cube that is too small, too large or out of range.
+    OctreeSize {
+        /// Requested lower corner.
+        origin: [i64; 3],
+        /// Requested edge exponent.
+        size_log2: u8,
+    },
+    /// A union of no tools.
+    NoTools,
+    /// An edit that cannot mean anything.
+    InvalidEdit {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
 }
 
 impl fmt::Display for Error {
@@ -92,6 +106,13 @@ impl fmt::Display for Error {
                 "box from {min:?} to {max:?} has no volume; every coordinate of min must be \
                  below the same coordinate of max"
             ),
+            Error::OctreeSize { origin, size_log2 } => write!(
+                f,
+                "octree cube at {origin:?} with edge 2^{size_log2} is invalid: the edge must be \
+                 2^1 to 2^27 and the cube must lie within ±{MAX_COORD} (2^26)"
+            ),
+            Error::NoTools => write!(f, "a union of tools needs at least one tool"),
+            Error::InvalidEdit { reason } => write!(f, "invalid edit: {reason}"),
             Error::CollinearPoints => write!(
                 f,
                 "the three points are collinear or coincide, so they define no plane"

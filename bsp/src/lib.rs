@@ -17,6 +17,8 @@
 //!   and cutting them by planes (§3.3).
 //! - [`tools`] — convex tools: exact convex hulls of integer points.
 //! - [`tree`] — BSP trees with material labels, and their convex cells.
+//! - [`mesh`] — boundary surfaces without T-junctions, and their triangles.
+//! - [`octree`] — the persistent octree of BSPs that edits touch locally.
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 //!
@@ -46,6 +48,8 @@
 pub mod convex;
 mod error;
 pub mod exact;
+pub mod mesh;
+pub mod octree;
 pub mod tools;
 pub mod tree;
 

@@ -20,7 +20,7 @@ use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
 use super::polygon::Polygon;
 use crate::convex::{ConvexArena, NO_TAG, PolyId};
-use crate::exact::{Plane, Point4, Sign, classify_vertex};
+use crate::exact::{Plane, Point4};
 
 /// One boundary polygon: outward plane, exact corners counter-clockwise
 /// from outside (with the edge planes that define them), and the labels on
@@ -46,7 +46,7 @@ pub struct BoundaryFace {
 }
 
 impl BoundaryFace {
-    fn new(polygon: Polygon, label: Label, outside: Label, on_bounds: bool) -> Self {
+    pub(crate) fn new(polygon: Polygon, label: Label, outside: Label, on_bounds: bool) -> Self {
         Self {
             plane: polygon.support,
             vertices: polygon.vertices(),
@@ -114,46 +114,38 @@ impl Bsp {
     /// Clips `polygon` against the subtree at `n`, keeping the pieces that
     /// reach leaves with a smaller label.
     fn clip(&self, n: NodeId, polygon: Polygon, label: Label, out: &mut Vec<BoundaryFace>) {
+        self.clip_polygon(n, polygon, &mut |piece, other| {
+            if other < label {
+                out.push(BoundaryFace::new(piece, label, other, false));
+            }
+        });
+    }
+
+    /// Splits `polygon` exactly among the leaves of the subtree at `n`,
+    /// calling `emit(piece, leaf label)` for each piece. A piece lying in a
+    /// node's plane goes to the side its outward normal points to (the
+    /// region in front of it).
+    pub(crate) fn clip_polygon(
+        &self,
+        n: NodeId,
+        polygon: Polygon,
+        emit: &mut impl FnMut(Polygon, Label),
+    ) {
         let mut stack = vec![(n, polygon)];
         while let Some((n, polygon)) = stack.pop() {
             match self.nodes()[n as usize] {
-                Node::Leaf(other) => {
-                    if other < label {
-                        out.push(BoundaryFace::new(polygon, label, other, false));
-                    }
-                }
+                Node::Leaf(other) => emit(polygon, other),
                 Node::Split {
                     plane,
                     below,
                     above,
                 } => {
-                    let p = self.planes()[plane as usize];
-                    let sides: Vec<Sign> = polygon
-                        .vertices()
-                        .iter()
-                        .map(|v| classify_vertex(v, &p))
-                        .collect();
-                    match (
-                        sides.contains(&Sign::Negative),
-                        sides.contains(&Sign::Positive),
-                    ) {
-                        (true, true) => {
-                            stack.push((below, polygon.part(&sides, &p, Sign::Negative)));
-                            stack.push((above, polygon.part(&sides, &p, Sign::Positive)));
-                        }
-                        (true, false) => stack.push((below, polygon)),
-                        (false, true) => stack.push((above, polygon)),
-                        // In the plane: the side across it is the one facing
-                        // away from the solid, i.e. where the face normal
-                        // points.
-                        (false, false) => {
-                            let same = p
-                                .normal()
-                                .iter()
-                                .zip(polygon.support.normal())
-                                .all(|(a, b)| (*a as i128).signum() == (b as i128).signum());
-                            stack.push((if same { above } else { below }, polygon));
-                        }
+                    let (b, a) = polygon.split(&self.planes()[plane as usize]);
+                    if let Some(a) = a {
+                        stack.push((above, a));
+                    }
+                    if let Some(b) = b {
+                        stack.push((below, b));
                     }
                 }
             }

@@ -87,6 +87,20 @@ impl Bsp {
         Self { planes, nodes }
     }
 
+    /// The same tree with every leaf label mapped by `f`.
+    #[must_use]
+    pub fn relabeled(&self, f: impl Fn(Label) -> Label) -> Bsp {
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|n| match *n {
+                Node::Leaf(l) => Node::Leaf(f(l)),
+                split => split,
+            })
+            .collect();
+        Bsp::from_parts(self.planes.clone(), nodes)
+    }
+
     /// The node array.
     #[must_use]
     pub fn nodes(&self) -> &[Node] {

@@ -18,7 +18,7 @@ pub mod bsp;
 pub mod cells;
 pub mod import;
 pub mod merge;
-mod polygon;
+pub(crate) mod polygon;
 pub mod simplify;
 
 pub use boundary::BoundaryFace;

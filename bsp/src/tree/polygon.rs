@@ -8,7 +8,9 @@
 //! plane is ever constructed, and every vertex stays exact.
 
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Point4, Sign, intersect_3_planes, plane_from_points};
+use crate::exact::{
+    IntPoint, Plane, Point4, Sign, classify_vertex, intersect_3_planes, plane_from_points,
+};
 
 /// A convex polygon in plane-based form.
 #[derive(Clone, Debug)]
@@ -92,6 +94,40 @@ impl Polygon {
         Self {
             support: self.support,
             edges,
+        }
+    }
+
+    /// The parts below and above `p`. A polygon lying in `p` goes to the
+    /// side its outward normal points to (the region in front of it).
+    pub(crate) fn split(self, p: &Plane) -> (Option<Self>, Option<Self>) {
+        let sides: Vec<Sign> = self
+            .vertices()
+            .iter()
+            .map(|v| classify_vertex(v, p))
+            .collect();
+        match (
+            sides.contains(&Sign::Negative),
+            sides.contains(&Sign::Positive),
+        ) {
+            (true, true) => (
+                Some(self.part(&sides, p, Sign::Negative)),
+                Some(self.part(&sides, p, Sign::Positive)),
+            ),
+            (true, false) => (Some(self), None),
+            (false, true) => (None, Some(self)),
+            (false, false) => {
+                // Coplanar: the supports are positive multiples of ±p.
+                let same = p
+                    .normal()
+                    .iter()
+                    .zip(self.support.normal())
+                    .all(|(a, b)| a.signum() == b.signum());
+                if same {
+                    (None, Some(self))
+                } else {
+                    (Some(self), None)
+                }
+            }
         }
     }
 }

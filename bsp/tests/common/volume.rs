@@ -31,7 +31,7 @@ impl Fraction {
         }
     }
 
-    fn new(num: BigInt, den: BigInt) -> Self {
+    pub fn new(num: BigInt, den: BigInt) -> Self {
         let (num, den) = if den.is_negative() {
             (-num, -den)
         } else {

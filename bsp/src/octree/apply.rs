@@ -1,0 +1,336 @@
+//! Applying a tool to an octree (paper 1 §3.8).
+//!
+//! Notation: `C` — a cell's box; `T` — the tool, `bounds(T)` its integer
+//! box; `f` — the label function of the edit ([`BooleanOp`]).
+//!
+//! The walk descends only into cells whose closed box touches `bounds(T)`;
+//! children run in parallel. At a leaf, an exact test (cutting `C` by the
+//! tool's planes) decides whether `T` has volume in `C`; if so, the leaf's
+//! BSP is merged with `T` inside `C` (§3.5), rebuilt without redundancy
+//! (§3.7) and, when still over the budget, split into eight children by
+//! rebuilding it inside each child box. After the children of an inner cell
+//! changed, eight leaf children that fit the budget together are combined:
+//! their BSPs are grafted under the axis planes (Fig. 8, combine A) and
+//! rebuilt inside the cell (combine B). Every step is exact and every
+//! result a pure function of its inputs, so the octree is bit-identical
+//! for any thread count.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::cell::{CellBox, CellKey};
+use super::graft::axis_graft;
+use super::tool::Tool;
+use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
+use crate::Error;
+use crate::convex::{ConvexArena, PolyId};
+use crate::tree::{BooleanOp, Bsp, EMPTY, Label};
+
+/// What an edit does where the tool is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Edit {
+    /// Remove all material inside the tool.
+    Subtract,
+    /// Fill the tool's empty space with this material (existing material
+    /// stays).
+    Add(Label),
+    /// Repaint the material inside the tool with this one.
+    Paint(Label),
+    /// Keep only the material inside the tool.
+    Intersect,
+}
+
+impl Edit {
+    fn op(self) -> BooleanOp {
+        match self {
+            Edit::Subtract => BooleanOp::Difference,
+            Edit::Add(_) => BooleanOp::Union,
+            Edit::Paint(label) => BooleanOp::Paint(label),
+            Edit::Intersect => BooleanOp::Intersection,
+        }
+    }
+
+    fn tool_label(self) -> Label {
+        match self {
+            Edit::Add(label) => label,
+            _ => 1,
+        }
+    }
+}
+
+/// The cells an edit touched.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Changes {
+    /// Leaf cells of the new octree whose surface may differ: their content
+    /// was replaced, or their box touches the tool's bounds (faces on their
+    /// border may have been exposed or covered). Sorted.
+    pub changed: Vec<CellKey>,
+    /// Leaf cells of the previous octree that are no longer leaves (split
+    /// or combined). Sorted.
+    pub removed: Vec<CellKey>,
+}
+
+impl Changes {
+    fn leaf(key: CellKey) -> Self {
+        Self {
+            changed: vec![key],
+            removed: Vec::new(),
+        }
+    }
+
+    fn append(&mut self, other: Changes) {
+        self.changed.extend(other.changed);
+        self.removed.extend(other.removed);
+    }
+}
+
+/// The edit, prepared once for the whole walk.
+struct Walk<'a> {
+    tool: Bsp,
+    bounds: CellBox,
+    op: BooleanOp,
+    /// Whether `f(l, EMPTY) ≠ l` for some label, so that cells the tool
+    /// misses change too (intersection empties them).
+    changes_outside: bool,
+    config: &'a OctreeConfig,
+}
+
+impl Octree {
+    /// Applies `edit` with `tool`, touching only the cells the tool can
+    /// reach (all cells for [`Edit::Intersect`], which empties the rest).
+    /// Cells run in parallel; the result does not depend on the thread
+    /// count. Keep a clone of the octree first to undo (cloning is cheap).
+    ///
+    /// # Errors
+    /// [`Error::InvalidEdit`] for adding or painting the empty label; the
+    /// octree is then unchanged.
+    pub fn apply(&mut self, tool: &Tool, edit: Edit) -> Result<Changes, Error> {
+        if matches!(edit, Edit::Add(EMPTY) | Edit::Paint(EMPTY)) {
+            return Err(Error::InvalidEdit {
+                reason: "adding or painting needs a non-empty material label",
+            });
+        }
+        let op = edit.op();
+        let walk = Walk {
+            tool: tool.labelled(edit.tool_label()),
+            bounds: tool.bounds(),
+            op,
+            changes_outside: (0..=Label::MAX).any(|l| op.apply(l, EMPTY) != l),
+            config: self.config(),
+        };
+        let root_box = self.root_box();
+        let (root, mut changes) = walk.node(&self.root, CellKey::ROOT, root_box);
+        if let Some(root) = root {
+            self.root = root;
+        }
+        changes.changed.sort_unstable();
+        changes.removed.sort_unstable();
+        Ok(changes)
+    }
+}
+
+impl Walk<'_> {
+    /// The new node (`None` when unchanged) and the changes below it.
+    fn node(&self, node: &OctNode, key: CellKey, cell: CellBox) -> (Option<OctNode>, Changes) {
+        if !self.changes_outside && !cell.touches(&self.bounds) {
+            return (None, Changes::default());
+        }
+        match node {
+            OctNode::Leaf(leaf) => self.leaf(leaf, key, cell),
+            OctNode::Inner(children) => {
+                let results: Vec<(Option<OctNode>, Changes)> = (0..8)
+                    .into_par_iter()
+                    .map(|i| self.node(&children[i], key.child(i), cell.child(i)))
+                    .collect();
+                if results.iter().all(|(n, _)| n.is_none()) {
+                    let mut changes = Changes::default();
+                    results.into_iter().for_each(|(_, c)| changes.append(c));
+                    return (None, changes);
+                }
+                let mut changes = Changes::default();
+                let mut new_children = children.as_ref().clone();
+                for (i, (n, c)) in results.into_iter().enumerate() {
+                    if let Some(n) = n {
+                        new_children[i] = n;
+                    }
+                    changes.append(c);
+                }
+                if let Some(combined) = combine(&new_children, cell, self.config) {
+                    let mut removed = Vec::new();
+                    collect_leaves(node, key, &mut removed);
+                    return (
+                        Some(OctNode::Leaf(combined)),
+                        Changes {
+                            changed: vec![key],
+                            removed,
+                        },
+                    );
+                }
+                (Some(OctNode::Inner(Arc::new(new_children))), changes)
+            }
+        }
+    }
+
+    fn leaf(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Changes) {
+        let touches = cell.touches(&self.bounds);
+        let meets = cell.overlaps(&self.bounds) && {
+            let mut arena = ConvexArena::new();
+            let poly = cell_poly(&mut arena, cell);
+            self.tool_meets(&mut arena, poly)
+        };
+        if !meets {
+            // The tool has no volume here: only labels outside it change.
+            let relabeled = self.changes_outside.then(|| relabel_outside(leaf, self.op));
+            let changes = if touches || relabeled.is_some() {
+                Changes::leaf(key)
+            } else {
+                Changes::default()
+            };
+            return (relabeled.flatten().map(OctNode::Leaf), changes);
+        }
+        let mut arena = ConvexArena::new();
+        let poly = cell_poly(&mut arena, cell);
+        let merged = leaf.to_bsp().merge(&self.tool, self.op, &mut arena, poly);
+        let mut arena = ConvexArena::new();
+        let poly = cell_poly(&mut arena, cell);
+        let simplified = merged.simplified(&mut arena, poly);
+        let (node, leaves) = build_leaf(simplified, key, cell, self.config);
+        let changes = match node {
+            OctNode::Leaf(_) => Changes::leaf(key),
+            OctNode::Inner(_) => Changes {
+                changed: leaves,
+                removed: vec![key],
+            },
+        };
+        (Some(node), changes)
+    }
+
+    fn tool_meets(&self, arena: &mut ConvexArena, cell: PolyId) -> bool {
+        self.tool
+            .cells(arena, cell)
+            .iter()
+            .any(|c| c.label != EMPTY)
+    }
+}
+
+/// The leaf with every label `l` replaced by `f(l, EMPTY)`, or `None` when
+/// that changes nothing.
+fn relabel_outside(leaf: &Leaf, op: BooleanOp) -> Option<Leaf> {
+    match leaf {
+        Leaf::Uniform(l) => {
+            let new = op.apply(*l, EMPTY);
+            (new != *l).then_some(Leaf::Uniform(new))
+        }
+        Leaf::Bsp(bsp) => {
+            let relabeled = bsp.relabeled(|l| op.apply(l, EMPTY));
+            if relabeled.nodes() == bsp.nodes() {
+                None
+            } else if relabeled.nodes().iter().all(|n| {
+                matches!(n, crate::tree::Node::Split { .. }) || *n == crate::tree::Node::Leaf(EMPTY)
+            }) {
+                Some(Leaf::Uniform(EMPTY))
+            } else {
+                Some(Leaf::Bsp(Arc::new(relabeled)))
+            }
+        }
+    }
+}
+
+/// A leaf for `bsp` inside `cell`, split into children while it is over
+/// the budget; also returns the leaf keys created.
+pub(crate) fn build_leaf(
+    bsp: Bsp,
+    key: CellKey,
+    cell: CellBox,
+    config: &OctreeConfig,
+) -> (OctNode, Vec<CellKey>) {
+    let inner = bsp.nodes().len() / 2;
+    if inner == 0 {
+        let label = match bsp.nodes()[0] {
+            crate::tree::Node::Leaf(label) => label,
+            crate::tree::Node::Split { .. } => EMPTY,
+        };
+        return (OctNode::Leaf(Leaf::Uniform(label)), vec![key]);
+    }
+    if inner <= config.max_bsp_nodes || key.depth >= config.max_depth || cell.min_edge() < 2 {
+        return (OctNode::Leaf(Leaf::Bsp(Arc::new(bsp))), vec![key]);
+    }
+    let built: Vec<(OctNode, Vec<CellKey>)> = (0..8)
+        .into_par_iter()
+        .map(|i| {
+            let child = cell.child(i);
+            let mut arena = ConvexArena::new();
+            let poly = cell_poly(&mut arena, child);
+            build_leaf(
+                bsp.simplified(&mut arena, poly),
+                key.child(i),
+                child,
+                config,
+            )
+        })
+        .collect();
+    let mut leaves = Vec::new();
+    let mut children = Vec::with_capacity(8);
+    for (node, keys) in built {
+        children.push(node);
+        leaves.extend(keys);
+    }
+    let children: [OctNode; 8] = children
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("eight children"));
+    (OctNode::Inner(Arc::new(children)), leaves)
+}
+
+/// One leaf for eight leaf children that fit the budget together, or
+/// `None`.
+fn combine(children: &[OctNode; 8], cell: CellBox, config: &OctreeConfig) -> Option<Leaf> {
+    let leaves: Vec<&Leaf> = children
+        .iter()
+        .map(|c| match c {
+            OctNode::Leaf(leaf) => Some(leaf),
+            OctNode::Inner(_) => None,
+        })
+        .collect::<Option<_>>()?;
+    if let Leaf::Uniform(first) = leaves[0]
+        && leaves
+            .iter()
+            .all(|l| matches!(l, Leaf::Uniform(x) if x == first))
+    {
+        return Some(Leaf::Uniform(*first));
+    }
+    if leaves.iter().map(|l| l.bsp_nodes()).sum::<usize>() > config.max_bsp_nodes {
+        return None;
+    }
+    let bsps: Vec<Bsp> = leaves.iter().map(|l| l.to_bsp()).collect();
+    let grafted = axis_graft(std::array::from_fn(|i| &bsps[i]), cell.mid());
+    let mut arena = ConvexArena::new();
+    let poly = cell_poly(&mut arena, cell);
+    let simplified = grafted.simplified(&mut arena, poly);
+    let inner = simplified.nodes().len() / 2;
+    if inner > config.max_bsp_nodes {
+        return None;
+    }
+    Some(match simplified.nodes()[0] {
+        crate::tree::Node::Leaf(label) if inner == 0 => Leaf::Uniform(label),
+        _ => Leaf::Bsp(Arc::new(simplified)),
+    })
+}
+
+fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {
+    match node {
+        OctNode::Leaf(_) => out.push(key),
+        OctNode::Inner(children) => {
+            for (i, child) in children.iter().enumerate() {
+                collect_leaves(child, key.child(i), out);
+            }
+        }
+    }
+}
+
+/// The cell's box in `arena`; cells lie inside the root cube, which was
+/// checked against the coordinate range when the octree was made.
+fn cell_poly(arena: &mut ConvexArena, cell: CellBox) -> PolyId {
+    cell.add_to(arena)
+        .expect("octree cells lie inside the checked root cube")
+}

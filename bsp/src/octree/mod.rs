@@ -1,0 +1,27 @@
+//! Octree-embedded BSPs (paper 1 §3.8): a persistent octree whose leaves
+//! hold a small BSP or one label, so that the cost of an edit depends on
+//! the tool, not on how much has been edited before.
+//!
+//! Notation: a *cell* is an octree node's axis-aligned box, named by its
+//! [`CellKey`]; a *leaf* holds a [`Leaf`]; the *budget* is the maximal
+//! number of inner BSP nodes per leaf ([`OctreeConfig::max_bsp_nodes`]).
+//!
+//! - [`cell`] — cell keys and integer boxes.
+//! - [`tree`] — the persistent octree: construction, leaves, statistics.
+//! - [`tool`] — convex tools (and unions of them) with their bounds.
+//! - [`apply`] — applying a tool to the cells it overlaps, in parallel;
+//!   splitting leaves over the budget and combining children under it.
+//! - [`surface`] — the surface of a cell or of the whole octree, with the
+//!   faces on cell borders kept only where the neighbour across is empty.
+
+pub mod apply;
+pub mod cell;
+mod graft;
+pub mod surface;
+pub mod tool;
+pub mod tree;
+
+pub use apply::{Changes, Edit};
+pub use cell::{CellBox, CellKey};
+pub use tool::Tool;
+pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

@@ -1,0 +1,128 @@
+//! The surface of an octree (paper 1 §3.4 across cells).
+//!
+//! Notation: a *border face* is a face of a leaf's solid lying on the
+//! leaf's box; the *region across* it is what lies in front of it — a part
+//! of a neighbouring leaf, or the outside of the root cube (empty).
+//!
+//! Inside a leaf the surface is its BSP's boundary ([`Bsp::boundary`]).
+//! A border face is clipped exactly against the region across: descending
+//! from the root, it is split by the axis planes of each inner cell it
+//! reaches (a face lying in such a plane goes to the side it faces), then
+//! against the neighbour's BSP. Pieces are kept where the label across is
+//! smaller — empty, or a material with a smaller label (an interface is
+//! reported once) — so the union of all cells' surfaces is the boundary of
+//! every material region of the octree, with no face between two cells of
+//! the same material. T-junctions between cells remain; the mesh stage
+//! removes them.
+
+use rayon::prelude::*;
+
+use super::cell::{CellBox, CellKey};
+use super::tree::{Leaf, OctNode, Octree};
+use crate::convex::ConvexArena;
+use crate::exact::Plane;
+use crate::tree::polygon::Polygon;
+use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
+
+impl Octree {
+    /// The surface pieces of leaf cell `key` (empty when `key` is not a
+    /// leaf): the faces between materials inside it, and its border faces
+    /// where the region across has a smaller label. Every piece has
+    /// [`BoundaryFace::on_bounds`] false: border faces are resolved.
+    #[must_use]
+    pub fn cell_surface(&self, key: CellKey) -> Vec<BoundaryFace> {
+        let Some(leaf) = self.leaf(key) else {
+            return Vec::new();
+        };
+        if matches!(leaf, Leaf::Uniform(EMPTY)) {
+            return Vec::new();
+        }
+        let bsp: Bsp = leaf.to_bsp();
+        let mut arena = ConvexArena::new();
+        let Ok(bounds) = self.cell_box(key).add_to(&mut arena) else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for face in bsp.boundary(&mut arena, bounds) {
+            if face.on_bounds {
+                self.clip_across(face.polygon(), face.label, &mut out);
+            } else {
+                out.push(face);
+            }
+        }
+        out
+    }
+
+    /// The surface of every leaf, in leaf order (cells run in parallel).
+    #[must_use]
+    pub fn surface(&self) -> Vec<BoundaryFace> {
+        let keys: Vec<CellKey> = self.leaves().into_iter().map(|(k, _)| k).collect();
+        keys.par_iter()
+            .map(|&key| self.cell_surface(key))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+
+    /// Clips a border face of solid `label` against the region across it.
+    fn clip_across(&self, polygon: Polygon, label: Label, out: &mut Vec<BoundaryFace>) {
+        let mut emit = |piece: Polygon, other: Label| {
+            if other < label {
+                out.push(BoundaryFace::new(piece, label, other, false));
+            }
+        };
+        let root = self.root_box();
+        if faces_out_of(&polygon.support, &root) {
+            emit(polygon, EMPTY);
+            return;
+        }
+        let mut stack: Vec<(&OctNode, CellBox, Polygon)> = vec![(&self.root, root, polygon)];
+        while let Some((node, cell, polygon)) = stack.pop() {
+            match node {
+                OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
+                OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, &mut emit),
+                OctNode::Inner(children) => {
+                    let mid = cell.mid();
+                    let mut pieces = vec![(polygon, 0usize)];
+                    for (axis, &m) in mid.iter().enumerate() {
+                        let plane = axis_plane(axis, m);
+                        let mut next = Vec::with_capacity(2 * pieces.len());
+                        for (piece, bits) in pieces {
+                            let (below, above) = piece.split(&plane);
+                            next.extend(below.map(|p| (p, bits)));
+                            next.extend(above.map(|p| (p, bits | 1 << axis)));
+                        }
+                        pieces = next;
+                    }
+                    for (piece, i) in pieces {
+                        stack.push((&children[i], cell.child(i), piece));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The plane `x_axis = at`, positive side above.
+fn axis_plane(axis: usize, at: i64) -> Plane {
+    let mut n = [0i64; 3];
+    n[axis] = 1;
+    Plane::new(n[0], n[1], n[2], -i128::from(at)).expect("cell coordinates are in range")
+}
+
+/// Whether a plane is one of the faces of `cube`, oriented outward.
+fn faces_out_of(plane: &Plane, cube: &CellBox) -> bool {
+    let n = plane.normal();
+    let axes: Vec<usize> = (0..3).filter(|&a| n[a] != 0).collect();
+    let [axis] = axes[..] else {
+        return false;
+    };
+    // n_a·x + d = 0  ⇔  x = −d / n_a.
+    let (na, d) = (i128::from(n[axis]), plane.offset());
+    if d % na != 0 {
+        return false;
+    }
+    let at = -d / na;
+    (na > 0 && at == i128::from(cube.max[axis])) || (na < 0 && at == i128::from(cube.min[axis]))
+}

@@ -1,0 +1,122 @@
+//! Tools: the solids an edit applies, as BSPs with integer bounds.
+//!
+//! A tool is a convex polyhedron (an exact hull of integer points, a box, a
+//! placed or swept shape from [`crate::tools`]) or a union of such; its
+//! bounds are a closed integer box containing it, used to find the cells
+//! it can touch.
+
+use super::cell::CellBox;
+use crate::Error;
+use crate::convex::{ConvexArena, PolyId};
+use crate::exact::IntPoint;
+use crate::exact::budget::MAX_COORD;
+use crate::tools::{Pose, convex_hull, placed_tool, swept_tool};
+use crate::tree::{BooleanOp, Bsp, Label};
+
+/// A solid to carve with, add or paint.
+#[derive(Clone, Debug)]
+pub struct Tool {
+    bsp: Bsp,
+    bounds: CellBox,
+}
+
+impl Tool {
+    /// The convex hull of integer points.
+    ///
+    /// # Errors
+    /// [`Error::DegenerateHull`] when the points span no volume.
+    pub fn convex_hull(points: &[IntPoint]) -> Result<Tool, Error> {
+        let mut arena = ConvexArena::new();
+        let poly = convex_hull(&mut arena, points)?;
+        Ok(Self::from_polyhedron(&arena, poly))
+    }
+
+    /// A shape's corners (in grid units) placed at `pose` and rounded: the
+    /// hull of the rounded corners.
+    ///
+    /// # Errors
+    /// Non-finite or out-of-range coordinates, or a flat result.
+    pub fn placed(corners: &[[f64; 3]], pose: &Pose) -> Result<Tool, Error> {
+        let mut arena = ConvexArena::new();
+        let poly = placed_tool(&mut arena, corners, pose)?;
+        Ok(Self::from_polyhedron(&arena, poly))
+    }
+
+    /// The volume a convex shape sweeps from pose `a` to pose `b` (hull of
+    /// its rounded corners at both).
+    ///
+    /// # Errors
+    /// As [`Tool::placed`].
+    pub fn swept(corners: &[[f64; 3]], a: &Pose, b: &Pose) -> Result<Tool, Error> {
+        let mut arena = ConvexArena::new();
+        let poly = swept_tool(&mut arena, corners, a, b)?;
+        Ok(Self::from_polyhedron(&arena, poly))
+    }
+
+    /// The axis-aligned box `solid`.
+    ///
+    /// # Errors
+    /// An empty or out-of-range box.
+    pub fn cuboid(solid: CellBox) -> Result<Tool, Error> {
+        let mut arena = ConvexArena::new();
+        let poly = solid.add_to(&mut arena)?;
+        Ok(Self::from_polyhedron(&arena, poly))
+    }
+
+    /// A convex polyhedron of `arena`.
+    #[must_use]
+    pub fn from_polyhedron(arena: &ConvexArena, poly: PolyId) -> Tool {
+        let mut min = [MAX_COORD; 3];
+        let mut max = [-MAX_COORD; 3];
+        for v in arena.vertices_of(poly) {
+            let p = arena.vertices()[v as usize].point.to_f64();
+            for a in 0..3 {
+                // One unit of slack covers the rounding of the position.
+                min[a] = min[a].min((p[a].floor() as i64 - 1).max(-MAX_COORD));
+                max[a] = max[a].max((p[a].ceil() as i64 + 1).min(MAX_COORD));
+            }
+        }
+        Tool {
+            bsp: Bsp::from_convex(arena, poly, 1),
+            bounds: CellBox { min, max },
+        }
+    }
+
+    /// The union of several tools.
+    ///
+    /// # Errors
+    /// [`Error::NoTools`] for an empty list.
+    pub fn union(tools: &[Tool]) -> Result<Tool, Error> {
+        let (first, rest) = tools.split_first().ok_or(Error::NoTools)?;
+        let mut out = first.clone();
+        for tool in rest {
+            for a in 0..3 {
+                out.bounds.min[a] = out.bounds.min[a].min(tool.bounds.min[a]);
+                out.bounds.max[a] = out.bounds.max[a].max(tool.bounds.max[a]);
+            }
+            let mut arena = ConvexArena::new();
+            let bounds = out.bounds.add_to(&mut arena)?;
+            out.bsp = out
+                .bsp
+                .merge(&tool.bsp, BooleanOp::Union, &mut arena, bounds);
+        }
+        Ok(out)
+    }
+
+    /// A closed integer box containing the tool.
+    #[must_use]
+    pub fn bounds(&self) -> CellBox {
+        self.bounds
+    }
+
+    /// The tool's solid (label 1) as a BSP.
+    #[must_use]
+    pub fn bsp(&self) -> &Bsp {
+        &self.bsp
+    }
+
+    /// The tool's BSP with its solid labelled `label`.
+    pub(crate) fn labelled(&self, label: Label) -> Bsp {
+        self.bsp.relabeled(|l| if l == 0 { 0 } else { label })
+    }
+}

@@ -1,0 +1,319 @@
+//! The octree of BSPs (§3.8): after every edit of random sequences, the
+//! exact volume of every material equals that of one big reference BSP
+//! edited the same way; leaves stay within the budget; cells the edit did
+//! not report keep their stored leaf; the surface encloses exactly the
+//! material volumes; results are bit-identical for 1 and 3 threads.
+
+mod common;
+
+use std::collections::BTreeMap;
+
+use chisel_bsp::Error;
+use chisel_bsp::convex::ConvexArena;
+use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree, OctreeConfig, Tool};
+use chisel_bsp::tools::{Pose, dodecahedron_corners};
+use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
+use common::shapes::p;
+use common::volume::{Fraction, polygons_volume, volume};
+use rand::{Rng as _, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const K: u8 = 12;
+const SIZE: i64 = 1 << K;
+
+fn config() -> OctreeConfig {
+    OctreeConfig {
+        max_bsp_nodes: 40,
+        max_depth: 6,
+    }
+}
+
+fn block() -> CellBox {
+    CellBox {
+        min: [100, 100, 100],
+        max: [SIZE - 100, SIZE - 100, SIZE / 2],
+    }
+}
+
+fn add(total: &mut BTreeMap<Label, Fraction>, label: Label, v: Fraction) {
+    let e = total.entry(label).or_insert_with(Fraction::zero);
+    *e = e.add(&v);
+}
+
+/// Exact volume per non-empty label, over all leaves.
+fn octree_volumes(octree: &Octree) -> BTreeMap<Label, Fraction> {
+    let mut total = BTreeMap::new();
+    for (key, leaf) in octree.leaves() {
+        let bsp = leaf.to_bsp();
+        bsp.validate().unwrap();
+        let mut arena = ConvexArena::new();
+        let cell = octree.cell_box(key).add_to(&mut arena).unwrap();
+        for c in bsp.cells(&mut arena, cell) {
+            if c.label != EMPTY {
+                add(&mut total, c.label, volume(&arena, c.poly));
+            }
+        }
+    }
+    total
+}
+
+fn bsp_volumes(bsp: &Bsp) -> BTreeMap<Label, Fraction> {
+    let mut total = BTreeMap::new();
+    let mut arena = ConvexArena::new();
+    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
+    for c in bsp.cells(&mut arena, root) {
+        if c.label != EMPTY {
+            add(&mut total, c.label, volume(&arena, c.poly));
+        }
+    }
+    total
+}
+
+/// Exact volume per label enclosed by the octree's surface: faces count
+/// outward for the label behind them and inward for the one in front.
+fn surface_volumes(octree: &Octree) -> BTreeMap<Label, Fraction> {
+    let mut total = BTreeMap::new();
+    for face in octree.surface() {
+        assert!(!face.on_bounds);
+        // No face between a material and itself; interfaces once.
+        assert!(
+            face.outside < face.label,
+            "{:?} over {:?}",
+            face.label,
+            face.outside
+        );
+        add(
+            &mut total,
+            face.label,
+            polygons_volume(std::slice::from_ref(&face.vertices)),
+        );
+        if face.outside != EMPTY {
+            let mut reversed = face.vertices.clone();
+            reversed.reverse();
+            add(&mut total, face.outside, polygons_volume(&[reversed]));
+        }
+    }
+    total.retain(|_, v| v.num != 0.into());
+    total
+}
+
+fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
+    let scale = rng.random_range(60.0..300.0);
+    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
+    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
+    let pose = Pose {
+        rotation: [
+            [ca, -sa * cb, sa * sb],
+            [sa, ca * cb, -ca * sb],
+            [0.0, sb, cb],
+        ],
+        translation: [
+            rng.random_range(0.0..SIZE as f64),
+            rng.random_range(0.0..SIZE as f64),
+            rng.random_range(SIZE as f64 * 0.3..SIZE as f64 * 0.6),
+        ],
+    };
+    Tool::placed(&dodecahedron_corners(scale), &pose).unwrap()
+}
+
+fn random_edit(rng: &mut ChaCha8Rng) -> Edit {
+    match rng.random_range(0..10) {
+        0..=5 => Edit::Subtract,
+        6 | 7 => Edit::Add(rng.random_range(1..=3)),
+        _ => Edit::Paint(rng.random_range(1..=3)),
+    }
+}
+
+fn reference_edit(reference: &Bsp, tool: &Tool, edit: Edit) -> Bsp {
+    let (op, label) = match edit {
+        Edit::Subtract => (BooleanOp::Difference, 1),
+        Edit::Add(m) => (BooleanOp::Union, m),
+        Edit::Paint(m) => (BooleanOp::Paint(m), 1),
+        Edit::Intersect => (BooleanOp::Intersection, 1),
+    };
+    let tool = tool
+        .bsp()
+        .relabeled(|l| if l == EMPTY { EMPTY } else { label });
+    let mut arena = ConvexArena::new();
+    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
+    let merged = reference.merge(&tool, op, &mut arena, root);
+    let mut arena = ConvexArena::new();
+    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
+    merged.simplified(&mut arena, root)
+}
+
+/// Unreported leaves keep their stored value; reported keys are right.
+fn check_changes(before: &Octree, after: &Octree, changes: &Changes) {
+    for (key, leaf) in after.leaves() {
+        if changes.changed.binary_search(&key).is_err() {
+            let old = before
+                .leaf(key)
+                .unwrap_or_else(|| panic!("{key:?} is new but unreported"));
+            assert!(old.same_as(leaf), "{key:?} changed but was not reported");
+        }
+    }
+    for key in &changes.changed {
+        assert!(after.leaf(*key).is_some(), "reported {key:?} is not a leaf");
+    }
+    for key in &changes.removed {
+        assert!(before.leaf(*key).is_some() && after.leaf(*key).is_none());
+    }
+}
+
+fn check_budget(octree: &Octree) {
+    for (key, leaf) in octree.leaves() {
+        assert!(
+            leaf.bsp_nodes() <= config().max_bsp_nodes || key.depth == config().max_depth,
+            "{key:?} holds {} nodes",
+            leaf.bsp_nodes()
+        );
+    }
+}
+
+#[test]
+fn random_edits_match_one_big_bsp_exactly() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+    let mut arena = ConvexArena::new();
+    let b = block().add_to(&mut arena).unwrap();
+    let mut reference = Bsp::from_convex(&arena, b, 1);
+    assert_eq!(octree_volumes(&octree), bsp_volumes(&reference));
+    for step in 0..24 {
+        let tool = random_tool(&mut rng);
+        let edit = random_edit(&mut rng);
+        let before = octree.clone();
+        let changes = octree.apply(&tool, edit).unwrap();
+        reference = reference_edit(&reference, &tool, edit);
+        assert_eq!(
+            octree_volumes(&octree),
+            bsp_volumes(&reference),
+            "step {step}: {edit:?}"
+        );
+        check_changes(&before, &octree, &changes);
+        check_budget(&octree);
+    }
+    assert!(octree.stats().leaves > 8, "the budget never split a cell");
+    assert_eq!(surface_volumes(&octree), octree_volumes(&octree));
+}
+
+#[test]
+fn the_previous_octree_survives_an_edit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+    for _ in 0..5 {
+        octree
+            .apply(&random_tool(&mut rng), Edit::Subtract)
+            .unwrap();
+    }
+    let before = octree.clone();
+    let volumes = octree_volumes(&octree);
+    octree
+        .apply(&random_tool(&mut rng), Edit::Subtract)
+        .unwrap();
+    assert_eq!(octree_volumes(&before), volumes);
+}
+
+#[test]
+fn results_are_bit_identical_for_any_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut rng = ChaCha8Rng::seed_from_u64(7);
+            let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+            for _ in 0..25 {
+                let (tool, edit) = (random_tool(&mut rng), random_edit(&mut rng));
+                octree.apply(&tool, edit).unwrap();
+            }
+            octree
+                .leaves()
+                .into_iter()
+                .map(|(key, leaf)| {
+                    let bsp = leaf.to_bsp();
+                    (key, bsp.nodes().to_vec(), bsp.planes().to_vec())
+                })
+                .collect::<Vec<_>>()
+        })
+    };
+    assert_eq!(run(1), run(3));
+}
+
+#[test]
+fn emptied_cells_combine_back_into_one_leaf() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+    for _ in 0..10 {
+        octree
+            .apply(&random_tool(&mut rng), Edit::Subtract)
+            .unwrap();
+    }
+    assert!(octree.stats().leaves > 1);
+    let everything = Tool::cuboid(CellBox {
+        min: [-1; 3],
+        max: [SIZE + 1; 3],
+    })
+    .unwrap();
+    let changes = octree.apply(&everything, Edit::Subtract).unwrap();
+    assert_eq!(octree.stats().leaves, 1);
+    assert_eq!(changes.changed, vec![CellKey::ROOT]);
+    assert!(octree_volumes(&octree).is_empty());
+}
+
+#[test]
+fn intersecting_empties_the_cells_the_tool_misses() {
+    let mut octree = Octree::from_box([0; 3], K, block(), 2, config()).unwrap();
+    let keep = CellBox {
+        min: [1000, 1000, 200],
+        max: [1500, 1800, 1000],
+    };
+    octree
+        .apply(&Tool::cuboid(keep).unwrap(), Edit::Intersect)
+        .unwrap();
+    let mut expected = BTreeMap::new();
+    add(
+        &mut expected,
+        2,
+        Fraction::new((500 * 800 * 800).into(), 1.into()),
+    );
+    assert_eq!(octree_volumes(&octree), expected);
+    assert_eq!(surface_volumes(&octree), expected);
+}
+
+#[test]
+fn bad_edits_are_errors_and_change_nothing() {
+    let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+    let tool = Tool::cuboid(CellBox {
+        min: [0; 3],
+        max: [500; 3],
+    })
+    .unwrap();
+    let before = octree_volumes(&octree);
+    assert!(matches!(
+        octree.apply(&tool, Edit::Add(EMPTY)),
+        Err(Error::InvalidEdit { .. })
+    ));
+    assert_eq!(octree_volumes(&octree), before);
+    assert!(matches!(
+        Octree::new([1 << 26, 0, 0], 4, EMPTY, config()),
+        Err(Error::OctreeSize { .. })
+    ));
+    assert!(matches!(
+        Octree::new([0; 3], 0, EMPTY, config()),
+        Err(Error::OctreeSize { .. })
+    ));
+    let flat = [p(0, 0, 0), p(10, 0, 0), p(0, 10, 0), p(10, 10, 0)];
+    assert!(matches!(
+        Tool::convex_hull(&flat),
+        Err(Error::DegenerateHull { .. })
+    ));
+    // A tool far outside the cube touches nothing.
+    let far = Tool::cuboid(CellBox {
+        min: [3 * SIZE; 3],
+        max: [3 * SIZE + 10; 3],
+    })
+    .unwrap();
+    let changes = octree.apply(&far, Edit::Subtract).unwrap();
+    assert!(changes.changed.is_empty() && changes.removed.is_empty());
+}
