@@ -193,6 +193,15 @@ fn random_edits_match_one_big_bsp_exactly() {
         check_budget(&octree);
     }
     assert!(octree.stats().leaves > 8, "the budget never split a cell");
+    // The f64 report agrees with the exact volumes.
+    for (label, exact) in octree_volumes(&octree) {
+        let approx = octree.volumes()[&label];
+        let exact = exact.to_f64();
+        assert!(
+            (approx - exact).abs() <= 1e-9 * exact,
+            "{label}: {approx} vs {exact}"
+        );
+    }
     assert_eq!(surface_volumes(&octree), octree_volumes(&octree));
 }
 

@@ -11,12 +11,14 @@
 //! - [`tool`] — convex tools (and unions of them) with their bounds.
 //! - [`apply`] — applying a tool to the cells it overlaps, in parallel;
 //!   splitting leaves over the budget and combining children under it.
+//! - [`measure`] — material volumes for reports.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
 
 pub mod apply;
 pub mod cell;
 mod graft;
+pub mod measure;
 pub mod surface;
 pub mod tool;
 pub mod tree;

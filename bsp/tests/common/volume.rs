@@ -55,6 +55,19 @@ impl Fraction {
         )
     }
 
+    /// Close to the nearest `f64` (within a few ulps).
+    pub fn to_f64(&self) -> f64 {
+        use num_traits::ToPrimitive;
+        // q = num / den scaled to about 60 bits, then scaled back.
+        let e = self.num.bits() as i64 - self.den.bits() as i64;
+        let q: BigInt = if e <= 60 {
+            (&self.num << (60 - e) as usize) / &self.den
+        } else {
+            &self.num / (&self.den << (e - 60) as usize)
+        };
+        q.to_f64().unwrap_or(f64::NAN) * 2f64.powi((e - 60) as i32)
+    }
+
     pub fn is_positive(&self) -> bool {
         self.num.is_positive()
     }
