@@ -1,0 +1,161 @@
+// The splat pass (paper 2, §6, §6.1): one instance per splat.
+//
+// Vertex stage: each splat becomes a surface-aligned box around its patch
+// (tangent half-extent r, normal half-extent e from eq. 23), drawn with
+// back-face culling so every covered pixel runs one fragment; a box thinner
+// than `flat_ratio · r` collapses to its front face, a quad lifted by e
+// along the normal. With SPLAT_SCREEN_QUAD it is instead a camera-facing
+// quad of half-size r placed at the front of the splat's sphere.
+//
+// Fragment stage: local ray tracing of the splat's quadric, keeping the
+// root nearest the sample and only within its radius; local clipping
+// against the splat's clip list; exact normal from the gradient; depth
+// written (reverse-Z). Every proxy lies in front of the patch it bounds, so
+// the written depth never exceeds the rasterized one:
+// `@early_depth_test(less_equal)` where the device supports it.
+//
+// Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, OUTPUT_IDS, OUTPUT_NORMALS,
+// OUTPUT_OVERDRAW (a constant per fragment, for additive blending).
+#import bevy_chisel::quadric::{
+    INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, intersect_line, literal_holds,
+    local_ray_direction, prop, quadrics, clip_indices, splats, surface_color, surface_depth,
+    view, world_normal,
+}
+
+struct SplatVarying {
+    @builtin(position) clip: vec4<f32>,
+    /// The proxy point in the prop's local coordinates (on the view ray).
+    @location(0) local: vec3<f32>,
+    @location(1) @interpolate(flat) splat: u32,
+};
+
+/// Outside the depth range: the triangle is clipped away.
+const DISCARDED_VERTEX: vec4<f32> = vec4<f32>(0.0, 0.0, -2.0, 1.0);
+
+/// Quad corners in the order of two counter-clockwise triangles.
+const QUAD_CORNERS: array<vec2<f32>, 6> = array<vec2<f32>, 6>(
+    vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+    vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+);
+
+fn varying_at(local: vec3<f32>, splat: u32) -> SplatVarying {
+    var out: SplatVarying;
+    out.local = local;
+    out.splat = splat;
+    out.clip = view.clip_from_world * (prop.world_from_local * vec4<f32>(local, 1.0));
+    return out;
+}
+
+@vertex
+fn vertex(
+    @builtin(vertex_index) vertex: u32,
+    @builtin(instance_index) instance: u32,
+) -> SplatVarying {
+    let s = splats[instance];
+    let r = s.radius * prop.radius_tolerance;
+#ifdef SPLAT_SCREEN_QUAD
+    var out: SplatVarying;
+    out.splat = instance;
+    if vertex >= 6u {
+        out.clip = DISCARDED_VERTEX;
+        out.local = s.position;
+        return out;
+    }
+    let centre = (prop.world_from_local * vec4<f32>(s.position, 1.0)).xyz;
+    let rw = r * prop.max_scale;
+    var dir = view.view_forward.xyz;
+    if view.camera_position.w > 0.5 {
+        let to_centre = centre - view.camera_position.xyz;
+        dir = to_centre / max(length(to_centre), 1e-30);
+    }
+    var helper = vec3<f32>(0.0, 1.0, 0.0);
+    if abs(dir.y) > 0.9 {
+        helper = vec3<f32>(1.0, 0.0, 0.0);
+    }
+    let right = normalize(cross(dir, helper));
+    let up = cross(right, dir);
+    var corners = QUAD_CORNERS;
+    let c = corners[vertex];
+    // A quad of half-size r at distance d − r covers the sphere's silhouette
+    // (its angular radius asin(r/d) is below atan(r/(d − r))).
+    let world = centre - dir * rw + (right * c.x + up * c.y) * rw;
+    out.local = (prop.local_from_world * vec4<f32>(world, 1.0)).xyz;
+    out.clip = view.clip_from_world * vec4<f32>(world, 1.0);
+    return out;
+#else
+    var n = s.normal;
+    var e = s.normal_extent * prop.radius_tolerance;
+    if dot(n, n) < 0.25 {
+        // A singular point (cone apex): no tangent plane, bound the sphere.
+        n = vec3<f32>(0.0, 0.0, 1.0);
+        e = r;
+    }
+    var helper = vec3<f32>(1.0, 0.0, 0.0);
+    if abs(n.x) > 0.9 {
+        helper = vec3<f32>(0.0, 1.0, 0.0);
+    }
+    let t1 = normalize(cross(helper, n));
+    let t2 = cross(n, t1);
+    let c = box_corner(vertex);
+    if e < prop.flat_ratio * r {
+        // Flat: only the +n face (the first six vertices), lifted to +e.
+        if vertex >= 6u {
+            var out: SplatVarying;
+            out.clip = DISCARDED_VERTEX;
+            out.local = s.position;
+            out.splat = instance;
+            return out;
+        }
+        return varying_at(s.position + (t1 * c.x + t2 * c.y) * r + n * e, instance);
+    }
+    return varying_at(s.position + (t1 * c.x + t2 * c.y) * r + n * (c.z * e), instance);
+#endif
+}
+
+#ifdef OUTPUT_OVERDRAW
+/// One unit per fragment invocation, summed by additive blending.
+@fragment
+fn fragment(in: SplatVarying) -> @location(0) vec4<f32> {
+    return vec4<f32>(1.0 / 64.0, 1.0 / 64.0, 1.0 / 64.0, 1.0);
+}
+#else
+#ifdef EARLY_DEPTH_TEST
+@early_depth_test(less_equal)
+#endif
+@fragment
+fn fragment(in: SplatVarying) -> SurfaceOutput {
+    let s = splats[in.splat];
+    let q = quadrics[s.quadric & INDEX_MASK];
+    let dir = local_ray_direction(in.local);
+    // Solve from the point of the ray closest to the sample: the root of
+    // smallest |u| is then the hit nearest the sample.
+    let p0 = in.local + dot(s.position - in.local, dir) * dir;
+    let roots = intersect_line(q, p0, dir);
+    var u = roots.x;
+    if abs(roots.y) < abs(u) {
+        u = roots.y;
+    }
+    if abs(u) >= NO_ROOT {
+        discard;
+    }
+    let p = p0 + u * dir;
+    let r = s.radius * prop.radius_tolerance;
+    let off = p - s.position;
+    if dot(off, off) > r * r {
+        discard;
+    }
+    for (var i = 0u; i < s.clip_count; i += 1u) {
+        if !literal_holds(clip_indices[s.clip_start + i], p) {
+            discard;
+        }
+    }
+    let depth = surface_depth(p);
+    if depth < 0.0 {
+        discard;
+    }
+    var out: SurfaceOutput;
+    out.color = surface_color(s.quadric, world_normal(s.quadric, p));
+    out.depth = depth;
+    return out;
+}
+#endif

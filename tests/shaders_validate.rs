@@ -1,0 +1,152 @@
+//! Every WGSL file under `shaders/` passes naga's parser and validator, the
+//! way Bevy composes it: modules with `#define_import_path` are registered
+//! with naga_oil's composer, and every other file is composed with every
+//! combination of the shader defines it lists in a `// Defines: A, B.`
+//! comment line. A shader error therefore fails `cargo test` on a machine
+//! without a GPU.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use naga::valid::Capabilities;
+use naga_oil::compose::{
+    ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage,
+    ShaderType,
+};
+
+fn shader_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")
+}
+
+fn wgsl_files() -> Vec<(String, String)> {
+    let mut files: Vec<(String, String)> = std::fs::read_dir(shader_dir())
+        .expect("shaders/ is readable")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "wgsl"))
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).expect("shader is readable");
+            (p.display().to_string(), text)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+fn is_module(source: &str) -> bool {
+    source
+        .lines()
+        .any(|l| l.trim_start().starts_with("#define_import_path"))
+}
+
+/// The defines listed in `// Defines: A, B, C.` lines.
+fn listed_defines(source: &str) -> Vec<String> {
+    let mut defines = Vec::new();
+    let mut in_list = false;
+    for line in source.lines() {
+        let Some(comment) = line.trim_start().strip_prefix("//") else {
+            in_list = false;
+            continue;
+        };
+        let comment = comment.trim();
+        let rest = if let Some(rest) = comment.strip_prefix("Defines:") {
+            in_list = true;
+            rest
+        } else if in_list {
+            comment
+        } else {
+            continue;
+        };
+        for word in rest.split([',', ' ', '.', '(', ')']) {
+            if !word.is_empty() && word.chars().all(|c| c.is_ascii_uppercase() || c == '_') {
+                defines.push(word.to_owned());
+            }
+        }
+        if comment.ends_with('.') {
+            in_list = false;
+        }
+    }
+    defines.sort();
+    defines.dedup();
+    defines
+}
+
+fn composer(files: &[(String, String)]) -> Composer {
+    let mut composer = Composer::default()
+        .with_capabilities(Capabilities::default() | Capabilities::EARLY_DEPTH_TEST);
+    // Modules may import each other: add until no more can be added.
+    let mut pending: Vec<&(String, String)> = files.iter().filter(|(_, s)| is_module(s)).collect();
+    while !pending.is_empty() {
+        let before = pending.len();
+        let mut errors = Vec::new();
+        pending.retain(|(path, source)| {
+            match composer.add_composable_module(ComposableModuleDescriptor {
+                source,
+                file_path: path,
+                language: ShaderLanguage::Wgsl,
+                ..Default::default()
+            }) {
+                Ok(_) => false,
+                Err(e) => {
+                    errors.push(e.emit_to_string(&composer));
+                    true
+                }
+            }
+        });
+        assert!(
+            pending.len() < before,
+            "shader modules do not compose:\n{}",
+            errors.join("\n")
+        );
+    }
+    composer
+}
+
+#[test]
+fn every_wgsl_file_validates_with_every_define_combination() {
+    let files = wgsl_files();
+    assert!(
+        files.iter().any(|(p, _)| p.ends_with("splat.wgsl")),
+        "the splat shader is missing"
+    );
+    let mut composer = composer(&files);
+    let mut checked = 0;
+    for (path, source) in files.iter().filter(|(_, s)| !is_module(s)) {
+        let defines = listed_defines(source);
+        assert!(defines.len() <= 8, "{path}: too many defines to enumerate");
+        for mask in 0u32..(1 << defines.len()) {
+            let shader_defs: HashMap<String, ShaderDefValue> = defines
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| mask & (1 << i) != 0)
+                .map(|(_, d)| (d.clone(), ShaderDefValue::Bool(true)))
+                .collect();
+            let result = composer.make_naga_module(NagaModuleDescriptor {
+                source,
+                file_path: path,
+                shader_type: ShaderType::Wgsl,
+                shader_defs: shader_defs.clone(),
+                ..Default::default()
+            });
+            if let Err(e) = result {
+                let mut names: Vec<_> = shader_defs.keys().collect();
+                names.sort();
+                panic!(
+                    "{path} with defines {names:?} does not validate:\n{}",
+                    e.emit_to_string(&composer)
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 2, "only {checked} shader variants checked");
+}
+
+#[test]
+fn listed_defines_are_parsed_from_comments() {
+    let source = "// Defines: A_B, EARLY_DEPTH_TEST,\n// OUTPUT_IDS (ids).\nfn f() {}\n";
+    assert_eq!(
+        listed_defines(source),
+        vec!["A_B", "EARLY_DEPTH_TEST", "OUTPUT_IDS"]
+    );
+}
