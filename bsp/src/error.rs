@@ -63,6 +63,24 @@ pub enum Error {
     },
     /// A union of no tools.
     NoTools,
+    /// A quantization unit that is not a positive finite length.
+    InvalidUnit {
+        /// The unit given.
+        unit: f64,
+    },
+    /// A mesh that is not closed: some directed edges are used more or
+    /// less often than their opposite.
+    NotWatertight {
+        /// How many directed edges are unmatched.
+        open_edges: usize,
+        /// One such edge, in grid coordinates.
+        example: [[i64; 3]; 2],
+    },
+    /// Input reaching outside the octree's cube.
+    OutsideOctree {
+        /// A grid point outside it.
+        point: [i64; 3],
+    },
     /// An edit that cannot mean anything.
     InvalidEdit {
         /// What is wrong with it.
@@ -112,6 +130,25 @@ impl fmt::Display for Error {
                  2^1 to 2^27 and the cube must lie within ±{MAX_COORD} (2^26)"
             ),
             Error::NoTools => write!(f, "a union of tools needs at least one tool"),
+            Error::InvalidUnit { unit } => write!(
+                f,
+                "quantization unit {unit} is not a positive finite length"
+            ),
+            Error::NotWatertight {
+                open_edges,
+                example,
+            } => write!(
+                f,
+                "the mesh is not watertight: {open_edges} directed edges are not matched by an \
+                 opposite edge (e.g. {:?} -> {:?} in grid units); close the holes and make \
+                 the triangles consistently oriented",
+                example[0], example[1]
+            ),
+            Error::OutsideOctree { point } => write!(
+                f,
+                "grid point {point:?} lies outside the octree's cube; enlarge the cube or \
+                 move the input"
+            ),
             Error::InvalidEdit { reason } => write!(f, "invalid edit: {reason}"),
             Error::CollinearPoints => write!(
                 f,

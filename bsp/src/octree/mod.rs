@@ -11,6 +11,7 @@
 //! - [`tool`] — convex tools (and unions of them) with their bounds.
 //! - [`apply`] — applying a tool to the cells it overlaps, in parallel;
 //!   splitting leaves over the budget and combining children under it.
+//! - [`import`] — an octree from a closed triangle mesh (§3.9).
 //! - [`measure`] — material volumes for reports.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
@@ -18,6 +19,7 @@
 pub mod apply;
 pub mod cell;
 mod graft;
+pub mod import;
 pub mod measure;
 pub mod surface;
 pub mod tool;

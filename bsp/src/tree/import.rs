@@ -14,7 +14,7 @@ use crate::Error;
 use crate::exact::{IntPoint, Plane, Sign, classify_vertex};
 
 /// Deterministic shuffle (xorshift64*), so imports are reproducible.
-pub(super) fn shuffle<T>(items: &mut [T], seed: u64) {
+fn shuffle<T>(items: &mut [T], seed: u64) {
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
     for i in (1..items.len()).rev() {
         state ^= state >> 12;
@@ -54,9 +54,23 @@ impl Bsp {
     }
 }
 
+impl Bsp {
+    /// A BSP from convex polygons with the labels behind and in front of
+    /// each, inserted in an order shuffled by `seed`.
+    pub(crate) fn from_polygons(mut polygons: Vec<(Polygon, Label, Label)>, seed: u64) -> Bsp {
+        shuffle(&mut polygons, seed);
+        let mut planes = Vec::new();
+        let mut nodes = vec![Node::Leaf(EMPTY)];
+        for (polygon, behind, in_front) in polygons {
+            insert(&mut planes, &mut nodes, polygon, behind, in_front);
+        }
+        Bsp::from_parts(planes, nodes)
+    }
+}
+
 /// Inserts one face: where it reaches a leaf, that leaf becomes a split by
 /// the face's plane with `behind` below and `in_front` above.
-pub(super) fn insert(
+fn insert(
     planes: &mut Vec<Plane>,
     nodes: &mut Vec<Node>,
     polygon: Polygon,

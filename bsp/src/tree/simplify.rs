@@ -16,8 +16,7 @@
 //! `K`, so the whole cell has that label. With no face inside `K`, all of
 //! `K` has one label, read off any cell.
 
-use super::bsp::{Bsp, EMPTY, Node};
-use super::import::{insert, shuffle};
+use super::bsp::{Bsp, EMPTY};
 use crate::convex::{ConvexArena, PolyId};
 
 /// Seed of the face order in rebuilt BSPs: fixed, so that rebuilding is a
@@ -38,16 +37,10 @@ impl Bsp {
         if faces.is_empty() {
             return Bsp::uniform(uniform);
         }
-        let mut polygons: Vec<_> = faces
+        let polygons: Vec<_> = faces
             .into_iter()
             .map(|f| (f.polygon(), f.label, f.outside))
             .collect();
-        shuffle(&mut polygons, REBUILD_SEED);
-        let mut planes = Vec::new();
-        let mut nodes = vec![Node::Leaf(EMPTY)];
-        for (polygon, behind, in_front) in polygons {
-            insert(&mut planes, &mut nodes, polygon, behind, in_front);
-        }
-        Bsp::from_parts(planes, nodes)
+        Bsp::from_polygons(polygons, REBUILD_SEED)
     }
 }
