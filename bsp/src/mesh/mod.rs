@@ -1,0 +1,206 @@
+//! Exact surface meshes from boundary faces (paper 1 §3.4, T-junction
+//! removal), and their triangulation to floats for rendering and export.
+//!
+//! Notation:
+//!
+//! - a *face* is one [`BoundaryFace`]: support plane `s` (outward), edge
+//!   planes `e_0 … e_{n−1}` and exact corners `c_0 … c_{n−1}`, where
+//!   `c_k = s ∩ e_{k−1} ∩ e_k` and *edge* `k` is the segment `c_k c_{k+1}`
+//!   on the line `s ∩ e_k`;
+//! - a *vertex* is one welded point of the [`SurfaceMesh`], named by its
+//!   index `u32`; equal exact points are one vertex;
+//! - a *T-junction* is a vertex strictly inside an edge of a face that does
+//!   not have it as a corner. Faces from different BSP cells (or octree
+//!   cells) meet along edges that are cut differently on each side, so the
+//!   assembled surface has T-junctions; §3.4 removes them by inserting
+//!   valence-2 corners: a rectangle with one T-junction becomes a pentagon.
+//!
+//! Every decision is exact: welding by [`Point4::same_position`], T-junctions
+//! by [`classify_vertex`](crate::exact::classify_vertex) against the face's
+//! own planes, their order along an edge by
+//! [`compare_offsets`](crate::exact::compare_offsets). Floats only find
+//! candidates (a hash of rounded positions, a uniform grid) and make the
+//! output ([`TriangleMesh`]).
+//!
+//! - [`weld`] — equal exact vertices become one index.
+//! - [`tjunction`] — every vertex strictly inside an edge is inserted there.
+//! - [`watertight`] — every directed edge has exactly one opposite.
+//! - [`validate`] — the invariants of a [`SurfaceMesh`], checked exactly.
+//! - [`triangulate`] — polygons to triangles with no zero-area triangle, and
+//!   `f32` output with exact face normals and per-face materials.
+//!
+//! # Example
+//!
+//! ```
+//! use chisel_bsp::convex::ConvexArena;
+//! use chisel_bsp::exact::IntPoint;
+//! use chisel_bsp::mesh::SurfaceMesh;
+//! use chisel_bsp::tree::{BooleanOp, Bsp};
+//!
+//! let p = |x, y, z| IntPoint::new(x, y, z);
+//! let solid = |min: IntPoint, max: IntPoint| -> Result<Bsp, chisel_bsp::Error> {
+//!     let mut arena = ConvexArena::new();
+//!     let poly = arena.add_box(min, max)?;
+//!     Ok(Bsp::from_convex(&arena, poly, 1))
+//! };
+//! // A box with a half-height box against one side: the union's faces meet
+//! // in T-junctions, which the mesh removes.
+//! let a = solid(p(0, 0, 0)?, p(10, 10, 10)?)?;
+//! let b = solid(p(10, 0, 0)?, p(20, 5, 10)?)?;
+//! let mut arena = ConvexArena::new();
+//! let bounds = arena.add_box(p(-50, -50, -50)?, p(50, 50, 50)?)?;
+//! let union = a.merge(&b, BooleanOp::Union, &mut arena, bounds);
+//! let mut arena = ConvexArena::new();
+//! let bounds = arena.add_box(p(-50, -50, -50)?, p(50, 50, 50)?)?;
+//! let mesh = SurfaceMesh::from_faces(&union.boundary(&mut arena, bounds));
+//! assert!(mesh.check_watertight().is_ok());
+//! let triangles = mesh.triangles();
+//! assert_eq!(triangles.indices.len(), triangles.normals.len());
+//! # Ok::<(), chisel_bsp::Error>(())
+//! ```
+
+pub mod tjunction;
+pub mod triangulate;
+pub mod validate;
+pub mod watertight;
+pub mod weld;
+
+pub use triangulate::{FlatShadedMesh, TriangleMesh};
+pub use validate::MeshInvariantError;
+pub use watertight::{BadEdge, EdgeProblem, WatertightError};
+
+use crate::exact::{Plane, Point4};
+use crate::tree::{BoundaryFace, Label};
+
+/// One polygon of a [`SurfaceMesh`]: a boundary face with its corners as
+/// welded vertex indices, including the corners inserted at T-junctions.
+///
+/// Invariants (checked by [`SurfaceMesh::validate`]): `corners[originals[k]]`
+/// is the face's original corner `k` (`s ∩ e_{k−1} ∩ e_k`), `originals` is
+/// strictly increasing with `originals[0] = 0`, and every corner strictly
+/// between `originals[k]` and `originals[k + 1]` (or after the last, for
+/// `k = n − 1`) lies strictly inside original edge `k`, in order along it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MeshPolygon {
+    /// Supporting plane, positive side outside (towards [`Self::outside`]).
+    pub plane: Plane,
+    /// The face's original edge planes (see [`BoundaryFace::edges`]).
+    pub edges: Vec<Plane>,
+    /// Vertex indices, counter-clockwise seen from outside.
+    pub corners: Vec<u32>,
+    /// Positions in [`Self::corners`] of the original corners, one per edge
+    /// plane.
+    pub originals: Vec<u32>,
+    /// The material behind the polygon (never empty).
+    pub label: Label,
+    /// The material in front of it ([`crate::tree::EMPTY`] for a surface
+    /// polygon and for polygons on the bounds).
+    pub outside: Label,
+    /// Whether the polygon lies on the bounds rather than on a BSP plane.
+    pub on_bounds: bool,
+}
+
+impl MeshPolygon {
+    /// Number of original edges (and original corners).
+    #[must_use]
+    #[inline]
+    pub fn original_len(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// The range of positions in [`Self::corners`] of the corners inserted
+    /// strictly inside original edge `k`.
+    #[must_use]
+    #[inline]
+    pub fn inserted_on_edge(&self, k: usize) -> core::ops::Range<usize> {
+        let start = self.originals[k] as usize + 1;
+        let end = self
+            .originals
+            .get(k + 1)
+            .map_or(self.corners.len(), |&o| o as usize);
+        start..end
+    }
+}
+
+/// A closed surface of exact polygons over welded vertices, as built from
+/// boundary faces by [`SurfaceMesh::from_faces`].
+#[derive(Clone, Debug, Default)]
+pub struct SurfaceMesh {
+    vertices: Vec<Point4>,
+    polygons: Vec<MeshPolygon>,
+}
+
+impl SurfaceMesh {
+    /// The surface of `faces`: equal corners welded exactly, then every
+    /// T-junction removed ([`Self::split_t_junctions`]).
+    #[must_use]
+    pub fn from_faces(faces: &[BoundaryFace]) -> Self {
+        let mut mesh = Self::welded(faces);
+        mesh.split_t_junctions();
+        mesh
+    }
+
+    /// The faces with equal corners welded exactly, but T-junctions left in
+    /// place: mostly for diagnosis and tests (such a mesh is in general not
+    /// watertight).
+    #[must_use]
+    pub fn welded(faces: &[BoundaryFace]) -> Self {
+        let mut welder = weld::Welder::with_capacity(faces.len() * 2);
+        let polygons = faces
+            .iter()
+            .map(|face| {
+                let corners: Vec<u32> = face.vertices.iter().map(|v| welder.index(v)).collect();
+                MeshPolygon {
+                    plane: face.plane,
+                    edges: face.edges.clone(),
+                    originals: (0..corners.len() as u32).collect(),
+                    corners,
+                    label: face.label,
+                    outside: face.outside,
+                    on_bounds: face.on_bounds,
+                }
+            })
+            .collect();
+        Self {
+            vertices: welder.into_vertices(),
+            polygons,
+        }
+    }
+
+    /// Inserts, into every original edge of every polygon, each vertex lying
+    /// strictly inside it, in order along the edge. Idempotent: the inserted
+    /// corners are recomputed from the original edges each time.
+    pub fn split_t_junctions(&mut self) {
+        tjunction::split(&self.vertices, &mut self.polygons);
+    }
+
+    /// The welded exact vertices.
+    #[must_use]
+    #[inline]
+    pub fn vertices(&self) -> &[Point4] {
+        &self.vertices
+    }
+
+    /// The polygons.
+    #[must_use]
+    #[inline]
+    pub fn polygons(&self) -> &[MeshPolygon] {
+        &self.polygons
+    }
+
+    /// Keeps only the polygons for which `keep` is true (the vertices stay,
+    /// so indices are unchanged). For example, `|p| p.outside == EMPTY`
+    /// keeps the outer surface of a multi-material solid, which is closed
+    /// again once interfaces are dropped.
+    pub fn retain(&mut self, keep: impl FnMut(&MeshPolygon) -> bool) {
+        self.polygons.retain(keep);
+    }
+
+    /// The position of vertex `v` in `f64` (each coordinate within `2^-51`
+    /// relative of the exact value).
+    #[must_use]
+    #[inline]
+    pub fn position(&self, v: u32) -> [f64; 3] {
+        self.vertices[v as usize].to_f64()
+    }
+}

@@ -1,0 +1,197 @@
+//! Watertightness: every directed edge `(u, v)` of a polygon is used once,
+//! and its opposite `(v, u)` exactly once, by another polygon.
+//!
+//! This is what a closed, consistently oriented manifold surface looks like
+//! after welding and T-junction removal. A solid touching itself along an
+//! edge has a closed surface that is not manifold there (four polygons meet
+//! at the edge): [`SurfaceMesh::check_closed`] checks the weaker property
+//! that holds for every closed surface, each directed edge used as often as
+//! its opposite. A boundary with material interfaces is
+//! not such a surface (three polygons meet where two materials and empty
+//! space do); check its outer surface instead
+//! ([`SurfaceMesh::retain`] with `outside == EMPTY`).
+
+use core::fmt;
+use std::collections::{HashMap, HashSet};
+
+use super::SurfaceMesh;
+
+/// What is wrong with one directed edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeProblem {
+    /// No polygon uses the opposite edge `(to, from)`: a crack, a hole, or a
+    /// T-junction left in place.
+    Open,
+    /// More than one polygon uses the edge in this direction: overlapping or
+    /// inconsistently oriented polygons, or a non-manifold edge.
+    Repeated,
+    /// The edge is used once, but its opposite more than once.
+    OppositeRepeated,
+}
+
+/// One offending directed edge, with its vertices' positions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BadEdge {
+    /// Start vertex index.
+    pub from: u32,
+    /// End vertex index.
+    pub to: u32,
+    /// Start position (`f64`, for display).
+    pub from_position: [f64; 3],
+    /// End position (`f64`, for display).
+    pub to_position: [f64; 3],
+    /// What is wrong with it.
+    pub problem: EdgeProblem,
+}
+
+/// The surface is not watertight: counts of offending directed edges and
+/// the first one found (in polygon order, so the report is deterministic).
+///
+/// Always a kernel bug when the polygons come from
+/// [`Bsp::boundary`](crate::tree::Bsp::boundary) of a single material; for
+/// polygons from elsewhere, the input is not a closed surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WatertightError {
+    /// Directed edges whose opposite no polygon uses.
+    pub open: usize,
+    /// Directed edges used more than once in the same direction (each such
+    /// edge counted once).
+    pub repeated: usize,
+    /// Directed edges used once whose opposite is used more than once.
+    pub opposite_repeated: usize,
+    /// The first offending edge.
+    pub example: BadEdge,
+}
+
+impl fmt::Display for WatertightError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let e = &self.example;
+        write!(
+            f,
+            "surface is not watertight: {} open, {} repeated and {} with a repeated opposite \
+             directed edge(s); e.g. edge {} -> {} from {:?} to {:?} is {}",
+            self.open,
+            self.repeated,
+            self.opposite_repeated,
+            e.from,
+            e.to,
+            e.from_position,
+            e.to_position,
+            match e.problem {
+                EdgeProblem::Open => "open (no opposite edge)",
+                EdgeProblem::Repeated => "used more than once in this direction",
+                EdgeProblem::OppositeRepeated => "matched by more than one opposite edge",
+            }
+        )
+    }
+}
+
+impl std::error::Error for WatertightError {}
+
+impl SurfaceMesh {
+    /// The directed edges `(corner k, corner k + 1)` of every polygon, in
+    /// polygon order.
+    pub fn directed_edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.polygons().iter().flat_map(|p| {
+            let n = p.corners.len();
+            (0..n).map(move |k| (p.corners[k], p.corners[(k + 1) % n]))
+        })
+    }
+
+    /// Checks that every directed edge is used exactly once and its
+    /// opposite exactly once: the surface is a closed, oriented 2-manifold.
+    /// Solids that touch themselves along an edge (two cubes sharing only
+    /// an edge) fail with [`EdgeProblem::Repeated`] although they are
+    /// closed; see [`SurfaceMesh::check_closed`].
+    ///
+    /// # Errors
+    /// [`WatertightError`] with the counts of offending edges and the first
+    /// one found.
+    pub fn check_watertight(&self) -> Result<(), WatertightError> {
+        let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+        for edge in self.directed_edges() {
+            *uses.entry(edge).or_insert(0) += 1;
+        }
+        let (mut open, mut repeated, mut opposite_repeated) = (0, 0, 0);
+        let mut example = None;
+        let mut seen_repeated: HashSet<(u32, u32)> = HashSet::new();
+        for (u, v) in self.directed_edges() {
+            let here = uses.get(&(u, v)).copied().unwrap_or(0);
+            let opposite = uses.get(&(v, u)).copied().unwrap_or(0);
+            let problem = if here > 1 {
+                if !seen_repeated.insert((u, v)) {
+                    continue;
+                }
+                repeated += 1;
+                EdgeProblem::Repeated
+            } else if opposite == 0 {
+                open += 1;
+                EdgeProblem::Open
+            } else if opposite > 1 {
+                opposite_repeated += 1;
+                EdgeProblem::OppositeRepeated
+            } else {
+                continue;
+            };
+            example.get_or_insert(BadEdge {
+                from: u,
+                to: v,
+                from_position: self.position(u),
+                to_position: self.position(v),
+                problem,
+            });
+        }
+        match example {
+            None => Ok(()),
+            Some(example) => Err(WatertightError {
+                open,
+                repeated,
+                opposite_repeated,
+                example,
+            }),
+        }
+    }
+
+    /// Checks the weaker property of any closed, consistently oriented
+    /// surface, manifold or not: every directed edge `(u, v)` is used as
+    /// often as its opposite `(v, u)`. True for the boundary of every
+    /// single-material solid, including solids touching themselves along an
+    /// edge.
+    ///
+    /// # Errors
+    /// [`WatertightError`] whose [`open`](WatertightError::open) counts the
+    /// distinct directed edges used more often than their opposite (each
+    /// reported as [`EdgeProblem::Open`]), and the first of them.
+    pub fn check_closed(&self) -> Result<(), WatertightError> {
+        let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+        for edge in self.directed_edges() {
+            *uses.entry(edge).or_insert(0) += 1;
+        }
+        let mut seen: HashSet<(u32, u32)> = HashSet::new();
+        let mut open = 0;
+        let mut example = None;
+        for (u, v) in self.directed_edges() {
+            let here = uses.get(&(u, v)).copied().unwrap_or(0);
+            let opposite = uses.get(&(v, u)).copied().unwrap_or(0);
+            if here > opposite && seen.insert((u, v)) {
+                open += 1;
+                example.get_or_insert(BadEdge {
+                    from: u,
+                    to: v,
+                    from_position: self.position(u),
+                    to_position: self.position(v),
+                    problem: EdgeProblem::Open,
+                });
+            }
+        }
+        match example {
+            None => Ok(()),
+            Some(example) => Err(WatertightError {
+                open,
+                repeated: 0,
+                opposite_repeated: 0,
+                example,
+            }),
+        }
+    }
+}
