@@ -47,10 +47,12 @@ pub struct BoundaryFace {
 
 impl BoundaryFace {
     pub(crate) fn new(polygon: Polygon, label: Label, outside: Label, on_bounds: bool) -> Self {
+        let plane = polygon.support;
+        let edges = polygon.edges.clone();
         Self {
-            plane: polygon.support,
-            vertices: polygon.vertices(),
-            edges: polygon.edges,
+            plane,
+            vertices: polygon.into_vertices(),
+            edges,
             label,
             outside,
             on_bounds,
@@ -59,10 +61,7 @@ impl BoundaryFace {
 
     /// The face as a plane-based polygon.
     pub(crate) fn polygon(&self) -> Polygon {
-        Polygon {
-            support: self.plane,
-            edges: self.edges.clone(),
-        }
+        Polygon::with_corners(self.plane, self.edges.clone(), self.vertices.clone())
     }
 }
 
@@ -91,16 +90,20 @@ impl Bsp {
             }
             for f in arena.faces_of(cell.poly) {
                 let face = arena.faces()[f as usize];
-                let polygon = Polygon {
-                    support: face.plane,
-                    edges: arena
-                        .face_loop(f)
-                        .map(|h| {
-                            let twin = arena.half_edges()[h as usize].twin;
-                            arena.faces()[arena.half_edges()[twin as usize].face as usize].plane
-                        })
-                        .collect(),
-                };
+                // Half-edge k lies in the face across it (edge plane k) and
+                // leaves corner k, the meet of edge planes k − 1 and k.
+                let (edges, corners) = arena
+                    .face_loop(f)
+                    .map(|h| {
+                        let half = arena.half_edges()[h as usize];
+                        let across = arena.half_edges()[half.twin as usize].face;
+                        (
+                            arena.faces()[across as usize].plane,
+                            arena.vertices()[half.origin as usize].point,
+                        )
+                    })
+                    .unzip();
+                let polygon = Polygon::with_corners(face.plane, edges, corners);
                 if face.tag == NO_TAG {
                     out.push(BoundaryFace::new(polygon, cell.label, EMPTY, true));
                 } else {

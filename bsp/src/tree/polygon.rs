@@ -12,11 +12,13 @@ use crate::exact::{
     IntPoint, Plane, Point4, Sign, classify_vertex, intersect_3_planes, plane_from_points,
 };
 
-/// A convex polygon in plane-based form.
+/// A convex polygon in plane-based form, with its corners computed once
+/// (a split computes only the corners it creates).
 #[derive(Clone, Debug)]
 pub(crate) struct Polygon {
     pub(crate) support: Plane,
     pub(crate) edges: Vec<Plane>,
+    corners: Vec<Point4>,
 }
 
 impl Polygon {
@@ -54,17 +56,41 @@ impl Polygon {
             };
             edges.push(plane);
         }
-        Ok(Some(Self { support, edges }))
+        Ok(Some(Self::new(support, edges)))
     }
 
-    pub(crate) fn vertices(&self) -> Vec<Point4> {
-        let n = self.edges.len();
-        (0..n)
-            .map(|k| {
-                intersect_3_planes(&self.support, &self.edges[(k + n - 1) % n], &self.edges[k])
-                    .expect("edge planes meet the support plane in a point")
-            })
-            .collect()
+    /// The polygon with these planes; its corners are computed.
+    pub(crate) fn new(support: Plane, edges: Vec<Plane>) -> Self {
+        let n = edges.len();
+        let corners = (0..n)
+            .map(|k| meet(&support, &edges[(k + n - 1) % n], &edges[k]))
+            .collect();
+        Self {
+            support,
+            edges,
+            corners,
+        }
+    }
+
+    /// The polygon with these planes and corners (corner `k` at the meet
+    /// of `support`, `edges[k − 1]` and `edges[k]`).
+    pub(crate) fn with_corners(support: Plane, edges: Vec<Plane>, corners: Vec<Point4>) -> Self {
+        debug_assert_eq!(edges.len(), corners.len());
+        Self {
+            support,
+            edges,
+            corners,
+        }
+    }
+
+    /// The exact corners, in order.
+    pub(crate) fn vertices(&self) -> &[Point4] {
+        &self.corners
+    }
+
+    /// The corners, taken.
+    pub(crate) fn into_vertices(self) -> Vec<Point4> {
+        self.corners
     }
 
     /// The part on side `keep` (Negative or Positive) of `p`, given the
@@ -79,21 +105,34 @@ impl Polygon {
         };
         // The boundary leaves the kept side after edge k when the next
         // vertex is strictly across `p`, or on `p` with the next edge going
-        // across; that is where `p` closes the part.
+        // across; that is where `p` closes the part. Each kept edge remembers
+        // its index, so corners between two consecutive original edges are
+        // reused and only those on `p` are computed.
         let across = -keep;
-        let mut edges = Vec::with_capacity(n + 1);
+        let mut kept: Vec<(Plane, Option<usize>)> = Vec::with_capacity(n + 1);
         for k in 0..n {
             if reaches(k) {
-                edges.push(self.edges[k]);
+                kept.push((self.edges[k], Some(k)));
                 let next = (k + 1) % n;
                 if sides[next] == across || !reaches(next) {
-                    edges.push(closing);
+                    kept.push((closing, None));
                 }
             }
         }
+        let m = kept.len();
+        let corners = (0..m)
+            .map(|j| {
+                let (prev, cur) = (kept[(j + m - 1) % m], kept[j]);
+                match (prev.1, cur.1) {
+                    (Some(a), Some(b)) if b == (a + 1) % n => self.corners[b],
+                    _ => meet(&self.support, &prev.0, &cur.0),
+                }
+            })
+            .collect();
         Self {
             support: self.support,
-            edges,
+            edges: kept.into_iter().map(|(e, _)| e).collect(),
+            corners,
         }
     }
 
@@ -130,4 +169,9 @@ impl Polygon {
             }
         }
     }
+}
+
+/// The corner where the support and two edge planes meet.
+fn meet(support: &Plane, a: &Plane, b: &Plane) -> Point4 {
+    intersect_3_planes(support, a, b).expect("edge planes meet the support plane in a point")
 }
