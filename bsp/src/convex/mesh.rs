@@ -69,6 +69,13 @@ impl ConvexArena {
         Self::default()
     }
 
+    /// Removes every polyhedron, keeping the memory.
+    pub fn clear(&mut self) {
+        self.vertices.clear();
+        self.half_edges.clear();
+        self.faces.clear();
+    }
+
     /// Reserves room for `additional` more vertices, faces and (six times
     /// as many) half-edges, so that the next cuts do not reallocate.
     pub fn reserve(&mut self, additional: usize) {

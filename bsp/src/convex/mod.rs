@@ -14,9 +14,11 @@
 
 pub mod cut;
 pub mod mesh;
+pub mod pool;
 mod scratch;
 pub mod validate;
 
 pub use cut::CutOutcome;
 pub use mesh::{ConvexArena, Face, HalfEdge, NO_TAG, PolyId, Vertex};
+pub use pool::with_arena;
 pub use validate::InvariantError;

@@ -24,7 +24,7 @@ use super::graft::axis_graft;
 use super::tool::Tool;
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
-use crate::convex::{ConvexArena, PolyId};
+use crate::convex::{ConvexArena, PolyId, with_arena};
 use crate::tree::{BooleanOp, Bsp, EMPTY, Label};
 
 /// What an edit does where the tool is.
@@ -174,27 +174,33 @@ impl Walk<'_> {
 
     fn leaf(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Changes) {
         let touches = cell.touches(&self.bounds);
-        let meets = cell.overlaps(&self.bounds) && {
-            let mut arena = ConvexArena::new();
-            let poly = cell_poly(&mut arena, cell);
-            self.tool_meets(&mut arena, poly)
-        };
+        let meets = cell.overlaps(&self.bounds)
+            && with_arena(|arena| {
+                let poly = cell_poly(arena, cell);
+                self.tool_meets(arena, poly)
+            });
         if !meets {
             // The tool has no volume here: only labels outside it change.
-            let relabeled = self.changes_outside.then(|| relabel_outside(leaf, self.op));
+            let relabeled = if self.changes_outside {
+                relabel_outside(leaf, self.op)
+            } else {
+                None
+            };
             let changes = if touches || relabeled.is_some() {
                 Changes::leaf(key)
             } else {
                 Changes::default()
             };
-            return (relabeled.flatten().map(OctNode::Leaf), changes);
+            return (relabeled.map(OctNode::Leaf), changes);
         }
-        let mut arena = ConvexArena::new();
-        let poly = cell_poly(&mut arena, cell);
-        let merged = leaf.to_bsp().merge(&self.tool, self.op, &mut arena, poly);
-        let mut arena = ConvexArena::new();
-        let poly = cell_poly(&mut arena, cell);
-        let simplified = merged.simplified(&mut arena, poly);
+        let merged = with_arena(|arena| {
+            let poly = cell_poly(arena, cell);
+            leaf.to_bsp().merge(&self.tool, self.op, arena, poly)
+        });
+        let simplified = with_arena(|arena| {
+            let poly = cell_poly(arena, cell);
+            merged.simplified(arena, poly)
+        });
         let (node, leaves) = build_leaf(simplified, key, cell, self.config);
         let changes = match node {
             OctNode::Leaf(_) => Changes::leaf(key),
@@ -260,14 +266,11 @@ pub(crate) fn build_leaf(
         .into_par_iter()
         .map(|i| {
             let child = cell.child(i);
-            let mut arena = ConvexArena::new();
-            let poly = cell_poly(&mut arena, child);
-            build_leaf(
-                bsp.simplified(&mut arena, poly),
-                key.child(i),
-                child,
-                config,
-            )
+            let simplified = with_arena(|arena| {
+                let poly = cell_poly(arena, child);
+                bsp.simplified(arena, poly)
+            });
+            build_leaf(simplified, key.child(i), child, config)
         })
         .collect();
     let mut leaves = Vec::new();
@@ -304,9 +307,10 @@ fn combine(children: &[OctNode; 8], cell: CellBox, config: &OctreeConfig) -> Opt
     }
     let bsps: Vec<Bsp> = leaves.iter().map(|l| l.to_bsp()).collect();
     let grafted = axis_graft(std::array::from_fn(|i| &bsps[i]), cell.mid());
-    let mut arena = ConvexArena::new();
-    let poly = cell_poly(&mut arena, cell);
-    let simplified = grafted.simplified(&mut arena, poly);
+    let simplified = with_arena(|arena| {
+        let poly = cell_poly(arena, cell);
+        grafted.simplified(arena, poly)
+    });
     let inner = simplified.nodes().len() / 2;
     if inner > config.max_bsp_nodes {
         return None;

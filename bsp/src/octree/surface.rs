@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
 use super::tree::{Leaf, OctNode, Octree};
-use crate::convex::ConvexArena;
+use crate::convex::with_arena;
 use crate::exact::Plane;
 use crate::tree::polygon::Polygon;
 use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
@@ -38,12 +38,13 @@ impl Octree {
             return Vec::new();
         }
         let bsp: Bsp = leaf.to_bsp();
-        let mut arena = ConvexArena::new();
-        let Ok(bounds) = self.cell_box(key).add_to(&mut arena) else {
-            return Vec::new();
-        };
+        let cell = self.cell_box(key);
+        let faces = with_arena(|arena| match cell.add_to(arena) {
+            Ok(bounds) => bsp.boundary(arena, bounds),
+            Err(_) => Vec::new(),
+        });
         let mut out = Vec::new();
-        for face in bsp.boundary(&mut arena, bounds) {
+        for face in faces {
             if face.on_bounds {
                 self.clip_across(face.polygon(), face.label, &mut out);
             } else {
