@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 
 use chisel_bsp::Error;
 use chisel_bsp::convex::ConvexArena;
+use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree, OctreeConfig, Tool};
 use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
@@ -203,6 +204,17 @@ fn random_edits_match_one_big_bsp_exactly() {
         );
     }
     assert_eq!(surface_volumes(&octree), octree_volumes(&octree));
+    // One watertight mesh across all cells once T-junctions are split —
+    // and not before: cell borders leave T-junctions.
+    // (The outer surface: material interfaces meet it in three-way edges.)
+    let faces = octree.surface();
+    let mut welded = SurfaceMesh::welded(&faces);
+    welded.retain(|p| p.outside == EMPTY);
+    assert!(welded.check_closed().is_err());
+    let mut mesh = SurfaceMesh::from_faces(&faces);
+    mesh.retain(|p| p.outside == EMPTY);
+    mesh.check_closed().unwrap();
+    assert!(!mesh.triangles().is_empty());
 }
 
 #[test]
@@ -259,6 +271,10 @@ fn emptied_cells_combine_back_into_one_leaf() {
             .unwrap();
     }
     assert!(octree.stats().leaves > 1);
+    // One material: a manifold, watertight surface across all cells.
+    SurfaceMesh::from_faces(&octree.surface())
+        .check_watertight()
+        .unwrap();
     let everything = Tool::cuboid(CellBox {
         min: [-1; 3],
         max: [SIZE + 1; 3],
