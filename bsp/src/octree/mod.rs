@@ -15,6 +15,28 @@
 //! - [`measure`] — material volumes for reports.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
+//!
+//! ## Example
+//!
+//! ```
+//! use chisel_bsp::mesh::SurfaceMesh;
+//! use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
+//! use chisel_bsp::tools::{Pose, dodecahedron_corners};
+//!
+//! // A 100 mm block on a 1 µm grid, in a cube of edge 2^17.
+//! let block = CellBox { min: [0; 3], max: [100_000; 3] };
+//! let mut octree = Octree::from_box([0; 3], 17, block, 1, OctreeConfig::default())?;
+//! let undo = octree.clone();
+//! let at = Pose::at([50_000.0, 50_000.0, 100_000.0]);
+//! let tool = Tool::placed(&dodecahedron_corners(3_000.0), &at)?;
+//! let changes = octree.apply(&tool, Edit::Subtract)?;
+//! for key in &changes.changed {
+//!     let triangles = SurfaceMesh::from_faces(&octree.cell_surface(*key)).triangles();
+//!     assert!(!triangles.is_empty());
+//! }
+//! assert!(octree.solid_volume() < undo.solid_volume());
+//! # Ok::<(), chisel_bsp::Error>(())
+//! ```
 
 pub mod apply;
 pub mod cell;
