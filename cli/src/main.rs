@@ -17,6 +17,7 @@ use glam::DVec3;
 
 mod args;
 mod budget;
+mod formats;
 mod sample;
 mod trace;
 
