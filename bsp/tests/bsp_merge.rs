@@ -70,9 +70,19 @@ fn label_functions() {
 #[test]
 fn volume_identities_hold_exactly_on_random_operands() {
     let mut rng = ChaCha8Rng::seed_from_u64(8);
-    for _ in 0..25 {
-        let a = random_convex_bsp(&mut rng, 1, H / 2);
-        let b = random_convex_bsp(&mut rng, 2, H / 2);
+    // A thousand pairs of operands, each the union of one to three random
+    // convex solids (so most are not convex).
+    let mut operand = |rng: &mut ChaCha8Rng, label: Label| {
+        let mut acc = random_convex_bsp(rng, label, H / 2);
+        for _ in 0..rng.random_range(0..3) {
+            let more = random_convex_bsp(rng, label, H / 2);
+            acc = merge(&acc, &more, BooleanOp::Union);
+        }
+        acc
+    };
+    for _ in 0..1000 {
+        let a = operand(&mut rng, 1);
+        let b = operand(&mut rng, 2);
         let (va, vb) = (solid_volume(&a), solid_volume(&b));
         let union = solid_volume(&merge(&a, &b, BooleanOp::Union));
         let inter = solid_volume(&merge(&a, &b, BooleanOp::Intersection));
