@@ -72,7 +72,7 @@ fn volume_identities_hold_exactly_on_random_operands() {
     let mut rng = ChaCha8Rng::seed_from_u64(8);
     // A thousand pairs of operands, each the union of one to three random
     // convex solids (so most are not convex).
-    let mut operand = |rng: &mut ChaCha8Rng, label: Label| {
+    let operand = |rng: &mut ChaCha8Rng, label: Label| {
         let mut acc = random_convex_bsp(rng, label, H / 2);
         for _ in 0..rng.random_range(0..3) {
             let more = random_convex_bsp(rng, label, H / 2);
