@@ -88,6 +88,8 @@ impl Changes {
 /// The edit, prepared once for the whole walk.
 struct Walk<'a> {
     tool: Bsp,
+    /// The label of the tool's solid.
+    tool_label: Label,
     bounds: CellBox,
     op: BooleanOp,
     /// Whether `f(l, EMPTY) ≠ l` for some label, so that cells the tool
@@ -114,6 +116,7 @@ impl Octree {
         let op = edit.op();
         let walk = Walk {
             tool: tool.labelled(edit.tool_label()),
+            tool_label: edit.tool_label(),
             bounds: tool.bounds(),
             op,
             changes_outside: (0..=Label::MAX).any(|l| op.apply(l, EMPTY) != l),
@@ -174,11 +177,31 @@ impl Walk<'_> {
 
     fn leaf(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Changes) {
         let touches = cell.touches(&self.bounds);
+        let touched = || {
+            if touches {
+                Changes::leaf(key)
+            } else {
+                Changes::default()
+            }
+        };
+        if let Leaf::Uniform(label) = *leaf {
+            // Carving empty space, adding where the cell is full, …: the
+            // edit maps this label to itself inside and outside the tool.
+            if self.op.apply(label, self.tool_label) == label
+                && self.op.apply(label, EMPTY) == label
+            {
+                return (None, touched());
+            }
+        }
+        // For a BSP leaf, an exact test first spares the merge and the
+        // rebuild where the tool misses the cell; for a uniform leaf the
+        // merge itself is that test.
         let meets = cell.overlaps(&self.bounds)
-            && with_arena(|arena| {
-                let poly = cell_poly(arena, cell);
-                self.tool_meets(arena, poly)
-            });
+            && (matches!(leaf, Leaf::Uniform(_))
+                || with_arena(|arena| {
+                    let poly = cell_poly(arena, cell);
+                    self.tool_meets(arena, poly)
+                }));
         if !meets {
             // The tool has no volume here: only labels outside it change.
             let relabeled = if self.changes_outside {
@@ -201,6 +224,11 @@ impl Walk<'_> {
             let poly = cell_poly(arena, cell);
             merged.simplified(arena, poly)
         });
+        if let (Leaf::Uniform(label), [crate::tree::Node::Leaf(new)]) = (leaf, simplified.nodes())
+            && label == new
+        {
+            return (None, touched());
+        }
         let (node, leaves) = build_leaf(simplified, key, cell, self.config);
         let changes = match node {
             OctNode::Leaf(_) => Changes::leaf(key),
