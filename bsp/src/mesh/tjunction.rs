@@ -30,14 +30,14 @@
 //!
 //! # Candidates
 //!
-//! A uniform grid over the `f64` positions of the vertices, about `√V`
-//! cells per axis (a surface of `V` vertices then has about one per
-//! occupied cell). Each edge visits the cells near it in steps of at most
-//! one cell, every step's box widened by a tolerance far above the rounding
-//! of the positions (each within `2^-51` relative, see [`super::weld`]), so
-//! a vertex exactly on the segment is always found; the exact test decides.
-
-use std::collections::HashMap;
+//! A dense uniform grid over the `f64` positions of the vertices, about
+//! `2∛V` cells per axis (`8V` cells in all, stored as one offset array and
+//! one index array). Each edge visits the cells near it in steps of at most
+//! one cell, every step's box widened by a tolerance (`2^-40` of the largest
+//! coordinate) far above the rounding of the positions (each within
+//! `2^-51` relative, see [`super::weld`]); a cheap `f64` test then drops
+//! vertices certainly off the segment, with the same margin. So a vertex
+//! exactly on the segment always reaches the exact test, which decides.
 
 use super::MeshPolygon;
 use crate::exact::{Point4, Sign, classify_vertex, compare_offsets};
@@ -46,6 +46,8 @@ use crate::exact::{Point4, Sign, classify_vertex, compare_offsets};
 pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
     let positions: Vec<[f64; 3]> = vertices.iter().map(Point4::to_f64).collect();
     let grid = Grid::new(&positions);
+    let mut seen = vec![u64::MAX; positions.len()];
+    let mut edge_number = 0u64;
     let mut candidates = Vec::new();
     let mut inside = Vec::new();
     for polygon in polygons.iter_mut() {
@@ -62,17 +64,16 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
             positions_of_originals.push(corners.len() as u32);
             corners.push(a);
             candidates.clear();
-            grid.near_segment(
-                positions[a as usize],
-                positions[b as usize],
-                &mut candidates,
-            );
+            let (pa, pb) = (positions[a as usize], positions[b as usize]);
+            grid.near_segment(pa, pb, edge_number, &mut seen, &mut candidates);
+            edge_number += 1;
             inside.clear();
             inside.extend(
                 candidates
                     .iter()
                     .copied()
                     .filter(|&w| w != a && w != b)
+                    .filter(|&w| grid.may_lie_on_segment(positions[w as usize], pa, pb))
                     .filter(|&w| strictly_inside_edge(&vertices[w as usize], polygon, k)),
             );
             let previous = polygon.edges[(k + n - 1) % n];
@@ -97,12 +98,15 @@ pub(crate) fn strictly_inside_edge(w: &Point4, polygon: &MeshPolygon, k: usize) 
         && classify_vertex(w, &polygon.plane) == Sign::Zero
 }
 
-/// A uniform grid of vertex indices by `f64` position.
+/// A dense uniform grid of vertex indices by `f64` position: the vertices
+/// of cell `c` are `items[start[c]..start[c + 1]]`.
 struct Grid {
     origin: [f64; 3],
     cell: f64,
+    dims: [usize; 3],
     tolerance: f64,
-    cells: HashMap<[i64; 3], Vec<u32>>,
+    start: Vec<u32>,
+    items: Vec<u32>,
 }
 
 impl Grid {
@@ -122,34 +126,87 @@ impl Grid {
         let magnitude = (0..3)
             .map(|i| lo[i].abs().max(hi[i].abs()))
             .fold(0.0, f64::max);
-        let per_axis = (positions.len() as f64).sqrt().ceil().clamp(1.0, 4096.0);
+        let per_axis = (2.0 * (positions.len() as f64).cbrt())
+            .ceil()
+            .clamp(1.0, 1024.0);
         // Cells no finer than the tolerance, so stepping stays bounded.
         let tolerance = magnitude * f64::powi(2.0, -40) + f64::MIN_POSITIVE;
         let cell = (extent / per_axis).max(tolerance * 1024.0);
+        let dims = [0, 1, 2].map(|i| (((hi[i] - lo[i]) / cell).floor() as usize + 1).min(1025));
         let mut grid = Self {
             origin: lo,
             cell,
+            dims,
             tolerance,
-            cells: HashMap::with_capacity(positions.len()),
+            start: vec![0; dims[0] * dims[1] * dims[2] + 1],
+            items: vec![0; positions.len()],
         };
-        for (i, &p) in positions.iter().enumerate() {
-            let key = grid.key(p);
-            grid.cells.entry(key).or_default().push(i as u32);
+        let cells: Vec<usize> = positions.iter().map(|&p| grid.index(grid.key(p))).collect();
+        for &c in &cells {
+            grid.start[c + 1] += 1;
+        }
+        for c in 0..grid.start.len() - 1 {
+            grid.start[c + 1] += grid.start[c];
+        }
+        let mut fill = grid.start.clone();
+        for (v, &c) in cells.iter().enumerate() {
+            grid.items[fill[c] as usize] = v as u32;
+            fill[c] += 1;
         }
         grid
     }
 
-    fn key(&self, p: [f64; 3]) -> [i64; 3] {
-        [0, 1, 2].map(|i| ((p[i] - self.origin[i]) / self.cell).floor() as i64)
+    /// The cell of `p`, clamped into the grid (a superset for queries).
+    fn key(&self, p: [f64; 3]) -> [usize; 3] {
+        [0, 1, 2].map(|i| {
+            let k = ((p[i] - self.origin[i]) / self.cell).floor();
+            if k > 0.0 {
+                (k as usize).min(self.dims[i] - 1)
+            } else {
+                0
+            }
+        })
     }
 
-    /// Appends (sorted, without repeats) every vertex whose position lies in
-    /// a cell near the segment `a b`.
-    fn near_segment(&self, a: [f64; 3], b: [f64; 3], out: &mut Vec<u32>) {
+    fn index(&self, [x, y, z]: [usize; 3]) -> usize {
+        (z * self.dims[1] + y) * self.dims[0] + x
+    }
+
+    /// False only when `p` is certainly off the segment `a b`: outside its
+    /// box, or farther from its line than the tolerance (twice over). The
+    /// rounding of the positions and of this arithmetic is below `2^-48`
+    /// of the magnitude, far inside the tolerance of `2^-40`, so a vertex
+    /// exactly on the segment always passes.
+    fn may_lie_on_segment(&self, p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> bool {
+        let slack = 2.0 * self.tolerance;
+        if (0..3).any(|i| p[i] < a[i].min(b[i]) - slack || p[i] > a[i].max(b[i]) + slack) {
+            return false;
+        }
+        let u = [0, 1, 2].map(|i| b[i] - a[i]);
+        let v = [0, 1, 2].map(|i| p[i] - a[i]);
+        let cross = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let cross2: f64 = cross.iter().map(|c| c * c).sum();
+        let length2: f64 = u.iter().map(|c| c * c).sum();
+        cross2 <= slack * slack * length2
+    }
+
+    /// Appends every vertex whose position lies in a cell near the segment
+    /// `a b`, once (`seen[v] == mark` after it is appended).
+    fn near_segment(
+        &self,
+        a: [f64; 3],
+        b: [f64; 3],
+        mark: u64,
+        seen: &mut [u64],
+        out: &mut Vec<u32>,
+    ) {
         let length = (0..3).map(|i| (b[i] - a[i]).abs()).fold(0.0, f64::max);
-        let steps = (length / self.cell).ceil().clamp(1.0, 1e6) as usize;
+        let steps = (length / self.cell).ceil().clamp(1.0, 4096.0) as usize;
         let point = |t: f64| [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t);
-        let mut keys: Vec<[i64; 3]> = Vec::new();
         for s in 0..steps {
             let (p, q) = (
                 point(s as f64 / steps as f64),
@@ -157,22 +214,19 @@ impl Grid {
             );
             let lo = self.key([0, 1, 2].map(|i| p[i].min(q[i]) - self.tolerance));
             let hi = self.key([0, 1, 2].map(|i| p[i].max(q[i]) + self.tolerance));
-            for x in lo[0]..=hi[0] {
+            for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
-                    for z in lo[2]..=hi[2] {
-                        keys.push([x, y, z]);
+                    for x in lo[0]..=hi[0] {
+                        let c = self.index([x, y, z]);
+                        for &v in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+                            if seen[v as usize] != mark {
+                                seen[v as usize] = mark;
+                                out.push(v);
+                            }
+                        }
                     }
                 }
             }
         }
-        keys.sort_unstable();
-        keys.dedup();
-        for key in &keys {
-            if let Some(list) = self.cells.get(key) {
-                out.extend_from_slice(list);
-            }
-        }
-        out.sort_unstable();
-        out.dedup();
     }
 }

@@ -45,6 +45,14 @@ pub fn ordered_bits(x: f64) -> i64 {
     }
 }
 
+/// Whether `a` and `b` are the same point: identical homogeneous
+/// coordinates (the common case, a corner shared by neighbouring faces),
+/// else the exact cross-multiplied comparison.
+#[inline]
+fn same_point(a: &Point4, b: &Point4) -> bool {
+    (a.xyz_digits == b.xyz_digits && a.w_digits == b.w_digits) || a.same_position(b)
+}
+
 /// Assigns indices to exact points, one per distinct position, in order of
 /// first appearance.
 #[derive(Debug, Default)]
@@ -88,7 +96,7 @@ impl Welder {
                     if let Some(found) = self.cells.get(&[*x, *y, *z]).and_then(|list| {
                         list.iter()
                             .copied()
-                            .find(|&i| self.vertices[i as usize].same_position(p))
+                            .find(|&i| same_point(&self.vertices[i as usize], p))
                     }) {
                         return found;
                     }
