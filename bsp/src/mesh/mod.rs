@@ -133,6 +133,10 @@ pub struct SurfaceMesh {
 impl SurfaceMesh {
     /// The surface of `faces`: equal corners welded exactly, then every
     /// T-junction removed ([`Self::split_t_junctions`]).
+    ///
+    /// # Panics
+    /// When a face breaks the shape [`Bsp::boundary`](crate::tree::Bsp::boundary)
+    /// guarantees: as many edge planes as corners, at least three.
     #[must_use]
     pub fn from_faces(faces: &[BoundaryFace]) -> Self {
         let mut mesh = Self::welded(faces);
@@ -143,8 +147,19 @@ impl SurfaceMesh {
     /// The faces with equal corners welded exactly, but T-junctions left in
     /// place: mostly for diagnosis and tests (such a mesh is in general not
     /// watertight).
+    ///
+    /// # Panics
+    /// As [`Self::from_faces`].
     #[must_use]
     pub fn welded(faces: &[BoundaryFace]) -> Self {
+        for (f, face) in faces.iter().enumerate() {
+            assert!(
+                face.edges.len() == face.vertices.len() && face.edges.len() >= 3,
+                "boundary face {f} has {} edge planes and {} corners",
+                face.edges.len(),
+                face.vertices.len()
+            );
+        }
         let mut welder = weld::Welder::with_capacity(faces.len() * 2);
         let polygons = faces
             .iter()
@@ -198,6 +213,9 @@ impl SurfaceMesh {
 
     /// The position of vertex `v` in `f64` (each coordinate within `2^-51`
     /// relative of the exact value).
+    ///
+    /// # Panics
+    /// When `v` is not a vertex index.
     #[must_use]
     #[inline]
     pub fn position(&self, v: u32) -> [f64; 3] {

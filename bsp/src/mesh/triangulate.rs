@@ -72,6 +72,10 @@ impl MeshPolygon {
     /// The polygon's triangles as vertex indices (see the module docs):
     /// `corners.len() − 2` of them, counter-clockwise, none degenerate,
     /// using every corner.
+    ///
+    /// # Panics
+    /// When `originals` does not fit `corners` (see the invariants on
+    /// [`MeshPolygon`]; polygons of a [`SurfaceMesh`] always fit).
     #[must_use]
     pub fn triangulate(&self) -> Vec<[u32; 3]> {
         let n = self.original_len();
