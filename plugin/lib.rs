@@ -8,6 +8,12 @@
 //! - [`chisel_quadric`] (re-exported as [`quadric`]): quadric CSG trees for
 //!   level-design props drawn pixel-exact by splat ray tracing.
 //!
+//! The [`splat`] module draws quadric CSG props: a [`splat::QuadricProp`]
+//! component (a scene file or an in-memory scene), sampled on the async
+//! compute pool, rendered by a splat pass with per-fragment ray tracing,
+//! clipping and depth writes, or by a global ray-tracing pass for
+//! comparison ([`splat::ChiselSplatPlugin`]).
+//!
 //! The [`presentation`] module runs any app either in a window or, where
 //! there is no display, headless on an offscreen target with PNG
 //! screenshots — the examples and the render tests use it.
@@ -15,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod presentation;
+pub mod splat;
 
 pub use chisel_bsp as bsp;
 pub use chisel_quadric as quadric;

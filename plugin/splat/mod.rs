@@ -1,0 +1,171 @@
+//! Quadric CSG props drawn pixel-exact by splat ray tracing (paper 2, §6).
+//!
+//! ## Map
+//!
+//! - [`prop`] — main world: the [`QuadricProp`] component, the
+//!   [`QuadricScene`] asset and its `.ron` loader, sampling on the async
+//!   compute pool into [`PropSplats`].
+//! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
+//!   `ShaderType`); their WGSL mirror is `shaders/quadric_common.wgsl`.
+//! - [`pipeline`] — bind group layouts and the pipeline specialized on the
+//!   view's format and MSAA and on [`SplatSettings`].
+//! - [`render`] — render world: extraction, buffer upload, and the pass, a
+//!   `Core3d` system between the opaque and transparent passes.
+//!
+//! Shaders: `shaders/splat.wgsl` (surface-aligned boxes with back-face
+//! culling, §6.1, or screen-aligned quads; local ray tracing, clipping and
+//! depth writes), `shaders/global.wgsl` (the global ray-tracing baseline).
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, QuadricProp, SplatRadius};
+//!
+//! fn setup(mut commands: Commands, assets: Res<AssetServer>) {
+//!     commands.spawn((
+//!         QuadricProp {
+//!             scene: assets.load("scenes/classic.ron"),
+//!             bounds: PropBounds { centre: Vec3::ZERO, radius: 90.0 },
+//!             radius: SplatRadius::Auto(40.0),
+//!         },
+//!         // Scene units are millimetres: a 10 cm prop at the origin.
+//!         Transform::from_scale(Vec3::splat(0.001)),
+//!     ));
+//! }
+//!
+//! App::new()
+//!     .add_plugins((DefaultPlugins, ChiselSplatPlugin))
+//!     .add_systems(Startup, setup)
+//!     .run();
+//! ```
+
+pub mod gpu;
+pub mod pipeline;
+pub mod prop;
+pub mod render;
+
+use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::prelude::*;
+use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
+use bevy::render::render_resource::SpecializedRenderPipelines;
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
+
+pub use prop::{PropBounds, PropGpuData, PropSplats, QuadricProp, QuadricScene, SplatRadius};
+
+/// How props are drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SplatMode {
+    /// Splats as surface-aligned boxes (or quads where flat) with back-face
+    /// culling (§6.1): the fast path.
+    #[default]
+    SurfaceBoxes,
+    /// Splats as camera-facing quads covering each splat's sphere (§6).
+    ScreenQuads,
+    /// No splats: every pixel of a cube around each prop ray traces the
+    /// whole normal form (the baseline of §7.2).
+    GlobalRayTrace,
+}
+
+/// What the pass writes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SplatOutput {
+    /// Shaded with the scene's first directional light and ambient light.
+    #[default]
+    Shaded,
+    /// The quadric index, unlit (tests): in an 8-bit sRGB target the bytes
+    /// are `r = 16·(i mod 16) + 8`, `g = 16·(i div 16 mod 16) + 8`, `b = 200`.
+    QuadricIds,
+    /// The world normal as `n · 0.5 + 0.5`.
+    Normals,
+    /// `1/64` per fragment invocation, added up (no depth test): overdraw.
+    Overdraw,
+}
+
+/// Settings of the splat pass, for all props and views.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, ExtractResource)]
+pub struct SplatSettings {
+    /// Splats or global ray tracing.
+    pub mode: SplatMode,
+    /// Shading or a debug output.
+    pub output: SplatOutput,
+    /// Splats with a normal extent below `flat_ratio · radius` are drawn as
+    /// one quad instead of a box.
+    pub flat_ratio: f32,
+    /// Hits are kept within `radius · radius_tolerance` of their sample
+    /// (slightly above 1 absorbs `f32` rounding at splat borders).
+    pub radius_tolerance: f32,
+}
+
+impl Default for SplatSettings {
+    fn default() -> Self {
+        Self {
+            mode: SplatMode::default(),
+            output: SplatOutput::default(),
+            flat_ratio: 1e-3,
+            radius_tolerance: 1.001,
+        }
+    }
+}
+
+/// The system sets of the main-world part, in order.
+#[derive(SystemSet, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum SplatSystems {
+    /// Props whose component or scene changed are marked for re-sampling.
+    Request,
+    /// Sampling tasks start and finished ones are swapped in.
+    Sample,
+}
+
+/// Quadric CSG props: the main-world component and sampling, and the
+/// render-world splat pass. Needs Bevy's render and 3D core pipeline
+/// plugins (`DefaultPlugins`).
+pub struct ChiselSplatPlugin;
+
+impl Plugin for ChiselSplatPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_asset::<QuadricScene>()
+            .init_asset_loader::<prop::QuadricSceneLoader>()
+            .init_resource::<SplatSettings>()
+            .configure_sets(
+                Update,
+                (SplatSystems::Request, SplatSystems::Sample).chain(),
+            )
+            .add_systems(
+                Update,
+                (
+                    prop::request_sampling.in_set(SplatSystems::Request),
+                    (prop::start_sampling, prop::finish_sampling)
+                        .chain()
+                        .in_set(SplatSystems::Sample),
+                ),
+            )
+            .add_plugins(ExtractResourcePlugin::<SplatSettings>::default());
+        pipeline::add_shaders(app);
+
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_resource::<pipeline::SplatPipeline>()
+            .init_resource::<SpecializedRenderPipelines<pipeline::SplatPipeline>>()
+            .init_resource::<render::ExtractedProps>()
+            .init_resource::<render::ExtractedSplatLight>()
+            .init_resource::<render::PropBuffers>()
+            .init_resource::<render::SplatViewUniforms>()
+            .add_systems(
+                ExtractSchedule,
+                (render::extract_props, render::extract_light),
+            )
+            .add_systems(
+                Render,
+                (render::prepare_props, render::prepare_views).in_set(RenderSystems::Prepare),
+            )
+            .add_systems(
+                Core3d,
+                render::splat_pass
+                    .after(main_opaque_pass_3d)
+                    .before(main_transparent_pass_3d)
+                    .in_set(Core3dSystems::MainPass),
+            );
+    }
+}

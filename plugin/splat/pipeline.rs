@@ -1,0 +1,192 @@
+//! The render pipelines of the splat and global passes: bind group layouts
+//! and specialization on the view (format, MSAA) and the pass settings.
+
+use bevy::asset::uuid_handle;
+use bevy::core_pipeline::core_3d::CORE_3D_DEPTH_FORMAT;
+use bevy::prelude::*;
+use bevy::render::render_resource::binding_types::{storage_buffer_read_only, uniform_buffer};
+use bevy::render::render_resource::{
+    BindGroupLayoutDescriptor, BindGroupLayoutEntries, BlendComponent, BlendFactor, BlendOperation,
+    BlendState, ColorTargetState, ColorWrites, CompareFunction, DepthStencilState, Face,
+    FragmentState, MultisampleState, PrimitiveState, RenderPipelineDescriptor, ShaderStages,
+    SpecializedRenderPipeline, TextureFormat, VertexState,
+};
+use bevy::shader::{Shader, ShaderDefVal};
+
+use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
+use super::{SplatMode, SplatOutput};
+
+/// The shared quadric module (`shaders/quadric_common.wgsl`).
+pub const QUADRIC_COMMON_SHADER: Handle<Shader> =
+    uuid_handle!("5f0c7c4e-2b8e-4d61-9a57-0d6f0f5a1c11");
+/// The splat pass (`shaders/splat.wgsl`).
+pub const SPLAT_SHADER: Handle<Shader> = uuid_handle!("7a3e9b1d-46c2-4f0e-8d5b-2c9a6e4f7b22");
+/// The global ray-tracing pass (`shaders/global.wgsl`).
+pub const GLOBAL_SHADER: Handle<Shader> = uuid_handle!("9c4d2e6f-8a1b-4c3d-b5e7-f1a2b3c4d533");
+
+/// Adds the three shaders to `Assets<Shader>` (compiled into the crate).
+pub(crate) fn add_shaders(app: &mut App) {
+    let Some(mut shaders) = app.world_mut().get_resource_mut::<Assets<Shader>>() else {
+        warn!("bevy_chisel: no shader assets (is the RenderPlugin added?); splats are not drawn");
+        return;
+    };
+    let sources = [
+        (
+            &QUADRIC_COMMON_SHADER,
+            include_str!("../../shaders/quadric_common.wgsl"),
+            "shaders/quadric_common.wgsl",
+        ),
+        (
+            &SPLAT_SHADER,
+            include_str!("../../shaders/splat.wgsl"),
+            "shaders/splat.wgsl",
+        ),
+        (
+            &GLOBAL_SHADER,
+            include_str!("../../shaders/global.wgsl"),
+            "shaders/global.wgsl",
+        ),
+    ];
+    for (handle, source, path) in sources {
+        if let Err(e) = shaders.insert(handle.id(), Shader::from_wgsl(source, path)) {
+            error!("bevy_chisel: cannot add shader {path}: {e}");
+        }
+    }
+}
+
+/// Layouts and shaders of the splat and global pipelines.
+#[derive(Resource)]
+pub struct SplatPipeline {
+    /// Group 0: the view uniform (dynamic offset).
+    pub view_layout: BindGroupLayoutDescriptor,
+    /// Group 1: the prop uniform and its four storage buffers.
+    pub prop_layout: BindGroupLayoutDescriptor,
+}
+
+impl Default for SplatPipeline {
+    fn default() -> Self {
+        Self {
+            view_layout: BindGroupLayoutDescriptor::new(
+                "chisel_splat_view_layout",
+                &BindGroupLayoutEntries::single(
+                    ShaderStages::VERTEX_FRAGMENT,
+                    uniform_buffer::<SplatViewUniform>(true),
+                ),
+            ),
+            prop_layout: BindGroupLayoutDescriptor::new(
+                "chisel_splat_prop_layout",
+                &BindGroupLayoutEntries::sequential(
+                    ShaderStages::VERTEX_FRAGMENT,
+                    (
+                        uniform_buffer::<PropUniform>(false),
+                        storage_buffer_read_only::<QuadricRecord>(false),
+                        storage_buffer_read_only::<u32>(false),
+                        storage_buffer_read_only::<SplatRecord>(false),
+                        storage_buffer_read_only::<u32>(false),
+                    ),
+                ),
+            ),
+        }
+    }
+}
+
+/// What a pipeline variant depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SplatPipelineKey {
+    /// The view's colour format.
+    pub format: TextureFormat,
+    /// MSAA sample count.
+    pub samples: u32,
+    /// Splat boxes, screen quads or global ray tracing.
+    pub mode: SplatMode,
+    /// Shaded, ids, normals or overdraw.
+    pub output: SplatOutput,
+    /// The device supports `@early_depth_test`.
+    pub early_depth_test: bool,
+}
+
+impl SplatPipelineKey {
+    /// Vertices per instance.
+    #[must_use]
+    pub fn vertex_count(&self) -> u32 {
+        match self.mode {
+            SplatMode::ScreenQuads => 6,
+            SplatMode::SurfaceBoxes | SplatMode::GlobalRayTrace => 36,
+        }
+    }
+}
+
+impl SpecializedRenderPipeline for SplatPipeline {
+    type Key = SplatPipelineKey;
+
+    fn specialize(&self, key: Self::Key) -> RenderPipelineDescriptor {
+        let mut defs: Vec<ShaderDefVal> = Vec::new();
+        match key.output {
+            SplatOutput::Shaded => {}
+            SplatOutput::QuadricIds => defs.push("OUTPUT_IDS".into()),
+            SplatOutput::Normals => defs.push("OUTPUT_NORMALS".into()),
+            SplatOutput::Overdraw => defs.push("OUTPUT_OVERDRAW".into()),
+        }
+        let (shader, cull_mode) = match key.mode {
+            SplatMode::SurfaceBoxes => (SPLAT_SHADER, Some(Face::Back)),
+            SplatMode::ScreenQuads => {
+                defs.push("SPLAT_SCREEN_QUAD".into());
+                (SPLAT_SHADER, None)
+            }
+            // Back faces of the proxy cube: one fragment per pixel, eye inside or not.
+            SplatMode::GlobalRayTrace => (GLOBAL_SHADER, Some(Face::Front)),
+        };
+        if key.early_depth_test && key.mode != SplatMode::GlobalRayTrace {
+            defs.push("EARLY_DEPTH_TEST".into());
+        }
+        let overdraw = key.output == SplatOutput::Overdraw;
+        let additive = BlendComponent {
+            src_factor: BlendFactor::One,
+            dst_factor: BlendFactor::One,
+            operation: BlendOperation::Add,
+        };
+        RenderPipelineDescriptor {
+            label: Some("chisel_splat_pipeline".into()),
+            layout: vec![self.view_layout.clone(), self.prop_layout.clone()],
+            vertex: VertexState {
+                shader: shader.clone(),
+                shader_defs: defs.clone(),
+                ..default()
+            },
+            primitive: PrimitiveState {
+                cull_mode,
+                ..default()
+            },
+            depth_stencil: Some(DepthStencilState {
+                format: CORE_3D_DEPTH_FORMAT,
+                depth_write_enabled: Some(!overdraw),
+                depth_compare: Some(if overdraw {
+                    CompareFunction::Always
+                } else {
+                    CompareFunction::GreaterEqual
+                }),
+                stencil: default(),
+                bias: default(),
+            }),
+            multisample: MultisampleState {
+                count: key.samples,
+                mask: !0,
+                alpha_to_coverage_enabled: false,
+            },
+            fragment: Some(FragmentState {
+                shader,
+                shader_defs: defs,
+                targets: vec![Some(ColorTargetState {
+                    format: key.format,
+                    blend: overdraw.then_some(BlendState {
+                        color: additive,
+                        alpha: additive,
+                    }),
+                    write_mask: ColorWrites::ALL,
+                })],
+                ..default()
+            }),
+            ..default()
+        }
+    }
+}

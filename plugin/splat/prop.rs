@@ -1,0 +1,320 @@
+//! Props in the main world: the [`QuadricProp`] component, the
+//! [`QuadricScene`] asset (scene files, `quadric/SCENES.md`), and sampling on
+//! the async compute pool with the result swapped in when ready.
+//!
+//! States of a prop entity: [`QuadricProp`] (what to draw) → a sampling task
+//! ([`PropSampling`]) → [`PropSplats`] (what the render world draws). An edit
+//! while a task runs re-samples when it ends; the old splats stay on screen
+//! until the new ones are in, so an edit never causes a frame without the
+//! prop nor a frame hitch.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use bevy::asset::io::Reader;
+use bevy::asset::{AssetLoader, LoadContext, LoadState};
+use bevy::math::{DVec3, Vec4};
+use bevy::prelude::*;
+use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
+use chisel_quadric::{BoundingSphere, SampleOptions, Scene, SplatSet, sample};
+
+use super::gpu::{QuadricRecord, SplatRecord};
+
+/// A quadric CSG scene as an asset, loaded from a RON scene file (`.ron`,
+/// format in `quadric/SCENES.md`) or added in memory with
+/// `Assets::<QuadricScene>::add`.
+#[derive(Asset, TypePath, Clone, Debug)]
+pub struct QuadricScene(pub Scene);
+
+/// Loads [`QuadricScene`]s from `.ron` files. A malformed file fails the
+/// load with the line, column and problem (Bevy logs it with the path).
+#[derive(Default, TypePath)]
+pub struct QuadricSceneLoader;
+
+/// Why a scene file could not be loaded.
+#[derive(Debug)]
+pub enum QuadricSceneLoadError {
+    /// The file could not be read.
+    Io(std::io::Error),
+    /// The text is not valid UTF-8.
+    NotUtf8,
+    /// The scene is malformed (line, column and problem inside).
+    Scene(chisel_quadric::Error),
+}
+
+impl std::fmt::Display for QuadricSceneLoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Io(e) => write!(f, "cannot read the scene file: {e}"),
+            Self::NotUtf8 => write!(f, "the scene file is not UTF-8 text"),
+            Self::Scene(e) => write!(f, "malformed scene: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for QuadricSceneLoadError {}
+
+impl AssetLoader for QuadricSceneLoader {
+    type Asset = QuadricScene;
+    type Settings = ();
+    type Error = QuadricSceneLoadError;
+
+    async fn load(
+        &self,
+        reader: &mut dyn Reader,
+        _settings: &(),
+        _load_context: &mut LoadContext<'_>,
+    ) -> Result<QuadricScene, QuadricSceneLoadError> {
+        let mut bytes = Vec::new();
+        reader
+            .read_to_end(&mut bytes)
+            .await
+            .map_err(QuadricSceneLoadError::Io)?;
+        let text = String::from_utf8(bytes).map_err(|_| QuadricSceneLoadError::NotUtf8)?;
+        Scene::from_ron(&text)
+            .map(QuadricScene)
+            .map_err(QuadricSceneLoadError::Scene)
+    }
+
+    fn extensions(&self) -> &[&str] {
+        &["ron"]
+    }
+}
+
+/// The splat radius of a prop, in scene units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SplatRadius {
+    /// The bounding radius divided by this number (the default, 40, gives
+    /// tens of thousands of splats for the shipped scenes).
+    Auto(f32),
+    /// A fixed radius.
+    Fixed(f32),
+}
+
+impl Default for SplatRadius {
+    fn default() -> Self {
+        Self::Auto(40.0)
+    }
+}
+
+/// A quadric CSG prop: a scene drawn pixel-exact by the splat pass, placed
+/// by the entity's `Transform` (scene units are local units).
+///
+/// Changing the component (or the scene asset) re-samples it on the async
+/// compute pool; the previous splats are drawn until the new ones are in.
+#[derive(Component, Clone, Debug)]
+#[require(Transform, Visibility)]
+pub struct QuadricProp {
+    /// The scene.
+    pub scene: Handle<QuadricScene>,
+    /// Only the surface inside this sphere (local coordinates) is sampled
+    /// and drawn; it must contain the solid.
+    pub bounds: PropBounds,
+    /// Splat radius.
+    pub radius: SplatRadius,
+}
+
+/// A bounding sphere in the prop's local coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PropBounds {
+    /// Centre.
+    pub centre: Vec3,
+    /// Radius (positive).
+    pub radius: f32,
+}
+
+impl PropBounds {
+    /// The radius `r` of splats for `radius`.
+    #[must_use]
+    pub fn splat_radius(&self, radius: SplatRadius) -> f32 {
+        match radius {
+            SplatRadius::Auto(divisor) => self.radius / divisor.max(1.0),
+            SplatRadius::Fixed(r) => r,
+        }
+    }
+}
+
+/// Splats of a prop ready for the GPU, shared with the render world.
+///
+/// Spawn it directly (with a `Transform`) to draw splats sampled elsewhere,
+/// e.g. synchronously with [`PropSplats::build`].
+#[derive(Component, Clone, Debug)]
+#[require(Transform, Visibility)]
+pub struct PropSplats(pub Arc<PropGpuData>);
+
+/// The buffers of one prop in GPU form.
+#[derive(Debug)]
+pub struct PropGpuData {
+    /// Unique per build: the render world re-uploads when it changes.
+    pub generation: u64,
+    /// The quadric buffer (one record per quadric of the normal form).
+    pub quadrics: Vec<QuadricRecord>,
+    /// The deduplicated clip lists.
+    pub clip_indices: Vec<u32>,
+    /// The instance buffer: one record per splat.
+    pub splats: Vec<SplatRecord>,
+    /// The normal form for the global pass: `(start, count)` per product,
+    /// then each product's flagged quadric references.
+    pub terms: Vec<u32>,
+    /// Number of products.
+    pub product_count: u32,
+    /// Local bounding sphere (`xyz` centre, `w` radius).
+    pub bounds: Vec4,
+    /// Splat radius used.
+    pub radius: f32,
+}
+
+static GENERATION: AtomicU64 = AtomicU64::new(1);
+
+impl PropGpuData {
+    /// Number of splats.
+    #[must_use]
+    pub fn splat_count(&self) -> usize {
+        self.splats.len()
+    }
+}
+
+impl PropSplats {
+    /// Samples `scene` inside `bounds` with splat radius `radius` (blocking;
+    /// the plugin runs this on the async compute pool).
+    ///
+    /// Errors: the scene's normal form or the sampling options are invalid
+    /// (the message says which).
+    pub fn build(scene: &Scene, bounds: PropBounds, radius: f32) -> Result<Self, String> {
+        let dnf = scene.dnf().map_err(|e| format!("normal form: {e}"))?;
+        let sphere = BoundingSphere::new(bounds.centre.as_dvec3(), f64::from(bounds.radius))
+            .map_err(|e| format!("bounds: {e}"))?;
+        let options =
+            SampleOptions::new(f64::from(radius), sphere).map_err(|e| format!("radius: {e}"))?;
+        let samples = sample(&dnf, &options).map_err(|e| format!("sampling: {e}"))?;
+        let set = SplatSet::new(&dnf, &scene.dag, &samples);
+        let products = dnf.products();
+        let mut terms: Vec<u32> = Vec::new();
+        let header = 2 * products.len();
+        let mut literals = Vec::new();
+        for product in products {
+            terms.push(to_u32(header + literals.len()));
+            terms.push(to_u32(product.len()));
+            for l in product {
+                let flag = match l.side {
+                    chisel_quadric::Side::Inside => 0,
+                    chisel_quadric::Side::Outside => chisel_quadric::OUTSIDE_FLAG,
+                };
+                literals.push(to_u32(l.quadric) | flag);
+            }
+        }
+        terms.extend(literals);
+        let centre: DVec3 = sphere.centre;
+        Ok(Self(Arc::new(PropGpuData {
+            generation: GENERATION.fetch_add(1, Ordering::Relaxed),
+            quadrics: set.gpu_quadrics().iter().map(QuadricRecord::from).collect(),
+            clip_indices: set.clip_indices.clone(),
+            splats: set.gpu_splats().iter().map(SplatRecord::from).collect(),
+            terms,
+            product_count: to_u32(products.len()),
+            bounds: centre.as_vec3().extend(bounds.radius),
+            radius,
+        })))
+    }
+}
+
+fn to_u32(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
+}
+
+/// The sampling state of a prop.
+#[derive(Component, Default)]
+pub struct PropSampling {
+    /// A (re-)sample is wanted.
+    pending: bool,
+    /// The running task.
+    task: Option<Task<Result<PropSplats, String>>>,
+    /// The scene failed to load and was reported.
+    reported: bool,
+}
+
+/// Marks props whose component or scene changed as wanting new splats.
+pub(crate) fn request_sampling(
+    mut commands: Commands,
+    mut events: MessageReader<AssetEvent<QuadricScene>>,
+    changed: Query<Entity, (With<QuadricProp>, Changed<QuadricProp>)>,
+    mut props: Query<(Entity, &QuadricProp, Option<&mut PropSampling>)>,
+) {
+    let modified: Vec<AssetId<QuadricScene>> = events
+        .read()
+        .filter_map(|e| match e {
+            AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => Some(*id),
+            _ => None,
+        })
+        .collect();
+    for (entity, prop, state) in &mut props {
+        let wanted = changed.contains(entity) || modified.contains(&prop.scene.id());
+        match state {
+            Some(mut state) if wanted => {
+                state.pending = true;
+                state.reported = false;
+            }
+            Some(_) => {}
+            None => {
+                commands.entity(entity).insert(PropSampling {
+                    pending: true,
+                    ..default()
+                });
+            }
+        }
+    }
+}
+
+/// Starts sampling tasks for props that want one and have their scene.
+pub(crate) fn start_sampling(
+    scenes: Res<Assets<QuadricScene>>,
+    asset_server: Res<AssetServer>,
+    mut props: Query<(Entity, &QuadricProp, &mut PropSampling)>,
+) {
+    for (entity, prop, mut state) in &mut props {
+        if !state.pending || state.task.is_some() {
+            continue;
+        }
+        let Some(scene) = scenes.get(&prop.scene) else {
+            if let Some(LoadState::Failed(e)) = asset_server.get_load_state(&prop.scene)
+                && !state.reported
+            {
+                error!("quadric prop {entity}: its scene did not load: {e}");
+                state.reported = true;
+                state.pending = false;
+            }
+            continue;
+        };
+        let scene = scene.0.clone();
+        let bounds = prop.bounds;
+        let radius = bounds.splat_radius(prop.radius);
+        state.pending = false;
+        state.task = Some(
+            AsyncComputeTaskPool::get()
+                .spawn(async move { PropSplats::build(&scene, bounds, radius) }),
+        );
+    }
+}
+
+/// Swaps finished samplings in.
+pub(crate) fn finish_sampling(
+    mut commands: Commands,
+    mut props: Query<(Entity, &mut PropSampling)>,
+) {
+    for (entity, mut state) in &mut props {
+        let Some(task) = state.task.as_mut() else {
+            continue;
+        };
+        let Some(result) = check_ready(task) else {
+            continue;
+        };
+        state.task = None;
+        match result {
+            Ok(splats) => {
+                debug!("quadric prop {entity}: {} splats", splats.0.splat_count());
+                commands.entity(entity).insert(splats);
+            }
+            Err(message) => error!("quadric prop {entity}: {message}"),
+        }
+    }
+}

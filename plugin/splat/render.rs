@@ -1,0 +1,337 @@
+//! The render world of the splat pass: extraction, buffer upload, bind
+//! groups, and the pass itself — a `Core3d` system after the opaque pass
+//! (Bevy 0.19 has no render-graph nodes: this system is the node).
+//!
+//! Per prop: a quadric buffer, a clip-index buffer, an instance buffer (one
+//! record per splat) and the normal form for the global pass, uploaded when
+//! the prop's splats change; a uniform with its transform, every frame. Per
+//! view: a uniform (view-projection, eye, light) at a dynamic offset and the
+//! specialized pipeline. The pass draws each prop with one instanced draw.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use bevy::camera::Exposure;
+use bevy::light::{DirectionalLight, GlobalAmbientLight};
+use bevy::math::Mat3;
+use bevy::prelude::*;
+use bevy::render::Extract;
+use bevy::render::camera::ExtractedCamera;
+use bevy::render::diagnostic::RecordDiagnostics;
+use bevy::render::render_resource::{
+    BindGroup, BindGroupEntries, CachedRenderPipelineId, DynamicUniformBuffer, PipelineCache,
+    RenderPassDescriptor, SpecializedRenderPipelines, StorageBuffer, StoreOp, UniformBuffer,
+    WgpuFeatures,
+};
+use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::view::{ExtractedView, Msaa, ViewDepthTexture, ViewTarget};
+
+use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
+use super::pipeline::{SplatPipeline, SplatPipelineKey};
+use super::prop::{PropGpuData, PropSplats};
+use super::{SplatMode, SplatSettings};
+
+/// One prop as seen by the render world this frame.
+pub struct ExtractedProp {
+    /// The main-world entity.
+    pub entity: Entity,
+    /// Its splats.
+    pub data: Arc<PropGpuData>,
+    /// Its local-to-world transform.
+    pub world_from_local: Mat4,
+}
+
+/// The props to draw this frame.
+#[derive(Resource, Default)]
+pub struct ExtractedProps(pub Vec<ExtractedProp>);
+
+/// The scene's light as the splat shader uses it.
+#[derive(Resource, Clone, Copy, Default)]
+pub struct ExtractedSplatLight {
+    /// Unit direction towards the light.
+    pub direction: Vec3,
+    /// Colour × illuminance × exposure ÷ π (Lambert).
+    pub color: Vec3,
+    /// Ambient colour × brightness × exposure.
+    pub ambient: Vec3,
+}
+
+pub(crate) fn extract_props(
+    mut extracted: ResMut<ExtractedProps>,
+    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &InheritedVisibility)>>,
+) {
+    extracted.0.clear();
+    for (entity, splats, transform, visibility) in &props {
+        if visibility.get() && !splats.0.splats.is_empty() {
+            extracted.0.push(ExtractedProp {
+                entity,
+                data: splats.0.clone(),
+                world_from_local: transform.to_matrix(),
+            });
+        }
+    }
+}
+
+pub(crate) fn extract_light(
+    mut light: ResMut<ExtractedSplatLight>,
+    directional: Extract<Query<(&DirectionalLight, &GlobalTransform)>>,
+    ambient: Extract<Option<Res<GlobalAmbientLight>>>,
+) {
+    let exposure = Exposure::default().exposure();
+    let (direction, color) = directional
+        .iter()
+        .next()
+        .map_or((Vec3::Z, Vec3::ZERO), |(l, t)| {
+            let c = l.color.to_linear();
+            let scale = l.illuminance * exposure / std::f32::consts::PI;
+            (
+                -t.forward().as_vec3(),
+                Vec3::new(c.red, c.green, c.blue) * scale,
+            )
+        });
+    let ambient = ambient.as_ref().map_or(Vec3::splat(0.05), |a| {
+        let c = a.color.to_linear();
+        Vec3::new(c.red, c.green, c.blue) * a.brightness * exposure
+    });
+    *light = ExtractedSplatLight {
+        direction,
+        color,
+        ambient,
+    };
+}
+
+/// GPU buffers of one prop.
+pub struct PropGpu {
+    generation: u64,
+    quadrics: StorageBuffer<Vec<QuadricRecord>>,
+    clip_indices: StorageBuffer<Vec<u32>>,
+    splats: StorageBuffer<Vec<SplatRecord>>,
+    terms: StorageBuffer<Vec<u32>>,
+    uniform: UniformBuffer<PropUniform>,
+    bind_group: Option<BindGroup>,
+    splat_count: u32,
+}
+
+/// GPU buffers of all props, by main-world entity.
+#[derive(Resource, Default)]
+pub struct PropBuffers(HashMap<Entity, PropGpu>);
+
+fn non_empty<T: Copy + Default>(v: &[T]) -> Vec<T> {
+    if v.is_empty() {
+        vec![T::default()]
+    } else {
+        v.to_vec()
+    }
+}
+
+fn prop_uniform(prop: &ExtractedProp, settings: &SplatSettings) -> PropUniform {
+    let m = prop.world_from_local;
+    let linear = Mat3::from_mat4(m);
+    let normal = Mat4::from_mat3(linear.inverse().transpose());
+    let max_scale = linear
+        .x_axis
+        .length()
+        .max(linear.y_axis.length())
+        .max(linear.z_axis.length());
+    PropUniform {
+        world_from_local: m,
+        local_from_world: m.inverse(),
+        normal_from_local: normal,
+        bounds: prop.data.bounds,
+        product_count: prop.data.product_count,
+        flat_ratio: settings.flat_ratio,
+        max_scale,
+        radius_tolerance: settings.radius_tolerance,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_props(
+    mut buffers: ResMut<PropBuffers>,
+    props: Res<ExtractedProps>,
+    settings: Res<SplatSettings>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    pipeline: Res<SplatPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+) {
+    buffers
+        .0
+        .retain(|entity, _| props.0.iter().any(|p| p.entity == *entity));
+    let layout = pipeline_cache.get_bind_group_layout(&pipeline.prop_layout);
+    for prop in &props.0 {
+        let data = &prop.data;
+        let stale = buffers
+            .0
+            .get(&prop.entity)
+            .is_none_or(|b| b.generation != data.generation);
+        if stale {
+            let mut gpu = PropGpu {
+                generation: data.generation,
+                quadrics: StorageBuffer::from(non_empty(&data.quadrics)),
+                clip_indices: StorageBuffer::from(non_empty(&data.clip_indices)),
+                splats: StorageBuffer::from(non_empty(&data.splats)),
+                terms: StorageBuffer::from(non_empty(&data.terms)),
+                uniform: UniformBuffer::default(),
+                bind_group: None,
+                splat_count: u32::try_from(data.splats.len()).unwrap_or(u32::MAX),
+            };
+            gpu.quadrics.write_buffer(&device, &queue);
+            gpu.clip_indices.write_buffer(&device, &queue);
+            gpu.splats.write_buffer(&device, &queue);
+            gpu.terms.write_buffer(&device, &queue);
+            buffers.0.insert(prop.entity, gpu);
+        }
+        let Some(gpu) = buffers.0.get_mut(&prop.entity) else {
+            continue;
+        };
+        gpu.uniform.set(prop_uniform(prop, &settings));
+        gpu.uniform.write_buffer(&device, &queue);
+        if gpu.bind_group.is_none()
+            && let (Some(uniform), Some(quadrics), Some(clips), Some(splats), Some(terms)) = (
+                gpu.uniform.binding(),
+                gpu.quadrics.binding(),
+                gpu.clip_indices.binding(),
+                gpu.splats.binding(),
+                gpu.terms.binding(),
+            )
+        {
+            let bind_group = device.create_bind_group(
+                "chisel_splat_prop_bind_group",
+                &layout,
+                &BindGroupEntries::sequential((uniform, quadrics, clips, splats, terms)),
+            );
+            gpu.bind_group = Some(bind_group);
+        }
+    }
+}
+
+/// The per-view uniforms of all views.
+#[derive(Resource, Default)]
+pub struct SplatViewUniforms {
+    buffer: DynamicUniformBuffer<SplatViewUniform>,
+    bind_group: Option<BindGroup>,
+}
+
+/// What the pass needs per view.
+#[derive(Component)]
+pub struct SplatViewState {
+    offset: u32,
+    pipeline: CachedRenderPipelineId,
+    vertex_count: u32,
+    global: bool,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_views(
+    mut commands: Commands,
+    mut uniforms: ResMut<SplatViewUniforms>,
+    views: Query<(Entity, &ExtractedView, &Msaa), With<ExtractedCamera>>,
+    light: Res<ExtractedSplatLight>,
+    settings: Res<SplatSettings>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    pipeline: Res<SplatPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    mut pipelines: ResMut<SpecializedRenderPipelines<SplatPipeline>>,
+) {
+    uniforms.buffer.clear();
+    let early_depth_test = device
+        .features()
+        .contains(WgpuFeatures::SHADER_EARLY_DEPTH_TEST);
+    for (entity, view, msaa) in &views {
+        let clip_from_world = view
+            .clip_from_world
+            .unwrap_or_else(|| view.clip_from_view * view.world_from_view.to_matrix().inverse());
+        let orthographic = view.clip_from_view.w_axis.w == 1.0;
+        let eye = view.world_from_view.translation();
+        let forward = view.world_from_view.forward().as_vec3();
+        let offset = uniforms.buffer.push(&SplatViewUniform {
+            clip_from_world,
+            camera_position: eye.extend(if orthographic { 0.0 } else { 1.0 }),
+            view_forward: forward.extend(0.0),
+            light_direction: light.direction.extend(0.0),
+            light_color: light.color.extend(0.0),
+            ambient: light.ambient.extend(0.0),
+        });
+        let key = SplatPipelineKey {
+            format: view.target_format,
+            samples: msaa.samples(),
+            mode: settings.mode,
+            output: settings.output,
+            early_depth_test,
+        };
+        let id = pipelines.specialize(&pipeline_cache, &pipeline, key);
+        commands.entity(entity).insert(SplatViewState {
+            offset,
+            pipeline: id,
+            vertex_count: key.vertex_count(),
+            global: settings.mode == SplatMode::GlobalRayTrace,
+        });
+    }
+    uniforms.buffer.write_buffer(&device, &queue);
+    let layout = pipeline_cache.get_bind_group_layout(&pipeline.view_layout);
+    uniforms.bind_group = uniforms.buffer.binding().map(|binding| {
+        device.create_bind_group(
+            "chisel_splat_view_bind_group",
+            &layout,
+            &BindGroupEntries::single(binding),
+        )
+    });
+}
+
+/// The splat pass of one view: every prop, one instanced draw each (one
+/// proxy cube each in global ray-tracing mode).
+pub(crate) fn splat_pass(
+    view: ViewQuery<(
+        &ExtractedCamera,
+        &ViewTarget,
+        &ViewDepthTexture,
+        &SplatViewState,
+    )>,
+    props: Res<ExtractedProps>,
+    buffers: Res<PropBuffers>,
+    uniforms: Res<SplatViewUniforms>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (camera, target, depth, state) = view.into_inner();
+
+    if props.0.is_empty() {
+        return;
+    }
+    let (Some(pipeline), Some(view_bind_group)) = (
+        pipeline_cache.get_render_pipeline(state.pipeline),
+        uniforms.bind_group.as_ref(),
+    ) else {
+        return;
+    };
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+        label: Some("chisel_splat_pass"),
+        color_attachments: &[Some(target.get_color_attachment())],
+        depth_stencil_attachment: Some(depth.get_attachment(StoreOp::Store)),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let span = diagnostics.pass_span(&mut pass, "chisel_splat_pass");
+    if let Some(viewport) = camera.viewport.as_ref() {
+        pass.set_camera_viewport(viewport);
+    }
+    pass.set_render_pipeline(pipeline);
+    pass.set_bind_group(0, view_bind_group, &[state.offset]);
+    for prop in &props.0 {
+        let Some(gpu) = buffers.0.get(&prop.entity) else {
+            continue;
+        };
+        let Some(bind_group) = gpu.bind_group.as_ref() else {
+            continue;
+        };
+        pass.set_bind_group(1, bind_group, &[]);
+        let instances = if state.global { 1 } else { gpu.splat_count };
+        pass.draw(0..state.vertex_count, 0..instances);
+    }
+    span.end(&mut pass);
+}
