@@ -5,6 +5,13 @@
 //!   CSG scene into splats (`--json` for one summary line, `-o FILE.ply`).
 //! - `chisel trace SCENE --bounds X,Y,Z,R -o IMAGE.png` renders it with the
 //!   CPU reference ray tracer.
+//! - `chisel mill --steps N`, `chisel cheese --count N`, `chisel sweep
+//!   --samples N` run the iterated CSG scenarios of SCENARIOS.md on the
+//!   octree of BSPs; `chisel replay OPS.jsonl` applies a recorded operation
+//!   sequence. All report per-step latency, result size, volume and memory
+//!   (`--json`, `--csv`, `--export`, `--record`).
+//! - `chisel boolean A B --op union|intersection|difference -o OUT` — the
+//!   exact Boolean of two closed meshes (OBJ, PLY or GLB).
 //!
 //! Bad input (unreadable or malformed files, out-of-range numbers) is
 //! reported on standard error with exit code 2.
@@ -16,10 +23,15 @@ use clap::{Parser, Subcommand};
 use glam::DVec3;
 
 mod args;
+mod boolean;
 mod budget;
 mod formats;
+mod meshfile;
 mod sample;
+mod scenario;
 mod trace;
+
+use scenario::runner::{RunFlags, Scenario};
 
 /// Exact solid modelling kernels of bevy_chisel, from the command line.
 #[derive(Parser)]
@@ -78,6 +90,59 @@ enum Command {
         #[arg(long, value_parser = args::size, default_value = "800x600")]
         size: (u32, u32),
     },
+    /// Mill a block: a flat end mill swept along a zig-zag path, one
+    /// subtraction per step (SCENARIOS.md "mill").
+    Mill {
+        /// Number of tool moves.
+        #[arg(long, default_value_t = 270)]
+        steps: usize,
+        #[command(flatten)]
+        run: RunFlags,
+    },
+    /// Carve a cube with many random dodecahedra (SCENARIOS.md "cheese").
+    Cheese {
+        /// Number of carves.
+        #[arg(long, default_value_t = 1000)]
+        count: usize,
+        /// Seed of the random sizes, rotations and places.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[command(flatten)]
+        run: RunFlags,
+    },
+    /// Sweep a gear along a Bézier curve by unions of per-triangle sweep
+    /// prisms (paper 1 §5).
+    Sweep {
+        /// Positions sampled along the curve.
+        #[arg(long, default_value_t = 100)]
+        samples: usize,
+        #[command(flatten)]
+        run: RunFlags,
+    },
+    /// The exact Boolean of two closed meshes (OBJ, PLY or GLB, in mm).
+    Boolean {
+        /// First operand.
+        a: PathBuf,
+        /// Second operand.
+        b: PathBuf,
+        /// The operation.
+        #[arg(long, value_enum)]
+        op: boolean::BooleanKind,
+        /// Output mesh (.obj, .ply or .glb).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// One line of JSON instead of a report.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Apply a recorded operation sequence (JSON lines: a base, then one
+    /// convex hull per step, millimetres).
+    Replay {
+        /// The sequence file.
+        ops: PathBuf,
+        #[command(flatten)]
+        run: RunFlags,
+    },
 }
 
 fn main() -> ExitCode {
@@ -116,6 +181,68 @@ fn main() -> ExitCode {
             look_at,
             fov,
             size,
+        }),
+        Command::Mill { steps, run } => scenario::mill::sequence(steps).and_then(|sequence| {
+            let parameters = serde_json::json!({ "steps": steps });
+            scenario::runner::run(
+                &Scenario {
+                    name: "mill",
+                    parameters,
+                    sequence,
+                },
+                &run,
+            )
+        }),
+        Command::Cheese { count, seed, run } => {
+            scenario::cheese::sequence(count, seed).and_then(|sequence| {
+                let parameters = serde_json::json!({ "count": count, "seed": seed });
+                scenario::runner::run(
+                    &Scenario {
+                        name: "cheese",
+                        parameters,
+                        sequence,
+                    },
+                    &run,
+                )
+            })
+        }
+        Command::Sweep { samples, run } => {
+            scenario::sweep::sequence(samples).and_then(|(sequence, flat)| {
+                let parameters =
+                    serde_json::json!({ "samples": samples, "flat_prisms_left_out": flat });
+                scenario::runner::run(
+                    &Scenario {
+                        name: "sweep",
+                        parameters,
+                        sequence,
+                    },
+                    &run,
+                )
+            })
+        }
+        Command::Boolean {
+            a,
+            b,
+            op,
+            output,
+            json,
+        } => boolean::run(&boolean::BooleanArgs {
+            a,
+            b,
+            op,
+            output,
+            json,
+        }),
+        Command::Replay { ops, run } => scenario::jsonl::read(&ops).and_then(|sequence| {
+            let parameters = serde_json::json!({ "file": ops });
+            scenario::runner::run(
+                &Scenario {
+                    name: "replay",
+                    parameters,
+                    sequence,
+                },
+                &run,
+            )
         }),
     };
     match result {

@@ -1,0 +1,70 @@
+//! Mesh files for the commands: reading a closed triangle mesh onto the
+//! 1 µm grid, and writing a result mesh (format by extension), both in
+//! millimetres.
+
+use std::path::Path;
+
+use chisel_bsp::exact::IntPoint;
+use chisel_bsp::mesh::TriangleMesh;
+use chisel_bsp::octree::CellBox;
+use chisel_bsp::tools::Quantization;
+
+use crate::formats::{read_triangle_soup, write_triangle_mesh};
+use crate::scenario::sequence::UNITS_PER_MM;
+
+/// A triangle mesh on the integer grid.
+pub struct GridMesh {
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[IntPoint; 3]>,
+    /// A box around every corner.
+    pub bounds: CellBox,
+}
+
+/// Reads a mesh file (OBJ, PLY or GLB; millimetres) onto the 1 µm grid.
+///
+/// # Errors
+/// A message naming the file: unreadable or malformed content, or
+/// coordinates beyond the exact range.
+pub fn read_grid(path: &Path) -> Result<GridMesh, String> {
+    let soup = read_triangle_soup(path).map_err(|e| e.to_string())?;
+    let grid = Quantization::new(1.0 / UNITS_PER_MM, [0.0; 3]).map_err(|e| e.to_string())?;
+    let positions = soup
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(v, &p)| {
+            grid.to_grid(p)
+                .map_err(|e| format!("{}: vertex {}: {e}", path.display(), v + 1))
+        })
+        .collect::<Result<Vec<IntPoint>, String>>()?;
+    let mut bounds = CellBox {
+        min: [i64::MAX; 3],
+        max: [i64::MIN; 3],
+    };
+    for p in &positions {
+        for (a, c) in p.coords().into_iter().enumerate() {
+            bounds.min[a] = bounds.min[a].min(c);
+            bounds.max[a] = bounds.max[a].max(c);
+        }
+    }
+    let triangles = soup
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| positions[v as usize]))
+        .collect();
+    Ok(GridMesh { triangles, bounds })
+}
+
+/// Writes `mesh` (grid units) to `path` in millimetres, in the format of
+/// the extension (OBJ, PLY or GLB).
+///
+/// # Errors
+/// A message naming the file.
+pub fn write(path: &Path, mesh: &TriangleMesh) -> Result<(), String> {
+    let scale = (1.0 / UNITS_PER_MM) as f32;
+    let mut mm = mesh.clone();
+    for p in &mut mm.positions {
+        *p = p.map(|c| c * scale);
+    }
+    write_triangle_mesh(path, &mm).map_err(|e| e.to_string())
+}

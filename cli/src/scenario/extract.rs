@@ -1,0 +1,60 @@
+//! Surface extraction for the scenarios: per changed cell after every step
+//! (what a game re-meshes), and the whole surface once at the end.
+
+use chisel_bsp::mesh::{SurfaceMesh, TriangleMesh};
+use chisel_bsp::octree::{CellKey, Octree};
+use rayon::prelude::*;
+
+/// What the per-step latency includes, for reports.
+pub const PER_STEP: &str =
+    "tool hull + apply + for every changed cell: cell_surface, welding, T-junctions, triangles";
+
+/// Re-extracts the triangles of every cell in `keys` (cells in parallel),
+/// as a game rebuilds the meshes of the cells an edit changed; returns the
+/// number of triangles.
+#[must_use]
+pub fn changed_cells(octree: &Octree, keys: &[CellKey]) -> usize {
+    keys.par_iter()
+        .map(|&key| {
+            let faces = octree.cell_surface(key);
+            if faces.is_empty() {
+                return 0;
+            }
+            SurfaceMesh::from_faces(&faces).triangles().len()
+        })
+        .sum()
+}
+
+/// The whole surface as one mesh, and whether it is watertight (every
+/// edge matched by exactly one opposite edge).
+#[must_use]
+pub fn whole(octree: &Octree) -> (TriangleMesh, bool) {
+    let mesh = SurfaceMesh::from_faces(&octree.surface());
+    let watertight = mesh.check_watertight().is_ok();
+    (mesh.triangles(), watertight)
+}
+
+/// A 64-bit FNV-1a hash of the mesh (positions, triangles, labels): equal
+/// for bit-identical results, e.g. across thread counts.
+#[must_use]
+pub fn mesh_hash(mesh: &TriangleMesh) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for p in &mesh.positions {
+        for c in p {
+            eat(&c.to_bits().to_le_bytes());
+        }
+    }
+    for (t, label) in mesh.indices.iter().zip(&mesh.labels) {
+        for v in t {
+            eat(&v.to_le_bytes());
+        }
+        eat(&[*label]);
+    }
+    h
+}

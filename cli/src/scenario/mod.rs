@@ -1,0 +1,23 @@
+//! Iterated CSG scenarios: a base solid edited by a sequence of convex
+//! tools, timed step by step (SCENARIOS.md, paper 1 §5).
+//!
+//! Every scenario is first written down as a [`Sequence`] of integer tool
+//! points (1 µm grid), then run by one [`runner`], so `mill`, `cheese`,
+//! `sweep` and `replay` report the same figures and record the same
+//! operation log that the peer comparison replays.
+//!
+//! - [`sequence`] — the operation sequence, units and the root cube.
+//! - [`jsonl`] — the replay format (one JSON object per line, millimetres).
+//! - [`mill`], [`cheese`], [`sweep`] — the generated scenarios.
+//! - [`runner`] — applies the steps, timing each with its re-extraction.
+//! - [`extract`] — per-cell re-extraction and the whole surface.
+//! - [`report`] — the figures: text, one JSON line, per-step CSV.
+
+pub mod cheese;
+pub mod extract;
+pub mod jsonl;
+pub mod mill;
+pub mod report;
+pub mod runner;
+pub mod sequence;
+pub mod sweep;

@@ -1,0 +1,212 @@
+//! Runs an operation sequence on an octree, timing every step: the tool's
+//! hull, its application, and the re-extraction of the cells it changed —
+//! the latency a game sees between a carve and the updated meshes.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use chisel_bsp::exact::IntPoint;
+use chisel_bsp::octree::{CellBox, Octree, OctreeConfig, Tool};
+use chisel_bsp::tree::EMPTY;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::extract;
+use super::jsonl;
+use super::report::{Latency, OctreeFigures, Report, StepRecord, peak_memory_mib, write_csv};
+use super::sequence::{Base, Sequence, root_cube};
+
+/// Options shared by every scenario command.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RunFlags {
+    /// Print one line of JSON instead of a report (and no progress bar).
+    #[arg(long)]
+    pub json: bool,
+    /// Write per-step latencies to this CSV file.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Write the resulting surface to this mesh file (.obj, .ply or .glb).
+    #[arg(long, value_name = "FILE")]
+    pub export: Option<PathBuf>,
+    /// Write the operation sequence to this file in the replay format
+    /// (JSON lines, millimetres, exactly the quantized tool points).
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+    /// Inner BSP nodes an octree cell may hold before it is split.
+    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_bsp_nodes: u32,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+}
+
+/// A named sequence ready to run.
+pub struct Scenario {
+    /// `mill`, `cheese`, `sweep` or `replay`.
+    pub name: &'static str,
+    /// Sizes, seed or file, as reported.
+    pub parameters: serde_json::Value,
+    /// What to do.
+    pub sequence: Sequence,
+}
+
+/// Runs `scenario` and prints its report; writes the files `flags` ask
+/// for.
+///
+/// # Errors
+/// A message for unwritable files, an unreadable base mesh, or geometry
+/// beyond the exact range.
+pub fn run(scenario: &Scenario, flags: &RunFlags) -> Result<(), String> {
+    if let Some(path) = &flags.record {
+        jsonl::write(path, &scenario.sequence)?;
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(flags.threads.map_or(0, |t| t as usize))
+        .build()
+        .map_err(|e| format!("cannot start worker threads: {e}"))?;
+    let (report, steps, mesh) = pool.install(|| execute(scenario, flags))?;
+    if let Some(path) = &flags.csv {
+        write_csv(path, &steps)?;
+    }
+    if let Some(path) = &flags.export {
+        crate::meshfile::write(path, &mesh)?;
+    }
+    if flags.json {
+        println!("{}", report.json());
+    } else {
+        print!("{}", report.text());
+        for (what, path) in [
+            ("csv", &flags.csv),
+            ("export", &flags.export),
+            ("record", &flags.record),
+        ] {
+            if let Some(path) = path {
+                println!("{:<16}{}", format!("wrote {what}"), path.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The octree of the base solid, in a cube holding it and every tool.
+fn base_octree(sequence: &Sequence, config: OctreeConfig) -> Result<Octree, String> {
+    let mesh = match &sequence.base {
+        Base::Mesh(path) => Some(crate::meshfile::read_grid(path)?),
+        Base::Empty | Base::Box(_) => None,
+    };
+    let mut bounds = sequence.bounds();
+    if let Some(mesh) = &mesh {
+        let b = mesh.bounds;
+        bounds = Some(match bounds {
+            None => b,
+            Some(a) => CellBox {
+                min: [0, 1, 2].map(|i| a.min[i].min(b.min[i])),
+                max: [0, 1, 2].map(|i| a.max[i].max(b.max[i])),
+            },
+        });
+    }
+    let bounds = bounds.unwrap_or(CellBox {
+        min: [0; 3],
+        max: [2; 3],
+    });
+    let (origin, size_log2) = root_cube(bounds)?;
+    let octree = match (&sequence.base, mesh) {
+        (Base::Box(b), _) => Octree::from_box(origin, size_log2, *b, 1, config),
+        (Base::Mesh(_), Some(mesh)) => {
+            Octree::from_triangles(origin, size_log2, &mesh.triangles, 1, config)
+        }
+        _ => Octree::new(origin, size_log2, EMPTY, config),
+    };
+    octree.map_err(|e| match &sequence.base {
+        Base::Mesh(path) => format!("{}: {e}", path.display()),
+        _ => e.to_string(),
+    })
+}
+
+fn progress(len: usize, hidden: bool, name: &str) -> ProgressBar {
+    if hidden || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) =
+        ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} steps, {per_sec}, eta {eta}")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(name.to_string());
+    bar
+}
+
+type Outcome = (Report, Vec<StepRecord>, chisel_bsp::mesh::TriangleMesh);
+
+fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
+    let config = OctreeConfig {
+        max_bsp_nodes: flags.max_bsp_nodes as usize,
+        ..OctreeConfig::default()
+    };
+    let setup = Instant::now();
+    let mut octree = base_octree(&scenario.sequence, config)?;
+    let setup_seconds = setup.elapsed().as_secs_f64();
+    let steps = &scenario.sequence.steps;
+    let bar = progress(steps.len(), flags.json, scenario.name);
+    let mut records = Vec::with_capacity(steps.len());
+    let start = Instant::now();
+    for (i, step) in steps.iter().enumerate() {
+        let fail = |e: chisel_bsp::Error| format!("step {}: {e}", i + 1);
+        let t0 = Instant::now();
+        let points = step
+            .hull
+            .iter()
+            .map(|&p| IntPoint::from_array(p).map_err(fail))
+            .collect::<Result<Vec<_>, _>>()?;
+        let tool = Tool::convex_hull(&points).map_err(fail)?;
+        let built = t0.elapsed().as_secs_f64();
+        let changes = octree.apply(&tool, step.op.edit()).map_err(fail)?;
+        let applied = t0.elapsed().as_secs_f64();
+        let triangles = extract::changed_cells(&octree, &changes.changed);
+        records.push(StepRecord {
+            seconds: t0.elapsed().as_secs_f64(),
+            hull_seconds: built,
+            apply_seconds: applied - built,
+            changed_cells: changes.changed.len(),
+            triangles,
+        });
+        bar.inc(1);
+    }
+    let total_seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let (mesh, watertight) = extract::whole(&octree);
+    let stats = octree.stats();
+    let seconds: Vec<f64> = records.iter().map(|r| r.seconds).collect();
+    let hull: Vec<f64> = records.iter().map(|r| r.hull_seconds).collect();
+    let apply: Vec<f64> = records.iter().map(|r| r.apply_seconds).collect();
+    let report = Report {
+        scenario: scenario.name.to_string(),
+        parameters: scenario.parameters.clone(),
+        steps: steps.len(),
+        threads: rayon::current_num_threads(),
+        setup_seconds,
+        total_seconds,
+        per_step: extract::PER_STEP,
+        latency: Latency::of(&seconds),
+        hull_median_ms: Latency::of(&hull).median_ms,
+        apply_median_ms: Latency::of(&apply).median_ms,
+        changed_cells_mean: records.iter().map(|r| r.changed_cells as f64).sum::<f64>()
+            / records.len().max(1) as f64,
+        triangles: mesh.len(),
+        watertight,
+        volume_mm3: octree.solid_volume() / 1e9,
+        octree: OctreeFigures {
+            leaves: stats.leaves,
+            bsp_leaves: stats.bsp_leaves,
+            depth: stats.depth,
+            bsp_nodes: stats.bsp_nodes,
+            planes: stats.planes,
+            bsp_bytes: stats.bsp_bytes,
+            bytes_per_bsp_node: stats.bsp_bytes as f64 / stats.bsp_nodes.max(1) as f64,
+        },
+        peak_memory_mib: peak_memory_mib(),
+        mesh_hash: format!("{:016x}", extract::mesh_hash(&mesh)),
+    };
+    Ok((report, records, mesh))
+}
