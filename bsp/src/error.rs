@@ -76,6 +76,13 @@ pub enum Error {
         /// One such edge, in grid coordinates.
         example: [[i64; 3]; 2],
     },
+    /// A mesh whose triangles cross each other.
+    SelfIntersecting {
+        /// Indices of two triangles that meet improperly.
+        triangles: [usize; 2],
+        /// Their corners, in grid units.
+        corners: Box<[[[i64; 3]; 3]; 2]>,
+    },
     /// Input reaching outside the octree's cube.
     OutsideOctree {
         /// A grid point outside it.
@@ -143,6 +150,12 @@ impl fmt::Display for Error {
                  opposite edge (e.g. {:?} -> {:?} in grid units); close the holes and make \
                  the triangles consistently oriented",
                 example[0], example[1]
+            ),
+            Error::SelfIntersecting { triangles, corners } => write!(
+                f,
+                "the mesh intersects itself: triangles {} {:?} and {} {:?} (grid units) meet \
+                 outside their shared corners and edges; repair the mesh before importing it",
+                triangles[0], corners[0], triangles[1], corners[1]
             ),
             Error::OutsideOctree { point } => write!(
                 f,

@@ -196,6 +196,34 @@ fn open_or_misoriented_meshes_are_errors() {
 }
 
 #[test]
+fn self_intersecting_meshes_are_errors() {
+    let cube =
+        |x: i64, y: i64, z: i64| (0..1).contains(&x) && (0..1).contains(&y) && (0..1).contains(&z);
+    let a = voxel_mesh(&cube, 1, 200, 100);
+    // Two closed boxes that interpenetrate.
+    let mut two = a.clone();
+    two.extend(voxel_mesh(&cube, 1, 200, 200));
+    let err = Octree::from_triangles([0; 3], K, &two, 1, config(150)).unwrap_err();
+    assert!(matches!(err, Error::SelfIntersecting { .. }), "{err}");
+    assert!(err.to_string().contains("intersects itself"));
+    // Apart, they are fine.
+    let mut apart = a.clone();
+    apart.extend(voxel_mesh(&cube, 1, 200, 400));
+    let octree = Octree::from_triangles([0; 3], K, &apart, 1, config(150)).unwrap();
+    assert_eq!(solid_volume(&octree), int(2 * 200 * 200 * 200));
+    // A corner pushed through the opposite face: still closed, but folded.
+    let corner = p(300, 300, 300);
+    let folded: Vec<[IntPoint; 3]> = a
+        .iter()
+        .map(|t| t.map(|q| if q == corner { p(300, 300, 50) } else { q }))
+        .collect();
+    assert!(matches!(
+        Octree::from_triangles([0; 3], K, &folded, 1, config(150)),
+        Err(Error::SelfIntersecting { .. })
+    ));
+}
+
+#[test]
 fn quantization_rounds_and_rejects_bad_input() {
     let q = Quantization::new(0.001, [1.0, 2.0, 3.0]).unwrap();
     assert_eq!(

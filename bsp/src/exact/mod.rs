@@ -16,6 +16,7 @@ pub mod budget;
 mod classify;
 mod digits;
 mod intersect;
+pub mod orient;
 mod plane;
 mod point;
 mod sign;

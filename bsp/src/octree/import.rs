@@ -25,13 +25,14 @@
 //!    free cell, and one lying in the face would have been given to it.
 //!    Free cells whose neighbours are all free wait for the next round.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::sync::Arc;
 
 use rayon::prelude::*;
 
 use super::apply::build_leaf;
 use super::cell::{CellBox, CellKey};
+use super::mesh_check::check_mesh;
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
 use crate::convex::ConvexArena;
@@ -50,7 +51,8 @@ impl Octree {
     /// # Errors
     /// [`Error::OctreeSize`] for a bad cube, [`Error::OutsideOctree`] for a
     /// corner outside it, [`Error::NotWatertight`] for an open or
-    /// inconsistently oriented mesh.
+    /// inconsistently oriented mesh, [`Error::SelfIntersecting`] for
+    /// triangles crossing each other.
     pub fn from_triangles(
         origin: [i64; 3],
         size_log2: u8,
@@ -60,7 +62,7 @@ impl Octree {
     ) -> Result<Octree, Error> {
         let mut octree = Octree::new(origin, size_log2, EMPTY, config)?;
         let root = octree.root_box();
-        check_closed(triangles, &root)?;
+        check_mesh(triangles, &root)?;
         let mut pieces = Vec::with_capacity(triangles.len());
         for t in triangles {
             if let Some(p) = Polygon::triangle(*t)? {
@@ -178,39 +180,6 @@ impl Octree {
         }
         *node = OctNode::Leaf(leaf);
     }
-}
-
-/// Checks that every directed edge is used as often as its opposite and
-/// every corner lies in the cube.
-fn check_closed(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error> {
-    let mut edges: HashMap<([i64; 3], [i64; 3]), u32> = HashMap::new();
-    for t in triangles {
-        let c = t.map(|p| p.coords());
-        if c[0] == c[1] || c[1] == c[2] || c[2] == c[0] {
-            continue;
-        }
-        for p in c {
-            if (0..3).any(|a| p[a] < cube.min[a] || p[a] > cube.max[a]) {
-                return Err(Error::OutsideOctree { point: p });
-            }
-        }
-        for k in 0..3 {
-            *edges.entry((c[k], c[(k + 1) % 3])).or_insert(0) += 1;
-        }
-    }
-    let mut open: Vec<([i64; 3], [i64; 3])> = edges
-        .iter()
-        .filter(|&(&(a, b), &n)| edges.get(&(b, a)) != Some(&n))
-        .map(|(&e, _)| e)
-        .collect();
-    if open.is_empty() {
-        return Ok(());
-    }
-    open.sort_unstable();
-    Err(Error::NotWatertight {
-        open_edges: open.len(),
-        example: [open[0].0, open[0].1],
-    })
 }
 
 /// The triangle octree below `key`: the node and its free leaves.

@@ -43,6 +43,7 @@ pub mod cell;
 mod graft;
 pub mod import;
 pub mod measure;
+mod mesh_check;
 pub mod surface;
 pub mod tool;
 pub mod tree;

@@ -15,25 +15,8 @@ use std::collections::HashMap;
 
 use crate::Error;
 use crate::convex::{ConvexArena, PolyId};
+use crate::exact::orient::{cross, orient, sub};
 use crate::exact::{IntPoint, Plane, Point4, plane_from_points};
-
-fn sub(a: [i64; 3], b: [i64; 3]) -> [i128; 3] {
-    [0, 1, 2].map(|i| a[i] as i128 - b[i] as i128)
-}
-
-fn cross(u: [i128; 3], v: [i128; 3]) -> [i128; 3] {
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
-}
-
-fn orient(a: [i64; 3], b: [i64; 3], c: [i64; 3], d: [i64; 3]) -> i128 {
-    let n = cross(sub(b, a), sub(c, a));
-    let w = sub(d, a);
-    n[0] * w[0] + n[1] * w[1] + n[2] * w[2]
-}
 
 /// Adds the convex hull of `points` to `arena` as a strictly convex
 /// polyhedron and returns it. Duplicate and interior points are ignored.

@@ -1,0 +1,231 @@
+//! Checks of an input triangle mesh before import (paper 1 §4.6: import
+//! is exact only for closed meshes without self-intersections).
+//!
+//! Notation: `orient` — the exact sign of a tetrahedron's volume
+//! ([`crate::exact::orient`]); a triangle is *proper* when its corners are
+//! not collinear. Two proper triangles may share a corner or an edge (as
+//! neighbours in a mesh do) and must meet nowhere else:
+//! - sharing an edge, they meet elsewhere only if coplanar and on the same
+//!   side of it;
+//! - sharing one corner `v`, they meet elsewhere exactly when the edge of
+//!   one opposite `v` meets the other triangle (the two triangles cut the
+//!   line where their planes meet in segments starting at `v`, and the
+//!   shorter one ends on an opposite edge inside the other triangle);
+//! - sharing nothing, they meet exactly when an edge of one meets the
+//!   other.
+//!
+//! Candidate pairs come from a uniform grid over the triangles' bounding
+//! boxes; every decision is exact.
+
+use std::collections::HashMap;
+
+use super::cell::CellBox;
+use crate::Error;
+use crate::exact::IntPoint;
+use crate::exact::orient::{cross, orient, orient_2d, sub};
+
+type P = [i64; 3];
+
+/// Checks that every directed edge is used as often as its opposite, every
+/// corner lies in `cube`, and no two triangles intersect improperly.
+///
+/// # Errors
+/// [`Error::OutsideOctree`], [`Error::NotWatertight`] or
+/// [`Error::SelfIntersecting`].
+pub(crate) fn check_mesh(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error> {
+    check_closed(triangles, cube)?;
+    if let Some((i, j)) = first_intersection(triangles) {
+        return Err(Error::SelfIntersecting {
+            triangles: [i, j],
+            corners: Box::new([
+                triangles[i].map(|p| p.coords()),
+                triangles[j].map(|p| p.coords()),
+            ]),
+        });
+    }
+    Ok(())
+}
+
+fn check_closed(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error> {
+    let mut edges: HashMap<(P, P), u32> = HashMap::new();
+    for t in triangles {
+        let c = t.map(|p| p.coords());
+        if c[0] == c[1] || c[1] == c[2] || c[2] == c[0] {
+            continue;
+        }
+        for p in c {
+            if (0..3).any(|a| p[a] < cube.min[a] || p[a] > cube.max[a]) {
+                return Err(Error::OutsideOctree { point: p });
+            }
+        }
+        for k in 0..3 {
+            *edges.entry((c[k], c[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    let mut open: Vec<(P, P)> = edges
+        .iter()
+        .filter(|&(&(a, b), &n)| edges.get(&(b, a)) != Some(&n))
+        .map(|(&e, _)| e)
+        .collect();
+    if open.is_empty() {
+        return Ok(());
+    }
+    open.sort_unstable();
+    Err(Error::NotWatertight {
+        open_edges: open.len(),
+        example: [open[0].0, open[0].1],
+    })
+}
+
+/// The first pair (by index) of proper triangles that intersect
+/// improperly, if any.
+fn first_intersection(triangles: &[[IntPoint; 3]]) -> Option<(usize, usize)> {
+    let tris: Vec<(usize, [P; 3])> = triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (i, t.map(|p| p.coords())))
+        .filter(|(_, t)| cross(sub(t[1], t[0]), sub(t[2], t[0])) != [0; 3])
+        .collect();
+    if tris.len() < 2 {
+        return None;
+    }
+    let boxes: Vec<(P, P)> = tris.iter().map(|(_, t)| bounds(t)).collect();
+    // Grid cells about the size of an average triangle.
+    let mean_extent = boxes
+        .iter()
+        .map(|(lo, hi)| (0..3).map(|a| hi[a] - lo[a]).max().unwrap_or(0) as f64)
+        .sum::<f64>()
+        / boxes.len() as f64;
+    let size = (mean_extent.ceil() as i64).max(1);
+    let cell_of = |p: P| p.map(|x| x.div_euclid(size));
+    let mut grid: HashMap<P, Vec<u32>> = HashMap::new();
+    for (k, (lo, hi)) in boxes.iter().enumerate() {
+        let (a, b) = (cell_of(*lo), cell_of(*hi));
+        for x in a[0]..=b[0] {
+            for y in a[1]..=b[1] {
+                for z in a[2]..=b[2] {
+                    grid.entry([x, y, z]).or_default().push(k as u32);
+                }
+            }
+        }
+    }
+    let mut found: Option<(usize, usize)> = None;
+    for (cell, members) in &grid {
+        for (m, &i) in members.iter().enumerate() {
+            for &j in &members[m + 1..] {
+                let (bi, bj) = (&boxes[i as usize], &boxes[j as usize]);
+                if !(0..3).all(|a| bi.0[a] <= bj.1[a] && bj.0[a] <= bi.1[a]) {
+                    continue;
+                }
+                // Test each pair once: in the cell holding the lower corner
+                // of the boxes' overlap.
+                let corner = [0, 1, 2].map(|a| bi.0[a].max(bj.0[a]));
+                if cell_of(corner) != *cell {
+                    continue;
+                }
+                let (ti, tj) = (&tris[i as usize], &tris[j as usize]);
+                if triangles_meet_improperly(&ti.1, &tj.1) {
+                    let pair = (ti.0.min(tj.0), ti.0.max(tj.0));
+                    if found.is_none_or(|f| pair < f) {
+                        found = Some(pair);
+                    }
+                }
+            }
+        }
+    }
+    found
+}
+
+fn bounds(t: &[P; 3]) -> (P, P) {
+    let lo = [0, 1, 2].map(|a| t.iter().map(|p| p[a]).min().unwrap_or(0));
+    let hi = [0, 1, 2].map(|a| t.iter().map(|p| p[a]).max().unwrap_or(0));
+    (lo, hi)
+}
+
+/// Whether two proper triangles meet anywhere but in shared corners and a
+/// shared edge.
+fn triangles_meet_improperly(t: &[P; 3], u: &[P; 3]) -> bool {
+    let shared: Vec<(usize, usize)> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| t[i] == u[j])
+        .collect();
+    match shared.len() {
+        0 => {
+            (0..3).any(|k| segment_meets_triangle(t[k], t[(k + 1) % 3], u))
+                || (0..3).any(|k| segment_meets_triangle(u[k], u[(k + 1) % 3], t))
+        }
+        1 => {
+            let (i, j) = shared[0];
+            segment_meets_triangle(t[(i + 1) % 3], t[(i + 2) % 3], u)
+                || segment_meets_triangle(u[(j + 1) % 3], u[(j + 2) % 3], t)
+        }
+        2 => {
+            // The corners off the shared edge, on the same side of it in a
+            // common plane, overlap.
+            let (e0, e1) = (t[shared[0].0], t[shared[1].0]);
+            let x = t[3 - shared[0].0 - shared[1].0];
+            let y = u[3 - shared[0].1 - shared[1].1];
+            if orient(e0, e1, x, y) != 0 {
+                return false;
+            }
+            let axis = dominant_axis(t);
+            orient_2d(e0, e1, x, axis).signum() == orient_2d(e0, e1, y, axis).signum()
+        }
+        // The same three corners: a doubled face.
+        _ => true,
+    }
+}
+
+/// The coordinate axis most normal to triangle `t` (projecting along it
+/// keeps `t` proper).
+fn dominant_axis(t: &[P; 3]) -> usize {
+    let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    (0..3).max_by_key(|&a| n[a].unsigned_abs()).unwrap_or(2)
+}
+
+/// Whether the closed segment `pq` meets the closed proper triangle `t`.
+fn segment_meets_triangle(p: P, q: P, t: &[P; 3]) -> bool {
+    let (op, oq) = (orient(t[0], t[1], t[2], p), orient(t[0], t[1], t[2], q));
+    if op.signum() * oq.signum() > 0 {
+        return false;
+    }
+    if op == 0 && oq == 0 {
+        let axis = dominant_axis(t);
+        return point_in_triangle_2d(p, t, axis)
+            || point_in_triangle_2d(q, t, axis)
+            || (0..3).any(|k| segments_meet_2d(p, q, t[k], t[(k + 1) % 3], axis));
+    }
+    // The segment reaches the plane; the line through it meets the closed
+    // triangle when it passes no edge on the outside.
+    let s = [
+        orient(p, q, t[0], t[1]).signum(),
+        orient(p, q, t[1], t[2]).signum(),
+        orient(p, q, t[2], t[0]).signum(),
+    ];
+    !(s.contains(&1) && s.contains(&-1))
+}
+
+fn point_in_triangle_2d(p: P, t: &[P; 3], axis: usize) -> bool {
+    let s = [
+        orient_2d(t[0], t[1], p, axis).signum(),
+        orient_2d(t[1], t[2], p, axis).signum(),
+        orient_2d(t[2], t[0], p, axis).signum(),
+    ];
+    !(s.contains(&1) && s.contains(&-1))
+}
+
+/// Whether closed segments `ab` and `cd`, lying in one plane, meet (in the
+/// projection along `axis`, which is faithful for that plane).
+fn segments_meet_2d(a: P, b: P, c: P, d: P, axis: usize) -> bool {
+    let (d1, d2) = (orient_2d(a, b, c, axis), orient_2d(a, b, d, axis));
+    let (d3, d4) = (orient_2d(c, d, a, axis), orient_2d(c, d, b, axis));
+    if d1.signum() * d2.signum() < 0 && d3.signum() * d4.signum() < 0 {
+        return true;
+    }
+    let within =
+        |p: P, q: P, r: P| (0..3).all(|k| p[k].min(q[k]) <= r[k] && r[k] <= p[k].max(q[k]));
+    (d1 == 0 && within(a, b, c))
+        || (d2 == 0 && within(a, b, d))
+        || (d3 == 0 && within(c, d, a))
+        || (d4 == 0 && within(c, d, b))
+}
