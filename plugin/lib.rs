@@ -14,6 +14,12 @@
 //! clipping and depth writes, or by a global ray-tracing pass for
 //! comparison ([`splat::ChiselSplatPlugin`]).
 //!
+//! The [`terrain`] module is destructible terrain: a [`terrain::Terrain`]
+//! component owning an octree of exact BSPs, carved by [`terrain::Carve`]
+//! messages on the async compute pool, re-meshed only in the cells that
+//! changed, with undo, ray casts and versioned files
+//! ([`terrain::TerrainPlugin`]).
+//!
 //! The [`presentation`] module runs any app either in a window or, where
 //! there is no display, headless on an offscreen target with PNG
 //! screenshots — the examples and the render tests use it.
@@ -22,6 +28,7 @@
 
 pub mod presentation;
 pub mod splat;
+pub mod terrain;
 
 pub use chisel_bsp as bsp;
 pub use chisel_quadric as quadric;

@@ -1,0 +1,294 @@
+//! The [`Terrain`] component: an octree with its grid, its history and the
+//! record of what it was built from; and the components of its cells.
+
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+use std::time::Instant;
+
+use bevy::prelude::*;
+use bevy::tasks::Task;
+use chisel_bsp::octree::{CellKey, Changes, Edit, Octree, OctreeConfig};
+use chisel_bsp::tools::Quantization;
+use chisel_bsp::tree::Label;
+
+use super::base::TerrainBase;
+use super::carve::{JobOutput, Upload};
+use super::error::TerrainError;
+use super::tool::GridTool;
+
+/// One carve in a terrain's record: the exact tool and the edit.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct JournalEntry {
+    /// The tool on the grid.
+    pub tool: GridTool,
+    /// What the carve did.
+    pub edit: Edit,
+}
+
+/// The state before one carve, kept for undo.
+#[derive(Clone, Debug)]
+pub(crate) struct UndoStep {
+    pub(crate) before: Octree,
+    pub(crate) changes: Changes,
+}
+
+/// Destructible terrain: a persistent octree of exact BSPs on an integer
+/// grid, with one child entity per (leaf cell, material) that has a
+/// visible surface ([`TerrainCell`]).
+///
+/// Coordinates of tools, rays and meshes are in the terrain's local frame;
+/// the [`Quantization`] maps them to the grid. Carve with the
+/// [`super::Carve`] message; undo with [`super::UndoCarve`].
+#[derive(Component)]
+#[require(Transform, Visibility)]
+pub struct Terrain {
+    pub(crate) octree: Octree,
+    pub(crate) quantization: Quantization,
+    pub(crate) base: Arc<TerrainBase>,
+    pub(crate) journal: Vec<JournalEntry>,
+    pub(crate) history: VecDeque<UndoStep>,
+    pub(crate) max_undo: usize,
+    pub(crate) runtime: Runtime,
+}
+
+/// Work in progress of a terrain (main-world only).
+pub(crate) struct Runtime {
+    pub(crate) queue: VecDeque<Job>,
+    pub(crate) task: Option<Task<JobOutput>>,
+    pub(crate) uploads: VecDeque<Upload>,
+    pub(crate) cells: HashMap<CellKey, Vec<(Label, Entity, usize)>>,
+    pub(crate) triangles: usize,
+    pub(crate) needs_full_mesh: bool,
+}
+
+/// A request waiting for its turn.
+pub(crate) enum Job {
+    Carve {
+        tool: GridTool,
+        edit: Edit,
+        requested: Instant,
+    },
+    Undo {
+        requested: Instant,
+    },
+}
+
+impl Default for Runtime {
+    fn default() -> Self {
+        Self {
+            queue: VecDeque::new(),
+            task: None,
+            uploads: VecDeque::new(),
+            cells: HashMap::new(),
+            triangles: 0,
+            needs_full_mesh: true,
+        }
+    }
+}
+
+/// Undo steps kept by default.
+pub const DEFAULT_MAX_UNDO: usize = 64;
+
+impl Terrain {
+    /// A terrain built from `base` on the grid `quantization`.
+    ///
+    /// # Errors
+    /// As [`TerrainBase::build`].
+    pub fn from_base(
+        quantization: Quantization,
+        base: TerrainBase,
+        config: OctreeConfig,
+    ) -> Result<Self, TerrainError> {
+        let octree = base.build(config)?;
+        Ok(Self {
+            octree,
+            quantization,
+            base: Arc::new(base),
+            journal: Vec::new(),
+            history: VecDeque::new(),
+            max_undo: DEFAULT_MAX_UNDO,
+            runtime: Runtime::default(),
+        })
+    }
+
+    /// Keeps at most `steps` carves for undo (older snapshots are dropped).
+    #[must_use]
+    pub fn with_max_undo(mut self, steps: usize) -> Self {
+        self.max_undo = steps;
+        while self.history.len() > steps {
+            self.history.pop_front();
+        }
+        self
+    }
+
+    /// The current octree (after every carve applied so far; meshes may lag
+    /// by a few frames, see [`Terrain::is_idle`]).
+    #[must_use]
+    pub fn octree(&self) -> &Octree {
+        &self.octree
+    }
+
+    /// The grid: unit and origin.
+    #[must_use]
+    pub fn quantization(&self) -> &Quantization {
+        &self.quantization
+    }
+
+    /// What the terrain was built from.
+    #[must_use]
+    pub fn base(&self) -> &TerrainBase {
+        &self.base
+    }
+
+    /// Every carve applied since the base, in order (undone carves removed).
+    #[must_use]
+    pub fn journal(&self) -> &[JournalEntry] {
+        &self.journal
+    }
+
+    /// How many carves can be undone now.
+    #[must_use]
+    pub fn undo_depth(&self) -> usize {
+        self.history.len()
+    }
+
+    /// Whether every requested carve and undo is applied and every mesh is
+    /// up to date.
+    #[must_use]
+    pub fn is_idle(&self) -> bool {
+        let r = &self.runtime;
+        r.queue.is_empty() && r.task.is_none() && r.uploads.is_empty() && !r.needs_full_mesh
+    }
+
+    /// Triangles currently shown.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.runtime.triangles
+    }
+
+    /// The entities showing leaf cell `key`, one per material.
+    #[must_use]
+    pub fn cell_entities(&self, key: CellKey) -> Vec<Entity> {
+        self.runtime
+            .cells
+            .get(&key)
+            .map(|v| v.iter().map(|&(_, e, _)| e).collect())
+            .unwrap_or_default()
+    }
+
+    /// Every leaf cell with entities, with those entities.
+    pub fn cells(&self) -> impl Iterator<Item = (CellKey, Vec<Entity>)> + '_ {
+        self.runtime
+            .cells
+            .iter()
+            .map(|(k, v)| (*k, v.iter().map(|&(_, e, _)| e).collect()))
+    }
+
+    /// Applies a carve synchronously to the octree and records it (journal
+    /// and undo), without touching meshes: for tools, tests and benchmarks
+    /// outside the ECS. In an app, send [`super::Carve`] instead.
+    ///
+    /// # Errors
+    /// As [`apply_carve`]; the terrain is then unchanged.
+    pub fn apply_now(&mut self, tool: &GridTool, edit: Edit) -> Result<Changes, TerrainError> {
+        let mut octree = self.octree.clone();
+        let changes = apply_carve(&mut octree, tool, edit)?;
+        let before = std::mem::replace(&mut self.octree, octree);
+        self.record(before, changes.clone(), tool.clone(), edit);
+        Ok(changes)
+    }
+
+    /// Undoes the last carve synchronously (no meshes touched); returns the
+    /// cells whose surface may differ.
+    ///
+    /// # Errors
+    /// [`TerrainError::NothingToUndo`].
+    pub fn undo_now(&mut self) -> Result<Vec<CellKey>, TerrainError> {
+        let step = self.history.pop_back().ok_or(TerrainError::NothingToUndo)?;
+        self.journal.pop();
+        self.octree = step.before;
+        let mut keys = step.changes.changed;
+        keys.extend(step.changes.removed);
+        keys.sort_unstable();
+        keys.dedup();
+        Ok(keys)
+    }
+
+    pub(crate) fn record(&mut self, before: Octree, changes: Changes, tool: GridTool, edit: Edit) {
+        self.journal.push(JournalEntry { tool, edit });
+        if self.max_undo > 0 {
+            self.history.push_back(UndoStep { before, changes });
+            while self.history.len() > self.max_undo {
+                self.history.pop_front();
+            }
+        }
+    }
+}
+
+/// Applies `tool` with `edit` to `octree`: builds the exact tool, checks
+/// that it reaches into the octree's cube, then applies it.
+///
+/// # Errors
+/// [`TerrainError::Kernel`] for a degenerate or out-of-range tool or an
+/// invalid edit, [`TerrainError::OutsideTerrain`] for a tool that misses
+/// the cube. The octree is unchanged on error.
+pub fn apply_carve(
+    octree: &mut Octree,
+    tool: &GridTool,
+    edit: Edit,
+) -> Result<Changes, TerrainError> {
+    let built = tool.build()?;
+    let bounds = built.bounds();
+    if !bounds.overlaps(&octree.root_box()) {
+        return Err(TerrainError::OutsideTerrain {
+            tool_min: bounds.min,
+            tool_max: bounds.max,
+        });
+    }
+    Ok(octree.apply(&built, edit)?)
+}
+
+/// One entity showing the surface of one material in one leaf cell; a
+/// child of its terrain. Its mesh is rebuilt only when the cell changes.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TerrainCell {
+    /// The terrain entity.
+    pub terrain: Entity,
+    /// The octree cell.
+    pub key: CellKey,
+    /// The material shown.
+    pub label: Label,
+}
+
+/// Materials of a terrain's labels: put it on the terrain entity. Labels
+/// without an entry use `fallback`.
+#[derive(Component, Clone, Debug, Default)]
+pub struct TerrainMaterials {
+    /// Material per label.
+    pub by_label: HashMap<Label, Handle<StandardMaterial>>,
+    /// Material of labels not in the table.
+    pub fallback: Handle<StandardMaterial>,
+}
+
+impl TerrainMaterials {
+    /// A table from `(label, material)` pairs.
+    #[must_use]
+    pub fn new(
+        entries: impl IntoIterator<Item = (Label, Handle<StandardMaterial>)>,
+        fallback: Handle<StandardMaterial>,
+    ) -> Self {
+        Self {
+            by_label: entries.into_iter().collect(),
+            fallback,
+        }
+    }
+
+    /// The material of `label`.
+    #[must_use]
+    pub fn get(&self, label: Label) -> Handle<StandardMaterial> {
+        self.by_label
+            .get(&label)
+            .cloned()
+            .unwrap_or_else(|| self.fallback.clone())
+    }
+}

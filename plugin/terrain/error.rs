@@ -1,0 +1,122 @@
+//! The one error type of the terrain plugin.
+
+use core::fmt;
+
+/// Everything that can go wrong when building, carving, saving or loading a
+/// terrain. Each variant says what was wrong and how to fix it; none of them
+/// leaves a terrain changed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TerrainError {
+    /// The exact kernel rejected the input (out-of-range or non-finite
+    /// coordinates, a degenerate tool, an open mesh, …).
+    Kernel(chisel_bsp::Error),
+    /// The tool lies entirely outside the terrain's octree cube, so the
+    /// carve could not change anything.
+    OutsideTerrain {
+        /// Lower corner of the tool's bounds, in grid units.
+        tool_min: [i64; 3],
+        /// Upper corner of the tool's bounds, in grid units.
+        tool_max: [i64; 3],
+    },
+    /// A tool description that cannot give a solid: no pieces, a piece with
+    /// fewer than four points, or a non-finite size.
+    InvalidTool {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// Undo was asked for, but no carve is left to undo.
+    NothingToUndo,
+    /// The entity named in a message has no [`super::Terrain`].
+    NoSuchTerrain,
+    /// A heightfield that cannot be used.
+    InvalidHeightfield {
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A Bevy mesh that cannot be imported (wrong topology, no positions).
+    InvalidMesh {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// Reading or writing a file failed.
+    Io {
+        /// The operating system's message.
+        message: String,
+    },
+    /// The file does not start with the terrain file magic: it is not a
+    /// terrain file.
+    BadMagic,
+    /// The file was written by a format version this build cannot read.
+    UnsupportedVersion {
+        /// Version found in the file.
+        found: u32,
+        /// The version this build reads and writes.
+        supported: u32,
+    },
+    /// The file ends in the middle of a record.
+    Truncated {
+        /// Byte offset where more data was expected.
+        at: usize,
+    },
+    /// The file's content is inconsistent (bad checksum, unknown tags,
+    /// values out of range, or replaying its edits fails).
+    Corrupt {
+        /// What was found.
+        reason: String,
+    },
+}
+
+impl From<chisel_bsp::Error> for TerrainError {
+    fn from(e: chisel_bsp::Error) -> Self {
+        TerrainError::Kernel(e)
+    }
+}
+
+impl From<std::io::Error> for TerrainError {
+    fn from(e: std::io::Error) -> Self {
+        TerrainError::Io {
+            message: e.to_string(),
+        }
+    }
+}
+
+impl fmt::Display for TerrainError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TerrainError::Kernel(e) => write!(f, "{e}"),
+            TerrainError::OutsideTerrain { tool_min, tool_max } => write!(
+                f,
+                "the tool (grid box {tool_min:?} to {tool_max:?}) lies entirely outside the \
+                 terrain's cube; move it onto the terrain"
+            ),
+            TerrainError::InvalidTool { reason } => write!(f, "invalid tool: {reason}"),
+            TerrainError::NothingToUndo => write!(f, "there is no carve left to undo"),
+            TerrainError::NoSuchTerrain => {
+                write!(
+                    f,
+                    "the entity has no Terrain component; carve a terrain entity"
+                )
+            }
+            TerrainError::InvalidHeightfield { reason } => {
+                write!(f, "invalid heightfield: {reason}")
+            }
+            TerrainError::InvalidMesh { reason } => write!(
+                f,
+                "cannot import the mesh: {reason}; give a closed triangle list with positions"
+            ),
+            TerrainError::Io { message } => write!(f, "terrain file: {message}"),
+            TerrainError::BadMagic => write!(f, "not a bevy_chisel terrain file (bad magic)"),
+            TerrainError::UnsupportedVersion { found, supported } => write!(
+                f,
+                "terrain file version {found} is not supported (this build reads version \
+                 {supported}); re-save it with a matching build"
+            ),
+            TerrainError::Truncated { at } => {
+                write!(f, "terrain file is truncated: data missing at byte {at}")
+            }
+            TerrainError::Corrupt { reason } => write!(f, "terrain file is corrupt: {reason}"),
+        }
+    }
+}
+
+impl std::error::Error for TerrainError {}

@@ -1,0 +1,235 @@
+//! Terrains outside the ECS: building from heightfields and meshes, ray
+//! casts, and terrain files (bit-identical round trips, typed errors).
+
+use bevy::math::Ray3d;
+use bevy::prelude::*;
+use bevy_chisel::bsp::octree::{Edit, Octree};
+use bevy_chisel::bsp::tools::Quantization;
+use bevy_chisel::terrain::{
+    CarveTool, HeightLayer, Heightfield, Terrain, TerrainError, file::FORMAT_VERSION,
+};
+
+fn mm() -> Quantization {
+    Quantization::new(0.001, [0.0; 3]).expect("valid unit")
+}
+
+fn same_structure(a: &Octree, b: &Octree) -> bool {
+    let (la, lb) = (a.leaves(), b.leaves());
+    la.len() == lb.len()
+        && la
+            .iter()
+            .zip(&lb)
+            .all(|((ka, a), (kb, b))| ka == kb && a.to_bsp() == b.to_bsp())
+}
+
+/// A 4 m × 4 m slab of rock (1) with dirt (2) down to 1 m under the surface
+/// and grass (3) down to 0.2 m, on a gentle slope.
+fn hill() -> Terrain {
+    let size = UVec2::new(5, 5);
+    let heights = (0..25)
+        .map(|k| 0.1 * (k % 5) as f32 + 0.05 * (k / 5) as f32)
+        .collect();
+    let field = Heightfield {
+        size,
+        heights,
+        spacing: 1.0,
+        corner: Vec3::new(-2.0, 0.0, -2.0),
+        bottom: -3.0,
+        label: 1,
+        layers: Vec::new(),
+    }
+    .with_layers([
+        HeightLayer {
+            depth: 1.0,
+            label: 2,
+        },
+        HeightLayer {
+            depth: 0.2,
+            label: 3,
+        },
+    ]);
+    Terrain::from_heightfield(mm(), &field).expect("valid heightfield")
+}
+
+fn label_at(terrain: &Terrain, p: Vec3) -> Option<u8> {
+    let g = terrain
+        .quantization()
+        .to_grid_f32(p.to_array())
+        .expect("in range");
+    terrain.octree().label_at(g.coords()).expect("in range")
+}
+
+#[test]
+fn heightfield_layers_follow_the_surface() {
+    let terrain = hill();
+    // At (0, 0) the surface is at 0.1·2 + 0.05·2 = 0.3.
+    assert_eq!(label_at(&terrain, Vec3::new(0.0, 0.35, 0.0)), Some(0));
+    assert_eq!(label_at(&terrain, Vec3::new(0.0, 0.25, 0.0)), Some(3));
+    assert_eq!(label_at(&terrain, Vec3::new(0.0, -0.3, 0.0)), Some(2));
+    assert_eq!(label_at(&terrain, Vec3::new(0.0, -1.0, 0.0)), Some(1));
+    assert_eq!(label_at(&terrain, Vec3::new(0.0, -3.1, 0.0)), Some(0));
+    let volumes = terrain.octree().volumes();
+    // Grass: 0.2 m under 16 m² (in mm³).
+    let grass = volumes.get(&3).copied().unwrap_or(0.0) * 1e-9;
+    assert!((grass - 0.2 * 16.0).abs() < 1e-6, "grass {grass} m³");
+    let total: f64 = volumes.values().sum::<f64>() * 1e-9;
+    // Mean height 0.2 + 0.1 = 0.3 above a bottom at −3.
+    assert!((total - 3.3 * 16.0).abs() < 1e-6, "total {total} m³");
+}
+
+#[test]
+fn heightfield_errors_are_typed() {
+    let field = Heightfield {
+        size: UVec2::new(3, 2),
+        heights: vec![0.0; 5],
+        spacing: 1.0,
+        corner: Vec3::ZERO,
+        bottom: -1.0,
+        label: 1,
+        layers: Vec::new(),
+    };
+    assert!(matches!(
+        Terrain::from_heightfield(mm(), &field),
+        Err(TerrainError::InvalidHeightfield { .. })
+    ));
+    let below = Heightfield {
+        heights: vec![0.0; 6],
+        bottom: 0.5,
+        ..field
+    };
+    assert!(matches!(
+        Terrain::from_heightfield(mm(), &below),
+        Err(TerrainError::InvalidHeightfield { .. })
+    ));
+}
+
+#[test]
+fn meshes_import_when_closed_and_fail_clearly_when_open() {
+    let cube = Mesh::from(Cuboid::new(2.0, 1.0, 3.0));
+    let terrain = Terrain::from_mesh(mm(), &cube, 4).expect("a cuboid is closed");
+    let volume = terrain.octree().solid_volume() * 1e-9;
+    assert!((volume - 6.0).abs() < 1e-9, "volume {volume}");
+    let open = Mesh::from(Plane3d::default().mesh().size(2.0, 2.0));
+    match Terrain::from_mesh(mm(), &open, 4) {
+        Err(TerrainError::Kernel(bevy_chisel::bsp::Error::NotWatertight { .. })) => {}
+        other => panic!("expected NotWatertight, got {:?}", other.err()),
+    }
+}
+
+#[test]
+fn ray_casts_hit_the_surface_and_see_craters() {
+    let mut terrain = Terrain::from_box(
+        mm(),
+        Vec3::new(-2.0, -2.0, -2.0),
+        Vec3::new(2.0, 0.0, 2.0),
+        1,
+    )
+    .expect("valid box");
+    let down = Ray3d::new(Vec3::new(0.3, 5.0, 0.2), Dir3::NEG_Y);
+    let hit = terrain.ray_cast(down, 100.0).expect("hits the top");
+    assert!((hit.point.y - 0.0).abs() < 1e-4, "{hit:?}");
+    assert!((hit.distance - 5.0).abs() < 1e-4);
+    assert!(hit.normal.abs_diff_eq(Vec3::Y, 1e-6), "{hit:?}");
+    assert_eq!(hit.label, 1);
+    assert!(terrain.ray_cast(down, 4.0).is_none(), "too short");
+    let miss = Ray3d::new(Vec3::new(3.0, 5.0, 0.0), Dir3::NEG_Y);
+    assert!(terrain.ray_cast(miss, 100.0).is_none());
+
+    // A crater of radius 1 at the surface: the ray now goes deeper.
+    let tool = CarveTool::dodecahedron(1.0, Vec3::new(0.3, 0.0, 0.2));
+    let grid = tool.to_grid(terrain.quantization()).expect("on the grid");
+    terrain
+        .apply_now(&grid, Edit::Subtract)
+        .expect("valid carve");
+    let hit = terrain
+        .ray_cast(down, 100.0)
+        .expect("hits the crater floor");
+    assert!(hit.point.y < -0.7 && hit.point.y > -1.01, "{hit:?}");
+    assert_eq!(label_at(&terrain, hit.point + Vec3::Y * 0.002), Some(0));
+    assert_eq!(label_at(&terrain, hit.point - Vec3::Y * 0.002), Some(1));
+    // Sideways through the crater wall.
+    let side = Ray3d::new(Vec3::new(-5.0, -0.5, 0.2), Dir3::X);
+    let hit = terrain.ray_cast(side, 100.0).expect("hits the side");
+    assert!((hit.point.x + 2.0).abs() < 1e-4);
+    assert!(hit.normal.abs_diff_eq(Vec3::NEG_X, 1e-6));
+}
+
+#[test]
+fn files_round_trip_bit_identically() {
+    let mut terrain = hill();
+    let q = *terrain.quantization();
+    for (k, edit) in [Edit::Subtract, Edit::Add(4), Edit::Paint(5), Edit::Subtract]
+        .into_iter()
+        .enumerate()
+    {
+        let at = Vec3::new(-1.0 + 0.6 * k as f32, 0.2, 0.3);
+        let grid = CarveTool::dodecahedron(0.7, at)
+            .to_grid(&q)
+            .expect("on the grid");
+        terrain.apply_now(&grid, edit).expect("valid carve");
+    }
+    let bytes = terrain.to_bytes();
+    let loaded = Terrain::from_bytes(&bytes).expect("loads");
+    assert!(same_structure(terrain.octree(), loaded.octree()));
+    assert_eq!(loaded.journal(), terrain.journal());
+    assert_eq!(loaded.to_bytes(), bytes);
+    assert_eq!(loaded.undo_depth(), 4);
+
+    let dir = std::env::temp_dir().join(format!("chisel-terrain-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("hill.chisel");
+    terrain.save(&path).expect("saves");
+    let from_file = Terrain::load(&path).expect("loads");
+    assert!(same_structure(terrain.octree(), from_file.octree()));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn damaged_files_give_typed_errors() {
+    let mut terrain = hill();
+    let q = *terrain.quantization();
+    let grid = CarveTool::dodecahedron(0.7, Vec3::new(0.0, 0.3, 0.0))
+        .to_grid(&q)
+        .expect("on the grid");
+    terrain
+        .apply_now(&grid, Edit::Subtract)
+        .expect("valid carve");
+    let bytes = terrain.to_bytes();
+
+    let mut magic = bytes.clone();
+    magic[0] = b'X';
+    assert_eq!(
+        Terrain::from_bytes(&magic).err(),
+        Some(TerrainError::BadMagic)
+    );
+
+    let mut version = bytes.clone();
+    version[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
+    assert_eq!(
+        Terrain::from_bytes(&version).err(),
+        Some(TerrainError::UnsupportedVersion {
+            found: FORMAT_VERSION + 1,
+            supported: FORMAT_VERSION
+        })
+    );
+
+    assert!(matches!(
+        Terrain::from_bytes(&bytes[..10]),
+        Err(TerrainError::Truncated { .. })
+    ));
+    assert!(matches!(
+        Terrain::from_bytes(&bytes[..bytes.len() - 3]),
+        Err(TerrainError::Corrupt { .. })
+    ));
+    let mut flipped = bytes.clone();
+    let middle = bytes.len() / 2;
+    flipped[middle] ^= 0x10;
+    assert!(matches!(
+        Terrain::from_bytes(&flipped),
+        Err(TerrainError::Corrupt { .. })
+    ));
+    assert!(matches!(
+        Terrain::load("/nonexistent/terrain.chisel"),
+        Err(TerrainError::Io { .. })
+    ));
+}
