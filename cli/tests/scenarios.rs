@@ -154,7 +154,7 @@ fn cheese_is_the_same_on_any_thread_count() {
 
 #[test]
 fn sweep_unions_a_closed_solid() {
-    let r = report(&["sweep", "--samples", "3"]);
+    let r = report(&["sweep", "--samples", "2"]);
     check_figures(&r, r["steps"].as_u64().unwrap() as usize);
     // More than the gear (> π · 8² · 6 mm³), less than its bounding
     // cylinder swept over the path's hull.
@@ -200,4 +200,107 @@ fn malformed_sequences_name_the_line_and_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     let out = chisel().args(["sweep", "--samples", "1"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// An axis-aligned box as OBJ text (outward, counter-clockwise faces).
+fn box_obj(min: [f64; 3], max: [f64; 3]) -> String {
+    let mut text = String::new();
+    for k in 0..8 {
+        let c = |a: usize| if k >> a & 1 == 1 { max[a] } else { min[a] };
+        text.push_str(&format!("v {} {} {}\n", c(0), c(1), c(2)));
+    }
+    // Corner k has bit a set when it is at max along axis a (1-based).
+    for face in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ] {
+        text.push_str(&format!(
+            "f {} {} {} {}\n",
+            face[0], face[1], face[2], face[3]
+        ));
+    }
+    text
+}
+
+#[test]
+fn boolean_of_two_boxes_has_the_exact_volumes() {
+    let a = temp("a.obj");
+    let b = temp("b.obj");
+    std::fs::write(&a, box_obj([0.0; 3], [10.0; 3])).unwrap();
+    std::fs::write(&b, box_obj([5.0, 0.0, 0.0], [15.0, 10.0, 10.0])).unwrap();
+    for (op, volume, out) in [
+        ("union", 1500.0, "u.glb"),
+        ("intersection", 500.0, "i.ply"),
+        ("difference", 500.0, "d.obj"),
+    ] {
+        let out = temp(out);
+        let r = report(&["boolean", path(&a), path(&b), "--op", op, "-o", path(&out)]);
+        assert!((f(&r, "a_volume_mm3") - 1000.0).abs() < 1e-9, "{r}");
+        assert!((f(&r, "volume_mm3") - volume).abs() < 1e-9, "{op}: {r}");
+        assert_eq!(r["watertight"].as_bool(), Some(true));
+        // The written mesh reads back as the same solid.
+        let again = report(&[
+            "boolean",
+            path(&out),
+            path(&out),
+            "--op",
+            "union",
+            "-o",
+            path(&temp("x.obj")),
+        ]);
+        assert!(
+            (f(&again, "volume_mm3") - volume).abs() < 1e-9,
+            "{op}: {again}"
+        );
+    }
+    // An open mesh (one face dropped) is refused with exit code 2.
+    let open = temp("open.obj");
+    let text = box_obj([0.0; 3], [1.0; 3]);
+    std::fs::write(&open, text.lines().take(13).collect::<Vec<_>>().join("\n")).unwrap();
+    let out = chisel()
+        .args([
+            "boolean",
+            path(&open),
+            path(&a),
+            "--op",
+            "union",
+            "-o",
+            path(&temp("y.obj")),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let message = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        message.contains("open.obj") && message.contains("watertight"),
+        "{message}"
+    );
+}
+
+#[test]
+fn scenarios_export_their_result_and_replay_a_mesh_base() {
+    let glb = temp("mill.glb");
+    let r = report(&["mill", "--steps", "4", "--export", path(&glb)]);
+    let bytes = std::fs::read(&glb).unwrap();
+    assert_eq!(&bytes[..4], b"glTF");
+    // A replay from an exported box with one box tool.
+    let block = temp("block.obj");
+    std::fs::write(&block, box_obj([0.0; 3], [10.0; 3])).unwrap();
+    let ops = temp("mesh-base.jsonl");
+    std::fs::write(
+        &ops,
+        "{\"base\": {\"mesh\": \"block.obj\"}}\n\
+         {\"op\": \"subtract\", \"hull\": [[2,2,2],[4,2,2],[2,4,2],[4,4,2],[2,2,11],[4,2,11],[2,4,11],[4,4,11]]}\n",
+    )
+    .unwrap();
+    let carved = report(&["replay", path(&ops)]);
+    assert!(
+        (f(&carved, "volume_mm3") - (1000.0 - 32.0)).abs() < 1e-9,
+        "{carved}"
+    );
+    assert!(f(&r, "volume_mm3") < 400_000.0);
 }
