@@ -1,90 +1,424 @@
-//! The bevy_chisel demo scene.
+//! The bevy_chisel demo: a quarry of exact, destructible terrain.
 //!
-//! For now a preview of the quarry: a layered block of rock, dirt and ore
-//! under a sun, seen from a slowly orbiting camera. Carving arrives with the
-//! terrain plugin. Runs in a window when a display exists; otherwise renders
-//! headless and writes PNG screenshots to `screenshots/`.
+//! A heightfield (`assets/terrain/quarry_height.png`) becomes layered
+//! terrain — grass and dirt following the surface, rock below, veins of
+//! ore — stored as an octree of exact BSPs. Click to blast craters with
+//! dodecahedra, right-click to heap up dirt, Z to undo; only the cells a
+//! blast reaches are re-meshed, on the async compute pool. The HUD shows
+//! the carve latency and the triangle count.
+//!
+//! Runs in a window when a display exists; otherwise renders headless,
+//! blasts a few scripted craters and writes PNG screenshots to
+//! `screenshots/`.
 //!
 //! `cargo run --release --example quarry`
 
+use std::time::Duration;
+
+use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
-use bevy_chisel::presentation::Presentation;
+use bevy_chisel::bsp::octree::Edit;
+use bevy_chisel::bsp::tools::Quantization;
+use bevy_chisel::presentation::{HeadlessConfig, Presentation};
+use bevy_chisel::terrain::{
+    Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, HeightLayer, Heightfield, Terrain,
+    TerrainMaterials, TerrainPlugin, TerrainSystems, UndoCarve,
+};
+
+const ROCK: u8 = 1;
+const DIRT: u8 = 2;
+const GRASS: u8 = 3;
+const ORE: u8 = 4;
+
+/// Radius of a blast crater (m).
+const BLAST_RADIUS: f32 = 2.0;
+/// Radius of a heap of added dirt (m).
+const HEAP_RADIUS: f32 = 1.0;
 
 fn main() -> AppExit {
-    let presentation = Presentation::detect("quarry");
+    let presentation = match Presentation::detect("quarry") {
+        Presentation::Headless(config) => Presentation::Headless(HeadlessConfig {
+            capture_frames: vec![10, 20],
+            max_frames: 300,
+            ..config
+        }),
+        window => window,
+    };
+    let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — quarry");
-    app.insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+    app.add_plugins(TerrainPlugin)
+        .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+        .init_resource::<Orbit>()
+        .init_resource::<Stats>()
         .add_systems(Startup, spawn_scene)
-        .add_systems(Update, orbit_camera)
-        .run()
+        .add_systems(
+            Update,
+            (
+                (orbit_camera, mouse_carves, keys).before(TerrainSystems::Carve),
+                update_hud.after(TerrainSystems::Mesh),
+            ),
+        );
+    if headless {
+        app.insert_resource(Script::default())
+            .add_systems(Update, scripted_carves.before(TerrainSystems::Carve));
+    }
+    app.run()
 }
 
-/// Layer thickness (m) and colour, top to bottom.
-const LAYERS: [(f32, Color); 4] = [
-    (1.0, Color::srgb(0.33, 0.52, 0.22)), // grass-topped dirt
-    (3.0, Color::srgb(0.45, 0.33, 0.22)), // dirt
-    (2.0, Color::srgb(0.55, 0.55, 0.58)), // rock
-    (2.0, Color::srgb(0.42, 0.42, 0.46)), // deep rock
-];
+/// The quarry's terrain, rounded to a 1 mm grid.
+fn build_terrain() -> Result<Terrain, BevyError> {
+    let grid = Quantization::new(0.001, [0.0; 3])?;
+    let field =
+        Heightfield::load_image("assets/terrain/quarry_height.png", 1.0, 0.0, 5.0, 8.0, ROCK)?
+            .with_layers([
+                HeightLayer {
+                    depth: 1.2,
+                    label: DIRT,
+                },
+                HeightLayer {
+                    depth: 0.25,
+                    label: GRASS,
+                },
+            ]);
+    let mut terrain = Terrain::from_heightfield(grid, &field)?;
+    // Veins of ore in the rock, 2.3 m under the surface: painted, and not
+    // undoable.
+    for (k, (x, z)) in [
+        (-6.0, 6.0),
+        (-7.5, 4.0),
+        (6.5, -5.5),
+        (3.0, 9.0),
+        (0.0, -2.0),
+        (10.0, 8.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let down = Ray3d::new(Vec3::new(x, 20.0, z), Dir3::NEG_Y);
+        let Some(hit) = terrain.ray_cast(down, 50.0) else {
+            continue;
+        };
+        let centre = hit.point - Vec3::Y * 2.3;
+        let tool = CarveTool::new(
+            CarveShape::Dodecahedron { radius: 1.4 },
+            Transform::from_translation(centre)
+                .with_rotation(Quat::from_rotation_y(0.7 * k as f32))
+                .with_scale(Vec3::new(1.8, 0.7, 1.0)),
+        );
+        let grid_tool = tool.to_grid(terrain.quantization())?;
+        terrain.apply_now(&grid_tool, Edit::Paint(ORE))?;
+    }
+    terrain.clear_undo();
+    Ok(terrain)
+}
 
-fn spawn_scene(
-    mut commands: Commands,
-    mut meshes: ResMut<Assets<Mesh>>,
-    mut materials: ResMut<Assets<StandardMaterial>>,
-) {
-    let size = 16.0;
-    let mut top = 0.0;
-    for (thickness, color) in LAYERS {
-        commands.spawn((
-            Mesh3d(meshes.add(Cuboid::new(size, thickness, size))),
-            MeshMaterial3d(materials.add(StandardMaterial {
-                base_color: color,
-                perceptual_roughness: 0.9,
-                ..default()
-            })),
-            Transform::from_xyz(0.0, top - thickness / 2.0, 0.0),
-        ));
-        top -= thickness;
-    }
-    // Veins of ore in the rock layer.
-    let ore = materials.add(StandardMaterial {
-        base_color: Color::srgb(0.85, 0.65, 0.15),
-        metallic: 0.6,
-        perceptual_roughness: 0.4,
-        ..default()
-    });
-    for (x, z) in [(-5.0, 8.0), (2.5, 8.0), (8.0, -3.0), (8.0, 4.5)] {
-        commands.spawn((
-            Mesh3d(meshes.add(Cuboid::new(1.2, 0.8, 1.2))),
-            MeshMaterial3d(ore.clone()),
-            Transform::from_xyz(x, -5.0, z),
-        ));
-    }
+fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<StandardMaterial>>) -> Result {
+    let mut material = |color: Color, roughness: f32, metallic: f32| {
+        materials.add(StandardMaterial {
+            base_color: color,
+            perceptual_roughness: roughness,
+            metallic,
+            ..default()
+        })
+    };
+    let table = TerrainMaterials::new(
+        [
+            (ROCK, material(Color::srgb(0.52, 0.52, 0.55), 0.9, 0.0)),
+            (DIRT, material(Color::srgb(0.45, 0.32, 0.20), 0.95, 0.0)),
+            (GRASS, material(Color::srgb(0.33, 0.55, 0.22), 0.9, 0.0)),
+            (ORE, material(Color::srgb(0.90, 0.70, 0.20), 0.35, 0.7)),
+        ],
+        material(Color::srgb(0.8, 0.2, 0.8), 0.5, 0.0),
+    );
+    let terrain = build_terrain()?;
+    commands.spawn((terrain, table.clone(), Name::new("quarry")));
+    commands.insert_resource(Palette(table));
     commands.spawn((
         DirectionalLight {
-            illuminance: 12_000.0,
+            illuminance: 11_000.0,
             shadow_maps_enabled: true,
             ..default()
         },
-        Transform::from_xyz(10.0, 20.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
+        Transform::from_xyz(12.0, 25.0, 8.0).looking_at(Vec3::ZERO, Vec3::Y),
     ));
+    commands.insert_resource(GlobalAmbientLight {
+        brightness: 400.0,
+        ..default()
+    });
     commands.spawn((Camera3d::default(), Transform::default()));
     commands.spawn((
-        Text::new("bevy_chisel quarry (preview): carving arrives with the terrain plugin"),
+        Text::new(""),
+        TextFont {
+            font_size: FontSize::Px(15.0),
+            ..default()
+        },
         Node {
             position_type: PositionType::Absolute,
-            top: px(12),
+            top: px(10),
             left: px(12),
             ..default()
         },
+        Hud,
     ));
+    Ok(())
 }
 
-fn orbit_camera(time: Res<Time>, mut cameras: Query<&mut Transform, With<Camera3d>>) {
-    let angle = 0.6 + 0.15 * time.elapsed_secs();
+/// The materials, kept to give a loaded terrain the same look.
+#[derive(Resource)]
+struct Palette(TerrainMaterials);
+
+#[derive(Component)]
+struct Hud;
+
+/// Carve timings for the HUD.
+#[derive(Resource, Default)]
+struct Stats {
+    last: Option<CarveApplied>,
+    error: Option<String>,
+    message: Option<String>,
+}
+
+/// An orbit camera around a focus point that WASD moves (a fly camera
+/// along the ground).
+#[derive(Resource)]
+struct Orbit {
+    focus: Vec3,
+    yaw: f32,
+    pitch: f32,
+    distance: f32,
+}
+
+impl Default for Orbit {
+    fn default() -> Self {
+        Self {
+            focus: Vec3::new(-1.0, 1.5, 1.0),
+            yaw: 0.9,
+            pitch: 0.55,
+            distance: 26.0,
+        }
+    }
+}
+
+fn orbit_camera(
+    time: Res<Time>,
+    keys: Res<ButtonInput<KeyCode>>,
+    buttons: Res<ButtonInput<MouseButton>>,
+    motion: Res<AccumulatedMouseMotion>,
+    scroll: Res<AccumulatedMouseScroll>,
+    mut orbit: ResMut<Orbit>,
+    mut cameras: Query<&mut Transform, With<Camera3d>>,
+) {
+    let dt = time.delta_secs();
+    let key = |k: KeyCode| if keys.pressed(k) { 1.0 } else { 0.0 };
+    orbit.yaw += (key(KeyCode::ArrowLeft) - key(KeyCode::ArrowRight)) * 1.5 * dt;
+    orbit.pitch += (key(KeyCode::ArrowUp) - key(KeyCode::ArrowDown)) * 1.0 * dt;
+    if buttons.pressed(MouseButton::Middle) {
+        orbit.yaw -= motion.delta.x * 0.005;
+        orbit.pitch += motion.delta.y * 0.005;
+    }
+    orbit.pitch = orbit.pitch.clamp(0.05, 1.5);
+    orbit.distance = (orbit.distance * (1.0 - 0.1 * scroll.delta.y)).clamp(3.0, 120.0);
+    let forward = Vec3::new(-orbit.yaw.cos(), 0.0, -orbit.yaw.sin());
+    let right = Vec3::new(-forward.z, 0.0, forward.x);
+    let speed = 0.5 * orbit.distance * dt;
+    let step = forward * (key(KeyCode::KeyW) - key(KeyCode::KeyS))
+        + right * (key(KeyCode::KeyD) - key(KeyCode::KeyA))
+        + Vec3::Y * (key(KeyCode::KeyE) - key(KeyCode::KeyQ));
+    orbit.focus += step * speed;
+    let offset = Vec3::new(
+        orbit.yaw.cos() * orbit.pitch.cos(),
+        orbit.pitch.sin(),
+        orbit.yaw.sin() * orbit.pitch.cos(),
+    ) * orbit.distance;
     for mut transform in &mut cameras {
-        *transform = Transform::from_xyz(26.0 * angle.cos(), 14.0, 26.0 * angle.sin())
-            .looking_at(Vec3::new(0.0, -3.0, 0.0), Vec3::Y);
+        *transform =
+            Transform::from_translation(orbit.focus + offset).looking_at(orbit.focus, Vec3::Y);
+    }
+}
+
+/// A blast crater: a dodecahedron turned a little differently each time.
+fn blast(centre: Vec3, count: usize) -> CarveTool {
+    let turn = Quat::from_euler(EulerRot::YXZ, 0.9 * count as f32, 0.4, 0.3 * count as f32);
+    CarveTool::new(
+        CarveShape::Dodecahedron {
+            radius: BLAST_RADIUS,
+        },
+        Transform::from_translation(centre).with_rotation(turn),
+    )
+}
+
+fn mouse_carves(
+    buttons: Res<ButtonInput<MouseButton>>,
+    windows: Query<&Window>,
+    cameras: Query<(&Camera, &GlobalTransform)>,
+    terrains: Query<(Entity, &Terrain)>,
+    mut carves: MessageWriter<Carve>,
+) {
+    let left = buttons.just_pressed(MouseButton::Left);
+    let right = buttons.just_pressed(MouseButton::Right);
+    if !(left || right) {
+        return;
+    }
+    let Some(cursor) = windows.iter().find_map(Window::cursor_position) else {
+        return;
+    };
+    let Some((camera, camera_transform)) = cameras.iter().next() else {
+        return;
+    };
+    let Ok(ray) = camera.viewport_to_world(camera_transform, cursor) else {
+        return;
+    };
+    for (entity, terrain) in &terrains {
+        let Some(hit) = terrain.ray_cast(ray, 500.0) else {
+            continue;
+        };
+        let (tool, edit) = if left {
+            (blast(hit.point, terrain.journal().len()), Edit::Subtract)
+        } else {
+            let centre = hit.point + hit.normal * (0.6 * HEAP_RADIUS);
+            (
+                CarveTool::dodecahedron(HEAP_RADIUS, centre),
+                Edit::Add(DIRT),
+            )
+        };
+        carves.write(Carve {
+            terrain: entity,
+            tool,
+            edit,
+        });
+    }
+}
+
+fn keys(
+    keys: Res<ButtonInput<KeyCode>>,
+    terrains: Query<(Entity, &Terrain)>,
+    palette: Res<Palette>,
+    mut undo: MessageWriter<UndoCarve>,
+    mut stats: ResMut<Stats>,
+    mut commands: Commands,
+) {
+    let path = std::env::temp_dir().join("quarry.chisel");
+    for (entity, terrain) in &terrains {
+        if keys.just_pressed(KeyCode::KeyZ) {
+            undo.write(UndoCarve { terrain: entity });
+        }
+        if keys.just_pressed(KeyCode::F5) {
+            stats.message = Some(match terrain.save(&path) {
+                Ok(()) => format!("saved {}", path.display()),
+                Err(e) => format!("save failed: {e}"),
+            });
+        }
+        if keys.just_pressed(KeyCode::F9) {
+            match Terrain::load(&path) {
+                Ok(loaded) => {
+                    commands.entity(entity).despawn();
+                    commands.spawn((loaded, palette.0.clone(), Name::new("quarry")));
+                    stats.message = Some(format!("loaded {}", path.display()));
+                }
+                Err(e) => stats.message = Some(format!("load failed: {e}")),
+            }
+        }
+    }
+}
+
+/// Headless runs: once the terrain is meshed, blast a few craters and heap
+/// up some dirt, so that the screenshots show carving.
+#[derive(Resource, Default)]
+struct Script {
+    done: bool,
+}
+
+fn scripted_carves(
+    mut script: ResMut<Script>,
+    terrains: Query<(Entity, &Terrain)>,
+    mut carves: MessageWriter<Carve>,
+) {
+    if script.done {
+        return;
+    }
+    for (entity, terrain) in &terrains {
+        if !terrain.is_idle() {
+            return;
+        }
+        let down =
+            |x: f32, z: f32| terrain.ray_cast(Ray3d::new(Vec3::new(x, 20.0, z), Dir3::NEG_Y), 50.0);
+        let spots = [
+            (-6.0, 6.0),
+            (-5.0, 7.5),
+            (-7.5, 4.8),
+            (4.0, 4.0),
+            (6.0, -5.0),
+            (7.5, -6.5),
+            (0.0, -2.0),
+        ];
+        for (k, (x, z)) in spots.into_iter().enumerate() {
+            if let Some(hit) = down(x, z) {
+                carves.write(Carve {
+                    terrain: entity,
+                    tool: blast(hit.point, k),
+                    edit: Edit::Subtract,
+                });
+            }
+        }
+        if let Some(hit) = down(-2.0, 9.0) {
+            carves.write(Carve {
+                terrain: entity,
+                tool: CarveTool::dodecahedron(HEAP_RADIUS, hit.point),
+                edit: Edit::Add(DIRT),
+            });
+        }
+        script.done = true;
+    }
+}
+
+fn update_hud(
+    mut applied: MessageReader<CarveApplied>,
+    mut rejected: MessageReader<CarveRejected>,
+    mut stats: ResMut<Stats>,
+    terrains: Query<&Terrain>,
+    mut hud: Query<&mut Text, With<Hud>>,
+) {
+    if let Some(last) = applied.read().last() {
+        stats.last = Some(last.clone());
+        stats.error = None;
+    }
+    if let Some(r) = rejected.read().last() {
+        stats.error = Some(r.error.to_string());
+    }
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let mut lines = vec![
+        "bevy_chisel quarry: exact destructible terrain".to_owned(),
+        "LMB blast crater | RMB heap dirt | Z undo | F5 save | F9 load".to_owned(),
+        "WASD/QE move | arrows or middle-drag orbit | wheel zoom".to_owned(),
+    ];
+    for terrain in &terrains {
+        let stats_line = terrain.octree().stats();
+        lines.push(format!(
+            "triangles {} | leaf cells {} | edits {} | undo {}",
+            terrain.triangle_count(),
+            stats_line.leaves,
+            terrain.journal().len(),
+            terrain.undo_depth()
+        ));
+    }
+    match &stats.last {
+        Some(last) => lines.push(format!(
+            "last carve: kernel {:.2} ms, meshes {:.2} ms (off-thread), visible after {:.1} ms, {} cells",
+            ms(last.apply_time),
+            ms(last.mesh_time),
+            ms(last.latency),
+            last.cells
+        )),
+        None => lines.push("last carve: none yet".to_owned()),
+    }
+    if let Some(e) = &stats.error {
+        lines.push(format!("rejected: {e}"));
+    }
+    if let Some(m) = &stats.message {
+        lines.push(m.clone());
+    }
+    for mut text in &mut hud {
+        text.0 = lines.join("\n");
     }
 }

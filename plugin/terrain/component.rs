@@ -121,6 +121,12 @@ impl Terrain {
         self
     }
 
+    /// Forgets every undo step (the carves stay in the journal): for edits
+    /// that are part of building a level, such as painting ore veins.
+    pub fn clear_undo(&mut self) {
+        self.history.clear();
+    }
+
     /// The current octree (after every carve applied so far; meshes may lag
     /// by a few frames, see [`Terrain::is_idle`]).
     #[must_use]
