@@ -75,7 +75,10 @@ fn renders_a_cube_headless_and_reads_back_its_pixels() {
     let images = frames.images();
     assert_eq!(images.len(), 2);
     // A still scene: both captures agree pixel for pixel.
-    assert_eq!(images[0].data, images[1].data, "the frame changed between captures");
+    assert_eq!(
+        images[0].data, images[1].data,
+        "the frame changed between captures"
+    );
     let image = &images[1];
     assert_eq!((image.width(), image.height()), (128, 96));
 
