@@ -23,13 +23,17 @@
 //! conics of eqs. 15–16), for a polynomial one `1 − p_x² ≥ 0` and
 //! `1 − p_y² ≥ 0`. Every one of these functions, like `r` and `p`, is
 //! *separable*: a quadratic in `x` plus a quadratic in `y`, so its exact
-//! range over an axis-aligned box is the sum of two 1D ranges.
+//! range over an axis-aligned box is the sum of two 1D ranges. Per axis each
+//! part is either `a x² + c` or `b x + c`, so all of them are affine in the
+//! warped coordinates of [`warp`](crate::sampling::warp) (`x²` or `x`),
+//! where the ownership conics are lines.
 
 use glam::{DMat3, DVec2, DVec3};
 
 use crate::frame::PrincipalFrame;
 use crate::quadric::Quadric;
 pub use crate::sampling::separable::{Quad1, Separable};
+use crate::sampling::warp::Warp;
 
 /// Relative size below which a local linear coefficient `βₘ` counts as zero.
 const BETA_ZERO_RELATIVE: f64 = 1e-11;
@@ -292,9 +296,10 @@ impl Heightfield {
     /// Bounds `(min, max)` of the distortion over the box `[lo, hi]` (§3.4).
     ///
     /// Polynomial heightfields: exact (both slopes are separable). Root
-    /// heightfields without linear terms, on a box inside one quadrant: the
-    /// extrema lie at the corners (the paper's property of eq. 13). Otherwise
-    /// interval bounds `δ² ∈ 1 + [N₋/r₊, N₊/r₋]`, `N = (r_x² + r_y²)/4`.
+    /// heightfields, on a box inside one cell of the [`warp`](Self::warp):
+    /// the extrema lie at the corners (the paper's property of eq. 13, see
+    /// [`warp`](crate::sampling::warp)). Otherwise interval bounds
+    /// `δ² ∈ 1 + [N₋/r₊, N₊/r₋]`, `N = (r_x² + r_y²)/4`.
     /// The maximum is `+∞` when the box reaches the domain's rim.
     #[must_use]
     pub fn distortion_bounds(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
@@ -307,9 +312,7 @@ impl Heightfield {
                 if r1 <= 0.0 {
                     return (f64::INFINITY, f64::INFINITY);
                 }
-                let pure = self.value.x.b == 0.0 && self.value.y.b == 0.0;
-                let quadrant = lo.x * hi.x >= 0.0 && lo.y * hi.y >= 0.0;
-                if pure && quadrant && r0 > 0.0 {
+                if self.warp(lo, hi).is_some() && r0 > 0.0 {
                     let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
                     let d = corners.map(|c| self.distortion(c));
                     let min = d.iter().copied().fold(f64::INFINITY, f64::min);
@@ -325,6 +328,43 @@ impl Heightfield {
                 (min, max)
             }
         }
+    }
+
+    /// Bounds `(min, max)` of the distortion over a set whose image in the
+    /// warped plane is convex with the extreme points `vertices` (a region
+    /// of one cell of the [`warp`](Self::warp), e.g. a curved triangle):
+    /// the distortion at the vertices, by the linear-fractional form of
+    /// eq. 13 in `w`. The maximum is `+∞` when a vertex is on the rim.
+    #[must_use]
+    pub fn distortion_bounds_at(&self, vertices: &[DVec2]) -> (f64, f64) {
+        vertices
+            .iter()
+            .map(|v| self.distortion(*v))
+            .fold((f64::INFINITY, 0.0), |(lo, hi), d| (lo.min(d), hi.max(d)))
+    }
+
+    /// The warp of the cell containing the box `[lo, hi]` (see
+    /// [`warp`](crate::sampling::warp)), or `None` when the box straddles
+    /// `0` on a quadratic axis or a separable part is not affine in the
+    /// warped coordinates.
+    #[must_use]
+    pub fn warp(&self, lo: DVec2, hi: DVec2) -> Option<Warp> {
+        let square = [self.value.x.a != 0.0, self.value.y.a != 0.0];
+        let side = |square: bool, lo: f64, hi: f64| {
+            if !square || lo >= 0.0 {
+                Some(1.0)
+            } else if hi <= 0.0 {
+                Some(-1.0)
+            } else {
+                None
+            }
+        };
+        let sign = DVec2::new(side(square[0], lo.x, hi.x)?, side(square[1], lo.y, hi.y)?);
+        let warp = Warp::new(square, sign);
+        for f in [&self.value, &self.owns_x, &self.owns_y] {
+            warp.affine(f)?;
+        }
+        Some(warp)
     }
 
     /// Whether no point of the box `[lo, hi]` is in this plane's
@@ -364,14 +404,6 @@ impl Heightfield {
     #[must_use]
     pub fn box_is_owned(&self, lo: DVec2, hi: DVec2) -> bool {
         self.owns_x.range(lo, hi).0 >= 0.0 && self.owns_y.range(lo, hi).0 >= 0.0
-    }
-
-    /// `Some((sx, sy))` when the line where `|nᵢ| = |nⱼ|` is `|sx·x| = |sy·y|`
-    /// (no linear terms, both slopes non-zero): the octant diagonals of §4.1.
-    #[must_use]
-    pub fn octant_slopes(&self) -> Option<(f64, f64)> {
-        let (fx, fy) = (self.value.x, self.value.y);
-        (fx.b == 0.0 && fy.b == 0.0 && fx.a != 0.0 && fy.a != 0.0).then_some((fx.a, fy.a))
     }
 }
 

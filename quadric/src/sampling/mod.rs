@@ -10,8 +10,10 @@
 //! quadric is its own surface instance, §5):
 //! 1. the quadric's local form and up to six heightfields
 //!    ([`heightfield`], §3.2);
-//! 2. each heightfield's domain box, cut into basic regions ([`regions`],
-//!    §4.1: rectangles, triangles, elliptic and hyperbolic triangles);
+//! 2. each heightfield's domain box, cut into basic regions ([`basic`],
+//!    §4.1: rectangles, triangles, and elliptic, hyperbolic or parabolic
+//!    triangles, whose curved sides follow the ownership conics exactly:
+//!    [`warp`], [`curved`]);
 //! 3. each basic region subdivided and classified with the quadric-relative
 //!    CSG distance (eq. 22) and distortion bounds (§3.4), filled with samples
 //!    where it lies on the surface (`subdivide`, §4.2).
@@ -40,18 +42,22 @@
 //! # Ok::<(), chisel_quadric::Error>(())
 //! ```
 
+pub mod basic;
+pub mod curved;
 pub mod heightfield;
 pub mod regions;
 pub mod separable;
 mod subdivide;
+pub mod warp;
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
 use crate::error::{Error, Result, positive};
+use basic::basic_regions;
 use heightfield::{Heightfield, LocalForm};
-use regions::{Region, RegionKind, basic_regions};
+use regions::{Region, RegionKind};
 pub use subdivide::DISTORTION_CAP;
 use subdivide::RegionJob;
 
@@ -152,8 +158,11 @@ pub struct Patch {
 pub struct SamplingStats {
     /// Basic regions built (§4.1).
     pub basic_regions: u64,
-    /// Basic regions by kind: triangles, rectangles, elliptic, hyperbolic.
-    pub kinds: [u64; 4],
+    /// Basic regions by kind ([`RegionKind::index`]): triangles,
+    /// rectangles, elliptic, hyperbolic and parabolic triangles.
+    pub kinds: [u64; RegionKind::COUNT],
+    /// Samples emitted by the basic regions of each kind.
+    pub kind_samples: [u64; RegionKind::COUNT],
     /// Regions visited during subdivision.
     pub regions: u64,
     /// Evaluations of the eq.-22 distance.
@@ -170,6 +179,9 @@ impl SamplingStats {
     fn add(&mut self, other: &Self) {
         self.basic_regions += other.basic_regions;
         for (a, b) in self.kinds.iter_mut().zip(other.kinds) {
+            *a += b;
+        }
+        for (a, b) in self.kind_samples.iter_mut().zip(other.kind_samples) {
             *a += b;
         }
         self.regions += other.regions;
@@ -262,9 +274,10 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
                 basic_regions: 1,
                 ..SamplingStats::default()
             };
-            stats.kinds[kind_index(*kind)] = 1;
+            stats.kinds[kind.index()] = 1;
             let mut out = Vec::new();
             job.run(region, &mut out, &mut stats);
+            stats.kind_samples[kind.index()] = out.len() as u64;
             (out, stats)
         })
         .collect();
@@ -280,15 +293,6 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
         stats,
         options: *options,
     })
-}
-
-fn kind_index(kind: RegionKind) -> usize {
-    match kind {
-        RegionKind::Triangle => 0,
-        RegionKind::Rectangle => 1,
-        RegionKind::EllipticTriangle => 2,
-        RegionKind::HyperbolicTriangle => 3,
-    }
 }
 
 /// Indices into normal forms fit in `u32` (the product limit is far lower).

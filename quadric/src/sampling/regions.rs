@@ -1,42 +1,206 @@
-//! Basic regions on a sampling plane (paper 2, §4.1, Fig. 8).
+//! Regions of a sampling plane (paper 2, §4.1–4.2, Fig. 8): the basic
+//! regions and the pieces their subdivision makes.
 //!
-//! Notation: `(x, y)` plane coordinates of a [`Heightfield`]; the domain is
-//! the axis-aligned box `[c − R, c + R]²` around the bounding sphere's
-//! projected centre `c` (radius `R`). It is cut by the coordinate axes into
-//! quadrant rectangles, and where the heightfield has octant diagonals
-//! (`|sx·x| = |sy·y|`, where two normal components are equal) each quadrant
-//! is cut along its diagonal into triangles. On each side of a diagonal only
-//! one ownership conic (eq. 15 or 16) can bound the low-distortion region;
-//! a triangle crossed by it is an *elliptic* or *hyperbolic triangle*, its
-//! curved side given implicitly by the conic (exact on boxes, see
-//! [`Heightfield::box_is_owned`]). Regions are convex polygons of three or
-//! four vertices; subdivision halves the longest edge.
+//! Notation: `(x, y)` plane coordinates of a [`Heightfield`]. A region is
+//! either a convex [`Polygon`] (a triangle or an axis-aligned rectangle,
+//! straight sides) or a [`CurvedTriangle`] (sides on conics centred at the
+//! origin, see [`curved`](crate::sampling::curved)). Both answer what the
+//! subdivision of §4.2 asks: corners, a bounding box, a cover radius (every
+//! point within that path length of a corner), the reach from each corner,
+//! a distortion bound and a split into two children that cover it.
+//! Paths inside a polygon are straight; inside a curved triangle they are
+//! arcs, and its radii are path lengths.
+//!
+//! [`Heightfield`]: crate::sampling::heightfield::Heightfield
 
 use glam::DVec2;
 
-use crate::sampling::heightfield::{HeightKind, Heightfield, Separable};
+use crate::sampling::curved::CurvedTriangle;
+use crate::sampling::heightfield::Heightfield;
+use crate::sampling::warp::ArcKind;
 
 /// What a basic region is (Fig. 8a).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum RegionKind {
-    /// A triangle wholly inside the low-distortion region.
+    /// A triangle with straight sides.
     Triangle,
     /// An axis-aligned rectangle.
     Rectangle,
-    /// A triangle whose curved side is part of an ellipse centred at the origin.
+    /// A curved triangle with a side on an ellipse centred at the origin.
     EllipticTriangle,
-    /// A triangle whose curved side is part of a hyperbola centred at the origin.
+    /// A curved triangle with a side on a hyperbola centred at the origin.
     HyperbolicTriangle,
+    /// A curved triangle with a side on a parabola (a paraboloid seen from
+    /// the side: one axis of the plane is linear).
+    ParabolicTriangle,
+}
+
+impl RegionKind {
+    /// The number of kinds.
+    pub const COUNT: usize = 5;
+
+    /// The index of the kind in [`SamplingStats`](crate::sampling::SamplingStats) arrays.
+    #[must_use]
+    pub fn index(self) -> usize {
+        match self {
+            Self::Triangle => 0,
+            Self::Rectangle => 1,
+            Self::EllipticTriangle => 2,
+            Self::HyperbolicTriangle => 3,
+            Self::ParabolicTriangle => 4,
+        }
+    }
+
+    /// The curved-triangle kind of an arc (a straight one gives
+    /// [`Triangle`](Self::Triangle)).
+    #[must_use]
+    pub fn of_arc(arc: ArcKind) -> Self {
+        match arc {
+            ArcKind::Straight => Self::Triangle,
+            ArcKind::Elliptic => Self::EllipticTriangle,
+            ArcKind::Hyperbolic => Self::HyperbolicTriangle,
+            ArcKind::Parabolic => Self::ParabolicTriangle,
+        }
+    }
+}
+
+/// A region of a sampling plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Region {
+    /// A triangle or an axis-aligned rectangle.
+    Polygon(Polygon),
+    /// A triangle of the warped plane (curved sides).
+    Curved(CurvedTriangle),
+}
+
+impl Region {
+    /// A straight triangle.
+    #[must_use]
+    pub fn triangle(a: DVec2, b: DVec2, c: DVec2) -> Self {
+        Self::Polygon(Polygon::triangle(a, b, c))
+    }
+
+    /// The axis-aligned rectangle `[lo, hi]`.
+    #[must_use]
+    pub fn rectangle(lo: DVec2, hi: DVec2) -> Self {
+        Self::Polygon(Polygon::rectangle(lo, hi))
+    }
+
+    /// The corners, where the subdivision evaluates distances.
+    #[must_use]
+    pub fn vertices(&self) -> &[DVec2] {
+        match self {
+            Self::Polygon(p) => p.vertices(),
+            Self::Curved(c) => c.vertices(),
+        }
+    }
+
+    /// The bounding box `(lo, hi)`.
+    #[must_use]
+    pub fn bounds(&self) -> (DVec2, DVec2) {
+        match self {
+            Self::Polygon(p) => p.bounds(),
+            Self::Curved(c) => c.bounds(),
+        }
+    }
+
+    /// The longest path inside the region from corner `i` to any of its points.
+    #[must_use]
+    pub fn reach(&self, i: usize) -> f64 {
+        match self {
+            Self::Polygon(p) => p.reach(i),
+            Self::Curved(c) => c.reach(i),
+        }
+    }
+
+    /// An upper bound of the diameter.
+    #[must_use]
+    pub fn diameter(&self) -> f64 {
+        match self {
+            Self::Polygon(p) => p.diameter(),
+            Self::Curved(c) => c.diameter(),
+        }
+    }
+
+    /// A path length `ρ` within which every point of the region has a corner.
+    #[must_use]
+    pub fn cover_radius(&self) -> f64 {
+        match self {
+            Self::Polygon(p) => p.cover_radius(),
+            Self::Curved(c) => c.cover_radius(),
+        }
+    }
+
+    /// Bounds `(min, max)` of the distortion of `hf` over the region (§3.4):
+    /// at the corners of the bounding box for a polygon, at the vertices
+    /// for a curved triangle.
+    #[must_use]
+    pub fn distortion_bounds(&self, hf: &Heightfield) -> (f64, f64) {
+        match self {
+            Self::Polygon(p) => {
+                let (lo, hi) = p.bounds();
+                hf.distortion_bounds(lo, hi)
+            }
+            Self::Curved(c) => c.distortion_bounds(hf),
+        }
+    }
+
+    /// A point of the region and a path length within which all of the
+    /// region lies around it (for culling far products).
+    #[must_use]
+    pub fn anchor(&self) -> (DVec2, f64) {
+        match self {
+            Self::Polygon(p) => {
+                let v = p.vertices();
+                #[allow(clippy::cast_precision_loss)]
+                let centroid = v.iter().copied().sum::<DVec2>() / v.len() as f64;
+                let reach = v.iter().map(|w| w.distance(centroid)).fold(0.0, f64::max);
+                (centroid, reach)
+            }
+            Self::Curved(c) => (c.vertices()[0], c.reach(0)),
+        }
+    }
+
+    /// Two children that together cover the region (Fig. 8c).
+    #[must_use]
+    pub fn split(&self) -> [Self; 2] {
+        match self {
+            Self::Polygon(p) => p.split().map(Self::Polygon),
+            Self::Curved(c) => c.split().map(Self::Curved),
+        }
+    }
+}
+
+/// The cover radius of a triangle: the circumradius of an acute triangle,
+/// half the longest edge of a right or obtuse one (discs of that radius
+/// around the vertices cover it).
+#[must_use]
+pub fn triangle_cover_radius(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    let (la, lb, lc) = (
+        b.distance_squared(c),
+        a.distance_squared(c),
+        a.distance_squared(b),
+    );
+    let longest = la.max(lb).max(lc);
+    if 2.0 * longest >= la + lb + lc {
+        // Right or obtuse: the longest edge's midpoint is farthest.
+        return 0.5 * longest.sqrt();
+    }
+    let area2 = (b - a).perp_dot(c - a).abs();
+    if area2 == 0.0 {
+        return 0.5 * longest.sqrt();
+    }
+    (la * lb * lc).sqrt() / (2.0 * area2)
 }
 
 /// A convex region of a sampling plane: a triangle or a rectangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Region {
+pub struct Polygon {
     vertices: [DVec2; 4],
     count: u8,
 }
 
-impl Region {
+impl Polygon {
     /// A triangle.
     #[must_use]
     pub fn triangle(a: DVec2, b: DVec2, c: DVec2) -> Self {
@@ -100,22 +264,7 @@ impl Region {
         if self.is_rectangle() {
             return 0.5 * v[0].distance(v[2]);
         }
-        let (a, b, c) = (v[0], v[1], v[2]);
-        let (la, lb, lc) = (
-            b.distance_squared(c),
-            a.distance_squared(c),
-            a.distance_squared(b),
-        );
-        let longest = la.max(lb).max(lc);
-        if 2.0 * longest >= la + lb + lc {
-            // Right or obtuse: the longest edge's midpoint is farthest.
-            return 0.5 * longest.sqrt();
-        }
-        let area2 = (b - a).perp_dot(c - a).abs();
-        if area2 == 0.0 {
-            return 0.5 * longest.sqrt();
-        }
-        (la * lb * lc).sqrt() / (2.0 * area2)
+        triangle_cover_radius(v[0], v[1], v[2])
     }
 
     /// Splits the longest edge in half (Fig. 8c).
@@ -182,110 +331,6 @@ impl Region {
     }
 }
 
-/// Splits `[lo, hi]` at `x = 0` and `y = 0` into quadrant boxes.
-fn quadrant_boxes(lo: DVec2, hi: DVec2) -> Vec<(DVec2, DVec2)> {
-    let cuts = |a: f64, b: f64| {
-        if a < 0.0 && 0.0 < b {
-            vec![(a, 0.0), (0.0, b)]
-        } else {
-            vec![(a, b)]
-        }
-    };
-    let mut out = Vec::new();
-    for (y0, y1) in cuts(lo.y, hi.y) {
-        for (x0, x1) in cuts(lo.x, hi.x) {
-            out.push((DVec2::new(x0, y0), DVec2::new(x1, y1)));
-        }
-    }
-    out
-}
-
-/// Clips a convex polygon to the half-plane `n·p ≥ 0`.
-fn clip(poly: &[DVec2], n: DVec2) -> Vec<DVec2> {
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for (i, &a) in poly.iter().enumerate() {
-        let b = poly[(i + 1) % poly.len()];
-        let (da, db) = (n.dot(a), n.dot(b));
-        if da >= 0.0 {
-            out.push(a);
-        }
-        if (da < 0.0) != (db < 0.0) {
-            out.push(a + (b - a) * (da / (da - db)));
-        }
-    }
-    out
-}
-
-/// Triangle fan of a convex polygon, dropping degenerate triangles.
-fn fan(poly: &[DVec2]) -> Vec<Region> {
-    (1..poly.len().saturating_sub(1))
-        .map(|i| Region::triangle(poly[0], poly[i], poly[i + 1]))
-        .filter(|t| {
-            let v = t.vertices();
-            (v[1] - v[0]).perp_dot(v[2] - v[0]).abs() > 0.0
-        })
-        .collect()
-}
-
-/// The basic regions of `hf` over the domain box `[lo, hi]`, with their kinds.
-///
-/// Regions wholly outside the plane's low-distortion region are dropped.
-#[must_use]
-pub fn basic_regions(hf: &Heightfield, lo: DVec2, hi: DVec2) -> Vec<(Region, RegionKind)> {
-    let mut out = Vec::new();
-    for (qlo, qhi) in quadrant_boxes(lo, hi) {
-        if qhi.x <= qlo.x || qhi.y <= qlo.y || hf.box_is_foreign(qlo, qhi) {
-            continue;
-        }
-        let rect = Region::rectangle(qlo, qhi);
-        let Some((sx, sy)) = hf.octant_slopes() else {
-            out.push((rect, RegionKind::Rectangle));
-            continue;
-        };
-        // The diagonal through this quadrant: |sx|·|x| = |sy|·|y|, as the
-        // line n·p = 0 with n ⟂ to it.
-        let centre = 0.5 * (qlo + qhi);
-        let (gx, gy) = (sx.abs() * centre.x.signum(), sy.abs() * centre.y.signum());
-        let normal = DVec2::new(gx, -gy);
-        let poly = rect.vertices().to_vec();
-        let sides = [clip(&poly, normal), clip(&poly, -normal)];
-        if sides.iter().any(|s| s.len() < 3) {
-            out.push((rect, RegionKind::Rectangle));
-            continue;
-        }
-        for (side, poly) in sides.iter().enumerate() {
-            // Side 0: |nᵢ| ≥ |nⱼ| there, so only conic 15 (owns_x) bounds it.
-            let conic = if side == 0 { &hf.owns_x } else { &hf.owns_y };
-            for tri in fan(poly) {
-                let (tlo, thi) = tri.bounds();
-                if hf.box_is_foreign(tlo, thi) {
-                    continue;
-                }
-                let kind = if hf.box_is_owned(tlo, thi) {
-                    RegionKind::Triangle
-                } else {
-                    conic_kind(hf, conic)
-                };
-                out.push((tri, kind));
-            }
-        }
-    }
-    out
-}
-
-/// Elliptic or hyperbolic, by the signs of the conic's square terms.
-fn conic_kind(hf: &Heightfield, conic: &Separable) -> RegionKind {
-    let elliptic = match hf.kind {
-        HeightKind::Root { .. } => conic.x.a * conic.y.a > 0.0,
-        HeightKind::Polynomial => true,
-    };
-    if elliptic {
-        RegionKind::EllipticTriangle
-    } else {
-        RegionKind::HyperbolicTriangle
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -293,9 +338,9 @@ mod tests {
     #[test]
     fn cover_radius_covers() {
         let regions = [
-            Region::rectangle(DVec2::ZERO, DVec2::new(2.0, 1.0)),
-            Region::triangle(DVec2::ZERO, DVec2::new(2.0, 0.0), DVec2::new(1.0, 1.5)),
-            Region::triangle(DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(1.0, 0.3)),
+            Polygon::rectangle(DVec2::ZERO, DVec2::new(2.0, 1.0)),
+            Polygon::triangle(DVec2::ZERO, DVec2::new(2.0, 0.0), DVec2::new(1.0, 1.5)),
+            Polygon::triangle(DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(1.0, 0.3)),
         ];
         for r in regions {
             let rho = r.cover_radius();

@@ -5,8 +5,10 @@
 //! distance of eq. 22 at the surface point above corner `v`, also bounded by
 //! the bounding sphere (`max(d₂₂, |x − C| − R)`, still a valid eq.-22
 //! distance for the solid clipped to the sphere), `δ₊` the region's maximum
-//! distortion (§3.4). A world radius `ρ` maps to at least `ρ/δ₊` in the
-//! plane, since the heightfield stretches plane lengths by at most `δ₊`.
+//! distortion (§3.4). A world radius `ρ` maps to at least a path length
+//! `ρ/δ₊` in the plane, since the heightfield stretches plane lengths by at
+//! most `δ₊`; paths are straight inside polygons and arcs inside curved
+//! triangles, whose radii are path lengths ([`Region`]).
 //!
 //! Per region:
 //! 1. drop it if no point is in the plane's low-distortion region, the
@@ -17,7 +19,12 @@
 //!    subdivide;
 //! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
 //!    region's cover radius and all signs agree: fill (negative) or drop
-//!    (positive);
+//!    (positive); a polygon is filled with a grid of cells, one sample at
+//!    each cell centre moved into the region; a curved triangle with a grid
+//!    of cells, one sample at the centre of each cell inside it, and on
+//!    its border one sample at a point of the region per cell or per
+//!    quarter of a cell, with radii from the cell's own distortion bound
+//!    or from path lengths inside the region;
 //! 4. if a corner is on the CSG surface and the region lies within plane
 //!    distance `r/δ₊` of it, emit that one sample with the reduced radius
 //!    `reach·δ₊` (§6.1);
@@ -36,8 +43,9 @@ use glam::{DVec2, DVec3};
 
 use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
+use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
-use crate::sampling::regions::Region;
+use crate::sampling::regions::{Polygon, Region};
 use crate::sampling::{BoundingSphere, Sample, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
@@ -53,6 +61,14 @@ const CULL_EVERY: u32 = 4;
 
 /// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
 const MAX_DEPTH: u32 = 50;
+
+/// Quarterings of a border cell in the fill of a curved triangle. Two
+/// always suffice: a path inside the region is at most `1 + 1/√2` times
+/// the distance of its ends ([`Warp::path_length`]), and the second
+/// quartering halves a cell's half-diagonal (at most `r/δ₊`) twice.
+///
+/// [`Warp::path_length`]: crate::sampling::warp::Warp::path_length
+const MAX_FILL_DEPTH: u32 = 2;
 
 /// Everything one basic region's subdivision reads.
 pub(crate) struct RegionJob<'a> {
@@ -108,14 +124,8 @@ impl RegionJob<'_> {
         if !depth.is_multiple_of(CULL_EVERY) || others.is_empty() || !delta.is_finite() {
             return None;
         }
-        let verts = region.vertices();
-        #[allow(clippy::cast_precision_loss)]
-        let centroid = verts.iter().copied().sum::<DVec2>() / verts.len() as f64;
-        let centre = self.heightfield.point(centroid)?;
-        let reach = verts
-            .iter()
-            .map(|v| v.distance(centroid))
-            .fold(0.0, f64::max);
+        let (anchor, reach) = region.anchor();
+        let centre = self.heightfield.point(anchor)?;
         self.distance.cull(others, centre, reach * delta)
     }
 
@@ -137,7 +147,7 @@ impl RegionJob<'_> {
         let r = self.options.radius;
         let small = region.diameter() < self.options.min_region_fraction * r;
         let verts = region.vertices();
-        let (_, delta) = hf.distortion_bounds(lo, hi);
+        let (_, delta) = region.distortion_bounds(hf);
         if delta > DISTORTION_CAP && self.ball_is_off_surface(lo, hi, others, stats) {
             stats.discarded += 1;
             return;
@@ -252,10 +262,113 @@ impl RegionJob<'_> {
         c.clamp(lo, hi).distance(c) > self.sphere.radius
     }
 
-    /// Covers a region that lies wholly on the CSG surface: a grid of cells
-    /// with half-diagonal at most `r/δ₊`, one sample per cell at its centre
-    /// moved into the region.
+    /// Covers a region that lies wholly on the CSG surface (step 3).
     fn fill(&self, region: &Region, delta: f64, out: &mut Vec<Sample>) {
+        match region {
+            Region::Polygon(p) => self.fill_polygon(p, delta, out),
+            Region::Curved(c) => self.fill_curved(c, delta, out),
+        }
+    }
+
+    /// Covers a curved triangle: a grid of cells with half-diagonal `h` at
+    /// most `r/δ₊`. A cell inside the region (its four corners are: the
+    /// region is convex in `w`, a cell is a box there) gets one sample at
+    /// its centre, within `h` of the cell along straight paths inside the
+    /// region. A cell on the region's border is handed to
+    /// [`cover_box`](Self::cover_box).
+    fn fill_curved(&self, region: &CurvedTriangle, delta: f64, out: &mut Vec<Sample>) {
+        let (lo, hi) = region.bounds();
+        let size = hi - lo;
+        let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
+        let nx = (size.x / step).ceil().max(1.0);
+        let ny = (size.y / step).ceil().max(1.0);
+        let cell = DVec2::new(size.x / nx, size.y / ny);
+        let half_diagonal = 0.5 * cell.length();
+        let radius = (half_diagonal * delta).min(self.options.radius);
+        // Cell counts are small positive integers stored in f64.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let (nx, ny) = (nx as usize, ny as usize);
+        let grid = |i: usize, j: usize| {
+            // Exact ends, so that the grid spans the bounds.
+            #[allow(clippy::cast_precision_loss)]
+            let (x, y) = (i as f64, j as f64);
+            DVec2::new(
+                if i == nx { hi.x } else { lo.x + cell.x * x },
+                if j == ny { hi.y } else { lo.y + cell.y * y },
+            )
+        };
+        let mut inside = vec![false; (nx + 1) * (ny + 1)];
+        for j in 0..=ny {
+            for i in 0..=nx {
+                inside[j * (nx + 1) + i] = region.contains(grid(i, j));
+            }
+        }
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b) = (grid(i, j), grid(i + 1, j + 1));
+                let k = j * (nx + 1) + i;
+                if inside[k] && inside[k + 1] && inside[k + nx + 1] && inside[k + nx + 2] {
+                    out.push(self.sample(0.5 * (a + b), radius));
+                } else {
+                    self.cover_box(region, delta, a, b, 0, out);
+                }
+            }
+        }
+    }
+
+    /// Covers the points of `region` in the box `[lo, hi]` (on its border):
+    /// one sample at the box centre if it is in the region, else at some
+    /// point of the region in the box; its radius bounds the world distance
+    /// to every point of the region in the box, by the smaller of two
+    /// bounds: straight segments in the box, stretched by at most the
+    /// box's distortion bound (exact at its corners, §3.4), or paths inside
+    /// the region (`δ₊` times their length bound). Boxes whose radius would
+    /// exceed `r` are quartered.
+    fn cover_box(
+        &self,
+        region: &CurvedTriangle,
+        delta: f64,
+        lo: DVec2,
+        hi: DVec2,
+        depth: u32,
+        out: &mut Vec<Sample>,
+    ) {
+        let centre = 0.5 * (lo + hi);
+        let point = if region.contains(centre) {
+            centre
+        } else if let Some(p) = region.point_in_box(lo, hi) {
+            p
+        } else {
+            return;
+        };
+        let far = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
+            .iter()
+            .map(|c| c.distance(point))
+            .fold(0.0, f64::max);
+        let (_, box_delta) = self.heightfield.distortion_bounds(lo, hi);
+        let floor = lo.abs().min(hi.abs());
+        let path = delta * region.warp().path_length(far, floor);
+        let radius = (box_delta * far).min(path);
+        if radius <= self.options.radius || depth >= MAX_FILL_DEPTH {
+            out.push(self.sample(point, radius.min(self.options.radius)));
+            return;
+        }
+        let mid = centre;
+        for (a, b) in [
+            (lo, mid),
+            (DVec2::new(mid.x, lo.y), DVec2::new(hi.x, mid.y)),
+            (DVec2::new(lo.x, mid.y), DVec2::new(mid.x, hi.y)),
+            (mid, hi),
+        ] {
+            self.cover_box(region, delta, a, b, depth + 1, out);
+        }
+    }
+
+    /// Covers a polygon: a grid of cells with half-diagonal at most `r/δ₊`,
+    /// one sample per cell at its centre moved into the polygon (its
+    /// nearest point, within the half-diagonal of every point of the cell
+    /// in the polygon, the polygon being convex).
+    fn fill_polygon(&self, region: &Polygon, delta: f64, out: &mut Vec<Sample>) {
         let (lo, hi) = region.bounds();
         let size = hi - lo;
         let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
