@@ -11,13 +11,8 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
 use std::hint::black_box;
 
-/// `(scene, bounding centre, bounding radius)`.
-const SCENES: [(&str, [f64; 3], f64); 4] = [
-    ("three_spheres", [0.0, 0.0, 10.0], 75.0),
-    ("classic", [0.0, 0.0, 0.0], 90.0),
-    ("sharp8", [0.0, 0.0, 0.0], 60.0),
-    ("machine80", [0.0, 0.0, 35.0], 100.0),
-];
+/// The shipped scenes, sampled inside the `bounds` their files give.
+const SCENES: [&str; 4] = ["three_spheres", "classic", "sharp8", "machine80"];
 
 fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
@@ -31,23 +26,26 @@ fn sampling(c: &mut Criterion) {
     let two = pool(2);
     let mut group = c.benchmark_group("table2");
     group.sample_size(10);
-    for (name, centre, bound) in SCENES {
+    for name in SCENES {
         let path = format!("{}/../assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
         let scene = Scene::load(&path).expect("shipped scene");
         let dnf = scene.dnf().expect("normal form");
-        let sphere = BoundingSphere::new(DVec3::from(centre), bound).expect("sphere");
+        let sphere = scene.bounds.expect("shipped scenes give bounds");
+        let bound = sphere.radius;
         for (label, divisor) in [("large", 10.0), ("medium", 30.0), ("small", 100.0)] {
             let options = SampleOptions::new(bound / divisor, sphere).expect("options");
             let set = one.install(|| sample(&dnf, &options)).expect("sampling");
             let splats = SplatSet::new(&dnf, &scene.dag, &set);
             eprintln!(
                 "{name} {label} (r = {:.2}): {} quadrics, {} samples, {} distance queries, \
-                 {} clip indices",
+                 {} clip indices; basic regions by kind {:?}, their samples {:?}",
                 options.radius,
                 dnf.quadrics().len(),
                 set.samples.len(),
                 set.stats.distance_queries,
-                splats.clip_indices.len()
+                splats.clip_indices.len(),
+                set.stats.kinds,
+                set.stats.kind_samples
             );
             group.throughput(Throughput::Elements(set.samples.len() as u64));
             group.bench_function(format!("{name}/{label}/1-thread"), |b| {

@@ -6,20 +6,24 @@
 mod common;
 
 use chisel_quadric::csg::Dnf;
-use chisel_quadric::{BoundingSphere, SampleOptions, SampleSet, sample, trace_image};
+use chisel_quadric::{SampleOptions, SampleSet, sample, trace_image};
 use glam::DVec3;
 
-/// `(scene, bounding centre, bounding radius)`.
-const SCENES: [(&str, [f64; 3], f64); 4] = [
-    ("three_spheres", [0.0, 0.0, 10.0], 75.0),
-    ("classic", [0.0, 0.0, 0.0], 90.0),
-    ("sharp8", [0.0, 0.0, 0.0], 60.0),
-    ("machine80", [0.0, 0.0, 35.0], 110.0),
-];
+/// The shipped scenes, sampled inside the bounds their files give.
+const SCENES: [&str; 4] = ["three_spheres", "classic", "sharp8", "machine80"];
 
-fn sampled(name: &str, centre: [f64; 3], bound: f64, radius: f64) -> (Dnf, SampleSet) {
-    let dnf = common::scene(name).dnf().unwrap();
-    let sphere = BoundingSphere::new(DVec3::from(centre), bound).unwrap();
+/// A scene's bounding sphere as `(centre, radius)`.
+fn bounds(name: &str) -> (DVec3, f64) {
+    let b = common::scene(name)
+        .bounds
+        .expect("shipped scenes give bounds");
+    (b.centre, b.radius)
+}
+
+fn sampled(name: &str, radius: f64) -> (Dnf, SampleSet) {
+    let scene = common::scene(name);
+    let dnf = scene.dnf().unwrap();
+    let sphere = scene.bounds.unwrap();
     let options = SampleOptions::new(radius, sphere).unwrap();
     let set = sample(&dnf, &options).unwrap();
     (dnf, set)
@@ -27,14 +31,15 @@ fn sampled(name: &str, centre: [f64; 3], bound: f64, radius: f64) -> (Dnf, Sampl
 
 #[test]
 fn traced_surface_is_covered() {
-    for (name, centre, bound) in SCENES {
+    for name in SCENES {
+        let (centre, bound) = bounds(name);
         for radius in [bound / 8.0, bound / 25.0] {
-            let (dnf, set) = sampled(name, centre, bound, radius);
+            let (dnf, set) = sampled(name, radius);
             assert!(!set.samples.is_empty(), "{name}: no samples");
             let grid = common::SampleGrid::new(&set, radius);
             let sphere = set.options.bounds;
             let (mut checked, mut missed) = (0, 0);
-            for camera in common::cameras(DVec3::from(centre), 2.5 * bound, 48) {
+            for camera in common::cameras(centre, 2.5 * bound, 48) {
                 let image = trace_image(&dnf, &camera);
                 for (i, &q) in image.quadric.iter().enumerate() {
                     if q == chisel_quadric::NO_HIT {
@@ -63,8 +68,9 @@ fn traced_surface_is_covered() {
 
 #[test]
 fn samples_lie_on_the_csg_surface() {
-    for (name, centre, bound) in SCENES {
-        let (dnf, set) = sampled(name, centre, bound, bound / 25.0);
+    for name in SCENES {
+        let (_, bound) = bounds(name);
+        let (dnf, set) = sampled(name, bound / 25.0);
         let eps = 1e-7 * bound;
         for s in &set.samples {
             let q = &dnf.quadrics()[s.quadric as usize].quadric;
@@ -93,13 +99,14 @@ fn samples_lie_on_the_csg_surface() {
 
 #[test]
 fn output_is_independent_of_thread_count() {
-    for (name, centre, bound) in SCENES {
+    for name in SCENES {
+        let (_, bound) = bounds(name);
         let run = |threads: usize| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| sampled(name, centre, bound, bound / 20.0).1)
+                .install(|| sampled(name, bound / 20.0).1)
         };
         assert_eq!(run(1), run(2), "{name}");
     }

@@ -175,3 +175,54 @@ fn degenerate_transforms_and_files() {
         Err(Error::Scene { line: 0, .. })
     ));
 }
+
+#[test]
+fn shipped_scenes_carry_bounds_around_their_solids() {
+    for name in ["three_spheres", "classic", "sharp8", "machine80"] {
+        let scene = Scene::load(scene_path(&format!("{name}.ron"))).unwrap();
+        let bounds = scene.bounds.unwrap_or_else(|| panic!("{name}: no bounds"));
+        // No point of the solid on a coarse grid lies outside the sphere.
+        let r = bounds.radius;
+        let n = 24;
+        for i in 0..=n {
+            for j in 0..=n {
+                for k in 0..=n {
+                    let t = |i: i32| 2.5 * r * (f64::from(i) / f64::from(n) - 0.5);
+                    let p = bounds.centre + DVec3::new(t(i), t(j), t(k));
+                    if bounds.signed_distance(p) > 0.0 {
+                        assert!(
+                            !scene.dag.contains(scene.root, p).unwrap(),
+                            "{name}: solid at {p} outside its bounds"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn bounds_parse_and_bad_bounds_name_line() {
+    let ok = "Scene(primitives: [(name: \"a\", shape: Sphere(center: (0, 0, 0), radius: 1))],\n\
+              root: Ref(\"a\"), bounds: (1, 2, 3, 4))";
+    let scene = Scene::from_ron(ok).unwrap();
+    let b = scene.bounds.unwrap();
+    assert_eq!((b.centre, b.radius), (DVec3::new(1.0, 2.0, 3.0), 4.0));
+    let none = "Scene(primitives: [(name: \"a\", shape: Sphere(center: (0, 0, 0), radius: 1))], \
+                root: Ref(\"a\"))";
+    assert!(Scene::from_ron(none).unwrap().bounds.is_none());
+    for (bad, what) in [
+        ("(0, 0, 0, -5)", "positive radius"),
+        ("(0, 0, 0, 0)", "positive radius"),
+        ("(0, 0, 0)", ""),
+        ("(0, 0, 0, 1, 2)", ""),
+    ] {
+        let text = format!(
+            "Scene(\n primitives: [(name: \"a\", shape: Sphere(center: (0, 0, 0), radius: 1))],\n \
+             root: Ref(\"a\"),\n bounds: {bad},\n)"
+        );
+        let (line, message) = parse_error(&text);
+        assert_eq!(line, 4, "{bad}: {message}");
+        assert!(message.contains(what), "{bad}: {message}");
+    }
+}

@@ -46,6 +46,7 @@ pub(crate) fn build(source: &str, spec: &SceneSpec) -> Result<Scene> {
         dag: b.dag,
         root,
         names: b.names,
+        bounds: spec.bounds.map(|b| b.0),
     })
 }
 

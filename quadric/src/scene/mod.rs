@@ -1,7 +1,10 @@
 //! Scene files: CSG trees of quadrics in [RON](https://github.com/ron-rs/ron).
 //!
 //! A scene has a list of named `primitives`, an optional list of named
-//! sub-graphs `nodes`, and a `root` expression. Lengths are in scene units
+//! sub-graphs `nodes`, a `root` expression and an optional bounding sphere
+//! `bounds: (x, y, z, r)`, the part of space to sample (never computed from
+//! the primitives: half-spaces, cylinders and other infinite quadrics leave
+//! most trees without a finite bound, so the file states it). Lengths are in scene units
 //! (millimetres by convention), angles in degrees, colours linear RGB in
 //! `[0, 1]`. Comments (`//`, `/* */`) are allowed. The full reference is
 //! `quadric/SCENES.md`; in short:
@@ -19,6 +22,7 @@
 //!         (name: "lens", node: Intersection([Ref("A"), Ref("B")])),
 //!     ],
 //!     root: Union([Ref("lens"), Ref("C")]),
+//!     bounds: (10, 10, 0, 60),
 //! )
 //! ```
 //!
@@ -52,6 +56,7 @@ pub use build::DEFAULT_COLOR;
 
 use crate::csg::{Color, CsgDag, Dnf, NodeId};
 use crate::error::{Error, Result};
+use crate::sampling::BoundingSphere;
 
 /// A parsed scene: a CSG DAG, its root and the primitives' names.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,6 +67,9 @@ pub struct Scene {
     pub root: NodeId,
     /// One name per DAG primitive (a box `b` gives `b[0]` … `b[5]`).
     pub names: Vec<String>,
+    /// The scene's bounding sphere (`bounds` in the file), if it gives one:
+    /// the default for sampling and for placing a camera.
+    pub bounds: Option<BoundingSphere>,
 }
 
 impl Scene {

@@ -9,6 +9,7 @@ use serde::Deserialize;
 use crate::csg::Color;
 use crate::error::{Error, Result};
 use crate::quadric::{Quadric, affine_inverse};
+use crate::sampling::BoundingSphere;
 
 /// A whole scene file.
 #[derive(Debug, Deserialize)]
@@ -20,6 +21,28 @@ pub(crate) struct SceneSpec {
     #[serde(default)]
     pub nodes: Vec<NamedNodeSpec>,
     pub root: NodeSpec,
+    /// The bounding sphere `(x, y, z, r)` to sample in, if given.
+    #[serde(default)]
+    pub bounds: Option<Bounds>,
+}
+
+/// A checked bounding sphere `(x, y, z, r)`: finite, `r > 0`.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(try_from = "[f64; 4]")]
+pub(crate) struct Bounds(pub BoundingSphere);
+
+impl TryFrom<[f64; 4]> for Bounds {
+    type Error = String;
+    fn try_from([x, y, z, r]: [f64; 4]) -> Result<Self, String> {
+        BoundingSphere::new(DVec3::new(x, y, z), r)
+            .map(Self)
+            .map_err(|_| {
+                format!(
+                    "bounds ({x}, {y}, {z}, {r}): a sphere (x, y, z, r) needs finite numbers \
+                     and a positive radius r"
+                )
+            })
+    }
 }
 
 /// A named primitive: a shape, an optional colour and an optional placement.
