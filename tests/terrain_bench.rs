@@ -50,20 +50,26 @@ fn crater_carves_on_a_large_terrain() {
     for k in 0..carves {
         let centre = Vec3::new(
             (4.0 + 248.0 * next()) as f32,
-            (-1.0 * next()) as f32,
+            -next() as f32,
             (4.0 + 248.0 * next()) as f32,
         );
         let tool = CarveTool::new(
             bevy_chisel::terrain::CarveShape::Dodecahedron { radius: 2.0 },
-            Transform::from_translation(centre)
-                .with_rotation(Quat::from_rotation_y((6.28 * next()) as f32)),
+            Transform::from_translation(centre).with_rotation(Quat::from_rotation_y(
+                (std::f64::consts::TAU * next()) as f32,
+            )),
         )
         .to_grid(&grid)
         .expect("on the grid");
         let start = Instant::now();
         let changes = apply_carve(&mut octree, &tool, Edit::Subtract).expect("valid carve");
         let applied = start.elapsed();
-        let keys: Vec<_> = changes.changed.iter().chain(&changes.removed).copied().collect();
+        let keys: Vec<_> = changes
+            .changed
+            .iter()
+            .chain(&changes.removed)
+            .copied()
+            .collect();
         let triangles: usize = keys
             .par_iter()
             .map(|&key| {
