@@ -1,5 +1,8 @@
 //! Parsers for comma-separated vector arguments.
 
+use std::path::Path;
+
+use chisel_quadric::{BoundingSphere, Scene};
 use glam::DVec3;
 
 /// Parses `x,y,z`.
@@ -12,6 +15,26 @@ pub fn vec3(text: &str) -> Result<DVec3, String> {
 pub fn sphere(text: &str) -> Result<(DVec3, f64), String> {
     let v = numbers(text, 4)?;
     Ok((DVec3::new(v[0], v[1], v[2]), v[3]))
+}
+
+/// The bounding sphere of a command: `--bounds` if given, else the scene
+/// file's `bounds`; an error naming both ways when there is neither.
+pub fn bounds(
+    given: Option<(DVec3, f64)>,
+    scene: &Scene,
+    path: &Path,
+) -> Result<BoundingSphere, String> {
+    match (given, scene.bounds) {
+        (Some((centre, radius)), _) => {
+            BoundingSphere::new(centre, radius).map_err(|e| format!("--bounds: {e}"))
+        }
+        (None, Some(b)) => Ok(b),
+        (None, None) => Err(format!(
+            "{} has no bounding sphere: add `bounds: (x, y, z, r)` to the scene \
+             (quadric/SCENES.md) or pass --bounds x,y,z,r",
+            path.display()
+        )),
+    }
 }
 
 /// Parses `WIDTHxHEIGHT`.

@@ -1,10 +1,10 @@
 //! `chisel` — the command line of bevy_chisel's kernels.
 //!
 //! - `chisel budget` prints the exact kernel's bit budget.
-//! - `chisel sample SCENE --radius R --bounds X,Y,Z,R` samples a quadric
+//! - `chisel sample SCENE --radius R [--bounds X,Y,Z,R]` samples a quadric
 //!   CSG scene into splats (`--json` for one summary line, `-o FILE.ply`).
-//! - `chisel trace SCENE --bounds X,Y,Z,R -o IMAGE.png` renders it with the
-//!   CPU reference ray tracer.
+//! - `chisel trace SCENE [--bounds X,Y,Z,R] -o IMAGE.png` renders it with the
+//!   CPU reference ray tracer. `--bounds` defaults to the scene's `bounds`.
 //! - `chisel mill --steps N`, `chisel cheese --count N`, `chisel sweep
 //!   --samples N` run the iterated CSG scenarios of SCENARIOS.md on the
 //!   octree of BSPs; `chisel replay OPS.jsonl` applies a recorded operation
@@ -57,9 +57,10 @@ enum Command {
         /// a sample on the same quadric.
         #[arg(long)]
         radius: f64,
-        /// Bounding sphere `x,y,z,r` that limits sampling.
+        /// Bounding sphere `x,y,z,r` that limits sampling (default: the
+        /// scene's `bounds`).
         #[arg(long, value_parser = args::sphere)]
-        bounds: (DVec3, f64),
+        bounds: Option<(DVec3, f64)>,
         /// Write the samples as a PLY point cloud.
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -74,9 +75,10 @@ enum Command {
         /// Output PNG.
         #[arg(short, long)]
         output: PathBuf,
-        /// Bounding sphere `x,y,z,r`; places the default camera.
+        /// Bounding sphere `x,y,z,r`; places the default camera (default:
+        /// the scene's `bounds`).
         #[arg(long, value_parser = args::sphere)]
-        bounds: (DVec3, f64),
+        bounds: Option<(DVec3, f64)>,
         /// Camera position `x,y,z`.
         #[arg(long, value_parser = args::vec3)]
         eye: Option<DVec3>,

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use chisel_quadric::{BoundingSphere, OUTSIDE_FLAG, SampleOptions, Scene, SplatSet, sample};
+use chisel_quadric::{OUTSIDE_FLAG, SampleOptions, Scene, SplatSet, sample};
 use glam::DVec3;
 
 /// What `chisel sample` was asked to do.
@@ -13,8 +13,8 @@ pub struct SampleArgs {
     pub scene: PathBuf,
     /// Splat radius, scene units.
     pub radius: f64,
-    /// Bounding sphere (centre, radius).
-    pub bounds: (DVec3, f64),
+    /// Bounding sphere (centre, radius); `None` for the scene's.
+    pub bounds: Option<(DVec3, f64)>,
     /// Where to write the samples as PLY, if anywhere.
     pub output: Option<PathBuf>,
     /// One JSON line instead of a report.
@@ -25,7 +25,7 @@ pub struct SampleArgs {
 pub fn run(args: &SampleArgs) -> Result<(), String> {
     let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let dnf = scene.dnf().map_err(|e| e.to_string())?;
-    let bounds = BoundingSphere::new(args.bounds.0, args.bounds.1).map_err(|e| e.to_string())?;
+    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene)?;
     let options = SampleOptions::new(args.radius, bounds).map_err(|e| e.to_string())?;
     let start = Instant::now();
     let samples = sample(&dnf, &options).map_err(|e| e.to_string())?;

@@ -12,8 +12,8 @@ pub struct TraceArgs {
     pub scene: PathBuf,
     /// Output PNG.
     pub output: PathBuf,
-    /// Bounding sphere, which places the default camera.
-    pub bounds: (DVec3, f64),
+    /// Bounding sphere, which places the default camera; `None` for the scene's.
+    pub bounds: Option<(DVec3, f64)>,
     /// Camera position (default: outside the bounds, looking at the centre).
     pub eye: Option<DVec3>,
     /// Point looked at (default: the centre of the bounds).
@@ -28,7 +28,8 @@ pub struct TraceArgs {
 pub fn run(args: &TraceArgs) -> Result<(), String> {
     let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let dnf = scene.dnf().map_err(|e| e.to_string())?;
-    let (centre, radius) = args.bounds;
+    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene)?;
+    let (centre, radius) = (bounds.centre, bounds.radius);
     let eye = args
         .eye
         .unwrap_or(centre + DVec3::new(1.8, -2.4, 1.5) * radius);

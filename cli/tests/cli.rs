@@ -119,6 +119,80 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
 }
 
 #[test]
+fn sample_and_trace_default_to_the_scene_bounds() {
+    // The shipped scenes carry `bounds`; the same run with and without the
+    // equal `--bounds` gives the same samples.
+    let run = |extra: &[&str]| {
+        let out = chisel()
+            .args(["sample", scene("three_spheres.ron").to_str().unwrap()])
+            .args(["--radius", "6", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let line = String::from_utf8(out.stdout).unwrap();
+        line.split("\"samples\":")
+            .nth(1)
+            .and_then(|rest| rest.split(',').next())
+            .and_then(|n| n.parse::<usize>().ok())
+            .expect("a samples field")
+    };
+    let from_scene = run(&[]);
+    assert!(from_scene > 100);
+    assert_eq!(from_scene, run(&["--bounds", "0,0,10,75"]));
+    assert_ne!(from_scene, run(&["--bounds", "0,0,10,20"]));
+    let png = temp("three_spheres.png");
+    let out = chisel()
+        .args(["trace", scene("three_spheres.ron").to_str().unwrap()])
+        .args(["--size", "32x24", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn missing_bounds_is_a_clear_error() {
+    let bare = temp("bare.ron");
+    std::fs::write(
+        &bare,
+        "Scene(primitives: [(name: \"a\", shape: Sphere(center: (0, 0, 0), radius: 1))], \
+         root: Ref(\"a\"))",
+    )
+    .unwrap();
+    for (command, options) in [("sample", ["--radius", "0.1"]), ("trace", ["--fov", "30"])] {
+        let out = chisel()
+            .args([command, bare.to_str().unwrap()])
+            .args(options)
+            .arg("-o")
+            .arg(temp("bare.out"))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{command}");
+        let message = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            message.contains("bounds: (x, y, z, r)") && message.contains("--bounds"),
+            "{command}: {message}"
+        );
+    }
+    // With --bounds the same scene samples.
+    let out = chisel()
+        .args(["sample", bare.to_str().unwrap(), "--radius", "0.1"])
+        .args(["--bounds", "0,0,0,2"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+}
+
+#[test]
 fn budget_prints_the_bit_widths() {
     let out = chisel().args(["budget", "--json"]).output().unwrap();
     assert!(out.status.success());
