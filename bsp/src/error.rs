@@ -61,6 +61,11 @@ pub enum Error {
         /// Requested edge exponent.
         size_log2: u8,
     },
+    /// Stored octree leaves that do not tile the cube.
+    InvalidOctree {
+        /// What is wrong with them.
+        reason: &'static str,
+    },
     /// A union of no tools.
     NoTools,
     /// A quantization unit that is not a positive finite length.
@@ -136,6 +141,7 @@ impl fmt::Display for Error {
                 "octree cube at {origin:?} with edge 2^{size_log2} is invalid: the edge must be \
                  2^1 to 2^27 and the cube must lie within ±{MAX_COORD} (2^26)"
             ),
+            Error::InvalidOctree { reason } => write!(f, "invalid octree: {reason}"),
             Error::NoTools => write!(f, "a union of tools needs at least one tool"),
             Error::InvalidUnit { unit } => write!(
                 f,

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use chisel_bsp::Error;
 use chisel_bsp::convex::ConvexArena;
 use chisel_bsp::mesh::SurfaceMesh;
-use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree, OctreeConfig, Tool};
+use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Leaf, Octree, OctreeConfig, Tool};
 use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
 use common::shapes::p;
@@ -341,4 +341,69 @@ fn bad_edits_are_errors_and_change_nothing() {
     .unwrap();
     let changes = octree.apply(&far, Edit::Subtract).unwrap();
     assert!(changes.changed.is_empty() && changes.removed.is_empty());
+}
+
+#[test]
+fn octrees_rebuild_from_their_stored_leaves() {
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+    for _ in 0..8 {
+        let (tool, edit) = (random_tool(&mut rng), random_edit(&mut rng));
+        octree.apply(&tool, edit).unwrap();
+    }
+    // Store every leaf as plain parts, then rebuild from them.
+    let stored: Vec<(CellKey, Leaf)> = octree
+        .leaves()
+        .into_iter()
+        .map(|(key, leaf)| {
+            let leaf = match leaf {
+                Leaf::Uniform(l) => Leaf::Uniform(*l),
+                Leaf::Bsp(bsp) => Leaf::Bsp(std::sync::Arc::new(
+                    Bsp::from_stored_parts(bsp.planes().to_vec(), bsp.nodes().to_vec()).unwrap(),
+                )),
+            };
+            (key, leaf)
+        })
+        .collect();
+    let rebuilt = Octree::from_leaves([0; 3], K, config(), stored.clone()).unwrap();
+    let parts = |o: &Octree| {
+        o.leaves()
+            .into_iter()
+            .map(|(k, l)| (k, l.to_bsp().nodes().to_vec(), l.to_bsp().planes().to_vec()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(parts(&rebuilt), parts(&octree));
+    assert_eq!(octree_volumes(&rebuilt), octree_volumes(&octree));
+    // Defects are errors.
+    let invalid = |leaves: Vec<(CellKey, Leaf)>| {
+        matches!(
+            Octree::from_leaves([0; 3], K, config(), leaves),
+            Err(Error::InvalidOctree { .. })
+        )
+    };
+    assert!(invalid(stored[1..].to_vec()), "a missing leaf");
+    let mut twice = stored.clone();
+    twice.push(stored[0].clone());
+    assert!(invalid(twice), "a repeated leaf");
+    let mut nested = stored.clone();
+    nested.push((stored[0].0.child(0), Leaf::Uniform(EMPTY)));
+    assert!(invalid(nested), "a leaf inside a leaf");
+    let mut outside = stored.clone();
+    outside.push((
+        CellKey {
+            depth: 1,
+            pos: [2, 0, 0],
+        },
+        Leaf::Uniform(EMPTY),
+    ));
+    assert!(invalid(outside), "a leaf outside the cube");
+    let nodes = vec![
+        chisel_bsp::tree::Node::Split {
+            plane: 0,
+            below: 1,
+            above: 1,
+        },
+        chisel_bsp::tree::Node::Leaf(1),
+    ];
+    assert!(Bsp::from_stored_parts(Vec::new(), nodes).is_err());
 }

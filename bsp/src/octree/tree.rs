@@ -178,6 +178,50 @@ impl Octree {
         )
     }
 
+    /// An octree from its leaves (a saved file, a network message),
+    /// checked: the cells must tile the cube exactly — every inner cell has
+    /// all eight children, no leaf lies inside another, none lies outside.
+    ///
+    /// # Errors
+    /// As [`Octree::new`], or [`Error::InvalidOctree`] naming the defect.
+    pub fn from_leaves(
+        origin: [i64; 3],
+        size_log2: u8,
+        config: OctreeConfig,
+        leaves: impl IntoIterator<Item = (CellKey, Leaf)>,
+    ) -> Result<Self, Error> {
+        let mut octree = Self::new(origin, size_log2, EMPTY, config)?;
+        let mut pending: std::collections::HashMap<CellKey, Leaf> =
+            std::collections::HashMap::new();
+        for (key, leaf) in leaves {
+            let edge = 1u64 << (size_log2 - key.depth.min(size_log2));
+            if key.depth > size_log2
+                || key
+                    .pos
+                    .iter()
+                    .any(|&p| (u64::from(p) + 1) * edge > 1u64 << size_log2)
+            {
+                return Err(Error::InvalidOctree {
+                    reason: "a leaf lies outside the cube",
+                });
+            }
+            if pending.insert(key, leaf).is_some() {
+                return Err(Error::InvalidOctree {
+                    reason: "a leaf is given twice",
+                });
+            }
+        }
+        let total = pending.len();
+        let mut used = 0;
+        octree.root = assemble(CellKey::ROOT, size_log2, &mut pending, &mut used)?;
+        if used != total {
+            return Err(Error::InvalidOctree {
+                reason: "a leaf lies inside another leaf",
+            });
+        }
+        Ok(octree)
+    }
+
     /// Lower corner of the root cube.
     #[must_use]
     pub fn origin(&self) -> [i64; 3] {
@@ -308,4 +352,31 @@ impl Octree {
             }
         }
     }
+}
+
+/// The node at `key` from the pending leaves: the leaf itself, or eight
+/// children assembled the same way.
+fn assemble(
+    key: CellKey,
+    size_log2: u8,
+    pending: &mut std::collections::HashMap<CellKey, Leaf>,
+    used: &mut usize,
+) -> Result<OctNode, Error> {
+    if let Some(leaf) = pending.remove(&key) {
+        *used += 1;
+        return Ok(OctNode::Leaf(leaf));
+    }
+    if key.depth >= size_log2 || pending.is_empty() {
+        return Err(Error::InvalidOctree {
+            reason: "the leaves leave part of the cube uncovered",
+        });
+    }
+    let mut children = Vec::with_capacity(8);
+    for i in 0..8 {
+        children.push(assemble(key.child(i), size_log2, pending, used)?);
+    }
+    let children: [OctNode; 8] = children
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("eight children"));
+    Ok(OctNode::Inner(Arc::new(children)))
 }

@@ -101,6 +101,24 @@ impl Bsp {
         Bsp::from_parts(self.planes.clone(), nodes)
     }
 
+    /// A tree from stored parts (a saved file, a network message), checked:
+    /// the nodes must form one tree rooted at node 0 over in-range plane
+    /// indices. Planes are checked when they are made ([`Plane::new`]).
+    ///
+    /// # Errors
+    /// The first defect found; nothing is built.
+    pub fn from_stored_parts(
+        planes: Vec<Plane>,
+        nodes: Vec<Node>,
+    ) -> Result<Self, BspInvariantError> {
+        if nodes.is_empty() {
+            return Err(BspInvariantError("a tree needs at least its root".into()));
+        }
+        let bsp = Self { planes, nodes };
+        bsp.validate()?;
+        Ok(bsp)
+    }
+
     /// The node array.
     #[must_use]
     pub fn nodes(&self) -> &[Node] {
