@@ -238,27 +238,93 @@ impl CurvedTriangle {
     #[must_use]
     pub fn point_in_box(&self, lo: DVec2, hi: DVec2) -> Option<DVec2> {
         let (wlo, whi) = self.warp.w_box(lo, hi);
-        let mut poly: Vec<DVec2> = self.w.to_vec();
-        for (n, c) in [
-            (DVec2::X, -wlo.x),
-            (DVec2::NEG_X, whi.x),
-            (DVec2::Y, -wlo.y),
-            (DVec2::NEG_Y, whi.y),
+        // A triangle clipped by four half-planes has at most seven corners.
+        let mut poly = [DVec2::ZERO; 8];
+        let mut next = [DVec2::ZERO; 8];
+        poly[..3].copy_from_slice(&self.w);
+        let mut len = 3;
+        for (axis, at, above) in [
+            (0, wlo.x, true),
+            (0, whi.x, false),
+            (1, wlo.y, true),
+            (1, whi.y, false),
         ] {
-            poly = clip_half_plane(&poly, n, c);
-            if poly.len() < 3 {
+            let side = |p: DVec2| if above { p[axis] - at } else { at - p[axis] };
+            let mut out = 0;
+            for i in 0..len {
+                let (a, b) = (poly[i], poly[(i + 1) % len]);
+                let (da, db) = (side(a), side(b));
+                if da >= 0.0 {
+                    next[out] = a;
+                    out += 1;
+                }
+                if (da < 0.0) != (db < 0.0) {
+                    let mut p = a + (b - a) * (da / (da - db));
+                    p[axis] = at;
+                    next[out] = p;
+                    out += 1;
+                }
+            }
+            if out < 3 {
                 return None;
             }
+            poly[..out].copy_from_slice(&next[..out]);
+            len = out;
         }
-        let area2: f64 = (1..poly.len() - 1)
+        let poly = &poly[..len];
+        let area2: f64 = (1..len - 1)
             .map(|i| (poly[i] - poly[0]).perp_dot(poly[i + 1] - poly[0]))
             .sum();
         if area2 == 0.0 {
             return None;
         }
         #[allow(clippy::cast_precision_loss)]
-        let centroid = poly.iter().copied().sum::<DVec2>() / poly.len() as f64;
+        let centroid = poly.iter().copied().sum::<DVec2>() / len as f64;
         Some(self.warp.from_w(centroid).clamp(lo, hi))
+    }
+
+    /// Whether the region meets the plane box `[lo, hi]` (within its cell):
+    /// the separating-axis test of the triangle and the box's image in `w`.
+    #[must_use]
+    pub fn meets_box(&self, lo: DVec2, hi: DVec2) -> bool {
+        let (wlo, whi) = self.warp.w_box(lo, hi);
+        let [a, b, c] = self.w;
+        if a.max(b).max(c).cmplt(wlo).any() || a.min(b).min(c).cmpgt(whi).any() {
+            return false;
+        }
+        let corners = [wlo, DVec2::new(whi.x, wlo.y), whi, DVec2::new(wlo.x, whi.y)];
+        let orientation = (b - a).perp_dot(c - a).signum();
+        [(a, b), (b, c), (c, a)].into_iter().all(|(p, q)| {
+            corners
+                .iter()
+                .any(|k| (q - p).perp_dot(*k - p) * orientation >= 0.0)
+        })
+    }
+
+    /// The point of the region whose `w` is nearest to that of plane point
+    /// `p` (`p` itself when it is inside): a point of the region near `p`.
+    #[must_use]
+    pub fn nearest_to(&self, p: DVec2) -> DVec2 {
+        if self.contains(p) {
+            return p;
+        }
+        let w = self.warp.to_w(p);
+        let on_side = |a: DVec2, b: DVec2| {
+            let ab = b - a;
+            let len2 = ab.length_squared();
+            let t = if len2 > 0.0 {
+                ((w - a).dot(ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            a + t * ab
+        };
+        let [a, b, c] = self.w;
+        let best = [on_side(a, b), on_side(b, c), on_side(c, a)]
+            .into_iter()
+            .min_by(|x, y| x.distance_squared(w).total_cmp(&y.distance_squared(w)))
+            .unwrap_or(a);
+        self.warp.from_w(best)
     }
 
     /// Checks the invariants: finite vertices, the plane vertices are the
@@ -438,7 +504,18 @@ mod tests {
                 let b = a + (hi - lo) / 10.0;
                 if let Some(p) = t.point_in_box(a, b) {
                     assert!(t.contains(p) && p.cmpge(a).all() && p.cmple(b).all());
+                    assert!(t.meets_box(a, b));
                     found += 1;
+                } else {
+                    // Boxes that only touch the region may still "meet" it.
+                    let touch = t.meets_box(a, b);
+                    assert!(!touch || t.point_in_box(a - 1e-9, b + 1e-9).is_some());
+                }
+                let c = 0.5 * (a + b);
+                let near = t.nearest_to(c);
+                assert!(t.contains(near));
+                if t.contains(c) {
+                    assert_eq!(near, c);
                 }
             }
         }

@@ -307,23 +307,30 @@ impl RegionJob<'_> {
             for i in 0..nx {
                 let (a, b) = (grid(i, j), grid(i + 1, j + 1));
                 let k = j * (nx + 1) + i;
-                if inside[k] && inside[k + 1] && inside[k + nx + 1] && inside[k + nx + 2] {
+                let corners = [
+                    inside[k],
+                    inside[k + 1],
+                    inside[k + nx + 1],
+                    inside[k + nx + 2],
+                ];
+                if corners.iter().all(|c| *c) {
                     out.push(self.sample(0.5 * (a + b), radius));
-                } else {
+                } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
             }
         }
     }
 
-    /// Covers the points of `region` in the box `[lo, hi]` (on its border):
-    /// one sample at the box centre if it is in the region, else at some
-    /// point of the region in the box; its radius bounds the world distance
-    /// to every point of the region in the box, by the smaller of two
-    /// bounds: straight segments in the box, stretched by at most the
-    /// box's distortion bound (exact at its corners, §3.4), or paths inside
-    /// the region (`δ₊` times their length bound). Boxes whose radius would
-    /// exceed `r` are quartered.
+    /// Covers the points of `region` in the box `[lo, hi]` (on its border;
+    /// the caller has checked that they meet) with one sample at a point `q` of the region in the box: the box
+    /// centre if it is inside, else the region's point nearest to it (in
+    /// `w`) if that lies in the box, else some point of the region in the
+    /// box. The radius bounds the world distance from `q` to every point of
+    /// the region in the box by the smaller of two bounds: straight segments
+    /// in the box, stretched by at most the box's distortion bound (exact at
+    /// its corners, §3.4), or paths inside the region (`δ₊` times their
+    /// length bound). Boxes whose radius would exceed `r` are quartered.
     fn cover_box(
         &self,
         region: &CurvedTriangle,
@@ -333,19 +340,26 @@ impl RegionJob<'_> {
         depth: u32,
         out: &mut Vec<Sample>,
     ) {
+        if depth > 0 && !region.meets_box(lo, hi) {
+            return;
+        }
         let centre = 0.5 * (lo + hi);
-        let point = if region.contains(centre) {
-            centre
+        let near = region.nearest_to(centre);
+        let point = if near.cmpge(lo).all() && near.cmple(hi).all() {
+            near
         } else if let Some(p) = region.point_in_box(lo, hi) {
             p
         } else {
             return;
         };
-        let far = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        let far = corners
             .iter()
             .map(|c| c.distance(point))
             .fold(0.0, f64::max);
-        let (_, box_delta) = self.heightfield.distortion_bounds(lo, hi);
+        // The box is in the region's cell of the warp, where the distortion
+        // is extreme at box corners (and unbounded where `r ≤ 0` at one).
+        let (_, box_delta) = self.heightfield.distortion_bounds_at(&corners);
         let floor = lo.abs().min(hi.abs());
         let path = delta * region.warp().path_length(far, floor);
         let radius = (box_delta * far).min(path);
