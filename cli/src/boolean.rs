@@ -102,7 +102,7 @@ pub fn run(args: &BooleanArgs) -> Result<(), String> {
             tools += 1;
         }
     }
-    let (mesh, watertight) = extract::whole(&result);
+    let (mesh, closure) = extract::whole(&result);
     let seconds = start.elapsed().as_secs_f64();
     meshfile::write(&args.output, &mesh)?;
     let mm3 = |v: f64| v / 1e9;
@@ -114,7 +114,8 @@ pub fn run(args: &BooleanArgs) -> Result<(), String> {
         "b_volume_mm3": mm3(volume_b),
         "volume_mm3": mm3(result.solid_volume()),
         "triangles": mesh.len(),
-        "watertight": watertight,
+        "closed": closure.closed,
+        "watertight": closure.manifold,
         "tools": tools,
         "import_seconds": imported,
         "seconds": seconds,
@@ -136,10 +137,10 @@ pub fn run(args: &BooleanArgs) -> Result<(), String> {
         println!(
             "result: {} triangles ({}), volume {:.6} mm³, in {seconds:.3} s ({imported:.3} s import)",
             mesh.len(),
-            if watertight {
-                "watertight"
-            } else {
-                "NOT watertight"
+            match (closure.closed, closure.manifold) {
+                (true, true) => "watertight",
+                (true, false) => "closed, touching itself along edges",
+                _ => "NOT closed",
             },
             mm3(result.solid_volume())
         );

@@ -25,13 +25,26 @@ pub fn changed_cells(octree: &Octree, keys: &[CellKey]) -> usize {
         .sum()
 }
 
-/// The whole surface as one mesh, and whether it is watertight (every
-/// edge matched by exactly one opposite edge).
+/// Whether a surface is closed, and whether it is also a 2-manifold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Closure {
+    /// Every directed edge is used as often as its opposite: the boundary
+    /// of a solid, possibly touching itself along edges.
+    pub closed: bool,
+    /// Every directed edge is used exactly once, and its opposite once
+    /// (watertight in the strict sense).
+    pub manifold: bool,
+}
+
+/// The whole surface as one mesh, and how closed it is.
 #[must_use]
-pub fn whole(octree: &Octree) -> (TriangleMesh, bool) {
+pub fn whole(octree: &Octree) -> (TriangleMesh, Closure) {
     let mesh = SurfaceMesh::from_faces(&octree.surface());
-    let watertight = mesh.check_watertight().is_ok();
-    (mesh.triangles(), watertight)
+    let closure = Closure {
+        closed: mesh.check_closed().is_ok(),
+        manifold: mesh.check_watertight().is_ok(),
+    };
+    (mesh.triangles(), closure)
 }
 
 /// A 64-bit FNV-1a hash of the mesh (positions, triangles, labels): equal

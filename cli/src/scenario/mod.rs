@@ -12,7 +12,9 @@
 //! - [`runner`] — applies the steps, timing each with its re-extraction.
 //! - [`extract`] — per-cell re-extraction and the whole surface.
 //! - [`report`] — the figures: text, one JSON line, per-step CSV.
+//! - [`check`] — per-step invariants (`--check`) for tests.
 
+pub mod check;
 pub mod cheese;
 pub mod extract;
 pub mod jsonl;

@@ -101,7 +101,11 @@ pub struct Report {
     pub changed_cells_mean: f64,
     /// Triangles of the result's surface.
     pub triangles: usize,
-    /// Whether that surface is watertight.
+    /// Whether that surface is closed (every directed edge matched by as
+    /// many opposite edges).
+    pub closed: bool,
+    /// Whether it is watertight in the strict sense: a closed 2-manifold
+    /// (false where the solid touches itself along an edge).
     pub watertight: bool,
     /// Volume of the result, mm³.
     pub volume_mm3: f64,
@@ -111,6 +115,8 @@ pub struct Report {
     pub peak_memory_mib: f64,
     /// Hash of the result mesh (equal for bit-identical results).
     pub mesh_hash: String,
+    /// Whether every step passed the `--check` invariants.
+    pub checked: bool,
 }
 
 impl Report {
@@ -170,10 +176,10 @@ impl Report {
             format!(
                 "{} triangles ({}), volume {:.6} mm³",
                 self.triangles,
-                if self.watertight {
-                    "watertight"
-                } else {
-                    "NOT watertight"
+                match (self.closed, self.watertight) {
+                    (true, true) => "watertight",
+                    (true, false) => "closed, touching itself along edges",
+                    _ => "NOT closed",
                 },
                 self.volume_mm3
             ),
@@ -195,6 +201,12 @@ impl Report {
             ),
         );
         line("mesh hash", self.mesh_hash.clone());
+        if self.checked {
+            line(
+                "checked",
+                "every step: volume bookkeeping, closed surface".into(),
+            );
+        }
         out
     }
 }

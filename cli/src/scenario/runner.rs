@@ -11,6 +11,7 @@ use chisel_bsp::octree::{CellBox, Octree, OctreeConfig, Tool};
 use chisel_bsp::tree::EMPTY;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::check;
 use super::extract;
 use super::jsonl;
 use super::report::{Latency, OctreeFigures, Report, StepRecord, peak_memory_mib, write_csv};
@@ -35,6 +36,10 @@ pub struct RunFlags {
     /// Inner BSP nodes an octree cell may hold before it is split.
     #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_bsp_nodes: u32,
+    /// Check every step (untimed): exact volume bookkeeping of the edit and
+    /// a closed surface. Slow; for small sizes.
+    #[arg(long)]
+    pub check: bool,
     /// Worker threads (default: one per core). Results do not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
@@ -153,6 +158,7 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
     let start = Instant::now();
     for (i, step) in steps.iter().enumerate() {
         let fail = |e: chisel_bsp::Error| format!("step {}: {e}", i + 1);
+        let before = flags.check.then(|| octree.clone());
         let t0 = Instant::now();
         let points = step
             .hull
@@ -171,11 +177,15 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
             changed_cells: changes.changed.len(),
             triangles,
         });
+        if let Some(before) = &before {
+            check::step(before, &octree, &tool, step.op)
+                .map_err(|e| format!("step {}: {e}", i + 1))?;
+        }
         bar.inc(1);
     }
     let total_seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let (mesh, watertight) = extract::whole(&octree);
+    let (mesh, closure) = extract::whole(&octree);
     let stats = octree.stats();
     let seconds: Vec<f64> = records.iter().map(|r| r.seconds).collect();
     let hull: Vec<f64> = records.iter().map(|r| r.hull_seconds).collect();
@@ -194,7 +204,8 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
         changed_cells_mean: records.iter().map(|r| r.changed_cells as f64).sum::<f64>()
             / records.len().max(1) as f64,
         triangles: mesh.len(),
-        watertight,
+        closed: closure.closed,
+        watertight: closure.manifold,
         volume_mm3: octree.solid_volume() / 1e9,
         octree: OctreeFigures {
             leaves: stats.leaves,
@@ -207,6 +218,7 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
         },
         peak_memory_mib: peak_memory_mib(),
         mesh_hash: format!("{:016x}", extract::mesh_hash(&mesh)),
+        checked: flags.check,
     };
     Ok((report, records, mesh))
 }
