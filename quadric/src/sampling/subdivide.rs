@@ -13,10 +13,10 @@
 //! Per region:
 //! 1. drop it if no point is in the plane's low-distortion region, the
 //!    heightfield's domain or the bounding sphere;
-//! 2. while `δ₊` exceeds [`DISTORTION_CAP`] (only near the rim, outside
-//!    the low-distortion region): drop the region if the distance at the
-//!    centre of a ball around its patch exceeds the ball's radius, else
-//!    subdivide;
+//! 2. while `δ₊` exceeds [`DISTORTION_CAP`] (only where a bound reaches
+//!    past the low-distortion region or to a singular point): drop the
+//!    region if the distance at the centre of a ball around its patch
+//!    exceeds the ball's radius, else subdivide;
 //! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
 //!    region's cover radius and all signs agree: fill (negative) or drop
 //!    (positive); a polygon is filled with a grid of cells, one sample at
@@ -51,8 +51,10 @@ use crate::sampling::{BoundingSphere, Sample, SampleOptions, SamplingStats};
 /// Regions whose distortion bound exceeds this are subdivided before they
 /// are classified. It must be at least `√3`, the largest distortion inside
 /// a low-distortion region (§4.1), so that every owned region gets
-/// classified; larger values stop earlier near ownership seams, where
-/// regions then overlap a neighbouring plane's (extra samples, no holes).
+/// classified. Basic regions lie in their plane's low-distortion region,
+/// but a polygon's bound is taken over its bounding box, which may reach
+/// past a seam, and at a cone's apex the distortion is unbounded; larger
+/// values classify such regions earlier.
 pub const DISTORTION_CAP: f64 = 2.5;
 
 /// Subdivision levels between two cullings of far products
