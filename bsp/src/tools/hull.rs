@@ -60,24 +60,23 @@ pub fn convex_hull(arena: &mut ConvexArena, points: &[IntPoint]) -> Result<PolyI
             continue;
         }
         // Horizon: directed edges of visible faces whose reverse belongs to
-        // a face that is not visible.
-        let mut edge_visible: HashMap<(usize, usize), bool> = HashMap::new();
-        for (f, &v) in faces.iter().zip(&visible) {
-            for k in 0..3 {
-                edge_visible.insert((f[k], f[(k + 1) % 3]), v);
-            }
-        }
+        // a face that is not visible, i.e. is not an edge of a visible face
+        // (the visible faces are few: a short list beats a map).
+        let visible_edges: Vec<(usize, usize)> = faces
+            .iter()
+            .zip(&visible)
+            .filter(|&(_, &v)| v)
+            .flat_map(|(f, _)| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
+            .collect();
         let mut next_faces = Vec::with_capacity(faces.len() + 4);
         for (f, &v) in faces.iter().zip(&visible) {
             if !v {
                 next_faces.push(*f);
-                continue;
             }
-            for k in 0..3 {
-                let (u, w) = (f[k], f[(k + 1) % 3]);
-                if edge_visible.get(&(w, u)) == Some(&false) {
-                    next_faces.push([u, w, p]);
-                }
+        }
+        for &(u, w) in &visible_edges {
+            if !visible_edges.contains(&(w, u)) {
+                next_faces.push([u, w, p]);
             }
         }
         faces = next_faces;
