@@ -16,6 +16,7 @@ same work a chisel step does before re-extraction: build the tool, apply it.
 """
 
 import json
+import os
 import resource
 import statistics
 import sys
@@ -44,8 +45,8 @@ def read_obj(path):
     return positions, triangles
 
 
-def base_manifold(base):
-    """The starting solid of a sequence."""
+def base_manifold(base, folder):
+    """The starting solid of a sequence; a relative mesh path is taken from `folder`."""
     if base == "empty":
         return Manifold()
     if "box" in base:
@@ -53,7 +54,7 @@ def base_manifold(base):
         size = [hi[a] - lo[a] for a in range(3)]
         return Manifold.cube(size).translate(lo)
     if "mesh" in base:
-        path = base["mesh"]
+        path = os.path.join(folder, base["mesh"])
         if not path.lower().endswith(".obj"):
             sys.exit(f"manifold_replay: only OBJ mesh bases are supported here, got {path}")
         positions, triangles = read_obj(path)
@@ -93,7 +94,7 @@ def replay(path, progress=False):
     """Runs the sequence; returns the figures as a dict."""
     base, steps = read_sequence(path)
     t0 = time.perf_counter()
-    work = base_manifold(base)
+    work = base_manifold(base, os.path.dirname(os.path.abspath(path)))
     work.num_tri()
     setup = time.perf_counter() - t0
     seconds = []

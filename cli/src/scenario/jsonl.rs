@@ -150,7 +150,11 @@ pub fn write(path: &Path, sequence: &Sequence) -> Result<(), String> {
     let mut out = BufWriter::new(File::create(path).map_err(fail)?);
     let base = match &sequence.base {
         Base::Empty => json!({ "base": "empty" }),
-        Base::Mesh(mesh) => json!({ "base": { "mesh": mesh } }),
+        // Absolute, so that the file can be replayed from any folder.
+        Base::Mesh(mesh) => {
+            let mesh = std::fs::canonicalize(mesh).unwrap_or_else(|_| mesh.clone());
+            json!({ "base": { "mesh": mesh } })
+        }
         Base::Box(b) => json!({ "base": { "box": [point_mm(b.min), point_mm(b.max)] } }),
     };
     writeln!(out, "{base}").map_err(fail)?;
