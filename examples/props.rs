@@ -3,9 +3,11 @@
 //! orbiting camera.
 //!
 //! Keys: `1` splats (surface-aligned boxes), `2` splats (screen quads), `3`
-//! global ray tracing; `O` overdraw, `N` normals, `S` shaded; arrows orbit
-//! and zoom. Without a display (or with `CHISEL_HEADLESS=1`) it renders
-//! offscreen and writes screenshots to `screenshots/props-*.png`.
+//! global ray tracing; `S` shaded, `B` splat bounds (the proxies
+//! themselves), `O` overdraw, `N` normals; arrows orbit and zoom. Without a
+//! display (or with `CHISEL_HEADLESS=1`) it renders offscreen and writes
+//! screenshots to `screenshots/props-*.png`: frame 40 shaded, frame 60 the
+//! splat bounds.
 //!
 //! ```sh
 //! cargo run --release --example props
@@ -15,14 +17,16 @@
 use bevy::prelude::*;
 use bevy_chisel::presentation::Presentation;
 use bevy_chisel::splat::{
-    ChiselSplatPlugin, PropBounds, QuadricProp, SplatMode, SplatOutput, SplatRadius, SplatSettings,
+    ChiselSplatPlugin, QuadricProp, SplatMode, SplatOutput, SplatRadius, SplatSettings,
 };
 
 /// World units per scene unit: the scenes are in millimetres, the world in
 /// metres at a tenth of the size (a 10 cm part is 1 unit).
 const SCALE: f32 = 0.01;
 
-/// `(scene file, bounding centre, bounding radius, position on the ground)`.
+/// `(scene file, bounding centre, bounding radius, position on the ground)`;
+/// the bounds are those of the scene files (the props take theirs from
+/// there), repeated here to stand each prop on the ground.
 const PROPS: [(&str, [f32; 3], f32, [f32; 2]); 4] = [
     (
         "scenes/three_spheres.ron",
@@ -48,12 +52,16 @@ fn main() -> AppExit {
         config.capture_frames = vec![40, 60];
         config.max_frames = 300;
     }
+    let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — quadric props");
     app.add_plugins(ChiselSplatPlugin)
         .insert_resource(ClearColor(Color::srgb(0.55, 0.65, 0.8)))
         .add_systems(Startup, setup)
         .add_systems(Update, (keys, orbit));
+    if headless {
+        app.add_systems(Update, headless_tour);
+    }
     app.run()
 }
 
@@ -71,7 +79,8 @@ fn setup(
         commands.spawn((
             QuadricProp {
                 scene: assets.load(path),
-                bounds: PropBounds { centre, radius },
+                // The scene file's `bounds`.
+                bounds: None,
                 radius: SplatRadius::Auto(40.0),
             },
             Transform::from_xyz(x, y, lift).with_scale(Vec3::splat(SCALE)),
@@ -112,12 +121,22 @@ fn keys(input: Res<ButtonInput<KeyCode>>, mut settings: ResMut<SplatSettings>) {
         settings.mode = SplatMode::ScreenQuads;
     } else if pressed(KeyCode::Digit3) {
         settings.mode = SplatMode::GlobalRayTrace;
+    } else if pressed(KeyCode::KeyB) {
+        settings.output = SplatOutput::Bounds;
     } else if pressed(KeyCode::KeyO) {
         settings.output = SplatOutput::Overdraw;
     } else if pressed(KeyCode::KeyN) {
         settings.output = SplatOutput::Normals;
     } else if pressed(KeyCode::KeyS) {
         settings.output = SplatOutput::Shaded;
+    }
+}
+
+/// Headless: the splat bounds from frame 50 on (screenshots at 40 and 60).
+fn headless_tour(mut frame: Local<u32>, mut settings: ResMut<SplatSettings>) {
+    *frame += 1;
+    if *frame == 50 {
+        settings.output = SplatOutput::Bounds;
     }
 }
 

@@ -6,7 +6,8 @@
 // all other literals of the product hold — the first point of the solid
 // along the ray when the eye is outside it.
 //
-// Defines: OUTPUT_IDS, OUTPUT_NORMALS, OUTPUT_OVERDRAW.
+// Defines: OUTPUT_IDS, OUTPUT_NORMALS, OUTPUT_OVERDRAW, OUTPUT_BOUNDS (the
+// proxy cube itself).
 #import bevy_chisel::quadric::{
     INDEX_MASK, NO_ROOT, OUTSIDE_FLAG, SurfaceOutput, box_corner, intersect_line,
     literal_holds, local_eye, local_ray_direction, prop, quadric_half_gradient, quadrics,
@@ -58,6 +59,15 @@ fn fragment(in: ProxyVarying) -> @location(0) vec4<f32> {
     return vec4<f32>(1.0 / 64.0, 1.0 / 64.0, 1.0 / 64.0, 1.0);
 }
 #else
+#ifdef OUTPUT_BOUNDS
+/// The proxy cube, its faces told apart by their slope.
+@fragment
+fn fragment(in: ProxyVarying) -> @location(0) vec4<f32> {
+    let face = normalize(cross(dpdx(in.local), dpdy(in.local)));
+    let light = 0.55 + 0.45 * abs(dot(face, vec3<f32>(0.3, 0.5, 0.81)));
+    return vec4<f32>(vec3<f32>(0.35, 0.6, 0.9) * light, 1.0);
+}
+#else
 @fragment
 fn fragment(in: ProxyVarying) -> SurfaceOutput {
     let dir = local_ray_direction(in.local);
@@ -101,4 +111,5 @@ fn fragment(in: ProxyVarying) -> SurfaceOutput {
     out.depth = depth;
     return out;
 }
+#endif
 #endif

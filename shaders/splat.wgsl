@@ -15,7 +15,9 @@
 // `@early_depth_test(less_equal)` where the device supports it.
 //
 // Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, OUTPUT_IDS, OUTPUT_NORMALS,
-// OUTPUT_OVERDRAW (a constant per fragment, for additive blending).
+// OUTPUT_OVERDRAW (a constant per fragment, for additive blending),
+// OUTPUT_BOUNDS (the proxies themselves, flat-coloured per splat),
+// SPLAT_OPEN_BOX (30 vertices per box: the −n face left out).
 #import bevy_chisel::quadric::{
     INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, intersect_line, literal_holds,
     local_ray_direction, prop, quadrics, clip_indices, splats, surface_color, surface_depth,
@@ -88,6 +90,10 @@ fn vertex(
     if dot(n, n) < 0.25 {
         // A singular point (cone apex): no tangent plane, bound the sphere.
         n = vec3<f32>(0.0, 0.0, 1.0);
+#ifdef SPLAT_OPEN_BOX
+        // Its −n face, left out, must face away from the eye.
+        n = -local_ray_direction(s.position);
+#endif
         e = r;
     }
     var helper = vec3<f32>(1.0, 0.0, 0.0);
@@ -96,7 +102,12 @@ fn vertex(
     }
     let t1 = normalize(cross(helper, n));
     let t2 = cross(n, t1);
+#ifdef SPLAT_OPEN_BOX
+    // Vertices 6..12 of a closed box are its −n face: skip them.
+    let c = box_corner(select(vertex, vertex + 6u, vertex >= 6u));
+#else
     let c = box_corner(vertex);
+#endif
     if e < prop.flat_ratio * r {
         // Flat: only the +n face (the first six vertices), lifted to +e.
         if vertex >= 6u {
@@ -117,6 +128,25 @@ fn vertex(
 @fragment
 fn fragment(in: SplatVarying) -> @location(0) vec4<f32> {
     return vec4<f32>(1.0 / 64.0, 1.0 / 64.0, 1.0 / 64.0, 1.0);
+}
+#else
+#ifdef OUTPUT_BOUNDS
+/// The splat bounds (§6.1, Fig. 12): each proxy in a colour of its own,
+/// its faces told apart by their slope, at the rasterized depth.
+@fragment
+fn fragment(in: SplatVarying) -> @location(0) vec4<f32> {
+    let face = normalize(cross(dpdx(in.local), dpdy(in.local)));
+    let light = 0.55 + 0.45 * abs(dot(face, vec3<f32>(0.3, 0.5, 0.81)));
+    return vec4<f32>(hash_color(in.splat) * light, 1.0);
+}
+
+/// A bright colour from a splat index.
+fn hash_color(i: u32) -> vec3<f32> {
+    var h = i * 747796405u + 2891336453u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    h = (h >> 22u) ^ h;
+    let c = vec3<f32>(f32(h & 255u), f32((h >> 8u) & 255u), f32((h >> 16u) & 255u)) / 255.0;
+    return 0.25 + 0.75 * c;
 }
 #else
 #ifdef EARLY_DEPTH_TEST
@@ -158,4 +188,5 @@ fn fragment(in: SplatVarying) -> SurfaceOutput {
     out.depth = depth;
     return out;
 }
+#endif
 #endif

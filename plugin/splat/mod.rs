@@ -24,7 +24,8 @@
 //!     commands.spawn((
 //!         QuadricProp {
 //!             scene: assets.load("scenes/classic.ron"),
-//!             bounds: PropBounds { centre: Vec3::ZERO, radius: 90.0 },
+//!             // `None` takes the scene file's `bounds`.
+//!             bounds: Some(PropBounds { centre: Vec3::ZERO, radius: 90.0 }),
 //!             radius: SplatRadius::Auto(40.0),
 //!         },
 //!         // Scene units are millimetres: a 10 cm prop at the origin.
@@ -79,6 +80,10 @@ pub enum SplatOutput {
     Normals,
     /// `1/64` per fragment invocation, added up (no depth test): overdraw.
     Overdraw,
+    /// The proxies themselves, each splat's in a colour of its own, at
+    /// their rasterized depth: the splat bounds of §6.1 (the proxy cube in
+    /// global ray-tracing mode).
+    Bounds,
 }
 
 /// Settings of the splat pass, for all props and views.
@@ -94,6 +99,12 @@ pub struct SplatSettings {
     /// Hits are kept within `radius · radius_tolerance` of their sample
     /// (slightly above 1 absorbs `f32` rounding at splat borders).
     pub radius_tolerance: f32,
+    /// Surface-aligned boxes without their `−n` face (§6.1: "if we are only
+    /// interested in the outer appearance, we can omit the box side in
+    /// negative normal direction"): fewer fragments from splats facing
+    /// away. Off by default; `tests/splat_bench.rs` measures it against the
+    /// closed boxes, pixel for pixel.
+    pub open_boxes: bool,
 }
 
 impl Default for SplatSettings {
@@ -103,6 +114,7 @@ impl Default for SplatSettings {
             output: SplatOutput::default(),
             flat_ratio: 1e-3,
             radius_tolerance: 1.001,
+            open_boxes: false,
         }
     }
 }

@@ -103,6 +103,8 @@ pub struct SplatPipelineKey {
     pub output: SplatOutput,
     /// The device supports `@early_depth_test`.
     pub early_depth_test: bool,
+    /// Surface-aligned boxes without their `−n` face.
+    pub open_boxes: bool,
 }
 
 impl SplatPipelineKey {
@@ -111,6 +113,7 @@ impl SplatPipelineKey {
     pub fn vertex_count(&self) -> u32 {
         match self.mode {
             SplatMode::ScreenQuads => 6,
+            SplatMode::SurfaceBoxes if self.open_boxes => 30,
             SplatMode::SurfaceBoxes | SplatMode::GlobalRayTrace => 36,
         }
     }
@@ -126,9 +129,15 @@ impl SpecializedRenderPipeline for SplatPipeline {
             SplatOutput::QuadricIds => defs.push("OUTPUT_IDS".into()),
             SplatOutput::Normals => defs.push("OUTPUT_NORMALS".into()),
             SplatOutput::Overdraw => defs.push("OUTPUT_OVERDRAW".into()),
+            SplatOutput::Bounds => defs.push("OUTPUT_BOUNDS".into()),
         }
         let (shader, cull_mode) = match key.mode {
-            SplatMode::SurfaceBoxes => (SPLAT_SHADER, Some(Face::Back)),
+            SplatMode::SurfaceBoxes => {
+                if key.open_boxes {
+                    defs.push("SPLAT_OPEN_BOX".into());
+                }
+                (SPLAT_SHADER, Some(Face::Back))
+            }
             SplatMode::ScreenQuads => {
                 defs.push("SPLAT_SCREEN_QUAD".into());
                 (SPLAT_SHADER, None)

@@ -108,8 +108,9 @@ pub struct QuadricProp {
     /// The scene.
     pub scene: Handle<QuadricScene>,
     /// Only the surface inside this sphere (local coordinates) is sampled
-    /// and drawn; it must contain the solid.
-    pub bounds: PropBounds,
+    /// and drawn; it must contain the solid. `None`: the scene file's
+    /// `bounds` (a scene without them is reported and not drawn).
+    pub bounds: Option<PropBounds>,
     /// Splat radius.
     pub radius: SplatRadius,
 }
@@ -123,7 +124,23 @@ pub struct PropBounds {
     pub radius: f32,
 }
 
+impl From<BoundingSphere> for PropBounds {
+    fn from(sphere: BoundingSphere) -> Self {
+        Self {
+            centre: sphere.centre.as_vec3(),
+            radius: sphere.radius as f32,
+        }
+    }
+}
+
 impl PropBounds {
+    /// The bounds of a prop: `given`, or else the scene's own (`bounds` in
+    /// the scene file); `None` when neither is there.
+    #[must_use]
+    pub fn resolve(given: Option<PropBounds>, scene: &Scene) -> Option<PropBounds> {
+        given.or_else(|| scene.bounds.map(PropBounds::from))
+    }
+
     /// The radius `r` of splats for `radius`.
     #[must_use]
     pub fn splat_radius(&self, radius: SplatRadius) -> f32 {
@@ -229,7 +246,7 @@ pub struct PropSampling {
     pending: bool,
     /// The running task.
     task: Option<Task<Result<PropSplats, String>>>,
-    /// The scene failed to load and was reported.
+    /// The scene failed to load, or has no bounds, and was reported.
     reported: bool,
 }
 
@@ -285,8 +302,18 @@ pub(crate) fn start_sampling(
             }
             continue;
         };
+        let Some(bounds) = PropBounds::resolve(prop.bounds, &scene.0) else {
+            if !state.reported {
+                error!(
+                    "quadric prop {entity}: no bounding sphere: give `bounds: (x, y, z, r)` in \
+                     the scene file or `QuadricProp::bounds`"
+                );
+                state.reported = true;
+            }
+            state.pending = false;
+            continue;
+        };
         let scene = scene.0.clone();
-        let bounds = prop.bounds;
         let radius = bounds.splat_radius(prop.radius);
         state.pending = false;
         state.task = Some(
@@ -316,5 +343,39 @@ pub(crate) fn finish_sampling(
             }
             Err(message) => error!("quadric prop {entity}: {message}"),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SPHERE: &str = r#"Scene(
+        primitives: [(name: "A", shape: Sphere(center: (0, 0, 0), radius: 10))],
+        root: Ref("A"),
+    )"#;
+    const SPHERE_WITH_BOUNDS: &str = r#"Scene(
+        primitives: [(name: "A", shape: Sphere(center: (0, 0, 0), radius: 10))],
+        root: Ref("A"),
+        bounds: (1, 2, 3, 12),
+    )"#;
+
+    #[test]
+    fn bounds_come_from_the_prop_then_from_the_scene_file() {
+        let with = Scene::from_ron(SPHERE_WITH_BOUNDS).expect("valid scene");
+        let without = Scene::from_ron(SPHERE).expect("valid scene");
+        let given = PropBounds {
+            centre: Vec3::ZERO,
+            radius: 20.0,
+        };
+        assert_eq!(PropBounds::resolve(Some(given), &with), Some(given));
+        assert_eq!(
+            PropBounds::resolve(None, &with),
+            Some(PropBounds {
+                centre: Vec3::new(1.0, 2.0, 3.0),
+                radius: 12.0,
+            })
+        );
+        assert_eq!(PropBounds::resolve(None, &without), None);
     }
 }

@@ -260,6 +260,7 @@ pub(crate) fn prepare_views(
             mode: settings.mode,
             output: settings.output,
             early_depth_test,
+            open_boxes: settings.open_boxes,
         };
         let id = pipelines.specialize(&pipeline_cache, &pipeline, key);
         commands.entity(entity).insert(SplatViewState {
