@@ -98,6 +98,58 @@ pub enum Error {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// Bytes that do not start with the octree file magic
+    /// ([`crate::octree::store::MAGIC`]): not an octree file.
+    NotAnOctreeFile,
+    /// An octree file of a format version this build cannot read.
+    UnsupportedFormatVersion {
+        /// Version found in the file.
+        found: u32,
+        /// The version this build reads and writes.
+        supported: u32,
+    },
+    /// An octree file that ends in the middle of a record.
+    TruncatedFile {
+        /// Byte offset where more data was expected.
+        at: usize,
+    },
+    /// An octree file whose checksum does not match its content: the bytes
+    /// were damaged after writing.
+    ChecksumMismatch {
+        /// The checksum stored in the file.
+        stored: u64,
+        /// The checksum of the bytes read.
+        computed: u64,
+    },
+    /// An octree file with a malformed record (unknown tag, impossible
+    /// count, dangling index, bytes after the end).
+    CorruptFile {
+        /// Byte offset of the record.
+        at: usize,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// A plane in an octree file outside the exact bit budget (or with a
+    /// zero normal); `cause` is the error [`crate::exact::Plane::new`] gives.
+    StoredPlaneOutOfBudget {
+        /// Byte offset of the plane.
+        at: usize,
+        /// Why the plane was refused.
+        cause: Box<Error>,
+    },
+    /// A BSP in an octree file whose nodes do not form one tree over its
+    /// planes.
+    InvalidStoredBsp {
+        /// Index of the BSP in the file's BSP table.
+        index: usize,
+        /// The defect found.
+        reason: String,
+    },
+    /// Reading or writing an octree file failed.
+    Io {
+        /// The operating system's message.
+        message: String,
+    },
 }
 
 impl fmt::Display for Error {
@@ -169,6 +221,42 @@ impl fmt::Display for Error {
                  move the input"
             ),
             Error::InvalidEdit { reason } => write!(f, "invalid edit: {reason}"),
+            Error::NotAnOctreeFile => write!(
+                f,
+                "not a chisel octree file (the magic bytes are missing); give a file written \
+                 by `Octree::to_bytes` or `chisel --export FILE.chisel`"
+            ),
+            Error::UnsupportedFormatVersion { found, supported } => write!(
+                f,
+                "octree file format version {found} is not supported (this build reads version \
+                 {supported}); write the file again with a matching build"
+            ),
+            Error::TruncatedFile { at } => write!(
+                f,
+                "octree file is truncated: data missing at byte {at}; the file was cut short \
+                 while writing or copying"
+            ),
+            Error::ChecksumMismatch { stored, computed } => write!(
+                f,
+                "octree file is damaged: checksum {computed:016x} of its content differs from \
+                 the stored {stored:016x}"
+            ),
+            Error::CorruptFile { at, reason } => {
+                write!(f, "octree file is corrupt at byte {at}: {reason}")
+            }
+            Error::StoredPlaneOutOfBudget { at, cause } => {
+                write!(
+                    f,
+                    "octree file holds an invalid plane at byte {at}: {cause}"
+                )
+            }
+            Error::InvalidStoredBsp { index, reason } => {
+                write!(
+                    f,
+                    "octree file holds an invalid BSP (number {index}): {reason}"
+                )
+            }
+            Error::Io { message } => write!(f, "octree file: {message}"),
             Error::CollinearPoints => write!(
                 f,
                 "the three points are collinear or coincide, so they define no plane"

@@ -15,6 +15,8 @@
 //! - [`measure`] — material volumes for reports.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
+//! - [`store`] — octree files: exact, versioned and checked
+//!   ([`Octree::to_bytes`], [`Octree::from_bytes`]).
 //!
 //! ## Example
 //!
@@ -44,6 +46,7 @@ mod graft;
 pub mod import;
 pub mod measure;
 mod mesh_check;
+pub mod store;
 pub mod surface;
 pub mod tool;
 pub mod tree;

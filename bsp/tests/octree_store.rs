@@ -1,0 +1,433 @@
+//! Octree files: a round trip is bit-identical (cells, planes, nodes,
+//! labels, exact volumes, later edits, bytes written again); snapshots
+//! share their BSPs again after loading; every truncation and random damage
+//! is a typed error, never a panic; and crafted defects behind a valid
+//! checksum give the specific error.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use chisel_bsp::Error;
+use chisel_bsp::convex::ConvexArena;
+use chisel_bsp::exact::budget::MAX_NORMAL;
+use chisel_bsp::octree::store::{
+    FORMAT_VERSION, MAGIC, checksum, snapshots_from_bytes, snapshots_to_bytes,
+};
+use chisel_bsp::octree::{CellBox, Edit, Leaf, Octree, OctreeConfig, Tool};
+use chisel_bsp::tools::{Pose, dodecahedron_corners};
+use chisel_bsp::tree::{EMPTY, Label};
+use common::volume::{Fraction, volume};
+use rand::{Rng as _, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const K: u8 = 12;
+const SIZE: i64 = 1 << K;
+
+fn config() -> OctreeConfig {
+    OctreeConfig {
+        max_bsp_nodes: 40,
+        max_depth: 6,
+    }
+}
+
+fn block() -> Octree {
+    let solid = CellBox {
+        min: [100, 100, 100],
+        max: [SIZE - 100, SIZE - 100, SIZE / 2],
+    };
+    Octree::from_box([-SIZE / 2, 0, 0], K, solid, 1, config()).expect("valid block")
+}
+
+fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
+    let scale = rng.random_range(60.0..300.0);
+    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
+    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
+    let pose = Pose {
+        rotation: [
+            [ca, -sa * cb, sa * sb],
+            [sa, ca * cb, -ca * sb],
+            [0.0, sb, cb],
+        ],
+        translation: [
+            rng.random_range(-SIZE as f64 / 2.0..SIZE as f64 / 2.0),
+            rng.random_range(0.0..SIZE as f64),
+            rng.random_range(SIZE as f64 * 0.3..SIZE as f64 * 0.6),
+        ],
+    };
+    Tool::placed(&dodecahedron_corners(scale), &pose).expect("valid tool")
+}
+
+fn random_edit(rng: &mut ChaCha8Rng) -> Edit {
+    match rng.random_range(0..10) {
+        0..=5 => Edit::Subtract,
+        6 | 7 => Edit::Add(rng.random_range(1..=3)),
+        _ => Edit::Paint(rng.random_range(1..=3)),
+    }
+}
+
+/// A block after `carves` random edits.
+fn carved(seed: u64, carves: usize) -> Octree {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut octree = block();
+    for _ in 0..carves {
+        let tool = random_tool(&mut rng);
+        octree
+            .apply(&tool, random_edit(&mut rng))
+            .expect("valid edit");
+    }
+    octree
+}
+
+/// Exact volume per non-empty label.
+fn exact_volumes(octree: &Octree) -> BTreeMap<Label, Fraction> {
+    let mut total: BTreeMap<Label, Fraction> = BTreeMap::new();
+    for (key, leaf) in octree.leaves() {
+        let mut arena = ConvexArena::new();
+        let cell = octree.cell_box(key).add_to(&mut arena).expect("in range");
+        for c in leaf.to_bsp().cells(&mut arena, cell) {
+            if c.label != EMPTY {
+                let e = total.entry(c.label).or_insert_with(Fraction::zero);
+                *e = e.add(&volume(&arena, c.poly));
+            }
+        }
+    }
+    total
+}
+
+/// Same cube, settings, cells, and per cell the same label or the same
+/// planes (exact coefficients), nodes and labels.
+fn assert_identical(a: &Octree, b: &Octree) {
+    assert_eq!(a.origin(), b.origin());
+    assert_eq!(a.size_log2(), b.size_log2());
+    assert_eq!(a.config(), b.config());
+    let (la, lb) = (a.leaves(), b.leaves());
+    assert_eq!(la.len(), lb.len());
+    for ((ka, a), (kb, b)) in la.iter().zip(&lb) {
+        assert_eq!(ka, kb);
+        match (a, b) {
+            (Leaf::Uniform(x), Leaf::Uniform(y)) => assert_eq!(x, y, "{ka:?}"),
+            (Leaf::Bsp(x), Leaf::Bsp(y)) => {
+                assert_eq!(x.nodes(), y.nodes(), "{ka:?}");
+                assert_eq!(x.planes().len(), y.planes().len());
+                for (p, q) in x.planes().iter().zip(y.planes()) {
+                    assert_eq!(p.normal(), q.normal());
+                    assert_eq!(p.offset(), q.offset());
+                }
+            }
+            _ => panic!("{ka:?}: leaf kinds differ"),
+        }
+    }
+}
+
+/// The file with its checksum recomputed, so that the records behind it
+/// are what the loader checks.
+fn resealed(mut bytes: Vec<u8>) -> Vec<u8> {
+    let end = bytes.len() - 8;
+    let sum = checksum(&bytes[..end]);
+    bytes[end..].copy_from_slice(&sum.to_le_bytes());
+    bytes
+}
+
+#[test]
+fn round_trips_are_bit_identical_after_random_carves() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut octree = block();
+    for step in 0..24 {
+        let tool = random_tool(&mut rng);
+        octree
+            .apply(&tool, random_edit(&mut rng))
+            .expect("valid edit");
+        if step % 6 != 5 {
+            continue;
+        }
+        let bytes = octree.to_bytes();
+        let loaded = Octree::from_bytes(&bytes).expect("loads");
+        assert_identical(&octree, &loaded);
+        assert_eq!(exact_volumes(&octree), exact_volumes(&loaded));
+        assert_eq!(octree.volumes(), loaded.volumes());
+        assert_eq!(octree.stats(), loaded.stats());
+        assert_eq!(loaded.to_bytes(), bytes, "written again, the same bytes");
+        // Both go on identically.
+        let (mut a, mut b) = (octree.clone(), loaded);
+        let tool = random_tool(&mut rng);
+        let edit = random_edit(&mut rng);
+        assert_eq!(a.apply(&tool, edit), b.apply(&tool, edit));
+        assert_eq!(a.to_bytes(), b.to_bytes());
+    }
+    assert!(octree.stats().bsp_leaves > 10, "{:?}", octree.stats());
+}
+
+#[test]
+fn uniform_and_single_leaf_octrees_round_trip() {
+    let empty = Octree::new([0; 3], 3, EMPTY, OctreeConfig::default()).expect("valid cube");
+    let back = Octree::from_bytes(&empty.to_bytes()).expect("loads");
+    assert_identical(&empty, &back);
+    let full = Octree::new([-8, -8, -8], 4, 7, OctreeConfig::default()).expect("valid cube");
+    assert_identical(&full, &Octree::from_bytes(&full.to_bytes()).expect("loads"));
+    let one = single_bsp_leaf();
+    assert!(matches!(one.leaves()[..], [(_, Leaf::Bsp(_))]));
+    assert_identical(&one, &Octree::from_bytes(&one.to_bytes()).expect("loads"));
+}
+
+#[test]
+fn snapshots_share_their_bsps_again() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut history = vec![carved(11, 10)];
+    for _ in 0..5 {
+        let mut next = history[history.len() - 1].clone();
+        next.apply(&random_tool(&mut rng), Edit::Subtract)
+            .expect("valid edit");
+        history.push(next);
+    }
+    let refs: Vec<&Octree> = history.iter().collect();
+    let bytes = snapshots_to_bytes(&refs);
+    let single: usize = history.iter().map(|o| o.to_bytes().len()).sum();
+    assert!(bytes.len() * 2 < single, "{} vs {single}", bytes.len());
+    let loaded = snapshots_from_bytes(&bytes).expect("loads");
+    assert_eq!(loaded.len(), history.len());
+    for (a, b) in history.iter().zip(&loaded) {
+        assert_identical(a, b);
+    }
+    // A BSP shared by two snapshots is shared after loading, and only then.
+    let first = &history[0];
+    let last = &history[history.len() - 1];
+    for (key, leaf) in first.leaves() {
+        let (Leaf::Bsp(a), Some(Leaf::Bsp(b))) = (leaf, last.leaf(key)) else {
+            continue;
+        };
+        let (Some(Leaf::Bsp(la)), Some(Leaf::Bsp(lb))) = (loaded[0].leaf(key), loaded[5].leaf(key))
+        else {
+            panic!("{key:?} is a BSP leaf in both");
+        };
+        assert_eq!(Arc::ptr_eq(a, b), Arc::ptr_eq(la, lb), "{key:?}");
+    }
+    let again: Vec<&Octree> = loaded.iter().collect();
+    assert_eq!(snapshots_to_bytes(&again), bytes);
+    assert!(matches!(
+        Octree::from_bytes(&bytes),
+        Err(Error::CorruptFile { .. })
+    ));
+}
+
+#[test]
+fn every_truncation_is_an_error() {
+    let bytes = carved(5, 12).to_bytes();
+    assert_eq!(Octree::from_bytes(&[]).err(), Some(Error::NotAnOctreeFile));
+    for n in 1..bytes.len() {
+        assert_eq!(
+            Octree::from_bytes(&bytes[..n]).err(),
+            Some(Error::TruncatedFile { at: n }),
+            "truncated to {n} of {} bytes",
+            bytes.len()
+        );
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(matches!(
+        Octree::from_bytes(&longer),
+        Err(Error::CorruptFile { at: 12, .. })
+    ));
+}
+
+#[test]
+fn random_damage_is_an_error_and_never_a_panic() {
+    let bytes = carved(9, 12).to_bytes();
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    for _ in 0..3000 {
+        let mut damaged = bytes.clone();
+        for _ in 0..rng.random_range(1..=4) {
+            let at = rng.random_range(0..damaged.len());
+            damaged[at] ^= rng.random_range(1..=255u8);
+        }
+        assert!(Octree::from_bytes(&damaged).is_err());
+    }
+}
+
+#[test]
+fn damage_behind_a_valid_checksum_never_panics() {
+    // The checksum is recomputed, so every record check is exercised. Some
+    // damage gives another valid octree (a changed label); that one must
+    // then be a sound octree that writes and reads back.
+    let bytes = carved(13, 8).to_bytes();
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let (mut refused, mut accepted) = (0, 0);
+    for _ in 0..4000 {
+        let mut damaged = bytes.clone();
+        for _ in 0..rng.random_range(1..=3) {
+            let at = rng.random_range(20..damaged.len() - 8);
+            damaged[at] = match rng.random_range(0..3) {
+                0 => damaged[at] ^ (1 << rng.random_range(0..8)),
+                1 => 0xff,
+                _ => rng.random(),
+            };
+        }
+        match Octree::from_bytes(&resealed(damaged)) {
+            Err(_) => refused += 1,
+            Ok(octree) => {
+                accepted += 1;
+                let again = Octree::from_bytes(&octree.to_bytes()).expect("reloads");
+                assert_identical(&octree, &again);
+            }
+        }
+    }
+    assert!(refused > 1000 && accepted > 10, "{refused} {accepted}");
+}
+
+#[test]
+fn wrong_magic_and_version_are_named() {
+    let bytes = carved(1, 3).to_bytes();
+    let mut magic = bytes.clone();
+    magic[3] = b'x';
+    assert_eq!(
+        Octree::from_bytes(&magic).err(),
+        Some(Error::NotAnOctreeFile)
+    );
+    assert_eq!(
+        Octree::from_bytes(b"solid cube\nfacet normal").err(),
+        Some(Error::NotAnOctreeFile)
+    );
+    assert_eq!(
+        Octree::from_bytes(&MAGIC[..5]).err(),
+        Some(Error::TruncatedFile { at: 5 })
+    );
+    let mut version = bytes.clone();
+    version[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
+    assert_eq!(
+        Octree::from_bytes(&version).err(),
+        Some(Error::UnsupportedFormatVersion {
+            found: FORMAT_VERSION + 1,
+            supported: FORMAT_VERSION,
+        })
+    );
+    let mut flipped = bytes.clone();
+    let middle = bytes.len() / 2;
+    flipped[middle] ^= 4;
+    assert!(matches!(
+        Octree::from_bytes(&flipped),
+        Err(Error::ChecksumMismatch { .. })
+    ));
+}
+
+/// A cube small enough that the block is one BSP leaf at the root.
+fn single_bsp_leaf() -> Octree {
+    let solid = CellBox {
+        min: [1, 2, 3],
+        max: [9, 10, 11],
+    };
+    Octree::from_box([0; 3], 4, solid, 2, OctreeConfig::default()).expect("valid box")
+}
+
+// Offsets in a file of one octree with one BSP leaf (see the layout in
+// `chisel_bsp::octree::store`): header 20, BSP count 4, plane and node
+// counts 4 + 4, then the planes (40 bytes each), then the nodes.
+const FIRST_PLANE: usize = 20 + 4 + 8;
+
+#[test]
+fn planes_outside_the_bit_budget_are_refused() {
+    let bytes = single_bsp_leaf().to_bytes();
+    let mut wide = bytes.clone();
+    wide[FIRST_PLANE..FIRST_PLANE + 8].copy_from_slice(&(MAX_NORMAL + 1).to_le_bytes());
+    assert_eq!(
+        Octree::from_bytes(&resealed(wide)).err(),
+        Some(Error::StoredPlaneOutOfBudget {
+            at: FIRST_PLANE,
+            cause: Box::new(Error::NormalOutOfRange {
+                component: 0,
+                value: MAX_NORMAL + 1
+            }),
+        })
+    );
+    let mut far = bytes.clone();
+    far[FIRST_PLANE + 24..FIRST_PLANE + 40].copy_from_slice(&(1i128 << 100).to_le_bytes());
+    assert!(matches!(
+        Octree::from_bytes(&resealed(far)),
+        Err(Error::StoredPlaneOutOfBudget { cause, .. })
+            if matches!(*cause, Error::OffsetOutOfRange { .. })
+    ));
+    let mut zero = bytes;
+    zero[FIRST_PLANE..FIRST_PLANE + 24].fill(0);
+    assert!(matches!(
+        Octree::from_bytes(&resealed(zero)),
+        Err(Error::StoredPlaneOutOfBudget { cause, .. }) if *cause == Error::ZeroNormal
+    ));
+}
+
+#[test]
+fn broken_trees_and_tilings_are_refused() {
+    let octree = single_bsp_leaf();
+    let Leaf::Bsp(bsp) = octree.leaves()[0].1.clone() else {
+        panic!("one BSP leaf");
+    };
+    let bytes = octree.to_bytes();
+    let nodes = FIRST_PLANE + 40 * bsp.planes().len();
+    // The root's `below` child pointing back at the root: not a tree.
+    let mut cycle = bytes.clone();
+    assert_eq!(cycle[nodes], 1, "the root is a split");
+    cycle[nodes + 5..nodes + 9].copy_from_slice(&0u32.to_le_bytes());
+    assert!(matches!(
+        Octree::from_bytes(&resealed(cycle)),
+        Err(Error::InvalidStoredBsp { index: 0, .. })
+    ));
+    let mut plane = bytes.clone();
+    plane[nodes + 1..nodes + 5].copy_from_slice(&999u32.to_le_bytes());
+    assert!(matches!(
+        Octree::from_bytes(&resealed(plane)),
+        Err(Error::InvalidStoredBsp { index: 0, .. })
+    ));
+    let mut tag = bytes.clone();
+    tag[nodes] = 7;
+    assert_eq!(
+        Octree::from_bytes(&resealed(tag)).err(),
+        Some(Error::CorruptFile {
+            at: nodes,
+            reason: "an unknown BSP node tag"
+        })
+    );
+    // The only leaf moved one level down: the cube is no longer covered.
+    let leaf = bytes.len() - 8 - (1 + 12 + 1 + 4);
+    let mut deeper = bytes.clone();
+    assert_eq!(deeper[leaf], 0, "the root leaf has depth 0");
+    deeper[leaf] = 1;
+    assert!(matches!(
+        Octree::from_bytes(&resealed(deeper)),
+        Err(Error::InvalidOctree { .. })
+    ));
+    // A BSP index beyond the table.
+    let mut index = bytes.clone();
+    index[leaf + 14..leaf + 18].copy_from_slice(&1u32.to_le_bytes());
+    assert!(matches!(
+        Octree::from_bytes(&resealed(index)),
+        Err(Error::CorruptFile { .. })
+    ));
+    // A cube beyond the exact range.
+    let cube = leaf - (4 + 1 + 8 + 1 + 24);
+    let mut far = bytes;
+    far[cube..cube + 8].copy_from_slice(&(i64::MAX - 3).to_le_bytes());
+    assert!(matches!(
+        Octree::from_bytes(&resealed(far)),
+        Err(Error::OctreeSize { .. })
+    ));
+}
+
+#[test]
+fn files_save_and_load() {
+    let octree = carved(21, 6);
+    let dir = std::env::temp_dir().join(format!("chisel-octree-store-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("carved.chisel");
+    octree.save(&path).expect("saves");
+    assert_identical(&octree, &Octree::load(&path).expect("loads"));
+    let mut buffer = Vec::new();
+    octree.write_to(&mut buffer).expect("writes");
+    assert_identical(
+        &octree,
+        &Octree::read_from(buffer.as_slice()).expect("reads"),
+    );
+    std::fs::remove_dir_all(&dir).expect("cleans up");
+    assert!(matches!(
+        Octree::load(dir.join("missing.chisel")),
+        Err(Error::Io { .. })
+    ));
+}
