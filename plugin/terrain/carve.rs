@@ -13,9 +13,9 @@
 //!    snapshot in and meshes the cells its carve had changed.
 //! 3. [`finish_jobs`] swaps the new octree in, records undo steps and queues
 //!    the cell meshes.
-//! 4. [`upload_meshes`] turns queued cell meshes into assets and entities
-//!    until the frame's budget ([`TerrainSettings::mesh_budget`]) is spent,
-//!    writes a [`TerrainCellChanged`] per cell and, once a carve is fully
+//! 4. [`upload_meshes`] adds the queued cell meshes (built in step 2) as
+//!    assets and entities until the frame's budget
+//!    ([`TerrainSettings::mesh_budget`]) is spent, writes a [`TerrainCellChanged`] per cell and, once a carve is fully
 //!    visible, its [`CarveApplied`].
 
 use std::collections::BTreeSet;
@@ -29,7 +29,7 @@ use rayon::prelude::*;
 
 use super::component::{Job, Terrain, TerrainCell, TerrainMaterials, apply_carve};
 use super::error::TerrainError;
-use super::mesh::{CellMesh, cell_meshes, cell_translation};
+use super::mesh::{ReadyMesh, cell_meshes, cell_translation};
 use super::tool::{CarveTool, GridTool};
 
 /// Carve a terrain: remove material inside the tool, add material to its
@@ -132,7 +132,7 @@ pub(crate) enum StepOutcome {
 pub(crate) struct JobOutput {
     octree: Octree,
     steps: Vec<StepOutcome>,
-    meshes: Vec<(CellKey, Option<Vec<CellMesh>>)>,
+    meshes: Vec<(CellKey, Option<Vec<ReadyMesh>>)>,
     mesh_time: Duration,
 }
 
@@ -141,7 +141,7 @@ pub(crate) enum Upload {
     Cell {
         key: CellKey,
         translation: Vec3,
-        meshes: Option<Vec<CellMesh>>,
+        meshes: Option<Vec<ReadyMesh>>,
     },
     Report(CarveApplied, Instant),
 }
@@ -304,9 +304,12 @@ fn remesh(
     let meshes = keys
         .par_iter()
         .map(|&key| {
-            let meshes = octree
-                .leaf(key)
-                .map(|_| cell_meshes(&octree, &quantization, key));
+            let meshes = octree.leaf(key).map(|_| {
+                cell_meshes(&octree, &quantization, key)
+                    .into_iter()
+                    .map(ReadyMesh::from)
+                    .collect()
+            });
             (key, meshes)
         })
         .collect();
@@ -429,27 +432,24 @@ pub fn upload_meshes(
                 } => {
                     uploaded += 1;
                     let old = runtime.cells.remove(&key).unwrap_or_default();
+                    let mut new = new.unwrap_or_default();
                     let mut kept = Vec::new();
                     for (label, cell_entity, triangles) in old {
                         runtime.triangles -= triangles;
-                        let reused = new
-                            .as_ref()
-                            .and_then(|n| n.iter().find(|m| m.label == label));
+                        let reused = new.iter().position(|m| m.label == label);
                         match (reused, cells.get_mut(cell_entity)) {
-                            (Some(mesh), Ok(mut handle)) => {
-                                handle.0 = meshes.add(mesh.to_mesh());
+                            (Some(i), Ok(mut handle)) => {
+                                let mesh = new.swap_remove(i);
+                                handle.0 = meshes.add(mesh.mesh);
                                 commands
                                     .entity(cell_entity)
                                     .insert(Transform::from_translation(translation));
-                                kept.push((label, cell_entity, mesh.triangle_count()));
+                                kept.push((label, cell_entity, mesh.triangles));
                             }
                             _ => commands.entity(cell_entity).despawn(),
                         }
                     }
-                    for mesh in new.iter().flatten() {
-                        if kept.iter().any(|&(l, _, _)| l == mesh.label) {
-                            continue;
-                        }
+                    for mesh in new {
                         let material = materials.map(|m| m.get(mesh.label)).unwrap_or_default();
                         let cell_entity = commands
                             .spawn((
@@ -458,13 +458,13 @@ pub fn upload_meshes(
                                     key,
                                     label: mesh.label,
                                 },
-                                Mesh3d(meshes.add(mesh.to_mesh())),
+                                Mesh3d(meshes.add(mesh.mesh)),
                                 MeshMaterial3d(material),
                                 Transform::from_translation(translation),
                                 ChildOf(entity),
                             ))
                             .id();
-                        kept.push((mesh.label, cell_entity, mesh.triangle_count()));
+                        kept.push((mesh.label, cell_entity, mesh.triangles));
                     }
                     kept.sort_by_key(|&(l, _, _)| l);
                     runtime.triangles += kept.iter().map(|&(_, _, t)| t).sum::<usize>();

@@ -1,8 +1,8 @@
 //! Cell meshes: the visible surface of one leaf cell, per material, as
 //! flat-shaded `f32` triangles relative to the cell's lower corner.
 //!
-//! Pure functions of the octree, run on the async compute pool; the main
-//! thread only turns their output into [`Mesh`] assets.
+//! Pure functions of the octree, run on the async compute pool, which also
+//! builds the [`Mesh`]es; the main thread only adds them as assets.
 
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::PrimitiveTopology;
@@ -34,12 +34,39 @@ impl CellMesh {
     /// As a Bevy triangle-list mesh.
     #[must_use]
     pub fn to_mesh(&self) -> Mesh {
+        self.clone().into_mesh()
+    }
+
+    /// As a Bevy triangle-list mesh, without copying the vertices.
+    #[must_use]
+    pub fn into_mesh(self) -> Mesh {
         Mesh::new(
             PrimitiveTopology::TriangleList,
             RenderAssetUsages::default(),
         )
-        .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, self.positions.clone())
-        .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, self.normals.clone())
+        .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, self.positions)
+        .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, self.normals)
+    }
+}
+
+/// One material's mesh of a cell, built off the main thread and ready to be
+/// added as an asset.
+pub(crate) struct ReadyMesh {
+    /// The material.
+    pub label: Label,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// The Bevy mesh.
+    pub mesh: Mesh,
+}
+
+impl From<CellMesh> for ReadyMesh {
+    fn from(mesh: CellMesh) -> Self {
+        Self {
+            label: mesh.label,
+            triangles: mesh.triangle_count(),
+            mesh: mesh.into_mesh(),
+        }
     }
 }
 
