@@ -1,22 +1,28 @@
 //! `chisel boolean A B --op union|intersection|difference -o OUT`: the
-//! exact Boolean of two closed meshes (OBJ, PLY or GLB, millimetres).
+//! exact Boolean of two solids, each a closed mesh (OBJ, PLY or GLB,
+//! millimetres) or an exact octree file (`.chisel`); the result is written
+//! as a mesh or, for an `OUT` ending in `.chisel`, as an exact octree.
 //!
-//! Both meshes are imported into octrees over one cube (§3.9). `B` is then
-//! applied to `A` one leaf cell at a time: the convex cells of the leaf's
-//! BSP inside the leaf's box are exact convex polyhedra, so their union is
-//! a [`Tool`] holding exactly `B` within that box. Union adds those tools,
-//! difference subtracts them, and intersection subtracts the tools made of
-//! `B`'s *empty* cells (`A ∩ B = A − (cube − B)`). Every step is exact.
+//! Both operands go into octrees over one cube: meshes are imported
+//! (§3.9); an octree file is used as stored when its cube holds both
+//! solids, else moved into the common cube exactly. `B` is then applied to
+//! `A` one leaf cell at a time: the convex cells of the leaf's BSP inside
+//! the leaf's box are exact convex polyhedra, so their union is a [`Tool`]
+//! holding exactly `B` within that box. Union adds those tools (each of
+//! `B`'s materials as itself), difference subtracts them, and intersection
+//! subtracts the tools made of `B`'s *empty* cells (`A ∩ B = A − (cube −
+//! B)`). Every step is exact, so with octree files `A ∩ A` is `A` and
+//! `A − A` is empty.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use chisel_bsp::convex::ConvexArena;
-use chisel_bsp::octree::{CellBox, Edit, Leaf, Octree, OctreeConfig, Tool};
+use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
 use chisel_bsp::tree::EMPTY;
 use serde_json::json;
 
 use crate::meshfile;
+use crate::octree_file::{self, leaf_tool};
 use crate::scenario::extract;
 use crate::scenario::sequence::root_cube;
 
@@ -45,71 +51,147 @@ pub struct BooleanArgs {
     pub json: bool,
 }
 
-/// The tool holding `B`'s cells of label `solid` (material, or empty when
-/// `solid` is false) inside one leaf, or `None` when there are none.
-fn leaf_tool(leaf: &Leaf, cell: CellBox, solid: bool) -> Result<Option<Tool>, String> {
-    let wanted = |label| (label != EMPTY) == solid;
-    match leaf {
-        Leaf::Uniform(label) if wanted(*label) => {
-            Tool::cuboid(cell).map(Some).map_err(|e| e.to_string())
+/// One operand as read: a mesh to import, or an exact octree file.
+enum Operand {
+    Mesh(meshfile::GridMesh),
+    Octree(Octree),
+}
+
+impl Operand {
+    fn read(path: &Path) -> Result<Operand, String> {
+        if octree_file::is_octree_file(path) {
+            octree_file::read(path).map(Operand::Octree)
+        } else {
+            meshfile::read_grid(path).map(Operand::Mesh)
         }
-        Leaf::Uniform(_) => Ok(None),
-        Leaf::Bsp(bsp) => {
-            let mut arena = ConvexArena::new();
-            let bounds = cell.add_to(&mut arena).map_err(|e| e.to_string())?;
-            let pieces: Vec<Tool> = bsp
-                .cells(&mut arena, bounds)
-                .into_iter()
-                .filter(|c| wanted(c.label))
-                .map(|c| Tool::from_polyhedron(&arena, c.poly))
-                .collect();
-            if pieces.is_empty() {
-                return Ok(None);
+    }
+
+    /// A box around the operand's material (`None` for an empty octree).
+    fn bounds(&self) -> Option<CellBox> {
+        match self {
+            Operand::Mesh(mesh) => Some(mesh.bounds),
+            Operand::Octree(octree) => octree_file::solid_bounds(octree),
+        }
+    }
+
+    /// The octree's cube, when it holds `bounds`.
+    fn cube_holding(&self, bounds: &CellBox) -> Option<([i64; 3], u8)> {
+        match self {
+            Operand::Octree(o) if octree_file::holds(&o.root_box(), bounds) => {
+                Some((o.origin(), o.size_log2()))
             }
-            Tool::union(&pieces).map(Some).map_err(|e| e.to_string())
+            _ => None,
         }
+    }
+
+    fn triangles(&self) -> Option<usize> {
+        match self {
+            Operand::Mesh(mesh) => Some(mesh.triangles.len()),
+            Operand::Octree(_) => None,
+        }
+    }
+
+    /// The operand as an octree over the cube `(origin, size_log2)`:
+    /// imported (a mesh), as stored (an octree over that cube) or moved
+    /// there exactly.
+    fn into_octree(
+        self,
+        origin: [i64; 3],
+        size_log2: u8,
+        config: OctreeConfig,
+        path: &Path,
+    ) -> Result<Octree, String> {
+        match self {
+            Operand::Mesh(mesh) => {
+                Octree::from_triangles(origin, size_log2, &mesh.triangles, 1, config)
+                    .map_err(|e| format!("{}: {e}", path.display()))
+            }
+            Operand::Octree(octree) => octree_file::embed(octree, origin, size_log2)
+                .map_err(|e| format!("{}: {e}", path.display())),
+        }
+    }
+}
+
+/// The cube both operands go into: an operand octree's own cube when it
+/// holds both solids (first `A`'s, then `B`'s; no copy needed), else the
+/// smallest cube around both.
+fn common_cube(a: &Operand, b: &Operand) -> Result<([i64; 3], u8), String> {
+    let bounds = [a.bounds(), b.bounds()]
+        .into_iter()
+        .flatten()
+        .reduce(|x, y| CellBox {
+            min: [0, 1, 2].map(|i| x.min[i].min(y.min[i])),
+            max: [0, 1, 2].map(|i| x.max[i].max(y.max[i])),
+        });
+    let Some(bounds) = bounds else {
+        // Both empty: any cube of an operand will do.
+        return match (a, b) {
+            (Operand::Octree(o), _) | (_, Operand::Octree(o)) => Ok((o.origin(), o.size_log2())),
+            _ => root_cube(CellBox {
+                min: [0; 3],
+                max: [2; 3],
+            }),
+        };
+    };
+    match a.cube_holding(&bounds).or_else(|| b.cube_holding(&bounds)) {
+        Some(cube) => Ok(cube),
+        None => root_cube(bounds),
     }
 }
 
 /// Runs the command; errors are messages for the user.
 pub fn run(args: &BooleanArgs) -> Result<(), String> {
     let start = Instant::now();
-    let a = meshfile::read_grid(&args.a)?;
-    let b = meshfile::read_grid(&args.b)?;
-    let bounds = CellBox {
-        min: [0, 1, 2].map(|i| a.bounds.min[i].min(b.bounds.min[i])),
-        max: [0, 1, 2].map(|i| a.bounds.max[i].max(b.bounds.max[i])),
+    let a = Operand::read(&args.a)?;
+    let b = Operand::read(&args.b)?;
+    let (a_triangles, b_triangles) = (a.triangles(), b.triangles());
+    let (origin, size_log2) = common_cube(&a, &b)?;
+    let config = match &a {
+        Operand::Octree(octree) => *octree.config(),
+        Operand::Mesh(_) => OctreeConfig::default(),
     };
-    let (origin, size_log2) = root_cube(bounds)?;
-    let config = OctreeConfig::default();
-    let import = |mesh: &meshfile::GridMesh, path: &PathBuf| {
-        Octree::from_triangles(origin, size_log2, &mesh.triangles, 1, config)
-            .map_err(|e| format!("{}: {e}", path.display()))
-    };
-    let mut result = import(&a, &args.a)?;
-    let other = import(&b, &args.b)?;
+    let mut result = a.into_octree(origin, size_log2, config, &args.a)?;
+    let other = b.into_octree(origin, size_log2, config, &args.b)?;
     let imported = start.elapsed().as_secs_f64();
     let (volume_a, volume_b) = (result.solid_volume(), other.solid_volume());
-    let (edit, solid) = match args.op {
-        BooleanKind::Union => (Edit::Add(1), true),
-        BooleanKind::Difference => (Edit::Subtract, true),
-        BooleanKind::Intersection => (Edit::Subtract, false),
-    };
     let mut tools = 0;
     for (key, leaf) in other.leaves() {
-        if let Some(tool) = leaf_tool(leaf, other.cell_box(key), solid)? {
-            result.apply(&tool, edit).map_err(|e| e.to_string())?;
-            tools += 1;
+        let cell = other.cell_box(key);
+        // Union adds each of B's materials as itself; difference removes
+        // all of them; intersection removes B's empty space.
+        let steps: Vec<(Edit, Option<Tool>)> = match args.op {
+            BooleanKind::Union => octree_file::leaf_labels(leaf)
+                .into_iter()
+                .filter(|&l| l != EMPTY)
+                .map(|label| Ok((Edit::Add(label), leaf_tool(leaf, cell, |l| l == label)?)))
+                .collect::<Result<_, String>>()?,
+            BooleanKind::Difference => {
+                vec![(Edit::Subtract, leaf_tool(leaf, cell, |l| l != EMPTY)?)]
+            }
+            BooleanKind::Intersection => {
+                vec![(Edit::Subtract, leaf_tool(leaf, cell, |l| l == EMPTY)?)]
+            }
+        };
+        for (edit, tool) in steps {
+            if let Some(tool) = tool {
+                result.apply(&tool, edit).map_err(|e| e.to_string())?;
+                tools += 1;
+            }
         }
     }
     let (mesh, closure) = extract::whole(&result);
     let seconds = start.elapsed().as_secs_f64();
-    meshfile::write(&args.output, &mesh)?;
-    let mm3 = |v: f64| v / 1e9;
+    if octree_file::is_octree_file(&args.output) {
+        octree_file::write(&args.output, &result)?;
+    } else {
+        meshfile::write(&args.output, &mesh)?;
+    }
+    // `+ 0.0` reports an empty result as 0, not −0.
+    let mm3 = |v: f64| v / 1e9 + 0.0;
     let figures = json!({
         "op": format!("{:?}", args.op).to_lowercase(),
-        "a_triangles": a.triangles.len(),
-        "b_triangles": b.triangles.len(),
+        "a_triangles": a_triangles,
+        "b_triangles": b_triangles,
         "a_volume_mm3": mm3(volume_a),
         "b_volume_mm3": mm3(volume_b),
         "volume_mm3": mm3(result.solid_volume()),
@@ -124,14 +206,17 @@ pub fn run(args: &BooleanArgs) -> Result<(), String> {
     if args.json {
         println!("{figures}");
     } else {
+        let size = |triangles: Option<usize>| {
+            triangles.map_or_else(|| "exact octree".to_string(), |t| format!("{t} triangles"))
+        };
         println!(
-            "{:?} of {} ({} triangles, {:.6} mm³) and {} ({} triangles, {:.6} mm³)",
+            "{:?} of {} ({}, {:.6} mm³) and {} ({}, {:.6} mm³)",
             args.op,
             args.a.display(),
-            a.triangles.len(),
+            size(a_triangles),
             mm3(volume_a),
             args.b.display(),
-            b.triangles.len(),
+            size(b_triangles),
             mm3(volume_b)
         );
         println!(

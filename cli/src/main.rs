@@ -11,7 +11,13 @@
 //!   sequence. All report per-step latency, result size, volume and memory
 //!   (`--json`, `--csv`, `--export`, `--record`).
 //! - `chisel boolean A B --op union|intersection|difference -o OUT` — the
-//!   exact Boolean of two closed meshes (OBJ, PLY or GLB).
+//!   exact Boolean of two closed meshes (OBJ, PLY or GLB) or exact octree
+//!   files (`.chisel`).
+//!
+//! Every result can be written as a mesh (`.obj`, `.ply`, `.glb`: floats,
+//! for viewers) or as an exact octree file (`.chisel`: integers, read back
+//! bit-identically by `chisel boolean` and by a replay's
+//! `{"base": {"mesh": "FILE.chisel"}}`).
 //!
 //! Bad input (unreadable or malformed files, out-of-range numbers) is
 //! reported on standard error with exit code 2.
@@ -27,6 +33,7 @@ mod boolean;
 mod budget;
 mod formats;
 mod meshfile;
+mod octree_file;
 mod sample;
 mod scenario;
 mod trace;
@@ -121,24 +128,26 @@ enum Command {
         #[command(flatten)]
         run: RunFlags,
     },
-    /// The exact Boolean of two closed meshes (OBJ, PLY or GLB, in mm).
+    /// The exact Boolean of two solids: closed meshes (OBJ, PLY or GLB, in
+    /// mm) or exact octree files (.chisel, read with no re-import).
     Boolean {
-        /// First operand.
+        /// First operand (.obj, .ply, .glb or .chisel).
         a: PathBuf,
-        /// Second operand.
+        /// Second operand (.obj, .ply, .glb or .chisel).
         b: PathBuf,
         /// The operation.
         #[arg(long, value_enum)]
         op: boolean::BooleanKind,
-        /// Output mesh (.obj, .ply or .glb).
+        /// Output: a mesh (.obj, .ply or .glb) or the exact octree
+        /// (.chisel).
         #[arg(short, long)]
         output: PathBuf,
         /// One line of JSON instead of a report.
         #[arg(long)]
         json: bool,
     },
-    /// Apply a recorded operation sequence (JSON lines: a base, then one
-    /// convex hull per step, millimetres).
+    /// Apply a recorded operation sequence (JSON lines: a base box, mesh or
+    /// .chisel octree, then one convex hull per step, millimetres).
     Replay {
         /// The sequence file.
         ops: PathBuf,

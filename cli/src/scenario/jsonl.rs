@@ -2,14 +2,17 @@
 //!
 //! ```text
 //! {"base": {"box": [[x0, y0, z0], [x1, y1, z1]]}}     first line: the base solid,
-//! {"base": {"mesh": "part.glb"}}                      or a closed mesh (OBJ/PLY/GLB),
+//! {"base": {"mesh": "part.glb"}}                      or a closed mesh (OBJ/PLY/GLB)
+//! {"base": {"mesh": "part.chisel"}}                   or an exact octree file,
 //! {"base": "empty"}                                   or nothing (unions build it)
 //! {"op": "subtract", "hull": [[x, y, z], ...]}        then one line per step:
 //! {"op": "union", "hull": [[x, y, z], ...]}           the tool is the convex hull
 //! {"op": "intersect", "hull": [[x, y, z], ...]}       of the points
 //! ```
 //!
-//! Points are quantized to the 1 µm grid on reading. A recorded file holds
+//! An exact octree file (`.chisel`, written by `--export FILE.chisel`) is
+//! used as stored, with no re-import. Points are quantized to the 1 µm grid
+//! on reading. A recorded file holds
 //! the grid points exactly (their shortest decimals in millimetres), so a
 //! replay, or a peer given the same file, applies exactly the same tools.
 //! Blank lines are ignored; anything else malformed is an error naming its

@@ -16,6 +16,7 @@ use super::extract;
 use super::jsonl;
 use super::report::{Latency, OctreeFigures, Report, StepRecord, peak_memory_mib, write_csv};
 use super::sequence::{Base, Sequence, root_cube};
+use crate::octree_file;
 
 /// Options shared by every scenario command.
 #[derive(clap::Args, Clone, Debug)]
@@ -26,7 +27,9 @@ pub struct RunFlags {
     /// Write per-step latencies to this CSV file.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
-    /// Write the resulting surface to this mesh file (.obj, .ply or .glb).
+    /// Write the result: its surface as a mesh (.obj, .ply or .glb), or
+    /// the exact octree (.chisel), which `chisel boolean` and a replay base
+    /// read back bit-identically.
     #[arg(long, value_name = "FILE")]
     pub export: Option<PathBuf>,
     /// Write the operation sequence to this file in the replay format
@@ -69,12 +72,16 @@ pub fn run(scenario: &Scenario, flags: &RunFlags) -> Result<(), String> {
         .num_threads(flags.threads.map_or(0, |t| t as usize))
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
-    let (report, steps, mesh) = pool.install(|| execute(scenario, flags))?;
+    let (report, steps, mesh, octree) = pool.install(|| execute(scenario, flags))?;
     if let Some(path) = &flags.csv {
         write_csv(path, &steps)?;
     }
     if let Some(path) = &flags.export {
-        crate::meshfile::write(path, &mesh)?;
+        if octree_file::is_octree_file(path) {
+            octree_file::write(path, &octree)?;
+        } else {
+            crate::meshfile::write(path, &mesh)?;
+        }
     }
     if flags.json {
         println!("{}", report.json());
@@ -94,7 +101,17 @@ pub fn run(scenario: &Scenario, flags: &RunFlags) -> Result<(), String> {
 }
 
 /// The octree of the base solid, in a cube holding it and every tool.
+///
+/// A `.chisel` base is used exactly as stored (its cube and settings) when
+/// its cube holds every tool, and otherwise moved exactly into a cube that
+/// does.
 fn base_octree(sequence: &Sequence, config: OctreeConfig) -> Result<Octree, String> {
+    if let Base::Mesh(path) = &sequence.base
+        && octree_file::is_octree_file(path)
+    {
+        return stored_base(octree_file::read(path)?, sequence)
+            .map_err(|e| format!("{}: {e}", path.display()));
+    }
     let mesh = match &sequence.base {
         Base::Mesh(path) => Some(crate::meshfile::read_grid(path)?),
         Base::Empty | Base::Box(_) => None,
@@ -128,6 +145,25 @@ fn base_octree(sequence: &Sequence, config: OctreeConfig) -> Result<Octree, Stri
     })
 }
 
+/// A stored base octree in a cube holding it and every tool of `sequence`.
+fn stored_base(octree: Octree, sequence: &Sequence) -> Result<Octree, String> {
+    let Some(tools) = sequence.bounds() else {
+        return Ok(octree);
+    };
+    if octree_file::holds(&octree.root_box(), &tools) {
+        return Ok(octree);
+    }
+    let bounds = match octree_file::solid_bounds(&octree) {
+        None => tools,
+        Some(b) => CellBox {
+            min: [0, 1, 2].map(|i| tools.min[i].min(b.min[i])),
+            max: [0, 1, 2].map(|i| tools.max[i].max(b.max[i])),
+        },
+    };
+    let (origin, size_log2) = root_cube(bounds)?;
+    octree_file::embed(octree, origin, size_log2)
+}
+
 fn progress(len: usize, hidden: bool, name: &str) -> ProgressBar {
     if hidden || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
@@ -142,7 +178,12 @@ fn progress(len: usize, hidden: bool, name: &str) -> ProgressBar {
     bar
 }
 
-type Outcome = (Report, Vec<StepRecord>, chisel_bsp::mesh::TriangleMesh);
+type Outcome = (
+    Report,
+    Vec<StepRecord>,
+    chisel_bsp::mesh::TriangleMesh,
+    Octree,
+);
 
 fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
     let config = OctreeConfig {
@@ -220,5 +261,5 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
         mesh_hash: format!("{:016x}", extract::mesh_hash(&mesh)),
         checked: flags.check,
     };
-    Ok((report, records, mesh))
+    Ok((report, records, mesh, octree))
 }
