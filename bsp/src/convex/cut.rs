@@ -17,12 +17,12 @@
 //!
 //! [`ConvexArena::cut_naive`] finds the crossing edges by classifying every
 //! vertex; the edge-descent search of the paper replaces only that step.
+//! Both hand the faces that meet the section to [`super::split`], which
+//! does steps 1–3.
 
-use super::mesh::{ConvexArena, Face, HalfEdge, PolyId, Vertex};
+use super::mesh::{ConvexArena, PolyId};
 use super::scratch::Scratch;
-use crate::exact::{
-    Plane, Sign, classify_vertex, compare_offsets, intersect_3_planes, offset_estimate,
-};
+use crate::exact::{Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
 
 /// The result of cutting a polyhedron `P` by a plane `s`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,11 +68,15 @@ impl ConvexArena {
                 (false, _) => return CutOutcome::Above,
                 (true, false) => return CutOutcome::Below,
             }
-            let relevant = faces
-                .into_iter()
-                .filter(|&f| arena.meets_section(f, scratch))
-                .collect();
-            arena.split_along(relevant, scratch, s, below_tag, above_tag)
+            let mut relevant = std::mem::take(&mut scratch.relevant);
+            relevant.clear();
+            relevant.extend(
+                faces
+                    .into_iter()
+                    .filter(|&f| arena.meets_section(f, scratch)),
+            );
+            scratch.relevant = relevant;
+            arena.split_along(scratch, s, below_tag, above_tag)
         })
     }
 
@@ -108,8 +112,8 @@ impl ConvexArena {
                     [v0, v0]
                 }
             };
-            let relevant = arena.march(&seeds, s, scratch);
-            arena.split_along(relevant, scratch, s, below_tag, above_tag)
+            arena.march(&seeds, s, scratch);
+            arena.split_along(scratch, s, below_tag, above_tag)
         })
     }
 
@@ -134,7 +138,7 @@ impl ConvexArena {
 
     /// The side of an already classified vertex.
     #[inline]
-    fn known_side(v: u32, scratch: &Scratch) -> Sign {
+    pub(super) fn known_side(v: u32, scratch: &Scratch) -> Sign {
         scratch.sides.get(v).expect("vertex classified before use")
     }
 
@@ -207,10 +211,13 @@ impl ConvexArena {
 
     /// Marches around the section from the faces around `seeds`: visits the
     /// faces that meet the section, crossing from one to the next through
-    /// crossing edges, edges in `s` and vertices on `s`.
-    fn march(&self, seeds: &[u32], s: &Plane, scratch: &mut Scratch) -> Vec<u32> {
-        let mut queue: Vec<u32> = Vec::with_capacity(64);
-        let mut relevant = Vec::with_capacity(64);
+    /// crossing edges, edges in `s` and vertices on `s`, and leaves them in
+    /// `scratch.relevant`.
+    fn march(&self, seeds: &[u32], s: &Plane, scratch: &mut Scratch) {
+        let mut queue = std::mem::take(&mut scratch.queue);
+        let mut relevant = std::mem::take(&mut scratch.relevant);
+        queue.clear();
+        relevant.clear();
         let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
             if scratch.vertices.insert(v, true) {
                 for h in self.outgoing(v) {
@@ -225,10 +232,28 @@ impl ConvexArena {
             around(v, &mut queue, scratch);
         }
         while let Some(f) = queue.pop() {
-            for h in self.face_loop(f) {
-                self.side(self.half_edges[h as usize].origin, s, scratch);
+            // Classify the face's vertices, noting whether it meets the
+            // section (vertices on both sides, or an edge in s).
+            let first = self.faces[f as usize].half_edge;
+            let first_side = self.side(self.half_edges[first as usize].origin, s, scratch);
+            let (mut plus, mut minus, mut in_plane) = (false, false, false);
+            let (mut h, mut here) = (first, first_side);
+            loop {
+                let next = self.half_edges[h as usize].next;
+                let there = if next == first {
+                    first_side
+                } else {
+                    self.side(self.half_edges[next as usize].origin, s, scratch)
+                };
+                plus |= here == Sign::Positive;
+                minus |= here == Sign::Negative;
+                in_plane |= here == Sign::Zero && there == Sign::Zero;
+                if next == first {
+                    break;
+                }
+                (h, here) = (next, there);
             }
-            if !self.meets_section(f, scratch) {
+            if !((plus && minus) || in_plane) {
                 continue;
             }
             relevant.push(f);
@@ -249,7 +274,8 @@ impl ConvexArena {
                 }
             }
         }
-        relevant
+        scratch.queue = queue;
+        scratch.relevant = relevant;
     }
 
     /// True when face `f` (all vertices classified) contains a section edge
@@ -264,258 +290,5 @@ impl ConvexArena {
             in_plane |= a == Sign::Zero && Self::known_side(self.dest(h), scratch) == Sign::Zero;
         }
         (plus && minus) || in_plane
-    }
-
-    /// Splits along the section, given the faces that meet it, their
-    /// vertices classified (steps 1–3 of the module docs).
-    fn split_along(
-        &mut self,
-        mut relevant: Vec<u32>,
-        scratch: &mut Scratch,
-        s: &Plane,
-        below_tag: u32,
-        above_tag: u32,
-    ) -> CutOutcome {
-        relevant.sort_unstable();
-        // 1. Split crossing edges (each once: from its + end).
-        let mut crossing = Vec::with_capacity(relevant.len());
-        for &f in &relevant {
-            for h in self.face_loop(f) {
-                let e = self.half_edges[h as usize];
-                if Self::known_side(e.origin, scratch) == Sign::Positive
-                    && Self::known_side(self.dest(h), scratch) == Sign::Negative
-                {
-                    crossing.push(h);
-                }
-            }
-        }
-        for h in crossing {
-            let m = self.split_edge(h, s);
-            scratch.sides.insert(m, Sign::Zero);
-        }
-        // 2. Split straddling faces.
-        let mut faces = Vec::with_capacity(2 * relevant.len());
-        faces.extend_from_slice(&relevant);
-        for &f in &relevant {
-            let has = |sign| {
-                self.face_loop(f)
-                    .any(|h| Self::known_side(self.half_edges[h as usize].origin, scratch) == sign)
-            };
-            if has(Sign::Positive) && has(Sign::Negative) {
-                faces.push(self.split_face(f, scratch));
-            }
-        }
-        // 3. Caps from the half-edges lying in s.
-        self.add_caps(&faces, scratch, s, below_tag, above_tag)
-    }
-
-    /// Splits the edge of half-edge `h` at its intersection with `s`;
-    /// returns the new vertex, which `h` now ends at.
-    fn split_edge(&mut self, h: u32, s: &Plane) -> u32 {
-        let e = self.half_edges[h as usize];
-        let t = self.half_edges[e.twin as usize];
-        let point = intersect_3_planes(
-            &self.faces[e.face as usize].plane,
-            &self.faces[t.face as usize].plane,
-            s,
-        )
-        .expect("a crossing edge meets the cutting plane in one point");
-        let m = self.vertices.len() as u32;
-        let (h2, t2) = (
-            self.half_edges.len() as u32,
-            self.half_edges.len() as u32 + 1,
-        );
-        // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
-        self.half_edges.push(HalfEdge {
-            origin: m,
-            twin: e.twin,
-            next: e.next,
-            face: e.face,
-        });
-        self.half_edges.push(HalfEdge {
-            origin: m,
-            twin: h,
-            next: t.next,
-            face: t.face,
-        });
-        self.half_edges[h as usize].next = h2;
-        self.half_edges[h as usize].twin = t2;
-        self.half_edges[e.twin as usize].next = t2;
-        self.half_edges[e.twin as usize].twin = h2;
-        self.vertices.push(Vertex {
-            point,
-            half_edge: h2,
-        });
-        m
-    }
-
-    /// Splits face `f` (with `+` and `−` vertices and exactly two `0`
-    /// vertices) along the segment between its `0` vertices. The half of
-    /// the loop on the `+` side gets a new face, which is returned.
-    fn split_face(&mut self, f: u32, scratch: &mut Scratch) -> u32 {
-        let mut loop_ = std::mem::take(&mut scratch.face_loop);
-        loop_.clear();
-        loop_.extend(self.face_loop(f));
-        let n = loop_.len();
-        let origin = |k: usize| self.half_edges[loop_[k % n] as usize].origin;
-        let side = |k: usize| Self::known_side(origin(k), scratch);
-        let mut zeros = (0..n).filter(|&k| side(k) == Sign::Zero);
-        let (i, j) = (
-            zeros
-                .next()
-                .expect("a straddling face has a vertex on the plane"),
-            zeros
-                .next()
-                .expect("a straddling face has two vertices on the plane"),
-        );
-        // Chain i..j (half-edges loop_[i], …, loop_[j−1]) and chain j..i.
-        let chain_ij_positive = side(i + 1) == Sign::Positive;
-        let (z1, z2) = (origin(i), origin(j));
-        let (a, b) = (
-            self.half_edges.len() as u32,
-            self.half_edges.len() as u32 + 1,
-        );
-        // a: z2→z1 closes chain i..j; b: z1→z2 closes chain j..i. Twins are
-        // set when the caps are built.
-        let new_face = self.faces.len() as u32;
-        let plane = self.faces[f as usize].plane;
-        let tag = self.faces[f as usize].tag;
-        let (face_ij, face_ji) = if chain_ij_positive {
-            (new_face, f)
-        } else {
-            (f, new_face)
-        };
-        self.half_edges.push(HalfEdge {
-            origin: z2,
-            twin: u32::MAX,
-            next: loop_[i],
-            face: face_ij,
-        });
-        self.half_edges.push(HalfEdge {
-            origin: z1,
-            twin: u32::MAX,
-            next: loop_[j],
-            face: face_ji,
-        });
-        self.half_edges[loop_[(j + n - 1) % n] as usize].next = a;
-        self.half_edges[loop_[(i + n - 1) % n] as usize].next = b;
-        for &h in &loop_[i..j] {
-            self.half_edges[h as usize].face = face_ij;
-        }
-        for k in j..i + n {
-            self.half_edges[loop_[k % n] as usize].face = face_ji;
-        }
-        self.faces.push(Face {
-            plane,
-            half_edge: if chain_ij_positive { a } else { b },
-            tag,
-        });
-        self.faces[f as usize].half_edge = if chain_ij_positive { b } else { a };
-        scratch.face_loop = loop_;
-        new_face
-    }
-
-    /// Builds the two caps along the section and separates the parts;
-    /// `faces` lists every face that meets the section.
-    fn add_caps(
-        &mut self,
-        faces: &[u32],
-        scratch: &mut Scratch,
-        s: &Plane,
-        below_tag: u32,
-        above_tag: u32,
-    ) -> CutOutcome {
-        // The half-edges lying in s, with the side of their face (the side
-        // of any vertex of the face off s).
-        let mut section: Vec<(u32, Sign)> = Vec::with_capacity(2 * faces.len());
-        for &f in faces {
-            let side = self
-                .face_loop(f)
-                .map(|h| Self::known_side(self.half_edges[h as usize].origin, scratch))
-                .find(|&x| x != Sign::Zero)
-                .unwrap_or(Sign::Zero);
-            for h in self.face_loop(f) {
-                let e = self.half_edges[h as usize];
-                if Self::known_side(e.origin, scratch) == Sign::Zero
-                    && Self::known_side(self.dest(h), scratch) == Sign::Zero
-                {
-                    section.push((h, side));
-                }
-            }
-        }
-        // One cap per side: for each section half-edge u→v on a face of that
-        // side, the cap gets v→u, and cap edges chain by shared vertices.
-        let mut first_cap_edge = [u32::MAX; 2];
-        for (k, (side, plane, tag)) in [
-            (Sign::Negative, *s, below_tag),
-            (Sign::Positive, s.flipped(), above_tag),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let cap = self.faces.len() as u32;
-            let first = self.half_edges.len() as u32;
-            scratch.cap_starts.clear();
-            let mut cap_edges = Vec::with_capacity(section.len());
-            for &(h, hside) in &section {
-                if hside != side {
-                    continue;
-                }
-                let (u, v) = (self.half_edges[h as usize].origin, self.dest(h));
-                let c = self.half_edges.len() as u32;
-                self.half_edges.push(HalfEdge {
-                    origin: v,
-                    twin: h,
-                    next: u32::MAX,
-                    face: cap,
-                });
-                self.half_edges[h as usize].twin = c;
-                scratch.cap_starts.insert(v, c);
-                cap_edges.push((c, u));
-            }
-            for &(c, u) in &cap_edges {
-                self.half_edges[c as usize].next = scratch
-                    .cap_starts
-                    .get(u)
-                    .expect("the section is a closed loop");
-            }
-            self.faces.push(Face {
-                plane,
-                half_edge: first,
-                tag,
-            });
-            first_cap_edge[k] = first;
-            if side == Sign::Negative {
-                // The lower part keeps the section vertices.
-                for &(c, _) in &cap_edges {
-                    let v = self.half_edges[c as usize].origin;
-                    self.vertices[v as usize].half_edge = c;
-                }
-            } else {
-                // The upper part gets copies: rotate around each section
-                // vertex through the upper part's half-edges (now closed off
-                // by the cap) and re-point their origins.
-                for &(c, _) in &cap_edges {
-                    let v = self.half_edges[c as usize].origin;
-                    let copy = self.vertices.len() as u32;
-                    self.vertices.push(Vertex {
-                        point: self.vertices[v as usize].point,
-                        half_edge: c,
-                    });
-                    let mut h = c;
-                    loop {
-                        self.half_edges[h as usize].origin = copy;
-                        h = self.half_edges[self.half_edges[h as usize].twin as usize].next;
-                        if h == c {
-                            break;
-                        }
-                    }
-                }
-            }
-        }
-        CutOutcome::Split {
-            below: PolyId(first_cap_edge[0]),
-            above: PolyId(first_cap_edge[1]),
-        }
     }
 }

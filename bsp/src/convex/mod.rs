@@ -10,12 +10,14 @@
 //! - [`mesh`] — the arena, its elements, constructors and traversal.
 //! - [`validate`] — every invariant, checked exactly (tests call it after
 //!   every step).
-//! - [`cut`] — cutting a polyhedron by a plane.
+//! - [`cut`] — cutting a polyhedron by a plane: finding the section.
+//! - `split` — splitting along the section once it is found.
 
 pub mod cut;
 pub mod mesh;
 pub mod pool;
 mod scratch;
+mod split;
 pub mod validate;
 
 pub use cut::CutOutcome;

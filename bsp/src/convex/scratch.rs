@@ -8,12 +8,12 @@
 
 use crate::exact::Sign;
 
-/// A map from element index to `T`, valid for the current stamp only.
+/// A map from element index to `T`, valid for the current stamp only. Each
+/// entry keeps its stamp beside its value, so a lookup touches one slot.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct StampMap<T: Copy + Default> {
     stamp: u32,
-    stamps: Vec<u32>,
-    values: Vec<T>,
+    entries: Vec<(u32, T)>,
 }
 
 impl<T: Copy + Default> StampMap<T> {
@@ -21,7 +21,7 @@ impl<T: Copy + Default> StampMap<T> {
     pub(crate) fn clear(&mut self) {
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
-            self.stamps.fill(0);
+            self.entries.fill((0, T::default()));
             self.stamp = 1;
         }
     }
@@ -29,15 +29,16 @@ impl<T: Copy + Default> StampMap<T> {
     /// The value at `i`, if set since the last [`StampMap::clear`].
     #[inline]
     pub(crate) fn get(&self, i: u32) -> Option<T> {
-        let i = i as usize;
-        (self.stamps.get(i) == Some(&self.stamp)).then(|| self.values[i])
+        match self.entries.get(i as usize) {
+            Some(&(stamp, value)) if stamp == self.stamp => Some(value),
+            _ => None,
+        }
     }
 
     /// Makes room for indices below `len` without reallocating later.
     pub(crate) fn reserve(&mut self, len: usize) {
-        if len > self.stamps.len() {
-            self.stamps.resize(len, 0);
-            self.values.resize(len, T::default());
+        if len > self.entries.len() {
+            self.entries.resize(len, (0, T::default()));
         }
     }
 
@@ -45,14 +46,13 @@ impl<T: Copy + Default> StampMap<T> {
     #[inline]
     pub(crate) fn insert(&mut self, i: u32, value: T) -> bool {
         let i = i as usize;
-        if i >= self.stamps.len() {
-            let len = (i + 1).max(2 * self.stamps.len());
-            self.stamps.resize(len, 0);
-            self.values.resize(len, T::default());
+        if i >= self.entries.len() {
+            let len = (i + 1).max(2 * self.entries.len());
+            self.entries.resize(len, (0, T::default()));
         }
-        let fresh = self.stamps[i] != self.stamp;
-        self.stamps[i] = self.stamp;
-        self.values[i] = value;
+        let entry = &mut self.entries[i];
+        let fresh = entry.0 != self.stamp;
+        *entry = (self.stamp, value);
         fresh
     }
 }
@@ -69,8 +69,37 @@ pub(crate) struct Scratch {
     pub(crate) vertices: StampMap<bool>,
     /// Cap half-edge starting at each section vertex.
     pub(crate) cap_starts: StampMap<u32>,
+    /// The march's queue of faces to visit.
+    pub(crate) queue: Vec<u32>,
+    /// The faces that meet the section.
+    pub(crate) relevant: Vec<u32>,
+    /// Per relevant face: what the split needs to know about it.
+    pub(crate) relevant_info: Vec<FaceInfo>,
+    /// The crossing half-edges, each from its `+` end.
+    pub(crate) crossing: Vec<u32>,
+    /// The half-edges lying in the cutting plane, with their face's side.
+    pub(crate) section: Vec<(u32, Sign)>,
+    /// Section half-edges of faces created by the split (listed last).
+    pub(crate) section_new: Vec<(u32, Sign)>,
+    /// The cap half-edges of one side and the vertex each one ends at.
+    pub(crate) cap_edges: Vec<(u32, u32)>,
     /// The half-edges of the face being split.
     pub(crate) face_loop: Vec<u32>,
+}
+
+/// What the split needs to know about one face that meets the section,
+/// found in a single walk around it before anything changes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum FaceInfo {
+    /// The face has `+` and `−` vertices: it will be split in two.
+    Straddling,
+    /// The face lies on one side and has an edge in the cutting plane.
+    Touching {
+        /// The side of its vertices off the plane.
+        side: Sign,
+        /// Its half-edge lying in the plane.
+        edge: u32,
+    },
 }
 
 impl Scratch {
