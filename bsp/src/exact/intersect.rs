@@ -13,11 +13,24 @@
 //! all four determinants: nine `i64 × i64` products in native `i128`, then
 //! three `i128 × i64 → 192-bit` products for `W` and nine
 //! `i128 × i128 → 256-bit` products for `X`. Bounds are in [`super::budget`].
+//!
+//! # The narrow path
+//!
+//! Planes with small coefficients (most in practice: tools and cells at a
+//! millimetre or micrometre grid) give vertices far inside the budget. With
+//! `|n| < 2^bn` and `|d| < 2^bd` for all three planes, each minor is below
+//! `2·2^(2bn)`, so `|W| < 3·2^bn·2^(2bn+1) < 2^(3bn+3)` and
+//! `|X| < 3·2^bd·2^(2bn+1) < 2^(2bn+bd+3)`, partial sums included. When both
+//! are at most `2^126` ([`NARROW_BITS`]), plain `i128` arithmetic is exact and
+//! gives the same vertex, digit for digit, as the wide path.
 
 use super::digits::{assemble, mul, split_balanced};
 use super::plane::Plane;
 use super::point::Point4;
 use super::wide::{I192, I256};
+
+/// Bound (in bits) on `|W|` and `|X|, |Y|, |Z|` for the narrow path.
+const NARROW_BITS: u32 = 126;
 
 /// `u × v` for 55-bit vectors; each component fits 111 bits.
 #[inline]
@@ -52,6 +65,24 @@ fn sum_offset_minor_products(d: &[(i64, i64); 3], c: [i128; 3]) -> I256 {
     assemble(g)
 }
 
+/// [`intersect_3_planes`] in `i128` (see the module docs for when it is
+/// exact), given the normals, offsets and minors `[n_q×n_r, n_r×n_p,
+/// n_p×n_q]`.
+#[inline(always)]
+fn intersect_narrow(n: [[i64; 3]; 3], d: [i128; 3], c: [[i128; 3]; 3]) -> Option<Point4> {
+    let w: i128 = (0..3).map(|i| n[0][i] as i128 * c[0][i]).sum();
+    if w == 0 {
+        return None;
+    }
+    let coord = |i: usize| -> i128 { -(d[0] * c[0][i] + d[1] * c[1][i] + d[2] * c[2][i]) };
+    let (x, y, z) = (coord(0), coord(1), coord(2));
+    Some(if w > 0 {
+        Point4::from_narrow(x, y, z, w)
+    } else {
+        Point4::from_narrow(-x, -y, -z, -w)
+    })
+}
+
 /// The unique common point of three planes as an exact homogeneous vertex
 /// with `W > 0`, or `None` when the normals are linearly dependent (two
 /// planes parallel, or all three containing a common direction).
@@ -62,7 +93,21 @@ pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
     let qr = cross(nq, nr);
     let rp = cross(nr, np);
     let pq = cross(np, nq);
+    let bn = u32::from(p.normal_bits.max(q.normal_bits).max(r.normal_bits));
+    let bd = u32::from(p.offset_bits.max(q.offset_bits).max(r.offset_bits));
+    let (n, d, minors) = ([np, nq, nr], [p.d, q.d, r.d], [qr, rp, pq]);
+    if 3 * bn + 3 <= NARROW_BITS && 2 * bn + bd + 3 <= NARROW_BITS {
+        intersect_narrow(n, d, minors)
+    } else {
+        intersect_wide(n, d, minors)
+    }
+}
 
+/// [`intersect_3_planes`] in wide arithmetic, exact for every input in
+/// budget; arguments as for [`intersect_narrow`].
+#[inline]
+fn intersect_wide(n: [[i64; 3]; 3], d: [i128; 3], c: [[i128; 3]; 3]) -> Option<Point4> {
+    let ([np, _, _], [qr, rp, pq]) = (n, c);
     // W = Σ_i n_p,i·qr_i with qr_i = q1·2^64 + q0 (balanced): the digit
     // sums are below 3·2^55·2^63 < 2^120 and 3·2^55·2^48 < 2^104.
     let mut gw = [0i128; 3];
@@ -76,7 +121,7 @@ pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
         return None;
     }
 
-    let d = [p.d, q.d, r.d].map(|d| {
+    let d = d.map(|d| {
         let (d0, d1) = split_balanced(d);
         (d0, d1 as i64)
     });
@@ -89,4 +134,42 @@ pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
         coord(2).negate_if(flip),
     );
     Some(Point4::from_parts(x, y, z, w.negate_if(!flip)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The narrow path gives the wide path's vertex, digit for digit, over
+    /// the whole range where it is taken.
+    #[test]
+    fn narrow_and_wide_paths_agree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut narrow = 0;
+        for _ in 0..20_000 {
+            let bn = rng.random_range(1..=41u32);
+            let bd = rng.random_range(1..=83u32.min(123 - 2 * bn));
+            let plane = |rng: &mut ChaCha8Rng| {
+                let n = [0; 3].map(|_| rng.random_range(-(1i64 << bn) + 1..1i64 << bn));
+                let d = rng.random_range(-(1i128 << bd) + 1..1i128 << bd);
+                Plane::new(n[0], n[1], n[2], d).ok()
+            };
+            let (Some(p), Some(q), Some(r)) = (plane(&mut rng), plane(&mut rng), plane(&mut rng))
+            else {
+                continue;
+            };
+            let (n, d) = ([p.normal(), q.normal(), r.normal()], [p.d, q.d, r.d]);
+            let c = [cross(n[1], n[2]), cross(n[2], n[0]), cross(n[0], n[1])];
+            let (a, b) = (intersect_narrow(n, d, c), intersect_wide(n, d, c));
+            assert_eq!(a.is_some(), b.is_some());
+            if let (Some(a), Some(b)) = (a, b) {
+                assert_eq!((a.xyz_digits, a.w_digits), (b.xyz_digits, b.w_digits));
+                assert_eq!(a.approx.map(f64::to_bits), b.approx.map(f64::to_bits));
+                narrow += 1;
+            }
+        }
+        assert!(narrow > 10_000);
+    }
 }

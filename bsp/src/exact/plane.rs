@@ -19,6 +19,11 @@ pub struct Plane {
     pub(crate) a: i64,
     pub(crate) b: i64,
     pub(crate) c: i64,
+    /// Bits of the largest normal component: `|a|, |b|, |c| < 2^normal_bits`
+    /// (fills padding; lets constructions pick a narrower path).
+    pub(crate) normal_bits: u8,
+    /// Bits of the offset: `|d| < 2^offset_bits`.
+    pub(crate) offset_bits: u8,
     pub(crate) d: i128,
     pub(crate) approx: [f64; 4],
 }
@@ -53,10 +58,13 @@ impl Plane {
                 .all(|v| v.unsigned_abs() <= MAX_NORMAL as u64)
         );
         debug_assert!(d.unsigned_abs() <= MAX_OFFSET as u128);
+        let largest = a.unsigned_abs().max(b.unsigned_abs()).max(c.unsigned_abs());
         Self {
             a,
             b,
             c,
+            normal_bits: (u64::BITS - largest.leading_zeros()) as u8,
+            offset_bits: (u128::BITS - d.unsigned_abs().leading_zeros()) as u8,
             d,
             approx: [a as f64, b as f64, c as f64, offset_to_f64(d)],
         }

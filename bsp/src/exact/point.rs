@@ -1,7 +1,7 @@
 //! Points: integer input points and exact homogeneous vertices.
 
 use super::budget::MAX_COORD;
-use super::digits::{assemble, to_balanced};
+use super::digits::{assemble, split_balanced, to_balanced};
 use super::wide::{I192, I256, Int};
 use crate::Error;
 
@@ -98,6 +98,30 @@ impl Point4 {
             xyz_digits: [to_balanced(&x), to_balanced(&y), to_balanced(&z)],
             w_digits: to_balanced(&w),
             approx: [x.to_f64(), y.to_f64(), z.to_f64(), w.to_f64()],
+        }
+    }
+
+    /// Builds a vertex from exact parts below `2^126` in magnitude with
+    /// `w > 0`: the same digits and `f64`s as [`Point4::from_parts`] gives
+    /// for these values (balanced digits are unique, and the `i128` to
+    /// `f64` conversion rounds to nearest), without wide arithmetic.
+    #[inline]
+    pub(crate) fn from_narrow(x: i128, y: i128, z: i128, w: i128) -> Self {
+        debug_assert!(w > 0);
+        let digits = |v: i128| -> (i64, i64) {
+            debug_assert!(v.unsigned_abs() < 1 << 126);
+            let (lo, hi) = split_balanced(v);
+            (lo, hi as i64)
+        };
+        let xyz = [x, y, z].map(|v| {
+            let (lo, hi) = digits(v);
+            [lo, hi, 0, 0]
+        });
+        let (w0, w1) = digits(w);
+        Self {
+            xyz_digits: xyz,
+            w_digits: [w0, w1, 0],
+            approx: [x as f64, y as f64, z as f64, w as f64],
         }
     }
 
