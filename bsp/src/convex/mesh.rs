@@ -52,6 +52,15 @@ pub struct Face {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PolyId(pub u32);
 
+/// The sizes of an arena's arrays at one moment, to discard everything
+/// added after it ([`ConvexArena::release_to`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ArenaMark {
+    vertices: usize,
+    half_edges: usize,
+    faces: usize,
+}
+
 /// Flat storage for half-edge meshes of convex polyhedra.
 #[derive(Clone, Debug, Default)]
 pub struct ConvexArena {
@@ -74,6 +83,28 @@ impl ConvexArena {
         self.vertices.clear();
         self.half_edges.clear();
         self.faces.clear();
+    }
+
+    /// The current sizes, for [`ConvexArena::release_to`].
+    #[must_use]
+    #[inline]
+    pub(crate) fn mark(&self) -> ArenaMark {
+        ArenaMark {
+            vertices: self.vertices.len(),
+            half_edges: self.half_edges.len(),
+            faces: self.faces.len(),
+        }
+    }
+
+    /// Discards every element added since `mark`, keeping the memory. The
+    /// caller promises that no polyhedron it still uses was created or cut
+    /// since then: cuts modify a polyhedron's elements in place, so one cut
+    /// after the mark may now point at discarded elements.
+    #[inline]
+    pub(crate) fn release_to(&mut self, mark: ArenaMark) {
+        self.vertices.truncate(mark.vertices);
+        self.half_edges.truncate(mark.half_edges);
+        self.faces.truncate(mark.faces);
     }
 
     /// Reserves room for `additional` more vertices, faces and (six times

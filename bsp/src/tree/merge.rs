@@ -9,7 +9,11 @@
 //! child that holds `C`, dropping the plane. At a leaf of `A` with label
 //! `a`, it inserts `B` restricted to `C` the same way, with leaf labels
 //! `f(a, b)` — so the result never keeps a plane that does not cut its cell.
-//! A final pass collapses splits whose two children are equal leaves.
+//! A split whose two children are equal leaves collapses into the leaf.
+//!
+//! The cells form a stack: a cell is dead once the recursion below it
+//! returns, so everything a recursion adds to the arena is discarded when
+//! it returns, and the arena stays as small as one root-to-leaf path.
 
 use std::collections::HashMap;
 
@@ -122,8 +126,24 @@ impl Merger<'_> {
     }
 
     /// Cuts `cell` by `s` and recurses with `step` into the children it
-    /// reaches; a split node only when the cut is proper.
+    /// reaches; a split node only when the cut is proper. `cell` is used up.
     fn split(
+        &mut self,
+        s: Plane,
+        cell: PolyId,
+        below: NodeId,
+        above: NodeId,
+        step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
+    ) -> NodeId {
+        let mark = self.arena.mark();
+        let node = self.split_cell(s, cell, below, above, step);
+        // The cell and all its pieces are dead now.
+        self.arena.release_to(mark);
+        node
+    }
+
+    /// [`Merger::split`] before the arena is released.
+    fn split_cell(
         &mut self,
         s: Plane,
         cell: PolyId,
@@ -167,7 +187,9 @@ impl Merger<'_> {
 
 impl Bsp {
     /// `self op other` inside the convex polyhedron `bounds` of `arena`
-    /// (which is cut up in place; outside `bounds` the result is empty).
+    /// (which is used up: the arena keeps its elements from before the call,
+    /// but `bounds` is no longer a valid polyhedron; outside `bounds` the
+    /// result is empty).
     /// Exact: the result's regions are exactly those of the label function.
     #[must_use]
     pub fn merge(
