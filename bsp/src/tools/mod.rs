@@ -1,10 +1,13 @@
 //! Convex tools: exact convex hulls of integer points, and the shapes built
-//! from them (prisms, dodecahedra, swept volumes).
+//! from them (prisms, dodecahedra, swept volumes); swept volumes of
+//! non-convex solids as unions of convex pieces ([`sweep`]).
 
 pub mod hull;
 pub mod quantize;
 pub mod shapes;
+pub mod sweep;
 
 pub use hull::convex_hull;
 pub use quantize::Quantization;
 pub use shapes::{Pose, dodecahedron_corners, placed_tool, prism_corners, swept_tool};
+pub use sweep::{CubicBezier, Gear, GearSweep, WedgeMesh, spans_volume};

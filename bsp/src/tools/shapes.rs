@@ -31,17 +31,24 @@ impl Pose {
         }
     }
 
+    /// `R·p + t`, not rounded.
+    #[must_use]
+    pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|i| {
+            self.rotation[i][0] * p[0]
+                + self.rotation[i][1] * p[1]
+                + self.rotation[i][2] * p[2]
+                + self.translation[i]
+        })
+    }
+
     /// Rounds `R·p + t` to the integer grid.
     ///
     /// # Errors
     /// [`Error::NonFinite`] or [`Error::CoordinateOutOfRange`].
     pub fn place(&self, p: [f64; 3]) -> Result<IntPoint, Error> {
         let mut out = [0i64; 3];
-        for (i, o) in out.iter_mut().enumerate() {
-            let v = self.rotation[i][0] * p[0]
-                + self.rotation[i][1] * p[1]
-                + self.rotation[i][2] * p[2]
-                + self.translation[i];
+        for (o, v) in out.iter_mut().zip(self.apply(p)) {
             if !v.is_finite() {
                 return Err(Error::NonFinite {
                     what: "tool coordinate",

@@ -122,38 +122,9 @@ pub fn root_cube(bounds: CellBox) -> Result<([i64; 3], u8), String> {
     Ok((origin, size_log2))
 }
 
-/// Whether the points span a volume (four of them not coplanar): exactly
-/// when their convex hull is a tool rather than a degenerate-hull error.
-/// Exact in `i128` for coordinates within the range.
-#[must_use]
-pub fn spans_volume(points: &[[i64; 3]]) -> bool {
-    let sub = |a: [i64; 3], b: [i64; 3]| [0, 1, 2].map(|i| i128::from(a[i]) - i128::from(b[i]));
-    let cross = |u: [i128; 3], v: [i128; 3]| {
-        [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ]
-    };
-    let Some(&a) = points.first() else {
-        return false;
-    };
-    let Some(&b) = points.iter().find(|&&p| p != a) else {
-        return false;
-    };
-    let ab = sub(b, a);
-    let Some(normal) = points
-        .iter()
-        .map(|&p| cross(ab, sub(p, a)))
-        .find(|n| *n != [0; 3])
-    else {
-        return false;
-    };
-    points.iter().any(|&p| {
-        let d = sub(p, a);
-        normal[0] * d[0] + normal[1] * d[1] + normal[2] * d[2] != 0
-    })
-}
+/// Whether the points span a volume: exactly when their convex hull is a
+/// tool rather than a degenerate-hull error.
+pub use chisel_bsp::tools::spans_volume;
 
 impl Sequence {
     /// The box around the base box and every tool point, or `None` when
@@ -190,16 +161,6 @@ mod tests {
         }
         assert!(quantize_mm(f64::NAN).is_err());
         assert!(quantize_mm(1e6).is_err());
-    }
-
-    #[test]
-    fn flat_point_sets_span_no_volume() {
-        let tet = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]];
-        assert!(spans_volume(&tet));
-        assert!(!spans_volume(&tet[..3]));
-        assert!(!spans_volume(&[[0, 0, 0]; 5]));
-        assert!(!spans_volume(&[[0, 0, 0], [1, 1, 1], [2, 2, 2], [5, 5, 5]]));
-        assert!(!spans_volume(&[[0, 0, 7], [1, 0, 7], [0, 1, 7], [3, 9, 7]]));
     }
 
     #[test]
