@@ -9,6 +9,8 @@
 //! child that holds `C`, dropping the plane. At a leaf of `A` with label
 //! `a`, it inserts `B` restricted to `C` the same way, with leaf labels
 //! `f(a, b)` — so the result never keeps a plane that does not cut its cell.
+//! Where `f(a, ·)` is constant (solid `a` in a union, empty `a` in the
+//! other operations) it inserts that leaf without looking at `B`.
 //! A split whose two children are equal leaves collapses into the leaf.
 //!
 //! The cells form a stack: a cell is dead once the recursion below it
@@ -71,6 +73,19 @@ impl BooleanOp {
             }
         }
     }
+
+    /// The label of a region labelled `a` in `A` whatever `B` holds there,
+    /// when [`BooleanOp::apply`] does not depend on `b` for this `a`.
+    #[must_use]
+    #[inline]
+    pub fn regardless_of_b(self, a: Label) -> Option<Label> {
+        match self {
+            BooleanOp::Union => (a != EMPTY).then_some(a),
+            BooleanOp::Intersection | BooleanOp::Difference => (a == EMPTY).then_some(EMPTY),
+            // Empty stays empty; material already of the paint's label keeps it.
+            BooleanOp::Paint(m) => (a == EMPTY || a == m).then_some(a),
+        }
+    }
 }
 
 /// Builds the merged tree.
@@ -97,7 +112,12 @@ impl Merger<'_> {
     /// its node.
     fn merge_a(&mut self, n: NodeId, cell: PolyId) -> NodeId {
         match self.a.nodes()[n as usize] {
-            Node::Leaf(label) => self.insert_b(0, cell, label),
+            // Where the label does not depend on B, inserting B would only
+            // make splits that all collapse into this one leaf.
+            Node::Leaf(label) => match self.op.regardless_of_b(label) {
+                Some(label) => self.push(Node::Leaf(label)),
+                None => self.insert_b(0, cell, label),
+            },
             Node::Split {
                 plane,
                 below,
@@ -213,5 +233,32 @@ impl Bsp {
         let root = merger.merge_a(0, bounds);
         debug_assert_eq!(root, 0);
         Bsp::from_parts(merger.planes, merger.nodes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `regardless_of_b` promises exactly what `apply` does, for every
+    /// label on either side.
+    #[test]
+    fn labels_regardless_of_b_agree_with_apply() {
+        let ops = [
+            BooleanOp::Union,
+            BooleanOp::Intersection,
+            BooleanOp::Difference,
+            BooleanOp::Paint(7),
+        ];
+        for op in ops {
+            for a in 0..=Label::MAX {
+                let labels: Vec<Label> = (0..=Label::MAX).map(|b| op.apply(a, b)).collect();
+                let constant = labels.iter().all(|&l| l == labels[0]);
+                match op.regardless_of_b(a) {
+                    Some(l) => assert!(constant && labels[0] == l, "{op:?} {a}"),
+                    None => assert!(!constant, "{op:?} {a}: a constant missed"),
+                }
+            }
+        }
     }
 }
