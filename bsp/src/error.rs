@@ -140,7 +140,7 @@ pub enum Error {
     /// A BSP in an octree file whose nodes do not form one tree over its
     /// planes.
     InvalidStoredBsp {
-        /// Index of the BSP in the file's BSP table.
+        /// Index of the BSP's leaf in the file's node table.
         index: usize,
         /// The defect found.
         reason: String,

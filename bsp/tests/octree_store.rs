@@ -320,9 +320,43 @@ fn single_bsp_leaf() -> Octree {
 }
 
 // Offsets in a file of one octree with one BSP leaf (see the layout in
-// `chisel_bsp::octree::store`): header 20, BSP count 4, plane and node
-// counts 4 + 4, then the planes (40 bytes each), then the nodes.
-const FIRST_PLANE: usize = 20 + 4 + 8;
+// `chisel_bsp::octree::store`): header 20, node count 4, the leaf's tag 1,
+// plane and BSP node counts 4 + 4, then the planes (40 bytes each), then
+// the BSP nodes.
+const FIRST_PLANE: usize = 20 + 4 + 1 + 8;
+/// Bytes of one octree record: cube, settings, root.
+const OCTREE: usize = 24 + 1 + 8 + 1 + 4;
+
+/// A file from raw node records and octree records (`root` per octree,
+/// each over the cube at the origin with edge `2^size_log2`), with a
+/// valid length and checksum.
+fn craft(nodes: &[Vec<u8>], octrees: &[(u8, u32)]) -> Vec<u8> {
+    let mut bytes = MAGIC.to_vec();
+    bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    bytes.extend_from_slice(&0u64.to_le_bytes());
+    bytes.extend_from_slice(&(nodes.len() as u32).to_le_bytes());
+    nodes.iter().for_each(|n| bytes.extend_from_slice(n));
+    bytes.extend_from_slice(&(octrees.len() as u32).to_le_bytes());
+    for &(size_log2, root) in octrees {
+        bytes.extend_from_slice(&[0; 24]);
+        bytes.push(size_log2);
+        bytes.extend_from_slice(&150u64.to_le_bytes());
+        bytes.push(20);
+        bytes.extend_from_slice(&root.to_le_bytes());
+    }
+    let length = (bytes.len() + 8) as u64;
+    bytes[12..20].copy_from_slice(&length.to_le_bytes());
+    bytes.extend_from_slice(&[0; 8]);
+    resealed(bytes)
+}
+
+fn inner(children: [u32; 8]) -> Vec<u8> {
+    let mut node = vec![2];
+    children
+        .iter()
+        .for_each(|c| node.extend_from_slice(&c.to_le_bytes()));
+    node
+}
 
 #[test]
 fn planes_outside_the_bit_budget_are_refused() {
@@ -355,7 +389,7 @@ fn planes_outside_the_bit_budget_are_refused() {
 }
 
 #[test]
-fn broken_trees_and_tilings_are_refused() {
+fn broken_trees_are_refused() {
     let octree = single_bsp_leaf();
     let Leaf::Bsp(bsp) = octree.leaves()[0].1.clone() else {
         panic!("one BSP leaf");
@@ -385,30 +419,90 @@ fn broken_trees_and_tilings_are_refused() {
             reason: "an unknown BSP node tag"
         })
     );
-    // The only leaf moved one level down: the cube is no longer covered.
-    let leaf = bytes.len() - 8 - (1 + 12 + 1 + 4);
-    let mut deeper = bytes.clone();
-    assert_eq!(deeper[leaf], 0, "the root leaf has depth 0");
-    deeper[leaf] = 1;
+    let mut tag = bytes;
+    tag[24] = 9;
+    assert_eq!(
+        Octree::from_bytes(&resealed(tag)).err(),
+        Some(Error::CorruptFile {
+            at: 24,
+            reason: "an unknown octree node tag"
+        })
+    );
+}
+
+#[test]
+fn broken_octrees_are_refused() {
+    let octree = carved(17, 4);
+    assert!(octree.stats().depth >= 2);
+    let bytes = octree.to_bytes();
+    let record = bytes.len() - 8 - OCTREE;
+    // A cube too small for the cells' nesting.
+    let mut shallow = bytes.clone();
+    assert_eq!(shallow[record + 24], K);
+    shallow[record + 24] = 1;
     assert!(matches!(
-        Octree::from_bytes(&resealed(deeper)),
+        Octree::from_bytes(&resealed(shallow)),
         Err(Error::InvalidOctree { .. })
     ));
-    // A BSP index beyond the table.
-    let mut index = bytes.clone();
-    index[leaf + 14..leaf + 18].copy_from_slice(&1u32.to_le_bytes());
-    assert!(matches!(
-        Octree::from_bytes(&resealed(index)),
-        Err(Error::CorruptFile { .. })
-    ));
     // A cube beyond the exact range.
-    let cube = leaf - (4 + 1 + 8 + 1 + 24);
-    let mut far = bytes;
-    far[cube..cube + 8].copy_from_slice(&(i64::MAX - 3).to_le_bytes());
+    let mut far = bytes.clone();
+    far[record..record + 8].copy_from_slice(&(i64::MAX - 3).to_le_bytes());
     assert!(matches!(
         Octree::from_bytes(&resealed(far)),
         Err(Error::OctreeSize { .. })
     ));
+    // A root beyond the node table.
+    let mut root = bytes.clone();
+    root[record + 34..record + 38].copy_from_slice(&u32::MAX.to_le_bytes());
+    assert!(matches!(
+        Octree::from_bytes(&resealed(root)),
+        Err(Error::CorruptFile { .. })
+    ));
+    // The root (the last node) naming itself as a child: a cycle.
+    let last = record - 4 - 33;
+    let mut cycle = bytes.clone();
+    assert_eq!(cycle[last], 2, "the root is an inner cell");
+    let own = u32::from_le_bytes(bytes[20..24].try_into().unwrap()) - 1;
+    cycle[last + 1..last + 5].copy_from_slice(&own.to_le_bytes());
+    assert_eq!(
+        Octree::from_bytes(&resealed(cycle)).err(),
+        Some(Error::CorruptFile {
+            at: last + 1,
+            reason: "a child that is not stored before its parent"
+        })
+    );
+
+    // Crafted files: the smallest valid one, a node no octree uses, and a
+    // chain of inner cells each repeating the one below eight times (8^20
+    // cells from 21 nodes), which would make every later walk explode.
+    let empty = craft(&[vec![0, 0]], &[(3, 0)]);
+    let back = Octree::from_bytes(&empty).expect("a valid empty octree");
+    assert!(matches!(back.leaves()[..], [(_, Leaf::Uniform(EMPTY))]));
+    assert!(matches!(
+        Octree::from_bytes(&craft(&[vec![0, 0], vec![0, 1]], &[(3, 0)])),
+        Err(Error::CorruptFile { .. })
+    ));
+    let one_level = craft(
+        &[vec![0, 0], vec![0, 1], inner([0, 1, 0, 1, 0, 1, 0, 1])],
+        &[(3, 2)],
+    );
+    assert_eq!(
+        Octree::from_bytes(&one_level)
+            .expect("valid")
+            .leaves()
+            .len(),
+        8
+    );
+    let mut chain = vec![vec![0, 1]];
+    for k in 0..20 {
+        chain.push(inner([k; 8]));
+    }
+    assert_eq!(
+        Octree::from_bytes(&craft(&chain, &[(20, 20)])).err(),
+        Some(Error::InvalidOctree {
+            reason: "more cells than the stored nodes can make"
+        })
+    );
 }
 
 #[test]

@@ -8,8 +8,11 @@
 //! promise that.
 //!
 //! One file holds one or more octrees ("snapshots", e.g. an undo history)
-//! over one table of BSPs: a BSP shared by several snapshots (the same
-//! [`Arc`]) is stored once and is shared again after loading.
+//! over one table of octree nodes, children before parents. Octrees share
+//! their unchanged subtrees in memory ([`Arc`]s: an edit copies only the
+//! path to the cells it changes); a shared subtree, and a shared BSP, is
+//! stored once and is shared again after loading, so a history of edits
+//! costs only the cells the edits replaced.
 //!
 //! ## Layout (version 1, little-endian)
 //!
@@ -17,24 +20,25 @@
 //! magic        8 bytes  "CHISELOC"                               MAGIC
 //! version      u32      1                                        FORMAT_VERSION
 //! length       u64      bytes in the whole file, checksum included
-//! bsp_count    u32
-//!   per BSP:   plane_count u32, node_count u32,
-//!              planes: a i64, b i64, c i64, d i128               (40 bytes each)
-//!              nodes:  tag u8 = 0 (leaf): label u8
-//!                      tag u8 = 1 (split): plane u32, below u32, above u32
+//! node_count   u32
+//!   per node:  tag u8 = 0 (uniform leaf): label u8
+//!              tag u8 = 1 (BSP leaf):     plane_count u32, bsp_node_count u32,
+//!                  planes: a i64, b i64, c i64, d i128           (40 bytes each)
+//!                  BSP nodes: tag u8 = 0 (leaf): label u8
+//!                             tag u8 = 1 (split): plane u32, below u32, above u32
+//!              tag u8 = 2 (inner cell):   8 × child u32, each an earlier node
 //! octree_count u32      at least 1
 //!   per octree: origin 3×i64, size_log2 u8,
 //!              max_bsp_nodes u64, max_depth u8                   (OctreeConfig)
-//!              leaf_count u32
-//!              per leaf: depth u8, pos 3×u32                     (CellKey)
-//!                        tag u8 = 0 (uniform): label u8
-//!                        tag u8 = 1 (BSP): index u32 into the BSP table
+//!              root u32  (a node index)
 //! checksum     u64      XXH64 (seed 0) of every byte before it
 //! ```
 //!
-//! Node and plane indices, labels and cell keys are those of
-//! [`Bsp::nodes`], [`Bsp::planes`] and [`Octree::leaves`] (whose order the
-//! writer follows); a node's `below` subtree is `n·x + d < 0`.
+//! Child `i` of an inner cell is the cell's octant `i` (bit 0: upper x
+//! half, bit 1: upper y, bit 2: upper z; see [`super::CellKey::child`]). BSP node
+//! and plane indices are those of [`Bsp::nodes`] and [`Bsp::planes`]; a BSP
+//! node's `below` subtree is `n·x + d < 0`. The writer numbers nodes in
+//! post-order, each shared node once.
 //!
 //! ## Checks on load
 //!
@@ -47,12 +51,14 @@
 //! [`crate::exact::budget`] through [`Plane::new`]
 //! ([`Error::StoredPlaneOutOfBudget`]), every BSP one tree over in-range
 //! plane indices through [`Bsp::from_stored_parts`]
-//! ([`Error::InvalidStoredBsp`]), every BSP index in range and every stored
-//! BSP used, the cube and the leaves tiling it through
-//! [`Octree::from_leaves`] ([`Error::OctreeSize`],
-//! [`Error::InvalidOctree`]), and no bytes left over
-//! ([`Error::CorruptFile`]). Loading never panics and never allocates more
-//! than a small multiple of the file's size.
+//! ([`Error::InvalidStoredBsp`]), every child an earlier node (so the
+//! nodes form no cycle) and every node used, the cube within the exact
+//! range ([`Error::OctreeSize`]), no octree deeper than its cube allows and
+//! none with more cells than its nodes can make without repeating a
+//! subtree ([`Error::InvalidOctree`]), and no bytes left over
+//! ([`Error::CorruptFile`]). Loading never panics, never allocates more
+//! than a small multiple of the file's size, and gives octrees whose every
+//! later operation costs what it would on the octree that was saved.
 
 mod bytes;
 mod xxh64;
@@ -63,12 +69,11 @@ use std::path::Path;
 use std::sync::Arc;
 
 use self::bytes::{Reader, Writer};
-use super::cell::CellKey;
-use super::tree::{Leaf, Octree, OctreeConfig};
+use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
 use crate::exact::Plane;
 use crate::exact::budget::MAX_COORD;
-use crate::tree::{Bsp, Node};
+use crate::tree::{Bsp, EMPTY, Label, Node};
 
 /// The first eight bytes of every octree file.
 pub const MAGIC: [u8; 8] = *b"CHISELOC";
@@ -82,19 +87,18 @@ const HEADER_BYTES: usize = 8 + 4 + 8;
 const CHECKSUM_BYTES: usize = 8;
 /// Bytes of one stored plane.
 const PLANE_BYTES: usize = 8 * 3 + 16;
-/// Fewest bytes of one stored node (a leaf).
+/// Fewest bytes of one stored BSP node (a leaf).
+const MIN_BSP_NODE_BYTES: usize = 2;
+/// Fewest bytes of one stored octree node (a uniform leaf).
 const MIN_NODE_BYTES: usize = 2;
-/// Fewest bytes of one stored BSP (two counts, one leaf node).
-const MIN_BSP_BYTES: usize = 8 + MIN_NODE_BYTES;
-/// Fewest bytes of one stored leaf cell (key, tag, label).
-const MIN_LEAF_BYTES: usize = 1 + 12 + 2;
-/// Fewest bytes of one stored octree (cube, config, no leaves).
-const MIN_OCTREE_BYTES: usize = 24 + 1 + 8 + 1 + 4;
+/// Bytes of one stored octree (cube, settings, root).
+const OCTREE_BYTES: usize = 24 + 1 + 8 + 1 + 4;
 
-const NODE_LEAF: u8 = 0;
-const NODE_SPLIT: u8 = 1;
-const CELL_UNIFORM: u8 = 0;
-const CELL_BSP: u8 = 1;
+const BSP_LEAF: u8 = 0;
+const BSP_SPLIT: u8 = 1;
+const NODE_UNIFORM: u8 = 0;
+const NODE_BSP: u8 = 1;
+const NODE_INNER: u8 = 2;
 
 /// The checksum of an octree file: XXH64 with seed 0 of `bytes` (the file
 /// up to its last eight bytes).
@@ -103,32 +107,82 @@ pub fn checksum(bytes: &[u8]) -> u64 {
     xxh64::xxh64(bytes)
 }
 
-/// Several octrees in one file, each BSP they share stored once.
+/// Identity of a stored node: shared subtrees and BSPs by address,
+/// uniform leaves by label.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+enum NodeId {
+    Uniform(Label),
+    Bsp(*const Bsp),
+    Inner(*const [OctNode; 8]),
+}
+
+/// The node table being written: each distinct node once, children first.
+struct NodeTable<'a> {
+    index: HashMap<NodeId, u32>,
+    w: &'a mut Writer,
+    count: u32,
+}
+
+impl NodeTable<'_> {
+    /// The index of `node`, writing it (and its children) when new.
+    fn add(&mut self, node: &OctNode) -> u32 {
+        let id = match node {
+            OctNode::Leaf(Leaf::Uniform(label)) => NodeId::Uniform(*label),
+            OctNode::Leaf(Leaf::Bsp(bsp)) => NodeId::Bsp(Arc::as_ptr(bsp)),
+            OctNode::Inner(children) => NodeId::Inner(Arc::as_ptr(children)),
+        };
+        if let Some(&i) = self.index.get(&id) {
+            return i;
+        }
+        match node {
+            OctNode::Leaf(Leaf::Uniform(label)) => {
+                self.w.u8(NODE_UNIFORM);
+                self.w.u8(*label);
+            }
+            OctNode::Leaf(Leaf::Bsp(bsp)) => {
+                self.w.u8(NODE_BSP);
+                write_bsp(self.w, bsp);
+            }
+            OctNode::Inner(children) => {
+                let ids = [0, 1, 2, 3, 4, 5, 6, 7].map(|k| self.add(&children[k]));
+                self.w.u8(NODE_INNER);
+                ids.iter().for_each(|&i| self.w.u32(i));
+            }
+        }
+        let i = self.count;
+        self.count += 1;
+        self.index.insert(id, i);
+        i
+    }
+}
+
+/// Several octrees in one file, each subtree and BSP they share stored
+/// once.
 #[must_use]
 pub fn snapshots_to_bytes(octrees: &[&Octree]) -> Vec<u8> {
     let mut w = Writer(Vec::new());
     w.0.extend_from_slice(&MAGIC);
     w.u32(FORMAT_VERSION);
     w.u64(0); // length, filled in below
-    let mut table: HashMap<*const Bsp, usize> = HashMap::new();
-    let mut bsps: Vec<&Bsp> = Vec::new();
-    for octree in octrees {
-        for (_, leaf) in octree.leaves() {
-            if let Leaf::Bsp(bsp) = leaf {
-                table.entry(Arc::as_ptr(bsp)).or_insert_with(|| {
-                    bsps.push(bsp);
-                    bsps.len() - 1
-                });
-            }
-        }
-    }
-    w.index(bsps.len());
-    for bsp in &bsps {
-        write_bsp(&mut w, bsp);
-    }
+    w.u32(0); // node count, filled in below
+    let mut table = NodeTable {
+        index: HashMap::new(),
+        w: &mut w,
+        count: 0,
+    };
+    let roots: Vec<u32> = octrees.iter().map(|o| table.add(&o.root)).collect();
+    let count = table.count;
+    w.0[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&count.to_le_bytes());
     w.index(octrees.len());
-    for octree in octrees {
-        write_octree(&mut w, octree, &table);
+    for (octree, root) in octrees.iter().zip(roots) {
+        for o in octree.origin() {
+            w.i64(o);
+        }
+        w.u8(octree.size_log2());
+        let config = octree.config();
+        w.u64(config.max_bsp_nodes as u64);
+        w.u8(config.max_depth);
+        w.u32(root);
     }
     let length = (w.0.len() + CHECKSUM_BYTES) as u64;
     w.0[12..HEADER_BYTES].copy_from_slice(&length.to_le_bytes());
@@ -138,7 +192,8 @@ pub fn snapshots_to_bytes(octrees: &[&Octree]) -> Vec<u8> {
 }
 
 /// The octrees of a file written by [`snapshots_to_bytes`], checked (see
-/// the module documentation); BSPs stored once are shared again.
+/// the module documentation); subtrees and BSPs stored once are shared
+/// again.
 ///
 /// # Errors
 /// The first defect found, as a typed [`Error`]; nothing is returned then.
@@ -155,29 +210,84 @@ pub fn snapshots_from_bytes(bytes: &[u8]) -> Result<Vec<Octree>, Error> {
     })
 }
 
+/// What the loader knows of each stored node.
+struct Stored {
+    node: OctNode,
+    /// Levels of inner cells below and including this one (0 for a leaf).
+    height: u8,
+    /// Leaf cells under it, counting a repeated subtree each time
+    /// (saturating).
+    cells: u64,
+    used: bool,
+}
+
 fn read_records(r: &mut Reader) -> Result<Vec<Octree>, Error> {
-    let bsp_count = r.count(MIN_BSP_BYTES)?;
-    let mut bsps = Vec::with_capacity(bsp_count);
-    for index in 0..bsp_count {
-        bsps.push(Arc::new(read_bsp(r, index)?));
+    let node_count = r.count(MIN_NODE_BYTES)?;
+    let mut nodes: Vec<Stored> = Vec::with_capacity(node_count);
+    let mut inner_count: u64 = 0;
+    for index in 0..node_count {
+        let at = r.at();
+        let stored = match r.u8()? {
+            NODE_UNIFORM => Stored {
+                node: OctNode::Leaf(Leaf::Uniform(r.u8()?)),
+                height: 0,
+                cells: 1,
+                used: false,
+            },
+            NODE_BSP => Stored {
+                node: OctNode::Leaf(Leaf::Bsp(Arc::new(read_bsp(r, index)?))),
+                height: 0,
+                cells: 1,
+                used: false,
+            },
+            NODE_INNER => {
+                let mut children = Vec::with_capacity(8);
+                let (mut height, mut cells) = (0u8, 0u64);
+                for _ in 0..8 {
+                    let at = r.at();
+                    let child = r.u32()? as usize;
+                    let Some(c) = nodes.get_mut(child) else {
+                        return Err(Reader::corrupt(
+                            at,
+                            "a child that is not stored before its parent",
+                        ));
+                    };
+                    c.used = true;
+                    height = height.max(c.height.saturating_add(1));
+                    cells = cells.saturating_add(c.cells);
+                    children.push(c.node.clone());
+                }
+                let children: [OctNode; 8] = children
+                    .try_into()
+                    .unwrap_or_else(|_| unreachable!("eight children"));
+                inner_count += 1;
+                Stored {
+                    node: OctNode::Inner(Arc::new(children)),
+                    height,
+                    cells,
+                    used: false,
+                }
+            }
+            _ => return Err(Reader::corrupt(at, "an unknown octree node tag")),
+        };
+        nodes.push(stored);
     }
-    let mut used = vec![false; bsp_count];
     let at = r.at();
-    let octree_count = r.count(MIN_OCTREE_BYTES)?;
+    let octree_count = r.count(OCTREE_BYTES)?;
     if octree_count == 0 {
         return Err(Reader::corrupt(at, "a file holds at least one octree"));
     }
     let mut octrees = Vec::with_capacity(octree_count);
     for _ in 0..octree_count {
-        octrees.push(read_octree(r, &bsps, &mut used)?);
+        octrees.push(read_octree(r, &mut nodes, inner_count)?);
     }
     if r.remaining() != 0 {
         return Err(Reader::corrupt(r.at(), "bytes after the last octree"));
     }
-    if used.contains(&false) {
+    if nodes.iter().any(|n| !n.used) {
         return Err(Reader::corrupt(
             HEADER_BYTES,
-            "a stored BSP is used by no leaf",
+            "a stored node is used by no octree",
         ));
     }
     Ok(octrees)
@@ -191,7 +301,6 @@ impl Octree {
     pub fn to_bytes(&self) -> Vec<u8> {
         snapshots_to_bytes(&[self])
     }
-
     /// An octree from file bytes, checked (see [`crate::octree::store`]).
     ///
     /// # Errors
@@ -308,7 +417,7 @@ fn write_bsp(w: &mut Writer, bsp: &Bsp) {
     for node in bsp.nodes() {
         match *node {
             Node::Leaf(label) => {
-                w.u8(NODE_LEAF);
+                w.u8(BSP_LEAF);
                 w.u8(label);
             }
             Node::Split {
@@ -316,7 +425,7 @@ fn write_bsp(w: &mut Writer, bsp: &Bsp) {
                 below,
                 above,
             } => {
-                w.u8(NODE_SPLIT);
+                w.u8(BSP_SPLIT);
                 w.u32(plane);
                 w.u32(below);
                 w.u32(above);
@@ -330,7 +439,7 @@ fn read_bsp(r: &mut Reader, index: usize) -> Result<Bsp, Error> {
     let node_count = r.count(0)?;
     if plane_count
         .saturating_mul(PLANE_BYTES)
-        .saturating_add(node_count.saturating_mul(MIN_NODE_BYTES))
+        .saturating_add(node_count.saturating_mul(MIN_BSP_NODE_BYTES))
         > r.remaining()
     {
         return Err(Reader::corrupt(
@@ -352,8 +461,8 @@ fn read_bsp(r: &mut Reader, index: usize) -> Result<Bsp, Error> {
     for _ in 0..node_count {
         let at = r.at();
         nodes.push(match r.u8()? {
-            NODE_LEAF => Node::Leaf(r.u8()?),
-            NODE_SPLIT => Node::Split {
+            BSP_LEAF => Node::Leaf(r.u8()?),
+            BSP_SPLIT => Node::Split {
                 plane: r.u32()?,
                 below: r.u32()?,
                 above: r.u32()?,
@@ -365,33 +474,7 @@ fn read_bsp(r: &mut Reader, index: usize) -> Result<Bsp, Error> {
         .map_err(|e| Error::InvalidStoredBsp { index, reason: e.0 })
 }
 
-fn write_octree(w: &mut Writer, octree: &Octree, table: &HashMap<*const Bsp, usize>) {
-    for o in octree.origin() {
-        w.i64(o);
-    }
-    w.u8(octree.size_log2());
-    let config = octree.config();
-    w.u64(config.max_bsp_nodes as u64);
-    w.u8(config.max_depth);
-    let leaves = octree.leaves();
-    w.index(leaves.len());
-    for (key, leaf) in leaves {
-        w.u8(key.depth);
-        key.pos.iter().for_each(|&p| w.u32(p));
-        match leaf {
-            Leaf::Uniform(label) => {
-                w.u8(CELL_UNIFORM);
-                w.u8(*label);
-            }
-            Leaf::Bsp(bsp) => {
-                w.u8(CELL_BSP);
-                w.index(table[&Arc::as_ptr(bsp)]);
-            }
-        }
-    }
-}
-
-fn read_octree(r: &mut Reader, bsps: &[Arc<Bsp>], used: &mut [bool]) -> Result<Octree, Error> {
+fn read_octree(r: &mut Reader, nodes: &mut [Stored], inner_count: u64) -> Result<Octree, Error> {
     let origin = [r.i64()?, r.i64()?, r.i64()?];
     let size_log2 = r.u8()?;
     // Refused here already so that no range check downstream sees a
@@ -406,27 +489,26 @@ fn read_octree(r: &mut Reader, bsps: &[Arc<Bsp>], used: &mut [bool]) -> Result<O
         max_bsp_nodes,
         max_depth: r.u8()?,
     };
-    let leaf_count = r.count(MIN_LEAF_BYTES)?;
-    let mut leaves = Vec::with_capacity(leaf_count);
-    for _ in 0..leaf_count {
-        let key = CellKey {
-            depth: r.u8()?,
-            pos: [r.u32()?, r.u32()?, r.u32()?],
-        };
-        let at = r.at();
-        let leaf = match r.u8()? {
-            CELL_UNIFORM => Leaf::Uniform(r.u8()?),
-            CELL_BSP => {
-                let index = r.u32()? as usize;
-                let bsp = bsps
-                    .get(index)
-                    .ok_or(Reader::corrupt(at, "a leaf names a BSP beyond the table"))?;
-                used[index] = true;
-                Leaf::Bsp(Arc::clone(bsp))
-            }
-            _ => return Err(Reader::corrupt(at, "an unknown leaf tag")),
-        };
-        leaves.push((key, leaf));
+    let at = r.at();
+    let root = r.u32()? as usize;
+    let Some(stored) = nodes.get_mut(root) else {
+        return Err(Reader::corrupt(at, "an octree root beyond the node table"));
+    };
+    stored.used = true;
+    let mut octree = Octree::new(origin, size_log2, EMPTY, config)?;
+    if stored.height > size_log2 {
+        return Err(Error::InvalidOctree {
+            reason: "cells nested deeper than the cube can be divided",
+        });
     }
-    Octree::from_leaves(origin, size_log2, config, leaves)
+    // A tree of `n` inner cells has `7n + 1` leaf cells; more means a
+    // subtree is repeated, and only so often that the octree stays as
+    // small as the file.
+    if stored.cells > 7 * inner_count + 1 {
+        return Err(Error::InvalidOctree {
+            reason: "more cells than the stored nodes can make",
+        });
+    }
+    octree.root = stored.node.clone();
+    Ok(octree)
 }
