@@ -1,7 +1,8 @@
 //! What a terrain starts from: a box, a heightfield with material layers by
 //! depth, or a closed triangle mesh — all on the integer grid, so that
 //! building the octree from a [`TerrainBase`] is a pure, exact function
-//! (a saved terrain stores its base and replays its carves).
+//! (a saved terrain stores its base as the record of what it was built
+//! from, beside the octree itself).
 //!
 //! Axes: grid axes are the terrain's local axes; heights run along `+y`.
 

@@ -59,7 +59,8 @@ pub enum TerrainError {
         at: usize,
     },
     /// The file's content is inconsistent (bad checksum, unknown tags,
-    /// values out of range, or replaying its edits fails).
+    /// values out of range, or an octree snapshot the kernel's checks
+    /// refuse).
     Corrupt {
         /// What was found.
         reason: String,

@@ -1,37 +1,68 @@
-//! Terrain files: a versioned binary record of a terrain's grid, octree
-//! settings, base and carves.
+//! Terrain files: a versioned, checked binary record of a terrain — its
+//! grid, what it was built from and every carve since, and the octree
+//! itself with the undo history.
 //!
-//! The octree is a pure function of those (the kernel is exact and
-//! deterministic), so loading rebuilds the base and replays the carves: the
-//! loaded octree is bit-identical to the saved one, and saving it again
-//! gives the same bytes. The last carves come back as undo steps.
+//! The octree is stored as an exact snapshot (the kernel's octree file,
+//! [`chisel_bsp::octree::store`]), so loading costs about as much as reading
+//! the leaves, whatever the number of carves: nothing is rebuilt or
+//! replayed. The loaded octree is bit-identical to the saved one, and
+//! saving it again gives the same bytes.
 //!
-//! Layout (little-endian):
+//! What is saved:
+//! - the grid (unit and origin) and the base, as built from;
+//! - the journal of carves — a record of what was done, kept for tools and
+//!   for rebuilding; it is not replayed on load;
+//! - the undo history: every undo step's previous octree and its changed
+//!   cells, so the loaded terrain undoes exactly as the saved one would
+//!   have, up to the same depth; the previous octrees share their unchanged
+//!   cells with the current one, in the file and after loading, so a deep
+//!   history costs only the cells that the carves replaced;
+//! - the undo depth limit ([`Terrain::with_max_undo`]).
+//!
+//! Not saved: carves still queued or running (save an idle terrain, see
+//! [`Terrain::is_idle`]), meshes and cell entities (rebuilt on spawn).
+//!
+//! Layout (version 2, little-endian):
 //!
 //! ```text
 //! magic    8 bytes  "CHISELTR"
 //! version  u32      FORMAT_VERSION
-//! unit f64, origin 3×f64, max_bsp_nodes u32, max_depth u8
+//! unit f64, origin 3×f64
 //! base     tag u8 (0 box, 1 heightfield, 2 triangles) + its fields
 //! carves   u32 count, each: edit tag u8, label u8, pieces u32,
 //!          per piece: points u32, per point 3×i64
-//! checksum u64      FNV-1a of every byte before it
+//! max_undo u64
+//! undo     u32 count, each: changed and removed cells, each a u32 count
+//!          of keys (depth u8, pos 3×u32)
+//! octrees  u64 length, then a kernel octree file of count + 1 snapshots:
+//!          the octree before each undo step, oldest first, then the
+//!          current octree
+//! checksum u64      XXH64 of every byte before it
+//!          (chisel_bsp::octree::store::checksum)
 //! ```
+//!
+//! Loading checks the magic, the version and the checksum first, then every
+//! record; the octree snapshots are checked by the kernel (bit budgets of
+//! every plane, every BSP a tree, the cells tiling the cube), and must
+//! agree with the base's cube and the undo steps.
 
+use std::collections::VecDeque;
 use std::path::Path;
 
-use chisel_bsp::octree::{CellBox, Edit, OctreeConfig};
+use chisel_bsp::octree::store::{checksum, snapshots_from_bytes, snapshots_to_bytes};
+use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree};
 use chisel_bsp::tools::Quantization;
 
 use super::base::{GridHeightfield, TerrainBase};
-use super::component::{JournalEntry, Terrain};
+use super::component::{JournalEntry, Runtime, Terrain, UndoStep};
 use super::error::TerrainError;
 use super::tool::GridTool;
 
 /// The first bytes of every terrain file.
 pub const MAGIC: [u8; 8] = *b"CHISELTR";
-/// The format version written and read by this build.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version written and read by this build. Version 1 stored
+/// the carves only and rebuilt the octree on load.
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Most points, triangles or carves accepted in one list (guards against
 /// allocation bombs in corrupt files).
@@ -48,9 +79,6 @@ impl Terrain {
         for o in self.quantization.origin() {
             w.f64(o);
         }
-        let config = self.octree.config();
-        w.u32(u32::try_from(config.max_bsp_nodes).unwrap_or(u32::MAX));
-        w.u8(config.max_depth);
         write_base(&mut w, &self.base);
         w.len(self.journal.len());
         for entry in &self.journal {
@@ -68,7 +96,18 @@ impl Terrain {
                 piece.iter().for_each(|&p| w.point(p));
             }
         }
-        let sum = fnv1a(&w.0);
+        w.u64(self.max_undo as u64);
+        w.len(self.history.len());
+        for step in &self.history {
+            w.keys(&step.changes.changed);
+            w.keys(&step.changes.removed);
+        }
+        let mut octrees: Vec<&Octree> = self.history.iter().map(|step| &step.before).collect();
+        octrees.push(&self.octree);
+        let snapshots = snapshots_to_bytes(&octrees);
+        w.u64(snapshots.len() as u64);
+        w.0.extend_from_slice(&snapshots);
+        let sum = checksum(&w.0);
         w.u64(sum);
         w.0
     }
@@ -82,7 +121,8 @@ impl Terrain {
     }
 
     /// A terrain from file bytes: checks magic, version and checksum, then
-    /// rebuilds the base and replays the carves.
+    /// every record, and takes the stored octree and undo history as they
+    /// are (nothing is replayed).
     ///
     /// # Errors
     /// [`TerrainError::BadMagic`], [`TerrainError::UnsupportedVersion`],
@@ -111,7 +151,7 @@ impl Terrain {
                 .try_into()
                 .map_err(|_| TerrainError::Truncated { at: body })?,
         );
-        if fnv1a(&bytes[..body]) != stored {
+        if checksum(&bytes[..body]) != stored {
             return Err(TerrainError::Corrupt {
                 reason: "checksum mismatch".into(),
             });
@@ -123,10 +163,6 @@ impl Terrain {
         let unit = r.f64()?;
         let origin = [r.f64()?, r.f64()?, r.f64()?];
         let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
-        let config = OctreeConfig {
-            max_bsp_nodes: r.u32()? as usize,
-            max_depth: r.u8()?,
-        };
         let base = read_base(r)?;
         let carves = r.len()?;
         let mut journal = Vec::with_capacity(carves.min(1 << 16));
@@ -154,19 +190,62 @@ impl Terrain {
             }
             journal.push(JournalEntry { tool, edit });
         }
+        let max_undo = usize::try_from(r.u64()?)
+            .map_err(|_| corrupt("the undo depth limit is beyond this machine's range"))?;
+        let steps = r.len()?;
+        let mut changes = Vec::with_capacity(steps.min(1 << 10));
+        for _ in 0..steps {
+            changes.push(Changes {
+                changed: r.keys()?,
+                removed: r.keys()?,
+            });
+        }
+        let length = usize::try_from(r.u64()?).unwrap_or(usize::MAX);
+        let snapshot_bytes = r.bytes(length)?;
         if r.at != r.bytes.len() {
             return Err(corrupt(format!(
-                "{} unexpected bytes after the last carve",
+                "{} unexpected bytes after the octrees",
                 r.bytes.len() - r.at
             )));
         }
-        let mut terrain = Terrain::from_base(quantization, base, config).map_err(corrupt)?;
-        for (k, entry) in journal.into_iter().enumerate() {
-            terrain
-                .apply_now(&entry.tool, entry.edit)
-                .map_err(|e| corrupt(format!("carve {k} does not replay: {e}")))?;
+        let mut octrees = snapshots_from_bytes(snapshot_bytes)
+            .map_err(|e| corrupt(format!("octree snapshot: {e}")))?;
+        if octrees.len() != changes.len() + 1 {
+            return Err(corrupt(format!(
+                "{} octree snapshots for {} undo steps",
+                octrees.len(),
+                changes.len()
+            )));
         }
-        Ok(terrain)
+        if changes.len() > max_undo || changes.len() > journal.len() {
+            return Err(corrupt(format!(
+                "{} undo steps for an undo limit of {max_undo} and {} carves",
+                changes.len(),
+                journal.len()
+            )));
+        }
+        let octree = octrees.pop().ok_or_else(|| corrupt("no octree"))?;
+        if base.cube() != (octree.origin(), octree.size_log2())
+            || octrees
+                .iter()
+                .any(|o| (o.origin(), o.size_log2()) != base.cube())
+        {
+            return Err(corrupt("the octree's cube is not the base's cube"));
+        }
+        let history: VecDeque<UndoStep> = octrees
+            .into_iter()
+            .zip(changes)
+            .map(|(before, changes)| UndoStep { before, changes })
+            .collect();
+        Ok(Terrain {
+            octree,
+            quantization,
+            base: std::sync::Arc::new(base),
+            journal,
+            history,
+            max_undo,
+            runtime: Runtime::default(),
+        })
     }
 
     /// Reads a terrain file.
@@ -182,12 +261,6 @@ fn corrupt(e: impl ToString) -> TerrainError {
     TerrainError::Corrupt {
         reason: e.to_string(),
     }
-}
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
 }
 
 fn write_base(w: &mut Writer, base: &TerrainBase) {
@@ -317,6 +390,13 @@ impl Writer {
     fn point(&mut self, p: [i64; 3]) {
         p.iter().for_each(|&c| self.i64(c));
     }
+    fn keys(&mut self, keys: &[CellKey]) {
+        self.len(keys.len());
+        for key in keys {
+            self.u8(key.depth);
+            key.pos.iter().for_each(|&p| self.u32(p));
+        }
+    }
 }
 
 struct Reader<'a> {
@@ -324,7 +404,7 @@ struct Reader<'a> {
     at: usize,
 }
 
-impl Reader<'_> {
+impl<'a> Reader<'a> {
     fn take<const N: usize>(&mut self) -> Result<[u8; N], TerrainError> {
         let end = self.at + N;
         let slice = self
@@ -341,6 +421,35 @@ impl Reader<'_> {
     }
     fn u32(&mut self) -> Result<u32, TerrainError> {
         Ok(u32::from_le_bytes(self.take()?))
+    }
+    fn u64(&mut self) -> Result<u64, TerrainError> {
+        Ok(u64::from_le_bytes(self.take()?))
+    }
+    fn bytes(&mut self, n: usize) -> Result<&'a [u8], TerrainError> {
+        let slice = self
+            .at
+            .checked_add(n)
+            .and_then(|end| self.bytes.get(self.at..end))
+            .ok_or(TerrainError::Truncated { at: self.at })?;
+        self.at += n;
+        Ok(slice)
+    }
+    /// Cell keys; each must name a cell of a cube (position below
+    /// `2^depth`, depth at most 27, the largest cube).
+    fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError> {
+        let n = self.len()?;
+        let mut keys = Vec::with_capacity(n.min(1 << 16));
+        for _ in 0..n {
+            let key = CellKey {
+                depth: self.u8()?,
+                pos: [self.u32()?, self.u32()?, self.u32()?],
+            };
+            if key.depth > 27 || key.pos.iter().any(|&p| u64::from(p) >> key.depth != 0) {
+                return Err(corrupt(format!("{key:?} names no cell")));
+            }
+            keys.push(key);
+        }
+        Ok(keys)
     }
     fn i64(&mut self) -> Result<i64, TerrainError> {
         Ok(i64::from_le_bytes(self.take()?))
