@@ -35,10 +35,10 @@
 //! ```
 //!
 //! Child `i` of an inner cell is the cell's octant `i` (bit 0: upper x
-//! half, bit 1: upper y, bit 2: upper z; see [`super::CellKey::child`]). BSP node
-//! and plane indices are those of [`Bsp::nodes`] and [`Bsp::planes`]; a BSP
-//! node's `below` subtree is `n·x + d < 0`. The writer numbers nodes in
-//! post-order, each shared node once.
+//! half, bit 1: upper y, bit 2: upper z; see [`super::CellKey::child`]).
+//! BSP node and plane indices are those of [`Bsp::nodes`] and
+//! [`Bsp::planes`]; a BSP node's `below` subtree is `n·x + d < 0`. The
+//! writer numbers nodes in post-order, each shared node once.
 //!
 //! ## Checks on load
 //!
@@ -57,8 +57,28 @@
 //! none with more cells than its nodes can make without repeating a
 //! subtree ([`Error::InvalidOctree`]), and no bytes left over
 //! ([`Error::CorruptFile`]). Loading never panics, never allocates more
-//! than a small multiple of the file's size, and gives octrees whose every
-//! later operation costs what it would on the octree that was saved.
+//! than a small multiple of the file's size, and gives no octree with more
+//! cells than a tree of its stored nodes has, so later walks over it cost
+//! in proportion to the file.
+//!
+//! ## Use
+//!
+//! [`Octree::to_bytes`] / [`Octree::from_bytes`] for one octree, with
+//! [`Octree::save`] / [`Octree::load`] (files) and [`Octree::write_to`] /
+//! [`Octree::read_from`] (streams); [`snapshots_to_bytes`] /
+//! [`snapshots_from_bytes`] for several sharing their cells.
+//!
+//! ```
+//! use chisel_bsp::octree::{CellBox, Octree, OctreeConfig};
+//!
+//! let block = CellBox { min: [0; 3], max: [600, 400, 300] };
+//! let octree = Octree::from_box([0; 3], 10, block, 1, OctreeConfig::default())?;
+//! let bytes = octree.to_bytes();
+//! let back = Octree::from_bytes(&bytes)?;
+//! assert_eq!(back.to_bytes(), bytes);
+//! assert_eq!(back.solid_volume(), 600.0 * 400.0 * 300.0);
+//! # Ok::<(), chisel_bsp::Error>(())
+//! ```
 
 mod bytes;
 mod xxh64;
