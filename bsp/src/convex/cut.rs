@@ -22,7 +22,10 @@
 
 use super::mesh::{ConvexArena, PolyId};
 use super::scratch::Scratch;
-use crate::exact::{Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
+use crate::exact::{
+    FilteredDot, Plane, Sign, classify_vertex, classify_vertex_exact, compare_offsets,
+    offset_estimate,
+};
 
 /// The result of cutting a polyhedron `P` by a plane `s`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -119,10 +122,10 @@ impl ConvexArena {
 
     /// Runs `op` with the arena's scratch space, cleared.
     fn with_scratch<T>(&mut self, op: impl FnOnce(&mut Self, &mut Scratch) -> T) -> T {
-        let mut scratch = std::mem::take(&mut self.scratch);
+        let mut scratch = self.scratch.take().unwrap_or_default();
         scratch.clear();
         let out = op(self, &mut scratch);
-        self.scratch = scratch;
+        self.scratch = Some(scratch);
         out
     }
 
@@ -178,34 +181,42 @@ impl ConvexArena {
             Ordering::Greater
         };
         let mut cur = start;
+        let (mut cur_value, mut cur_error) = offset_estimate(&self.vertices[cur as usize].point, s);
         loop {
-            let (cur_value, cur_error) = offset_estimate(&self.vertices[cur as usize].point, s);
-            let mut best: Option<(u32, f64)> = None;
-            let mut uncertain: Option<u32> = None;
+            // The best certified step, and an exactly certified one.
+            let mut best: Option<(u32, f64, (f64, f64))> = None;
+            let mut uncertain: Option<(u32, (f64, f64))> = None;
             for h in self.outgoing(cur) {
                 let n = self.dest(h);
-                if self.side(n, s, scratch) == target {
+                let point = &self.vertices[n as usize].point;
+                // One f64 evaluation gives both the side and the offset.
+                let dot = FilteredDot::new(point, s);
+                let side = scratch.sides.get(n).unwrap_or_else(|| {
+                    let side = dot
+                        .sign()
+                        .unwrap_or_else(|| classify_vertex_exact(point, s));
+                    scratch.sides.insert(n, side);
+                    side
+                });
+                if side == target {
                     return Some((cur, n));
                 }
-                let (value, error) = offset_estimate(&self.vertices[n as usize].point, s);
+                let (value, error) = dot.offset(point);
                 let gain = toward(value) - toward(cur_value);
                 if gain > error + cur_error {
-                    if best.is_none_or(|(_, g)| gain > g) {
-                        best = Some((n, gain));
+                    if best.is_none_or(|(_, g, _)| gain > g) {
+                        best = Some((n, gain, (value, error)));
                     }
                 } else if gain >= -(error + cur_error)
                     && uncertain.is_none()
-                    && compare_offsets(
-                        &self.vertices[n as usize].point,
-                        &self.vertices[cur as usize].point,
-                        s,
-                    ) == wanted
+                    && compare_offsets(point, &self.vertices[cur as usize].point, s) == wanted
                 {
                     // Too close to call in f64: exactly closer.
-                    uncertain = Some(n);
+                    uncertain = Some((n, (value, error)));
                 }
             }
-            cur = best.map(|(n, _)| n).or(uncertain)?;
+            (cur, (cur_value, cur_error)) =
+                best.map(|(n, _, estimate)| (n, estimate)).or(uncertain)?;
         }
     }
 

@@ -6,7 +6,7 @@
 //! outside the polyhedron, so the interior is where every face plane is
 //! negative.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use super::scratch::Scratch;
 use crate::Error;
@@ -67,8 +67,9 @@ pub struct ConvexArena {
     pub(crate) vertices: Vec<Vertex>,
     pub(crate) half_edges: Vec<HalfEdge>,
     pub(crate) faces: Vec<Face>,
-    /// Reused working memory of the cuts (no part of the geometry).
-    pub(crate) scratch: Scratch,
+    /// Reused working memory of the cuts (no part of the geometry), boxed
+    /// so that lending it to a cut moves a pointer.
+    pub(crate) scratch: Option<Box<Scratch>>,
 }
 
 impl ConvexArena {
@@ -113,7 +114,7 @@ impl ConvexArena {
         self.vertices.reserve(additional);
         self.faces.reserve(additional);
         self.half_edges.reserve(6 * additional);
-        self.scratch.reserve(
+        self.scratch.get_or_insert_default().reserve(
             self.vertices.len() + additional,
             self.faces.len() + additional,
         );
@@ -299,16 +300,16 @@ impl ConvexArena {
     /// of its half-edge.
     #[must_use]
     pub fn faces_of(&self, poly: PolyId) -> Vec<u32> {
-        let mut seen = HashMap::new();
         let start = self.half_edges[poly.0 as usize].face;
         let mut order = vec![start];
-        seen.insert(start, ());
+        let mut seen = SeenSet::default();
+        seen.insert(start);
         let mut i = 0;
         while i < order.len() {
             let face = order[i];
             for h in self.face_loop(face) {
                 let neighbour = self.half_edges[self.half_edges[h as usize].twin as usize].face;
-                if seen.insert(neighbour, ()).is_none() {
+                if seen.insert(neighbour) {
                     order.push(neighbour);
                 }
             }
@@ -320,12 +321,12 @@ impl ConvexArena {
     /// The vertices of polyhedron `poly` (each once, in first-seen order).
     #[must_use]
     pub fn vertices_of(&self, poly: PolyId) -> Vec<u32> {
-        let mut seen = HashMap::new();
+        let mut seen = SeenSet::default();
         let mut out = Vec::new();
         for face in self.faces_of(poly) {
             for h in self.face_loop(face) {
                 let v = self.half_edges[h as usize].origin;
-                if seen.insert(v, ()).is_none() {
+                if seen.insert(v) {
                     out.push(v);
                 }
             }
@@ -351,5 +352,38 @@ impl ConvexArena {
                 (self.faces[f as usize].plane, corners)
             })
             .collect()
+    }
+}
+
+/// A set of element indices for one traversal: a short list searched
+/// linearly while it is small (cells have tens of faces; hashing them costs
+/// more than the search), a hash set beyond.
+#[derive(Default)]
+struct SeenSet {
+    few: Vec<u32>,
+    many: Option<HashSet<u32>>,
+}
+
+impl SeenSet {
+    /// Entries kept in the list before switching to hashing.
+    const FEW: usize = 48;
+
+    /// Adds `x`; true when it was not in the set yet.
+    #[inline]
+    fn insert(&mut self, x: u32) -> bool {
+        if let Some(many) = &mut self.many {
+            return many.insert(x);
+        }
+        if self.few.contains(&x) {
+            return false;
+        }
+        if self.few.len() == Self::FEW {
+            let mut many: HashSet<u32> = self.few.drain(..).collect();
+            many.insert(x);
+            self.many = Some(many);
+        } else {
+            self.few.push(x);
+        }
+        true
     }
 }

@@ -99,16 +99,56 @@ pub fn plane_dot_exact(v: &Point4, s: &Plane) -> I256 {
 #[must_use]
 #[inline]
 pub fn offset_estimate(v: &Point4, s: &Plane) -> (f64, f64) {
-    let [x, y, z, w] = v.approx;
-    let [a, b, c, d] = s.approx;
-    let (t0, t1, t2, t3) = (x * a, y * b, z * c, w * d);
-    let sum = (t0 + t1) + (t2 + t3);
-    let magnitude = (t0.abs() + t1.abs()) + (t2.abs() + t3.abs());
-    let value = sum / w;
-    let u = f64::EPSILON / 2.0;
-    let error =
-        ((magnitude * FILTER_EPSILON + 4.0 * u * sum.abs()) / w + 4.0 * u * value.abs()) * 1.25;
-    (value, error)
+    FilteredDot::new(v, s).offset(v)
+}
+
+/// The `f64` evaluation of `T` that both the sign filter and the offset
+/// estimate start from, so that a caller needing both computes it once.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FilteredDot {
+    /// `s = fl((t_1 + t_2) + (t_3 + t_4))`.
+    sum: f64,
+    /// `m = fl((|t_1| + |t_2|) + (|t_3| + |t_4|))`.
+    magnitude: f64,
+}
+
+impl FilteredDot {
+    /// Evaluates `T` for `v` and `s` in `f64` (module docs).
+    #[inline]
+    pub(crate) fn new(v: &Point4, s: &Plane) -> Self {
+        let [x, y, z, w] = v.approx;
+        let [a, b, c, d] = s.approx;
+        let (t0, t1, t2, t3) = (x * a, y * b, z * c, w * d);
+        Self {
+            sum: (t0 + t1) + (t2 + t3),
+            magnitude: (t0.abs() + t1.abs()) + (t2.abs() + t3.abs()),
+        }
+    }
+
+    /// The side, when the error bound certifies it.
+    #[inline]
+    pub(crate) fn sign(self) -> Option<Sign> {
+        let bound = self.magnitude * FILTER_EPSILON;
+        if self.sum > bound {
+            Some(Sign::Positive)
+        } else if self.sum < -bound {
+            Some(Sign::Negative)
+        } else {
+            None
+        }
+    }
+
+    /// [`offset_estimate`] of `v`, the vertex this was evaluated for.
+    #[inline]
+    pub(crate) fn offset(self, v: &Point4) -> (f64, f64) {
+        let w = v.approx[3];
+        let value = self.sum / w;
+        let u = f64::EPSILON / 2.0;
+        let error = ((self.magnitude * FILTER_EPSILON + 4.0 * u * self.sum.abs()) / w
+            + 4.0 * u * value.abs())
+            * 1.25;
+        (value, error)
+    }
 }
 
 /// Compares the signed distances of `a` and `b` to `s` exactly:
@@ -128,17 +168,5 @@ pub fn compare_offsets(a: &Point4, b: &Point4, s: &Plane) -> core::cmp::Ordering
 #[must_use]
 #[inline]
 pub fn classify_vertex_filtered(v: &Point4, s: &Plane) -> Option<Sign> {
-    let [x, y, z, w] = v.approx;
-    let [a, b, c, d] = s.approx;
-    let (t0, t1, t2, t3) = (x * a, y * b, z * c, w * d);
-    let sum = (t0 + t1) + (t2 + t3);
-    let magnitude = (t0.abs() + t1.abs()) + (t2.abs() + t3.abs());
-    let bound = magnitude * FILTER_EPSILON;
-    if sum > bound {
-        Some(Sign::Positive)
-    } else if sum < -bound {
-        Some(Sign::Negative)
-    } else {
-        None
-    }
+    FilteredDot::new(v, s).sign()
 }

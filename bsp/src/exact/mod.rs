@@ -22,6 +22,7 @@ mod point;
 mod sign;
 pub mod wide;
 
+pub(crate) use classify::FilteredDot;
 pub use classify::{
     FILTER_EPSILON, classify_vertex, classify_vertex_exact, classify_vertex_filtered,
     compare_offsets, offset_estimate, plane_dot_exact,

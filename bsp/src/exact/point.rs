@@ -121,7 +121,7 @@ impl Point4 {
         Self {
             xyz_digits: xyz,
             w_digits: [w0, w1, 0],
-            approx: [x as f64, y as f64, z as f64, w as f64],
+            approx: [x, y, z, w].map(narrow_to_f64),
         }
     }
 
@@ -165,6 +165,27 @@ impl Point4 {
     }
 }
 
+/// The nearest `f64` to `v` (ties to even), as `v as f64` but without the
+/// generic 128-bit conversion routine: below `2^63` the hardware converts;
+/// above, the leading 64 bits are kept with a sticky bit for the rest (9
+/// bits below the rounding position, so rounding is still correct) and
+/// scaled by an exact power of two.
+#[inline]
+fn narrow_to_f64(v: i128) -> f64 {
+    if let Ok(small) = i64::try_from(v) {
+        return small as f64;
+    }
+    let m = v.unsigned_abs();
+    let lz = m.leading_zeros();
+    let top = m << lz;
+    let (hi, lo) = ((top >> 64) as u64, top as u64);
+    let sticky = u64::from((hi & 1) | lo != 0);
+    // hi·2^64 ≈ m·2^lz, and (hi >> 1 | sticky) carries the same rounding.
+    let scale = f64::from_bits(u64::from(1023 + 65 - lz) << 52);
+    let magnitude = ((hi >> 1) | sticky) as i64 as f64 * scale;
+    if v < 0 { -magnitude } else { magnitude }
+}
+
 impl From<IntPoint> for Point4 {
     /// Lifts an input point to `(x, y, z, 1)`.
     fn from(p: IntPoint) -> Self {
@@ -175,5 +196,28 @@ impl From<IntPoint> for Point4 {
             I256::from_i64(z),
             I192::from_i64(1),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::narrow_to_f64;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The conversion rounds as `as f64` does, at every magnitude and at
+    /// ties (values with few significant bits and a trailing one).
+    #[test]
+    fn narrow_conversion_rounds_to_nearest() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut values = vec![0, 1, -1, i128::MAX, i128::MIN, i128::MIN + 1];
+        for bits in 1..127u32 {
+            let v: i128 = rng.random::<i128>() >> (127 - bits);
+            let tie = (1i128 << bits.min(125)) | (1i128 << bits.saturating_sub(54));
+            values.extend([v, -v, tie, -tie, tie + 1, tie - 1]);
+        }
+        for v in values {
+            assert_eq!(narrow_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
+        }
     }
 }
