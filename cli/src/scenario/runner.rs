@@ -36,7 +36,8 @@ pub struct RunFlags {
     /// (JSON lines, millimetres, exactly the quantized tool points).
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
-    /// Inner BSP nodes an octree cell may hold before it is split.
+    /// Inner BSP nodes an octree cell may hold before it is split (a
+    /// `.chisel` replay base keeps the settings it was saved with).
     #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_bsp_nodes: u32,
     /// Check every step (untimed): exact volume bookkeeping of the edit and
