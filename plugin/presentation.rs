@@ -4,6 +4,13 @@
 //! window. Without one it renders offscreen into an image, captures PNG
 //! screenshots at chosen frames, prints where they went and exits — so every
 //! example also runs in CI and on servers, on a CPU Vulkan driver.
+//!
+//! Every capture is checked for content: a frame whose pixels are nearly
+//! all one colour (the clear colour of a scene that failed to draw, or an
+//! image the renderer never wrote) fails the run ([`foreground_fraction`],
+//! [`HeadlessConfig::min_foreground`]). A scene that needs time before it
+//! is worth capturing (carving, sampling) holds the frame count with
+//! [`HoldCaptures`].
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -42,12 +49,18 @@ pub struct HeadlessConfig {
     pub output_dir: Option<PathBuf>,
     /// File name stem: screenshots are `{stem}-{frame:04}.png`.
     pub stem: String,
-    /// Give up (exit with an error) after this many frames.
+    /// Give up (exit with an error) after this many frames in all,
+    /// counting frames under [`HoldCaptures`].
     pub max_frames: u32,
+    /// Smallest fraction of every capture that must differ from the
+    /// frame's background (see [`foreground_fraction`]); a capture with
+    /// less fails the run. `0.0` turns the check off.
+    pub min_foreground: f32,
 }
 
 impl HeadlessConfig {
-    /// 960×540, screenshots at frames 4 and 12 into `screenshots/`.
+    /// 960×540, screenshots at frames 4 and 12 into `screenshots/`, each
+    /// at least 10% foreground.
     #[must_use]
     pub fn new(stem: impl Into<String>) -> Self {
         Self {
@@ -57,6 +70,7 @@ impl HeadlessConfig {
             output_dir: Some(PathBuf::from("screenshots")),
             stem: stem.into(),
             max_frames: 120,
+            min_foreground: 0.1,
         }
     }
 }
@@ -152,11 +166,24 @@ pub struct HeadlessCapturePlugin {
     pub frames: CapturedFrames,
 }
 
+/// While this resource is present and `true`, a headless run does not
+/// count frames towards [`HeadlessConfig::capture_frames`]: a scene sets it
+/// while it is still carving or sampling, so that the screenshots show the
+/// finished state. [`HeadlessConfig::max_frames`] still counts every frame.
+/// Ignored in a window.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HoldCaptures(pub bool);
+
 #[derive(Resource, Clone)]
 struct HeadlessState {
     config: HeadlessConfig,
     target: Option<Handle<Image>>,
+    /// Frames counted towards the captures.
     frame: u32,
+    /// Every frame.
+    total: u32,
+    /// Captures that failed the content check.
+    failures: Vec<String>,
 }
 
 impl Plugin for HeadlessCapturePlugin {
@@ -166,6 +193,8 @@ impl Plugin for HeadlessCapturePlugin {
                 config: self.config.clone(),
                 target: None,
                 frame: 0,
+                total: 0,
+                failures: Vec::new(),
             })
             .insert_resource(self.frames.clone())
             .add_systems(PreStartup, create_offscreen_target)
@@ -207,7 +236,15 @@ fn redirect_cameras_offscreen(
     }
 }
 
-fn request_screenshots(mut state: ResMut<HeadlessState>, mut commands: Commands) {
+fn request_screenshots(
+    mut state: ResMut<HeadlessState>,
+    hold: Option<Res<HoldCaptures>>,
+    mut commands: Commands,
+) {
+    state.total += 1;
+    if hold.is_some_and(|h| h.0) {
+        return;
+    }
     state.frame += 1;
     let frame = state.frame;
     let (Some(target), true) = (&state.target, state.config.capture_frames.contains(&frame)) else {
@@ -218,27 +255,91 @@ fn request_screenshots(mut state: ResMut<HeadlessState>, mut commands: Commands)
         .output_dir
         .as_ref()
         .map(|dir| dir.join(format!("{}-{frame:04}.png", state.config.stem)));
+    let name = path.as_ref().map_or_else(
+        || format!("{} frame {frame}", state.config.stem),
+        |p| p.display().to_string(),
+    );
     commands.spawn(Screenshot::image(target.clone())).observe(
-        move |captured: On<ScreenshotCaptured>, frames: Res<CapturedFrames>| {
+        move |captured: On<ScreenshotCaptured>,
+              frames: Res<CapturedFrames>,
+              mut state: ResMut<HeadlessState>| {
             frames.push(captured.image.clone());
+            let rgb = match captured.image.clone().try_into_dynamic() {
+                Ok(dynamic) => dynamic.to_rgb8(),
+                Err(e) => {
+                    state
+                        .failures
+                        .push(format!("{name}: cannot convert the capture: {e:?}"));
+                    return;
+                }
+            };
+            let foreground = foreground_fraction(&rgb, BACKGROUND_TOLERANCE);
             if let Some(path) = &path {
-                save_png(&captured.image, path);
+                save_png(&rgb, path, foreground);
+            }
+            let min = state.config.min_foreground;
+            if foreground < min {
+                state.failures.push(format!(
+                    "{name}: only {:.1}% of the frame differs from its background \
+                     (at least {:.1}% expected): the scene did not draw",
+                    100.0 * foreground,
+                    100.0 * min
+                ));
             }
         },
     );
 }
 
-fn save_png(image: &Image, path: &std::path::Path) {
+fn save_png(rgb: &image::RgbImage, path: &std::path::Path, foreground: f32) {
     if let Some(dir) = path.parent() {
         let _ = std::fs::create_dir_all(dir);
     }
-    match image.clone().try_into_dynamic() {
-        Ok(dynamic) => match dynamic.to_rgb8().save(path) {
-            Ok(()) => println!("headless: wrote screenshot {}", path.display()),
-            Err(e) => eprintln!("headless: cannot write {}: {e}", path.display()),
-        },
-        Err(e) => eprintln!("headless: cannot convert screenshot: {e:?}"),
+    match rgb.save(path) {
+        Ok(()) => println!(
+            "headless: wrote screenshot {} ({:.0}% foreground)",
+            path.display(),
+            100.0 * foreground
+        ),
+        Err(e) => eprintln!("headless: cannot write {}: {e}", path.display()),
     }
+}
+
+/// How far (per channel, 0–255) a pixel may stray from the background
+/// colour and still count as background: dithering moves the clear colour
+/// by a step or two.
+pub const BACKGROUND_TOLERANCE: u8 = 8;
+
+/// The fraction of `image`'s pixels that differ from its background — its
+/// most common colour — by more than `tolerance` in some channel.
+///
+/// A frame in which nothing was drawn is one colour (the clear colour, or
+/// whatever the target held) up to dithering, so its fraction is near 0;
+/// text overlays add a few percent. Scenery that fills much of the frame
+/// gives a large fraction even where one flat face is its most common
+/// colour, since the sky then counts as foreground.
+#[must_use]
+pub fn foreground_fraction(image: &image::RgbImage, tolerance: u8) -> f32 {
+    let pixels = image.pixels().count();
+    if pixels == 0 {
+        return 0.0;
+    }
+    let mut counts: std::collections::HashMap<[u8; 3], u32> = std::collections::HashMap::new();
+    for p in image.pixels() {
+        *counts.entry(p.0).or_default() += 1;
+    }
+    let Some(background) = counts
+        .iter()
+        .max_by_key(|&(colour, n)| (*n, *colour))
+        .map(|(colour, _)| *colour)
+    else {
+        return 0.0;
+    };
+    let differs = |p: &image::Rgb<u8>| {
+        p.0.iter()
+            .zip(background)
+            .any(|(&a, b)| a.abs_diff(b) > tolerance)
+    };
+    image.pixels().filter(|p| differs(p)).count() as f32 / pixels as f32
 }
 
 fn exit_when_done(
@@ -248,13 +349,62 @@ fn exit_when_done(
 ) {
     let wanted = state.config.capture_frames.len();
     if frames.images().len() >= wanted {
-        exit.write(AppExit::Success);
-    } else if state.frame >= state.config.max_frames {
+        if state.failures.is_empty() {
+            exit.write(AppExit::Success);
+        } else {
+            for failure in &state.failures {
+                eprintln!("headless: {failure}");
+            }
+            exit.write(AppExit::error());
+        }
+    } else if state.total >= state.config.max_frames {
         eprintln!(
             "headless: only {} of {wanted} screenshots after {} frames",
             frames.images().len(),
-            state.frame
+            state.total
         );
         exit.write(AppExit::error());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::{Rgb, RgbImage};
+
+    #[test]
+    fn an_empty_frame_has_no_foreground() {
+        // The clear colour, dithered by ±1.
+        let sky = RgbImage::from_fn(64, 48, |x, y| {
+            let d = ((x + y) % 3) as u8;
+            Rgb([134 + d, 173 - d, 214])
+        });
+        assert!(foreground_fraction(&sky, BACKGROUND_TOLERANCE) < 0.001);
+        // A never-written target.
+        let black = RgbImage::new(64, 48);
+        assert_eq!(foreground_fraction(&black, BACKGROUND_TOLERANCE), 0.0);
+    }
+
+    #[test]
+    fn scenery_counts_even_when_one_face_dominates() {
+        // Top 40% sky, bottom 60% one flat face of a block.
+        let image = RgbImage::from_fn(100, 100, |_, y| {
+            if y < 40 {
+                Rgb([134, 173, 214])
+            } else {
+                Rgb([90, 140, 60])
+            }
+        });
+        let f = foreground_fraction(&image, BACKGROUND_TOLERANCE);
+        assert!((f - 0.4).abs() < 1e-6, "{f}");
+        // A line of text on the sky is not scenery.
+        let text = RgbImage::from_fn(100, 100, |x, y| {
+            if y < 3 && x % 2 == 0 {
+                Rgb([255, 255, 255])
+            } else {
+                Rgb([134, 173, 214])
+            }
+        });
+        assert!(foreground_fraction(&text, BACKGROUND_TOLERANCE) < 0.1);
     }
 }

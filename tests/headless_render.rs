@@ -57,6 +57,8 @@ fn renders_a_cube_headless_and_reads_back_its_pixels() {
         output_dir: None,
         stem: "headless_render".into(),
         max_frames: 60,
+        // The pixels are checked one by one below.
+        min_foreground: 0.0,
     };
     let mut app = App::new();
     let frames = Presentation::Headless(config).add_default_plugins(&mut app, "headless test");

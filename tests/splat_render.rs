@@ -84,6 +84,8 @@ fn render(
             SHOT.fetch_add(1, Ordering::Relaxed)
         ),
         max_frames: 60,
+        // The pixels are checked one by one below.
+        min_foreground: 0.0,
     };
     let mut app = App::new();
     let frames = Presentation::Headless(config).add_default_plugins(&mut app, "splat test");
