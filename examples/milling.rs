@@ -14,7 +14,6 @@
 use std::f32::consts::{FRAC_PI_2, TAU};
 use std::time::Duration;
 
-use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
@@ -23,6 +22,7 @@ use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainMaterials, TerrainPlugin,
     TerrainSystems,
 };
+use bevy_chisel::viewer::{ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, overlay_text};
 
 /// World units are millimetres; the grid step is 0.01 mm.
 const GRID_UNIT: f64 = 0.01;
@@ -47,7 +47,7 @@ fn main() -> AppExit {
     };
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — milling");
-    app.add_plugins(TerrainPlugin)
+    app.add_plugins((TerrainPlugin, ViewerPlugin))
         .insert_resource(ClearColor(Color::srgb(0.16, 0.17, 0.20)))
         .insert_resource(Mill {
             path: tool_path(),
@@ -60,7 +60,7 @@ fn main() -> AppExit {
         .add_systems(
             Update,
             (
-                (orbit_camera, mill_steps).before(TerrainSystems::Carve),
+                mill_steps.before(TerrainSystems::Carve),
                 update_panel.after(TerrainSystems::Mesh),
             ),
         )
@@ -111,9 +111,6 @@ struct Mill {
 #[derive(Component)]
 struct Bit;
 
-#[derive(Component)]
-struct Panel;
-
 fn spawn_scene(
     mut commands: Commands,
     mut meshes: ResMut<Assets<Mesh>>,
@@ -159,21 +156,15 @@ fn spawn_scene(
         brightness: 500.0,
         ..default()
     });
-    commands.spawn((Camera3d::default(), Transform::default()));
-    commands.spawn((
-        Text::new(""),
-        TextFont {
-            font_size: FontSize::Px(15.0),
-            ..default()
-        },
-        Node {
-            position_type: PositionType::Absolute,
-            top: px(10),
-            left: px(12),
-            ..default()
-        },
-        Panel,
-    ));
+    commands.spawn(OrbitCamera {
+        min_distance: 20.0,
+        max_distance: 600.0,
+        move_keys: false,
+        ..OrbitCamera::new(Vec3::new(0.0, -8.0, 0.0), 150.0)
+            .with_angles(0.9, 0.75)
+            .with_drag([MouseButton::Left, MouseButton::Middle])
+    });
+    commands.spawn(overlay_text());
     Ok(())
 }
 
@@ -226,42 +217,11 @@ fn mill_steps(
     }
 }
 
-fn orbit_camera(
-    time: Res<Time>,
-    buttons: Res<ButtonInput<MouseButton>>,
-    motion: Res<AccumulatedMouseMotion>,
-    scroll: Res<AccumulatedMouseScroll>,
-    keys: Res<ButtonInput<KeyCode>>,
-    mut state: Local<Option<(f32, f32, f32)>>,
-    mut cameras: Query<&mut Transform, With<Camera3d>>,
-) {
-    let (yaw, pitch, distance) = state.get_or_insert((0.9, 0.75, 150.0));
-    let dt = time.delta_secs();
-    let key = |k: KeyCode| if keys.pressed(k) { 1.0 } else { 0.0 };
-    *yaw += (key(KeyCode::ArrowLeft) - key(KeyCode::ArrowRight)) * 1.5 * dt;
-    *pitch += (key(KeyCode::ArrowUp) - key(KeyCode::ArrowDown)) * dt;
-    if buttons.pressed(MouseButton::Left) || buttons.pressed(MouseButton::Middle) {
-        *yaw -= motion.delta.x * 0.005;
-        *pitch += motion.delta.y * 0.005;
-    }
-    *pitch = pitch.clamp(0.05, 1.5);
-    *distance = (*distance * (1.0 - 0.1 * scroll.delta.y)).clamp(20.0, 600.0);
-    let offset = Vec3::new(
-        yaw.cos() * pitch.cos(),
-        pitch.sin(),
-        yaw.sin() * pitch.cos(),
-    );
-    for mut transform in &mut cameras {
-        *transform = Transform::from_translation(offset * *distance - Vec3::Y * 8.0)
-            .looking_at(Vec3::new(0.0, -8.0, 0.0), Vec3::Y);
-    }
-}
-
 fn update_panel(
     mut applied: MessageReader<CarveApplied>,
     mut mill: ResMut<Mill>,
     terrains: Query<&Terrain>,
-    mut panel: Query<&mut Text, With<Panel>>,
+    mut panel: Query<&mut Text, With<Overlay>>,
 ) {
     for a in applied.read() {
         mill.times.push((a.apply_time, a.mesh_time));
@@ -269,7 +229,7 @@ fn update_panel(
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     let mut lines = vec![
         "bevy_chisel milling: exact swept-volume CNC simulation (10 um grid)".to_owned(),
-        "drag or arrows orbit | wheel zoom | Space pause | R restart path".to_owned(),
+        format!("{ORBIT_HELP} | Space pause | R restart path"),
         format!(
             "step {} of {}",
             mill.next,

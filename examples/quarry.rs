@@ -15,14 +15,16 @@
 
 use std::time::Duration;
 
-use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, Presentation};
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, HeightLayer, Heightfield, Terrain,
-    TerrainMaterials, TerrainPlugin, TerrainSystems, UndoCarve,
+    TerrainMaterials, TerrainPlugin, TerrainSystems,
+};
+use bevy_chisel::viewer::{
+    CARVING_HELP, ClickCarving, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
 };
 
 const ROCK: u8 = 1;
@@ -47,15 +49,21 @@ fn main() -> AppExit {
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — quarry");
-    app.add_plugins(TerrainPlugin)
+    app.add_plugins((TerrainPlugin, ViewerPlugin))
         .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
-        .init_resource::<Orbit>()
+        .insert_resource(ClickCarving {
+            blast_radius: BLAST_RADIUS,
+            heap_radius: HEAP_RADIUS,
+            heap_label: DIRT,
+            reach: 500.0,
+            undo_key: Some(KeyCode::KeyZ),
+        })
         .init_resource::<Stats>()
         .add_systems(Startup, spawn_scene)
         .add_systems(
             Update,
             (
-                (orbit_camera, mouse_carves, keys).before(TerrainSystems::Carve),
+                keys.before(TerrainSystems::Carve),
                 update_hud.after(TerrainSystems::Mesh),
             ),
         );
@@ -146,30 +154,18 @@ fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<StandardMate
         brightness: 400.0,
         ..default()
     });
-    commands.spawn((Camera3d::default(), Transform::default()));
-    commands.spawn((
-        Text::new(""),
-        TextFont {
-            font_size: FontSize::Px(15.0),
-            ..default()
-        },
-        Node {
-            position_type: PositionType::Absolute,
-            top: px(10),
-            left: px(12),
-            ..default()
-        },
-        Hud,
-    ));
+    commands.spawn(OrbitCamera {
+        min_distance: 3.0,
+        max_distance: 120.0,
+        ..OrbitCamera::new(Vec3::new(-1.0, 1.5, 1.0), 26.0)
+    });
+    commands.spawn(overlay_text());
     Ok(())
 }
 
 /// The materials, kept to give a loaded terrain the same look.
 #[derive(Resource)]
 struct Palette(TerrainMaterials);
-
-#[derive(Component)]
-struct Hud;
 
 /// Carve timings for the HUD.
 #[derive(Resource, Default)]
@@ -179,130 +175,16 @@ struct Stats {
     message: Option<String>,
 }
 
-/// An orbit camera around a focus point that WASD moves (a fly camera
-/// along the ground).
-#[derive(Resource)]
-struct Orbit {
-    focus: Vec3,
-    yaw: f32,
-    pitch: f32,
-    distance: f32,
-}
-
-impl Default for Orbit {
-    fn default() -> Self {
-        Self {
-            focus: Vec3::new(-1.0, 1.5, 1.0),
-            yaw: 0.9,
-            pitch: 0.55,
-            distance: 26.0,
-        }
-    }
-}
-
-fn orbit_camera(
-    time: Res<Time>,
-    keys: Res<ButtonInput<KeyCode>>,
-    buttons: Res<ButtonInput<MouseButton>>,
-    motion: Res<AccumulatedMouseMotion>,
-    scroll: Res<AccumulatedMouseScroll>,
-    mut orbit: ResMut<Orbit>,
-    mut cameras: Query<&mut Transform, With<Camera3d>>,
-) {
-    let dt = time.delta_secs();
-    let key = |k: KeyCode| if keys.pressed(k) { 1.0 } else { 0.0 };
-    orbit.yaw += (key(KeyCode::ArrowLeft) - key(KeyCode::ArrowRight)) * 1.5 * dt;
-    orbit.pitch += (key(KeyCode::ArrowUp) - key(KeyCode::ArrowDown)) * 1.0 * dt;
-    if buttons.pressed(MouseButton::Middle) {
-        orbit.yaw -= motion.delta.x * 0.005;
-        orbit.pitch += motion.delta.y * 0.005;
-    }
-    orbit.pitch = orbit.pitch.clamp(0.05, 1.5);
-    orbit.distance = (orbit.distance * (1.0 - 0.1 * scroll.delta.y)).clamp(3.0, 120.0);
-    let forward = Vec3::new(-orbit.yaw.cos(), 0.0, -orbit.yaw.sin());
-    let right = Vec3::new(-forward.z, 0.0, forward.x);
-    let speed = 0.5 * orbit.distance * dt;
-    let step = forward * (key(KeyCode::KeyW) - key(KeyCode::KeyS))
-        + right * (key(KeyCode::KeyD) - key(KeyCode::KeyA))
-        + Vec3::Y * (key(KeyCode::KeyE) - key(KeyCode::KeyQ));
-    orbit.focus += step * speed;
-    let offset = Vec3::new(
-        orbit.yaw.cos() * orbit.pitch.cos(),
-        orbit.pitch.sin(),
-        orbit.yaw.sin() * orbit.pitch.cos(),
-    ) * orbit.distance;
-    for mut transform in &mut cameras {
-        *transform =
-            Transform::from_translation(orbit.focus + offset).looking_at(orbit.focus, Vec3::Y);
-    }
-}
-
-/// A blast crater: a dodecahedron turned a little differently each time.
-fn blast(centre: Vec3, count: usize) -> CarveTool {
-    let turn = Quat::from_euler(EulerRot::YXZ, 0.9 * count as f32, 0.4, 0.3 * count as f32);
-    CarveTool::new(
-        CarveShape::Dodecahedron {
-            radius: BLAST_RADIUS,
-        },
-        Transform::from_translation(centre).with_rotation(turn),
-    )
-}
-
-fn mouse_carves(
-    buttons: Res<ButtonInput<MouseButton>>,
-    windows: Query<&Window>,
-    cameras: Query<(&Camera, &GlobalTransform)>,
-    terrains: Query<(Entity, &Terrain)>,
-    mut carves: MessageWriter<Carve>,
-) {
-    let left = buttons.just_pressed(MouseButton::Left);
-    let right = buttons.just_pressed(MouseButton::Right);
-    if !(left || right) {
-        return;
-    }
-    let Some(cursor) = windows.iter().find_map(Window::cursor_position) else {
-        return;
-    };
-    let Some((camera, camera_transform)) = cameras.iter().next() else {
-        return;
-    };
-    let Ok(ray) = camera.viewport_to_world(camera_transform, cursor) else {
-        return;
-    };
-    for (entity, terrain) in &terrains {
-        let Some(hit) = terrain.ray_cast(ray, 500.0) else {
-            continue;
-        };
-        let (tool, edit) = if left {
-            (blast(hit.point, terrain.journal().len()), Edit::Subtract)
-        } else {
-            let centre = hit.point + hit.normal * (0.6 * HEAP_RADIUS);
-            (
-                CarveTool::dodecahedron(HEAP_RADIUS, centre),
-                Edit::Add(DIRT),
-            )
-        };
-        carves.write(Carve {
-            terrain: entity,
-            tool,
-            edit,
-        });
-    }
-}
-
+/// F5 saves the terrain, F9 loads it back.
 fn keys(
     keys: Res<ButtonInput<KeyCode>>,
     terrains: Query<(Entity, &Terrain)>,
     palette: Res<Palette>,
-    mut undo: MessageWriter<UndoCarve>,
     mut stats: ResMut<Stats>,
     mut commands: Commands,
 ) {
     let path = std::env::temp_dir().join("quarry.chisel");
     for (entity, terrain) in &terrains {
-        if keys.just_pressed(KeyCode::KeyZ) {
-            undo.write(UndoCarve { terrain: entity });
-        }
         if keys.just_pressed(KeyCode::F5) {
             stats.message = Some(match terrain.save(&path) {
                 Ok(()) => format!("saved {}", path.display()),
@@ -356,7 +238,7 @@ fn scripted_carves(
             if let Some(hit) = down(x, z) {
                 carves.write(Carve {
                     terrain: entity,
-                    tool: blast(hit.point, k),
+                    tool: blast(hit.point, BLAST_RADIUS, k),
                     edit: Edit::Subtract,
                 });
             }
@@ -377,7 +259,7 @@ fn update_hud(
     mut rejected: MessageReader<CarveRejected>,
     mut stats: ResMut<Stats>,
     terrains: Query<&Terrain>,
-    mut hud: Query<&mut Text, With<Hud>>,
+    mut hud: Query<&mut Text, With<Overlay>>,
 ) {
     if let Some(last) = applied.read().last() {
         stats.last = Some(last.clone());
@@ -389,8 +271,8 @@ fn update_hud(
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     let mut lines = vec![
         "bevy_chisel quarry: exact destructible terrain".to_owned(),
-        "LMB blast crater | RMB heap dirt | Z undo | F5 save | F9 load".to_owned(),
-        "WASD/QE move | arrows or middle-drag orbit | wheel zoom".to_owned(),
+        format!("{CARVING_HELP} | F5 save | F9 load"),
+        format!("WASD/QE move | {ORBIT_HELP}"),
     ];
     for terrain in &terrains {
         let stats_line = terrain.octree().stats();

@@ -22,13 +22,16 @@
 //!
 //! The [`presentation`] module runs any app either in a window or, where
 //! there is no display, headless on an offscreen target with PNG
-//! screenshots — the examples and the render tests use it.
+//! screenshots — the examples and the render tests use it. The [`viewer`]
+//! module holds what the examples share: an orbit camera, text overlays and
+//! carving the terrain under the mouse cursor.
 
 #![warn(missing_docs)]
 
 pub mod presentation;
 pub mod splat;
 pub mod terrain;
+pub mod viewer;
 
 pub use chisel_bsp as bsp;
 pub use chisel_quadric as quadric;
