@@ -11,13 +11,14 @@ use std::sync::Arc;
 
 use chisel_bsp::Error;
 use chisel_bsp::convex::ConvexArena;
+use chisel_bsp::exact::Plane;
 use chisel_bsp::exact::budget::MAX_NORMAL;
 use chisel_bsp::octree::store::{
-    FORMAT_VERSION, MAGIC, checksum, snapshots_from_bytes, snapshots_to_bytes,
+    FORMAT_VERSION, MAGIC, MAX_STORED_BSP_DEPTH, checksum, snapshots_from_bytes, snapshots_to_bytes,
 };
-use chisel_bsp::octree::{CellBox, Edit, Leaf, Octree, OctreeConfig, Tool};
+use chisel_bsp::octree::{CellBox, CellKey, Edit, Leaf, Octree, OctreeConfig, Tool};
 use chisel_bsp::tools::{Pose, dodecahedron_corners};
-use chisel_bsp::tree::{EMPTY, Label};
+use chisel_bsp::tree::{Bsp, EMPTY, Label, Node};
 use common::volume::{Fraction, volume};
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -428,6 +429,42 @@ fn broken_trees_are_refused() {
             reason: "an unknown octree node tag"
         })
     );
+}
+
+#[test]
+fn bsps_deeper_than_any_the_kernel_builds_are_refused() {
+    // A chain of splits x < 1, x < 2, …: each level one more split.
+    let chain = |depth: u32| {
+        let planes = (0..depth)
+            .map(|k| Plane::new(-1, 0, 0, i128::from(k % 1000) + 1).expect("in budget"))
+            .collect();
+        let mut nodes = Vec::new();
+        for k in 0..depth {
+            let n = 2 * k;
+            nodes.push(Node::Split {
+                plane: k,
+                below: n + 1,
+                above: n + 2,
+            });
+            nodes.push(Node::Leaf(1));
+        }
+        nodes.push(Node::Leaf(EMPTY));
+        let bsp = Bsp::from_stored_parts(planes, nodes).expect("a tree");
+        Octree::from_leaves(
+            [0; 3],
+            10,
+            OctreeConfig::default(),
+            [(CellKey::ROOT, Leaf::Bsp(Arc::new(bsp)))],
+        )
+        .expect("one leaf")
+    };
+    let deep = chain(MAX_STORED_BSP_DEPTH as u32);
+    assert_identical(&deep, &Octree::from_bytes(&deep.to_bytes()).expect("loads"));
+    let deeper = chain(MAX_STORED_BSP_DEPTH as u32 + 1);
+    assert!(matches!(
+        Octree::from_bytes(&deeper.to_bytes()),
+        Err(Error::InvalidStoredBsp { index: 0, .. })
+    ));
 }
 
 #[test]

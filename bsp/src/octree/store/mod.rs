@@ -51,7 +51,8 @@
 //! [`crate::exact::budget`] through [`Plane::new`]
 //! ([`Error::StoredPlaneOutOfBudget`]), every BSP one tree over in-range
 //! plane indices through [`Bsp::from_stored_parts`]
-//! ([`Error::InvalidStoredBsp`]), every child an earlier node (so the
+//! ([`Error::InvalidStoredBsp`]) at most [`MAX_STORED_BSP_DEPTH`] levels
+//! deep, every child an earlier node (so the
 //! nodes form no cycle) and every node used, the cube within the exact
 //! range ([`Error::OctreeSize`]), no octree deeper than its cube allows and
 //! none with more cells than its nodes can make without repeating a
@@ -113,6 +114,12 @@ const MIN_BSP_NODE_BYTES: usize = 2;
 const MIN_NODE_BYTES: usize = 2;
 /// Bytes of one stored octree (cube, settings, root).
 const OCTREE_BYTES: usize = 24 + 1 + 8 + 1 + 4;
+
+/// Deepest stored BSP accepted. A leaf within the node budget has at
+/// most `max_bsp_nodes` levels, so the kernel's own BSPs stay far below
+/// this; a deeper one from a crafted file would overflow the stack of the
+/// recursive walks of later edits.
+pub const MAX_STORED_BSP_DEPTH: usize = 4096;
 
 const BSP_LEAF: u8 = 0;
 const BSP_SPLIT: u8 = 1;
@@ -490,8 +497,31 @@ fn read_bsp(r: &mut Reader, index: usize) -> Result<Bsp, Error> {
             _ => return Err(Reader::corrupt(at, "an unknown BSP node tag")),
         });
     }
-    Bsp::from_stored_parts(planes, nodes)
-        .map_err(|e| Error::InvalidStoredBsp { index, reason: e.0 })
+    let bsp = Bsp::from_stored_parts(planes, nodes)
+        .map_err(|e| Error::InvalidStoredBsp { index, reason: e.0 })?;
+    if bsp_depth(&bsp) > MAX_STORED_BSP_DEPTH {
+        return Err(Error::InvalidStoredBsp {
+            index,
+            reason: format!("more than {MAX_STORED_BSP_DEPTH} levels deep"),
+        });
+    }
+    Ok(bsp)
+}
+
+/// Levels of splits on the longest path from the root to a leaf, of a
+/// checked tree.
+fn bsp_depth(bsp: &Bsp) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0u32, 0usize)];
+    while let Some((n, depth)) = stack.pop() {
+        match bsp.nodes()[n as usize] {
+            Node::Leaf(_) => deepest = deepest.max(depth),
+            Node::Split { below, above, .. } => {
+                stack.extend([(below, depth + 1), (above, depth + 1)]);
+            }
+        }
+    }
+    deepest
 }
 
 fn read_octree(r: &mut Reader, nodes: &mut [Stored], inner_count: u64) -> Result<Octree, Error> {
