@@ -47,12 +47,11 @@ pub struct BoundaryFace {
 
 impl BoundaryFace {
     pub(crate) fn new(polygon: Polygon, label: Label, outside: Label, on_bounds: bool) -> Self {
-        let plane = polygon.support;
-        let edges = polygon.edges.clone();
+        let (plane, edges, vertices) = polygon.into_parts();
         Self {
             plane,
-            vertices: polygon.into_vertices(),
             edges,
+            vertices,
             label,
             outside,
             on_bounds,
@@ -62,6 +61,11 @@ impl BoundaryFace {
     /// The face as a plane-based polygon.
     pub(crate) fn polygon(&self) -> Polygon {
         Polygon::with_corners(self.plane, self.edges.clone(), self.vertices.clone())
+    }
+
+    /// The face as a plane-based polygon, taken apart without copying.
+    pub(crate) fn into_polygon(self) -> Polygon {
+        Polygon::with_corners(self.plane, self.edges, self.vertices)
     }
 }
 

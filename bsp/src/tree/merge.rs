@@ -96,16 +96,34 @@ struct Merger<'a> {
     arena: &'a mut ConvexArena,
     planes: Vec<Plane>,
     plane_index: HashMap<Plane, u32>,
+    /// The output palette index of each input plane once it is known
+    /// (`A`'s planes first, then `B`'s; `u32::MAX` before), so that the
+    /// palette is hashed once per input plane rather than once per split.
+    known: Vec<u32>,
     nodes: Vec<Node>,
 }
 
-impl Merger<'_> {
-    fn plane(&mut self, plane: Plane) -> u32 {
+/// An input plane: its slot in [`Merger::known`] and the plane.
+#[derive(Clone, Copy)]
+struct InputPlane<'a> {
+    slot: usize,
+    plane: &'a Plane,
+}
+
+impl<'a> Merger<'a> {
+    /// The output palette index of an input plane, added on first use
+    /// (equal planes of `A` and `B` share one entry).
+    fn plane(&mut self, input: InputPlane<'_>) -> u32 {
+        if self.known[input.slot] != u32::MAX {
+            return self.known[input.slot];
+        }
         let next = self.planes.len() as u32;
-        *self.plane_index.entry(plane).or_insert_with(|| {
-            self.planes.push(plane);
+        let index = *self.plane_index.entry(*input.plane).or_insert_with(|| {
+            self.planes.push(*input.plane);
             next
-        })
+        });
+        self.known[input.slot] = index;
+        index
     }
 
     /// Appends the merge of `A`'s subtree `n` restricted to `cell`; returns
@@ -123,7 +141,10 @@ impl Merger<'_> {
                 below,
                 above,
             } => {
-                let s = self.a.planes()[plane as usize];
+                let s = InputPlane {
+                    slot: plane as usize,
+                    plane: &self.a.planes()[plane as usize],
+                };
                 self.split(s, cell, below, above, Self::merge_a)
             }
         }
@@ -139,7 +160,10 @@ impl Merger<'_> {
                 below,
                 above,
             } => {
-                let s = self.b.planes()[plane as usize];
+                let s = InputPlane {
+                    slot: self.a.planes().len() + plane as usize,
+                    plane: &self.b.planes()[plane as usize],
+                };
                 self.split(s, cell, below, above, |m, child, c| m.insert_b(child, c, a))
             }
         }
@@ -149,7 +173,7 @@ impl Merger<'_> {
     /// reaches; a split node only when the cut is proper. `cell` is used up.
     fn split(
         &mut self,
-        s: Plane,
+        s: InputPlane<'a>,
         cell: PolyId,
         below: NodeId,
         above: NodeId,
@@ -165,13 +189,13 @@ impl Merger<'_> {
     /// [`Merger::split`] before the arena is released.
     fn split_cell(
         &mut self,
-        s: Plane,
+        s: InputPlane<'a>,
         cell: PolyId,
         below: NodeId,
         above: NodeId,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
-        match self.arena.cut(cell, &s, NO_TAG, NO_TAG) {
+        match self.arena.cut(cell, s.plane, NO_TAG, NO_TAG) {
             CutOutcome::Below => step(self, below, cell),
             CutOutcome::Above => step(self, above, cell),
             CutOutcome::Split {
@@ -226,6 +250,7 @@ impl Bsp {
             arena,
             planes: Vec::new(),
             plane_index: HashMap::new(),
+            known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
         };
         // Nodes are appended in depth-first order, so the first one is the

@@ -12,6 +12,10 @@ use crate::exact::{
     IntPoint, Plane, Point4, Sign, classify_vertex, intersect_3_planes, plane_from_points,
 };
 
+/// Polygons with at most this many corners are split without allocating
+/// working memory.
+const SMALL: usize = 32;
+
 /// A convex polygon in plane-based form, with its corners computed once
 /// (a split computes only the corners it creates).
 #[derive(Clone, Debug)]
@@ -88,9 +92,9 @@ impl Polygon {
         &self.corners
     }
 
-    /// The corners, taken.
-    pub(crate) fn into_vertices(self) -> Vec<Point4> {
-        self.corners
+    /// The support, edge planes and corners, taken.
+    pub(crate) fn into_parts(self) -> (Plane, Vec<Plane>, Vec<Point4>) {
+        (self.support, self.edges, self.corners)
     }
 
     /// The part on side `keep` (Negative or Positive) of `p`, given the
@@ -109,29 +113,43 @@ impl Polygon {
         // its index, so corners between two consecutive original edges are
         // reused and only those on `p` are computed.
         let across = -keep;
-        let mut kept: Vec<(Plane, Option<usize>)> = Vec::with_capacity(n + 1);
+        let mut edges = Vec::with_capacity(n + 1);
+        // The original index of each kept edge (NONE for the closing one),
+        // on the stack for the usual small polygon.
+        const NONE: usize = usize::MAX;
+        let (mut stack, mut heap) = ([NONE; SMALL + 1], Vec::new());
+        let origin: &mut [usize] = if n <= SMALL {
+            &mut stack
+        } else {
+            heap.resize(n + 1, NONE);
+            &mut heap
+        };
+        let mut m = 0;
         for k in 0..n {
             if reaches(k) {
-                kept.push((self.edges[k], Some(k)));
+                edges.push(self.edges[k]);
+                origin[m] = k;
+                m += 1;
                 let next = (k + 1) % n;
                 if sides[next] == across || !reaches(next) {
-                    kept.push((closing, None));
+                    edges.push(closing);
+                    origin[m] = NONE;
+                    m += 1;
                 }
             }
         }
-        let m = kept.len();
         let corners = (0..m)
             .map(|j| {
-                let (prev, cur) = (kept[(j + m - 1) % m], kept[j]);
-                match (prev.1, cur.1) {
-                    (Some(a), Some(b)) if b == (a + 1) % n => self.corners[b],
-                    _ => meet(&self.support, &prev.0, &cur.0),
+                let prev = (j + m - 1) % m;
+                match (origin[prev], origin[j]) {
+                    (a, b) if a != NONE && b != NONE && b == (a + 1) % n => self.corners[b],
+                    _ => meet(&self.support, &edges[prev], &edges[j]),
                 }
             })
             .collect();
         Self {
             support: self.support,
-            edges: kept.into_iter().map(|(e, _)| e).collect(),
+            edges,
             corners,
         }
     }
@@ -139,18 +157,25 @@ impl Polygon {
     /// The parts below and above `p`. A polygon lying in `p` goes to the
     /// side its outward normal points to (the region in front of it).
     pub(crate) fn split(self, p: &Plane) -> (Option<Self>, Option<Self>) {
-        let sides: Vec<Sign> = self
-            .vertices()
-            .iter()
-            .map(|v| classify_vertex(v, p))
-            .collect();
-        match (
-            sides.contains(&Sign::Negative),
-            sides.contains(&Sign::Positive),
-        ) {
+        let n = self.corners.len();
+        let (mut stack, mut heap) = ([Sign::Zero; SMALL], Vec::new());
+        let sides: &mut [Sign] = if n <= SMALL {
+            &mut stack[..n]
+        } else {
+            heap.resize(n, Sign::Zero);
+            &mut heap
+        };
+        let (mut below, mut above) = (false, false);
+        for (side, v) in sides.iter_mut().zip(&self.corners) {
+            *side = classify_vertex(v, p);
+            below |= *side == Sign::Negative;
+            above |= *side == Sign::Positive;
+        }
+        let sides = &*sides;
+        match (below, above) {
             (true, true) => (
-                Some(self.part(&sides, p, Sign::Negative)),
-                Some(self.part(&sides, p, Sign::Positive)),
+                Some(self.part(sides, p, Sign::Negative)),
+                Some(self.part(sides, p, Sign::Positive)),
             ),
             (true, false) => (Some(self), None),
             (false, true) => (None, Some(self)),

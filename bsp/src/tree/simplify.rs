@@ -39,7 +39,10 @@ impl Bsp {
         }
         let polygons: Vec<_> = faces
             .into_iter()
-            .map(|f| (f.polygon(), f.label, f.outside))
+            .map(|f| {
+                let (label, outside) = (f.label, f.outside);
+                (f.into_polygon(), label, outside)
+            })
             .collect();
         Bsp::from_polygons(polygons, REBUILD_SEED)
     }
