@@ -328,6 +328,11 @@ fn bad_edits_are_errors_and_change_nothing() {
         Octree::new([0; 3], 0, EMPTY, config()),
         Err(Error::OctreeSize { .. })
     ));
+    // Far outside the budget: an error, not an overflow.
+    assert!(matches!(
+        Octree::new([i64::MAX, 0, 0], 27, EMPTY, config()),
+        Err(Error::OctreeSize { .. })
+    ));
     let flat = [p(0, 0, 0), p(10, 0, 0), p(0, 10, 0), p(10, 10, 0)];
     assert!(matches!(
         Tool::convex_hull(&flat),

@@ -123,7 +123,7 @@ impl Octree {
         if !(1..=27).contains(&size_log2)
             || origin
                 .iter()
-                .any(|&o| o < -MAX_COORD || o + (1i64 << size_log2) > MAX_COORD)
+                .any(|&o| o < -MAX_COORD || o > MAX_COORD - (1i64 << size_log2))
         {
             return Err(Error::OctreeSize { origin, size_log2 });
         }
