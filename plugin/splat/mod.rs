@@ -8,9 +8,21 @@
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
 //!   `ShaderType`); their WGSL mirror is `shaders/quadric_common.wgsl`.
 //! - [`pipeline`] — bind group layouts and the pipeline specialized on the
-//!   view's format and MSAA and on [`SplatSettings`].
+//!   view's format and MSAA and on its splat settings.
 //! - [`render`] — render world: extraction, buffer upload, and the pass, a
 //!   `Core3d` system between the opaque and transparent passes.
+//!
+//! Settings: the [`SplatSettings`] resource applies to every camera; a
+//! camera with a [`SplatViewSettings`] component is drawn with those
+//! instead (one view in global ray tracing or showing quadric ids beside
+//! the shaded one, say).
+//!
+//! Transforms: a prop follows its entity's `GlobalTransform`, any
+//! invertible affine map — non-uniform scale, shear, and mirroring (a
+//! negative determinant: the prop is drawn as the mirror image of its
+//! scene, boxes wound the other way round so that culling keeps the faces
+//! towards the eye). A prop whose transform has no inverse (a zero scale)
+//! is not drawn.
 //!
 //! Shaders: `shaders/splat.wgsl` (surface-aligned boxes with back-face
 //! culling, §6.1, or screen-aligned quads; local ray tracing, clipping and
@@ -47,6 +59,7 @@ pub mod render;
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::prelude::*;
+use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::SpecializedRenderPipelines;
 use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
@@ -86,7 +99,8 @@ pub enum SplatOutput {
     Bounds,
 }
 
-/// Settings of the splat pass, for all props and views.
+/// Settings of the splat pass, for all props, in every view whose camera
+/// has no [`SplatViewSettings`] of its own.
 #[derive(Resource, Clone, Copy, Debug, PartialEq, ExtractResource)]
 pub struct SplatSettings {
     /// Splats or global ray tracing.
@@ -101,9 +115,12 @@ pub struct SplatSettings {
     pub radius_tolerance: f32,
     /// Surface-aligned boxes without their `−n` face (§6.1: "if we are only
     /// interested in the outer appearance, we can omit the box side in
-    /// negative normal direction"): fewer fragments from splats facing
-    /// away. Off by default; `tests/splat_bench.rs` measures it against the
-    /// closed boxes, pixel for pixel.
+    /// negative normal direction"): a third fewer fragments, from the
+    /// splats facing away (`tests/splat_bench.rs` measures both and
+    /// compares them pixel for pixel: no pixel differs on the SCENARIOS
+    /// scenes). On by default. Turn it off only to look at a prop's inner
+    /// surfaces from inside the solid (a camera or near plane inside a
+    /// prop), which open boxes leave out.
     pub open_boxes: bool,
 }
 
@@ -114,10 +131,34 @@ impl Default for SplatSettings {
             output: SplatOutput::default(),
             flat_ratio: 1e-3,
             radius_tolerance: 1.001,
-            open_boxes: false,
+            open_boxes: true,
         }
     }
 }
+
+/// On a camera: the splat settings of that view, in place of the
+/// [`SplatSettings`] resource (which the cameras without one keep using).
+/// Every field applies per view — mode, output, flat ratio, radius
+/// tolerance, open boxes — and the pipeline is specialized per view, so
+/// two cameras may draw the same props in different modes in one frame.
+/// Removing the component returns the camera to the resource.
+///
+/// ```no_run
+/// use bevy::prelude::*;
+/// use bevy_chisel::splat::{SplatMode, SplatSettings, SplatViewSettings};
+///
+/// fn spawn_baseline_camera(mut commands: Commands) {
+///     commands.spawn((
+///         Camera3d::default(),
+///         SplatViewSettings(SplatSettings {
+///             mode: SplatMode::GlobalRayTrace,
+///             ..default()
+///         }),
+///     ));
+/// }
+/// ```
+#[derive(Component, Clone, Copy, Debug, PartialEq, ExtractComponent)]
+pub struct SplatViewSettings(pub SplatSettings);
 
 /// The system sets of the main-world part, in order.
 #[derive(SystemSet, Clone, Debug, PartialEq, Eq, Hash)]
@@ -151,7 +192,10 @@ impl Plugin for ChiselSplatPlugin {
                         .in_set(SplatSystems::Sample),
                 ),
             )
-            .add_plugins(ExtractResourcePlugin::<SplatSettings>::default());
+            .add_plugins((
+                ExtractResourcePlugin::<SplatSettings>::default(),
+                ExtractComponentPlugin::<SplatViewSettings>::default(),
+            ));
         pipeline::add_shaders(app);
 
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
