@@ -69,6 +69,15 @@ impl BoundaryFace {
     }
 }
 
+/// Whether [`Bsp::boundary_of_cells`] reports the faces on the bounds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Bounds {
+    /// Report them, marked [`BoundaryFace::on_bounds`].
+    Keep,
+    /// Leave them out (nothing is known about what lies beyond).
+    Skip,
+}
+
 impl Bsp {
     /// The boundary of the solid inside `bounds` (a polyhedron of `arena`,
     /// cut up in place): every solid–empty face piece and every interface
@@ -77,23 +86,28 @@ impl Bsp {
     /// marked [`BoundaryFace::on_bounds`].
     pub fn boundary(&self, arena: &mut ConvexArena, bounds: PolyId) -> Vec<BoundaryFace> {
         let cells = self.cells(arena, bounds);
-        self.boundary_of_cells(arena, &cells)
+        self.boundary_of_cells(arena, &cells, Bounds::Keep)
     }
 
     /// The boundary pieces of the given cells (from [`Bsp::cells`] on
-    /// `arena`).
+    /// `arena`), with or without the pieces on the bounds.
     pub(crate) fn boundary_of_cells(
         &self,
         arena: &ConvexArena,
         cells: &[Cell],
+        bounds: Bounds,
     ) -> Vec<BoundaryFace> {
         let mut out = Vec::new();
+        let mut stack = Vec::new();
         for cell in cells {
             if cell.label == EMPTY {
                 continue;
             }
             for f in arena.faces_of(cell.poly) {
                 let face = arena.faces()[f as usize];
+                if face.tag == NO_TAG && bounds == Bounds::Skip {
+                    continue;
+                }
                 // Half-edge k lies in the face across it (edge plane k) and
                 // leaves corner k, the meet of edge planes k − 1 and k.
                 let (edges, corners) = arena
@@ -111,7 +125,7 @@ impl Bsp {
                 if face.tag == NO_TAG {
                     out.push(BoundaryFace::new(polygon, cell.label, EMPTY, true));
                 } else {
-                    self.clip(face.tag, polygon, cell.label, &mut out);
+                    self.clip(face.tag, polygon, cell.label, &mut stack, &mut out);
                 }
             }
         }
@@ -120,8 +134,15 @@ impl Bsp {
 
     /// Clips `polygon` against the subtree at `n`, keeping the pieces that
     /// reach leaves with a smaller label.
-    fn clip(&self, n: NodeId, polygon: Polygon, label: Label, out: &mut Vec<BoundaryFace>) {
-        self.clip_polygon(n, polygon, &mut |piece, other| {
+    fn clip(
+        &self,
+        n: NodeId,
+        polygon: Polygon,
+        label: Label,
+        stack: &mut Vec<(NodeId, Polygon)>,
+        out: &mut Vec<BoundaryFace>,
+    ) {
+        self.clip_polygon_with(n, polygon, stack, &mut |piece, other| {
             if other < label {
                 out.push(BoundaryFace::new(piece, label, other, false));
             }
@@ -138,7 +159,18 @@ impl Bsp {
         polygon: Polygon,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        let mut stack = vec![(n, polygon)];
+        self.clip_polygon_with(n, polygon, &mut Vec::new(), emit);
+    }
+
+    /// [`Bsp::clip_polygon`] with a reused (empty) work stack.
+    fn clip_polygon_with(
+        &self,
+        n: NodeId,
+        polygon: Polygon,
+        stack: &mut Vec<(NodeId, Polygon)>,
+        emit: &mut impl FnMut(Polygon, Label),
+    ) {
+        stack.push((n, polygon));
         while let Some((n, polygon)) = stack.pop() {
             match self.nodes()[n as usize] {
                 Node::Leaf(other) => emit(polygon, other),

@@ -45,12 +45,11 @@ impl Bsp {
             }
         }
         shuffle(&mut polygons, seed);
-        let mut planes: Vec<Plane> = Vec::new();
-        let mut nodes = vec![Node::Leaf(EMPTY)];
+        let mut tree = Builder::default();
         for polygon in polygons {
-            insert(&mut planes, &mut nodes, polygon, label, EMPTY);
+            tree.insert(polygon, label, EMPTY);
         }
-        Ok(Bsp::from_parts(planes, nodes))
+        Ok(tree.finish())
     }
 }
 
@@ -59,65 +58,87 @@ impl Bsp {
     /// each, inserted in an order shuffled by `seed`.
     pub(crate) fn from_polygons(mut polygons: Vec<(Polygon, Label, Label)>, seed: u64) -> Bsp {
         shuffle(&mut polygons, seed);
-        let mut planes = Vec::new();
-        let mut nodes = vec![Node::Leaf(EMPTY)];
+        let mut tree = Builder::default();
         for (polygon, behind, in_front) in polygons {
-            insert(&mut planes, &mut nodes, polygon, behind, in_front);
+            tree.insert(polygon, behind, in_front);
         }
-        Bsp::from_parts(planes, nodes)
+        tree.finish()
     }
 }
 
-/// Inserts one face: where it reaches a leaf, that leaf becomes a split by
-/// the face's plane with `behind` below and `in_front` above.
-fn insert(
-    planes: &mut Vec<Plane>,
-    nodes: &mut Vec<Node>,
-    polygon: Polygon,
-    behind: Label,
-    in_front: Label,
-) {
-    // Every piece of the face shares its plane: one palette entry.
-    let mut palette_index = None;
-    let mut stack: Vec<(NodeId, Polygon)> = vec![(0, polygon)];
-    while let Some((n, polygon)) = stack.pop() {
-        match nodes[n as usize] {
-            Node::Leaf(_) => {
-                let plane = *palette_index.get_or_insert_with(|| {
-                    planes.push(polygon.support);
-                    planes.len() as u32 - 1
-                });
-                let below = nodes.len() as NodeId;
-                nodes.push(Node::Leaf(behind));
-                nodes.push(Node::Leaf(in_front));
-                nodes[n as usize] = Node::Split {
+/// A tree being built face by face, with working memory reused between
+/// faces.
+struct Builder {
+    planes: Vec<Plane>,
+    nodes: Vec<Node>,
+    stack: Vec<(NodeId, Polygon)>,
+    sides: Vec<Sign>,
+}
+
+impl Default for Builder {
+    fn default() -> Self {
+        Self {
+            planes: Vec::new(),
+            nodes: vec![Node::Leaf(EMPTY)],
+            stack: Vec::new(),
+            sides: Vec::new(),
+        }
+    }
+}
+
+impl Builder {
+    fn finish(self) -> Bsp {
+        Bsp::from_parts(self.planes, self.nodes)
+    }
+
+    /// Inserts one face: where it reaches a leaf, that leaf becomes a split
+    /// by the face's plane with `behind` below and `in_front` above.
+    fn insert(&mut self, polygon: Polygon, behind: Label, in_front: Label) {
+        let Self {
+            planes,
+            nodes,
+            stack,
+            sides,
+        } = self;
+        // Every piece of the face shares its plane: one palette entry.
+        let mut palette_index = None;
+        stack.push((0, polygon));
+        while let Some((n, polygon)) = stack.pop() {
+            match nodes[n as usize] {
+                Node::Leaf(_) => {
+                    let plane = *palette_index.get_or_insert_with(|| {
+                        planes.push(polygon.support);
+                        planes.len() as u32 - 1
+                    });
+                    let below = nodes.len() as NodeId;
+                    nodes.push(Node::Leaf(behind));
+                    nodes.push(Node::Leaf(in_front));
+                    nodes[n as usize] = Node::Split {
+                        plane,
+                        below,
+                        above: below + 1,
+                    };
+                }
+                Node::Split {
                     plane,
                     below,
-                    above: below + 1,
-                };
-            }
-            Node::Split {
-                plane,
-                below,
-                above,
-            } => {
-                let p = planes[plane as usize];
-                let sides: Vec<Sign> = polygon
-                    .vertices()
-                    .iter()
-                    .map(|v| classify_vertex(v, &p))
-                    .collect();
-                let (neg, pos) = (
-                    sides.contains(&Sign::Negative),
-                    sides.contains(&Sign::Positive),
-                );
-                match (neg, pos) {
-                    (false, false) => {} // in the plane: already represented
-                    (true, false) => stack.push((below, polygon)),
-                    (false, true) => stack.push((above, polygon)),
-                    (true, true) => {
-                        stack.push((below, polygon.part(&sides, &p, Sign::Negative)));
-                        stack.push((above, polygon.part(&sides, &p, Sign::Positive)));
+                    above,
+                } => {
+                    let p = &planes[plane as usize];
+                    sides.clear();
+                    sides.extend(polygon.vertices().iter().map(|v| classify_vertex(v, p)));
+                    let (neg, pos) = (
+                        sides.contains(&Sign::Negative),
+                        sides.contains(&Sign::Positive),
+                    );
+                    match (neg, pos) {
+                        (false, false) => {} // in the plane: already represented
+                        (true, false) => stack.push((below, polygon)),
+                        (false, true) => stack.push((above, polygon)),
+                        (true, true) => {
+                            stack.push((below, polygon.part(sides, p, Sign::Negative)));
+                            stack.push((above, polygon.part(sides, p, Sign::Positive)));
+                        }
                     }
                 }
             }

@@ -16,6 +16,7 @@
 //! `K`, so the whole cell has that label. With no face inside `K`, all of
 //! `K` has one label, read off any cell.
 
+use super::boundary::Bounds;
 use super::bsp::{Bsp, EMPTY};
 use crate::convex::{ConvexArena, PolyId};
 
@@ -32,8 +33,7 @@ impl Bsp {
     pub fn simplified(&self, arena: &mut ConvexArena, bounds: PolyId) -> Bsp {
         let cells = self.cells(arena, bounds);
         let uniform = cells.first().map_or(EMPTY, |c| c.label);
-        let mut faces = self.boundary_of_cells(arena, &cells);
-        faces.retain(|f| !f.on_bounds);
+        let faces = self.boundary_of_cells(arena, &cells, Bounds::Skip);
         if faces.is_empty() {
             return Bsp::uniform(uniform);
         }
