@@ -8,6 +8,7 @@
 
 use std::collections::{HashMap, HashSet};
 
+use super::pool;
 use super::scratch::Scratch;
 use crate::Error;
 use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes};
@@ -52,6 +53,21 @@ pub struct Face {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PolyId(pub u32);
 
+impl Drop for ConvexArena {
+    /// Hands the arrays to this thread's reserve for [`ConvexArena::new`].
+    fn drop(&mut self) {
+        if self.vertices.capacity() == 0 && self.half_edges.capacity() == 0 {
+            return;
+        }
+        pool::keep_spare(pool::Arrays {
+            vertices: std::mem::take(&mut self.vertices),
+            half_edges: std::mem::take(&mut self.half_edges),
+            faces: std::mem::take(&mut self.faces),
+            scratch: self.scratch.take(),
+        });
+    }
+}
+
 /// The sizes of an arena's arrays at one moment, to discard everything
 /// added after it ([`ConvexArena::release_to`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,10 +89,19 @@ pub struct ConvexArena {
 }
 
 impl ConvexArena {
-    /// An empty arena.
+    /// An empty arena; it reuses the memory of an arena this thread
+    /// dropped earlier, if there is one.
     #[must_use]
     pub fn new() -> Self {
-        Self::default()
+        match pool::take_spare() {
+            Some(arrays) => Self {
+                vertices: arrays.vertices,
+                half_edges: arrays.half_edges,
+                faces: arrays.faces,
+                scratch: arrays.scratch,
+            },
+            None => Self::default(),
+        }
     }
 
     /// Removes every polyhedron, keeping the memory.
