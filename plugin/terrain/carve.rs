@@ -19,6 +19,7 @@
 //!    visible, its [`CarveApplied`].
 
 use std::collections::BTreeSet;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
@@ -99,6 +100,11 @@ pub struct TerrainSettings {
     pub mesh_budget: Duration,
     /// Most carves applied in one background job.
     pub max_batch: usize,
+    /// Threads that apply carves and mesh cells in the background. The
+    /// default is every core but one (at least one), so that the main
+    /// thread keeps a core to itself however large the carve; results are
+    /// bit-identical for any number.
+    pub worker_threads: usize,
 }
 
 impl Default for TerrainSettings {
@@ -106,7 +112,45 @@ impl Default for TerrainSettings {
         Self {
             mesh_budget: Duration::from_micros(1000),
             max_batch: 16,
+            worker_threads: std::thread::available_parallelism()
+                .map_or(1, |n| n.get().saturating_sub(1).max(1)),
         }
+    }
+}
+
+/// The thread pool of the background jobs (state of [`start_jobs`]), rebuilt when
+/// [`TerrainSettings::worker_threads`] changes (`None`: rayon's global pool,
+/// if a pool could not be built).
+#[derive(Default)]
+pub struct Workers {
+    threads: usize,
+    pool: Option<Arc<rayon::ThreadPool>>,
+}
+
+impl Workers {
+    fn pool(&mut self, threads: usize) -> Option<Arc<rayon::ThreadPool>> {
+        let threads = threads.max(1);
+        if self.threads != threads {
+            self.threads = threads;
+            self.pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(|i| format!("chisel-terrain-{i}"))
+                .build()
+                .ok()
+                .map(Arc::new);
+        }
+        self.pool.clone()
+    }
+}
+
+/// Runs `job` on `pool` (or on rayon's global pool).
+fn on_pool<T>(pool: Option<Arc<rayon::ThreadPool>>, job: impl FnOnce() -> T + Send) -> T
+where
+    T: Send,
+{
+    match pool {
+        Some(pool) => pool.install(job),
+        None => job(),
     }
 }
 
@@ -195,10 +239,12 @@ pub fn read_requests(
 /// Starts the next job of every terrain that has none running.
 pub fn start_jobs(
     settings: Res<TerrainSettings>,
+    mut workers: Local<Workers>,
     mut terrains: Query<(Entity, &mut Terrain)>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
     for (entity, mut terrain) in &mut terrains {
+        let pool = workers.pool(settings.worker_threads);
         let terrain = &mut *terrain;
         if terrain.runtime.task.is_some() {
             continue;
@@ -208,10 +254,9 @@ pub fn start_jobs(
             terrain.runtime.needs_full_mesh = false;
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
-            terrain.runtime.task = Some(
-                AsyncComputeTaskPool::get()
-                    .spawn(async move { remesh(octree, quantization, Vec::new(), keys) }),
-            );
+            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                on_pool(pool, || remesh(octree, quantization, Vec::new(), keys))
+            }));
             continue;
         }
         match terrain.runtime.queue.pop_front() {
@@ -220,10 +265,9 @@ pub fn start_jobs(
                 Ok(keys) => {
                     let octree = terrain.octree.clone();
                     let steps = vec![StepOutcome::Undone { requested }];
-                    terrain.runtime.task = Some(
-                        AsyncComputeTaskPool::get()
-                            .spawn(async move { remesh(octree, quantization, steps, keys) }),
-                    );
+                    terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                        on_pool(pool, || remesh(octree, quantization, steps, keys))
+                    }));
                 }
                 Err(error) => {
                     rejected.write(CarveRejected {
@@ -251,10 +295,9 @@ pub fn start_jobs(
                     }
                 }
                 let octree = terrain.octree.clone();
-                terrain.runtime.task = Some(
-                    AsyncComputeTaskPool::get()
-                        .spawn(async move { carve_batch(octree, quantization, batch) }),
-                );
+                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                    on_pool(pool, || carve_batch(octree, quantization, batch))
+                }));
             }
         }
     }
