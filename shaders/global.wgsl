@@ -4,7 +4,9 @@
 // intersects its view ray with every literal of every product of the normal
 // form and keeps the nearest root where the ray enters that literal while
 // all other literals of the product hold — the first point of the solid
-// along the ray when the eye is outside it.
+// along the ray when the eye is outside it. A mirrored prop's cube is wound
+// the other way round in local space (`box_corner`), so the faces kept are
+// the far ones whatever the prop's transform.
 //
 // Defines: OUTPUT_IDS, OUTPUT_NORMALS, OUTPUT_OVERDRAW, OUTPUT_BOUNDS (the
 // proxy cube itself).

@@ -31,6 +31,12 @@ struct SplatView {
     light_color: vec4<f32>,
     /// rgb: ambient light.
     ambient: vec4<f32>,
+    /// Splats whose normal extent is below `flat_ratio · radius` are drawn
+    /// as a single surface-aligned quad.
+    flat_ratio: f32,
+    /// A hit is kept within `radius · radius_tolerance` of its sample.
+    radius_tolerance: f32,
+    pad: vec2<u32>,
 };
 
 /// One prop (mirror: `PropUniform`).
@@ -43,13 +49,12 @@ struct Prop {
     bounds: vec4<f32>,
     /// Number of products of the normal form (global pass).
     product_count: u32,
-    /// Splats whose normal extent is below `flat_ratio · radius` are drawn
-    /// as a single surface-aligned quad.
-    flat_ratio: f32,
-    /// Largest scale factor of `world_from_local`.
+    /// Largest stretch (singular value) of `world_from_local`.
     max_scale: f32,
-    /// A hit is kept within `radius · radius_tolerance` of its sample.
-    radius_tolerance: f32,
+    /// −1 when `world_from_local` mirrors (negative determinant), +1
+    /// otherwise: see `box_corner`.
+    mirror_sign: f32,
+    pad: u32,
 };
 
 /// One quadric record (mirror: `chisel_quadric::GpuQuadric`).
@@ -235,12 +240,18 @@ const BOX_CORNERS: array<u32, 36> = array<u32, 36>(
     0u, 1u, 5u, 0u, 5u, 4u,
 );
 
-/// Corner `vertex` (0..36) of the box as signs (±1, ±1, ±1).
+/// Corner `vertex` (0..36) of the box as signs (±1, ±1, ±1), the first
+/// sign multiplied by `prop.mirror_sign`. The box is symmetric, so a
+/// mirrored prop gets the same box with every triangle wound the other way
+/// in local space: counter-clockwise from outside again once its
+/// `world_from_local` has mirrored it, so back-face culling keeps the
+/// faces towards the eye, and the face list keeps its order (the +n face
+/// stays the first two triangles).
 fn box_corner(vertex: u32) -> vec3<f32> {
     var corners = BOX_CORNERS;
     let i = corners[vertex % 36u];
     return vec3<f32>(
-        select(-1.0, 1.0, (i & 1u) != 0u),
+        select(-1.0, 1.0, (i & 1u) != 0u) * prop.mirror_sign,
         select(-1.0, 1.0, (i & 2u) != 0u),
         select(-1.0, 1.0, (i & 4u) != 0u),
     );

@@ -5,7 +5,9 @@
 // back-face culling so every covered pixel runs one fragment; a box thinner
 // than `flat_ratio · r` collapses to its front face, a quad lifted by e
 // along the normal. With SPLAT_SCREEN_QUAD it is instead a camera-facing
-// quad of half-size r placed at the front of the splat's sphere.
+// quad of half-size r placed at the front of the splat's sphere. A mirrored
+// prop (negative determinant) gets its boxes wound the other way round in
+// local space (`box_corner`), so they reach clip space counter-clockwise.
 //
 // Fragment stage: local ray tracing of the splat's quadric, keeping the
 // root nearest the sample and only within its radius; local clipping
@@ -54,7 +56,7 @@ fn vertex(
     @builtin(instance_index) instance: u32,
 ) -> SplatVarying {
     let s = splats[instance];
-    let r = s.radius * prop.radius_tolerance;
+    let r = s.radius * view.radius_tolerance;
 #ifdef SPLAT_SCREEN_QUAD
     var out: SplatVarying;
     out.splat = instance;
@@ -86,7 +88,7 @@ fn vertex(
     return out;
 #else
     var n = s.normal;
-    var e = s.normal_extent * prop.radius_tolerance;
+    var e = s.normal_extent * view.radius_tolerance;
     if dot(n, n) < 0.25 {
         // A singular point (cone apex): no tangent plane, bound the sphere.
         n = vec3<f32>(0.0, 0.0, 1.0);
@@ -108,7 +110,7 @@ fn vertex(
 #else
     let c = box_corner(vertex);
 #endif
-    if e < prop.flat_ratio * r {
+    if e < view.flat_ratio * r {
         // Flat: only the +n face (the first six vertices), lifted to +e.
         if vertex >= 6u {
             var out: SplatVarying;
@@ -169,7 +171,7 @@ fn fragment(in: SplatVarying) -> SurfaceOutput {
         discard;
     }
     let p = p0 + u * dir;
-    let r = s.radius * prop.radius_tolerance;
+    let r = s.radius * view.radius_tolerance;
     let off = p - s.position;
     if dot(off, off) > r * r {
         discard;

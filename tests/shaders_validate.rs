@@ -150,3 +150,87 @@ fn listed_defines_are_parsed_from_comments() {
         vec!["A_B", "EARLY_DEPTH_TEST", "OUTPUT_IDS"]
     );
 }
+
+/// `(size, [(member, offset)])` of a `#[repr(C)]` struct: every field, in
+/// declaration order.
+macro_rules! rust_layout {
+    ($t:ty: $($field:ident),+ $(,)?) => {
+        (
+            size_of::<$t>() as u32,
+            vec![$((stringify!($field).to_owned(), std::mem::offset_of!($t, $field) as u32)),+],
+        )
+    };
+}
+
+/// The WGSL mirrors in `shaders/quadric_common.wgsl` have the members,
+/// offsets and sizes of the Rust structs in `plugin/splat/gpu.rs`, as naga
+/// lays them out (uniform and storage rules coincide for these structs).
+#[test]
+fn wgsl_structs_match_the_rust_layouts() {
+    use bevy_chisel::splat::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
+
+    let mut composer = composer(&wgsl_files());
+    let source = "#import bevy_chisel::quadric::{Prop, Quadric, Splat, SplatView}\n\
+        @group(0) @binding(0) var<uniform> layout_view: SplatView;\n\
+        @group(0) @binding(1) var<uniform> layout_prop: Prop;\n\
+        @group(0) @binding(2) var<storage, read> layout_quadrics: array<Quadric>;\n\
+        @group(0) @binding(3) var<storage, read> layout_splats: array<Splat>;\n\
+        @compute @workgroup_size(1)\n\
+        fn main() {\n\
+            let x = layout_view.flat_ratio + layout_prop.max_scale\n\
+                + layout_quadrics[0].c[0].x + layout_splats[0].radius;\n\
+        }\n";
+    let module = composer
+        .make_naga_module(NagaModuleDescriptor {
+            source,
+            file_path: "layout_check.wgsl",
+            shader_type: ShaderType::Wgsl,
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("layout check: {}", e.emit_to_string(&composer)));
+    let wgsl_layout = |name: &str| {
+        let mangled = format!("{name}X_naga_oil_mod_X");
+        module
+            .types
+            .iter()
+            .find_map(|(_, t)| {
+                let type_name = t.name.as_deref()?;
+                let naga::TypeInner::Struct { members, span } = &t.inner else {
+                    return None;
+                };
+                (type_name == name || type_name.starts_with(&mangled)).then(|| {
+                    let members = members
+                        .iter()
+                        .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                        .collect::<Vec<_>>();
+                    (*span, members)
+                })
+            })
+            .unwrap_or_else(|| panic!("struct {name} is not in the composed module"))
+    };
+    let pairs = [
+        (
+            "SplatView",
+            rust_layout!(SplatViewUniform: clip_from_world, camera_position, view_forward,
+                light_direction, light_color, ambient, flat_ratio, radius_tolerance, pad),
+        ),
+        (
+            "Prop",
+            rust_layout!(PropUniform: world_from_local, local_from_world, normal_from_local,
+                bounds, product_count, max_scale, mirror_sign, pad),
+        ),
+        ("Quadric", rust_layout!(QuadricRecord: c)),
+        (
+            "Splat",
+            rust_layout!(SplatRecord: position, radius, normal, normal_extent, quadric,
+                clip_start, clip_count, pad),
+        ),
+    ];
+    for (name, rust) in pairs {
+        assert_eq!(
+            wgsl_layout(name),
+            rust,
+            "WGSL {name} against its Rust mirror"
+        );
+    }
+}

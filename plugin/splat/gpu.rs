@@ -4,9 +4,11 @@
 //! (WGSL) layout and its Rust layout coincide; the WGSL mirror is
 //! `shaders/quadric_common.wgsl` (same names, same field order). Tests check
 //! the sizes against the kernel's own GPU records
-//! ([`chisel_quadric::GpuSplat`], [`chisel_quadric::GpuQuadric`]).
+//! ([`chisel_quadric::GpuSplat`], [`chisel_quadric::GpuQuadric`]), and
+//! `tests/shaders_validate.rs` checks every WGSL mirror's member names and
+//! offsets, as naga lays them out, against these structs.
 
-use bevy::math::{Mat4, Vec3, Vec4};
+use bevy::math::{Mat4, UVec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
 use chisel_quadric::{GpuQuadric, GpuSplat};
 
@@ -26,6 +28,14 @@ pub struct SplatViewUniform {
     pub light_color: Vec4,
     /// Ambient light, exposure applied (`w` unused).
     pub ambient: Vec4,
+    /// Splats with a normal extent below `flat_ratio · radius` are drawn as
+    /// one quad ([`SplatSettings::flat_ratio`](super::SplatSettings::flat_ratio)).
+    pub flat_ratio: f32,
+    /// Hits are kept within `radius · radius_tolerance` of their sample
+    /// ([`SplatSettings::radius_tolerance`](super::SplatSettings::radius_tolerance)).
+    pub radius_tolerance: f32,
+    /// Padding to 16 bytes.
+    pub pad: UVec2,
 }
 
 /// Per-prop data (WGSL `Prop`, group 1 binding 0).
@@ -42,13 +52,17 @@ pub struct PropUniform {
     pub bounds: Vec4,
     /// Number of products of the normal form.
     pub product_count: u32,
-    /// Splats with a normal extent below `flat_ratio · radius` are drawn as
-    /// one quad.
-    pub flat_ratio: f32,
-    /// Largest scale factor of `world_from_local`.
+    /// Largest stretch of `world_from_local` (its largest singular value):
+    /// a local sphere of radius `r` lies in a world sphere of radius
+    /// `r · max_scale`.
     pub max_scale: f32,
-    /// Hits are kept within `radius · radius_tolerance` of their sample.
-    pub radius_tolerance: f32,
+    /// `−1` when `world_from_local` mirrors (negative determinant), `+1`
+    /// otherwise. The vertex stages negate one tangent axis of every box
+    /// by it, which reverses the boxes' winding in local space so that it
+    /// comes out counter-clockwise (front-facing) again in clip space.
+    pub mirror_sign: f32,
+    /// Padding to 16 bytes.
+    pub pad: u32,
 }
 
 /// One entry of the quadric buffer (WGSL `Quadric`): the kernel's

@@ -5,15 +5,17 @@
 //! Per prop: a quadric buffer, a clip-index buffer, an instance buffer (one
 //! record per splat) and the normal form for the global pass, uploaded when
 //! the prop's splats change; a uniform with its transform, every frame. Per
-//! view: a uniform (view-projection, eye, light) at a dynamic offset and the
-//! specialized pipeline. The pass draws each prop with one instanced draw.
+//! view: a uniform (view-projection, eye, light, settings) at a dynamic
+//! offset and the pipeline specialized for the view's settings (its
+//! camera's [`SplatViewSettings`], else the [`SplatSettings`] resource). The
+//! pass draws each prop with one instanced draw.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use bevy::camera::Exposure;
 use bevy::light::{DirectionalLight, GlobalAmbientLight};
-use bevy::math::Mat3;
+use bevy::math::{DMat3, Mat3};
 use bevy::prelude::*;
 use bevy::render::Extract;
 use bevy::render::camera::ExtractedCamera;
@@ -29,7 +31,7 @@ use bevy::render::view::{ExtractedView, Msaa, ViewDepthTexture, ViewTarget};
 use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
 use super::pipeline::{SplatPipeline, SplatPipelineKey};
 use super::prop::{PropGpuData, PropSplats};
-use super::{SplatMode, SplatSettings};
+use super::{SplatMode, SplatSettings, SplatViewSettings};
 
 /// One prop as seen by the render world this frame.
 pub struct ExtractedProp {
@@ -62,7 +64,10 @@ pub(crate) fn extract_props(
 ) {
     extracted.0.clear();
     for (entity, splats, transform, visibility) in &props {
-        if visibility.get() && !splats.0.splats.is_empty() {
+        // A transform without an inverse (a zero scale) has no local rays
+        // to trace: the prop is flat or a point, and is not drawn.
+        let det = transform.affine().matrix3.determinant();
+        if visibility.get() && !splats.0.splats.is_empty() && det.is_finite() && det != 0.0 {
             extracted.0.push(ExtractedProp {
                 entity,
                 data: splats.0.clone(),
@@ -124,32 +129,43 @@ fn non_empty<T: Copy + Default>(v: &[T]) -> Vec<T> {
     }
 }
 
-fn prop_uniform(prop: &ExtractedProp, settings: &SplatSettings) -> PropUniform {
+/// The largest singular value of `m`: the most it stretches a vector,
+/// so a sphere of radius `r` maps into one of radius `r · stretch(m)`
+/// whatever the shear or non-uniform scale (the largest column length falls
+/// short of it under shear).
+fn largest_stretch(m: Mat3) -> f32 {
+    let m = DMat3::from_cols(
+        m.x_axis.as_dvec3(),
+        m.y_axis.as_dvec3(),
+        m.z_axis.as_dvec3(),
+    );
+    let gram = chisel_quadric::SymmetricEigen::new(m.transpose() * m);
+    gram.max_value().max(0.0).sqrt() as f32
+}
+
+fn prop_uniform(prop: &ExtractedProp) -> PropUniform {
     let m = prop.world_from_local;
     let linear = Mat3::from_mat4(m);
     let normal = Mat4::from_mat3(linear.inverse().transpose());
-    let max_scale = linear
-        .x_axis
-        .length()
-        .max(linear.y_axis.length())
-        .max(linear.z_axis.length());
     PropUniform {
         world_from_local: m,
         local_from_world: m.inverse(),
         normal_from_local: normal,
         bounds: prop.data.bounds,
         product_count: prop.data.product_count,
-        flat_ratio: settings.flat_ratio,
-        max_scale,
-        radius_tolerance: settings.radius_tolerance,
+        max_scale: largest_stretch(linear),
+        mirror_sign: if linear.determinant() < 0.0 {
+            -1.0
+        } else {
+            1.0
+        },
+        pad: 0,
     }
 }
 
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn prepare_props(
     mut buffers: ResMut<PropBuffers>,
     props: Res<ExtractedProps>,
-    settings: Res<SplatSettings>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
     pipeline: Res<SplatPipeline>,
@@ -185,7 +201,7 @@ pub(crate) fn prepare_props(
         let Some(gpu) = buffers.0.get_mut(&prop.entity) else {
             continue;
         };
-        gpu.uniform.set(prop_uniform(prop, &settings));
+        gpu.uniform.set(prop_uniform(prop));
         gpu.uniform.write_buffer(&device, &queue);
         if gpu.bind_group.is_none()
             && let (Some(uniform), Some(quadrics), Some(clips), Some(splats), Some(terms)) = (
@@ -226,7 +242,10 @@ pub struct SplatViewState {
 pub(crate) fn prepare_views(
     mut commands: Commands,
     mut uniforms: ResMut<SplatViewUniforms>,
-    views: Query<(Entity, &ExtractedView, &Msaa), With<ExtractedCamera>>,
+    views: Query<
+        (Entity, &ExtractedView, &Msaa, Option<&SplatViewSettings>),
+        With<ExtractedCamera>,
+    >,
     light: Res<ExtractedSplatLight>,
     settings: Res<SplatSettings>,
     device: Res<RenderDevice>,
@@ -239,7 +258,8 @@ pub(crate) fn prepare_views(
     let early_depth_test = device
         .features()
         .contains(WgpuFeatures::SHADER_EARLY_DEPTH_TEST);
-    for (entity, view, msaa) in &views {
+    for (entity, view, msaa, view_settings) in &views {
+        let settings = view_settings.map_or(*settings, |s| s.0);
         let clip_from_world = view
             .clip_from_world
             .unwrap_or_else(|| view.clip_from_view * view.world_from_view.to_matrix().inverse());
@@ -253,6 +273,9 @@ pub(crate) fn prepare_views(
             light_direction: light.direction.extend(0.0),
             light_color: light.color.extend(0.0),
             ambient: light.ambient.extend(0.0),
+            flat_ratio: settings.flat_ratio,
+            radius_tolerance: settings.radius_tolerance,
+            pad: UVec2::ZERO,
         });
         let key = SplatPipelineKey {
             format: view.target_format,
@@ -335,4 +358,22 @@ pub(crate) fn splat_pass(
         pass.draw(0..state.vertex_count, 0..instances);
     }
     span.end(&mut pass);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn largest_stretch_is_the_largest_singular_value() {
+        let rotation = Quat::from_euler(EulerRot::XYZ, 0.3, -1.1, 0.7);
+        let scaled = Mat3::from_quat(rotation) * Mat3::from_diagonal(Vec3::new(2.0, -3.0, 0.5));
+        assert!((largest_stretch(scaled) - 3.0).abs() < 1e-5);
+        // A shear stretches (1, 1, 0)/√2 by more than any column's length:
+        // the largest singular value of [[1, 1], [0, 1]] is the golden ratio.
+        let shear = Mat3::from_cols(Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Z);
+        let golden = (1.0 + 5.0_f32.sqrt()) / 2.0;
+        assert!((largest_stretch(shear) - golden).abs() < 1e-5);
+        assert!(largest_stretch(shear) > shear.y_axis.length());
+    }
 }
