@@ -7,11 +7,14 @@
 //! comparison eye must be the reference image of the unmirrored scene from
 //! `eye`, left and right swapped (the reference camera's rays through the
 //! pixel columns `x` and `width − 1 − x` are mirror images): same quadric
-//! ids, normals mirrored by `x → −x`.
+//! ids, normals mirrored by `x → −x`. A prop stretched unevenly and
+//! rotated is compared with the reference tracer of its scene under the
+//! same affine map.
 
 mod common;
 
-use bevy::math::DVec3;
+use bevy::math::DQuat;
+use bevy::math::{DMat4, DVec3};
 use bevy::prelude::*;
 use bevy_chisel::splat::{SplatMode, SplatOutput, SplatSettings, SplatViewSettings};
 use common::{
@@ -192,4 +195,69 @@ fn each_camera_draws_with_its_own_settings() {
         cube as f64 > 1.2 * covered as f64,
         "the proxy cube reaches beyond the prop: {cube} px against {covered}"
     );
+}
+
+#[test]
+fn a_stretched_and_rotated_prop_matches_the_reference_tracer() {
+    // Non-uniform scale under a rotation: the normals need the inverse
+    // transpose, and the screen quads the map's largest stretch (1.4).
+    let (name, centre, radius) = scene_entry("classic");
+    let mut scene = load_scene(name);
+    let splats = scene_splats(&scene, centre, radius);
+    let rotation = DQuat::from_euler(EulerRot::ZXY, 0.5, 0.25, -0.3);
+    let stretch = DVec3::new(1.4, 0.6, 1.0);
+    let affine = DMat4::from_scale_rotation_translation(stretch, rotation, DVec3::ZERO);
+    scene.root = scene
+        .dag
+        .transform(affine, scene.root)
+        .expect("an invertible map");
+    let moved_centre = affine.transform_point3(centre);
+    let eye = eye(moved_centre, radius * stretch.max_element());
+    let expected = reference(&scene, eye, moved_centre, SIZE);
+    let view = |settings| View {
+        eye: eye.as_vec3() * SCALE,
+        centre: moved_centre.as_vec3() * SCALE,
+        settings,
+    };
+    let cameras = [
+        view(None),
+        view(own(id_settings(SplatMode::ScreenQuads))),
+        view(own(id_settings(SplatMode::GlobalRayTrace))),
+        view(own(SplatSettings {
+            output: SplatOutput::Normals,
+            ..default()
+        })),
+    ];
+    let image = render_views(
+        splats,
+        Transform {
+            rotation: rotation.as_quat(),
+            scale: stretch.as_vec3() * SCALE,
+            ..default()
+        },
+        id_settings(SplatMode::SurfaceBoxes),
+        &cameras,
+        SIZE,
+    );
+    let at = |i: u32| Placement {
+        x_offset: i * SIZE,
+        mirrored: false,
+    };
+    let mut failures = Vec::new();
+    for (i, what) in ["surface boxes", "screen quads", "global ray tracing"]
+        .into_iter()
+        .enumerate()
+    {
+        check(
+            &mut failures,
+            format!("{name} stretched, {what}"),
+            &compare_ids(&expected, &image, at(i as u32)),
+        );
+    }
+    check(
+        &mut failures,
+        format!("{name} stretched, normals"),
+        &compare_normals(&expected, &image, at(3)),
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
 }
