@@ -39,7 +39,8 @@ pub struct ExtractedProp {
     pub entity: Entity,
     /// Its splats.
     pub data: Arc<PropGpuData>,
-    /// Its local-to-world transform.
+    /// Its local-to-world transform (invertible: props with a singular
+    /// transform are not extracted).
     pub world_from_local: Mat4,
 }
 
