@@ -53,6 +53,19 @@ pub struct Face {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PolyId(pub u32);
 
+impl Clone for ConvexArena {
+    /// A copy of the polyhedra; the working memory of the cuts is not
+    /// copied (it may be sized for a much larger arena reused earlier).
+    fn clone(&self) -> Self {
+        Self {
+            vertices: self.vertices.clone(),
+            half_edges: self.half_edges.clone(),
+            faces: self.faces.clone(),
+            scratch: None,
+        }
+    }
+}
+
 impl Drop for ConvexArena {
     /// Hands the arrays to this thread's reserve for [`ConvexArena::new`].
     fn drop(&mut self) {
@@ -78,7 +91,7 @@ pub(crate) struct ArenaMark {
 }
 
 /// Flat storage for half-edge meshes of convex polyhedra.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct ConvexArena {
     pub(crate) vertices: Vec<Vertex>,
     pub(crate) half_edges: Vec<HalfEdge>,
