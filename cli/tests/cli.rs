@@ -1,23 +1,16 @@
 //! The `chisel` binary end to end: real scenes in, summaries and files out,
 //! bad input reported with exit code 2.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-fn chisel() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_chisel"))
-}
+use std::path::PathBuf;
+
+use common::{chisel, temp};
 
 fn scene(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../assets/scenes")
         .join(name)
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("chisel-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
 }
 
 #[test]

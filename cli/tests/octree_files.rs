@@ -4,41 +4,12 @@
 //! a stored octree with the identical result, and damaged files reported
 //! with exit code 2.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use std::path::Path;
+
+use common::{box_obj, chisel, f, path, report, temp};
 use serde_json::Value;
-
-fn chisel() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_chisel"))
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("chisel-octree-files-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-/// Runs chisel with `args` and `--json`; the parsed report.
-fn report(args: &[&str]) -> Value {
-    let out = chisel().args(args).arg("--json").output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_str(String::from_utf8(out.stdout).unwrap().trim()).unwrap()
-}
-
-fn f(v: &Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("no number `{key}` in {v}"))
-}
 
 fn boolean(a: &Path, b: &Path, op: &str, out: &Path) -> Value {
     report(&["boolean", path(a), path(b), "--op", op, "-o", path(out)])
@@ -154,27 +125,4 @@ fn damaged_octree_files_are_errors_with_exit_code_2() {
         let message = String::from_utf8_lossy(&out.stderr);
         assert!(message.contains(expected), "{message}");
     }
-}
-
-fn box_obj(min: [f64; 3], max: [f64; 3]) -> String {
-    let mut text = String::new();
-    for k in 0..8 {
-        let c = [0, 1, 2].map(|a| if (k >> a) & 1 == 1 { max[a] } else { min[a] });
-        text.push_str(&format!("v {} {} {}\n", c[0], c[1], c[2]));
-    }
-    // Corners: bit 0 = x, bit 1 = y, bit 2 = z (1-based in OBJ).
-    for face in [
-        [1, 3, 4, 2],
-        [5, 6, 8, 7],
-        [1, 2, 6, 5],
-        [3, 7, 8, 4],
-        [1, 5, 7, 3],
-        [2, 4, 8, 6],
-    ] {
-        text.push_str(&format!(
-            "f {} {} {} {}\n",
-            face[0], face[1], face[2], face[3]
-        ));
-    }
-    text
 }

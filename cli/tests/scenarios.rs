@@ -5,43 +5,10 @@
 //! do not depend on the thread count, and malformed sequences are errors
 //! naming their line, with exit code 2.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use common::{box_obj, chisel, f, path, report, temp};
 use serde_json::Value;
-
-fn chisel() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_chisel"))
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("chisel-scenarios-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-/// Runs chisel with `args` and `--json`; the parsed report.
-fn report(args: &[&str]) -> Value {
-    let out = chisel().args(args).arg("--json").output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(text.lines().count(), 1, "{text}");
-    serde_json::from_str(&text).unwrap()
-}
-
-fn f(v: &Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("no number `{key}` in {v}"))
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn check_figures(r: &Value, steps: usize) {
     assert_eq!(r["steps"].as_u64(), Some(steps as u64), "{r}");
@@ -218,30 +185,6 @@ fn malformed_sequences_name_the_line_and_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     let out = chisel().args(["sweep", "--samples", "1"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
-}
-
-/// An axis-aligned box as OBJ text (outward, counter-clockwise faces).
-fn box_obj(min: [f64; 3], max: [f64; 3]) -> String {
-    let mut text = String::new();
-    for k in 0..8 {
-        let c = |a: usize| if k >> a & 1 == 1 { max[a] } else { min[a] };
-        text.push_str(&format!("v {} {} {}\n", c(0), c(1), c(2)));
-    }
-    // Corner k has bit a set when it is at max along axis a (1-based).
-    for face in [
-        [1, 3, 4, 2],
-        [5, 6, 8, 7],
-        [1, 2, 6, 5],
-        [3, 7, 8, 4],
-        [1, 5, 7, 3],
-        [2, 4, 8, 6],
-    ] {
-        text.push_str(&format!(
-            "f {} {} {} {}\n",
-            face[0], face[1], face[2], face[3]
-        ));
-    }
-    text
 }
 
 #[test]
