@@ -1,7 +1,8 @@
 //! Terrain benchmarks at 1 mm units. Crater carves on a 256 m × 256 m
 //! terrain: time to apply a radius-2 m dodecahedron and re-mesh the cells
 //! it changed, as the plugin does off the main thread. Terrain files: time
-//! to load a carved quarry against replaying its carves. Ignored by default
+//! to load a carved quarry against replaying its carves. Frames: what
+//! carving costs a game running at 60 frames per second. Ignored by default
 //! (they take a while); run
 //!
 //! `cargo test --release -p bevy_chisel --test terrain_bench -- --ignored --nocapture`
@@ -12,57 +13,81 @@
 
 use std::time::{Duration, Instant};
 
+use bevy::asset::AssetPlugin;
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::mesh::cell_meshes;
-use bevy_chisel::terrain::{CarveTool, Terrain, apply_carve};
+use bevy_chisel::terrain::{
+    Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainCellChanged, TerrainPlugin,
+    TerrainSystems, apply_carve,
+};
 use rayon::prelude::*;
 
+/// The `p` quantile of sorted durations, in milliseconds.
 fn percentile(sorted: &[Duration], p: f64) -> f64 {
     let k = ((sorted.len() as f64 - 1.0) * p).round() as usize;
     sorted[k].as_secs_f64() * 1e3
 }
 
-#[test]
-#[ignore = "benchmark"]
-fn crater_carves_on_a_large_terrain() {
-    let carves: usize = std::env::var("CHISEL_BENCH_CARVES")
+/// `name` from the environment, else `default`.
+fn env_or(name: &str, default: usize) -> usize {
+    std::env::var(name)
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(1000);
+        .unwrap_or(default)
+}
+
+/// A deterministic stream of numbers in `[0, 1)` (xorshift64).
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A 256 m × 256 m × 20 m block of rock on a 1 mm grid, top face at y = 0.
+fn large_terrain() -> Terrain {
     let grid = Quantization::new(0.001, [0.0; 3]).expect("valid unit");
-    let terrain = Terrain::from_box(
+    Terrain::from_box(
         grid,
         Vec3::new(0.0, -20.0, 0.0),
         Vec3::new(256.0, 0.0, 256.0),
         1,
     )
-    .expect("valid box");
+    .expect("valid box")
+}
+
+/// A radius-2 m dodecahedron at a random place just under the top face of
+/// [`large_terrain`], turned at random about y.
+fn crater(next: &mut impl FnMut() -> f64) -> CarveTool {
+    let centre = Vec3::new(
+        (4.0 + 248.0 * next()) as f32,
+        -next() as f32,
+        (4.0 + 248.0 * next()) as f32,
+    );
+    let turn = Quat::from_rotation_y((std::f64::consts::TAU * next()) as f32);
+    CarveTool::new(
+        CarveShape::Dodecahedron { radius: 2.0 },
+        Transform::from_translation(centre).with_rotation(turn),
+    )
+}
+
+#[test]
+#[ignore = "benchmark"]
+fn crater_carves_on_a_large_terrain() {
+    let carves = env_or("CHISEL_BENCH_CARVES", 1000);
+    let terrain = large_terrain();
+    let grid = *terrain.quantization();
     let mut octree = terrain.octree().clone();
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform(0x9E37_79B9_7F4A_7C15);
     let (mut apply, mut total) = (Vec::new(), Vec::new());
     let mut by_decile = vec![Vec::new(); 10];
     for k in 0..carves {
-        let centre = Vec3::new(
-            (4.0 + 248.0 * next()) as f32,
-            -next() as f32,
-            (4.0 + 248.0 * next()) as f32,
-        );
-        let tool = CarveTool::new(
-            bevy_chisel::terrain::CarveShape::Dodecahedron { radius: 2.0 },
-            Transform::from_translation(centre).with_rotation(Quat::from_rotation_y(
-                (std::f64::consts::TAU * next()) as f32,
-            )),
-        )
-        .to_grid(&grid)
-        .expect("on the grid");
+        let tool = crater(&mut next).to_grid(&grid).expect("on the grid");
         let start = Instant::now();
         let changes = apply_carve(&mut octree, &tool, Edit::Subtract).expect("valid carve");
         let applied = start.elapsed();
@@ -133,12 +158,9 @@ fn crater_carves_on_a_large_terrain() {
 fn loading_a_saved_terrain_against_replaying_its_carves() {
     use bevy::math::Ray3d;
     use bevy_chisel::bsp::octree::Octree;
-    use bevy_chisel::terrain::{CarveShape, HeightLayer, Heightfield};
+    use bevy_chisel::terrain::{HeightLayer, Heightfield};
 
-    let carves: usize = std::env::var("CHISEL_BENCH_CARVES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1000);
+    let carves = env_or("CHISEL_BENCH_CARVES", 1000);
     let grid = Quantization::new(0.001, [0.0; 3]).expect("valid unit");
     let field = Heightfield::load_image("assets/terrain/quarry_height.png", 1.0, 0.0, 5.0, 8.0, 1)
         .expect("the quarry heightfield")
@@ -153,12 +175,9 @@ fn loading_a_saved_terrain_against_replaying_its_carves() {
             },
         ]);
     let mut terrain = Terrain::from_heightfield(grid, &field).expect("valid heightfield");
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f32 / (1u64 << 53) as f32
+    let mut next = {
+        let mut next = uniform(0x2545_F491_4F6C_DD1D);
+        move || next() as f32
     };
     let start = Instant::now();
     // Blasts where a ray from above meets the ground (a few rays fall
@@ -242,5 +261,203 @@ fn loading_a_saved_terrain_against_replaying_its_carves() {
         replaying.as_secs_f64() / loading.as_secs_f64(),
         rebuilding.as_secs_f64() * 1e3,
         (replaying - rebuilding).as_secs_f64() * 1e3,
+    );
+}
+
+const FRAME: Duration = Duration::from_nanos(16_666_667);
+
+/// Frames run with nothing to carve before the carves start.
+const BASELINE_FRAMES: usize = 600;
+
+/// Per-frame records.
+#[derive(Resource, Default)]
+struct Frames {
+    /// The frame being run.
+    frame: u64,
+    /// When the terrain systems of this frame began.
+    start: Option<Instant>,
+    /// Main-thread span of the terrain systems, per frame.
+    spans: Vec<Duration>,
+    /// The same, in the frames that uploaded no mesh: what is left there is
+    /// bookkeeping, and the scheduler's preemption of the main thread by the
+    /// background work on a machine with few cores.
+    idle_spans: Vec<Duration>,
+    /// Frame of each `CarveApplied` with an edit, in order.
+    applied: Vec<u64>,
+    /// Kernel and mesh times reported by the plugin, per carve.
+    work: Vec<Duration>,
+}
+
+fn mark_start(mut frames: ResMut<Frames>) {
+    frames.start = Some(Instant::now());
+}
+
+fn mark_end(
+    mut frames: ResMut<Frames>,
+    mut applied: MessageReader<CarveApplied>,
+    mut changed: MessageReader<TerrainCellChanged>,
+) {
+    let uploaded = changed.read().count() > 0;
+    if let Some(start) = frames.start.take() {
+        let span = start.elapsed();
+        frames.spans.push(span);
+        if !uploaded {
+            frames.idle_spans.push(span);
+        }
+    }
+    let frame = frames.frame;
+    for report in applied.read() {
+        if report.edit.is_some() {
+            frames.applied.push(frame);
+            frames.work.push(report.apply_time + report.mesh_time);
+        }
+    }
+}
+
+/// What carving costs a game's frame: an app paced at 60 frames per second
+/// (no rendering, `MinimalPlugins`) sends a crater carve every few frames to
+/// a 256 m × 256 m terrain at 1 mm units and records, per frame, the
+/// main-thread span of the terrain systems (from before
+/// [`TerrainSystems::Carve`] to after [`TerrainSystems::Mesh`]), and per
+/// carve, the frames from the `Carve` message to its `CarveApplied` (every
+/// changed cell's mesh in place). The same span over frames with nothing
+/// to carve is the baseline. Ignored by default; run
+///
+/// `cargo test --release -p bevy_chisel --test terrain_bench frames -- --ignored --nocapture`
+///
+/// Environment: `CHISEL_BENCH_CARVES` (default 300), `CHISEL_BENCH_EVERY`
+/// (frames between carves, default 6: ten carves a second).
+///
+/// The span covers the plugin's systems only: a renderer adds the upload of
+/// the new meshes to the GPU, on the render thread.
+#[test]
+#[ignore = "benchmark"]
+fn carving_at_sixty_frames_per_second() {
+    let carves = env_or("CHISEL_BENCH_CARVES", 300);
+    let every = env_or("CHISEL_BENCH_EVERY", 6).max(1) as u64;
+    let terrain = large_terrain();
+
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, AssetPlugin::default(), TerrainPlugin))
+        .init_asset::<Mesh>()
+        .init_asset::<StandardMaterial>()
+        .init_resource::<Frames>()
+        .add_systems(
+            Update,
+            (
+                mark_start.before(TerrainSystems::Carve),
+                mark_end.after(TerrainSystems::Mesh),
+            ),
+        );
+    let entity = app.world_mut().spawn(terrain).id();
+    for _ in 0..10_000 {
+        app.update();
+        if app
+            .world()
+            .get::<Terrain>(entity)
+            .is_some_and(Terrain::is_idle)
+        {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    {
+        let mut frames = app.world_mut().resource_mut::<Frames>();
+        frames.spans.clear();
+        frames.idle_spans.clear();
+        frames.applied.clear();
+        frames.work.clear();
+    }
+
+    let mut next = uniform(0x9E37_79B9_7F4A_7C15);
+    // A baseline: the same frames with nothing to carve, so that what
+    // carving adds can be told from the machine's own noise.
+    for _ in 0..BASELINE_FRAMES {
+        let begin = Instant::now();
+        app.update();
+        if let Some(rest) = FRAME.checked_sub(begin.elapsed()) {
+            std::thread::sleep(rest);
+        }
+    }
+    let mut baseline = std::mem::take(&mut app.world_mut().resource_mut::<Frames>().spans);
+    baseline.sort();
+    app.world_mut().resource_mut::<Frames>().idle_spans.clear();
+
+    let mut sent = Vec::with_capacity(carves);
+    let mut frame = 0u64;
+    loop {
+        let begin = Instant::now();
+        app.world_mut().resource_mut::<Frames>().frame = frame;
+        if frame.is_multiple_of(every) && sent.len() < carves {
+            app.world_mut().write_message(Carve {
+                terrain: entity,
+                tool: crater(&mut next),
+                edit: Edit::Subtract,
+            });
+            sent.push(frame);
+        }
+        app.update();
+        let done = app.world().resource::<Frames>().applied.len();
+        if done >= carves || frame > (carves as u64 * every + 60) * 20 {
+            break;
+        }
+        frame += 1;
+        if let Some(rest) = FRAME.checked_sub(begin.elapsed()) {
+            std::thread::sleep(rest);
+        }
+    }
+
+    let frames = app.world().resource::<Frames>();
+    assert_eq!(frames.applied.len(), carves, "every carve was applied");
+    let mut spans = frames.spans.clone();
+    spans.sort();
+    let mut idle = frames.idle_spans.clone();
+    idle.sort();
+    let mut work = frames.work.clone();
+    work.sort();
+    let mut lag: Vec<u64> = frames
+        .applied
+        .iter()
+        .zip(&sent)
+        .map(|(applied, sent)| applied - sent)
+        .collect();
+    lag.sort_unstable();
+    let within = |n: u64| lag.iter().filter(|&&l| l <= n).count() as f64 / lag.len() as f64;
+    println!(
+        "{carves} crater carves (r = 2 m, 1 mm grid, 256 m × 256 m), one every {every} frames at 60 fps, {} frames",
+        spans.len()
+    );
+    println!(
+        "main-thread span of the terrain systems per frame: median {:.3} ms, p99 {:.3} ms, max {:.3} ms",
+        percentile(&spans, 0.5),
+        percentile(&spans, 0.99),
+        percentile(&spans, 1.0)
+    );
+    println!(
+        "the same with nothing to carve ({} frames): median {:.3} ms, p99 {:.3} ms, max {:.3} ms",
+        baseline.len(),
+        percentile(&baseline, 0.5),
+        percentile(&baseline, 0.99),
+        percentile(&baseline, 1.0)
+    );
+    println!(
+        "the same in the {} carving frames that uploaded no mesh: median {:.3} ms, p99 {:.3} ms, max {:.3} ms",
+        idle.len(),
+        percentile(&idle, 0.5),
+        percentile(&idle, 0.99),
+        percentile(&idle, 1.0)
+    );
+    println!(
+        "background work per carve (kernel + meshes): median {:.2} ms, p99 {:.2} ms",
+        percentile(&work, 0.5),
+        percentile(&work, 0.99)
+    );
+    println!(
+        "frames from Carve to CarveApplied: median {}, p99 {}, max {}; within 1 frame {:.1}%, within 2 frames {:.1}%",
+        lag[lag.len() / 2],
+        lag[((lag.len() - 1) as f64 * 0.99).round() as usize],
+        lag[lag.len() - 1],
+        100.0 * within(1),
+        100.0 * within(2)
     );
 }
