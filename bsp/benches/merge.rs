@@ -1,15 +1,26 @@
 //! Figure 10 of paper 1: Booleans of random BSPs, output nodes per second.
 //!
-//! `cargo bench -p chisel_bsp --bench merge`. Operands are unions of random
-//! convex polyhedra (each a linear BSP) grown to about `N` nodes; each
-//! measured operation merges two of them inside their bounding box. The
-//! reported throughput is output BSP nodes per second.
+//! `cargo bench -p chisel_bsp --bench merge`. Two kinds of operands, each
+//! merged inside their bounding box; the reported throughput is output BSP
+//! nodes per second:
+//!
+//! - `random` — the paper's random BSPs: split the leaf holding a random
+//!   point of the cube by a plane through that point in a random direction,
+//!   until the tree has `N` inner nodes; leaves are randomly solid or empty.
+//!   `random/pairs` merges 40 fixed pairs with sizes drawn from 1–200 and a
+//!   random operation each (union, intersection or difference), the setting
+//!   of the paper's Figure 10, and reports their total output over their
+//!   total time.
+//! - `convex` — unions of random convex polyhedra (linear BSPs) grown to
+//!   about `N` nodes: solids that look like terrain cells, whose merges keep
+//!   their output close to linear in the input.
 
 use std::hint::black_box;
 
 use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG};
+use chisel_bsp::exact::Plane;
 use chisel_bsp::exact::{IntPoint, plane_from_points};
-use chisel_bsp::tree::{BooleanOp, Bsp};
+use chisel_bsp::tree::{BooleanOp, Bsp, Node};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -63,8 +74,109 @@ fn random_bsp(rng: &mut ChaCha8Rng, nodes: usize) -> Bsp {
     bsp
 }
 
-fn figure10(c: &mut Criterion) {
-    let mut group = c.benchmark_group("merge");
+/// A random BSP with `splits` inner nodes, built as in the paper: the
+/// leaf holding a random point is split by a plane through the point with a
+/// random normal (integer components up to 2^10), and each new leaf is
+/// solid or empty at random.
+fn paper_random_bsp(rng: &mut ChaCha8Rng, splits: usize) -> Bsp {
+    let mut planes: Vec<Plane> = Vec::new();
+    let mut nodes = vec![Node::Leaf(rng.random_range(0..2))];
+    while planes.len() < splits {
+        let x = [0; 3].map(|_| rng.random_range(-H + 1..H));
+        let n = [0; 3].map(|_| rng.random_range(-1024i64..=1024));
+        if n == [0; 3] {
+            continue;
+        }
+        let d = -(0..3)
+            .map(|i| i128::from(n[i]) * i128::from(x[i]))
+            .sum::<i128>();
+        let plane = Plane::new(n[0], n[1], n[2], d).expect("small coefficients");
+        // The leaf holding x (points on a plane go below).
+        let mut at = 0;
+        while let Node::Split {
+            plane,
+            below,
+            above,
+        } = nodes[at]
+        {
+            let q = planes[plane as usize];
+            let [a, b, c] = q.normal().map(i128::from);
+            let value = a * i128::from(x[0]) + b * i128::from(x[1]) + c * i128::from(x[2]);
+            at = if value + q.offset() > 0 { above } else { below } as usize;
+        }
+        let below = nodes.len() as u32;
+        nodes.push(Node::Leaf(rng.random_range(0..2)));
+        nodes.push(Node::Leaf(rng.random_range(0..2)));
+        nodes[at] = Node::Split {
+            plane: planes.len() as u32,
+            below,
+            above: below + 1,
+        };
+        planes.push(plane);
+    }
+    Bsp::from_stored_parts(planes, nodes).expect("a well-formed tree")
+}
+
+const OPS: [(&str, BooleanOp); 3] = [
+    ("union", BooleanOp::Union),
+    ("intersection", BooleanOp::Intersection),
+    ("difference", BooleanOp::Difference),
+];
+
+/// The paper's setting: random BSPs of 1–200 inner nodes.
+fn figure10_random(c: &mut Criterion) {
+    let mut group = c.benchmark_group("random");
+    group.sample_size(20);
+    let mut rng = ChaCha8Rng::seed_from_u64(10);
+    for splits in [10, 50, 200] {
+        let (a, b) = (
+            paper_random_bsp(&mut rng, splits),
+            paper_random_bsp(&mut rng, splits),
+        );
+        for (name, op) in OPS {
+            let out = merged(&a, &b, op).nodes().len();
+            group.throughput(Throughput::Elements(out as u64));
+            let id = format!("{name}/{}+{}->{out}", a.nodes().len(), b.nodes().len());
+            group.bench_function(BenchmarkId::from_parameter(id), |bench| {
+                bench.iter(|| black_box(merged(&a, &b, op)))
+            });
+        }
+    }
+    let pairs: Vec<(Bsp, Bsp, BooleanOp)> = (0..40)
+        .map(|_| {
+            let a = rng.random_range(1..=200);
+            let b = rng.random_range(1..=200);
+            let op = OPS[rng.random_range(0..OPS.len())].1;
+            (
+                paper_random_bsp(&mut rng, a),
+                paper_random_bsp(&mut rng, b),
+                op,
+            )
+        })
+        .collect();
+    let out: usize = pairs
+        .iter()
+        .map(|(a, b, op)| merged(a, b, *op).nodes().len())
+        .sum();
+    let input: usize = pairs
+        .iter()
+        .map(|(a, b, _)| a.nodes().len() + b.nodes().len())
+        .sum();
+    group.throughput(Throughput::Elements(out as u64));
+    let id = format!("pairs/40 pairs, {input}->{out}");
+    group.bench_function(BenchmarkId::from_parameter(id), |bench| {
+        bench.iter(|| {
+            for (a, b, op) in &pairs {
+                black_box(merged(a, b, *op));
+            }
+        })
+    });
+    group.finish();
+}
+
+/// Unions of random convex polyhedra.
+fn figure10_convex(c: &mut Criterion) {
+    let mut group = c.benchmark_group("convex");
     group.sample_size(20);
     let mut rng = ChaCha8Rng::seed_from_u64(10);
     for nodes in [10, 50, 200] {
@@ -84,5 +196,5 @@ fn figure10(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, figure10);
+criterion_group!(benches, figure10_random, figure10_convex);
 criterion_main!(benches);
