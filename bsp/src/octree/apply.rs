@@ -216,13 +216,10 @@ impl Walk<'_> {
             };
             return (relabeled.map(OctNode::Leaf), changes);
         }
-        let merged = with_arena(|arena| {
-            let poly = cell_poly(arena, cell);
-            leaf.to_bsp().merge(&self.tool, self.op, arena, poly)
-        });
         let simplified = with_arena(|arena| {
             let poly = cell_poly(arena, cell);
-            merged.simplified(arena, poly)
+            leaf.to_bsp()
+                .merge_simplified(&self.tool, self.op, arena, poly)
         });
         if let (Leaf::Uniform(label), [crate::tree::Node::Leaf(new)]) = (leaf, simplified.nodes())
             && label == new

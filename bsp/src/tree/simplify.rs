@@ -18,6 +18,8 @@
 
 use super::boundary::Bounds;
 use super::bsp::{Bsp, EMPTY};
+use super::cells::Cell;
+use super::merge::BooleanOp;
 use crate::convex::{ConvexArena, PolyId};
 
 /// Seed of the face order in rebuilt BSPs: fixed, so that rebuilding is a
@@ -32,8 +34,30 @@ impl Bsp {
     #[must_use]
     pub fn simplified(&self, arena: &mut ConvexArena, bounds: PolyId) -> Bsp {
         let cells = self.cells(arena, bounds);
+        self.rebuilt(arena, &cells)
+    }
+
+    /// `(self op other).simplified(…)` inside `bounds` (a polyhedron of
+    /// `arena`, used up), equal to [`Bsp::merge`] followed by
+    /// [`Bsp::simplified`] but without cutting the merged tree's cells a
+    /// second time: the merge keeps them ([`Bsp::merge_cells`]).
+    #[must_use]
+    pub fn merge_simplified(
+        &self,
+        other: &Bsp,
+        op: BooleanOp,
+        arena: &mut ConvexArena,
+        bounds: PolyId,
+    ) -> Bsp {
+        let (merged, cells) = self.merge_cells(other, op, arena, bounds);
+        merged.rebuilt(arena, &cells)
+    }
+
+    /// The rebuild from `self`'s cells inside some bounds (from
+    /// [`Bsp::cells`] or [`Bsp::merge_cells`] on `arena`).
+    fn rebuilt(&self, arena: &ConvexArena, cells: &[Cell]) -> Bsp {
         let uniform = cells.first().map_or(EMPTY, |c| c.label);
-        let faces = self.boundary_of_cells(arena, &cells, Bounds::Skip);
+        let faces = self.boundary_of_cells(arena, cells, Bounds::Skip);
         if faces.is_empty() {
             return Bsp::uniform(uniform);
         }
