@@ -51,7 +51,7 @@ pub mod surface;
 pub mod tool;
 pub mod tree;
 
-pub use apply::{Changes, Edit};
+pub use apply::{CellFaces, Changes, Edit};
 pub use cell::{CellBox, CellKey};
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

@@ -54,6 +54,29 @@ impl Octree {
         out
     }
 
+    /// The surface pieces of leaf cell `key` from its boundary `faces`
+    /// inside the cell (as [`Octree::apply_with_faces`] hands them back):
+    /// the border faces ([`BoundaryFace::on_bounds`]) are clipped against
+    /// the regions across, the others kept. The same exact surface as
+    /// [`Octree::cell_surface`] (empty when `key` is not a leaf), possibly
+    /// in different pieces.
+    #[must_use]
+    pub fn cell_surface_from(&self, key: CellKey, faces: Vec<BoundaryFace>) -> Vec<BoundaryFace> {
+        if self.leaf(key).is_none() {
+            return Vec::new();
+        }
+        let mut out = Vec::with_capacity(faces.len());
+        for face in faces {
+            if face.on_bounds {
+                let label = face.label;
+                self.clip_across(face.into_polygon(), label, &mut out);
+            } else {
+                out.push(face);
+            }
+        }
+        out
+    }
+
     /// The surface of every leaf, in leaf order (cells run in parallel).
     #[must_use]
     pub fn surface(&self) -> Vec<BoundaryFace> {
