@@ -4,7 +4,10 @@
 //! leaf's box; the *region across* it is what lies in front of it — a part
 //! of a neighbouring leaf, or the outside of the root cube (empty).
 //!
-//! Inside a leaf the surface is its BSP's boundary ([`Bsp::boundary`]).
+//! Inside a leaf the surface is its BSP's boundary ([`Bsp::boundary`]), or
+//! after an edit the boundary its rebuild started from
+//! ([`Octree::cell_surface_from`]: the same exact surface, cut into pieces
+//! by the merged tree's planes rather than the rebuilt tree's).
 //! A border face is clipped exactly against the region across: descending
 //! from the root, it is split by the axis planes of each inner cell it
 //! reaches (a face lying in such a plane goes to the side it faces), then
@@ -119,16 +122,17 @@ impl Octree {
         let facing = Facing::of(&polygon.support, from);
         let mut stack: Vec<(&OctNode, CellBox, Polygon, CellBox)> =
             vec![(&self.root, root, polygon, *from)];
+        // The pieces of one inner cell, axis by axis (reused).
+        let (mut pieces, mut next) = (Vec::new(), Vec::new());
         while let Some((node, cell, polygon, range)) = stack.pop() {
             match node {
                 OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
                 OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, &mut emit),
                 OctNode::Inner(children) => {
                     let mid = cell.mid();
-                    let mut pieces = vec![(polygon, range, 0usize)];
+                    pieces.push((polygon, range, 0usize));
                     for (axis, &m) in mid.iter().enumerate() {
-                        let mut next = Vec::with_capacity(2 * pieces.len());
-                        for (piece, range, bits) in pieces {
+                        for (piece, range, bits) in pieces.drain(..) {
                             match facing.side(axis, m, &range) {
                                 Some(false) => next.push((piece, range, bits)),
                                 Some(true) => next.push((piece, range, bits | 1 << axis)),
@@ -142,9 +146,9 @@ impl Octree {
                                 }
                             }
                         }
-                        pieces = next;
+                        std::mem::swap(&mut pieces, &mut next);
                     }
-                    for (piece, range, i) in pieces {
+                    for (piece, range, i) in pieces.drain(..) {
                         stack.push((&children[i], cell.child(i), piece, range));
                     }
                 }
