@@ -133,3 +133,68 @@ fn random_boolean_sequences_keep_the_identities() {
         "tools overlap the solid: {overlapping} of 36"
     );
 }
+
+/// Every face of a cell as its plane, tag and corners, in traversal order.
+fn cell_faces(arena: &ConvexArena, poly: PolyId) -> Vec<String> {
+    arena
+        .faces_of(poly)
+        .into_iter()
+        .map(|f| {
+            let face = arena.faces()[f as usize];
+            let corners: Vec<String> = arena
+                .face_loop(f)
+                .map(|h| {
+                    let v = arena.half_edges()[h as usize].origin;
+                    format!("{:?}", arena.vertices()[v as usize].point)
+                })
+                .collect();
+            format!("{:?} {} {corners:?}", face.plane, face.tag)
+        })
+        .collect()
+}
+
+/// The cells the merge keeps are those `cells()` cuts from its result,
+/// polyhedron for polyhedron (planes, tags, corners, traversal order), and
+/// merging with simplification gives the same tree as the two steps.
+#[test]
+fn merge_keeps_the_cells_of_its_result() {
+    let mut rng = ChaCha8Rng::seed_from_u64(34);
+    let ops = [
+        BooleanOp::Union,
+        BooleanOp::Intersection,
+        BooleanOp::Difference,
+        BooleanOp::Paint(3),
+    ];
+    for round in 0..6 {
+        let mut acc = random_convex_bsp(&mut rng, 1, H / 4);
+        for step in 0..10 {
+            let tool = random_convex_bsp(&mut rng, 1 + (step % 3) as Label, H / 4);
+            let op = ops[(round + step) % ops.len()];
+            let mut arena = ConvexArena::new();
+            let b = bounds(&mut arena);
+            let (merged, cells) = acc.merge_cells(&tool, op, &mut arena, b);
+            assert_eq!(merged, merge(&acc, &tool, op), "the same tree");
+            let mut again = ConvexArena::new();
+            let b = bounds(&mut again);
+            let expected = merged.cells(&mut again, b);
+            assert_eq!(cells.len(), expected.len(), "round {round} step {step}");
+            for (c, e) in cells.iter().zip(&expected) {
+                assert_eq!((c.leaf, c.label), (e.leaf, e.label));
+                arena.validate(c.poly).unwrap();
+                assert_eq!(cell_faces(&arena, c.poly), cell_faces(&again, e.poly));
+            }
+            let mut arena = ConvexArena::new();
+            let b = bounds(&mut arena);
+            let simplified = acc.merge_simplified(&tool, op, &mut arena, b);
+            let mut arena = ConvexArena::new();
+            let b = bounds(&mut arena);
+            assert_eq!(simplified, merged.simplified(&mut arena, b));
+            // Keep the operand small and non-convex, as octree leaves are.
+            acc = if merged.nodes().len() > 1 {
+                simplified
+            } else {
+                random_convex_bsp(&mut rng, 1, H / 4)
+            };
+        }
+    }
+}

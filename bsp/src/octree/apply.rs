@@ -25,7 +25,7 @@ use super::tool::Tool;
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
 use crate::convex::{ConvexArena, PolyId, with_arena};
-use crate::tree::{BooleanOp, Bsp, EMPTY, Label};
+use crate::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label};
 
 /// What an edit does where the tool is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -85,6 +85,33 @@ impl Changes {
     }
 }
 
+/// The boundary faces of leaves whose content an edit replaced, by key
+/// (see [`Octree::apply_with_faces`]).
+pub type CellFaces = Vec<(CellKey, Vec<BoundaryFace>)>;
+
+/// The changes below a node, with the faces of the replaced leaves there.
+#[derive(Default)]
+struct Edited {
+    changes: Changes,
+    faces: CellFaces,
+}
+
+impl From<Changes> for Edited {
+    fn from(changes: Changes) -> Self {
+        Self {
+            changes,
+            faces: Vec::new(),
+        }
+    }
+}
+
+impl Edited {
+    fn append(&mut self, other: Edited) {
+        self.changes.append(other.changes);
+        self.faces.extend(other.faces);
+    }
+}
+
 /// The edit, prepared once for the whole walk.
 struct Walk<'a> {
     tool: Bsp,
@@ -96,6 +123,8 @@ struct Walk<'a> {
     /// misses change too (intersection empties them).
     changes_outside: bool,
     config: &'a OctreeConfig,
+    /// Whether to hand back the faces of replaced leaves.
+    keep_faces: bool,
 }
 
 impl Octree {
@@ -108,6 +137,30 @@ impl Octree {
     /// [`Error::InvalidEdit`] for adding or painting the empty label; the
     /// octree is then unchanged.
     pub fn apply(&mut self, tool: &Tool, edit: Edit) -> Result<Changes, Error> {
+        self.edit(tool, edit, false).map(|edited| edited.changes)
+    }
+
+    /// [`Octree::apply`], also handing back, for each leaf whose content
+    /// the edit replaced (a key in [`Changes::changed`] that stayed one
+    /// leaf), the boundary faces the rebuild extracted there: its surface
+    /// inside the cell, with the faces on the cell's box marked
+    /// [`BoundaryFace::on_bounds`]. [`Octree::cell_surface_from`] finishes
+    /// them into what [`Octree::cell_surface`] would give — the same exact
+    /// surface, possibly in different pieces — without cutting the cell's
+    /// BSP again. Sorted by key; deterministic for any thread count.
+    ///
+    /// # Errors
+    /// As [`Octree::apply`].
+    pub fn apply_with_faces(
+        &mut self,
+        tool: &Tool,
+        edit: Edit,
+    ) -> Result<(Changes, CellFaces), Error> {
+        self.edit(tool, edit, true)
+            .map(|edited| (edited.changes, edited.faces))
+    }
+
+    fn edit(&mut self, tool: &Tool, edit: Edit, keep_faces: bool) -> Result<Edited, Error> {
         if matches!(edit, Edit::Add(EMPTY) | Edit::Paint(EMPTY)) {
             return Err(Error::InvalidEdit {
                 reason: "adding or painting needs a non-empty material label",
@@ -121,37 +174,39 @@ impl Octree {
             op,
             changes_outside: (0..=Label::MAX).any(|l| op.apply(l, EMPTY) != l),
             config: self.config(),
+            keep_faces,
         };
         let root_box = self.root_box();
-        let (root, mut changes) = walk.node(&self.root, CellKey::ROOT, root_box);
+        let (root, mut edited) = walk.node(&self.root, CellKey::ROOT, root_box);
         if let Some(root) = root {
             self.root = root;
         }
-        changes.changed.sort_unstable();
-        changes.removed.sort_unstable();
-        Ok(changes)
+        edited.changes.changed.sort_unstable();
+        edited.changes.removed.sort_unstable();
+        edited.faces.sort_unstable_by_key(|(key, _)| *key);
+        Ok(edited)
     }
 }
 
 impl Walk<'_> {
     /// The new node (`None` when unchanged) and the changes below it.
-    fn node(&self, node: &OctNode, key: CellKey, cell: CellBox) -> (Option<OctNode>, Changes) {
+    fn node(&self, node: &OctNode, key: CellKey, cell: CellBox) -> (Option<OctNode>, Edited) {
         if !self.changes_outside && !cell.touches(&self.bounds) {
-            return (None, Changes::default());
+            return (None, Edited::default());
         }
         match node {
             OctNode::Leaf(leaf) => self.leaf(leaf, key, cell),
             OctNode::Inner(children) => {
-                let results: Vec<(Option<OctNode>, Changes)> = (0..8)
+                let results: Vec<(Option<OctNode>, Edited)> = (0..8)
                     .into_par_iter()
                     .map(|i| self.node(&children[i], key.child(i), cell.child(i)))
                     .collect();
                 if results.iter().all(|(n, _)| n.is_none()) {
-                    let mut changes = Changes::default();
+                    let mut changes = Edited::default();
                     results.into_iter().for_each(|(_, c)| changes.append(c));
                     return (None, changes);
                 }
-                let mut changes = Changes::default();
+                let mut changes = Edited::default();
                 let mut new_children = children.as_ref().clone();
                 for (i, (n, c)) in results.into_iter().enumerate() {
                     if let Some(n) = n {
@@ -162,20 +217,19 @@ impl Walk<'_> {
                 if let Some(combined) = combine(&new_children, cell, self.config) {
                     let mut removed = Vec::new();
                     collect_leaves(node, key, &mut removed);
-                    return (
-                        Some(OctNode::Leaf(combined)),
-                        Changes {
-                            changed: vec![key],
-                            removed,
-                        },
-                    );
+                    // The children's faces are dropped with them.
+                    let changes = Changes {
+                        changed: vec![key],
+                        removed,
+                    };
+                    return (Some(OctNode::Leaf(combined)), changes.into());
                 }
                 (Some(OctNode::Inner(Arc::new(new_children))), changes)
             }
         }
     }
 
-    fn leaf(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Changes) {
+    fn leaf(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Edited) {
         let touches = cell.touches(&self.bounds);
         let touched = || {
             if touches {
@@ -190,7 +244,7 @@ impl Walk<'_> {
             if self.op.apply(label, self.tool_label) == label
                 && self.op.apply(label, EMPTY) == label
             {
-                return (None, touched());
+                return (None, touched().into());
             }
         }
         // For a BSP leaf, an exact test first spares the merge and the
@@ -214,30 +268,42 @@ impl Walk<'_> {
             } else {
                 Changes::default()
             };
-            return (relabeled.map(OctNode::Leaf), changes);
+            return (relabeled.map(OctNode::Leaf), changes.into());
         }
-        let merged = with_arena(|arena| {
+        let (simplified, faces) = with_arena(|arena| {
             let poly = cell_poly(arena, cell);
-            leaf.to_bsp().merge(&self.tool, self.op, arena, poly)
-        });
-        let simplified = with_arena(|arena| {
-            let poly = cell_poly(arena, cell);
-            merged.simplified(arena, poly)
+            let bsp = leaf.to_bsp();
+            if self.keep_faces {
+                bsp.merge_simplified_faces(&self.tool, self.op, arena, poly)
+            } else {
+                let simplified = bsp.merge_simplified(&self.tool, self.op, arena, poly);
+                (simplified, Vec::new())
+            }
         });
         if let (Leaf::Uniform(label), [crate::tree::Node::Leaf(new)]) = (leaf, simplified.nodes())
             && label == new
         {
-            return (None, touched());
+            return (None, touched().into());
         }
         let (node, leaves) = build_leaf(simplified, key, cell, self.config);
-        let changes = match node {
-            OctNode::Leaf(_) => Changes::leaf(key),
+        let edited = match node {
+            OctNode::Leaf(_) => Edited {
+                changes: Changes::leaf(key),
+                faces: if self.keep_faces {
+                    vec![(key, faces)]
+                } else {
+                    Vec::new()
+                },
+            },
+            // The children are rebuilt inside their boxes: their surfaces
+            // are extracted afresh.
             OctNode::Inner(_) => Changes {
                 changed: leaves,
                 removed: vec![key],
-            },
+            }
+            .into(),
         };
-        (Some(node), changes)
+        (Some(node), edited)
     }
 
     fn tool_meets(&self, arena: &mut ConvexArena, cell: PolyId) -> bool {

@@ -10,7 +10,10 @@
 //! - [`tree`] — the persistent octree: construction, leaves, statistics.
 //! - [`tool`] — convex tools (and unions of them) with their bounds.
 //! - [`apply`] — applying a tool to the cells it overlaps, in parallel;
-//!   splitting leaves over the budget and combining children under it.
+//!   splitting leaves over the budget and combining children under it;
+//!   [`Octree::apply_with_faces`] also hands back the boundary faces the
+//!   rebuild of each replaced leaf extracted, for re-meshing without
+//!   cutting that leaf again ([`Octree::cell_surface_from`]).
 //! - [`import`] — an octree from a closed triangle mesh (§3.9).
 //! - [`measure`] — material volumes for reports.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
@@ -51,7 +54,7 @@ pub mod surface;
 pub mod tool;
 pub mod tree;
 
-pub use apply::{Changes, Edit};
+pub use apply::{CellFaces, Changes, Edit};
 pub use cell::{CellBox, CellKey};
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

@@ -4,7 +4,10 @@
 //! leaf's box; the *region across* it is what lies in front of it — a part
 //! of a neighbouring leaf, or the outside of the root cube (empty).
 //!
-//! Inside a leaf the surface is its BSP's boundary ([`Bsp::boundary`]).
+//! Inside a leaf the surface is its BSP's boundary ([`Bsp::boundary`]), or
+//! after an edit the boundary its rebuild started from
+//! ([`Octree::cell_surface_from`]: the same exact surface, cut into pieces
+//! by the merged tree's planes rather than the rebuilt tree's).
 //! A border face is clipped exactly against the region across: descending
 //! from the root, it is split by the axis planes of each inner cell it
 //! reaches (a face lying in such a plane goes to the side it faces), then
@@ -46,7 +49,32 @@ impl Octree {
         let mut out = Vec::new();
         for face in faces {
             if face.on_bounds {
-                self.clip_across(face.polygon(), face.label, &mut out);
+                let label = face.label;
+                self.clip_across(face.into_polygon(), label, &cell, &mut out);
+            } else {
+                out.push(face);
+            }
+        }
+        out
+    }
+
+    /// The surface pieces of leaf cell `key` from its boundary `faces`
+    /// inside the cell (as [`Octree::apply_with_faces`] hands them back):
+    /// the border faces ([`BoundaryFace::on_bounds`]) are clipped against
+    /// the regions across, the others kept. The same exact surface as
+    /// [`Octree::cell_surface`] (empty when `key` is not a leaf), possibly
+    /// in different pieces.
+    #[must_use]
+    pub fn cell_surface_from(&self, key: CellKey, faces: Vec<BoundaryFace>) -> Vec<BoundaryFace> {
+        if self.leaf(key).is_none() {
+            return Vec::new();
+        }
+        let cell = self.cell_box(key);
+        let mut out = Vec::with_capacity(faces.len());
+        for face in faces {
+            if face.on_bounds {
+                let label = face.label;
+                self.clip_across(face.into_polygon(), label, &cell, &mut out);
             } else {
                 out.push(face);
             }
@@ -66,8 +94,21 @@ impl Octree {
             .collect()
     }
 
-    /// Clips a border face of solid `label` against the region across it.
-    fn clip_across(&self, polygon: Polygon, label: Label, out: &mut Vec<BoundaryFace>) {
+    /// Clips a border face of solid `label` on the box `from` (the leaf it
+    /// belongs to) against the region across it.
+    ///
+    /// Descending, a piece is split by an axis plane only where that plane
+    /// crosses the box range known to hold the piece (`from`'s, narrowed by
+    /// earlier splits): elsewhere the split would return the piece whole,
+    /// to the same side, so the pieces and their order are those of
+    /// splitting at every axis plane.
+    fn clip_across(
+        &self,
+        polygon: Polygon,
+        label: Label,
+        from: &CellBox,
+        out: &mut Vec<BoundaryFace>,
+    ) {
         let mut emit = |piece: Polygon, other: Label| {
             if other < label {
                 out.push(BoundaryFace::new(piece, label, other, false));
@@ -78,26 +119,37 @@ impl Octree {
             emit(polygon, EMPTY);
             return;
         }
-        let mut stack: Vec<(&OctNode, CellBox, Polygon)> = vec![(&self.root, root, polygon)];
-        while let Some((node, cell, polygon)) = stack.pop() {
+        let facing = Facing::of(&polygon.support, from);
+        let mut stack: Vec<(&OctNode, CellBox, Polygon, CellBox)> =
+            vec![(&self.root, root, polygon, *from)];
+        // The pieces of one inner cell, axis by axis (reused).
+        let (mut pieces, mut next) = (Vec::new(), Vec::new());
+        while let Some((node, cell, polygon, range)) = stack.pop() {
             match node {
                 OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
                 OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, &mut emit),
                 OctNode::Inner(children) => {
                     let mid = cell.mid();
-                    let mut pieces = vec![(polygon, 0usize)];
+                    pieces.push((polygon, range, 0usize));
                     for (axis, &m) in mid.iter().enumerate() {
-                        let plane = axis_plane(axis, m);
-                        let mut next = Vec::with_capacity(2 * pieces.len());
-                        for (piece, bits) in pieces {
-                            let (below, above) = piece.split(&plane);
-                            next.extend(below.map(|p| (p, bits)));
-                            next.extend(above.map(|p| (p, bits | 1 << axis)));
+                        for (piece, range, bits) in pieces.drain(..) {
+                            match facing.side(axis, m, &range) {
+                                Some(false) => next.push((piece, range, bits)),
+                                Some(true) => next.push((piece, range, bits | 1 << axis)),
+                                None => {
+                                    let (below, above) = piece.split(&axis_plane(axis, m));
+                                    let (mut rb, mut ra) = (range, range);
+                                    rb.max[axis] = rb.max[axis].min(m);
+                                    ra.min[axis] = ra.min[axis].max(m);
+                                    next.extend(below.map(|p| (p, rb, bits)));
+                                    next.extend(above.map(|p| (p, ra, bits | 1 << axis)));
+                                }
+                            }
                         }
-                        pieces = next;
+                        std::mem::swap(&mut pieces, &mut next);
                     }
-                    for (piece, i) in pieces {
-                        stack.push((&children[i], cell.child(i), piece));
+                    for (piece, range, i) in pieces.drain(..) {
+                        stack.push((&children[i], cell.child(i), piece, range));
                     }
                 }
             }
@@ -110,6 +162,52 @@ fn axis_plane(axis: usize, at: i64) -> Plane {
     let mut n = [0i64; 3];
     n[axis] = 1;
     Plane::new(n[0], n[1], n[2], -i128::from(at)).expect("cell coordinates are in range")
+}
+
+/// Where a border face lies: the axis its plane is normal to and whether
+/// it faces the positive direction, or nothing known (every axis plane
+/// then splits exactly).
+#[derive(Clone, Copy)]
+struct Facing(Option<(usize, bool)>);
+
+impl Facing {
+    /// The facing of a face with support `plane` lying on the box `from`.
+    fn of(plane: &Plane, from: &CellBox) -> Self {
+        let n = plane.normal();
+        let axes: Vec<usize> = (0..3).filter(|&a| n[a] != 0).collect();
+        let [axis] = axes[..] else {
+            return Self(None);
+        };
+        let positive = n[axis] > 0;
+        // n_a·x + d = 0 must be the box's own face on that side.
+        let at = if positive {
+            from.max[axis]
+        } else {
+            from.min[axis]
+        };
+        let on_box = i128::from(n[axis]) * i128::from(at) + plane.offset() == 0;
+        Self(on_box.then_some((axis, positive)))
+    }
+
+    /// The side of the plane `x_axis = m` (`true` above) that a piece of
+    /// the face within `range` goes to whole, or `None` when the plane may
+    /// cut it.
+    fn side(self, axis: usize, m: i64, range: &CellBox) -> Option<bool> {
+        let (a, positive) = self.0?;
+        if axis == a {
+            // The face lies in x_a = its box side: in the plane it goes to
+            // the side it faces.
+            let c = if positive { range.max[a] } else { range.min[a] };
+            return Some(if c == m { positive } else { c > m });
+        }
+        if range.max[axis] <= m {
+            Some(false)
+        } else if range.min[axis] >= m {
+            Some(true)
+        } else {
+            None
+        }
+    }
 }
 
 /// Whether a plane is one of the faces of `cube`, oriented outward.

@@ -16,10 +16,26 @@
 //! The cells form a stack: a cell is dead once the recursion below it
 //! returns, so everything a recursion adds to the arena is discarded when
 //! it returns, and the arena stays as small as one root-to-leaf path.
+//!
+//! [`Bsp::merge_cells`] keeps the cells instead: each output leaf's cell,
+//! exactly as [`Bsp::cells`] of the result would cut it, for the redundancy
+//! removal that follows (§3.7: "the merge procedure already produces a
+//! convex cell for each leaf node"). The cuts are the same ones in the same
+//! order, so the cells are identical element for element; two things need
+//! care:
+//! - Tags. A cap faces the sibling subtree's node. The upper part's sibling
+//!   is the split's lower child, always the next node; the lower part's
+//!   sibling, the upper child, is numbered only after the lower recursion,
+//!   so its caps carry a pending tag (the split node, marked) that is
+//!   resolved once the tree is complete.
+//! - Collapsed splits. Their cell is the uncut one, so every proper cut
+//!   first copies its cell ([`Survey::copy`]); when the split collapses, the
+//!   pieces are discarded and the copy becomes the leaf's cell.
 
 use std::collections::HashMap;
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
+use super::cells::{Cell, Reach, Survey};
 use crate::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
 use crate::exact::Plane;
 
@@ -101,7 +117,23 @@ struct Merger<'a> {
     /// palette is hashed once per input plane rather than once per split.
     known: Vec<u32>,
     nodes: Vec<Node>,
+    /// The output leaves' cells when they are kept ([`Bsp::merge_cells`]).
+    cells: Option<KeptCells>,
 }
+
+/// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
+/// copies.
+struct KeptCells {
+    cells: Vec<Cell>,
+    survey: Survey,
+    /// The cell `survey` describes, while it is unchanged: a cell that
+    /// does not cut properly is tested against the next plane as it is.
+    surveyed: Option<PolyId>,
+}
+
+/// Marks a pending tag: the upper child of the split node in the low bits,
+/// numbered once the lower recursion has returned.
+const PENDING: u32 = 1 << 31;
 
 /// An input plane: its slot in [`Merger::known`] and the plane.
 #[derive(Clone, Copy)]
@@ -133,7 +165,7 @@ impl<'a> Merger<'a> {
             // Where the label does not depend on B, inserting B would only
             // make splits that all collapse into this one leaf.
             Node::Leaf(label) => match self.op.regardless_of_b(label) {
-                Some(label) => self.push(Node::Leaf(label)),
+                Some(label) => self.leaf(label, cell),
                 None => self.insert_b(0, cell, label),
             },
             Node::Split {
@@ -154,7 +186,7 @@ impl<'a> Merger<'a> {
     /// `a`; returns its node.
     fn insert_b(&mut self, n: NodeId, cell: PolyId, a: Label) -> NodeId {
         match self.b.nodes()[n as usize] {
-            Node::Leaf(b) => self.push(Node::Leaf(self.op.apply(a, b))),
+            Node::Leaf(b) => self.leaf(self.op.apply(a, b), cell),
             Node::Split {
                 plane,
                 below,
@@ -177,17 +209,28 @@ impl<'a> Merger<'a> {
         cell: PolyId,
         below: NodeId,
         above: NodeId,
-        step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
+        mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
+        if self.cells.is_some() {
+            return self.split_keeping(s, cell, below, above, step);
+        }
         let mark = self.arena.mark();
-        let node = self.split_cell(s, cell, below, above, step);
+        let node = match self.arena.cut(cell, s.plane, NO_TAG, NO_TAG) {
+            CutOutcome::Below => step(self, below, cell),
+            CutOutcome::Above => step(self, above, cell),
+            CutOutcome::Split {
+                below: cb,
+                above: ca,
+            } => self.proper(s, (cb, ca), below, above, step).0,
+        };
         // The cell and all its pieces are dead now.
         self.arena.release_to(mark);
         node
     }
 
-    /// [`Merger::split`] before the arena is released.
-    fn split_cell(
+    /// [`Merger::split`] keeping the output leaves' cells: a proper cut
+    /// copies the cell first, for the case that the split collapses.
+    fn split_keeping(
         &mut self,
         s: InputPlane<'a>,
         cell: PolyId,
@@ -195,32 +238,87 @@ impl<'a> Merger<'a> {
         above: NodeId,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
-        match self.arena.cut(cell, s.plane, NO_TAG, NO_TAG) {
-            CutOutcome::Below => step(self, below, cell),
-            CutOutcome::Above => step(self, above, cell),
-            CutOutcome::Split {
-                below: cb,
-                above: ca,
-            } => {
-                let plane = self.plane(s);
-                let node = self.push(Node::Leaf(EMPTY));
-                let b = step(self, below, cb);
-                let a = step(self, above, ca);
-                self.nodes[node as usize] = match (self.nodes[b as usize], self.nodes[a as usize]) {
-                    // Equal leaves on both sides: the plane separates nothing.
-                    (Node::Leaf(x), Node::Leaf(y)) if x == y => {
-                        self.nodes.truncate(node as usize);
-                        return self.push(Node::Leaf(x));
-                    }
-                    _ => Node::Split {
-                        plane,
-                        below: b,
-                        above: a,
-                    },
-                };
-                node
-            }
+        let kept = self.cells.as_mut().expect("cells are kept");
+        // A cut changes the cell in place: a proper one is found first and
+        // the cell copied before it, for the case that the split collapses.
+        if kept.surveyed != Some(cell) {
+            kept.survey.survey(self.arena, cell);
+            kept.surveyed = Some(cell);
         }
+        match kept.survey.reach(self.arena, s.plane) {
+            Reach::Below => return step(self, below, cell),
+            Reach::Above => return step(self, above, cell),
+            Reach::Both => {}
+        }
+        let whole = kept.survey.copy(self.arena, cell);
+        // The cut changes the cell, and a collapse below releases pieces.
+        kept.surveyed = None;
+        let first_cell = kept.cells.len();
+        let after_copy = self.arena.mark();
+        let node = self.nodes.len() as NodeId;
+        let CutOutcome::Split {
+            below: cb,
+            above: ca,
+        } = self.arena.cut(cell, s.plane, PENDING | node, node + 1)
+        else {
+            unreachable!("vertices on both sides")
+        };
+        let (node, collapsed) = self.proper(s, (cb, ca), below, above, step);
+        if let Some(label) = collapsed {
+            // The pieces are dead; the uncut copy is the leaf's cell.
+            self.arena.release_to(after_copy);
+            let kept = self.cells.as_mut().expect("cells are kept");
+            kept.surveyed = None;
+            kept.cells.truncate(first_cell);
+            kept.cells.push(Cell {
+                poly: whole,
+                leaf: node,
+                label,
+            });
+        }
+        node
+    }
+
+    /// The split for a proper cut into `cb` below and `ca` above, or the
+    /// leaf it collapses into (then also its label).
+    fn proper(
+        &mut self,
+        s: InputPlane<'a>,
+        (cb, ca): (PolyId, PolyId),
+        below: NodeId,
+        above: NodeId,
+        mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
+    ) -> (NodeId, Option<Label>) {
+        let plane = self.plane(s);
+        let node = self.push(Node::Leaf(EMPTY));
+        let b = step(self, below, cb);
+        let a = step(self, above, ca);
+        self.nodes[node as usize] = match (self.nodes[b as usize], self.nodes[a as usize]) {
+            // Equal leaves on both sides: the plane separates nothing.
+            (Node::Leaf(x), Node::Leaf(y)) if x == y => {
+                self.nodes.truncate(node as usize);
+                return (self.push(Node::Leaf(x)), Some(x));
+            }
+            _ => Node::Split {
+                plane,
+                below: b,
+                above: a,
+            },
+        };
+        (node, None)
+    }
+
+    /// Appends a leaf, keeping its cell when cells are kept.
+    fn leaf(&mut self, label: Label, cell: PolyId) -> NodeId {
+        let leaf = self.push(Node::Leaf(label));
+        if let Some(kept) = &mut self.cells {
+            kept.cells.push(Cell {
+                poly: cell,
+                leaf,
+                label,
+            });
+        }
+        leaf
     }
 
     fn push(&mut self, node: Node) -> NodeId {
@@ -243,7 +341,50 @@ impl Bsp {
         arena: &mut ConvexArena,
         bounds: PolyId,
     ) -> Bsp {
-        let mut merger = Merger {
+        self.merger(other, op, arena, None).run(bounds).0
+    }
+
+    /// [`Bsp::merge`], also returning the result's cells inside `bounds`,
+    /// left in `arena`: the same list, polyhedron for polyhedron and tag for
+    /// tag, as [`Bsp::cells`] of the result would cut from `bounds` (but
+    /// without cutting again).
+    #[must_use]
+    pub fn merge_cells(
+        &self,
+        other: &Bsp,
+        op: BooleanOp,
+        arena: &mut ConvexArena,
+        bounds: PolyId,
+    ) -> (Bsp, Vec<Cell>) {
+        let kept = KeptCells {
+            cells: Vec::new(),
+            survey: Survey::default(),
+            surveyed: None,
+        };
+        let first_face = arena.faces().len();
+        let (bsp, cells) = self.merger(other, op, arena, Some(kept)).run(bounds);
+        // Resolve the pending tags. Every face since the start is scanned,
+        // discarded copies included: a pending tag of a discarded face may
+        // name a node that is gone, and is left as it is.
+        for face in &mut arena.faces[first_face..] {
+            if face.tag != NO_TAG && face.tag & PENDING != 0 {
+                let split = (face.tag & !PENDING) as usize;
+                if let Some(Node::Split { above, .. }) = bsp.nodes().get(split) {
+                    face.tag = *above;
+                }
+            }
+        }
+        (bsp, cells.map(|k| k.cells).unwrap_or_default())
+    }
+
+    fn merger<'a>(
+        &'a self,
+        other: &'a Bsp,
+        op: BooleanOp,
+        arena: &'a mut ConvexArena,
+        cells: Option<KeptCells>,
+    ) -> Merger<'a> {
+        Merger {
             a: self,
             b: other,
             op,
@@ -252,12 +393,19 @@ impl Bsp {
             plane_index: HashMap::new(),
             known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
-        };
+            cells,
+        }
+    }
+}
+
+impl Merger<'_> {
+    /// The merged tree (and the kept cells).
+    fn run(mut self, bounds: PolyId) -> (Bsp, Option<KeptCells>) {
         // Nodes are appended in depth-first order, so the first one is the
         // root (a collapsed split is replaced in place).
-        let root = merger.merge_a(0, bounds);
+        let root = self.merge_a(0, bounds);
         debug_assert_eq!(root, 0);
-        Bsp::from_parts(merger.planes, merger.nodes)
+        (Bsp::from_parts(self.planes, self.nodes), self.cells)
     }
 }
 

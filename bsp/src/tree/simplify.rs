@@ -16,8 +16,10 @@
 //! `K`, so the whole cell has that label. With no face inside `K`, all of
 //! `K` has one label, read off any cell.
 
-use super::boundary::Bounds;
+use super::boundary::{BoundaryFace, Bounds};
 use super::bsp::{Bsp, EMPTY};
+use super::cells::Cell;
+use super::merge::BooleanOp;
 use crate::convex::{ConvexArena, PolyId};
 
 /// Seed of the face order in rebuilt BSPs: fixed, so that rebuilding is a
@@ -32,8 +34,56 @@ impl Bsp {
     #[must_use]
     pub fn simplified(&self, arena: &mut ConvexArena, bounds: PolyId) -> Bsp {
         let cells = self.cells(arena, bounds);
+        self.rebuilt(arena, &cells)
+    }
+
+    /// `(self op other).simplified(…)` inside `bounds` (a polyhedron of
+    /// `arena`, used up), equal to [`Bsp::merge`] followed by
+    /// [`Bsp::simplified`] but without cutting the merged tree's cells a
+    /// second time: the merge keeps them ([`Bsp::merge_cells`]).
+    #[must_use]
+    pub fn merge_simplified(
+        &self,
+        other: &Bsp,
+        op: BooleanOp,
+        arena: &mut ConvexArena,
+        bounds: PolyId,
+    ) -> Bsp {
+        let (merged, cells) = self.merge_cells(other, op, arena, bounds);
+        merged.rebuilt(arena, &cells)
+    }
+
+    /// [`Bsp::merge_simplified`], also returning the merged tree's boundary
+    /// inside `bounds` that the rebuild starts from, with the faces on the
+    /// bounds ([`Bsp::boundary`] of the result, in other pieces).
+    pub(crate) fn merge_simplified_faces(
+        &self,
+        other: &Bsp,
+        op: BooleanOp,
+        arena: &mut ConvexArena,
+        bounds: PolyId,
+    ) -> (Bsp, Vec<BoundaryFace>) {
+        let (merged, cells) = self.merge_cells(other, op, arena, bounds);
+        let faces = merged.boundary_of_cells(arena, &cells, Bounds::Keep);
+        // The same faces in the same order as with `Bounds::Skip`.
+        let polygons: Vec<_> = faces
+            .iter()
+            .filter(|f| !f.on_bounds)
+            .map(|f| (f.polygon(), f.label, f.outside))
+            .collect();
+        let rebuilt = if polygons.is_empty() {
+            Bsp::uniform(cells.first().map_or(EMPTY, |c| c.label))
+        } else {
+            Bsp::from_polygons(polygons, REBUILD_SEED)
+        };
+        (rebuilt, faces)
+    }
+
+    /// The rebuild from `self`'s cells inside some bounds (from
+    /// [`Bsp::cells`] or [`Bsp::merge_cells`] on `arena`).
+    fn rebuilt(&self, arena: &ConvexArena, cells: &[Cell]) -> Bsp {
         let uniform = cells.first().map_or(EMPTY, |c| c.label);
-        let faces = self.boundary_of_cells(arena, &cells, Bounds::Skip);
+        let faces = self.boundary_of_cells(arena, cells, Bounds::Skip);
         if faces.is_empty() {
             return Bsp::uniform(uniform);
         }

@@ -2,21 +2,36 @@
 //! (what a game re-meshes), and the whole surface once at the end.
 
 use chisel_bsp::mesh::{SurfaceMesh, TriangleMesh};
-use chisel_bsp::octree::{CellKey, Octree};
+use chisel_bsp::octree::{CellFaces, CellKey, Octree};
+use chisel_bsp::tree::BoundaryFace;
 use rayon::prelude::*;
 
 /// What the per-step latency includes, for reports.
-pub const PER_STEP: &str =
-    "tool hull + apply + for every changed cell: cell_surface, welding, T-junctions, triangles";
+pub const PER_STEP: &str = "tool hull + apply (keeping the rebuilt cells' faces) + for every changed cell: \
+     its surface (cell_surface_from, else cell_surface), welding, T-junctions, triangles";
 
 /// Re-extracts the triangles of every cell in `keys` (cells in parallel),
-/// as a game rebuilds the meshes of the cells an edit changed; returns the
+/// as a game rebuilds the meshes of the cells an edit changed; `faces` are
+/// the faces [`Octree::apply_with_faces`] handed back (sorted by key): a
+/// cell listed there finishes from them, the others (cells that only touch
+/// the tool, new children of a split) are extracted afresh. Returns the
 /// number of triangles.
 #[must_use]
-pub fn changed_cells(octree: &Octree, keys: &[CellKey]) -> usize {
-    keys.par_iter()
+pub fn changed_cells(octree: &Octree, keys: &[CellKey], faces: CellFaces) -> usize {
+    let mut faces = faces.into_iter().peekable();
+    let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> = keys
+        .iter()
         .map(|&key| {
-            let faces = octree.cell_surface(key);
+            while faces.next_if(|(k, _)| *k < key).is_some() {}
+            (key, faces.next_if(|(k, _)| *k == key).map(|(_, f)| f))
+        })
+        .collect();
+    jobs.into_par_iter()
+        .map(|(key, faces)| {
+            let faces = match faces {
+                Some(faces) => octree.cell_surface_from(key, faces),
+                None => octree.cell_surface(key),
+            };
             if faces.is_empty() {
                 return 0;
             }

@@ -209,9 +209,11 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
             .collect::<Result<Vec<_>, _>>()?;
         let tool = Tool::convex_hull(&points).map_err(fail)?;
         let built = t0.elapsed().as_secs_f64();
-        let changes = octree.apply(&tool, step.op.edit()).map_err(fail)?;
+        let (changes, faces) = octree
+            .apply_with_faces(&tool, step.op.edit())
+            .map_err(fail)?;
         let applied = t0.elapsed().as_secs_f64();
-        let triangles = extract::changed_cells(&octree, &changes.changed);
+        let triangles = extract::changed_cells(&octree, &changes.changed, faces);
         records.push(StepRecord {
             seconds: t0.elapsed().as_secs_f64(),
             hull_seconds: built,
