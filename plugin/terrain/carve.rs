@@ -18,7 +18,7 @@
 //!    ([`TerrainSettings::mesh_budget`]) is spent, writes a [`TerrainCellChanged`] per cell and, once a carve is fully
 //!    visible, its [`CarveApplied`].
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -26,11 +26,12 @@ use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, futures::check_ready};
 use chisel_bsp::octree::{CellKey, Changes, Edit, Octree};
 use chisel_bsp::tools::Quantization;
+use chisel_bsp::tree::BoundaryFace;
 use rayon::prelude::*;
 
-use super::component::{Job, Terrain, TerrainCell, TerrainMaterials, apply_carve};
+use super::component::{Job, Terrain, TerrainCell, TerrainMaterials, apply_carve_with_faces};
 use super::error::TerrainError;
-use super::mesh::{ReadyMesh, cell_meshes, cell_translation};
+use super::mesh::{ReadyMesh, cell_meshes, cell_meshes_from, cell_translation};
 use super::tool::{CarveTool, GridTool};
 
 /// Carve a terrain: remove material inside the tool, add material to its
@@ -255,7 +256,9 @@ pub fn start_jobs(
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                on_pool(pool, || remesh(octree, quantization, Vec::new(), keys))
+                on_pool(pool, || {
+                    remesh(octree, quantization, Vec::new(), keys, BTreeMap::new())
+                })
             }));
             continue;
         }
@@ -266,7 +269,9 @@ pub fn start_jobs(
                     let octree = terrain.octree.clone();
                     let steps = vec![StepOutcome::Undone { requested }];
                     terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                        on_pool(pool, || remesh(octree, quantization, steps, keys))
+                        on_pool(pool, || {
+                            remesh(octree, quantization, steps, keys, BTreeMap::new())
+                        })
                     }));
                 }
                 Err(error) => {
@@ -312,11 +317,19 @@ fn carve_batch(
 ) -> JobOutput {
     let mut steps = Vec::with_capacity(batch.len());
     let mut keys = Vec::new();
+    // The latest faces handed back for each cell whose content a carve of
+    // the batch replaced; a later carve that changes the cell otherwise
+    // (relabels it, splits it, or only touches it) drops them.
+    let mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>> = BTreeMap::new();
     for (tool, edit, requested) in batch {
         let before = octree.clone();
         let start = Instant::now();
-        match apply_carve(&mut octree, &tool, edit) {
-            Ok(changes) => {
+        match apply_carve_with_faces(&mut octree, &tool, edit) {
+            Ok((changes, faces)) => {
+                for key in changes.changed.iter().chain(&changes.removed) {
+                    fresh.remove(key);
+                }
+                fresh.extend(faces);
                 keys.extend(changes.changed.iter().copied());
                 keys.extend(changes.removed.iter().copied());
                 steps.push(StepOutcome::Applied {
@@ -331,27 +344,35 @@ fn carve_batch(
             Err(error) => steps.push(StepOutcome::Rejected { error }),
         }
     }
-    remesh(octree, quantization, steps, keys)
+    remesh(octree, quantization, steps, keys, fresh)
 }
 
-/// Meshes `keys` of `octree` (a key that is no longer a leaf gets `None`).
+/// Meshes `keys` of `octree` (a key that is no longer a leaf gets `None`),
+/// from the faces in `fresh` where a carve handed them back.
 fn remesh(
     octree: Octree,
     quantization: Quantization,
     steps: Vec<StepOutcome>,
     keys: Vec<CellKey>,
+    mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
 ) -> JobOutput {
     let start = Instant::now();
     let keys: BTreeSet<CellKey> = keys.into_iter().collect();
-    let keys: Vec<CellKey> = keys.into_iter().collect();
-    let meshes = keys
-        .par_iter()
-        .map(|&key| {
+    let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> = keys
+        .into_iter()
+        .map(|key| (key, fresh.remove(&key)))
+        .collect();
+    let meshes = jobs
+        .into_par_iter()
+        .map(|(key, faces)| {
             let meshes = octree.leaf(key).map(|_| {
-                cell_meshes(&octree, &quantization, key)
-                    .into_iter()
-                    .map(ReadyMesh::from)
-                    .collect()
+                match faces {
+                    Some(faces) => cell_meshes_from(&octree, &quantization, key, faces),
+                    None => cell_meshes(&octree, &quantization, key),
+                }
+                .into_iter()
+                .map(ReadyMesh::from)
+                .collect()
             });
             (key, meshes)
         })

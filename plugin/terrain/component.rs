@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use bevy::prelude::*;
 use bevy::tasks::Task;
-use chisel_bsp::octree::{CellKey, Changes, Edit, Octree, OctreeConfig};
+use chisel_bsp::octree::{CellFaces, CellKey, Changes, Edit, Octree, OctreeConfig, Tool};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::Label;
 
@@ -243,6 +243,28 @@ pub fn apply_carve(
     tool: &GridTool,
     edit: Edit,
 ) -> Result<Changes, TerrainError> {
+    let built = built_inside(octree, tool)?;
+    Ok(octree.apply(&built, edit)?)
+}
+
+/// [`apply_carve`], also handing back the boundary faces of the cells whose
+/// content the carve replaced ([`Octree::apply_with_faces`]), from which
+/// [`super::mesh::cell_meshes_from`] meshes those cells without cutting
+/// their BSPs again.
+///
+/// # Errors
+/// As [`apply_carve`]; the octree is unchanged on error.
+pub fn apply_carve_with_faces(
+    octree: &mut Octree,
+    tool: &GridTool,
+    edit: Edit,
+) -> Result<(Changes, CellFaces), TerrainError> {
+    let built = built_inside(octree, tool)?;
+    Ok(octree.apply_with_faces(&built, edit)?)
+}
+
+/// The exact tool, checked to reach into the octree's cube.
+fn built_inside(octree: &Octree, tool: &GridTool) -> Result<Tool, TerrainError> {
     let built = tool.build()?;
     let bounds = built.bounds();
     if !bounds.overlaps(&octree.root_box()) {
@@ -251,7 +273,7 @@ pub fn apply_carve(
             tool_max: bounds.max,
         });
     }
-    Ok(octree.apply(&built, edit)?)
+    Ok(built)
 }
 
 /// One entity showing the surface of one material in one leaf cell; a

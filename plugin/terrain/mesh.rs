@@ -10,7 +10,7 @@ use bevy::prelude::*;
 use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{CellKey, Octree};
 use chisel_bsp::tools::Quantization;
-use chisel_bsp::tree::{EMPTY, Label};
+use chisel_bsp::tree::{BoundaryFace, EMPTY, Label};
 
 /// The triangles of one material in one cell, flat shaded: vertex `3t..3t+3`
 /// is triangle `t`, each with its face's exact normal.
@@ -79,7 +79,34 @@ impl From<CellMesh> for ReadyMesh {
 /// `f32`: the error is about `2^-24` of the cell's edge.
 #[must_use]
 pub fn cell_meshes(octree: &Octree, quantization: &Quantization, key: CellKey) -> Vec<CellMesh> {
-    let faces = octree.cell_surface(key);
+    meshes_of_surface(octree, quantization, key, octree.cell_surface(key))
+}
+
+/// [`cell_meshes`] from the boundary faces a carve handed back for `key`
+/// ([`Octree::apply_with_faces`]): the same surface without cutting the
+/// cell's BSP again (possibly split into different triangles).
+#[must_use]
+pub fn cell_meshes_from(
+    octree: &Octree,
+    quantization: &Quantization,
+    key: CellKey,
+    faces: Vec<BoundaryFace>,
+) -> Vec<CellMesh> {
+    meshes_of_surface(
+        octree,
+        quantization,
+        key,
+        octree.cell_surface_from(key, faces),
+    )
+}
+
+/// One mesh per material of a cell's surface pieces.
+fn meshes_of_surface(
+    octree: &Octree,
+    quantization: &Quantization,
+    key: CellKey,
+    faces: Vec<BoundaryFace>,
+) -> Vec<CellMesh> {
     if faces.is_empty() {
         return Vec::new();
     }

@@ -73,7 +73,9 @@ pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
     Carve, CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings, UndoCarve,
 };
-pub use component::{JournalEntry, Terrain, TerrainCell, TerrainMaterials, apply_carve};
+pub use component::{
+    JournalEntry, Terrain, TerrainCell, TerrainMaterials, apply_carve, apply_carve_with_faces,
+};
 pub use error::TerrainError;
 pub use mesh::CellMesh;
 pub use raycast::TerrainHit;
