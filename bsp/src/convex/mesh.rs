@@ -158,10 +158,34 @@ impl ConvexArena {
         );
     }
 
-    /// All vertices (of every polyhedron in the arena).
+    /// The number of vertices (of every polyhedron in the arena); vertex
+    /// ids are below it.
     #[must_use]
-    pub fn vertices(&self) -> &[Vertex] {
-        &self.vertices
+    #[inline]
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// The exact position of vertex `v`.
+    #[must_use]
+    #[inline]
+    pub fn point(&self, v: u32) -> &Point4 {
+        &self.vertices[v as usize].point
+    }
+
+    /// The position of vertex `v` in `f64` (for export and display only;
+    /// see [`Point4::to_f64`]).
+    #[must_use]
+    #[inline]
+    pub fn position(&self, v: u32) -> [f64; 3] {
+        self.point(v).to_f64()
+    }
+
+    /// A half-edge leaving vertex `v`.
+    #[must_use]
+    #[inline]
+    pub fn vertex_half_edge(&self, v: u32) -> u32 {
+        self.vertices[v as usize].half_edge
     }
 
     /// All half-edges.
@@ -174,6 +198,13 @@ impl ConvexArena {
     #[must_use]
     pub fn faces(&self) -> &[Face] {
         &self.faces
+    }
+
+    /// The supporting plane of face `f`, positive side outside.
+    #[must_use]
+    #[inline]
+    pub fn face_plane(&self, f: u32) -> &Plane {
+        &self.faces[f as usize].plane
     }
 
     /// The axis-aligned box `[min, max]` as a polyhedron with six faces.
