@@ -5,7 +5,7 @@
 
 mod common;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
+use chisel_bsp::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane, Sign, classify_vertex, plane_from_points};
 use common::volume::volume;
 use rand::{Rng, SeedableRng};
@@ -33,10 +33,16 @@ fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> 
     let before = sides(arena, poly, s);
     let volume_before = volume(arena, poly);
     let mut reference = arena.clone();
+    let one_sided = [Part::Below, Part::Above].map(|part| {
+        let mut copy = arena.clone();
+        let kept = copy.cut_keeping(poly, s, part, NO_TAG);
+        (copy, kept)
+    });
     let expected = reference.cut_naive(poly, s, NO_TAG, NO_TAG);
     let outcome = arena.cut(poly, s, NO_TAG, NO_TAG);
     assert_eq!(outcome, expected, "edge descent and classify-all disagree");
     assert_same_arena(arena, &reference);
+    assert_one_sided_cuts_agree(arena, outcome, &one_sided);
     let has = |x| before.contains(&x);
     match outcome {
         CutOutcome::Above => {
@@ -73,6 +79,30 @@ fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> 
             let a = arena.vertices_of(below);
             assert!(arena.vertices_of(above).iter().all(|v| !a.contains(v)));
             vec![below, above]
+        }
+    }
+}
+
+/// Each one-sided cut has the outcome of the two-sided cut and builds the
+/// same part, element for element once extracted.
+fn assert_one_sided_cuts_agree(
+    arena: &ConvexArena,
+    outcome: CutOutcome,
+    one_sided: &[(ConvexArena, KeptOutcome); 2],
+) {
+    for (k, (copy, kept)) in one_sided.iter().enumerate() {
+        match (outcome, *kept) {
+            (CutOutcome::Below, KeptOutcome::Below) | (CutOutcome::Above, KeptOutcome::Above) => {}
+            (CutOutcome::Split { below, above }, KeptOutcome::Cut(id)) => {
+                copy.validate(id)
+                    .unwrap_or_else(|e| panic!("one-sided part {k}: {e}"));
+                let part = [below, above][k];
+                let (a, ia) = copy.extract(id);
+                let (b, ib) = arena.extract(part);
+                assert_eq!(ia, ib);
+                assert_same_arena(&a, &b);
+            }
+            _ => panic!("one-sided cut {k}: {kept:?}, two-sided: {outcome:?}"),
         }
     }
 }

@@ -5,6 +5,13 @@
 //! around `face(h)` seen from outside; a face's plane has its positive side
 //! outside the polyhedron, so the interior is where every face plane is
 //! negative.
+//!
+//! Layout: the exact positions ([`Point4`], 152 bytes) and the face planes
+//! ([`Plane`], 80 bytes) live in their own arrays, `points` and `planes`,
+//! named by index from the small vertex and face records. Splitting a face
+//! or duplicating a section vertex for the upper part of a cut copies an
+//! index, never the exact data; a point or plane may be shared by several
+//! records (the copies of a section vertex, the halves of a split face).
 
 use std::collections::{HashMap, HashSet};
 
@@ -16,13 +23,14 @@ use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes};
 /// Tag of a face with no opposite BSP node.
 pub const NO_TAG: u32 = u32::MAX;
 
-/// A vertex: its exact position and one half-edge leaving it.
+/// A vertex: its exact position (an index into the arena's points) and one
+/// half-edge leaving it.
 #[derive(Clone, Copy, Debug)]
-pub struct Vertex {
-    /// Exact homogeneous position.
-    pub point: Point4,
+pub(crate) struct Vertex {
+    /// Index of its exact homogeneous position in `ConvexArena::points`.
+    pub(crate) point: u32,
     /// A half-edge whose origin is this vertex.
-    pub half_edge: u32,
+    pub(crate) half_edge: u32,
 }
 
 /// A directed edge of one face.
@@ -38,11 +46,12 @@ pub struct HalfEdge {
     pub face: u32,
 }
 
-/// A planar convex face.
+/// A planar convex face; its plane is [`ConvexArena::face_plane`].
 #[derive(Clone, Copy, Debug)]
 pub struct Face {
-    /// Supporting plane, positive side outside.
-    pub plane: Plane,
+    /// Index of its supporting plane (positive side outside) in the
+    /// arena's plane array.
+    pub(crate) plane: u32,
     /// One half-edge of the face.
     pub half_edge: u32,
     /// The BSP node on the other side of the face, or [`NO_TAG`].
@@ -59,8 +68,10 @@ impl Clone for ConvexArena {
     fn clone(&self) -> Self {
         Self {
             vertices: self.vertices.clone(),
+            points: self.points.clone(),
             half_edges: self.half_edges.clone(),
             faces: self.faces.clone(),
+            planes: self.planes.clone(),
             scratch: None,
         }
     }
@@ -74,8 +85,10 @@ impl Drop for ConvexArena {
         }
         pool::keep_spare(pool::Arrays {
             vertices: std::mem::take(&mut self.vertices),
+            points: std::mem::take(&mut self.points),
             half_edges: std::mem::take(&mut self.half_edges),
             faces: std::mem::take(&mut self.faces),
+            planes: std::mem::take(&mut self.planes),
             scratch: self.scratch.take(),
         });
     }
@@ -86,16 +99,22 @@ impl Drop for ConvexArena {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct ArenaMark {
     vertices: usize,
+    points: usize,
     half_edges: usize,
     faces: usize,
+    planes: usize,
 }
 
 /// Flat storage for half-edge meshes of convex polyhedra.
 #[derive(Debug, Default)]
 pub struct ConvexArena {
     pub(crate) vertices: Vec<Vertex>,
+    /// Exact vertex positions, named by [`Vertex::point`].
+    pub(crate) points: Vec<Point4>,
     pub(crate) half_edges: Vec<HalfEdge>,
     pub(crate) faces: Vec<Face>,
+    /// Face planes, named by [`Face::plane`].
+    pub(crate) planes: Vec<Plane>,
     /// Reused working memory of the cuts (no part of the geometry), boxed
     /// so that lending it to a cut moves a pointer.
     pub(crate) scratch: Option<Box<Scratch>>,
@@ -109,8 +128,10 @@ impl ConvexArena {
         match pool::take_spare() {
             Some(arrays) => Self {
                 vertices: arrays.vertices,
+                points: arrays.points,
                 half_edges: arrays.half_edges,
                 faces: arrays.faces,
+                planes: arrays.planes,
                 scratch: arrays.scratch,
             },
             None => Self::default(),
@@ -120,8 +141,10 @@ impl ConvexArena {
     /// Removes every polyhedron, keeping the memory.
     pub fn clear(&mut self) {
         self.vertices.clear();
+        self.points.clear();
         self.half_edges.clear();
         self.faces.clear();
+        self.planes.clear();
     }
 
     /// The current sizes, for [`ConvexArena::release_to`].
@@ -130,8 +153,10 @@ impl ConvexArena {
     pub(crate) fn mark(&self) -> ArenaMark {
         ArenaMark {
             vertices: self.vertices.len(),
+            points: self.points.len(),
             half_edges: self.half_edges.len(),
             faces: self.faces.len(),
+            planes: self.planes.len(),
         }
     }
 
@@ -142,15 +167,20 @@ impl ConvexArena {
     #[inline]
     pub(crate) fn release_to(&mut self, mark: ArenaMark) {
         self.vertices.truncate(mark.vertices);
+        self.points.truncate(mark.points);
         self.half_edges.truncate(mark.half_edges);
         self.faces.truncate(mark.faces);
+        self.planes.truncate(mark.planes);
     }
 
-    /// Reserves room for `additional` more vertices, faces and (six times
-    /// as many) half-edges, so that the next cuts do not reallocate.
+    /// Reserves room for `additional` more vertices, points, faces and
+    /// planes and (six times as many) half-edges, so that the next cuts do
+    /// not reallocate.
     pub fn reserve(&mut self, additional: usize) {
         self.vertices.reserve(additional);
+        self.points.reserve(additional);
         self.faces.reserve(additional);
+        self.planes.reserve(additional);
         self.half_edges.reserve(6 * additional);
         self.scratch.get_or_insert_default().reserve(
             self.vertices.len() + additional,
@@ -170,7 +200,7 @@ impl ConvexArena {
     #[must_use]
     #[inline]
     pub fn point(&self, v: u32) -> &Point4 {
-        &self.vertices[v as usize].point
+        &self.points[self.vertices[v as usize].point as usize]
     }
 
     /// The position of vertex `v` in `f64` (for export and display only;
@@ -204,7 +234,27 @@ impl ConvexArena {
     #[must_use]
     #[inline]
     pub fn face_plane(&self, f: u32) -> &Plane {
-        &self.faces[f as usize].plane
+        &self.planes[self.faces[f as usize].plane as usize]
+    }
+
+    /// Adds a vertex at the new exact position `point`.
+    #[inline]
+    pub(crate) fn push_vertex(&mut self, point: Point4, half_edge: u32) -> u32 {
+        let v = self.vertices.len() as u32;
+        self.vertices.push(Vertex {
+            point: self.points.len() as u32,
+            half_edge,
+        });
+        self.points.push(point);
+        v
+    }
+
+    /// Adds `plane` to the plane array; returns its index for
+    /// [`Face::plane`].
+    #[inline]
+    pub(crate) fn push_plane(&mut self, plane: Plane) -> u32 {
+        self.planes.push(plane);
+        self.planes.len() as u32 - 1
     }
 
     /// The axis-aligned box `[min, max]` as a polyhedron with six faces.
@@ -261,10 +311,9 @@ impl ConvexArena {
     ) -> PolyId {
         let v0 = self.vertices.len() as u32;
         let h0 = self.half_edges.len() as u32;
-        self.vertices.extend(points.iter().map(|&point| Vertex {
-            point,
-            half_edge: u32::MAX,
-        }));
+        for &point in points {
+            self.push_vertex(point, u32::MAX);
+        }
         let mut by_ends: HashMap<(u32, u32), u32> = HashMap::new();
         for (plane, corners) in faces {
             let face = self.faces.len() as u32;
@@ -282,8 +331,9 @@ impl ConvexArena {
                 self.vertices[(v0 + c) as usize].half_edge = h;
                 by_ends.insert((c, to), h);
             }
+            let plane = self.push_plane(*plane);
             self.faces.push(Face {
-                plane: *plane,
+                plane,
                 half_edge: first,
                 tag: NO_TAG,
             });
@@ -308,10 +358,9 @@ impl ConvexArena {
             for h in self.face_loop(f) {
                 edge_index.insert(h, edge_index.len() as u32);
                 let v = self.half_edges[h as usize].origin;
-                vertex_index.entry(v).or_insert_with(|| {
-                    out.vertices.push(self.vertices[v as usize]);
-                    out.vertices.len() as u32 - 1
-                });
+                vertex_index
+                    .entry(v)
+                    .or_insert_with(|| out.push_vertex(*self.point(v), u32::MAX));
             }
         }
         out.half_edges = vec![
@@ -334,9 +383,11 @@ impl ConvexArena {
                 };
             }
             let face = self.faces[f as usize];
+            let plane = out.push_plane(*self.face_plane(f));
             out.faces.push(Face {
+                plane,
                 half_edge: edge_index[&face.half_edge],
-                ..face
+                tag: face.tag,
             });
         }
         for (old, &new) in &vertex_index {
@@ -412,13 +463,9 @@ impl ConvexArena {
             .map(|f| {
                 let corners = self
                     .face_loop(f)
-                    .map(|h| {
-                        self.vertices[self.half_edges[h as usize].origin as usize]
-                            .point
-                            .to_f64()
-                    })
+                    .map(|h| self.position(self.half_edges[h as usize].origin))
                     .collect();
-                (self.faces[f as usize].plane, corners)
+                (*self.face_plane(f), corners)
             })
             .collect()
     }
