@@ -102,7 +102,13 @@ pub(crate) enum Link {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum FaceInfo {
     /// The face has `+` and `−` vertices: it will be split in two.
-    Straddling,
+    Straddling {
+        /// The half-edges of the face that will enter its two `0`
+        /// vertices once its crossing edges are split, in loop order.
+        enter: [u32; 2],
+        /// The side of the vertices between the first and the second.
+        first_chain: Sign,
+    },
     /// The face lies on one side and has an edge in the cutting plane.
     Touching {
         /// The side of its vertices off the plane.

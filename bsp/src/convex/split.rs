@@ -58,15 +58,15 @@ impl ConvexArena {
         section_new.clear();
         for (&f, &kind) in relevant.iter().zip(&info) {
             match (kind, keep) {
-                (FaceInfo::Straddling, None) => {
-                    let (kept, new) = self.split_face(f, scratch);
+                (FaceInfo::Straddling { enter, first_chain }, None) => {
+                    let (kept, new) = self.split_face(f, &self.face_zeros(enter, first_chain));
                     section.push((kept, Sign::Negative));
                     section_new.push((new, Sign::Positive));
                 }
-                (FaceInfo::Straddling, Some(side)) => {
+                (FaceInfo::Straddling { enter, first_chain }, Some(side)) => {
                     // Listed where the two-sided split lists them, so that
                     // the kept part comes out the same.
-                    let edge = self.trim_face(f, side, scratch);
+                    let edge = self.trim_face(f, side, &self.face_zeros(enter, first_chain));
                     if side == Sign::Negative {
                         section.push((edge, side));
                     } else {
@@ -99,6 +99,12 @@ impl ConvexArena {
         let first_side = side(first);
         let (mut h, mut here) = (first, first_side);
         let (mut plus, mut minus, mut in_plane) = (false, false, u32::MAX);
+        // Where the section meets the face boundary, in loop order: at a
+        // `0` vertex (entered by the previous half-edge, `u32::MAX` while
+        // unknown) or inside a crossing edge (entered by that half-edge
+        // once it is split).
+        let (mut enter, mut events, mut first_chain) = ([u32::MAX; 2], 0, Sign::Zero);
+        let mut prev = u32::MAX;
         loop {
             let next = self.half_edges[h as usize].next;
             let there = if next == first {
@@ -114,13 +120,34 @@ impl ConvexArena {
                 debug_assert_eq!(in_plane, u32::MAX, "a face has one edge in the plane");
                 in_plane = h;
             }
+            let entered = if here == Sign::Zero {
+                Some(prev)
+            } else if here.as_i32() * there.as_i32() < 0 {
+                Some(h)
+            } else {
+                None
+            };
+            if let Some(e) = entered {
+                if events < 2 {
+                    enter[events] = e;
+                }
+                if events == 0 {
+                    first_chain = there;
+                }
+                events += 1;
+            }
             if next == first {
                 break;
             }
-            (h, here) = (next, there);
+            (prev, h, here) = (h, next, there);
         }
         if plus && minus {
-            FaceInfo::Straddling
+            debug_assert_eq!(events, 2, "a convex face meets a plane twice");
+            if enter[0] == u32::MAX {
+                // The walk started at a `0` vertex: it is entered last.
+                enter[0] = h;
+            }
+            FaceInfo::Straddling { enter, first_chain }
         } else {
             debug_assert_ne!(in_plane, u32::MAX, "the face meets the section");
             FaceInfo::Touching {
@@ -162,39 +189,11 @@ impl ConvexArena {
         m
     }
 
-    /// The two `0` vertices of straddling face `f` (it has exactly two
-    /// once crossing edges are split), found in one walk from its stored
-    /// half-edge.
-    fn face_zeros(&self, f: u32, scratch: &Scratch) -> FaceZeros {
-        let first = self.faces[f as usize].half_edge;
-        let (mut leave, mut enter) = ([u32::MAX; 2], [u32::MAX; 2]);
-        let (mut found, mut first_chain) = (0, Sign::Zero);
-        let (mut h, mut prev) = (first, u32::MAX);
-        loop {
-            let side = Self::known_side(self.half_edges[h as usize].origin, scratch);
-            if side == Sign::Zero {
-                assert!(found < 2, "a straddling face has two vertices on the plane");
-                (leave[found], enter[found]) = (h, prev);
-                found += 1;
-            } else if found == 1 && first_chain == Sign::Zero {
-                first_chain = side;
-            }
-            prev = h;
-            h = self.half_edges[h as usize].next;
-            if h == first {
-                break;
-            }
-        }
-        assert!(
-            found == 2,
-            "a straddling face has two vertices on the plane"
-        );
-        if enter[0] == u32::MAX {
-            // The walk started at the first 0 vertex: it is entered last.
-            enter[0] = prev;
-        }
+    /// The two `0` vertices of a straddling face once its crossing edges
+    /// are split, from what [`ConvexArena::survey_face`] found.
+    fn face_zeros(&self, enter: [u32; 2], first_chain: Sign) -> FaceZeros {
         FaceZeros {
-            leave,
+            leave: enter.map(|e| self.half_edges[e as usize].next),
             enter,
             first_chain,
         }
@@ -203,8 +202,7 @@ impl ConvexArena {
     /// Trims straddling face `f` to its half on side `keep` by one new
     /// half-edge between its two `0` vertices (the other half's half-edges
     /// are left unused); returns the new half-edge, which lies in `s`.
-    fn trim_face(&mut self, f: u32, keep: Sign, scratch: &Scratch) -> u32 {
-        let z = self.face_zeros(f, scratch);
+    fn trim_face(&mut self, f: u32, keep: Sign, z: &FaceZeros) -> u32 {
         // The kept chain runs from zero k to zero 1 − k; the new half-edge
         // closes it, from zero 1 − k back to zero k.
         let k = usize::from(z.first_chain != keep);
@@ -224,8 +222,7 @@ impl ConvexArena {
     /// the segment between them: `f` keeps the `−` half and a new face gets
     /// the `+` half. Returns the new half-edge in `s` of each half, `f`'s
     /// first.
-    fn split_face(&mut self, f: u32, scratch: &Scratch) -> (u32, u32) {
-        let z = self.face_zeros(f, scratch);
+    fn split_face(&mut self, f: u32, z: &FaceZeros) -> (u32, u32) {
         let (z1, z2) = (
             self.half_edges[z.leave[0] as usize].origin,
             self.half_edges[z.leave[1] as usize].origin,
@@ -376,7 +373,7 @@ impl ConvexArena {
 }
 
 /// The two `0` vertices of a straddling face, in the order its loop from
-/// its stored half-edge meets them.
+/// its stored half-edge meets them (crossing edges split).
 struct FaceZeros {
     /// The half-edge of the face leaving each.
     leave: [u32; 2],
