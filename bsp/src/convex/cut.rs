@@ -17,7 +17,7 @@
 //!
 //! [`ConvexArena::cut_naive`] finds the crossing edges by classifying every
 //! vertex; the edge-descent search of the paper replaces only that step.
-//! Both hand the faces that meet the section to [`super::split`], which
+//! Both hand the faces that meet the section to `split`, which
 //! does steps 1–3. [`ConvexArena::cut_keeping`] is the edge-descent cut for
 //! callers that keep one part: step 3 builds only that part's cap and copies
 //! no vertices, and the faces of the other part are not split.

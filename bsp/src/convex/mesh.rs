@@ -471,34 +471,65 @@ impl ConvexArena {
     }
 }
 
-/// A set of element indices for one traversal: a short list searched
-/// linearly while it is small (cells have tens of faces; hashing them costs
-/// more than the search), a hash set beyond.
-#[derive(Default)]
+/// A set of element indices for one traversal: a small open-addressing
+/// table on the stack while it is at most half full (cells have tens of
+/// faces; a heap hash set costs more than the traversal), a hash set
+/// beyond.
 struct SeenSet {
-    few: Vec<u32>,
+    slots: [u32; SeenSet::SLOTS],
+    len: usize,
     many: Option<HashSet<u32>>,
 }
 
+impl Default for SeenSet {
+    fn default() -> Self {
+        Self {
+            slots: [SeenSet::EMPTY; SeenSet::SLOTS],
+            len: 0,
+            many: None,
+        }
+    }
+}
+
 impl SeenSet {
-    /// Entries kept in the list before switching to hashing.
-    const FEW: usize = 48;
+    /// Table size, a power of two.
+    const SLOTS: usize = 128;
+    /// Entries kept in the table before switching to hashing.
+    const FEW: usize = Self::SLOTS / 2;
+    /// Marks a free slot (no element index is `u32::MAX`).
+    const EMPTY: u32 = u32::MAX;
 
     /// Adds `x`; true when it was not in the set yet.
     #[inline]
     fn insert(&mut self, x: u32) -> bool {
+        debug_assert_ne!(x, Self::EMPTY);
         if let Some(many) = &mut self.many {
             return many.insert(x);
         }
-        if self.few.contains(&x) {
-            return false;
+        // Fibonacci hashing to 7 bits, then linear probing.
+        let mut i = (x.wrapping_mul(0x9E37_79B9) >> 25) as usize;
+        loop {
+            let slot = self.slots[i];
+            if slot == x {
+                return false;
+            }
+            if slot == Self::EMPTY {
+                break;
+            }
+            i = (i + 1) & (Self::SLOTS - 1);
         }
-        if self.few.len() == Self::FEW {
-            let mut many: HashSet<u32> = self.few.drain(..).collect();
+        if self.len == Self::FEW {
+            let mut many: HashSet<u32> = self
+                .slots
+                .iter()
+                .copied()
+                .filter(|&v| v != Self::EMPTY)
+                .collect();
             many.insert(x);
             self.many = Some(many);
         } else {
-            self.few.push(x);
+            self.slots[i] = x;
+            self.len += 1;
         }
         true
     }
