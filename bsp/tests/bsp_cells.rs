@@ -62,7 +62,7 @@ fn a_convex_polyhedron_round_trips_through_its_linear_bsp() {
                 .faces_of(q)
                 .iter()
                 .map(|&f| {
-                    let plane = a.faces()[f as usize].plane;
+                    let plane = a.face_plane(f);
                     (plane.normal(), plane.offset())
                 })
                 .collect();

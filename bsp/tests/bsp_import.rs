@@ -25,9 +25,7 @@ fn triangles(arena: &ConvexArena, poly: PolyId) -> Vec<[IntPoint; 3]> {
         let corners: Vec<IntPoint> = arena
             .face_loop(f)
             .map(|h| {
-                let [x, y, z] = arena.vertices()[arena.half_edges()[h as usize].origin as usize]
-                    .point
-                    .to_f64();
+                let [x, y, z] = arena.position(arena.half_edges()[h as usize].origin);
                 p(x as i64, y as i64, z as i64)
             })
             .collect();

@@ -5,7 +5,7 @@
 
 mod common;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
+use chisel_bsp::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane, Sign, classify_vertex, plane_from_points};
 use common::volume::volume;
 use rand::{Rng, SeedableRng};
@@ -23,7 +23,7 @@ fn sides(arena: &ConvexArena, poly: PolyId, s: &Plane) -> Vec<Sign> {
     arena
         .vertices_of(poly)
         .iter()
-        .map(|&v| classify_vertex(&arena.vertices()[v as usize].point, s))
+        .map(|&v| classify_vertex(arena.point(v), s))
         .collect()
 }
 
@@ -33,10 +33,16 @@ fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> 
     let before = sides(arena, poly, s);
     let volume_before = volume(arena, poly);
     let mut reference = arena.clone();
+    let one_sided = [Part::Below, Part::Above].map(|part| {
+        let mut copy = arena.clone();
+        let kept = copy.cut_keeping(poly, s, part, NO_TAG);
+        (copy, kept)
+    });
     let expected = reference.cut_naive(poly, s, NO_TAG, NO_TAG);
     let outcome = arena.cut(poly, s, NO_TAG, NO_TAG);
     assert_eq!(outcome, expected, "edge descent and classify-all disagree");
     assert_same_arena(arena, &reference);
+    assert_one_sided_cuts_agree(arena, outcome, &one_sided);
     let has = |x| before.contains(&x);
     match outcome {
         CutOutcome::Above => {
@@ -77,17 +83,43 @@ fn checked_cut(arena: &mut ConvexArena, poly: PolyId, s: &Plane) -> Vec<PolyId> 
     }
 }
 
+/// Each one-sided cut has the outcome of the two-sided cut and builds the
+/// same part, element for element once extracted.
+fn assert_one_sided_cuts_agree(
+    arena: &ConvexArena,
+    outcome: CutOutcome,
+    one_sided: &[(ConvexArena, KeptOutcome); 2],
+) {
+    for (k, (copy, kept)) in one_sided.iter().enumerate() {
+        match (outcome, *kept) {
+            (CutOutcome::Below, KeptOutcome::Below) | (CutOutcome::Above, KeptOutcome::Above) => {}
+            (CutOutcome::Split { below, above }, KeptOutcome::Cut(id)) => {
+                copy.validate(id)
+                    .unwrap_or_else(|e| panic!("one-sided part {k}: {e}"));
+                let part = [below, above][k];
+                let (a, ia) = copy.extract(id);
+                let (b, ib) = arena.extract(part);
+                assert_eq!(ia, ib);
+                assert_same_arena(&a, &b);
+            }
+            _ => panic!("one-sided cut {k}: {kept:?}, two-sided: {outcome:?}"),
+        }
+    }
+}
+
 /// Element-for-element equality of two arenas.
 fn assert_same_arena(a: &ConvexArena, b: &ConvexArena) {
     assert_eq!(a.half_edges(), b.half_edges());
     assert_eq!(a.faces().len(), b.faces().len());
-    for (x, y) in a.faces().iter().zip(b.faces()) {
-        assert_eq!((x.plane, x.half_edge, x.tag), (y.plane, y.half_edge, y.tag));
+    for (f, (x, y)) in (0..).zip(a.faces().iter().zip(b.faces())) {
+        assert_eq!((x.half_edge, x.tag), (y.half_edge, y.tag));
+        assert_eq!(a.face_plane(f), b.face_plane(f));
     }
-    assert_eq!(a.vertices().len(), b.vertices().len());
-    for (x, y) in a.vertices().iter().zip(b.vertices()) {
-        assert_eq!(x.half_edge, y.half_edge);
-        assert!(x.point.xyz() == y.point.xyz() && x.point.w() == y.point.w());
+    assert_eq!(a.vertex_count(), b.vertex_count());
+    for v in 0..a.vertex_count() as u32 {
+        assert_eq!(a.vertex_half_edge(v), b.vertex_half_edge(v));
+        let (x, y) = (a.point(v), b.point(v));
+        assert!(x.xyz() == y.xyz() && x.w() == y.w());
     }
 }
 
@@ -109,12 +141,12 @@ fn extracting_a_part_gives_the_same_polyhedron_compactly() {
         let (copy, id) = arena.extract(part);
         copy.validate(id).unwrap();
         assert_eq!(copy.faces().len(), arena.faces_of(part).len());
-        assert_eq!(copy.vertices().len(), arena.vertices_of(part).len());
+        assert_eq!(copy.vertex_count(), arena.vertices_of(part).len());
         let planes = |a: &ConvexArena, p: PolyId| {
             let mut v: Vec<_> = a
                 .faces_of(p)
                 .iter()
-                .map(|&f| a.faces()[f as usize].plane.normal())
+                .map(|&f| a.face_plane(f).normal())
                 .collect();
             v.sort();
             v
@@ -221,7 +253,7 @@ fn random_cuts(seed: u64, steps: usize) -> (ConvexArena, Vec<PolyId>) {
             let pick = |rng: &mut ChaCha8Rng| -> IntPoint {
                 if rng.random_bool(0.5) {
                     let v = verts[rng.random_range(0..verts.len())];
-                    let [x, y, z] = arena.vertices()[v as usize].point.to_f64();
+                    let [x, y, z] = arena.position(v);
                     p(x.round() as i64, y.round() as i64, z.round() as i64)
                 } else {
                     p(

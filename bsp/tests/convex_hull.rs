@@ -20,7 +20,7 @@ fn p(x: i64, y: i64, z: i64) -> IntPoint {
 fn assert_is_hull(arena: &ConvexArena, poly: PolyId, points: &[IntPoint]) {
     arena.validate(poly).unwrap();
     for &f in &arena.faces_of(poly) {
-        let plane = arena.faces()[f as usize].plane;
+        let plane = arena.face_plane(f);
         for &q in points {
             assert_ne!(
                 plane.side_of(q),
@@ -30,7 +30,7 @@ fn assert_is_hull(arena: &ConvexArena, poly: PolyId, points: &[IntPoint]) {
         }
     }
     for v in arena.vertices_of(poly) {
-        let [x, y, z] = arena.vertices()[v as usize].point.to_f64();
+        let [x, y, z] = arena.position(v);
         let corner = p(x as i64, y as i64, z as i64);
         assert!(
             points.contains(&corner),

@@ -158,9 +158,7 @@ fn convex_hulls_import_with_the_volume_of_their_bsp() {
             let corners: Vec<IntPoint> = arena
                 .face_loop(f)
                 .map(|h| {
-                    let q = arena.vertices()[arena.half_edges()[h as usize].origin as usize]
-                        .point
-                        .to_f64();
+                    let q = arena.position(arena.half_edges()[h as usize].origin);
                     p(q[0] as i64, q[1] as i64, q[2] as i64)
                 })
                 .collect();

@@ -54,7 +54,7 @@ fn a_swept_prism_contains_both_end_poses() {
         for &c in &corners {
             let q = pose.place(c).unwrap();
             for &f in &arena.faces_of(swept) {
-                assert_ne!(arena.faces()[f as usize].plane.side_of(q), Sign::Positive);
+                assert_ne!(arena.face_plane(f).side_of(q), Sign::Positive);
             }
         }
     }

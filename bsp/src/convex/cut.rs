@@ -17,11 +17,13 @@
 //!
 //! [`ConvexArena::cut_naive`] finds the crossing edges by classifying every
 //! vertex; the edge-descent search of the paper replaces only that step.
-//! Both hand the faces that meet the section to [`super::split`], which
-//! does steps 1–3.
+//! Both hand the faces that meet the section to `split`, which
+//! does steps 1–3. [`ConvexArena::cut_keeping`] is the edge-descent cut for
+//! callers that keep one part: step 3 builds only that part's cap and copies
+//! no vertices, and the faces of the other part are not split.
 
 use super::mesh::{ConvexArena, PolyId};
-use super::scratch::Scratch;
+use super::scratch::{Link, Scratch};
 use crate::exact::{
     FilteredDot, Plane, Sign, classify_vertex, classify_vertex_exact, compare_offsets,
     offset_estimate,
@@ -41,6 +43,30 @@ pub enum CutOutcome {
     /// No proper intersection: `P` lies in the closed negative half-space.
     Below,
     /// No proper intersection: `P` lies in the closed positive half-space.
+    Above,
+}
+
+/// The part of a cut polyhedron that [`ConvexArena::cut_keeping`] builds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// The part in the negative half-space of the cutting plane.
+    Below,
+    /// The part in the positive half-space of the cutting plane.
+    Above,
+}
+
+/// The result of cutting a polyhedron `P` by a plane `s` and keeping one
+/// part ([`ConvexArena::cut_keeping`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KeptOutcome {
+    /// `P` was cut in place into the kept part; the elements only the other
+    /// part used stay in the arena, unused.
+    Cut(PolyId),
+    /// No proper intersection: `P` lies in the closed negative half-space
+    /// and is unchanged.
+    Below,
+    /// No proper intersection: `P` lies in the closed positive half-space
+    /// and is unchanged.
     Above,
 }
 
@@ -79,7 +105,11 @@ impl ConvexArena {
                     .filter(|&f| arena.meets_section(f, scratch)),
             );
             scratch.relevant = relevant;
-            arena.split_along(scratch, s, below_tag, above_tag)
+            let [below, above] = arena.split_along(scratch, s, [below_tag, above_tag], None);
+            CutOutcome::Split {
+                below: PolyId(below),
+                above: PolyId(above),
+            }
         })
     }
 
@@ -92,32 +122,75 @@ impl ConvexArena {
     /// element, to [`ConvexArena::cut_naive`].
     pub fn cut(&mut self, poly: PolyId, s: &Plane, below_tag: u32, above_tag: u32) -> CutOutcome {
         self.with_scratch(|arena, scratch| {
-            let v0 = arena.half_edges[poly.0 as usize].origin;
-            // Walk towards the side v0 is not on; a `(from, to)` step onto
-            // that side brackets the section. From a vertex on s, both sides
-            // must exist for a proper cut, and v0 itself is on the section.
-            let seeds = match arena.side(v0, s, scratch) {
-                Sign::Positive => match arena.descend(v0, s, Sign::Negative, scratch) {
-                    Some((from, to)) => [from, to],
-                    None => return CutOutcome::Above,
-                },
-                Sign::Negative => match arena.descend(v0, s, Sign::Positive, scratch) {
-                    Some((from, to)) => [from, to],
-                    None => return CutOutcome::Below,
-                },
-                Sign::Zero => {
-                    if arena.descend(v0, s, Sign::Negative, scratch).is_none() {
-                        return CutOutcome::Above;
-                    }
-                    if arena.descend(v0, s, Sign::Positive, scratch).is_none() {
-                        return CutOutcome::Below;
-                    }
-                    [v0, v0]
-                }
-            };
-            arena.march(&seeds, s, scratch);
-            arena.split_along(scratch, s, below_tag, above_tag)
+            if let Some(outcome) = arena.find_section(poly, s, scratch) {
+                return outcome;
+            }
+            let [below, above] = arena.split_along(scratch, s, [below_tag, above_tag], None);
+            CutOutcome::Split {
+                below: PolyId(below),
+                above: PolyId(above),
+            }
         })
+    }
+
+    /// Cuts `poly` by `s` like [`ConvexArena::cut`] but builds only the
+    /// part `keep`, whose cap face gets tag `cap_tag`: the same polyhedron,
+    /// element for element once extracted ([`ConvexArena::extract`]), as
+    /// that part of [`ConvexArena::cut`], for less work.
+    pub fn cut_keeping(
+        &mut self,
+        poly: PolyId,
+        s: &Plane,
+        keep: Part,
+        cap_tag: u32,
+    ) -> KeptOutcome {
+        self.with_scratch(|arena, scratch| {
+            match arena.find_section(poly, s, scratch) {
+                Some(CutOutcome::Below) => return KeptOutcome::Below,
+                Some(CutOutcome::Above) => return KeptOutcome::Above,
+                Some(CutOutcome::Split { .. }) | None => {}
+            }
+            let side = match keep {
+                Part::Below => Sign::Negative,
+                Part::Above => Sign::Positive,
+            };
+            let [below, above] = arena.split_along(scratch, s, [cap_tag; 2], Some(side));
+            KeptOutcome::Cut(PolyId(match keep {
+                Part::Below => below,
+                Part::Above => above,
+            }))
+        })
+    }
+
+    /// Edge descent and marching: `None` when the cut is proper, with the
+    /// faces that meet the section in `scratch.relevant`, else the outcome
+    /// ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
+    fn find_section(&self, poly: PolyId, s: &Plane, scratch: &mut Scratch) -> Option<CutOutcome> {
+        let v0 = self.half_edges[poly.0 as usize].origin;
+        // Walk towards the side v0 is not on; a `(from, to)` step onto
+        // that side brackets the section. From a vertex on s, both sides
+        // must exist for a proper cut, and v0 itself is on the section.
+        let seeds = match self.side(v0, s, scratch) {
+            Sign::Positive => match self.descend(v0, s, Sign::Negative, scratch) {
+                Some((from, to)) => [from, to],
+                None => return Some(CutOutcome::Above),
+            },
+            Sign::Negative => match self.descend(v0, s, Sign::Positive, scratch) {
+                Some((from, to)) => [from, to],
+                None => return Some(CutOutcome::Below),
+            },
+            Sign::Zero => {
+                if self.descend(v0, s, Sign::Negative, scratch).is_none() {
+                    return Some(CutOutcome::Above);
+                }
+                if self.descend(v0, s, Sign::Positive, scratch).is_none() {
+                    return Some(CutOutcome::Below);
+                }
+                [v0, v0]
+            }
+        };
+        self.march(&seeds, s, scratch);
+        None
     }
 
     /// Runs `op` with the arena's scratch space, cleared.
@@ -133,7 +206,7 @@ impl ConvexArena {
     #[inline]
     fn side(&self, v: u32, s: &Plane, scratch: &mut Scratch) -> Sign {
         scratch.sides.get(v).unwrap_or_else(|| {
-            let side = classify_vertex(&self.vertices[v as usize].point, s);
+            let side = classify_vertex(self.point(v), s);
             scratch.sides.insert(v, side);
             side
         })
@@ -181,14 +254,14 @@ impl ConvexArena {
             Ordering::Greater
         };
         let mut cur = start;
-        let (mut cur_value, mut cur_error) = offset_estimate(&self.vertices[cur as usize].point, s);
+        let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
         loop {
             // The best certified step, and an exactly certified one.
             let mut best: Option<(u32, f64, (f64, f64))> = None;
             let mut uncertain: Option<(u32, (f64, f64))> = None;
             for h in self.outgoing(cur) {
                 let n = self.dest(h);
-                let point = &self.vertices[n as usize].point;
+                let point = self.point(n);
                 // One f64 evaluation gives both the side and the offset.
                 let dot = FilteredDot::new(point, s);
                 let side = scratch.sides.get(n).unwrap_or_else(|| {
@@ -209,7 +282,7 @@ impl ConvexArena {
                     }
                 } else if gain >= -(error + cur_error)
                     && uncertain.is_none()
-                    && compare_offsets(point, &self.vertices[cur as usize].point, s) == wanted
+                    && compare_offsets(point, self.point(cur), s) == wanted
                 {
                     // Too close to call in f64: exactly closer.
                     uncertain = Some((n, (value, error)));
@@ -227,6 +300,7 @@ impl ConvexArena {
     fn march(&self, seeds: &[u32], s: &Plane, scratch: &mut Scratch) {
         let mut queue = std::mem::take(&mut scratch.queue);
         let mut relevant = std::mem::take(&mut scratch.relevant);
+        let mut links = std::mem::take(&mut scratch.links);
         queue.clear();
         relevant.clear();
         let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
@@ -244,47 +318,53 @@ impl ConvexArena {
         }
         while let Some(f) = queue.pop() {
             // Classify the face's vertices, noting whether it meets the
-            // section (vertices on both sides, or an edge in s).
+            // section (vertices on both sides, or an edge in s), and where
+            // the march would go on from it: across crossing edges and
+            // edges in s, and around vertices on s.
+            links.clear();
             let first = self.faces[f as usize].half_edge;
             let first_side = self.side(self.half_edges[first as usize].origin, s, scratch);
             let (mut plus, mut minus, mut in_plane) = (false, false, false);
             let (mut h, mut here) = (first, first_side);
             loop {
-                let next = self.half_edges[h as usize].next;
-                let there = if next == first {
+                let e = self.half_edges[h as usize];
+                let there = if e.next == first {
                     first_side
                 } else {
-                    self.side(self.half_edges[next as usize].origin, s, scratch)
+                    self.side(self.half_edges[e.next as usize].origin, s, scratch)
                 };
                 plus |= here == Sign::Positive;
                 minus |= here == Sign::Negative;
                 in_plane |= here == Sign::Zero && there == Sign::Zero;
-                if next == first {
+                if here.as_i32() * there.as_i32() < 0 || (here == Sign::Zero && there == Sign::Zero)
+                {
+                    links.push(Link::Across(e.twin));
+                }
+                if here == Sign::Zero {
+                    links.push(Link::Around(e.origin));
+                }
+                if e.next == first {
                     break;
                 }
-                (h, here) = (next, there);
+                (h, here) = (e.next, there);
             }
             if !((plus && minus) || in_plane) {
                 continue;
             }
             relevant.push(f);
-            for h in self.face_loop(f) {
-                let e = self.half_edges[h as usize];
-                let (a, b) = (
-                    Self::known_side(e.origin, scratch),
-                    Self::known_side(self.dest(h), scratch),
-                );
-                if a.as_i32() * b.as_i32() < 0 || (a == Sign::Zero && b == Sign::Zero) {
-                    let g = self.half_edges[e.twin as usize].face;
-                    if scratch.faces.insert(g, true) {
-                        queue.push(g);
+            for &link in &links {
+                match link {
+                    Link::Across(twin) => {
+                        let g = self.half_edges[twin as usize].face;
+                        if scratch.faces.insert(g, true) {
+                            queue.push(g);
+                        }
                     }
-                }
-                if a == Sign::Zero {
-                    around(e.origin, &mut queue, scratch);
+                    Link::Around(v) => around(v, &mut queue, scratch),
                 }
             }
         }
+        scratch.links = links;
         scratch.queue = queue;
         scratch.relevant = relevant;
     }

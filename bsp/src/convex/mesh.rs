@@ -5,6 +5,13 @@
 //! around `face(h)` seen from outside; a face's plane has its positive side
 //! outside the polyhedron, so the interior is where every face plane is
 //! negative.
+//!
+//! Layout: the exact positions ([`Point4`], 152 bytes) and the face planes
+//! ([`Plane`], 80 bytes) live in their own arrays, `points` and `planes`,
+//! named by index from the small vertex and face records. Splitting a face
+//! or duplicating a section vertex for the upper part of a cut copies an
+//! index, never the exact data; a point or plane may be shared by several
+//! records (the copies of a section vertex, the halves of a split face).
 
 use std::collections::{HashMap, HashSet};
 
@@ -16,13 +23,14 @@ use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes};
 /// Tag of a face with no opposite BSP node.
 pub const NO_TAG: u32 = u32::MAX;
 
-/// A vertex: its exact position and one half-edge leaving it.
+/// A vertex: its exact position (an index into the arena's points) and one
+/// half-edge leaving it.
 #[derive(Clone, Copy, Debug)]
-pub struct Vertex {
-    /// Exact homogeneous position.
-    pub point: Point4,
+pub(crate) struct Vertex {
+    /// Index of its exact homogeneous position in `ConvexArena::points`.
+    pub(crate) point: u32,
     /// A half-edge whose origin is this vertex.
-    pub half_edge: u32,
+    pub(crate) half_edge: u32,
 }
 
 /// A directed edge of one face.
@@ -38,11 +46,12 @@ pub struct HalfEdge {
     pub face: u32,
 }
 
-/// A planar convex face.
+/// A planar convex face; its plane is [`ConvexArena::face_plane`].
 #[derive(Clone, Copy, Debug)]
 pub struct Face {
-    /// Supporting plane, positive side outside.
-    pub plane: Plane,
+    /// Index of its supporting plane (positive side outside) in the
+    /// arena's plane array.
+    pub(crate) plane: u32,
     /// One half-edge of the face.
     pub half_edge: u32,
     /// The BSP node on the other side of the face, or [`NO_TAG`].
@@ -59,8 +68,10 @@ impl Clone for ConvexArena {
     fn clone(&self) -> Self {
         Self {
             vertices: self.vertices.clone(),
+            points: self.points.clone(),
             half_edges: self.half_edges.clone(),
             faces: self.faces.clone(),
+            planes: self.planes.clone(),
             scratch: None,
         }
     }
@@ -74,8 +85,10 @@ impl Drop for ConvexArena {
         }
         pool::keep_spare(pool::Arrays {
             vertices: std::mem::take(&mut self.vertices),
+            points: std::mem::take(&mut self.points),
             half_edges: std::mem::take(&mut self.half_edges),
             faces: std::mem::take(&mut self.faces),
+            planes: std::mem::take(&mut self.planes),
             scratch: self.scratch.take(),
         });
     }
@@ -86,16 +99,22 @@ impl Drop for ConvexArena {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct ArenaMark {
     vertices: usize,
+    points: usize,
     half_edges: usize,
     faces: usize,
+    planes: usize,
 }
 
 /// Flat storage for half-edge meshes of convex polyhedra.
 #[derive(Debug, Default)]
 pub struct ConvexArena {
     pub(crate) vertices: Vec<Vertex>,
+    /// Exact vertex positions, named by [`Vertex::point`].
+    pub(crate) points: Vec<Point4>,
     pub(crate) half_edges: Vec<HalfEdge>,
     pub(crate) faces: Vec<Face>,
+    /// Face planes, named by [`Face::plane`].
+    pub(crate) planes: Vec<Plane>,
     /// Reused working memory of the cuts (no part of the geometry), boxed
     /// so that lending it to a cut moves a pointer.
     pub(crate) scratch: Option<Box<Scratch>>,
@@ -109,8 +128,10 @@ impl ConvexArena {
         match pool::take_spare() {
             Some(arrays) => Self {
                 vertices: arrays.vertices,
+                points: arrays.points,
                 half_edges: arrays.half_edges,
                 faces: arrays.faces,
+                planes: arrays.planes,
                 scratch: arrays.scratch,
             },
             None => Self::default(),
@@ -120,8 +141,10 @@ impl ConvexArena {
     /// Removes every polyhedron, keeping the memory.
     pub fn clear(&mut self) {
         self.vertices.clear();
+        self.points.clear();
         self.half_edges.clear();
         self.faces.clear();
+        self.planes.clear();
     }
 
     /// The current sizes, for [`ConvexArena::release_to`].
@@ -130,8 +153,10 @@ impl ConvexArena {
     pub(crate) fn mark(&self) -> ArenaMark {
         ArenaMark {
             vertices: self.vertices.len(),
+            points: self.points.len(),
             half_edges: self.half_edges.len(),
             faces: self.faces.len(),
+            planes: self.planes.len(),
         }
     }
 
@@ -142,15 +167,20 @@ impl ConvexArena {
     #[inline]
     pub(crate) fn release_to(&mut self, mark: ArenaMark) {
         self.vertices.truncate(mark.vertices);
+        self.points.truncate(mark.points);
         self.half_edges.truncate(mark.half_edges);
         self.faces.truncate(mark.faces);
+        self.planes.truncate(mark.planes);
     }
 
-    /// Reserves room for `additional` more vertices, faces and (six times
-    /// as many) half-edges, so that the next cuts do not reallocate.
+    /// Reserves room for `additional` more vertices, points, faces and
+    /// planes and (six times as many) half-edges, so that the next cuts do
+    /// not reallocate.
     pub fn reserve(&mut self, additional: usize) {
         self.vertices.reserve(additional);
+        self.points.reserve(additional);
         self.faces.reserve(additional);
+        self.planes.reserve(additional);
         self.half_edges.reserve(6 * additional);
         self.scratch.get_or_insert_default().reserve(
             self.vertices.len() + additional,
@@ -158,10 +188,34 @@ impl ConvexArena {
         );
     }
 
-    /// All vertices (of every polyhedron in the arena).
+    /// The number of vertices (of every polyhedron in the arena); vertex
+    /// ids are below it.
     #[must_use]
-    pub fn vertices(&self) -> &[Vertex] {
-        &self.vertices
+    #[inline]
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// The exact position of vertex `v`.
+    #[must_use]
+    #[inline]
+    pub fn point(&self, v: u32) -> &Point4 {
+        &self.points[self.vertices[v as usize].point as usize]
+    }
+
+    /// The position of vertex `v` in `f64` (for export and display only;
+    /// see [`Point4::to_f64`]).
+    #[must_use]
+    #[inline]
+    pub fn position(&self, v: u32) -> [f64; 3] {
+        self.point(v).to_f64()
+    }
+
+    /// A half-edge leaving vertex `v`.
+    #[must_use]
+    #[inline]
+    pub fn vertex_half_edge(&self, v: u32) -> u32 {
+        self.vertices[v as usize].half_edge
     }
 
     /// All half-edges.
@@ -174,6 +228,33 @@ impl ConvexArena {
     #[must_use]
     pub fn faces(&self) -> &[Face] {
         &self.faces
+    }
+
+    /// The supporting plane of face `f`, positive side outside.
+    #[must_use]
+    #[inline]
+    pub fn face_plane(&self, f: u32) -> &Plane {
+        &self.planes[self.faces[f as usize].plane as usize]
+    }
+
+    /// Adds a vertex at the new exact position `point`.
+    #[inline]
+    pub(crate) fn push_vertex(&mut self, point: Point4, half_edge: u32) -> u32 {
+        let v = self.vertices.len() as u32;
+        self.vertices.push(Vertex {
+            point: self.points.len() as u32,
+            half_edge,
+        });
+        self.points.push(point);
+        v
+    }
+
+    /// Adds `plane` to the plane array; returns its index for
+    /// [`Face::plane`].
+    #[inline]
+    pub(crate) fn push_plane(&mut self, plane: Plane) -> u32 {
+        self.planes.push(plane);
+        self.planes.len() as u32 - 1
     }
 
     /// The axis-aligned box `[min, max]` as a polyhedron with six faces.
@@ -230,10 +311,9 @@ impl ConvexArena {
     ) -> PolyId {
         let v0 = self.vertices.len() as u32;
         let h0 = self.half_edges.len() as u32;
-        self.vertices.extend(points.iter().map(|&point| Vertex {
-            point,
-            half_edge: u32::MAX,
-        }));
+        for &point in points {
+            self.push_vertex(point, u32::MAX);
+        }
         let mut by_ends: HashMap<(u32, u32), u32> = HashMap::new();
         for (plane, corners) in faces {
             let face = self.faces.len() as u32;
@@ -251,8 +331,9 @@ impl ConvexArena {
                 self.vertices[(v0 + c) as usize].half_edge = h;
                 by_ends.insert((c, to), h);
             }
+            let plane = self.push_plane(*plane);
             self.faces.push(Face {
-                plane: *plane,
+                plane,
                 half_edge: first,
                 tag: NO_TAG,
             });
@@ -277,10 +358,9 @@ impl ConvexArena {
             for h in self.face_loop(f) {
                 edge_index.insert(h, edge_index.len() as u32);
                 let v = self.half_edges[h as usize].origin;
-                vertex_index.entry(v).or_insert_with(|| {
-                    out.vertices.push(self.vertices[v as usize]);
-                    out.vertices.len() as u32 - 1
-                });
+                vertex_index
+                    .entry(v)
+                    .or_insert_with(|| out.push_vertex(*self.point(v), u32::MAX));
             }
         }
         out.half_edges = vec![
@@ -303,9 +383,11 @@ impl ConvexArena {
                 };
             }
             let face = self.faces[f as usize];
+            let plane = out.push_plane(*self.face_plane(f));
             out.faces.push(Face {
+                plane,
                 half_edge: edge_index[&face.half_edge],
-                ..face
+                tag: face.tag,
             });
         }
         for (old, &new) in &vertex_index {
@@ -381,46 +463,73 @@ impl ConvexArena {
             .map(|f| {
                 let corners = self
                     .face_loop(f)
-                    .map(|h| {
-                        self.vertices[self.half_edges[h as usize].origin as usize]
-                            .point
-                            .to_f64()
-                    })
+                    .map(|h| self.position(self.half_edges[h as usize].origin))
                     .collect();
-                (self.faces[f as usize].plane, corners)
+                (*self.face_plane(f), corners)
             })
             .collect()
     }
 }
 
-/// A set of element indices for one traversal: a short list searched
-/// linearly while it is small (cells have tens of faces; hashing them costs
-/// more than the search), a hash set beyond.
-#[derive(Default)]
+/// A set of element indices for one traversal: a small open-addressing
+/// table on the stack while it is at most half full (cells have tens of
+/// faces; a heap hash set costs more than the traversal), a hash set
+/// beyond.
 struct SeenSet {
-    few: Vec<u32>,
+    slots: [u32; SeenSet::SLOTS],
+    len: usize,
     many: Option<HashSet<u32>>,
 }
 
+impl Default for SeenSet {
+    fn default() -> Self {
+        Self {
+            slots: [SeenSet::EMPTY; SeenSet::SLOTS],
+            len: 0,
+            many: None,
+        }
+    }
+}
+
 impl SeenSet {
-    /// Entries kept in the list before switching to hashing.
-    const FEW: usize = 48;
+    /// Table size, a power of two.
+    const SLOTS: usize = 128;
+    /// Entries kept in the table before switching to hashing.
+    const FEW: usize = Self::SLOTS / 2;
+    /// Marks a free slot (no element index is `u32::MAX`).
+    const EMPTY: u32 = u32::MAX;
 
     /// Adds `x`; true when it was not in the set yet.
     #[inline]
     fn insert(&mut self, x: u32) -> bool {
+        debug_assert_ne!(x, Self::EMPTY);
         if let Some(many) = &mut self.many {
             return many.insert(x);
         }
-        if self.few.contains(&x) {
-            return false;
+        // Fibonacci hashing to 7 bits, then linear probing.
+        let mut i = (x.wrapping_mul(0x9E37_79B9) >> 25) as usize;
+        loop {
+            let slot = self.slots[i];
+            if slot == x {
+                return false;
+            }
+            if slot == Self::EMPTY {
+                break;
+            }
+            i = (i + 1) & (Self::SLOTS - 1);
         }
-        if self.few.len() == Self::FEW {
-            let mut many: HashSet<u32> = self.few.drain(..).collect();
+        if self.len == Self::FEW {
+            let mut many: HashSet<u32> = self
+                .slots
+                .iter()
+                .copied()
+                .filter(|&v| v != Self::EMPTY)
+                .collect();
             many.insert(x);
             self.many = Some(many);
         } else {
-            self.few.push(x);
+            self.slots[i] = x;
+            self.len += 1;
         }
         true
     }

@@ -1,7 +1,8 @@
 //! Convex polyhedra with exact homogeneous vertices (paper 1 §3.3).
 //!
-//! A [`ConvexArena`] stores half-edge meshes of convex polyhedra in three
-//! flat arrays. One arena holds many polyhedra: cutting a polyhedron by a
+//! A [`ConvexArena`] stores half-edge meshes of convex polyhedra in flat
+//! arrays: vertices, half-edges and faces, with the exact points and planes
+//! they name by index in two more. One arena holds many polyhedra: cutting a polyhedron by a
 //! plane splits it in place into two, which stay in the same arena and are
 //! named by a [`PolyId`] (any half-edge on them). Faces carry their exact
 //! supporting [`Plane`](crate::exact::Plane), oriented outwards, and a tag
@@ -20,7 +21,7 @@ mod scratch;
 mod split;
 pub mod validate;
 
-pub use cut::CutOutcome;
-pub use mesh::{ConvexArena, Face, HalfEdge, NO_TAG, PolyId, Vertex};
+pub use cut::{CutOutcome, KeptOutcome, Part};
+pub use mesh::{ConvexArena, Face, HalfEdge, NO_TAG, PolyId};
 pub use pool::with_arena;
 pub use validate::InvariantError;

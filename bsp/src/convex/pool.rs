@@ -11,6 +11,7 @@ use std::cell::RefCell;
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::Scratch;
+use crate::exact::{Plane, Point4};
 
 thread_local! {
     static FREE: RefCell<Vec<ConvexArena>> = const { RefCell::new(Vec::new()) };
@@ -35,8 +36,10 @@ pub fn with_arena<R>(f: impl FnOnce(&mut ConvexArena) -> R) -> R {
 /// The arrays of a dropped arena, emptied, with their capacity.
 pub(super) struct Arrays {
     pub(super) vertices: Vec<Vertex>,
+    pub(super) points: Vec<Point4>,
     pub(super) half_edges: Vec<HalfEdge>,
     pub(super) faces: Vec<Face>,
+    pub(super) planes: Vec<Plane>,
     pub(super) scratch: Option<Box<Scratch>>,
 }
 
@@ -52,8 +55,10 @@ pub(super) fn take_spare() -> Option<Arrays> {
 /// enough are kept already or the thread is shutting down.
 pub(super) fn keep_spare(mut arrays: Arrays) {
     arrays.vertices.clear();
+    arrays.points.clear();
     arrays.half_edges.clear();
     arrays.faces.clear();
+    arrays.planes.clear();
     let _ = SPARE.try_with(|spare| {
         if let Ok(mut spare) = spare.try_borrow_mut()
             && spare.len() < SPARE_ARRAYS

@@ -73,6 +73,8 @@ pub(crate) struct Scratch {
     pub(crate) queue: Vec<u32>,
     /// The faces that meet the section.
     pub(crate) relevant: Vec<u32>,
+    /// Where the march goes on from the face it is visiting.
+    pub(crate) links: Vec<Link>,
     /// Per relevant face: what the split needs to know about it.
     pub(crate) relevant_info: Vec<FaceInfo>,
     /// The crossing half-edges, each from its `+` end.
@@ -83,8 +85,16 @@ pub(crate) struct Scratch {
     pub(crate) section_new: Vec<(u32, Sign)>,
     /// The cap half-edges of one side and the vertex each one ends at.
     pub(crate) cap_edges: Vec<(u32, u32)>,
-    /// The half-edges of the face being split.
-    pub(crate) face_loop: Vec<u32>,
+}
+
+/// A step of the march from a face that meets the section.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Link {
+    /// To the face across an edge (this half-edge's twin) that crosses the
+    /// plane or lies in it.
+    Across(u32),
+    /// To every face around a vertex on the plane.
+    Around(u32),
 }
 
 /// What the split needs to know about one face that meets the section,
@@ -92,7 +102,13 @@ pub(crate) struct Scratch {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum FaceInfo {
     /// The face has `+` and `−` vertices: it will be split in two.
-    Straddling,
+    Straddling {
+        /// The half-edges of the face that will enter its two `0`
+        /// vertices once its crossing edges are split, in loop order.
+        enter: [u32; 2],
+        /// The side of the vertices between the first and the second.
+        first_chain: Sign,
+    },
     /// The face lies on one side and has an edge in the cutting plane.
     Touching {
         /// The side of its vertices off the plane.

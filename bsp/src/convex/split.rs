@@ -12,22 +12,29 @@
 //! faces are split between their two `0` vertices (the new face takes the
 //! `+` half), and the section edges, known by now without another walk,
 //! get the two caps.
+//!
+//! A one-sided split (*kept side* `k`, for [`ConvexArena::cut_keeping`])
+//! builds only the part on side `k`: a straddling face keeps its `k` half,
+//! faces on the other side are left as they are, and only the cap of that
+//! part is built, on the section vertices themselves.
 
-use super::cut::CutOutcome;
-use super::mesh::{ConvexArena, Face, HalfEdge, PolyId, Vertex};
+use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::{FaceInfo, Scratch};
 use crate::exact::{Plane, Sign, intersect_3_planes};
 
 impl ConvexArena {
     /// Splits along the section, given the faces that meet it in
-    /// `scratch.relevant` with their vertices classified.
+    /// `scratch.relevant` with their vertices classified; `tags` are those
+    /// of the lower and upper part's caps. Builds both parts, or with
+    /// `keep`, only the part on that side. Returns the first half-edge of
+    /// each part's cap (`u32::MAX` for a part not built).
     pub(super) fn split_along(
         &mut self,
         scratch: &mut Scratch,
         s: &Plane,
-        below_tag: u32,
-        above_tag: u32,
-    ) -> CutOutcome {
+        tags: [u32; 2],
+        keep: Option<Sign>,
+    ) -> [u32; 2] {
         let mut relevant = std::mem::take(&mut scratch.relevant);
         let mut info = std::mem::take(&mut scratch.relevant_info);
         let mut crossing = std::mem::take(&mut scratch.crossing);
@@ -50,18 +57,32 @@ impl ConvexArena {
         section.clear();
         section_new.clear();
         for (&f, &kind) in relevant.iter().zip(&info) {
-            match kind {
-                FaceInfo::Straddling => {
-                    let (kept, new) = self.split_face(f, scratch);
+            match (kind, keep) {
+                (FaceInfo::Straddling { enter, first_chain }, None) => {
+                    let (kept, new) = self.split_face(f, &self.face_zeros(enter, first_chain));
                     section.push((kept, Sign::Negative));
                     section_new.push((new, Sign::Positive));
                 }
-                FaceInfo::Touching { side, edge } => section.push((edge, side)),
+                (FaceInfo::Straddling { enter, first_chain }, Some(side)) => {
+                    // Listed where the two-sided split lists them, so that
+                    // the kept part comes out the same.
+                    let edge = self.trim_face(f, side, &self.face_zeros(enter, first_chain));
+                    if side == Sign::Negative {
+                        section.push((edge, side));
+                    } else {
+                        section_new.push((edge, side));
+                    }
+                }
+                (FaceInfo::Touching { side, edge }, _) => {
+                    if keep.is_none_or(|k| k == side) {
+                        section.push((edge, side));
+                    }
+                }
             }
         }
         section.extend_from_slice(&section_new);
         // 3. Caps.
-        let outcome = self.add_caps(&section, scratch, s, below_tag, above_tag);
+        let outcome = self.add_caps(&section, scratch, s, tags, keep);
         scratch.relevant = relevant;
         scratch.relevant_info = info;
         scratch.crossing = crossing;
@@ -78,6 +99,12 @@ impl ConvexArena {
         let first_side = side(first);
         let (mut h, mut here) = (first, first_side);
         let (mut plus, mut minus, mut in_plane) = (false, false, u32::MAX);
+        // Where the section meets the face boundary, in loop order: at a
+        // `0` vertex (entered by the previous half-edge, `u32::MAX` while
+        // unknown) or inside a crossing edge (entered by that half-edge
+        // once it is split).
+        let (mut enter, mut events, mut first_chain) = ([u32::MAX; 2], 0, Sign::Zero);
+        let mut prev = u32::MAX;
         loop {
             let next = self.half_edges[h as usize].next;
             let there = if next == first {
@@ -93,13 +120,34 @@ impl ConvexArena {
                 debug_assert_eq!(in_plane, u32::MAX, "a face has one edge in the plane");
                 in_plane = h;
             }
+            let entered = if here == Sign::Zero {
+                Some(prev)
+            } else if here.as_i32() * there.as_i32() < 0 {
+                Some(h)
+            } else {
+                None
+            };
+            if let Some(e) = entered {
+                if events < 2 {
+                    enter[events] = e;
+                }
+                if events == 0 {
+                    first_chain = there;
+                }
+                events += 1;
+            }
             if next == first {
                 break;
             }
-            (h, here) = (next, there);
+            (prev, h, here) = (h, next, there);
         }
         if plus && minus {
-            FaceInfo::Straddling
+            debug_assert_eq!(events, 2, "a convex face meets a plane twice");
+            if enter[0] == u32::MAX {
+                // The walk started at a `0` vertex: it is entered last.
+                enter[0] = h;
+            }
+            FaceInfo::Straddling { enter, first_chain }
         } else {
             debug_assert_ne!(in_plane, u32::MAX, "the face meets the section");
             FaceInfo::Touching {
@@ -114,17 +162,13 @@ impl ConvexArena {
     fn split_edge(&mut self, h: u32, s: &Plane) -> u32 {
         let e = self.half_edges[h as usize];
         let t = self.half_edges[e.twin as usize];
-        let point = intersect_3_planes(
-            &self.faces[e.face as usize].plane,
-            &self.faces[t.face as usize].plane,
-            s,
-        )
-        .expect("a crossing edge meets the cutting plane in one point");
-        let m = self.vertices.len() as u32;
+        let point = intersect_3_planes(self.face_plane(e.face), self.face_plane(t.face), s)
+            .expect("a crossing edge meets the cutting plane in one point");
         let (h2, t2) = (
             self.half_edges.len() as u32,
             self.half_edges.len() as u32 + 1,
         );
+        let m = self.push_vertex(point, h2);
         // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
         self.half_edges.push(HalfEdge {
             origin: m,
@@ -142,117 +186,125 @@ impl ConvexArena {
         self.half_edges[h as usize].twin = t2;
         self.half_edges[e.twin as usize].next = t2;
         self.half_edges[e.twin as usize].twin = h2;
-        self.vertices.push(Vertex {
-            point,
-            half_edge: h2,
-        });
         m
+    }
+
+    /// The two `0` vertices of a straddling face once its crossing edges
+    /// are split, from what [`ConvexArena::survey_face`] found.
+    fn face_zeros(&self, enter: [u32; 2], first_chain: Sign) -> FaceZeros {
+        FaceZeros {
+            leave: enter.map(|e| self.half_edges[e as usize].next),
+            enter,
+            first_chain,
+        }
+    }
+
+    /// Trims straddling face `f` to its half on side `keep` by one new
+    /// half-edge between its two `0` vertices (the other half's half-edges
+    /// are left unused); returns the new half-edge, which lies in `s`.
+    fn trim_face(&mut self, f: u32, keep: Sign, z: &FaceZeros) -> u32 {
+        // The kept chain runs from zero k to zero 1 − k; the new half-edge
+        // closes it, from zero 1 − k back to zero k.
+        let k = usize::from(z.first_chain != keep);
+        let new = self.half_edges.len() as u32;
+        self.half_edges.push(HalfEdge {
+            origin: self.half_edges[z.leave[1 - k] as usize].origin,
+            twin: u32::MAX,
+            next: z.leave[k],
+            face: f,
+        });
+        self.half_edges[z.enter[1 - k] as usize].next = new;
+        self.faces[f as usize].half_edge = new;
+        new
     }
 
     /// Splits straddling face `f` (now with exactly two `0` vertices) along
     /// the segment between them: `f` keeps the `−` half and a new face gets
     /// the `+` half. Returns the new half-edge in `s` of each half, `f`'s
     /// first.
-    fn split_face(&mut self, f: u32, scratch: &mut Scratch) -> (u32, u32) {
-        let mut loop_ = std::mem::take(&mut scratch.face_loop);
-        loop_.clear();
-        let (mut i, mut j) = (usize::MAX, usize::MAX);
-        let first = self.faces[f as usize].half_edge;
-        let mut h = first;
-        loop {
-            if Self::known_side(self.half_edges[h as usize].origin, scratch) == Sign::Zero {
-                if i == usize::MAX {
-                    i = loop_.len();
-                } else if j == usize::MAX {
-                    j = loop_.len();
-                }
-            }
-            loop_.push(h);
-            h = self.half_edges[h as usize].next;
-            if h == first {
-                break;
-            }
-        }
-        assert!(
-            j != usize::MAX,
-            "a straddling face has two vertices on the plane"
+    fn split_face(&mut self, f: u32, z: &FaceZeros) -> (u32, u32) {
+        let (z1, z2) = (
+            self.half_edges[z.leave[0] as usize].origin,
+            self.half_edges[z.leave[1] as usize].origin,
         );
-        let n = loop_.len();
-        let origin = |k: usize| self.half_edges[loop_[k] as usize].origin;
-        // Chain i..j (half-edges loop_[i], …, loop_[j−1]) and chain j..i;
-        // each has a vertex off the plane, so i + 1 < j.
-        let chain_ij_positive = Self::known_side(origin(i + 1), scratch) == Sign::Positive;
-        let (z1, z2) = (origin(i), origin(j));
+        // Chain 0 runs from z1 to z2 (half-edges leave[0] … enter[1]),
+        // chain 1 from z2 to z1; a: z2→z1 closes chain 0, b: z1→z2 closes
+        // chain 1. Twins are set when the caps are built.
+        let chain_0_positive = z.first_chain == Sign::Positive;
         let (a, b) = (
             self.half_edges.len() as u32,
             self.half_edges.len() as u32 + 1,
         );
-        // a: z2→z1 closes chain i..j; b: z1→z2 closes chain j..i. Twins are
-        // set when the caps are built.
         let new_face = self.faces.len() as u32;
-        let plane = self.faces[f as usize].plane;
-        let tag = self.faces[f as usize].tag;
-        let (face_ij, face_ji) = if chain_ij_positive {
+        let face = self.faces[f as usize];
+        let (face_0, face_1) = if chain_0_positive {
             (new_face, f)
         } else {
             (f, new_face)
         };
+        // The `+` chain moves to the new face (before the loop is cut).
+        let (start, end) = if chain_0_positive {
+            (z.leave[0], z.enter[1])
+        } else {
+            (z.leave[1], z.enter[0])
+        };
+        let mut h = start;
+        loop {
+            self.half_edges[h as usize].face = new_face;
+            if h == end {
+                break;
+            }
+            h = self.half_edges[h as usize].next;
+        }
         self.half_edges.push(HalfEdge {
             origin: z2,
             twin: u32::MAX,
-            next: loop_[i],
-            face: face_ij,
+            next: z.leave[0],
+            face: face_0,
         });
         self.half_edges.push(HalfEdge {
             origin: z1,
             twin: u32::MAX,
-            next: loop_[j],
-            face: face_ji,
+            next: z.leave[1],
+            face: face_1,
         });
-        self.half_edges[loop_[j - 1] as usize].next = a;
-        self.half_edges[loop_[if i == 0 { n - 1 } else { i - 1 }] as usize].next = b;
-        if chain_ij_positive {
-            for &h in &loop_[i..j] {
-                self.half_edges[h as usize].face = new_face;
-            }
-        } else {
-            for &h in loop_[j..].iter().chain(&loop_[..i]) {
-                self.half_edges[h as usize].face = new_face;
-            }
-        }
-        let (kept, new) = if chain_ij_positive { (b, a) } else { (a, b) };
+        self.half_edges[z.enter[1] as usize].next = a;
+        self.half_edges[z.enter[0] as usize].next = b;
+        let (kept, new) = if chain_0_positive { (b, a) } else { (a, b) };
         self.faces.push(Face {
-            plane,
             half_edge: new,
-            tag,
+            ..face
         });
         self.faces[f as usize].half_edge = kept;
-        scratch.face_loop = loop_;
         (kept, new)
     }
 
-    /// Builds the two caps along the section and separates the parts;
-    /// `section` lists every half-edge lying in `s` with the side of its
-    /// face.
+    /// Builds the two caps along the section and separates the parts, or
+    /// with `keep` only the cap of that side's part; `section` lists every
+    /// half-edge lying in `s` with the side of its face (of the kept side
+    /// only, with `keep`). Returns the first half-edge of each cap
+    /// (`u32::MAX` for a cap not built).
     fn add_caps(
         &mut self,
         section: &[(u32, Sign)],
         scratch: &mut Scratch,
         s: &Plane,
-        below_tag: u32,
-        above_tag: u32,
-    ) -> CutOutcome {
+        tags: [u32; 2],
+        keep: Option<Sign>,
+    ) -> [u32; 2] {
         // One cap per side: for each section half-edge u→v on a face of that
         // side, the cap gets v→u, and cap edges chain by shared vertices.
         let mut cap_edges = std::mem::take(&mut scratch.cap_edges);
         let mut first_cap_edge = [u32::MAX; 2];
-        for (k, (side, plane, tag)) in [
-            (Sign::Negative, *s, below_tag),
-            (Sign::Positive, s.flipped(), above_tag),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+        for (k, side) in [Sign::Negative, Sign::Positive].into_iter().enumerate() {
+            if keep.is_some_and(|kept| kept != side) {
+                continue;
+            }
+            let plane = self.push_plane(if side == Sign::Negative {
+                *s
+            } else {
+                s.flipped()
+            });
             let cap = self.faces.len() as u32;
             let first = self.half_edges.len() as u32;
             scratch.cap_starts.clear();
@@ -282,17 +334,19 @@ impl ConvexArena {
             self.faces.push(Face {
                 plane,
                 half_edge: first,
-                tag,
+                tag: tags[k],
             });
             first_cap_edge[k] = first;
-            if side == Sign::Negative {
-                // The lower part keeps the section vertices.
+            if side == Sign::Negative || keep.is_some() {
+                // The lower part (or the only part built) keeps the section
+                // vertices.
                 for &(c, _) in &cap_edges {
                     let v = self.half_edges[c as usize].origin;
                     self.vertices[v as usize].half_edge = c;
                 }
             } else {
-                // The upper part gets copies: rotate around each section
+                // The upper part gets copies (sharing the exact point):
+                // rotate around each section
                 // vertex through the upper part's half-edges (now closed off
                 // by the cap) and re-point their origins.
                 for &(c, _) in &cap_edges {
@@ -314,9 +368,17 @@ impl ConvexArena {
             }
         }
         scratch.cap_edges = cap_edges;
-        CutOutcome::Split {
-            below: PolyId(first_cap_edge[0]),
-            above: PolyId(first_cap_edge[1]),
-        }
+        first_cap_edge
     }
+}
+
+/// The two `0` vertices of a straddling face, in the order its loop from
+/// its stored half-edge meets them (crossing edges split).
+struct FaceZeros {
+    /// The half-edge of the face leaving each.
+    leave: [u32; 2],
+    /// The half-edge of the face entering each.
+    enter: [u32; 2],
+    /// The side of the vertices on the chain from the first to the second.
+    first_chain: Sign,
 }

@@ -2,7 +2,8 @@
 //!
 //! Combinatorial: twins are mutual and reversed, face loops close (at least
 //! three edges), every half-edge of a face names that face, vertices point
-//! at a half-edge leaving them, and `V − E + F = 2`. Geometric (exact): each
+//! at a half-edge leaving them, vertices and faces name an existing point
+//! and plane, and `V − E + F = 2`. Geometric (exact): each
 //! vertex lies on the plane of every face around it, strictly inside the
 //! plane of every other face, and no two neighbouring faces are coplanar —
 //! the polyhedron is strictly convex.
@@ -44,7 +45,12 @@ impl ConvexArena {
         let mut half_edge_count = 0usize;
         let mut vertex_set = HashSet::new();
         for &f in &faces {
-            let face = &self.faces[f as usize];
+            ensure!(
+                (self.faces[f as usize].plane as usize) < self.planes.len(),
+                "face {f} names no plane"
+            );
+        }
+        for &f in &faces {
             let mut len = 0;
             for h in self.face_loop(f) {
                 len += 1;
@@ -81,12 +87,17 @@ impl ConvexArena {
                     e.origin
                 );
                 ensure!(
-                    classify_vertex(&v.point, &face.plane) == Sign::Zero,
+                    (v.point as usize) < self.points.len(),
+                    "vertex {} names no point",
+                    e.origin
+                );
+                ensure!(
+                    classify_vertex(self.point(e.origin), self.face_plane(f)) == Sign::Zero,
                     "vertex {} is not on the plane of face {f}",
                     e.origin
                 );
                 ensure!(
-                    !are_planes_parallel(&face.plane, &self.faces[t.face as usize].plane),
+                    !are_planes_parallel(self.face_plane(f), self.face_plane(t.face)),
                     "neighbouring faces {f} and {} have parallel planes",
                     t.face
                 );
@@ -111,7 +122,7 @@ impl ConvexArena {
         // Strict convexity: each vertex is strictly inside every face plane
         // it is not on.
         for &f in &faces {
-            let plane = &self.faces[f as usize].plane;
+            let plane = self.face_plane(f);
             let on_face: HashSet<u32> = self
                 .face_loop(f)
                 .map(|h| self.half_edges[h as usize].origin)
@@ -119,8 +130,7 @@ impl ConvexArena {
             for &vtx in &vertex_set {
                 if !on_face.contains(&vtx) {
                     ensure!(
-                        classify_vertex(&self.vertices[vtx as usize].point, plane)
-                            == Sign::Negative,
+                        classify_vertex(self.point(vtx), plane) == Sign::Negative,
                         "vertex {vtx} is not strictly inside face {f}"
                     );
                 }

@@ -48,7 +48,7 @@ impl Octree {
 }
 
 fn polyhedron_volume(arena: &ConvexArena, poly: PolyId) -> f64 {
-    let position = |v: u32| arena.vertices()[v as usize].point.to_f64();
+    let position = |v: u32| arena.position(v);
     let faces = arena.faces_of(poly);
     let Some(&first) = faces.first() else {
         return 0.0;

@@ -69,7 +69,7 @@ impl Tool {
         let mut min = [MAX_COORD; 3];
         let mut max = [-MAX_COORD; 3];
         for v in arena.vertices_of(poly) {
-            let p = arena.vertices()[v as usize].point.to_f64();
+            let p = arena.position(v);
             for a in 0..3 {
                 // One unit of slack covers the rounding of the position.
                 min[a] = min[a].min((p[a].floor() as i64 - 1).max(-MAX_COORD));

@@ -115,13 +115,10 @@ impl Bsp {
                     .map(|h| {
                         let half = arena.half_edges()[h as usize];
                         let across = arena.half_edges()[half.twin as usize].face;
-                        (
-                            arena.faces()[across as usize].plane,
-                            arena.vertices()[half.origin as usize].point,
-                        )
+                        (*arena.face_plane(across), *arena.point(half.origin))
                     })
                     .unzip();
-                let polygon = Polygon::with_corners(face.plane, edges, corners);
+                let polygon = Polygon::with_corners(*arena.face_plane(f), edges, corners);
                 if face.tag == NO_TAG {
                     out.push(BoundaryFace::new(polygon, cell.label, EMPTY, true));
                 } else {

@@ -70,7 +70,7 @@ impl Bsp {
         };
         for (k, &f) in faces.iter().enumerate() {
             let node = bsp.nodes.len() as NodeId;
-            bsp.planes.push(arena.faces()[f as usize].plane);
+            bsp.planes.push(*arena.face_plane(f));
             bsp.nodes.push(Node::Split {
                 plane: k as u32,
                 below: node + 2,

@@ -81,7 +81,7 @@ pub fn volume(arena: &ConvexArena, poly: PolyId) -> Fraction {
         .map(|f| {
             arena
                 .face_loop(f)
-                .map(|h| arena.vertices()[arena.half_edges()[h as usize].origin as usize].point)
+                .map(|h| *arena.point(arena.half_edges()[h as usize].origin))
                 .collect()
         })
         .collect();
