@@ -145,10 +145,10 @@ fn cell_faces(arena: &ConvexArena, poly: PolyId) -> Vec<String> {
                 .face_loop(f)
                 .map(|h| {
                     let v = arena.half_edges()[h as usize].origin;
-                    format!("{:?}", arena.vertices()[v as usize].point)
+                    format!("{:?}", arena.point(v))
                 })
                 .collect();
-            format!("{:?} {} {corners:?}", face.plane, face.tag)
+            format!("{:?} {} {corners:?}", arena.face_plane(f), face.tag)
         })
         .collect()
 }

@@ -7,7 +7,8 @@
 //! sibling subtree), which the later interior-face removal needs.
 
 use super::bsp::{Bsp, Label, Node, NodeId};
-use crate::convex::{ConvexArena, CutOutcome, Face, HalfEdge, PolyId, Vertex};
+use crate::convex::mesh::Vertex;
+use crate::convex::{ConvexArena, CutOutcome, Face, HalfEdge, PolyId};
 use crate::exact::{Plane, Sign, classify_vertex};
 
 /// The cell of one leaf inside the bounds.
@@ -145,7 +146,7 @@ impl Survey {
     pub(crate) fn reach(&self, arena: &ConvexArena, s: &Plane) -> Reach {
         let (mut below, mut above) = (false, false);
         for &v in &self.vertices {
-            match classify_vertex(&arena.vertices[v as usize].point, s) {
+            match classify_vertex(arena.point(v), s) {
                 Sign::Negative => below = true,
                 Sign::Positive => above = true,
                 Sign::Zero => {}
