@@ -5,13 +5,16 @@
 //! - `extract_linear_bsp/*/N`: the paper's — extracting the convex cell of
 //!   a linear BSP of `N` planes tangent to a sphere, i.e. cutting a box by
 //!   each plane in turn and keeping the part below. Throughput is in cuts.
+//!   `edge_descent` builds both parts of every cut (as BSP merges need),
+//!   `one_sided` only the part kept (`cut_keeping`), `classify_all` is the
+//!   naive cut building both.
 //! - `cut_through_middle/*/N`: one random plane through the central region
 //!   of the finished `N`-face polyhedron (a large section), each applied to
 //!   a fresh, cache-warm copy.
 
 use std::hint::black_box;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
+use chisel_bsp::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane};
 use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
@@ -48,17 +51,37 @@ fn bounding_box(arena: &mut ConvexArena) -> PolyId {
     arena.add_box(corner(-R), corner(R)).expect("a box")
 }
 
+/// How [`extract_cell`] cuts.
+#[derive(Clone, Copy)]
+enum Method {
+    /// Edge descent and marching, both parts built.
+    EdgeDescent,
+    /// Edge descent and marching, only the part below built.
+    OneSided,
+    /// Every vertex classified, both parts built.
+    ClassifyAll,
+}
+
 /// The cell of the linear BSP of `planes`: the box cut by each in turn.
-fn extract_cell(planes: &[Plane], naive: bool) -> (ConvexArena, PolyId) {
+fn extract_cell(planes: &[Plane], method: Method) -> (ConvexArena, PolyId) {
     let mut arena = ConvexArena::new();
     let mut poly = bounding_box(&mut arena);
     for plane in planes {
-        let outcome = if naive {
-            arena.cut_naive(poly, plane, NO_TAG, NO_TAG)
-        } else {
-            arena.cut(poly, plane, NO_TAG, NO_TAG)
+        let below = match method {
+            Method::EdgeDescent => match arena.cut(poly, plane, NO_TAG, NO_TAG) {
+                CutOutcome::Split { below, .. } => Some(below),
+                _ => None,
+            },
+            Method::OneSided => match arena.cut_keeping(poly, plane, Part::Below, NO_TAG) {
+                KeptOutcome::Cut(below) => Some(below),
+                _ => None,
+            },
+            Method::ClassifyAll => match arena.cut_naive(poly, plane, NO_TAG, NO_TAG) {
+                CutOutcome::Split { below, .. } => Some(below),
+                _ => None,
+            },
         };
-        if let CutOutcome::Split { below, .. } = outcome {
+        if let Some(below) = below {
             poly = below;
         }
     }
@@ -100,9 +123,13 @@ fn figure9(c: &mut Criterion) {
     for planes in [50, 250, 1000, 2000] {
         let tangents = tangent_planes(planes, planes as u64);
         group.throughput(Throughput::Elements(planes as u64));
-        for (name, naive) in [("edge_descent", false), ("classify_all", true)] {
+        for (name, method) in [
+            ("edge_descent", Method::EdgeDescent),
+            ("one_sided", Method::OneSided),
+            ("classify_all", Method::ClassifyAll),
+        ] {
             group.bench_with_input(BenchmarkId::new(name, planes), &planes, |b, _| {
-                b.iter(|| black_box(extract_cell(&tangents, naive)))
+                b.iter(|| black_box(extract_cell(&tangents, method)))
             });
         }
     }
