@@ -9,9 +9,9 @@
 //! the plane, and is dropped if it lies in the plane.
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
-use super::polygon::Polygon;
+use super::polygon::{Polygon, classify_corners};
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Sign, classify_vertex};
+use crate::exact::{IntPoint, Plane, Sign};
 
 /// Deterministic shuffle (xorshift64*), so imports are reproducible.
 fn shuffle<T>(items: &mut [T], seed: u64) {
@@ -126,18 +126,15 @@ impl Builder {
                 } => {
                     let p = &planes[plane as usize];
                     sides.clear();
-                    sides.extend(polygon.vertices().iter().map(|v| classify_vertex(v, p)));
-                    let (neg, pos) = (
-                        sides.contains(&Sign::Negative),
-                        sides.contains(&Sign::Positive),
-                    );
-                    match (neg, pos) {
+                    sides.resize(polygon.vertices().len(), Sign::Zero);
+                    match classify_corners(polygon.vertices(), p, sides) {
                         (false, false) => {} // in the plane: already represented
                         (true, false) => stack.push((below, polygon)),
                         (false, true) => stack.push((above, polygon)),
                         (true, true) => {
-                            stack.push((below, polygon.part(sides, p, Sign::Negative)));
-                            stack.push((above, polygon.part(sides, p, Sign::Positive)));
+                            let (b, a) = polygon.split_straddling(sides, p);
+                            stack.push((below, b));
+                            stack.push((above, a));
                         }
                     }
                 }

@@ -9,7 +9,8 @@
 
 use crate::Error;
 use crate::exact::{
-    IntPoint, Plane, Point4, Sign, classify_vertex, intersect_3_planes, plane_from_points,
+    IntPoint, Plane, Point4, Sign, classify_vertex_exact, classify_vertex_filtered,
+    intersect_3_planes, plane_from_points,
 };
 
 /// Polygons with at most this many corners are split without allocating
@@ -165,18 +166,13 @@ impl Polygon {
             heap.resize(n, Sign::Zero);
             &mut heap
         };
-        let (mut below, mut above) = (false, false);
-        for (side, v) in sides.iter_mut().zip(&self.corners) {
-            *side = classify_vertex(v, p);
-            below |= *side == Sign::Negative;
-            above |= *side == Sign::Positive;
-        }
+        let (below, above) = classify_corners(&self.corners, p, sides);
         let sides = &*sides;
         match (below, above) {
-            (true, true) => (
-                Some(self.part(sides, p, Sign::Negative)),
-                Some(self.part(sides, p, Sign::Positive)),
-            ),
+            (true, true) => {
+                let (b, a) = self.split_straddling(sides, p);
+                (Some(b), Some(a))
+            }
             (true, false) => (Some(self), None),
             (false, true) => (None, Some(self)),
             (false, false) => {
@@ -194,6 +190,241 @@ impl Polygon {
             }
         }
     }
+
+    /// The parts below and above `p` of a polygon with corners on both
+    /// sides (`sides` as [`classify_corners`] gives them): the same as
+    /// [`Self::part`] on each side, but each corner on `p` that both parts
+    /// share is computed once, and one part reuses this polygon's memory.
+    pub(crate) fn split_straddling(mut self, sides: &[Sign], p: &Plane) -> (Self, Self) {
+        let n = self.edges.len();
+        // The layout of each part: the original index of each of its edges
+        // (NONE for the closing one). At most 2n entries each (n + 1 for a
+        // convex polygon).
+        let (mut stack, mut heap) = ([NONE; 4 * SMALL], Vec::new());
+        let buffer: &mut [u32] = if n <= SMALL {
+            &mut stack
+        } else {
+            heap.resize(4 * n, NONE);
+            &mut heap
+        };
+        let (low, high) = buffer.split_at_mut(2 * n);
+        let (mb, ma) = (
+            layout(sides, Sign::Negative, low),
+            layout(sides, Sign::Positive, high),
+        );
+        let (below, above) = (&low[..mb], &high[..ma]);
+        let flipped = p.flipped();
+        let Some(meets) = SharedMeets::new(&self, [(below, p), (above, &flipped)]) else {
+            // Not the shape of a convex polygon's parts: no sharing.
+            return (
+                self.part(sides, p, Sign::Negative),
+                self.part(sides, p, Sign::Positive),
+            );
+        };
+        // The part whose edges all stay at or before their position is
+        // rewritten in place; the other is built first, into new memory.
+        if fits_in_place(below, n) {
+            let a = self.assemble(above, &flipped, &meets);
+            self.rewrite(below, p, &meets);
+            (self, a)
+        } else if fits_in_place(above, n) {
+            let b = self.assemble(below, p, &meets);
+            self.rewrite(above, &flipped, &meets);
+            (b, self)
+        } else {
+            (
+                self.assemble(below, p, &meets),
+                self.assemble(above, &flipped, &meets),
+            )
+        }
+    }
+
+    /// The part with edges `origin` (original indices, NONE for
+    /// `closing`), in new memory.
+    fn assemble(&self, origin: &[u32], closing: &Plane, meets: &SharedMeets) -> Self {
+        let (n, m) = (self.edges.len(), origin.len());
+        let mut edges = Vec::with_capacity(m);
+        let mut corners = Vec::with_capacity(m);
+        for j in 0..m {
+            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+            edges.push(if o == NONE {
+                *closing
+            } else {
+                self.edges[o as usize]
+            });
+            corners.push(match reused_corner(prev, o, n) {
+                Some(k) => self.corners[k],
+                None => *meets.get(prev, o),
+            });
+        }
+        Self {
+            support: self.support,
+            edges,
+            corners,
+        }
+    }
+
+    /// This polygon turned, in place, into the part with edges `origin`
+    /// (which [`fits_in_place`]).
+    fn rewrite(&mut self, origin: &[u32], closing: &Plane, meets: &SharedMeets) {
+        let (n, m) = (self.edges.len(), origin.len());
+        // Entry j reads original position origin[j] ≥ j, not yet written.
+        for j in 0..m {
+            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+            self.edges[j] = if o == NONE {
+                *closing
+            } else {
+                self.edges[o as usize]
+            };
+            self.corners[j] = match reused_corner(prev, o, n) {
+                Some(k) => self.corners[k],
+                None => *meets.get(prev, o),
+            };
+        }
+        self.edges.truncate(m);
+        self.corners.truncate(m);
+    }
+}
+
+/// Marks the closing plane in a part's layout.
+const NONE: u32 = u32::MAX;
+
+/// The sides of `corners` with respect to `p`, written to `sides`, and
+/// whether any is below and any above.
+#[inline]
+pub(crate) fn classify_corners(corners: &[Point4], p: &Plane, sides: &mut [Sign]) -> (bool, bool) {
+    let (mut below, mut above) = (false, false);
+    for (side, v) in sides.iter_mut().zip(corners) {
+        *side = classify_vertex_filtered(v, p).unwrap_or_else(|| classify_vertex_exact(v, p));
+        below |= *side == Sign::Negative;
+        above |= *side == Sign::Positive;
+    }
+    (below, above)
+}
+
+/// Writes the layout of the part on side `keep` into `origin` (as
+/// [`Polygon::part`] builds it: the original index of each kept edge, NONE
+/// where the closing plane goes) and returns its length.
+fn layout(sides: &[Sign], keep: Sign, origin: &mut [u32]) -> usize {
+    let n = sides.len();
+    let reaches = |k: usize| sides[k] == keep || sides[(k + 1) % n] == keep;
+    let across = -keep;
+    let mut m = 0;
+    for k in 0..n {
+        if reaches(k) {
+            origin[m] = k as u32;
+            m += 1;
+            let next = (k + 1) % n;
+            if sides[next] == across || !reaches(next) {
+                origin[m] = NONE;
+                m += 1;
+            }
+        }
+    }
+    m
+}
+
+/// The original corner a part reuses between its edges `prev` and `o`
+/// (consecutive original edges), if any.
+#[inline]
+fn reused_corner(prev: u32, o: u32, n: usize) -> Option<usize> {
+    (prev != NONE && o != NONE && o as usize == (prev as usize + 1) % n).then_some(o as usize)
+}
+
+/// Whether the part with this layout can be written over the original
+/// polygon front to back: no more edges, none moving to a later position.
+fn fits_in_place(origin: &[u32], n: usize) -> bool {
+    origin.len() <= n
+        && origin
+            .iter()
+            .enumerate()
+            .all(|(j, &o)| o == NONE || o as usize >= j)
+}
+
+/// The corners on the splitting plane of both parts, computed once: the
+/// corner between the closing plane and original edge `k` is the meet of
+/// the support, `e_k` and `±p`, the same exact vertex for both parts (the
+/// homogeneous coordinates of a three-plane meet change only in a common
+/// sign under reordering or flipping a plane, and the sign is normalised).
+struct SharedMeets {
+    keys: [u32; MAX_MEETS],
+    points: [Option<Point4>; MAX_MEETS],
+}
+
+/// New corners of a straddling split: two per part for a convex polygon.
+const MAX_MEETS: usize = 4;
+
+impl SharedMeets {
+    /// The new corners of both parts (layout and closing plane each), or
+    /// `None` when a part needs a corner that is not between its closing
+    /// plane and an original edge, or more than [`MAX_MEETS`] of them.
+    fn new(polygon: &Polygon, parts: [(&[u32], &Plane); 2]) -> Option<Self> {
+        let n = polygon.edges.len();
+        let mut meets = Self {
+            keys: [NONE; MAX_MEETS],
+            points: [None; MAX_MEETS],
+        };
+        let mut len = 0;
+        for (origin, closing) in parts {
+            let m = origin.len();
+            let plane = |o: u32| {
+                if o == NONE {
+                    closing
+                } else {
+                    &polygon.edges[o as usize]
+                }
+            };
+            for j in 0..m {
+                let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+                if reused_corner(prev, o, n).is_some() {
+                    continue;
+                }
+                let key = match (prev == NONE, o == NONE) {
+                    (true, false) => o,
+                    (false, true) => prev,
+                    _ => return None,
+                };
+                if let Some(i) = meets.keys[..len].iter().position(|&k| k == key) {
+                    debug_assert!(same_digits(
+                        meets.points[i].as_ref(),
+                        &meet(&polygon.support, plane(prev), plane(o))
+                    ));
+                    continue;
+                }
+                if len == MAX_MEETS {
+                    return None;
+                }
+                meets.keys[len] = key;
+                meets.points[len] = Some(meet(&polygon.support, plane(prev), plane(o)));
+                len += 1;
+            }
+        }
+        Some(meets)
+    }
+
+    /// The corner between the closing plane and the original edge among
+    /// `prev` and `o`.
+    #[inline]
+    fn get(&self, prev: u32, o: u32) -> &Point4 {
+        let key = if o == NONE { prev } else { o };
+        let i = self
+            .keys
+            .iter()
+            .position(|&k| k == key)
+            .expect("every new corner of a part was computed");
+        self.points[i]
+            .as_ref()
+            .expect("a key is set with its point")
+    }
+}
+
+/// Whether `a` is present and has the digits of `b` (debug checks).
+fn same_digits(a: Option<&Point4>, b: &Point4) -> bool {
+    a.is_some_and(|a| {
+        a.xyz_digits == b.xyz_digits
+            && a.w_digits == b.w_digits
+            && a.approx.map(f64::to_bits) == b.approx.map(f64::to_bits)
+    })
 }
 
 /// The corner where the support and two edge planes meet.
