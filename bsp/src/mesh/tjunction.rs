@@ -157,15 +157,13 @@ impl Grid {
     }
 
     /// The cell of `p`, clamped into the grid (a superset for queries).
+    /// The saturating cast truncates, which is the floor for the positive
+    /// values it keeps, and gives 0 below 1 and for NaN.
+    #[inline]
     fn key(&self, p: [f64; 3]) -> [usize; 3] {
-        [0, 1, 2].map(|i| {
-            let k = ((p[i] - self.origin[i]) / self.cell).floor();
-            if k > 0.0 {
-                (k as usize).min(self.dims[i] - 1)
-            } else {
-                0
-            }
-        })
+        let axis =
+            |i: usize| (((p[i] - self.origin[i]) / self.cell) as usize).min(self.dims[i] - 1);
+        [axis(0), axis(1), axis(2)]
     }
 
     fn index(&self, [x, y, z]: [usize; 3]) -> usize {
