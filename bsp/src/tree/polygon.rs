@@ -194,7 +194,8 @@ impl Polygon {
     /// The parts below and above `p` of a polygon with corners on both
     /// sides (`sides` as [`classify_corners`] gives them): the same as
     /// [`Self::part`] on each side, but each corner on `p` that both parts
-    /// share is computed once, and one part reuses this polygon's memory.
+    /// share is computed once, runs of kept edges and corners are copied
+    /// whole, and one part reuses this polygon's memory.
     pub(crate) fn split_straddling(mut self, sides: &[Sign], p: &Plane) -> (Self, Self) {
         let n = self.edges.len();
         // The layout of each part: the original index of each of its edges
@@ -214,48 +215,62 @@ impl Polygon {
         );
         let (below, above) = (&low[..mb], &high[..ma]);
         let flipped = p.flipped();
-        let Some(meets) = SharedMeets::new(&self, [(below, p), (above, &flipped)]) else {
-            // Not the shape of a convex polygon's parts: no sharing.
-            return (
-                self.part(sides, p, Sign::Negative),
-                self.part(sides, p, Sign::Positive),
-            );
-        };
         // The part whose edges all stay at or before their position is
-        // rewritten in place; the other is built first, into new memory.
+        // rewritten in place, after the other is built into new memory.
         if fits_in_place(below, n) {
-            let a = self.assemble(above, &flipped, &meets);
-            self.rewrite(below, p, &meets);
+            let a = self.assemble(above, &flipped, None);
+            self.rewrite(below, p, (above, &a.corners));
             (self, a)
         } else if fits_in_place(above, n) {
-            let b = self.assemble(below, p, &meets);
-            self.rewrite(above, &flipped, &meets);
+            let b = self.assemble(below, p, None);
+            self.rewrite(above, &flipped, (below, &b.corners));
             (b, self)
         } else {
-            (
-                self.assemble(below, p, &meets),
-                self.assemble(above, &flipped, &meets),
-            )
+            let b = self.assemble(below, p, None);
+            let a = self.assemble(above, &flipped, Some((below, &b.corners)));
+            (b, a)
         }
     }
 
     /// The part with edges `origin` (original indices, NONE for
-    /// `closing`), in new memory.
-    fn assemble(&self, origin: &[u32], closing: &Plane, meets: &SharedMeets) -> Self {
+    /// `closing`), in new memory; corners on `p` are taken from `other`
+    /// (the other part's layout and corners) where it has them.
+    fn assemble(&self, origin: &[u32], closing: &Plane, other: Option<Other<'_>>) -> Self {
         let (n, m) = (self.edges.len(), origin.len());
         let mut edges = Vec::with_capacity(m);
         let mut corners = Vec::with_capacity(m);
-        for j in 0..m {
-            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
-            edges.push(if o == NONE {
-                *closing
+        let mut j = 0;
+        while j < m {
+            let o = origin[j];
+            if o == NONE {
+                edges.push(*closing);
+                j += 1;
             } else {
-                self.edges[o as usize]
-            });
-            corners.push(match reused_corner(prev, o, n) {
-                Some(k) => self.corners[k],
-                None => *meets.get(prev, o),
-            });
+                let end = run_end(origin, j);
+                edges.extend_from_slice(&self.edges[o as usize..o as usize + (end - j)]);
+                j = end;
+            }
+        }
+        let mut j = 0;
+        while j < m {
+            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+            if let Some(k) = reused_corner(prev, o, n) {
+                let end = run_end(origin, j);
+                corners.extend_from_slice(&self.corners[k..k + (end - j)]);
+                j = end;
+            } else {
+                let plane = |o: u32| match o {
+                    NONE => closing,
+                    o => &self.edges[o as usize],
+                };
+                corners.push(new_corner(
+                    &self.support,
+                    (prev, plane(prev)),
+                    (o, plane(o)),
+                    other,
+                ));
+                j += 1;
+            }
         }
         Self {
             support: self.support,
@@ -265,25 +280,110 @@ impl Polygon {
     }
 
     /// This polygon turned, in place, into the part with edges `origin`
-    /// (which [`fits_in_place`]).
-    fn rewrite(&mut self, origin: &[u32], closing: &Plane, meets: &SharedMeets) {
+    /// (which [`fits_in_place`]); corners on `p` are taken from `other`
+    /// where it has them.
+    fn rewrite(&mut self, origin: &[u32], closing: &Plane, other: Other<'_>) {
         let (n, m) = (self.edges.len(), origin.len());
         // Entry j reads original position origin[j] ≥ j, not yet written.
-        for j in 0..m {
-            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
-            self.edges[j] = if o == NONE {
-                *closing
+        let mut j = 0;
+        while j < m {
+            let o = origin[j];
+            if o == NONE {
+                self.edges[j] = *closing;
+                j += 1;
             } else {
-                self.edges[o as usize]
-            };
-            self.corners[j] = match reused_corner(prev, o, n) {
-                Some(k) => self.corners[k],
-                None => *meets.get(prev, o),
-            };
+                let end = run_end(origin, j);
+                if o as usize != j {
+                    self.edges
+                        .copy_within(o as usize..o as usize + (end - j), j);
+                }
+                j = end;
+            }
+        }
+        // The edges are final; corner j lies between edges j − 1 and j.
+        let mut j = 0;
+        while j < m {
+            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+            if let Some(k) = reused_corner(prev, o, n) {
+                let end = run_end(origin, j);
+                if k != j {
+                    self.corners.copy_within(k..k + (end - j), j);
+                }
+                j = end;
+            } else {
+                self.corners[j] = new_corner(
+                    &self.support,
+                    (prev, &self.edges[(j + m - 1) % m]),
+                    (o, &self.edges[j]),
+                    Some(other),
+                );
+                j += 1;
+            }
         }
         self.edges.truncate(m);
         self.corners.truncate(m);
     }
+}
+
+/// The other part of a split, already built: its layout and corners.
+type Other<'a> = (&'a [u32], &'a [Point4]);
+
+/// The end of the run of consecutive original edges starting at position
+/// `j` of a layout (`origin[j]` is not NONE); inside the run the corners
+/// are the original ones too.
+#[inline]
+fn run_end(origin: &[u32], j: usize) -> usize {
+    let mut end = j + 1;
+    while end < origin.len() && origin[end] == origin[end - 1].wrapping_add(1) {
+        end += 1;
+    }
+    end
+}
+
+/// The corner of a part between its edges `(prev, plane)` and `(o,
+/// plane)` (original indices, NONE for the closing plane) that is not an
+/// original corner: the one `other` has between the same original edge and
+/// its closing plane (the same exact vertex: the homogeneous coordinates of
+/// a three-plane meet change only by a common sign when the planes are
+/// reordered or one is flipped, and the sign is normalised), else the meet.
+#[inline]
+fn new_corner(
+    support: &Plane,
+    (prev, a): (u32, &Plane),
+    (o, b): (u32, &Plane),
+    other: Option<Other<'_>>,
+) -> Point4 {
+    let key = match (prev, o) {
+        (NONE, NONE) => None,
+        (NONE, k) | (k, NONE) => Some(k),
+        _ => None,
+    };
+    if let (Some(key), Some((origin, corners))) = (key, other) {
+        let m = origin.len();
+        for (j, &o) in origin.iter().enumerate() {
+            if o != NONE {
+                continue;
+            }
+            let next = (j + 1) % m;
+            let found = if origin[(j + m - 1) % m] == key {
+                &corners[j]
+            } else if origin[next] == key {
+                &corners[next]
+            } else {
+                continue;
+            };
+            debug_assert!(same_digits(found, &meet(support, a, b)));
+            return *found;
+        }
+    }
+    meet(support, a, b)
+}
+
+/// Whether two vertices have the same digits and `f64`s (debug checks).
+fn same_digits(a: &Point4, b: &Point4) -> bool {
+    a.xyz_digits == b.xyz_digits
+        && a.w_digits == b.w_digits
+        && a.approx.map(f64::to_bits) == b.approx.map(f64::to_bits)
 }
 
 /// Marks the closing plane in a part's layout.
@@ -339,92 +439,6 @@ fn fits_in_place(origin: &[u32], n: usize) -> bool {
             .iter()
             .enumerate()
             .all(|(j, &o)| o == NONE || o as usize >= j)
-}
-
-/// The corners on the splitting plane of both parts, computed once: the
-/// corner between the closing plane and original edge `k` is the meet of
-/// the support, `e_k` and `±p`, the same exact vertex for both parts (the
-/// homogeneous coordinates of a three-plane meet change only in a common
-/// sign under reordering or flipping a plane, and the sign is normalised).
-struct SharedMeets {
-    keys: [u32; MAX_MEETS],
-    points: [Option<Point4>; MAX_MEETS],
-}
-
-/// New corners of a straddling split: two per part for a convex polygon.
-const MAX_MEETS: usize = 4;
-
-impl SharedMeets {
-    /// The new corners of both parts (layout and closing plane each), or
-    /// `None` when a part needs a corner that is not between its closing
-    /// plane and an original edge, or more than [`MAX_MEETS`] of them.
-    fn new(polygon: &Polygon, parts: [(&[u32], &Plane); 2]) -> Option<Self> {
-        let n = polygon.edges.len();
-        let mut meets = Self {
-            keys: [NONE; MAX_MEETS],
-            points: [None; MAX_MEETS],
-        };
-        let mut len = 0;
-        for (origin, closing) in parts {
-            let m = origin.len();
-            let plane = |o: u32| {
-                if o == NONE {
-                    closing
-                } else {
-                    &polygon.edges[o as usize]
-                }
-            };
-            for j in 0..m {
-                let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
-                if reused_corner(prev, o, n).is_some() {
-                    continue;
-                }
-                let key = match (prev == NONE, o == NONE) {
-                    (true, false) => o,
-                    (false, true) => prev,
-                    _ => return None,
-                };
-                if let Some(i) = meets.keys[..len].iter().position(|&k| k == key) {
-                    debug_assert!(same_digits(
-                        meets.points[i].as_ref(),
-                        &meet(&polygon.support, plane(prev), plane(o))
-                    ));
-                    continue;
-                }
-                if len == MAX_MEETS {
-                    return None;
-                }
-                meets.keys[len] = key;
-                meets.points[len] = Some(meet(&polygon.support, plane(prev), plane(o)));
-                len += 1;
-            }
-        }
-        Some(meets)
-    }
-
-    /// The corner between the closing plane and the original edge among
-    /// `prev` and `o`.
-    #[inline]
-    fn get(&self, prev: u32, o: u32) -> &Point4 {
-        let key = if o == NONE { prev } else { o };
-        let i = self
-            .keys
-            .iter()
-            .position(|&k| k == key)
-            .expect("every new corner of a part was computed");
-        self.points[i]
-            .as_ref()
-            .expect("a key is set with its point")
-    }
-}
-
-/// Whether `a` is present and has the digits of `b` (debug checks).
-fn same_digits(a: Option<&Point4>, b: &Point4) -> bool {
-    a.is_some_and(|a| {
-        a.xyz_digits == b.xyz_digits
-            && a.w_digits == b.w_digits
-            && a.approx.map(f64::to_bits) == b.approx.map(f64::to_bits)
-    })
 }
 
 /// The corner where the support and two edge planes meet.
