@@ -18,7 +18,7 @@
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
-use super::polygon::Polygon;
+use super::polygon::{Polygon, spare_buffers};
 use crate::convex::{ConvexArena, NO_TAG, PolyId};
 use crate::exact::{Plane, Point4};
 
@@ -110,17 +110,13 @@ impl Bsp {
                 }
                 // Half-edge k lies in the face across it (edge plane k) and
                 // leaves corner k, the meet of edge planes k − 1 and k.
-                let (edges, corners) = arena
-                    .face_loop(f)
-                    .map(|h| {
-                        let half = arena.half_edges()[h as usize];
-                        let across = arena.half_edges()[half.twin as usize].face;
-                        (
-                            arena.faces()[across as usize].plane,
-                            arena.vertices()[half.origin as usize].point,
-                        )
-                    })
-                    .unzip();
+                let (mut edges, mut corners) = spare_buffers(arena.face_loop(f).count());
+                for h in arena.face_loop(f) {
+                    let half = arena.half_edges()[h as usize];
+                    let across = arena.half_edges()[half.twin as usize].face;
+                    edges.push(arena.faces()[across as usize].plane);
+                    corners.push(arena.vertices()[half.origin as usize].point);
+                }
                 let polygon = Polygon::with_corners(face.plane, edges, corners);
                 if face.tag == NO_TAG {
                     out.push(BoundaryFace::new(polygon, cell.label, EMPTY, true));

@@ -7,6 +7,9 @@
 //! each side and closes each part with `p` (below) or `−p` (above): no new
 //! plane is ever constructed, and every vertex stays exact.
 
+use std::cell::RefCell;
+use std::mem;
+
 use crate::Error;
 use crate::exact::{
     IntPoint, Plane, Point4, Sign, classify_vertex_exact, classify_vertex_filtered,
@@ -94,8 +97,12 @@ impl Polygon {
     }
 
     /// The support, edge planes and corners, taken.
-    pub(crate) fn into_parts(self) -> (Plane, Vec<Plane>, Vec<Point4>) {
-        (self.support, self.edges, self.corners)
+    pub(crate) fn into_parts(mut self) -> (Plane, Vec<Plane>, Vec<Point4>) {
+        (
+            self.support,
+            mem::take(&mut self.edges),
+            mem::take(&mut self.corners),
+        )
     }
 
     /// The part on side `keep` (Negative or Positive) of `p`, given the
@@ -237,8 +244,7 @@ impl Polygon {
     /// (the other part's layout and corners) where it has them.
     fn assemble(&self, origin: &[u32], closing: &Plane, other: Option<Other<'_>>) -> Self {
         let (n, m) = (self.edges.len(), origin.len());
-        let mut edges = Vec::with_capacity(m);
-        let mut corners = Vec::with_capacity(m);
+        let (mut edges, mut corners) = spare_buffers(m);
         let mut j = 0;
         while j < m {
             let o = origin[j];
@@ -384,6 +390,55 @@ fn same_digits(a: &Point4, b: &Point4) -> bool {
     a.xyz_digits == b.xyz_digits
         && a.w_digits == b.w_digits
         && a.approx.map(f64::to_bits) == b.approx.map(f64::to_bits)
+}
+
+impl Drop for Polygon {
+    /// Hands the polygon's memory to the spare buffers of this thread.
+    fn drop(&mut self) {
+        if self.corners.capacity() == 0 {
+            return;
+        }
+        let buffers = (mem::take(&mut self.edges), mem::take(&mut self.corners));
+        // When the pool is full, or the thread is ending, the buffers are
+        // simply freed.
+        let _ = SPARE.try_with(|spare| {
+            if let Ok(mut spare) = spare.try_borrow_mut()
+                && spare.len() < MAX_SPARE
+            {
+                let (mut edges, mut corners) = buffers;
+                edges.clear();
+                corners.clear();
+                spare.push((edges, corners));
+            }
+        });
+    }
+}
+
+thread_local! {
+    /// Edge and corner buffers of dropped polygons, for the next polygons
+    /// built on the same thread: clipping and rebuilding drop about as many
+    /// pieces as they create, so most splits allocate nothing.
+    static SPARE: RefCell<Vec<(Vec<Plane>, Vec<Point4>)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Spare buffer pairs kept per thread.
+const MAX_SPARE: usize = 64;
+
+/// Empty edge and corner buffers with room for `m` of each: spare ones
+/// when there are, else new ones.
+pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
+    let spare = SPARE
+        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.pop()))
+        .ok()
+        .flatten();
+    match spare {
+        Some((mut edges, mut corners)) => {
+            edges.reserve(m);
+            corners.reserve(m);
+            (edges, corners)
+        }
+        None => (Vec::with_capacity(m), Vec::with_capacity(m)),
+    }
 }
 
 /// Marks the closing plane in a part's layout.
