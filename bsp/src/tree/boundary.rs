@@ -60,7 +60,10 @@ impl BoundaryFace {
 
     /// The face as a plane-based polygon.
     pub(crate) fn polygon(&self) -> Polygon {
-        Polygon::with_corners(self.plane, self.edges.clone(), self.vertices.clone())
+        let (mut edges, mut corners) = spare_buffers(self.edges.len());
+        edges.extend_from_slice(&self.edges);
+        corners.extend_from_slice(&self.vertices);
+        Polygon::with_corners(self.plane, edges, corners)
     }
 
     /// The face as a plane-based polygon, taken apart without copying.

@@ -424,20 +424,26 @@ thread_local! {
 /// Spare buffer pairs kept per thread.
 const MAX_SPARE: usize = 64;
 
+/// Room for corners in new buffers, at least: most polygons have fewer,
+/// so spare buffers usually fit the next polygon.
+const MIN_CAPACITY: usize = 8;
+
 /// Empty edge and corner buffers with room for `m` of each: spare ones
-/// when there are, else new ones.
+/// when they are large enough, else new ones (growing a spare buffer would
+/// copy its stale contents).
 pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
     let spare = SPARE
         .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.pop()))
         .ok()
         .flatten();
     match spare {
-        Some((mut edges, mut corners)) => {
-            edges.reserve(m);
-            corners.reserve(m);
+        Some((edges, corners)) if edges.capacity() >= m && corners.capacity() >= m => {
             (edges, corners)
         }
-        None => (Vec::with_capacity(m), Vec::with_capacity(m)),
+        _ => {
+            let capacity = m.max(MIN_CAPACITY);
+            (Vec::with_capacity(capacity), Vec::with_capacity(capacity))
+        }
     }
 }
 
