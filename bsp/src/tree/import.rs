@@ -102,8 +102,10 @@ impl Builder {
         } = self;
         // Every piece of the face shares its plane: one palette entry.
         let mut palette_index = None;
-        stack.push((0, polygon));
-        while let Some((n, polygon)) = stack.pop() {
+        // A piece that is not split goes on without passing through the
+        // stack; of two parts, the one above goes first.
+        let mut current = Some((0, polygon));
+        while let Some((n, polygon)) = current.take().or_else(|| stack.pop()) {
             match nodes[n as usize] {
                 Node::Leaf(_) => {
                     let plane = *palette_index.get_or_insert_with(|| {
@@ -129,12 +131,12 @@ impl Builder {
                     sides.resize(polygon.vertices().len(), Sign::Zero);
                     match classify_corners(polygon.vertices(), p, sides) {
                         (false, false) => {} // in the plane: already represented
-                        (true, false) => stack.push((below, polygon)),
-                        (false, true) => stack.push((above, polygon)),
+                        (true, false) => current = Some((below, polygon)),
+                        (false, true) => current = Some((above, polygon)),
                         (true, true) => {
                             let (b, a) = polygon.split_straddling(sides, p);
                             stack.push((below, b));
-                            stack.push((above, a));
+                            current = Some((above, a));
                         }
                     }
                 }

@@ -183,13 +183,7 @@ impl Polygon {
             (true, false) => (Some(self), None),
             (false, true) => (None, Some(self)),
             (false, false) => {
-                // Coplanar: the supports are positive multiples of ±p.
-                let same = p
-                    .normal()
-                    .iter()
-                    .zip(self.support.normal())
-                    .all(|(a, b)| a.signum() == b.signum());
-                if same {
+                if faces_along(&self.support, p) {
                     (None, Some(self))
                 } else {
                     (Some(self), None)
@@ -450,13 +444,30 @@ pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
 /// Marks the closing plane in a part's layout.
 const NONE: u32 = u32::MAX;
 
+/// Whether a polygon with support `support` lying in `p` faces along `p`
+/// (the supports are positive multiples of each other, not opposite).
+#[inline]
+pub(crate) fn faces_along(support: &Plane, p: &Plane) -> bool {
+    p.normal()
+        .iter()
+        .zip(support.normal())
+        .all(|(a, b)| a.signum() == b.signum())
+}
+
+/// The side of `p` that `v` is on ([`crate::exact::classify_vertex`], with
+/// the filter inlined).
+#[inline]
+pub(crate) fn side_of(v: &Point4, p: &Plane) -> Sign {
+    classify_vertex_filtered(v, p).unwrap_or_else(|| classify_vertex_exact(v, p))
+}
+
 /// The sides of `corners` with respect to `p`, written to `sides`, and
 /// whether any is below and any above.
 #[inline]
 pub(crate) fn classify_corners(corners: &[Point4], p: &Plane, sides: &mut [Sign]) -> (bool, bool) {
     let (mut below, mut above) = (false, false);
     for (side, v) in sides.iter_mut().zip(corners) {
-        *side = classify_vertex_filtered(v, p).unwrap_or_else(|| classify_vertex_exact(v, p));
+        *side = side_of(v, p);
         below |= *side == Sign::Negative;
         above |= *side == Sign::Positive;
     }
