@@ -50,13 +50,16 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
     let mut edge_number = 0u64;
     let mut candidates = Vec::new();
     let mut inside = Vec::new();
+    let mut originals = Vec::new();
     for polygon in polygons.iter_mut() {
         let n = polygon.original_len();
-        let originals: Vec<u32> = polygon
-            .originals
-            .iter()
-            .map(|&o| polygon.corners[o as usize])
-            .collect();
+        originals.clear();
+        originals.extend(
+            polygon
+                .originals
+                .iter()
+                .map(|&o| polygon.corners[o as usize]),
+        );
         let mut corners = Vec::with_capacity(n);
         let mut positions_of_originals = Vec::with_capacity(n);
         for k in 0..n {
