@@ -416,7 +416,7 @@ thread_local! {
 }
 
 /// Spare buffer pairs kept per thread.
-const MAX_SPARE: usize = 64;
+const MAX_SPARE: usize = 256;
 
 /// Room for corners in new buffers, at least: most polygons have fewer,
 /// so spare buffers usually fit the next polygon.
