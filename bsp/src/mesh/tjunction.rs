@@ -50,13 +50,16 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
     let mut edge_number = 0u64;
     let mut candidates = Vec::new();
     let mut inside = Vec::new();
+    let mut originals = Vec::new();
     for polygon in polygons.iter_mut() {
         let n = polygon.original_len();
-        let originals: Vec<u32> = polygon
-            .originals
-            .iter()
-            .map(|&o| polygon.corners[o as usize])
-            .collect();
+        originals.clear();
+        originals.extend(
+            polygon
+                .originals
+                .iter()
+                .map(|&o| polygon.corners[o as usize]),
+        );
         let mut corners = Vec::with_capacity(n);
         let mut positions_of_originals = Vec::with_capacity(n);
         for k in 0..n {
@@ -157,15 +160,13 @@ impl Grid {
     }
 
     /// The cell of `p`, clamped into the grid (a superset for queries).
+    /// The saturating cast truncates, which is the floor for the positive
+    /// values it keeps, and gives 0 below 1 and for NaN.
+    #[inline]
     fn key(&self, p: [f64; 3]) -> [usize; 3] {
-        [0, 1, 2].map(|i| {
-            let k = ((p[i] - self.origin[i]) / self.cell).floor();
-            if k > 0.0 {
-                (k as usize).min(self.dims[i] - 1)
-            } else {
-                0
-            }
-        })
+        let axis =
+            |i: usize| (((p[i] - self.origin[i]) / self.cell) as usize).min(self.dims[i] - 1);
+        [axis(0), axis(1), axis(2)]
     }
 
     fn index(&self, [x, y, z]: [usize; 3]) -> usize {

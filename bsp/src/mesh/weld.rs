@@ -20,6 +20,8 @@
 //! too. Candidates are then confirmed exactly.
 
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
+use std::hash::{BuildHasherDefault, Hash, Hasher};
 
 use crate::exact::Point4;
 
@@ -53,12 +55,63 @@ fn same_point(a: &Point4, b: &Point4) -> bool {
     (a.xyz_digits == b.xyz_digits && a.w_digits == b.w_digits) || a.same_position(b)
 }
 
+/// The key of a cell: its three coordinates, hashed as three words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct CellKey([i64; 3]);
+
+impl Hash for CellKey {
+    #[inline]
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        for v in self.0 {
+            state.write_i64(v);
+        }
+    }
+}
+
+/// A multiply–rotate hash of a few words (as in `rustc-hash`): the keys
+/// are not adversarial, and the cell lookups only need a good spread.
+#[derive(Clone, Copy, Debug, Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    #[inline]
+    fn write_u64(&mut self, x: u64) {
+        self.0 = self.0.wrapping_add(x).wrapping_mul(0xF135_7AEA_2E62_A9C5);
+    }
+
+    #[inline]
+    fn write_i64(&mut self, x: i64) {
+        self.write_u64(x as u64);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0.rotate_left(26)
+    }
+}
+
+/// Marks the end of a cell's list of vertices.
+const END: u32 = u32::MAX;
+
 /// Assigns indices to exact points, one per distinct position, in order of
 /// first appearance.
 #[derive(Debug, Default)]
 pub struct Welder {
     vertices: Vec<Point4>,
-    cells: HashMap<[i64; 3], Vec<u32>>,
+    /// The first and last vertex of each cell; the others are linked by
+    /// [`Self::next`], in order of first appearance.
+    cells: HashMap<CellKey, (u32, u32), BuildHasherDefault<CellHasher>>,
+    /// The vertex after each in its cell, or [`END`].
+    next: Vec<u32>,
 }
 
 impl Welder {
@@ -67,7 +120,8 @@ impl Welder {
     pub fn with_capacity(n: usize) -> Self {
         Self {
             vertices: Vec::with_capacity(n),
-            cells: HashMap::with_capacity(n),
+            cells: HashMap::with_capacity_and_hasher(n, BuildHasherDefault::default()),
+            next: Vec::with_capacity(n),
         }
     }
 
@@ -93,19 +147,32 @@ impl Welder {
         for x in cx.iter().flatten() {
             for y in cy.iter().flatten() {
                 for z in cz.iter().flatten() {
-                    if let Some(found) = self.cells.get(&[*x, *y, *z]).and_then(|list| {
-                        list.iter()
-                            .copied()
-                            .find(|&i| same_point(&self.vertices[i as usize], p))
-                    }) {
-                        return found;
+                    let Some(&(first, _)) = self.cells.get(&CellKey([*x, *y, *z])) else {
+                        continue;
+                    };
+                    let mut i = first;
+                    while i != END {
+                        if same_point(&self.vertices[i as usize], p) {
+                            return i;
+                        }
+                        i = self.next[i as usize];
                     }
                 }
             }
         }
         let index = self.vertices.len() as u32;
         self.vertices.push(*p);
-        self.cells.entry(key).or_default().push(index);
+        self.next.push(END);
+        match self.cells.entry(CellKey(key)) {
+            Entry::Occupied(mut cell) => {
+                let (_, last) = cell.get_mut();
+                self.next[*last as usize] = index;
+                *last = index;
+            }
+            Entry::Vacant(cell) => {
+                cell.insert((index, index));
+            }
+        }
         index
     }
 

@@ -18,9 +18,9 @@
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
-use super::polygon::Polygon;
+use super::polygon::{Polygon, faces_along, side_of, spare_buffers};
 use crate::convex::{ConvexArena, NO_TAG, PolyId};
-use crate::exact::{Plane, Point4};
+use crate::exact::{Plane, Point4, Sign};
 
 /// One boundary polygon: outward plane, exact corners counter-clockwise
 /// from outside (with the edge planes that define them), and the labels on
@@ -60,7 +60,10 @@ impl BoundaryFace {
 
     /// The face as a plane-based polygon.
     pub(crate) fn polygon(&self) -> Polygon {
-        Polygon::with_corners(self.plane, self.edges.clone(), self.vertices.clone())
+        let (mut edges, mut corners) = spare_buffers(self.edges.len());
+        edges.extend_from_slice(&self.edges);
+        corners.extend_from_slice(&self.vertices);
+        Polygon::with_corners(self.plane, edges, corners)
     }
 
     /// The face as a plane-based polygon, taken apart without copying.
@@ -99,51 +102,88 @@ impl Bsp {
     ) -> Vec<BoundaryFace> {
         let mut out = Vec::new();
         let mut stack = Vec::new();
+        let mut sides = Vec::new();
+        let mut faces = Vec::new();
         for cell in cells {
             if cell.label == EMPTY {
                 continue;
             }
-            for f in arena.faces_of(cell.poly) {
-                let face = arena.faces()[f as usize];
-                if face.tag == NO_TAG && bounds == Bounds::Skip {
-                    continue;
-                }
-                // Half-edge k lies in the face across it (edge plane k) and
-                // leaves corner k, the meet of edge planes k − 1 and k.
-                let (edges, corners) = arena
-                    .face_loop(f)
-                    .map(|h| {
-                        let half = arena.half_edges()[h as usize];
-                        let across = arena.half_edges()[half.twin as usize].face;
-                        (*arena.face_plane(across), *arena.point(half.origin))
-                    })
-                    .unzip();
-                let polygon = Polygon::with_corners(*arena.face_plane(f), edges, corners);
-                if face.tag == NO_TAG {
-                    out.push(BoundaryFace::new(polygon, cell.label, EMPTY, true));
-                } else {
-                    self.clip(face.tag, polygon, cell.label, &mut stack, &mut out);
+            faces_of_cell(arena, cell.poly, &mut faces);
+            for &f in &faces {
+                if arena.faces()[f as usize].tag != NO_TAG {
+                    self.clip_cell_face(arena, f, cell.label, &mut sides, &mut stack, &mut out);
+                } else if bounds == Bounds::Keep {
+                    out.push(BoundaryFace::new(
+                        cell_face(arena, f),
+                        cell.label,
+                        EMPTY,
+                        true,
+                    ));
                 }
             }
         }
         out
     }
 
-    /// Clips `polygon` against the subtree at `n`, keeping the pieces that
-    /// reach leaves with a smaller label.
-    fn clip(
+    /// Clips face `f` of a solid cell of `label` against the subtree on its
+    /// other side, keeping the pieces that reach leaves with a smaller
+    /// label: [`Bsp::clip_polygon`], but the face is read in place in the
+    /// arena until it must be split or kept, so a face that falls whole
+    /// into a leaf of the same material is never copied.
+    fn clip_cell_face(
         &self,
-        n: NodeId,
-        polygon: Polygon,
+        arena: &ConvexArena,
+        f: u32,
         label: Label,
+        sides: &mut Vec<Sign>,
         stack: &mut Vec<(NodeId, Polygon)>,
         out: &mut Vec<BoundaryFace>,
     ) {
-        self.clip_polygon_with(n, polygon, stack, &mut |piece, other| {
-            if other < label {
-                out.push(BoundaryFace::new(piece, label, other, false));
+        let face = &arena.faces()[f as usize];
+        let mut n = face.tag;
+        loop {
+            match self.nodes()[n as usize] {
+                Node::Leaf(other) => {
+                    if other < label {
+                        out.push(BoundaryFace::new(cell_face(arena, f), label, other, false));
+                    }
+                    return;
+                }
+                Node::Split {
+                    plane,
+                    below,
+                    above,
+                } => {
+                    let p = &self.planes()[plane as usize];
+                    sides.clear();
+                    let (mut neg, mut pos) = (false, false);
+                    for h in arena.face_loop(f) {
+                        let origin = arena.half_edges()[h as usize].origin;
+                        let side = side_of(arena.point(origin), p);
+                        neg |= side == Sign::Negative;
+                        pos |= side == Sign::Positive;
+                        sides.push(side);
+                    }
+                    // The choices of [`Polygon::split`].
+                    n = match (neg, pos) {
+                        (true, true) => {
+                            let (b, a) = cell_face(arena, f).split_straddling(sides, p);
+                            stack.push((above, a));
+                            self.clip_pieces(below, b, stack, &mut |piece, other| {
+                                if other < label {
+                                    out.push(BoundaryFace::new(piece, label, other, false));
+                                }
+                            });
+                            return;
+                        }
+                        (true, false) => below,
+                        (false, true) => above,
+                        (false, false) if faces_along(arena.face_plane(f), p) => above,
+                        (false, false) => below,
+                    };
+                }
             }
-        });
+        }
     }
 
     /// Splits `polygon` exactly among the leaves of the subtree at `n`,
@@ -156,19 +196,21 @@ impl Bsp {
         polygon: Polygon,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        self.clip_polygon_with(n, polygon, &mut Vec::new(), emit);
+        self.clip_pieces(n, polygon, &mut Vec::new(), emit);
     }
 
-    /// [`Bsp::clip_polygon`] with a reused (empty) work stack.
-    fn clip_polygon_with(
+    /// [`Bsp::clip_polygon`] of `polygon` at `n` and then of the pieces on
+    /// `stack`, depth first, below before above. A piece that is not split
+    /// goes on without passing through the stack.
+    fn clip_pieces(
         &self,
         n: NodeId,
         polygon: Polygon,
         stack: &mut Vec<(NodeId, Polygon)>,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        stack.push((n, polygon));
-        while let Some((n, polygon)) = stack.pop() {
+        let mut current = Some((n, polygon));
+        while let Some((n, polygon)) = current.take().or_else(|| stack.pop()) {
             match self.nodes()[n as usize] {
                 Node::Leaf(other) => emit(polygon, other),
                 Node::Split {
@@ -176,15 +218,58 @@ impl Bsp {
                     below,
                     above,
                 } => {
-                    let (b, a) = polygon.split(&self.planes()[plane as usize]);
-                    if let Some(a) = a {
-                        stack.push((above, a));
-                    }
-                    if let Some(b) = b {
-                        stack.push((below, b));
-                    }
+                    current = match polygon.split(&self.planes()[plane as usize]) {
+                        (Some(b), Some(a)) => {
+                            stack.push((above, a));
+                            Some((below, b))
+                        }
+                        (Some(b), None) => Some((below, b)),
+                        (None, Some(a)) => Some((above, a)),
+                        (None, None) => None,
+                    };
                 }
             }
         }
     }
+}
+
+/// The faces of cell `poly`, in the order of [`ConvexArena::faces_of`]
+/// (breadth first from the face of its half-edge), into `order`, reused
+/// between cells: the faces found so far are the set of faces seen,
+/// searched linearly while the cell is small (cells have tens of faces).
+fn faces_of_cell(arena: &ConvexArena, poly: PolyId, order: &mut Vec<u32>) {
+    /// Faces searched linearly; beyond, the arena's own traversal.
+    const FEW: usize = 48;
+    order.clear();
+    order.push(arena.half_edges()[poly.0 as usize].face);
+    let mut i = 0;
+    while i < order.len() {
+        for h in arena.face_loop(order[i]) {
+            let twin = arena.half_edges()[h as usize].twin;
+            let neighbour = arena.half_edges()[twin as usize].face;
+            if !order.contains(&neighbour) {
+                if order.len() == FEW {
+                    *order = arena.faces_of(poly);
+                    return;
+                }
+                order.push(neighbour);
+            }
+        }
+        i += 1;
+    }
+    debug_assert_eq!(*order, arena.faces_of(poly));
+}
+
+/// Face `f` of the arena as a plane-based polygon. Half-edge k lies in the
+/// face across it (edge plane k) and leaves corner k, the meet of edge
+/// planes k − 1 and k.
+fn cell_face(arena: &ConvexArena, f: u32) -> Polygon {
+    let (mut edges, mut corners) = spare_buffers(arena.face_loop(f).count());
+    for h in arena.face_loop(f) {
+        let half = arena.half_edges()[h as usize];
+        let across = arena.half_edges()[half.twin as usize].face;
+        edges.push(*arena.face_plane(across));
+        corners.push(*arena.point(half.origin));
+    }
+    Polygon::with_corners(*arena.face_plane(f), edges, corners)
 }

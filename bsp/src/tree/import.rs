@@ -9,9 +9,9 @@
 //! the plane, and is dropped if it lies in the plane.
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
-use super::polygon::Polygon;
+use super::polygon::{Polygon, classify_corners};
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Sign, classify_vertex};
+use crate::exact::{IntPoint, Plane, Sign};
 
 /// Deterministic shuffle (xorshift64*), so imports are reproducible.
 fn shuffle<T>(items: &mut [T], seed: u64) {
@@ -102,8 +102,10 @@ impl Builder {
         } = self;
         // Every piece of the face shares its plane: one palette entry.
         let mut palette_index = None;
-        stack.push((0, polygon));
-        while let Some((n, polygon)) = stack.pop() {
+        // A piece that is not split goes on without passing through the
+        // stack; of two parts, the one above goes first.
+        let mut current = Some((0, polygon));
+        while let Some((n, polygon)) = current.take().or_else(|| stack.pop()) {
             match nodes[n as usize] {
                 Node::Leaf(_) => {
                     let plane = *palette_index.get_or_insert_with(|| {
@@ -126,18 +128,15 @@ impl Builder {
                 } => {
                     let p = &planes[plane as usize];
                     sides.clear();
-                    sides.extend(polygon.vertices().iter().map(|v| classify_vertex(v, p)));
-                    let (neg, pos) = (
-                        sides.contains(&Sign::Negative),
-                        sides.contains(&Sign::Positive),
-                    );
-                    match (neg, pos) {
+                    sides.resize(polygon.vertices().len(), Sign::Zero);
+                    match classify_corners(polygon.vertices(), p, sides) {
                         (false, false) => {} // in the plane: already represented
-                        (true, false) => stack.push((below, polygon)),
-                        (false, true) => stack.push((above, polygon)),
+                        (true, false) => current = Some((below, polygon)),
+                        (false, true) => current = Some((above, polygon)),
                         (true, true) => {
-                            stack.push((below, polygon.part(sides, p, Sign::Negative)));
-                            stack.push((above, polygon.part(sides, p, Sign::Positive)));
+                            let (b, a) = polygon.split_straddling(sides, p);
+                            stack.push((below, b));
+                            current = Some((above, a));
                         }
                     }
                 }

@@ -7,9 +7,13 @@
 //! each side and closes each part with `p` (below) or `−p` (above): no new
 //! plane is ever constructed, and every vertex stays exact.
 
+use std::cell::RefCell;
+use std::mem;
+
 use crate::Error;
 use crate::exact::{
-    IntPoint, Plane, Point4, Sign, classify_vertex, intersect_3_planes, plane_from_points,
+    IntPoint, Plane, Point4, Sign, classify_vertex_exact, classify_vertex_filtered,
+    intersect_3_planes, plane_from_points,
 };
 
 /// Polygons with at most this many corners are split without allocating
@@ -93,8 +97,12 @@ impl Polygon {
     }
 
     /// The support, edge planes and corners, taken.
-    pub(crate) fn into_parts(self) -> (Plane, Vec<Plane>, Vec<Point4>) {
-        (self.support, self.edges, self.corners)
+    pub(crate) fn into_parts(mut self) -> (Plane, Vec<Plane>, Vec<Point4>) {
+        (
+            self.support,
+            mem::take(&mut self.edges),
+            mem::take(&mut self.corners),
+        )
     }
 
     /// The part on side `keep` (Negative or Positive) of `p`, given the
@@ -165,28 +173,17 @@ impl Polygon {
             heap.resize(n, Sign::Zero);
             &mut heap
         };
-        let (mut below, mut above) = (false, false);
-        for (side, v) in sides.iter_mut().zip(&self.corners) {
-            *side = classify_vertex(v, p);
-            below |= *side == Sign::Negative;
-            above |= *side == Sign::Positive;
-        }
+        let (below, above) = classify_corners(&self.corners, p, sides);
         let sides = &*sides;
         match (below, above) {
-            (true, true) => (
-                Some(self.part(sides, p, Sign::Negative)),
-                Some(self.part(sides, p, Sign::Positive)),
-            ),
+            (true, true) => {
+                let (b, a) = self.split_straddling(sides, p);
+                (Some(b), Some(a))
+            }
             (true, false) => (Some(self), None),
             (false, true) => (None, Some(self)),
             (false, false) => {
-                // Coplanar: the supports are positive multiples of ±p.
-                let same = p
-                    .normal()
-                    .iter()
-                    .zip(self.support.normal())
-                    .all(|(a, b)| a.signum() == b.signum());
-                if same {
+                if faces_along(&self.support, p) {
                     (None, Some(self))
                 } else {
                     (Some(self), None)
@@ -194,6 +191,326 @@ impl Polygon {
             }
         }
     }
+
+    /// The parts below and above `p` of a polygon with corners on both
+    /// sides (`sides` as [`classify_corners`] gives them): the same as
+    /// [`Self::part`] on each side, but each corner on `p` that both parts
+    /// share is computed once, runs of kept edges and corners are copied
+    /// whole, and one part reuses this polygon's memory.
+    pub(crate) fn split_straddling(mut self, sides: &[Sign], p: &Plane) -> (Self, Self) {
+        let n = self.edges.len();
+        // The layout of each part: the original index of each of its edges
+        // (NONE for the closing one). At most 2n entries each (n + 1 for a
+        // convex polygon).
+        let (mut stack, mut heap) = ([NONE; 4 * SMALL], Vec::new());
+        let buffer: &mut [u32] = if n <= SMALL {
+            &mut stack
+        } else {
+            heap.resize(4 * n, NONE);
+            &mut heap
+        };
+        let (low, high) = buffer.split_at_mut(2 * n);
+        let (mb, ma) = (
+            layout(sides, Sign::Negative, low),
+            layout(sides, Sign::Positive, high),
+        );
+        let (below, above) = (&low[..mb], &high[..ma]);
+        let flipped = p.flipped();
+        // The part whose edges all stay at or before their position is
+        // rewritten in place, after the other is built into new memory.
+        if fits_in_place(below, n) {
+            let a = self.assemble(above, &flipped, None);
+            self.rewrite(below, p, (above, &a.corners));
+            (self, a)
+        } else if fits_in_place(above, n) {
+            let b = self.assemble(below, p, None);
+            self.rewrite(above, &flipped, (below, &b.corners));
+            (b, self)
+        } else {
+            let b = self.assemble(below, p, None);
+            let a = self.assemble(above, &flipped, Some((below, &b.corners)));
+            (b, a)
+        }
+    }
+
+    /// The part with edges `origin` (original indices, NONE for
+    /// `closing`), in new memory; corners on `p` are taken from `other`
+    /// (the other part's layout and corners) where it has them.
+    fn assemble(&self, origin: &[u32], closing: &Plane, other: Option<Other<'_>>) -> Self {
+        let (n, m) = (self.edges.len(), origin.len());
+        let (mut edges, mut corners) = spare_buffers(m);
+        let mut j = 0;
+        while j < m {
+            let o = origin[j];
+            if o == NONE {
+                edges.push(*closing);
+                j += 1;
+            } else {
+                let end = run_end(origin, j);
+                edges.extend_from_slice(&self.edges[o as usize..o as usize + (end - j)]);
+                j = end;
+            }
+        }
+        let mut j = 0;
+        while j < m {
+            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+            if let Some(k) = reused_corner(prev, o, n) {
+                let end = run_end(origin, j);
+                corners.extend_from_slice(&self.corners[k..k + (end - j)]);
+                j = end;
+            } else {
+                let plane = |o: u32| match o {
+                    NONE => closing,
+                    o => &self.edges[o as usize],
+                };
+                corners.push(new_corner(
+                    &self.support,
+                    (prev, plane(prev)),
+                    (o, plane(o)),
+                    other,
+                ));
+                j += 1;
+            }
+        }
+        Self {
+            support: self.support,
+            edges,
+            corners,
+        }
+    }
+
+    /// This polygon turned, in place, into the part with edges `origin`
+    /// (which [`fits_in_place`]); corners on `p` are taken from `other`
+    /// where it has them.
+    fn rewrite(&mut self, origin: &[u32], closing: &Plane, other: Other<'_>) {
+        let (n, m) = (self.edges.len(), origin.len());
+        // Entry j reads original position origin[j] ≥ j, not yet written.
+        let mut j = 0;
+        while j < m {
+            let o = origin[j];
+            if o == NONE {
+                self.edges[j] = *closing;
+                j += 1;
+            } else {
+                let end = run_end(origin, j);
+                if o as usize != j {
+                    self.edges
+                        .copy_within(o as usize..o as usize + (end - j), j);
+                }
+                j = end;
+            }
+        }
+        // The edges are final; corner j lies between edges j − 1 and j.
+        let mut j = 0;
+        while j < m {
+            let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+            if let Some(k) = reused_corner(prev, o, n) {
+                let end = run_end(origin, j);
+                if k != j {
+                    self.corners.copy_within(k..k + (end - j), j);
+                }
+                j = end;
+            } else {
+                self.corners[j] = new_corner(
+                    &self.support,
+                    (prev, &self.edges[(j + m - 1) % m]),
+                    (o, &self.edges[j]),
+                    Some(other),
+                );
+                j += 1;
+            }
+        }
+        self.edges.truncate(m);
+        self.corners.truncate(m);
+    }
+}
+
+/// The other part of a split, already built: its layout and corners.
+type Other<'a> = (&'a [u32], &'a [Point4]);
+
+/// The end of the run of consecutive original edges starting at position
+/// `j` of a layout (`origin[j]` is not NONE); inside the run the corners
+/// are the original ones too.
+#[inline]
+fn run_end(origin: &[u32], j: usize) -> usize {
+    let mut end = j + 1;
+    while end < origin.len() && origin[end] == origin[end - 1].wrapping_add(1) {
+        end += 1;
+    }
+    end
+}
+
+/// The corner of a part between its edges `(prev, plane)` and `(o,
+/// plane)` (original indices, NONE for the closing plane) that is not an
+/// original corner: the one `other` has between the same original edge and
+/// its closing plane (the same exact vertex: the homogeneous coordinates of
+/// a three-plane meet change only by a common sign when the planes are
+/// reordered or one is flipped, and the sign is normalised), else the meet.
+#[inline]
+fn new_corner(
+    support: &Plane,
+    (prev, a): (u32, &Plane),
+    (o, b): (u32, &Plane),
+    other: Option<Other<'_>>,
+) -> Point4 {
+    let key = match (prev, o) {
+        (NONE, NONE) => None,
+        (NONE, k) | (k, NONE) => Some(k),
+        _ => None,
+    };
+    if let (Some(key), Some((origin, corners))) = (key, other) {
+        let m = origin.len();
+        for (j, &o) in origin.iter().enumerate() {
+            if o != NONE {
+                continue;
+            }
+            let next = (j + 1) % m;
+            let found = if origin[(j + m - 1) % m] == key {
+                &corners[j]
+            } else if origin[next] == key {
+                &corners[next]
+            } else {
+                continue;
+            };
+            debug_assert!(same_digits(found, &meet(support, a, b)));
+            return *found;
+        }
+    }
+    meet(support, a, b)
+}
+
+/// Whether two vertices have the same digits and `f64`s (debug checks).
+fn same_digits(a: &Point4, b: &Point4) -> bool {
+    a.xyz_digits == b.xyz_digits
+        && a.w_digits == b.w_digits
+        && a.approx.map(f64::to_bits) == b.approx.map(f64::to_bits)
+}
+
+impl Drop for Polygon {
+    /// Hands the polygon's memory to the spare buffers of this thread.
+    fn drop(&mut self) {
+        if self.corners.capacity() == 0 {
+            return;
+        }
+        let buffers = (mem::take(&mut self.edges), mem::take(&mut self.corners));
+        // When the pool is full, or the thread is ending, the buffers are
+        // simply freed.
+        let _ = SPARE.try_with(|spare| {
+            if let Ok(mut spare) = spare.try_borrow_mut()
+                && spare.len() < MAX_SPARE
+            {
+                let (mut edges, mut corners) = buffers;
+                edges.clear();
+                corners.clear();
+                spare.push((edges, corners));
+            }
+        });
+    }
+}
+
+thread_local! {
+    /// Edge and corner buffers of dropped polygons, for the next polygons
+    /// built on the same thread: clipping and rebuilding drop about as many
+    /// pieces as they create, so most splits allocate nothing.
+    static SPARE: RefCell<Vec<(Vec<Plane>, Vec<Point4>)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Spare buffer pairs kept per thread.
+const MAX_SPARE: usize = 256;
+
+/// Room for corners in new buffers, at least: most polygons have fewer,
+/// so spare buffers usually fit the next polygon.
+const MIN_CAPACITY: usize = 8;
+
+/// Empty edge and corner buffers with room for `m` of each: spare ones
+/// when they are large enough, else new ones (growing a spare buffer would
+/// copy its stale contents).
+pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
+    let spare = SPARE
+        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.pop()))
+        .ok()
+        .flatten();
+    match spare {
+        Some((edges, corners)) if edges.capacity() >= m && corners.capacity() >= m => {
+            (edges, corners)
+        }
+        _ => {
+            let capacity = m.max(MIN_CAPACITY);
+            (Vec::with_capacity(capacity), Vec::with_capacity(capacity))
+        }
+    }
+}
+
+/// Marks the closing plane in a part's layout.
+const NONE: u32 = u32::MAX;
+
+/// Whether a polygon with support `support` lying in `p` faces along `p`
+/// (the supports are positive multiples of each other, not opposite).
+#[inline]
+pub(crate) fn faces_along(support: &Plane, p: &Plane) -> bool {
+    p.normal()
+        .iter()
+        .zip(support.normal())
+        .all(|(a, b)| a.signum() == b.signum())
+}
+
+/// The side of `p` that `v` is on ([`crate::exact::classify_vertex`], with
+/// the filter inlined).
+#[inline]
+pub(crate) fn side_of(v: &Point4, p: &Plane) -> Sign {
+    classify_vertex_filtered(v, p).unwrap_or_else(|| classify_vertex_exact(v, p))
+}
+
+/// The sides of `corners` with respect to `p`, written to `sides`, and
+/// whether any is below and any above.
+#[inline]
+pub(crate) fn classify_corners(corners: &[Point4], p: &Plane, sides: &mut [Sign]) -> (bool, bool) {
+    let (mut below, mut above) = (false, false);
+    for (side, v) in sides.iter_mut().zip(corners) {
+        *side = side_of(v, p);
+        below |= *side == Sign::Negative;
+        above |= *side == Sign::Positive;
+    }
+    (below, above)
+}
+
+/// Writes the layout of the part on side `keep` into `origin` (as
+/// [`Polygon::part`] builds it: the original index of each kept edge, NONE
+/// where the closing plane goes) and returns its length.
+fn layout(sides: &[Sign], keep: Sign, origin: &mut [u32]) -> usize {
+    let n = sides.len();
+    let reaches = |k: usize| sides[k] == keep || sides[(k + 1) % n] == keep;
+    let across = -keep;
+    let mut m = 0;
+    for k in 0..n {
+        if reaches(k) {
+            origin[m] = k as u32;
+            m += 1;
+            let next = (k + 1) % n;
+            if sides[next] == across || !reaches(next) {
+                origin[m] = NONE;
+                m += 1;
+            }
+        }
+    }
+    m
+}
+
+/// The original corner a part reuses between its edges `prev` and `o`
+/// (consecutive original edges), if any.
+#[inline]
+fn reused_corner(prev: u32, o: u32, n: usize) -> Option<usize> {
+    (prev != NONE && o != NONE && o as usize == (prev as usize + 1) % n).then_some(o as usize)
+}
+
+/// Whether the part with this layout can be written over the original
+/// polygon front to back: no more edges, none moving to a later position.
+fn fits_in_place(origin: &[u32], n: usize) -> bool {
+    origin.len() <= n
+        && origin
+            .iter()
+            .enumerate()
+            .all(|(j, &o)| o == NONE || o as usize >= j)
 }
 
 /// The corner where the support and two edge planes meet.
