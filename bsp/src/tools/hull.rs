@@ -43,45 +43,88 @@ pub fn convex_hull(arena: &mut ConvexArena, points: &[IntPoint]) -> Result<PolyI
         .find(|&i| orient(pts[a], pts[b], pts[c], pts[i]) != 0)
         .ok_or(Error::DegenerateHull { reason: "coplanar" })?;
     // Faces as vertex triples, counter-clockwise from outside.
-    let mut faces: Vec<[usize; 3]> = if orient(pts[a], pts[b], pts[c], pts[d]) < 0 {
-        vec![[a, b, c], [a, d, b], [b, d, c], [c, d, a]]
+    let first: [[usize; 3]; 4] = if orient(pts[a], pts[b], pts[c], pts[d]) < 0 {
+        [[a, b, c], [a, d, b], [b, d, c], [c, d, a]]
     } else {
-        vec![[a, c, b], [a, b, d], [b, c, d], [c, a, d]]
+        [[a, c, b], [a, b, d], [b, c, d], [c, a, d]]
     };
+    let mut faces: Vec<Triangle> = first.iter().map(|&f| Triangle::new(f, &pts)).collect();
+    let (mut next_faces, mut visible_edges, mut sorted_edges) =
+        (Vec::new(), Vec::new(), Vec::new());
+    let mut sees = Vec::new();
     for p in 0..pts.len() {
         if [a, b, c, d].contains(&p) {
             continue;
         }
-        let visible: Vec<bool> = faces
-            .iter()
-            .map(|f| orient(pts[f[0]], pts[f[1]], pts[f[2]], pts[p]) > 0)
-            .collect();
-        if !visible.contains(&true) {
+        sees.clear();
+        sees.extend(faces.iter().map(|f| f.sees(pts[p])));
+        if !sees.contains(&true) {
             continue;
         }
         // Horizon: directed edges of visible faces whose reverse belongs to
         // a face that is not visible, i.e. is not an edge of a visible face
-        // (the visible faces are few: a short list beats a map).
-        let visible_edges: Vec<(usize, usize)> = faces
-            .iter()
-            .zip(&visible)
-            .filter(|&(_, &v)| v)
-            .flat_map(|(f, _)| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
-            .collect();
-        let mut next_faces = Vec::with_capacity(faces.len() + 4);
-        for (f, &v) in faces.iter().zip(&visible) {
-            if !v {
+        // (looked up in a sorted copy; new faces follow the visible faces'
+        // order).
+        visible_edges.clear();
+        next_faces.clear();
+        for (f, &seen) in faces.iter().zip(&sees) {
+            if seen {
+                let v = f.corners;
+                visible_edges.extend((0..3).map(|k| (v[k], v[(k + 1) % 3])));
+            } else {
                 next_faces.push(*f);
             }
         }
+        sorted_edges.clear();
+        sorted_edges.extend_from_slice(&visible_edges);
+        sorted_edges.sort_unstable();
         for &(u, w) in &visible_edges {
-            if !visible_edges.contains(&(w, u)) {
-                next_faces.push([u, w, p]);
+            if sorted_edges.binary_search(&(w, u)).is_err() {
+                next_faces.push(Triangle::new([u, w, p], &pts));
             }
         }
-        faces = next_faces;
+        std::mem::swap(&mut faces, &mut next_faces);
     }
+    let faces: Vec<[usize; 3]> = faces.iter().map(|f| f.corners).collect();
     Ok(build_polyhedron(arena, &pts, &faces))
+}
+
+/// A hull triangle with its (unnormalised, exact) outward normal, so that
+/// testing a point costs one dot product: `orient(a, b, c, d) = n · (d − a)`.
+/// In the coordinate budget (`|x| ≤ 2^26`) differences fit 28 bits and the
+/// normal's components 56 bits, so both are `i64` and each product is one
+/// `64 × 64 → 128` multiply.
+#[derive(Clone, Copy)]
+struct Triangle {
+    corners: [usize; 3],
+    /// The first corner's coordinates.
+    origin: [i64; 3],
+    /// `(b − a) × (c − a)`.
+    normal: [i64; 3],
+}
+
+impl Triangle {
+    fn new(corners: [usize; 3], pts: &[[i64; 3]]) -> Self {
+        let [a, b, c] = corners.map(|i| pts[i]);
+        let normal = cross(sub(b, a), sub(c, a))
+            .map(|x| i64::try_from(x).expect("in-budget normals fit 56 bits"));
+        Self {
+            corners,
+            origin: a,
+            normal,
+        }
+    }
+
+    /// Whether `d` lies strictly outside (`orient(a, b, c, d) > 0`).
+    #[inline]
+    fn sees(&self, d: [i64; 3]) -> bool {
+        let n = self.normal;
+        let w = [0, 1, 2].map(|i| d[i] - self.origin[i]);
+        let dot = (0..3)
+            .map(|i| i128::from(n[i]) * i128::from(w[i]))
+            .sum::<i128>();
+        dot > 0
+    }
 }
 
 /// Merges coplanar neighbouring triangles and adds the polyhedron.
@@ -107,26 +150,36 @@ fn build_polyhedron(arena: &mut ConvexArena, pts: &[[i64; 3]], faces: &[[usize; 
     let mut used: Vec<usize> = Vec::new();
     let mut index_of: HashMap<usize, u32> = HashMap::new();
     let mut polygons: Vec<(Plane, Vec<u32>)> = Vec::new();
+    let (mut edges, mut boundary) = (Vec::new(), Vec::new());
     for (plane, tris) in &groups {
-        let mut edges: HashMap<(usize, usize), ()> = HashMap::new();
-        for t in tris {
-            for k in 0..3 {
-                edges.insert((t[k], t[(k + 1) % 3]), ());
-            }
-        }
-        let boundary: HashMap<usize, usize> = edges
-            .keys()
-            .filter(|(u, w)| !edges.contains_key(&(*w, *u)))
-            .map(|&(u, w)| (u, w))
-            .collect();
+        edges.clear();
+        edges.extend(
+            tris.iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3]))),
+        );
+        edges.sort_unstable();
+        // The group's boundary, sorted by first vertex: one edge leaves
+        // each boundary vertex of a convex polygon.
+        boundary.clear();
+        boundary.extend(
+            edges
+                .iter()
+                .filter(|&&(u, w)| edges.binary_search(&(w, u)).is_err()),
+        );
+        let after = |v: usize| -> usize {
+            let i = boundary
+                .binary_search_by_key(&v, |&(u, _)| u)
+                .expect("the boundary is a closed loop");
+            boundary[i].1
+        };
         // Walk the loop from its smallest vertex, dropping straight-through
         // vertices.
-        let start = *boundary.keys().min().expect("a face has a boundary");
+        let start = boundary.first().expect("a face has a boundary").0;
         let mut ring = vec![start];
-        let mut v = boundary[&start];
+        let mut v = after(start);
         while v != start {
             ring.push(v);
-            v = boundary[&v];
+            v = after(v);
         }
         let n = ring.len();
         let corners: Vec<usize> = (0..n)
