@@ -420,8 +420,17 @@ impl ConvexArena {
     /// of its half-edge.
     #[must_use]
     pub fn faces_of(&self, poly: PolyId) -> Vec<u32> {
+        let mut order = Vec::new();
+        self.faces_of_into(poly, &mut order);
+        order
+    }
+
+    /// [`ConvexArena::faces_of`] into `order` (cleared first), so that a
+    /// caller visiting many polyhedra reuses one buffer.
+    pub fn faces_of_into(&self, poly: PolyId, order: &mut Vec<u32>) {
         let start = self.half_edges[poly.0 as usize].face;
-        let mut order = vec![start];
+        order.clear();
+        order.push(start);
         let mut seen = SeenSet::default();
         seen.insert(start);
         let mut i = 0;
@@ -435,7 +444,6 @@ impl ConvexArena {
             }
             i += 1;
         }
-        order
     }
 
     /// The vertices of polyhedron `poly` (each once, in first-seen order).

@@ -108,7 +108,7 @@ impl Bsp {
             if cell.label == EMPTY {
                 continue;
             }
-            faces_of_cell(arena, cell.poly, &mut faces);
+            arena.faces_of_into(cell.poly, &mut faces);
             for &f in &faces {
                 if arena.faces()[f as usize].tag != NO_TAG {
                     self.clip_cell_face(arena, f, cell.label, &mut sides, &mut stack, &mut out);
@@ -231,33 +231,6 @@ impl Bsp {
             }
         }
     }
-}
-
-/// The faces of cell `poly`, in the order of [`ConvexArena::faces_of`]
-/// (breadth first from the face of its half-edge), into `order`, reused
-/// between cells: the faces found so far are the set of faces seen,
-/// searched linearly while the cell is small (cells have tens of faces).
-fn faces_of_cell(arena: &ConvexArena, poly: PolyId, order: &mut Vec<u32>) {
-    /// Faces searched linearly; beyond, the arena's own traversal.
-    const FEW: usize = 48;
-    order.clear();
-    order.push(arena.half_edges()[poly.0 as usize].face);
-    let mut i = 0;
-    while i < order.len() {
-        for h in arena.face_loop(order[i]) {
-            let twin = arena.half_edges()[h as usize].twin;
-            let neighbour = arena.half_edges()[twin as usize].face;
-            if !order.contains(&neighbour) {
-                if order.len() == FEW {
-                    *order = arena.faces_of(poly);
-                    return;
-                }
-                order.push(neighbour);
-            }
-        }
-        i += 1;
-    }
-    debug_assert_eq!(*order, arena.faces_of(poly));
 }
 
 /// Face `f` of the arena as a plane-based polygon. Half-edge k lies in the

@@ -372,14 +372,15 @@ fn new_corner(
             } else {
                 continue;
             };
-            debug_assert!(same_digits(found, &meet(support, a, b)));
+            // Tested against a fresh `meet` in `split_parts_keep_exact_corners`.
             return *found;
         }
     }
     meet(support, a, b)
 }
 
-/// Whether two vertices have the same digits and `f64`s (debug checks).
+/// Whether two vertices have the same digits and `f64`s.
+#[cfg(test)]
 fn same_digits(a: &Point4, b: &Point4) -> bool {
     a.xyz_digits == b.xyz_digits
         && a.w_digits == b.w_digits
@@ -516,4 +517,77 @@ fn fits_in_place(origin: &[u32], n: usize) -> bool {
 /// The corner where the support and two edge planes meet.
 fn meet(support: &Plane, a: &Plane, b: &Plane) -> Point4 {
     intersect_3_planes(support, a, b).expect("edge planes meet the support plane in a point")
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    fn random_point(rng: &mut ChaCha8Rng) -> IntPoint {
+        let mut c = || rng.random_range(-1000..=1000);
+        IntPoint::new(c(), c(), c()).expect("in budget")
+    }
+
+    /// A plane with a small random normal through `x`.
+    fn plane_through(rng: &mut ChaCha8Rng, x: IntPoint) -> Option<Plane> {
+        let n = [0; 3].map(|_| rng.random_range(-20i64..=20));
+        let d = -(0..3)
+            .map(|i| i128::from(n[i]) * i128::from(x.coords()[i]))
+            .sum::<i128>();
+        (n != [0; 3]).then(|| Plane::new(n[0], n[1], n[2], d).expect("small coefficients"))
+    }
+
+    /// Every corner of every part, after repeated splits by random planes
+    /// (some through corners, so corners land on the plane), has exactly
+    /// the digits of a fresh meet of its planes: the corners a split takes
+    /// over from the original or from the other part are the right ones.
+    #[test]
+    fn split_parts_keep_exact_corners() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let corners = [0; 3].map(|_| random_point(&mut rng));
+            let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
+                continue;
+            };
+            let mut pieces = vec![triangle];
+            for round in 0..6 {
+                let x = if round % 3 == 0 {
+                    corners[rng.random_range(0..3)]
+                } else {
+                    random_point(&mut rng)
+                };
+                let Some(plane) = plane_through(&mut rng, x) else {
+                    continue;
+                };
+                pieces = pieces
+                    .into_iter()
+                    .flat_map(|piece| {
+                        let (below, above) = piece.split(&plane);
+                        below.into_iter().chain(above)
+                    })
+                    .collect();
+            }
+            for piece in &pieces {
+                let n = piece.edges.len();
+                assert_eq!(piece.vertices().len(), n);
+                for k in 0..n {
+                    let fresh = meet(
+                        &piece.support,
+                        &piece.edges[(k + n - 1) % n],
+                        &piece.edges[k],
+                    );
+                    assert!(
+                        same_digits(&piece.vertices()[k], &fresh),
+                        "corner {k} of {n}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 3000, "only {checked} corners checked");
+    }
 }
