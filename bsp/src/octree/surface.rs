@@ -46,16 +46,7 @@ impl Octree {
             Ok(bounds) => bsp.boundary(arena, bounds),
             Err(_) => Vec::new(),
         });
-        let mut out = Vec::new();
-        for face in faces {
-            if face.on_bounds {
-                let label = face.label;
-                self.clip_across(face.into_polygon(), label, &cell, &mut out);
-            } else {
-                out.push(face);
-            }
-        }
-        out
+        self.resolve_borders(faces, &cell)
     }
 
     /// The surface pieces of leaf cell `key` from its boundary `faces`
@@ -69,12 +60,17 @@ impl Octree {
         if self.leaf(key).is_none() {
             return Vec::new();
         }
-        let cell = self.cell_box(key);
+        self.resolve_borders(faces, &self.cell_box(key))
+    }
+
+    /// The boundary `faces` of a leaf inside `cell`, with its border faces
+    /// clipped against the regions across and the others kept.
+    fn resolve_borders(&self, faces: Vec<BoundaryFace>, cell: &CellBox) -> Vec<BoundaryFace> {
         let mut out = Vec::with_capacity(faces.len());
         for face in faces {
             if face.on_bounds {
                 let label = face.label;
-                self.clip_across(face.into_polygon(), label, &cell, &mut out);
+                self.clip_across(face.into_polygon(), label, cell, &mut out);
             } else {
                 out.push(face);
             }
