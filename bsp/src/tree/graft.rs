@@ -313,6 +313,10 @@ impl Bsp {
     /// [`Bsp::merge`], but `other`'s planes are kept where they do not cut
     /// their cells, so the tree is larger; [`Bsp::simplified`] removes them.
     /// Equal planes of the operands get separate palette entries.
+    ///
+    /// # Panics
+    /// When the result could have more nodes or planes than `u32` counts
+    /// (checked before any cut: `arena` is then unchanged).
     #[must_use]
     pub fn merge_grafted(
         &self,
@@ -351,9 +355,18 @@ impl Bsp {
             .iter()
             .filter(|s| matches!(s, Step::Graft(_)))
             .count();
-        grafter
-            .nodes
-            .reserve(self.nodes().len() + copies * other.nodes().len());
+        let most = copies
+            .checked_mul(other.nodes().len())
+            .and_then(|n| n.checked_add(self.nodes().len()))
+            .filter(|&n| NodeId::try_from(n).is_ok())
+            .filter(|_| u32::try_from(self.planes().len() + other.planes().len()).is_ok());
+        let Some(most) = most else {
+            panic!(
+                "a grafted merge of {copies} copies of {} nodes is too large",
+                other.nodes().len()
+            );
+        };
+        grafter.nodes.reserve(most);
         // Nodes are appended in depth-first order, so the first one is the
         // root (a collapsed split is replaced in place).
         let root = grafter.graft_a(0, Some(bounds));
