@@ -18,8 +18,9 @@
 //! volumes of every material, are those of [`Bsp::merge`].
 //!
 //! What makes the output nodes cheap:
-//! - `B`'s planes enter the output palette once, at the first copy, and
-//!   each image `f(a, B)` is built once per label `a`; a copy is then a
+//! - `B`'s planes enter the output palette once, before `A`'s (with the
+//!   first image that is a tree, even if no cell gets a copy), and each
+//!   image `f(a, B)` is built once per label `a`; a copy is then a
 //!   block copy of the image and an index offset added to its splits.
 //! - A subtree of `A` whose leaves all map to the same single leaf yields
 //!   that leaf without a cut (cutting would only make splits that all
@@ -87,8 +88,6 @@ struct Grafter<'a> {
     a_planes: Vec<u32>,
     /// Where `B`'s planes start in the output palette, once copied.
     b_planes: Option<u32>,
-    /// The positions of `B`'s splits in its node array.
-    b_splits: Vec<u32>,
     /// Which labels `B`'s leaves carry.
     b_labels: [bool; 256],
     /// The images built so far, by label of `A`.
@@ -274,9 +273,8 @@ impl Grafter<'_> {
             Image::Tree(tree) => {
                 // A copy, then the child indices of its splits shifted.
                 self.nodes.extend_from_slice(tree);
-                let copy = &mut self.nodes[root as usize..];
-                for &i in &self.b_splits {
-                    if let Node::Split { below, above, .. } = &mut copy[i as usize] {
+                for node in &mut self.nodes[root as usize..] {
+                    if let Node::Split { below, above, .. } = node {
                         *below += root;
                         *above += root;
                     }
@@ -326,11 +324,9 @@ impl Bsp {
         bounds: PolyId,
     ) -> Bsp {
         let mut b_labels = [false; 256];
-        let mut b_splits = Vec::with_capacity(other.nodes().len() / 2);
-        for (i, n) in other.nodes().iter().enumerate() {
-            match *n {
-                Node::Leaf(b) => b_labels[b as usize] = true,
-                Node::Split { .. } => b_splits.push(i as u32),
+        for n in other.nodes() {
+            if let Node::Leaf(b) = *n {
+                b_labels[b as usize] = true;
             }
         }
         let mut grafter = Grafter {
@@ -341,7 +337,6 @@ impl Bsp {
             planes: Vec::with_capacity(self.planes().len() + other.planes().len()),
             a_planes: vec![UNSEEN; self.planes().len()],
             b_planes: None,
-            b_splits,
             b_labels,
             images: Vec::new(),
             plan: vec![Step::Leaf(EMPTY); self.nodes().len()],
