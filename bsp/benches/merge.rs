@@ -14,6 +14,11 @@
 //! - `convex` — unions of random convex polyhedra (linear BSPs) grown to
 //!   about `N` nodes: solids that look like terrain cells, whose merges keep
 //!   their output close to linear in the input.
+//!
+//! Each case is merged two ways, named in its id: `pruned` ([`Bsp::merge`],
+//! which cuts `B` into every cell of `A` and keeps only planes that cut)
+//! and `grafted` ([`Bsp::merge_grafted`], the paper's merge, which copies
+//! `B` whole into those cells, as the paper's figure counts output nodes).
 
 use std::hint::black_box;
 
@@ -59,17 +64,28 @@ fn random_convex(rng: &mut ChaCha8Rng) -> Bsp {
     Bsp::from_convex(&arena, poly, 1)
 }
 
-fn merged(a: &Bsp, b: &Bsp, op: BooleanOp) -> Bsp {
+/// The merge of `A` and `B` inside the bounding box, one way.
+type Merge = fn(&Bsp, &Bsp, BooleanOp) -> Bsp;
+
+fn pruned_merge(a: &Bsp, b: &Bsp, op: BooleanOp) -> Bsp {
     let mut arena = ConvexArena::new();
     let bounds = arena.add_box(p(-H, -H, -H), p(H, H, H)).expect("a box");
     a.merge(b, op, &mut arena, bounds)
 }
 
+fn grafted_merge(a: &Bsp, b: &Bsp, op: BooleanOp) -> Bsp {
+    let mut arena = ConvexArena::new();
+    let bounds = arena.add_box(p(-H, -H, -H), p(H, H, H)).expect("a box");
+    a.merge_grafted(b, op, &mut arena, bounds)
+}
+
+const MERGES: [(&str, Merge); 2] = [("pruned", pruned_merge), ("grafted", grafted_merge)];
+
 /// A union of random convex polyhedra with at least `nodes` nodes.
 fn random_bsp(rng: &mut ChaCha8Rng, nodes: usize) -> Bsp {
     let mut bsp = random_convex(rng);
     while bsp.nodes().len() < nodes {
-        bsp = merged(&bsp, &random_convex(rng), BooleanOp::Union);
+        bsp = pruned_merge(&bsp, &random_convex(rng), BooleanOp::Union);
     }
     bsp
 }
@@ -134,12 +150,15 @@ fn figure10_random(c: &mut Criterion) {
             paper_random_bsp(&mut rng, splits),
         );
         for (name, op) in OPS {
-            let out = merged(&a, &b, op).nodes().len();
-            group.throughput(Throughput::Elements(out as u64));
-            let id = format!("{name}/{}+{}->{out}", a.nodes().len(), b.nodes().len());
-            group.bench_function(BenchmarkId::from_parameter(id), |bench| {
-                bench.iter(|| black_box(merged(&a, &b, op)))
-            });
+            for (way, merge) in MERGES {
+                let out = merge(&a, &b, op).nodes().len();
+                group.throughput(Throughput::Elements(out as u64));
+                let (na, nb) = (a.nodes().len(), b.nodes().len());
+                let id = format!("{name}/{way}/{na}+{nb}->{out}");
+                group.bench_function(BenchmarkId::from_parameter(id), |bench| {
+                    bench.iter(|| black_box(merge(&a, &b, op)))
+                });
+            }
         }
     }
     let pairs: Vec<(Bsp, Bsp, BooleanOp)> = (0..40)
@@ -154,23 +173,25 @@ fn figure10_random(c: &mut Criterion) {
             )
         })
         .collect();
-    let out: usize = pairs
-        .iter()
-        .map(|(a, b, op)| merged(a, b, *op).nodes().len())
-        .sum();
     let input: usize = pairs
         .iter()
         .map(|(a, b, _)| a.nodes().len() + b.nodes().len())
         .sum();
-    group.throughput(Throughput::Elements(out as u64));
-    let id = format!("pairs/40 pairs, {input}->{out}");
-    group.bench_function(BenchmarkId::from_parameter(id), |bench| {
-        bench.iter(|| {
-            for (a, b, op) in &pairs {
-                black_box(merged(a, b, *op));
-            }
-        })
-    });
+    for (way, merge) in MERGES {
+        let out: usize = pairs
+            .iter()
+            .map(|(a, b, op)| merge(a, b, *op).nodes().len())
+            .sum();
+        group.throughput(Throughput::Elements(out as u64));
+        let id = format!("pairs/{way}/40 pairs, {input}->{out}");
+        group.bench_function(BenchmarkId::from_parameter(id), |bench| {
+            bench.iter(|| {
+                for (a, b, op) in &pairs {
+                    black_box(merge(a, b, *op));
+                }
+            })
+        });
+    }
     group.finish();
 }
 
@@ -185,12 +206,15 @@ fn figure10_convex(c: &mut Criterion) {
             ("union", BooleanOp::Union),
             ("difference", BooleanOp::Difference),
         ] {
-            let out = merged(&a, &b, op).nodes().len();
-            group.throughput(Throughput::Elements(out as u64));
-            let id = format!("{name}/{}+{}->{out}", a.nodes().len(), b.nodes().len());
-            group.bench_function(BenchmarkId::from_parameter(id), |bench| {
-                bench.iter(|| black_box(merged(&a, &b, op)))
-            });
+            for (way, merge) in MERGES {
+                let out = merge(&a, &b, op).nodes().len();
+                group.throughput(Throughput::Elements(out as u64));
+                let (na, nb) = (a.nodes().len(), b.nodes().len());
+                let id = format!("{name}/{way}/{na}+{nb}->{out}");
+                group.bench_function(BenchmarkId::from_parameter(id), |bench| {
+                    bench.iter(|| black_box(merge(&a, &b, op)))
+                });
+            }
         }
     }
     group.finish();

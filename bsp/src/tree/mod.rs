@@ -9,6 +9,8 @@
 //! - [`cells`] — the convex cells of the leaves inside a bounding
 //!   polyhedron, by recursive exact cutting (first step of §3.4).
 //! - [`merge`] — Booleans (and painting) by merging two BSPs (§3.5).
+//! - [`graft`] — the same Booleans by copying one operand whole into the
+//!   other's cells, as the paper states the merge (§3.5).
 //! - [`import`] — a BSP from a closed triangle soup (§3.6).
 //! - [`boundary`] — the solid's boundary without interior faces (§3.4).
 //! - [`simplify`] — redundancy removal by extraction and rebuilding (§3.7).
@@ -16,6 +18,7 @@
 pub mod boundary;
 pub mod bsp;
 pub mod cells;
+pub mod graft;
 pub mod import;
 pub mod merge;
 pub(crate) mod polygon;
