@@ -23,7 +23,7 @@
 //! no vertices, and the faces of the other part are not split.
 
 use super::mesh::{ConvexArena, PolyId};
-use super::scratch::{Link, Scratch};
+use super::scratch::Scratch;
 use super::survey::FaceSurvey;
 use crate::exact::{
     FilteredDot, Plane, Sign, classify_vertex, classify_vertex_exact, compare_offsets,
@@ -231,6 +231,19 @@ impl ConvexArena {
         scratch.sides.get(v).expect("vertex classified before use")
     }
 
+    /// The outgoing half-edges of vertex `v`, each with the vertex it
+    /// leads to (the origin of its twin, read with the twin's `next`).
+    fn neighbours(&self, v: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let first = self.vertices[v as usize].half_edge;
+        let mut h = Some(first);
+        std::iter::from_fn(move || {
+            let cur = h?;
+            let twin = self.half_edges[self.half_edges[cur as usize].twin as usize];
+            h = (twin.next != first).then_some(twin.next);
+            Some((cur, twin.origin))
+        })
+    }
+
     /// The outgoing half-edges of vertex `v`.
     fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
         let first = self.vertices[v as usize].half_edge;
@@ -267,8 +280,7 @@ impl ConvexArena {
             // The best certified step, and an exactly certified one.
             let mut best: Option<(u32, f64, (f64, f64))> = None;
             let mut uncertain: Option<(u32, (f64, f64))> = None;
-            for h in self.outgoing(cur) {
-                let n = self.dest(h);
+            for (h, n) in self.neighbours(cur) {
                 let point = self.point(n);
                 // One f64 evaluation gives both the side and the offset.
                 let dot = FilteredDot::new(point, s);
@@ -308,7 +320,7 @@ impl ConvexArena {
     fn march(&self, seed: Seed, s: &Plane, scratch: &mut Scratch) {
         let mut queue = std::mem::take(&mut scratch.queue);
         let mut relevant = std::mem::take(&mut scratch.relevant);
-        let mut links = std::mem::take(&mut scratch.links);
+        let mut on_plane = std::mem::take(&mut scratch.on_plane);
         queue.clear();
         relevant.clear();
         let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
@@ -334,10 +346,10 @@ impl ConvexArena {
         }
         while let Some(f) = queue.pop() {
             // Classify the face's vertices, noting whether it meets the
-            // section (vertices on both sides, or an edge in s), and where
-            // the march would go on from it: across crossing edges and
-            // edges in s, and around vertices on s.
-            links.clear();
+            // section (vertices on both sides, or an edge in s); the march
+            // goes on across its crossing edges and edges in s, and around
+            // its vertices on s.
+            on_plane.clear();
             let first = self.faces[f as usize].half_edge;
             let first_side = self.side(self.half_edges[first as usize].origin, s, scratch);
             let mut survey = FaceSurvey::new();
@@ -352,10 +364,15 @@ impl ConvexArena {
                 survey.step(h, here, there);
                 if here.as_i32() * there.as_i32() < 0 || (here == Sign::Zero && there == Sign::Zero)
                 {
-                    links.push(Link::Across(e.twin));
+                    // A crossing edge or an edge in s: f meets the section,
+                    // so the march goes on across it.
+                    let g = self.half_edges[e.twin as usize].face;
+                    if scratch.faces.insert(g, true) {
+                        queue.push(g);
+                    }
                 }
                 if here == Sign::Zero {
-                    links.push(Link::Around(e.origin));
+                    on_plane.push(e.origin);
                 }
                 if e.next == first {
                     break;
@@ -366,19 +383,13 @@ impl ConvexArena {
                 continue;
             };
             relevant.push((f, info));
-            for &link in &links {
-                match link {
-                    Link::Across(twin) => {
-                        let g = self.half_edges[twin as usize].face;
-                        if scratch.faces.insert(g, true) {
-                            queue.push(g);
-                        }
-                    }
-                    Link::Around(v) => around(v, &mut queue, scratch),
-                }
+            // Around its vertices on s, now that f is known to meet the
+            // section (a face touching s at one vertex only does not).
+            for &v in &on_plane {
+                around(v, &mut queue, scratch);
             }
         }
-        scratch.links = links;
+        scratch.on_plane = on_plane;
         scratch.queue = queue;
         scratch.relevant = relevant;
     }

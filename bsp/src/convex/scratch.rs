@@ -75,24 +75,14 @@ pub(crate) struct Scratch {
     /// The faces that meet the section, with what the split needs to know
     /// about each.
     pub(crate) relevant: Vec<(u32, FaceInfo)>,
-    /// Where the march goes on from the face it is visiting.
-    pub(crate) links: Vec<Link>,
+    /// The vertices on the cutting plane of the face the march visits.
+    pub(crate) on_plane: Vec<u32>,
     /// The half-edges lying in the cutting plane, with their face's side.
     pub(crate) section: Vec<(u32, Sign)>,
     /// Section half-edges of faces created by the split (listed last).
     pub(crate) section_new: Vec<(u32, Sign)>,
     /// The cap half-edges of one side and the vertex each one ends at.
     pub(crate) cap_edges: Vec<(u32, u32)>,
-}
-
-/// A step of the march from a face that meets the section.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Link {
-    /// To the face across an edge (this half-edge's twin) that crosses the
-    /// plane or lies in it.
-    Across(u32),
-    /// To every face around a vertex on the plane.
-    Around(u32),
 }
 
 impl Scratch {
