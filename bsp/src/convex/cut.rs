@@ -23,7 +23,8 @@
 //! no vertices, and the faces of the other part are not split.
 
 use super::mesh::{ConvexArena, PolyId};
-use super::scratch::{Link, Scratch};
+use super::scratch::Scratch;
+use super::survey::FaceSurvey;
 use crate::exact::{
     FilteredDot, Plane, Sign, classify_vertex, classify_vertex_exact, compare_offsets,
     offset_estimate,
@@ -102,7 +103,7 @@ impl ConvexArena {
             relevant.extend(
                 faces
                     .into_iter()
-                    .filter(|&f| arena.meets_section(f, scratch)),
+                    .filter_map(|f| Some((f, arena.survey_face(f, scratch)?))),
             );
             scratch.relevant = relevant;
             let [below, above] = arena.split_along(scratch, s, [below_tag, above_tag], None);
@@ -167,16 +168,16 @@ impl ConvexArena {
     /// ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
     fn find_section(&self, poly: PolyId, s: &Plane, scratch: &mut Scratch) -> Option<CutOutcome> {
         let v0 = self.half_edges[poly.0 as usize].origin;
-        // Walk towards the side v0 is not on; a `(from, to)` step onto
-        // that side brackets the section. From a vertex on s, both sides
-        // must exist for a proper cut, and v0 itself is on the section.
-        let seeds = match self.side(v0, s, scratch) {
+        // Walk towards the side v0 is not on; a step onto that side
+        // brackets the section. From a vertex on s, both sides must exist
+        // for a proper cut, and v0 itself is on the section.
+        let seed = match self.side(v0, s, scratch) {
             Sign::Positive => match self.descend(v0, s, Sign::Negative, scratch) {
-                Some((from, to)) => [from, to],
+                Some(h) => self.seed_at(h, scratch),
                 None => return Some(CutOutcome::Above),
             },
             Sign::Negative => match self.descend(v0, s, Sign::Positive, scratch) {
-                Some((from, to)) => [from, to],
+                Some(h) => self.seed_at(h, scratch),
                 None => return Some(CutOutcome::Below),
             },
             Sign::Zero => {
@@ -186,11 +187,23 @@ impl ConvexArena {
                 if self.descend(v0, s, Sign::Positive, scratch).is_none() {
                     return Some(CutOutcome::Below);
                 }
-                [v0, v0]
+                Seed::Vertex(v0)
             }
         };
-        self.march(&seeds, s, scratch);
+        self.march(seed, s, scratch);
         None
+    }
+
+    /// Where the march starts after the descent stepped along `h` onto the
+    /// far side: around the origin of `h` when it lies on `s`, else at the
+    /// two faces of `h`, whose edge crosses `s`.
+    fn seed_at(&self, h: u32, scratch: &Scratch) -> Seed {
+        let from = self.half_edges[h as usize].origin;
+        if Self::known_side(from, scratch) == Sign::Zero {
+            Seed::Vertex(from)
+        } else {
+            Seed::Edge(h)
+        }
     }
 
     /// Runs `op` with the arena's scratch space, cleared.
@@ -218,6 +231,19 @@ impl ConvexArena {
         scratch.sides.get(v).expect("vertex classified before use")
     }
 
+    /// The outgoing half-edges of vertex `v`, each with the vertex it
+    /// leads to (the origin of its twin, read with the twin's `next`).
+    fn neighbours(&self, v: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let first = self.vertices[v as usize].half_edge;
+        let mut h = Some(first);
+        std::iter::from_fn(move || {
+            let cur = h?;
+            let twin = self.half_edges[self.half_edges[cur as usize].twin as usize];
+            h = (twin.next != first).then_some(twin.next);
+            Some((cur, twin.origin))
+        })
+    }
+
     /// The outgoing half-edges of vertex `v`.
     fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
         let first = self.vertices[v as usize].half_edge;
@@ -231,21 +257,16 @@ impl ConvexArena {
     }
 
     /// Edge descent from `start` (not on side `target`) towards side
-    /// `target` of `s`: returns an adjacent pair `(from, to)` with `to` on
-    /// side `target`, or `None` when no vertex is on that side.
+    /// `target` of `s`: returns a half-edge whose destination is on side
+    /// `target` and whose origin is not, or `None` when no vertex is on
+    /// that side.
     ///
     /// Each step moves to a neighbour certified to lie strictly closer to
     /// the target side — by the `f64` estimates and their error bounds, or
     /// else by exact comparison — so the walk never cycles, and it stops
     /// only at a vertex no neighbour improves on: a global extremum of the
     /// (linear) offset over the convex polyhedron.
-    fn descend(
-        &self,
-        start: u32,
-        s: &Plane,
-        target: Sign,
-        scratch: &mut Scratch,
-    ) -> Option<(u32, u32)> {
+    fn descend(&self, start: u32, s: &Plane, target: Sign, scratch: &mut Scratch) -> Option<u32> {
         use core::cmp::Ordering;
         let toward = |a: f64| if target == Sign::Negative { -a } else { a };
         let wanted = if target == Sign::Negative {
@@ -259,8 +280,7 @@ impl ConvexArena {
             // The best certified step, and an exactly certified one.
             let mut best: Option<(u32, f64, (f64, f64))> = None;
             let mut uncertain: Option<(u32, (f64, f64))> = None;
-            for h in self.outgoing(cur) {
-                let n = self.dest(h);
+            for (h, n) in self.neighbours(cur) {
                 let point = self.point(n);
                 // One f64 evaluation gives both the side and the offset.
                 let dot = FilteredDot::new(point, s);
@@ -272,7 +292,7 @@ impl ConvexArena {
                     side
                 });
                 if side == target {
-                    return Some((cur, n));
+                    return Some(h);
                 }
                 let (value, error) = dot.offset(point);
                 let gain = toward(value) - toward(cur_value);
@@ -293,14 +313,14 @@ impl ConvexArena {
         }
     }
 
-    /// Marches around the section from the faces around `seeds`: visits the
+    /// Marches around the section from the faces at `seed`: visits the
     /// faces that meet the section, crossing from one to the next through
     /// crossing edges, edges in `s` and vertices on `s`, and leaves them in
     /// `scratch.relevant`.
-    fn march(&self, seeds: &[u32], s: &Plane, scratch: &mut Scratch) {
+    fn march(&self, seed: Seed, s: &Plane, scratch: &mut Scratch) {
         let mut queue = std::mem::take(&mut scratch.queue);
         let mut relevant = std::mem::take(&mut scratch.relevant);
-        let mut links = std::mem::take(&mut scratch.links);
+        let mut on_plane = std::mem::take(&mut scratch.on_plane);
         queue.clear();
         relevant.clear();
         let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
@@ -313,18 +333,26 @@ impl ConvexArena {
                 }
             }
         };
-        for &v in seeds {
-            around(v, &mut queue, scratch);
+        match seed {
+            Seed::Vertex(v) => around(v, &mut queue, scratch),
+            Seed::Edge(h) => {
+                for e in [h, self.half_edges[h as usize].twin] {
+                    let f = self.half_edges[e as usize].face;
+                    if scratch.faces.insert(f, true) {
+                        queue.push(f);
+                    }
+                }
+            }
         }
         while let Some(f) = queue.pop() {
             // Classify the face's vertices, noting whether it meets the
-            // section (vertices on both sides, or an edge in s), and where
-            // the march would go on from it: across crossing edges and
-            // edges in s, and around vertices on s.
-            links.clear();
+            // section (vertices on both sides, or an edge in s); the march
+            // goes on across its crossing edges and edges in s, and around
+            // its vertices on s.
+            on_plane.clear();
             let first = self.faces[f as usize].half_edge;
             let first_side = self.side(self.half_edges[first as usize].origin, s, scratch);
-            let (mut plus, mut minus, mut in_plane) = (false, false, false);
+            let mut survey = FaceSurvey::new();
             let (mut h, mut here) = (first, first_side);
             loop {
                 let e = self.half_edges[h as usize];
@@ -333,53 +361,45 @@ impl ConvexArena {
                 } else {
                     self.side(self.half_edges[e.next as usize].origin, s, scratch)
                 };
-                plus |= here == Sign::Positive;
-                minus |= here == Sign::Negative;
-                in_plane |= here == Sign::Zero && there == Sign::Zero;
+                survey.step(h, here, there);
                 if here.as_i32() * there.as_i32() < 0 || (here == Sign::Zero && there == Sign::Zero)
                 {
-                    links.push(Link::Across(e.twin));
+                    // A crossing edge or an edge in s: f meets the section,
+                    // so the march goes on across it.
+                    let g = self.half_edges[e.twin as usize].face;
+                    if scratch.faces.insert(g, true) {
+                        queue.push(g);
+                    }
                 }
                 if here == Sign::Zero {
-                    links.push(Link::Around(e.origin));
+                    on_plane.push(e.origin);
                 }
                 if e.next == first {
                     break;
                 }
                 (h, here) = (e.next, there);
             }
-            if !((plus && minus) || in_plane) {
+            let Some(info) = survey.finish() else {
                 continue;
-            }
-            relevant.push(f);
-            for &link in &links {
-                match link {
-                    Link::Across(twin) => {
-                        let g = self.half_edges[twin as usize].face;
-                        if scratch.faces.insert(g, true) {
-                            queue.push(g);
-                        }
-                    }
-                    Link::Around(v) => around(v, &mut queue, scratch),
-                }
+            };
+            relevant.push((f, info));
+            // Around its vertices on s, now that f is known to meet the
+            // section (a face touching s at one vertex only does not).
+            for &v in &on_plane {
+                around(v, &mut queue, scratch);
             }
         }
-        scratch.links = links;
+        scratch.on_plane = on_plane;
         scratch.queue = queue;
         scratch.relevant = relevant;
     }
+}
 
-    /// True when face `f` (all vertices classified) contains a section edge
-    /// once crossing edges are split: it has vertices on both sides, or an
-    /// edge lying in `s`.
-    fn meets_section(&self, f: u32, scratch: &Scratch) -> bool {
-        let (mut plus, mut minus, mut in_plane) = (false, false, false);
-        for h in self.face_loop(f) {
-            let a = Self::known_side(self.half_edges[h as usize].origin, scratch);
-            plus |= a == Sign::Positive;
-            minus |= a == Sign::Negative;
-            in_plane |= a == Sign::Zero && Self::known_side(self.dest(h), scratch) == Sign::Zero;
-        }
-        (plus && minus) || in_plane
-    }
+/// Where the march around the section starts.
+#[derive(Clone, Copy, Debug)]
+enum Seed {
+    /// Every face around a vertex on the cutting plane.
+    Vertex(u32),
+    /// The two faces of a half-edge whose edge crosses the cutting plane.
+    Edge(u32),
 }

@@ -12,6 +12,7 @@
 //! - [`validate`] — every invariant, checked exactly (tests call it after
 //!   every step).
 //! - [`cut`] — cutting a polyhedron by a plane: finding the section.
+//! - `survey` — what one walk around a face tells the split.
 //! - `split` — splitting along the section once it is found.
 
 pub mod cut;
@@ -19,6 +20,7 @@ pub mod mesh;
 pub mod pool;
 mod scratch;
 mod split;
+mod survey;
 pub mod validate;
 
 pub use cut::{CutOutcome, KeptOutcome, Part};

@@ -6,6 +6,7 @@
 //! starting a new operation is a single increment, and lookups are one
 //! comparison.
 
+use super::survey::FaceInfo;
 use crate::exact::Sign;
 
 /// A map from element index to `T`, valid for the current stamp only. Each
@@ -71,51 +72,17 @@ pub(crate) struct Scratch {
     pub(crate) cap_starts: StampMap<u32>,
     /// The march's queue of faces to visit.
     pub(crate) queue: Vec<u32>,
-    /// The faces that meet the section.
-    pub(crate) relevant: Vec<u32>,
-    /// Where the march goes on from the face it is visiting.
-    pub(crate) links: Vec<Link>,
-    /// Per relevant face: what the split needs to know about it.
-    pub(crate) relevant_info: Vec<FaceInfo>,
-    /// The crossing half-edges, each from its `+` end.
-    pub(crate) crossing: Vec<u32>,
+    /// The faces that meet the section, with what the split needs to know
+    /// about each.
+    pub(crate) relevant: Vec<(u32, FaceInfo)>,
+    /// The vertices on the cutting plane of the face the march visits.
+    pub(crate) on_plane: Vec<u32>,
     /// The half-edges lying in the cutting plane, with their face's side.
     pub(crate) section: Vec<(u32, Sign)>,
     /// Section half-edges of faces created by the split (listed last).
     pub(crate) section_new: Vec<(u32, Sign)>,
     /// The cap half-edges of one side and the vertex each one ends at.
     pub(crate) cap_edges: Vec<(u32, u32)>,
-}
-
-/// A step of the march from a face that meets the section.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Link {
-    /// To the face across an edge (this half-edge's twin) that crosses the
-    /// plane or lies in it.
-    Across(u32),
-    /// To every face around a vertex on the plane.
-    Around(u32),
-}
-
-/// What the split needs to know about one face that meets the section,
-/// found in a single walk around it before anything changes.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum FaceInfo {
-    /// The face has `+` and `−` vertices: it will be split in two.
-    Straddling {
-        /// The half-edges of the face that will enter its two `0`
-        /// vertices once its crossing edges are split, in loop order.
-        enter: [u32; 2],
-        /// The side of the vertices between the first and the second.
-        first_chain: Sign,
-    },
-    /// The face lies on one side and has an edge in the cutting plane.
-    Touching {
-        /// The side of its vertices off the plane.
-        side: Sign,
-        /// Its half-edge lying in the plane.
-        edge: u32,
-    },
 }
 
 impl Scratch {

@@ -6,9 +6,10 @@
 //! *straddling* when it has `+` and `−` vertices, *touching* when it lies
 //! on one side with an edge in `s`.
 //!
-//! Each face that meets the section is walked once, before anything
-//! changes, to learn its kind, its crossing edges and its edge in `s`. Then
-//! crossing edges are split (the only exact constructions), straddling
+//! Each face that meets the section has been walked once, before anything
+//! changes (by the march, or by the naive cut's survey), and comes with
+//! what that walk found (`survey`): its kind, its crossing edge and its
+//! edge in `s`. Then crossing edges are split (the only exact constructions), straddling
 //! faces are split between their two `0` vertices (the new face takes the
 //! `+` half), and the section edges, known by now without another walk,
 //! get the two caps.
@@ -19,7 +20,8 @@
 //! part is built, on the section vertices themselves.
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
-use super::scratch::{FaceInfo, Scratch};
+use super::scratch::Scratch;
+use super::survey::{FaceInfo, FaceSurvey};
 use crate::exact::{Plane, Sign, intersect_3_planes};
 
 impl ConvexArena {
@@ -36,34 +38,41 @@ impl ConvexArena {
         keep: Option<Sign>,
     ) -> [u32; 2] {
         let mut relevant = std::mem::take(&mut scratch.relevant);
-        let mut info = std::mem::take(&mut scratch.relevant_info);
-        let mut crossing = std::mem::take(&mut scratch.crossing);
         let mut section = std::mem::take(&mut scratch.section);
         let mut section_new = std::mem::take(&mut scratch.section_new);
         // Sorted, so the result does not depend on how the faces were found.
-        relevant.sort_unstable();
-        info.clear();
-        crossing.clear();
-        for &f in &relevant {
-            info.push(self.survey_face(f, scratch, &mut crossing));
-        }
+        relevant.sort_unstable_by_key(|&(f, _)| f);
         // 1. Split crossing edges.
-        for &h in &crossing {
-            let m = self.split_edge(h, s);
-            scratch.sides.insert(m, Sign::Zero);
+        for &(_, info) in &relevant {
+            if let FaceInfo::Straddling { crossing, .. } = info
+                && crossing != u32::MAX
+            {
+                let m = self.split_edge(crossing, s);
+                scratch.sides.insert(m, Sign::Zero);
+            }
         }
         // 2. Split straddling faces; list the section edges, those of the
         // new faces last.
         section.clear();
         section_new.clear();
-        for (&f, &kind) in relevant.iter().zip(&info) {
-            match (kind, keep) {
-                (FaceInfo::Straddling { enter, first_chain }, None) => {
+        for &(f, info) in &relevant {
+            match (info, keep) {
+                (
+                    FaceInfo::Straddling {
+                        enter, first_chain, ..
+                    },
+                    None,
+                ) => {
                     let (kept, new) = self.split_face(f, &self.face_zeros(enter, first_chain));
                     section.push((kept, Sign::Negative));
                     section_new.push((new, Sign::Positive));
                 }
-                (FaceInfo::Straddling { enter, first_chain }, Some(side)) => {
+                (
+                    FaceInfo::Straddling {
+                        enter, first_chain, ..
+                    },
+                    Some(side),
+                ) => {
                     // Listed where the two-sided split lists them, so that
                     // the kept part comes out the same.
                     let edge = self.trim_face(f, side, &self.face_zeros(enter, first_chain));
@@ -84,27 +93,20 @@ impl ConvexArena {
         // 3. Caps.
         let outcome = self.add_caps(&section, scratch, s, tags, keep);
         scratch.relevant = relevant;
-        scratch.relevant_info = info;
-        scratch.crossing = crossing;
         scratch.section = section;
         scratch.section_new = section_new;
         outcome
     }
 
-    /// One walk around face `f` (all vertices classified): its kind, and
-    /// its crossing half-edges (from their `+` end) appended to `crossing`.
-    fn survey_face(&self, f: u32, scratch: &Scratch, crossing: &mut Vec<u32>) -> FaceInfo {
+    /// What the split needs to know about face `f` (all vertices
+    /// classified), from one walk around it; `None` when it does not meet
+    /// the section.
+    pub(super) fn survey_face(&self, f: u32, scratch: &Scratch) -> Option<FaceInfo> {
         let side = |h: u32| Self::known_side(self.half_edges[h as usize].origin, scratch);
         let first = self.faces[f as usize].half_edge;
         let first_side = side(first);
+        let mut survey = FaceSurvey::new();
         let (mut h, mut here) = (first, first_side);
-        let (mut plus, mut minus, mut in_plane) = (false, false, u32::MAX);
-        // Where the section meets the face boundary, in loop order: at a
-        // `0` vertex (entered by the previous half-edge, `u32::MAX` while
-        // unknown) or inside a crossing edge (entered by that half-edge
-        // once it is split).
-        let (mut enter, mut events, mut first_chain) = ([u32::MAX; 2], 0, Sign::Zero);
-        let mut prev = u32::MAX;
         loop {
             let next = self.half_edges[h as usize].next;
             let there = if next == first {
@@ -112,49 +114,13 @@ impl ConvexArena {
             } else {
                 side(next)
             };
-            plus |= here == Sign::Positive;
-            minus |= here == Sign::Negative;
-            if here == Sign::Positive && there == Sign::Negative {
-                crossing.push(h);
-            } else if here == Sign::Zero && there == Sign::Zero {
-                debug_assert_eq!(in_plane, u32::MAX, "a face has one edge in the plane");
-                in_plane = h;
-            }
-            let entered = if here == Sign::Zero {
-                Some(prev)
-            } else if here.as_i32() * there.as_i32() < 0 {
-                Some(h)
-            } else {
-                None
-            };
-            if let Some(e) = entered {
-                if events < 2 {
-                    enter[events] = e;
-                }
-                if events == 0 {
-                    first_chain = there;
-                }
-                events += 1;
-            }
+            survey.step(h, here, there);
             if next == first {
                 break;
             }
-            (prev, h, here) = (h, next, there);
+            (h, here) = (next, there);
         }
-        if plus && minus {
-            debug_assert_eq!(events, 2, "a convex face meets a plane twice");
-            if enter[0] == u32::MAX {
-                // The walk started at a `0` vertex: it is entered last.
-                enter[0] = h;
-            }
-            FaceInfo::Straddling { enter, first_chain }
-        } else {
-            debug_assert_ne!(in_plane, u32::MAX, "the face meets the section");
-            FaceInfo::Touching {
-                side: if plus { Sign::Positive } else { Sign::Negative },
-                edge: in_plane,
-            }
-        }
+        survey.finish()
     }
 
     /// Splits the edge of half-edge `h` at its intersection with `s`;
@@ -190,7 +156,7 @@ impl ConvexArena {
     }
 
     /// The two `0` vertices of a straddling face once its crossing edges
-    /// are split, from what [`ConvexArena::survey_face`] found.
+    /// are split, from what the survey of the face found.
     fn face_zeros(&self, enter: [u32; 2], first_chain: Sign) -> FaceZeros {
         FaceZeros {
             leave: enter.map(|e| self.half_edges[e as usize].next),

@@ -23,6 +23,12 @@
 //! `|X| < 3·2^bd·2^(2bn+1) < 2^(2bn+bd+3)`, partial sums included. When both
 //! are at most `2^126` ([`NARROW_BITS`]), plain `i128` arithmetic is exact and
 //! gives the same vertex, digit for digit, as the wide path.
+//!
+//! When both bounds are at most `2^63` ([`SMALL_BITS`]), plain `i64` is
+//! exact (the minors too: `3bn + 3 ≤ 63` gives `2bn + 1 ≤ 41`), which is
+//! the case of planes with normals and offsets below `2^20`, or normals
+//! below `2^11` (a direction grid of 2,048 steps per axis) and offsets
+//! below `2^38`.
 
 use super::digits::{assemble, mul, split_balanced};
 use super::plane::Plane;
@@ -31,6 +37,71 @@ use super::wide::{I192, I256};
 
 /// Bound (in bits) on `|W|` and `|X|, |Y|, |Z|` for the narrow path.
 const NARROW_BITS: u32 = 126;
+/// Bound (in bits) on `|W|` and `|X|, |Y|, |Z|` for the `i64` path.
+const SMALL_BITS: u32 = 63;
+
+/// The path that computes the meet of planes whose normals have at most
+/// `bn` bits and offsets at most `bd` bits exactly (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Path {
+    /// `i64` throughout.
+    Small,
+    /// `i128` throughout.
+    Narrow,
+    /// Digit sums into 192- and 256-bit values.
+    Wide,
+}
+
+impl Path {
+    /// The narrowest exact path for the given bit counts.
+    #[inline(always)]
+    fn for_bits(bn: u32, bd: u32) -> Self {
+        let (w_bits, xyz_bits) = (3 * bn + 3, 2 * bn + bd + 3);
+        if w_bits <= SMALL_BITS && xyz_bits <= SMALL_BITS {
+            Path::Small
+        } else if w_bits <= NARROW_BITS && xyz_bits <= NARROW_BITS {
+            Path::Narrow
+        } else {
+            Path::Wide
+        }
+    }
+}
+
+/// `u × v` for vectors with components below `2^20`; each component of the
+/// result is below `2^41`.
+#[inline(always)]
+fn cross_small(u: [i64; 3], v: [i64; 3]) -> [i64; 3] {
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+/// [`intersect_3_planes`] in `i64`, for normals `n` and offsets `d` whose
+/// bit counts select [`Path::Small`] (module docs: every partial sum of
+/// `W` and `X, Y, Z` is below `2^63`, so nothing wraps and negating is
+/// exact).
+#[inline(always)]
+fn intersect_small(n: [[i64; 3]; 3], d: [i64; 3]) -> Option<Point4> {
+    let [np, nq, nr] = n;
+    let (qr, rp, pq) = (
+        cross_small(nq, nr),
+        cross_small(nr, np),
+        cross_small(np, nq),
+    );
+    let w = np[0] * qr[0] + np[1] * qr[1] + np[2] * qr[2];
+    if w == 0 {
+        return None;
+    }
+    let coord = |i: usize| -(d[0] * qr[i] + d[1] * rp[i] + d[2] * pq[i]);
+    let (x, y, z) = (coord(0), coord(1), coord(2));
+    Some(if w > 0 {
+        Point4::from_small(x, y, z, w)
+    } else {
+        Point4::from_small(-x, -y, -z, -w)
+    })
+}
 
 /// `u × v` for 55-bit vectors; each component fits 111 bits.
 #[inline]
@@ -89,18 +160,27 @@ fn intersect_narrow(n: [[i64; 3]; 3], d: [i128; 3], c: [[i128; 3]; 3]) -> Option
 #[must_use]
 #[inline]
 pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
-    let (np, nq, nr) = (p.normal(), q.normal(), r.normal());
-    let qr = cross(nq, nr);
-    let rp = cross(nr, np);
-    let pq = cross(np, nq);
+    let n = [p.normal(), q.normal(), r.normal()];
+    let d = [p.d, q.d, r.d];
     let bn = u32::from(p.normal_bits.max(q.normal_bits).max(r.normal_bits));
     let bd = u32::from(p.offset_bits.max(q.offset_bits).max(r.offset_bits));
-    let (n, d, minors) = ([np, nq, nr], [p.d, q.d, r.d], [qr, rp, pq]);
-    if 3 * bn + 3 <= NARROW_BITS && 2 * bn + bd + 3 <= NARROW_BITS {
+    let path = Path::for_bits(bn, bd);
+    if path == Path::Small {
+        // |d| < 2^(63 − 3 − 2bn): the conversions are exact.
+        return intersect_small(n, d.map(|d| d as i64));
+    }
+    let minors = minors(n);
+    if path == Path::Narrow {
         intersect_narrow(n, d, minors)
     } else {
         intersect_wide(n, d, minors)
     }
+}
+
+/// The minors `[n_q × n_r, n_r × n_p, n_p × n_q]` of normals `[n_p, n_q, n_r]`.
+#[inline(always)]
+fn minors([np, nq, nr]: [[i64; 3]; 3]) -> [[i128; 3]; 3] {
+    [cross(nq, nr), cross(nr, np), cross(np, nq)]
 }
 
 /// [`intersect_3_planes`] in wide arithmetic, exact for every input in
@@ -171,5 +251,86 @@ mod tests {
             }
         }
         assert!(narrow > 10_000);
+    }
+
+    /// A plane with normal components and offset of the given magnitudes
+    /// and random signs.
+    fn signed_plane(rng: &mut ChaCha8Rng, n: [i64; 3], d: i128) -> Option<Plane> {
+        let mut sign = || if rng.random::<bool>() { 1 } else { -1 };
+        Plane::new(
+            sign() * n[0],
+            sign() * n[1],
+            sign() * n[2],
+            sign() as i128 * d,
+        )
+        .ok()
+    }
+
+    /// Checks that `intersect_3_planes` takes the `i64` path for `p, q, r`
+    /// and gives the wide path's vertex, digit for digit; true when the
+    /// planes meet in a point.
+    fn small_path_agrees(p: &Plane, q: &Plane, r: &Plane) -> bool {
+        let bn = u32::from(p.normal_bits.max(q.normal_bits).max(r.normal_bits));
+        let bd = u32::from(p.offset_bits.max(q.offset_bits).max(r.offset_bits));
+        assert_eq!(Path::for_bits(bn, bd), Path::Small);
+        let n = [p.normal(), q.normal(), r.normal()];
+        let (a, b) = (
+            intersect_3_planes(p, q, r),
+            intersect_wide(n, [p.d, q.d, r.d], minors(n)),
+        );
+        assert_eq!(a.is_some(), b.is_some());
+        let (Some(a), Some(b)) = (a, b) else {
+            return false;
+        };
+        assert_eq!((a.xyz_digits, a.w_digits), (b.xyz_digits, b.w_digits));
+        assert_eq!(a.approx.map(f64::to_bits), b.approx.map(f64::to_bits));
+        true
+    }
+
+    /// The `i64` path gives the wide path's vertex, digit for digit, for
+    /// random planes at every normal bit count it takes, with offsets up to
+    /// the largest it takes, and at the edge of its range (every
+    /// coefficient at its largest magnitude); one bit more selects a wider
+    /// path.
+    #[test]
+    fn small_and_wide_paths_agree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (mut random, mut extreme) = (0, 0);
+        for bn in 1..=(SMALL_BITS - 3) / 3 {
+            let bd_max = SMALL_BITS - 3 - 2 * bn;
+            assert_ne!(Path::for_bits(bn + 1, bd_max), Path::Small);
+            assert_ne!(Path::for_bits(bn, bd_max + 1), Path::Small);
+            let (n_max, d_max) = ((1i64 << bn) - 1, (1i128 << bd_max) - 1);
+            for _ in 0..300 {
+                let bd = rng.random_range(1..=bd_max);
+                let plane = |rng: &mut ChaCha8Rng| {
+                    let n = [0; 3].map(|_| rng.random_range(-n_max..=n_max));
+                    let d = rng.random_range(-(1i128 << bd) + 1..1i128 << bd);
+                    Plane::new(n[0], n[1], n[2], d).ok()
+                };
+                if let (Some(p), Some(q), Some(r)) =
+                    (plane(&mut rng), plane(&mut rng), plane(&mut rng))
+                    && small_path_agrees(&p, &q, &r)
+                {
+                    random += 1;
+                }
+            }
+            for _ in 0..30 {
+                // Extreme magnitudes, with a random component zeroed or
+                // lowered now and then so that the normals are independent.
+                let plane = |rng: &mut ChaCha8Rng| {
+                    let mut n = [n_max; 3];
+                    n[rng.random_range(0..3)] = rng.random_range(0..=n_max);
+                    signed_plane(rng, n, d_max)
+                };
+                if let (Some(p), Some(q), Some(r)) =
+                    (plane(&mut rng), plane(&mut rng), plane(&mut rng))
+                    && small_path_agrees(&p, &q, &r)
+                {
+                    extreme += 1;
+                }
+            }
+        }
+        assert!(random > 5_000 && extreme > 200, "{random} {extreme}");
     }
 }

@@ -125,6 +125,20 @@ impl Point4 {
         }
     }
 
+    /// Builds a vertex from exact parts that fit `i64`, with `w > 0`: the
+    /// same digits and `f64`s as [`Point4::from_parts`] gives for these
+    /// values (one balanced digit each, and the `i64` to `f64` conversion
+    /// rounds to nearest).
+    #[inline(always)]
+    pub(crate) fn from_small(x: i64, y: i64, z: i64, w: i64) -> Self {
+        debug_assert!(w > 0);
+        Self {
+            xyz_digits: [[x, 0, 0, 0], [y, 0, 0, 0], [z, 0, 0, 0]],
+            w_digits: [w, 0, 0],
+            approx: [x as f64, y as f64, z as f64, w as f64],
+        }
+    }
+
     /// Homogeneous numerators `[X, Y, Z]`.
     #[must_use]
     #[inline]

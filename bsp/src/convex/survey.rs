@@ -1,0 +1,136 @@
+//! What one walk around a face tells the split (paper 1 §3.3, Fig. 4).
+//!
+//! Notation: a face's loop runs from its stored half-edge; each half-edge
+//! `h` goes from a vertex on side `here` to one on side `there` of the
+//! cutting plane `s` (`+`, `0` or `−`). A face *meets the section* when it
+//! has `+` and `−` vertices (it *straddles* `s` and will be split) or an
+//! edge lying in `s` (it *touches* `s`).
+//!
+//! The march walks every face it visits once, classifying its vertices;
+//! [`FaceSurvey`] gathers in that same walk everything the split needs, so
+//! no face is walked twice.
+
+use crate::exact::Sign;
+
+/// What the split needs to know about one face that meets the section,
+/// found in a single walk around it before anything changes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum FaceInfo {
+    /// The face has `+` and `−` vertices: it will be split in two.
+    Straddling {
+        /// The half-edges of the face that will enter its two `0`
+        /// vertices once its crossing edges are split, in loop order.
+        enter: [u32; 2],
+        /// The side of the vertices between the first and the second.
+        first_chain: Sign,
+        /// Its half-edge from a `+` to a `−` vertex (a convex face has at
+        /// most one), or `u32::MAX`.
+        crossing: u32,
+    },
+    /// The face lies on one side and has an edge in the cutting plane.
+    Touching {
+        /// The side of its vertices off the plane.
+        side: Sign,
+        /// Its half-edge lying in the plane.
+        edge: u32,
+    },
+}
+
+/// The state of one walk around a face: feed every half-edge in loop order
+/// to [`FaceSurvey::step`], then call [`FaceSurvey::finish`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FaceSurvey {
+    plus: bool,
+    minus: bool,
+    /// The half-edge lying in `s`, or `u32::MAX`.
+    in_plane: u32,
+    /// The half-edge from `+` to `−`, or `u32::MAX`.
+    crossing: u32,
+    /// Where the section meets the face boundary, in loop order: at a `0`
+    /// vertex (entered by the previous half-edge, `u32::MAX` while unknown)
+    /// or inside a crossing edge (entered by that half-edge once it is
+    /// split).
+    enter: [u32; 2],
+    events: u32,
+    first_chain: Sign,
+    /// The half-edge walked before the current one, or `u32::MAX`.
+    prev: u32,
+}
+
+impl FaceSurvey {
+    /// A walk about to start.
+    #[inline]
+    pub(crate) fn new() -> Self {
+        Self {
+            plus: false,
+            minus: false,
+            in_plane: u32::MAX,
+            crossing: u32::MAX,
+            enter: [u32::MAX; 2],
+            events: 0,
+            first_chain: Sign::Zero,
+            prev: u32::MAX,
+        }
+    }
+
+    /// Records half-edge `h`, from a vertex on side `here` to one on side
+    /// `there`.
+    #[inline]
+    pub(crate) fn step(&mut self, h: u32, here: Sign, there: Sign) {
+        self.plus |= here == Sign::Positive;
+        self.minus |= here == Sign::Negative;
+        if here == Sign::Positive && there == Sign::Negative {
+            self.crossing = h;
+        } else if here == Sign::Zero && there == Sign::Zero {
+            debug_assert_eq!(self.in_plane, u32::MAX, "a face has one edge in the plane");
+            self.in_plane = h;
+        }
+        let entered = if here == Sign::Zero {
+            Some(self.prev)
+        } else if here.as_i32() * there.as_i32() < 0 {
+            Some(h)
+        } else {
+            None
+        };
+        if let Some(e) = entered {
+            if self.events < 2 {
+                self.enter[self.events as usize] = e;
+            }
+            if self.events == 0 {
+                self.first_chain = there;
+            }
+            self.events += 1;
+        }
+        self.prev = h;
+    }
+
+    /// What the split needs to know about the face, once every half-edge
+    /// has been recorded; `None` when it does not meet the section.
+    #[inline]
+    pub(crate) fn finish(self) -> Option<FaceInfo> {
+        if self.plus && self.minus {
+            debug_assert_eq!(self.events, 2, "a convex face meets a plane twice");
+            let mut enter = self.enter;
+            if enter[0] == u32::MAX {
+                // The walk started at a `0` vertex: it is entered last.
+                enter[0] = self.prev;
+            }
+            Some(FaceInfo::Straddling {
+                enter,
+                first_chain: self.first_chain,
+                crossing: self.crossing,
+            })
+        } else if self.in_plane != u32::MAX {
+            Some(FaceInfo::Touching {
+                side: if self.plus {
+                    Sign::Positive
+                } else {
+                    Sign::Negative
+                },
+                edge: self.in_plane,
+            })
+        } else {
+            None
+        }
+    }
+}
