@@ -23,6 +23,8 @@
 //! output ([`TriangleMesh`]).
 //!
 //! - [`weld`] — equal exact vertices become one index.
+//! - `merge` — coplanar fragments with a whole common edge and a convex
+//!   union become one polygon ([`SurfaceMesh::merge_coplanar`]).
 //! - [`tjunction`] — every vertex strictly inside an edge is inserted there.
 //! - [`watertight`] — every directed edge has exactly one opposite.
 //! - [`validate`] — the invariants of a [`SurfaceMesh`], checked exactly.
@@ -59,6 +61,7 @@
 //! # Ok::<(), chisel_bsp::Error>(())
 //! ```
 
+mod merge;
 pub mod tjunction;
 pub mod triangulate;
 pub mod validate;
@@ -131,8 +134,9 @@ pub struct SurfaceMesh {
 }
 
 impl SurfaceMesh {
-    /// The surface of `faces`: equal corners welded exactly, then every
-    /// T-junction removed ([`Self::split_t_junctions`]).
+    /// The surface of `faces`: equal corners welded exactly, coplanar
+    /// fragments merged ([`Self::merge_coplanar`]), then every T-junction
+    /// removed ([`Self::split_t_junctions`]).
     ///
     /// # Panics
     /// When a face breaks the shape [`Bsp::boundary`](crate::tree::Bsp::boundary)
@@ -140,8 +144,65 @@ impl SurfaceMesh {
     #[must_use]
     pub fn from_faces(faces: &[BoundaryFace]) -> Self {
         let mut mesh = Self::welded(faces);
+        mesh.merge_coplanar();
         mesh.split_t_junctions();
         mesh
+    }
+
+    /// Merges polygons on the same plane with the same materials that
+    /// share a whole edge, wherever their union is convex, until no merge
+    /// applies (exactly; see the `merge` module docs), and drops the
+    /// vertices no polygon uses any more (the others keep their order).
+    /// The surface as a point set is unchanged. Corners inserted at
+    /// T-junctions are dropped first: call [`Self::split_t_junctions`]
+    /// afterwards.
+    pub fn merge_coplanar(&mut self) {
+        for polygon in &mut self.polygons {
+            if polygon.corners.len() != polygon.edges.len() {
+                let corners = polygon
+                    .originals
+                    .iter()
+                    .map(|&o| polygon.corners[o as usize])
+                    .collect();
+                polygon.corners = corners;
+                polygon.originals = (0..polygon.edges.len() as u32).collect();
+            }
+        }
+        if merge::merge_coplanar(&self.vertices, &mut self.polygons) {
+            self.drop_unused_vertices();
+        }
+    }
+
+    /// Removes the vertices that no polygon uses, renumbering the others
+    /// in order.
+    fn drop_unused_vertices(&mut self) {
+        const UNUSED: u32 = u32::MAX;
+        let mut renumber = vec![UNUSED; self.vertices.len()];
+        for polygon in &self.polygons {
+            for &c in &polygon.corners {
+                renumber[c as usize] = 0;
+            }
+        }
+        let mut kept = 0u32;
+        for slot in &mut renumber {
+            if *slot != UNUSED {
+                *slot = kept;
+                kept += 1;
+            }
+        }
+        if kept as usize == self.vertices.len() {
+            return;
+        }
+        let mut v = 0;
+        self.vertices.retain(|_| {
+            v += 1;
+            renumber[v - 1] != UNUSED
+        });
+        for polygon in &mut self.polygons {
+            for c in &mut polygon.corners {
+                *c = renumber[*c as usize];
+            }
+        }
     }
 
     /// The faces with equal corners welded exactly, but T-junctions left in
