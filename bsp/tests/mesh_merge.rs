@@ -118,6 +118,9 @@ fn check_merge(bsp: &Bsp, what: &str) -> (usize, usize) {
     let before = unmerged(&faces);
     let after = SurfaceMesh::from_faces(&faces);
     after.validate().unwrap_or_else(|e| panic!("{what}: {e}"));
+    let owned = SurfaceMesh::from_face_vec(faces.clone());
+    assert_eq!(owned.polygons(), after.polygons(), "{what}: owned faces");
+    assert_eq!(owned.triangles(), after.triangles(), "{what}: owned faces");
     after
         .check_closed()
         .unwrap_or_else(|e| panic!("{what}: not closed: {e}"));

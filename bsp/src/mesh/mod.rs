@@ -213,22 +213,43 @@ impl SurfaceMesh {
     /// As [`Self::from_faces`].
     #[must_use]
     pub fn welded(faces: &[BoundaryFace]) -> Self {
-        for (f, face) in faces.iter().enumerate() {
-            assert!(
-                face.edges.len() == face.vertices.len() && face.edges.len() >= 3,
-                "boundary face {f} has {} edge planes and {} corners",
-                face.edges.len(),
-                face.vertices.len()
-            );
-        }
+        Self::welded_with(faces.iter().map(|face| (face, face.edges.clone())))
+    }
+
+    /// As [`Self::from_faces`], taking the faces (their edge planes move
+    /// into the polygons instead of being copied).
+    ///
+    /// # Panics
+    /// As [`Self::from_faces`].
+    #[must_use]
+    pub fn from_face_vec(mut faces: Vec<BoundaryFace>) -> Self {
+        let mut mesh = Self::welded_with(faces.iter_mut().map(|face| {
+            let edges = core::mem::take(&mut face.edges);
+            (&*face, edges)
+        }));
+        mesh.merge_coplanar();
+        mesh.split_t_junctions();
+        mesh
+    }
+
+    /// The welded mesh of faces given with their edge planes.
+    fn welded_with<'a>(
+        faces: impl ExactSizeIterator<Item = (&'a BoundaryFace, Vec<Plane>)>,
+    ) -> Self {
         let mut welder = weld::Welder::with_capacity(faces.len() * 2);
         let polygons = faces
-            .iter()
-            .map(|face| {
+            .enumerate()
+            .map(|(f, (face, edges))| {
+                assert!(
+                    edges.len() == face.vertices.len() && edges.len() >= 3,
+                    "boundary face {f} has {} edge planes and {} corners",
+                    edges.len(),
+                    face.vertices.len()
+                );
                 let corners: Vec<u32> = face.vertices.iter().map(|v| welder.index(v)).collect();
                 MeshPolygon {
                     plane: face.plane,
-                    edges: face.edges.clone(),
+                    edges,
                     originals: (0..corners.len() as u32).collect(),
                     corners,
                     label: face.label,
