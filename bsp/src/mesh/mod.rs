@@ -23,6 +23,8 @@
 //! output ([`TriangleMesh`]).
 //!
 //! - [`weld`] — equal exact vertices become one index.
+//! - `merge` — coplanar fragments with a whole common edge and a convex
+//!   union become one polygon ([`SurfaceMesh::merge_coplanar`]).
 //! - [`tjunction`] — every vertex strictly inside an edge is inserted there.
 //! - [`watertight`] — every directed edge has exactly one opposite.
 //! - [`validate`] — the invariants of a [`SurfaceMesh`], checked exactly.
@@ -59,6 +61,7 @@
 //! # Ok::<(), chisel_bsp::Error>(())
 //! ```
 
+mod merge;
 pub mod tjunction;
 pub mod triangulate;
 pub mod validate;
@@ -131,8 +134,9 @@ pub struct SurfaceMesh {
 }
 
 impl SurfaceMesh {
-    /// The surface of `faces`: equal corners welded exactly, then every
-    /// T-junction removed ([`Self::split_t_junctions`]).
+    /// The surface of `faces`: equal corners welded exactly, coplanar
+    /// fragments merged ([`Self::merge_coplanar`]), then every T-junction
+    /// removed ([`Self::split_t_junctions`]).
     ///
     /// # Panics
     /// When a face breaks the shape [`Bsp::boundary`](crate::tree::Bsp::boundary)
@@ -140,8 +144,65 @@ impl SurfaceMesh {
     #[must_use]
     pub fn from_faces(faces: &[BoundaryFace]) -> Self {
         let mut mesh = Self::welded(faces);
+        mesh.merge_coplanar();
         mesh.split_t_junctions();
         mesh
+    }
+
+    /// Merges polygons on the same plane with the same materials that
+    /// share a whole edge, wherever their union is convex, until no merge
+    /// applies (exactly; see the `merge` module docs), and drops the
+    /// vertices no polygon uses any more (the others keep their order).
+    /// The surface as a point set is unchanged. Corners inserted at
+    /// T-junctions are dropped first: call [`Self::split_t_junctions`]
+    /// afterwards.
+    pub fn merge_coplanar(&mut self) {
+        for polygon in &mut self.polygons {
+            if polygon.corners.len() != polygon.edges.len() {
+                let corners = polygon
+                    .originals
+                    .iter()
+                    .map(|&o| polygon.corners[o as usize])
+                    .collect();
+                polygon.corners = corners;
+                polygon.originals = (0..polygon.edges.len() as u32).collect();
+            }
+        }
+        if merge::merge_coplanar(&self.vertices, &mut self.polygons) {
+            self.drop_unused_vertices();
+        }
+    }
+
+    /// Removes the vertices that no polygon uses, renumbering the others
+    /// in order.
+    fn drop_unused_vertices(&mut self) {
+        const UNUSED: u32 = u32::MAX;
+        let mut renumber = vec![UNUSED; self.vertices.len()];
+        for polygon in &self.polygons {
+            for &c in &polygon.corners {
+                renumber[c as usize] = 0;
+            }
+        }
+        let mut kept = 0u32;
+        for slot in &mut renumber {
+            if *slot != UNUSED {
+                *slot = kept;
+                kept += 1;
+            }
+        }
+        if kept as usize == self.vertices.len() {
+            return;
+        }
+        let mut v = 0;
+        self.vertices.retain(|_| {
+            v += 1;
+            renumber[v - 1] != UNUSED
+        });
+        for polygon in &mut self.polygons {
+            for c in &mut polygon.corners {
+                *c = renumber[*c as usize];
+            }
+        }
     }
 
     /// The faces with equal corners welded exactly, but T-junctions left in
@@ -152,22 +213,43 @@ impl SurfaceMesh {
     /// As [`Self::from_faces`].
     #[must_use]
     pub fn welded(faces: &[BoundaryFace]) -> Self {
-        for (f, face) in faces.iter().enumerate() {
-            assert!(
-                face.edges.len() == face.vertices.len() && face.edges.len() >= 3,
-                "boundary face {f} has {} edge planes and {} corners",
-                face.edges.len(),
-                face.vertices.len()
-            );
-        }
+        Self::welded_with(faces.iter().map(|face| (face, face.edges.clone())))
+    }
+
+    /// As [`Self::from_faces`], taking the faces (their edge planes move
+    /// into the polygons instead of being copied).
+    ///
+    /// # Panics
+    /// As [`Self::from_faces`].
+    #[must_use]
+    pub fn from_face_vec(mut faces: Vec<BoundaryFace>) -> Self {
+        let mut mesh = Self::welded_with(faces.iter_mut().map(|face| {
+            let edges = core::mem::take(&mut face.edges);
+            (&*face, edges)
+        }));
+        mesh.merge_coplanar();
+        mesh.split_t_junctions();
+        mesh
+    }
+
+    /// The welded mesh of faces given with their edge planes.
+    fn welded_with<'a>(
+        faces: impl ExactSizeIterator<Item = (&'a BoundaryFace, Vec<Plane>)>,
+    ) -> Self {
         let mut welder = weld::Welder::with_capacity(faces.len() * 2);
         let polygons = faces
-            .iter()
-            .map(|face| {
+            .enumerate()
+            .map(|(f, (face, edges))| {
+                assert!(
+                    edges.len() == face.vertices.len() && edges.len() >= 3,
+                    "boundary face {f} has {} edge planes and {} corners",
+                    edges.len(),
+                    face.vertices.len()
+                );
                 let corners: Vec<u32> = face.vertices.iter().map(|v| welder.index(v)).collect();
                 MeshPolygon {
                     plane: face.plane,
-                    edges: face.edges.clone(),
+                    edges,
                     originals: (0..corners.len() as u32).collect(),
                     corners,
                     label: face.label,

@@ -28,6 +28,21 @@
 //! is the largest. Distinct points on `L_k` never tie, since `e_{k−1}` is
 //! strictly monotone along it.
 //!
+//! # Edges matched whole
+//!
+//! An original edge `a → b` used by exactly one polygon, whose opposite
+//! `b → a` is also an original edge of exactly one polygon with the same
+//! materials on both sides, is left as it is: splitting would insert the same vertices (those strictly inside the
+//! segment `ab`) into both, in opposite orders, and the pieces would pair
+//! up again. Leaving both whole removes equally many uses of each piece
+//! and of its opposite, so every directed edge is still used as often as
+//! its opposite, and a directed edge used once with its opposite once
+//! stays so: the mesh is closed whenever the fully split one is, and
+//! watertight whenever that one is. As both polygons have the same materials, keeping
+//! polygons by material ([`super::SurfaceMesh::retain`], e.g. the outer
+//! surface) keeps both or neither, and the same holds for what is kept. Most edges between faces of one cell are matched whole,
+//! and skip the search below.
+//!
 //! # Candidates
 //!
 //! A dense uniform grid over the `f64` positions of the vertices, about
@@ -39,11 +54,24 @@
 //! vertices certainly off the segment, with the same margin. So a vertex
 //! exactly on the segment always reaches the exact test, which decides.
 
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
 use super::MeshPolygon;
+use super::weld::WordHasher;
 use crate::exact::{Point4, Sign, classify_vertex, compare_offsets};
 
-/// Inserts every T-junction into every polygon (see the module docs).
+/// Directed edge `(from, to)` packed into one word.
+#[inline]
+fn edge_key(from: u32, to: u32) -> u64 {
+    (u64::from(from) << 32) | u64::from(to)
+}
+
+/// Inserts every T-junction into every polygon, except on edges matched
+/// whole (see the module docs).
 pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
+    let whole = matched_whole(polygons);
+    let mut edge_index = 0;
     let positions: Vec<[f64; 3]> = vertices.iter().map(Point4::to_f64).collect();
     let grid = Grid::new(&positions);
     let mut seen = vec![u64::MAX; positions.len()];
@@ -51,6 +79,7 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
     let mut candidates = Vec::new();
     let mut inside = Vec::new();
     let mut originals = Vec::new();
+    let (mut corners, mut positions_of_originals) = (Vec::new(), Vec::new());
     for polygon in polygons.iter_mut() {
         let n = polygon.original_len();
         originals.clear();
@@ -60,12 +89,16 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
                 .iter()
                 .map(|&o| polygon.corners[o as usize]),
         );
-        let mut corners = Vec::with_capacity(n);
-        let mut positions_of_originals = Vec::with_capacity(n);
+        corners.clear();
+        positions_of_originals.clear();
         for k in 0..n {
             let (a, b) = (originals[k], originals[(k + 1) % n]);
             positions_of_originals.push(corners.len() as u32);
             corners.push(a);
+            edge_index += 1;
+            if whole[edge_index - 1] {
+                continue;
+            }
             candidates.clear();
             let (pa, pb) = (positions[a as usize], positions[b as usize]);
             grid.near_segment(pa, pb, edge_number, &mut seen, &mut candidates);
@@ -85,9 +118,51 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
             });
             corners.extend_from_slice(&inside);
         }
-        polygon.corners = corners;
-        polygon.originals = positions_of_originals;
+        // Reuse the polygon's own storage (most polygons are unchanged).
+        if polygon.corners != corners {
+            polygon.corners.clone_from(&corners);
+            polygon.originals.clone_from(&positions_of_originals);
+        }
     }
+}
+
+/// Per original edge of every polygon (in order): whether it is matched
+/// whole (see the module docs).
+fn matched_whole(polygons: &[MeshPolygon]) -> Vec<bool> {
+    const SHARED: u32 = u32::MAX;
+    let original = |polygon: &MeshPolygon, k: usize| {
+        let n = polygon.original_len();
+        polygon.corners[polygon.originals[k % n] as usize]
+    };
+    // The one polygon using each original directed edge, or SHARED.
+    let mut owners: HashMap<u64, u32, BuildHasherDefault<WordHasher>> =
+        HashMap::with_capacity_and_hasher(polygons.len() * 5, BuildHasherDefault::default());
+    for (f, polygon) in polygons.iter().enumerate() {
+        for k in 0..polygon.original_len() {
+            let key = edge_key(original(polygon, k), original(polygon, k + 1));
+            owners
+                .entry(key)
+                .and_modify(|owner| *owner = SHARED)
+                .or_insert(f as u32);
+        }
+    }
+    let mut whole = Vec::with_capacity(owners.len());
+    for polygon in polygons {
+        for k in 0..polygon.original_len() {
+            let (a, b) = (original(polygon, k), original(polygon, k + 1));
+            let opposite = match (owners.get(&edge_key(a, b)), owners.get(&edge_key(b, a))) {
+                (Some(&own), Some(&other)) if own != SHARED && other != SHARED => {
+                    Some(&polygons[other as usize])
+                }
+                _ => None,
+            };
+            whole.push(opposite.is_some_and(|o| {
+                (o.label, o.outside, o.on_bounds)
+                    == (polygon.label, polygon.outside, polygon.on_bounds)
+            }));
+        }
+    }
+    whole
 }
 
 /// Whether `w` lies strictly inside original edge `k` of `polygon`, exactly

@@ -71,9 +71,9 @@ impl Hash for CellKey {
 /// A multiply–rotate hash of a few words (as in `rustc-hash`): the keys
 /// are not adversarial, and the cell lookups only need a good spread.
 #[derive(Clone, Copy, Debug, Default)]
-struct CellHasher(u64);
+pub(crate) struct WordHasher(u64);
 
-impl Hasher for CellHasher {
+impl Hasher for WordHasher {
     #[inline]
     fn write(&mut self, bytes: &[u8]) {
         for chunk in bytes.chunks(8) {
@@ -109,7 +109,7 @@ pub struct Welder {
     vertices: Vec<Point4>,
     /// The first and last vertex of each cell; the others are linked by
     /// [`Self::next`], in order of first appearance.
-    cells: HashMap<CellKey, (u32, u32), BuildHasherDefault<CellHasher>>,
+    cells: HashMap<CellKey, (u32, u32), BuildHasherDefault<WordHasher>>,
     /// The vertex after each in its cell, or [`END`].
     next: Vec<u32>,
 }

@@ -35,7 +35,7 @@ pub fn changed_cells(octree: &Octree, keys: &[CellKey], faces: CellFaces) -> usi
             if faces.is_empty() {
                 return 0;
             }
-            SurfaceMesh::from_faces(&faces).triangles().len()
+            SurfaceMesh::from_face_vec(faces).triangles().len()
         })
         .sum()
 }
@@ -54,7 +54,7 @@ pub struct Closure {
 /// The whole surface as one mesh, and how closed it is.
 #[must_use]
 pub fn whole(octree: &Octree) -> (TriangleMesh, Closure) {
-    let mesh = SurfaceMesh::from_faces(&octree.surface());
+    let mesh = SurfaceMesh::from_face_vec(octree.surface());
     let closure = Closure {
         closed: mesh.check_closed().is_ok(),
         manifold: mesh.check_watertight().is_ok(),
