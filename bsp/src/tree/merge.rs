@@ -29,8 +29,10 @@
 //!   so its caps carry a pending tag (the split node, marked) that is
 //!   resolved once the tree is complete.
 //! - Collapsed splits. Their cell is the uncut one, so every proper cut
-//!   first copies its cell ([`Survey::copy`]); when the split collapses, the
-//!   pieces are discarded and the copy becomes the leaf's cell.
+//!   first saves the records of its cell ([`Survey::save`]); when the split
+//!   collapses, the pieces are discarded and the saved records written
+//!   back ([`Survey::restore`]): the cell is again exactly as it was before
+//!   the cut, and becomes the leaf's cell.
 
 use std::collections::HashMap;
 
@@ -122,7 +124,7 @@ struct Merger<'a> {
 }
 
 /// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
-/// copies.
+/// saves.
 struct KeptCells {
     cells: Vec<Cell>,
     survey: Survey,
@@ -229,7 +231,7 @@ impl<'a> Merger<'a> {
     }
 
     /// [`Merger::split`] keeping the output leaves' cells: a proper cut
-    /// copies the cell first, for the case that the split collapses.
+    /// saves the cell first, for the case that the split collapses.
     fn split_keeping(
         &mut self,
         s: InputPlane<'a>,
@@ -240,7 +242,7 @@ impl<'a> Merger<'a> {
     ) -> NodeId {
         let kept = self.cells.as_mut().expect("cells are kept");
         // A cut changes the cell in place: a proper one is found first and
-        // the cell copied before it, for the case that the split collapses.
+        // the cell saved before it, for the case that the split collapses.
         if kept.surveyed != Some(cell) {
             kept.survey.survey(self.arena, cell);
             kept.surveyed = Some(cell);
@@ -250,11 +252,11 @@ impl<'a> Merger<'a> {
             Reach::Above => return step(self, above, cell),
             Reach::Both => {}
         }
-        let whole = kept.survey.copy(self.arena, cell);
+        let saved = kept.survey.save(self.arena);
         // The cut changes the cell, and a collapse below releases pieces.
         kept.surveyed = None;
         let first_cell = kept.cells.len();
-        let after_copy = self.arena.mark();
+        let before_cut = self.arena.mark();
         let node = self.nodes.len() as NodeId;
         let CutOutcome::Split {
             below: cb,
@@ -264,17 +266,20 @@ impl<'a> Merger<'a> {
             unreachable!("vertices on both sides")
         };
         let (node, collapsed) = self.proper(s, (cb, ca), below, above, step);
+        let kept = self.cells.as_mut().expect("cells are kept");
         if let Some(label) = collapsed {
-            // The pieces are dead; the uncut copy is the leaf's cell.
-            self.arena.release_to(after_copy);
-            let kept = self.cells.as_mut().expect("cells are kept");
+            // The pieces are dead; the cell, restored uncut, is the leaf's.
+            self.arena.release_to(before_cut);
+            kept.survey.restore(self.arena, saved);
             kept.surveyed = None;
             kept.cells.truncate(first_cell);
             kept.cells.push(Cell {
-                poly: whole,
+                poly: cell,
                 leaf: node,
                 label,
             });
+        } else {
+            kept.survey.drop_saved(saved);
         }
         node
     }
