@@ -34,7 +34,9 @@
 //!   back ([`Survey::restore`]): the cell is again exactly as it was before
 //!   the cut, and becomes the leaf's cell.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::{Cell, Reach, Survey};
@@ -113,7 +115,7 @@ struct Merger<'a> {
     op: BooleanOp,
     arena: &'a mut ConvexArena,
     planes: Vec<Plane>,
-    plane_index: HashMap<Plane, u32>,
+    plane_index: HashMap<Plane, u32, BuildHasherDefault<PlaneHasher>>,
     /// The output palette index of each input plane once it is known
     /// (`A`'s planes first, then `B`'s; `u32::MAX` before), so that the
     /// palette is hashed once per input plane rather than once per split.
@@ -131,6 +133,50 @@ struct KeptCells {
     /// The cell `survey` describes, while it is unchanged: a cell that
     /// does not cut properly is tested against the next plane as it is.
     surveyed: Option<PolyId>,
+}
+
+/// A multiply–add hash of a plane's coefficient words (as in
+/// `rustc-hash`): the palette's keys are not adversarial, and lookups only
+/// need a good spread.
+#[derive(Clone, Copy, Debug, Default)]
+struct PlaneHasher(u64);
+
+impl Hasher for PlaneHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    #[inline]
+    fn write_u64(&mut self, x: u64) {
+        self.0 = self.0.wrapping_add(x).wrapping_mul(0xF135_7AEA_2E62_A9C5);
+    }
+
+    #[inline]
+    fn write_i64(&mut self, x: i64) {
+        self.write_u64(x as u64);
+    }
+
+    #[inline]
+    fn write_i128(&mut self, x: i128) {
+        self.write_u64(x as u64);
+        self.write_u64((x >> 64) as u64);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0.rotate_left(26)
+    }
+}
+
+thread_local! {
+    /// The survey memory of earlier merges on this thread, kept so that a
+    /// merge does not regrow it.
+    static SURVEYS: RefCell<Vec<Survey>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Marks a pending tag: the upper child of the split node in the low bits,
@@ -361,9 +407,14 @@ impl Bsp {
         arena: &mut ConvexArena,
         bounds: PolyId,
     ) -> (Bsp, Vec<Cell>) {
+        let survey = SURVEYS
+            .try_with(|s| s.try_borrow_mut().ok().and_then(|mut s| s.pop()))
+            .ok()
+            .flatten()
+            .unwrap_or_default();
         let kept = KeptCells {
             cells: Vec::new(),
-            survey: Survey::default(),
+            survey,
             surveyed: None,
         };
         let first_face = arena.faces().len();
@@ -379,7 +430,16 @@ impl Bsp {
                 }
             }
         }
-        (bsp, cells.map(|k| k.cells).unwrap_or_default())
+        let Some(kept) = cells else {
+            unreachable!("cells are kept")
+        };
+        let survey = kept.survey;
+        let _ = SURVEYS.try_with(|s| {
+            if let Ok(mut s) = s.try_borrow_mut() {
+                s.push(survey);
+            }
+        });
+        (bsp, kept.cells)
     }
 
     fn merger<'a>(
@@ -395,7 +455,10 @@ impl Bsp {
             op,
             arena,
             planes: Vec::new(),
-            plane_index: HashMap::new(),
+            plane_index: HashMap::with_capacity_and_hasher(
+                self.planes().len() + other.planes().len(),
+                BuildHasherDefault::default(),
+            ),
             known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
             cells,
