@@ -24,8 +24,8 @@ use super::graft::axis_graft;
 use super::tool::Tool;
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
-use crate::convex::{ConvexArena, PolyId, with_arena};
-use crate::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label};
+use crate::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId, with_arena};
+use crate::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label, Node, NodeId};
 
 /// What an edit does where the tool is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -306,11 +306,54 @@ impl Walk<'_> {
         (Some(node), edited)
     }
 
+    /// Whether the tool's solid has volume in `cell` (a polyhedron of
+    /// `arena`, cut up in place): whether [`Bsp::cells`] of the tool there
+    /// has a non-empty cell, found with the same cuts but stopping at the
+    /// first such cell, and building only the part of a cut whose other
+    /// side is an empty leaf.
     fn tool_meets(&self, arena: &mut ConvexArena, cell: PolyId) -> bool {
-        self.tool
-            .cells(arena, cell)
-            .iter()
-            .any(|c| c.label != EMPTY)
+        let nodes = self.tool.nodes();
+        let mut stack = vec![(0 as NodeId, cell)];
+        while let Some((n, poly)) = stack.pop() {
+            let (plane, below, above) = match nodes[n as usize] {
+                Node::Leaf(label) if label != EMPTY => return true,
+                Node::Leaf(_) => continue,
+                Node::Split {
+                    plane,
+                    below,
+                    above,
+                } => (plane, below, above),
+            };
+            let s = &self.tool.planes()[plane as usize];
+            let empty = |n: NodeId| nodes[n as usize] == Node::Leaf(EMPTY);
+            let keep = match (empty(below), empty(above)) {
+                (true, true) => continue,
+                (false, true) => Some((Part::Below, below)),
+                (true, false) => Some((Part::Above, above)),
+                (false, false) => None,
+            };
+            if let Some((part, child)) = keep {
+                match arena.cut_keeping(poly, s, part, NO_TAG) {
+                    KeptOutcome::Cut(kept) => stack.push((child, kept)),
+                    KeptOutcome::Below => {
+                        stack.extend((part == Part::Below).then_some((below, poly)))
+                    }
+                    KeptOutcome::Above => {
+                        stack.extend((part == Part::Above).then_some((above, poly)))
+                    }
+                }
+            } else {
+                match arena.cut(poly, s, NO_TAG, NO_TAG) {
+                    CutOutcome::Split { below: b, above: a } => {
+                        stack.push((above, a));
+                        stack.push((below, b));
+                    }
+                    CutOutcome::Below => stack.push((below, poly)),
+                    CutOutcome::Above => stack.push((above, poly)),
+                }
+            }
+        }
+        false
     }
 }
 

@@ -14,7 +14,8 @@
 //! label, so solid–empty faces always face out of the solid. Faces on the
 //! bounds are kept and marked: what lies outside the bounds is not known
 //! here. T-junctions are removed later, on the assembled surface
-//! ([`crate::mesh`]).
+//! ([`crate::mesh`]). A split whose one side is a leaf that would drop its
+//! piece builds only the other piece.
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
@@ -167,13 +168,35 @@ impl Bsp {
                     // The choices of [`Polygon::split`].
                     n = match (neg, pos) {
                         (true, true) => {
-                            let (b, a) = cell_face(arena, f).split_straddling(sides, p);
-                            stack.push((above, a));
-                            self.clip_pieces(below, b, stack, &mut |piece, other| {
+                            let face = cell_face(arena, f);
+                            let (b, a) = match self.wanted(label, below, above) {
+                                [true, true] => {
+                                    let (b, a) = face.split_straddling(sides, p);
+                                    (Some(b), Some(a))
+                                }
+                                [true, false] => {
+                                    (Some(face.one_part(sides, p, Sign::Negative)), None)
+                                }
+                                [false, true] => {
+                                    (None, Some(face.one_part(sides, p, Sign::Positive)))
+                                }
+                                [false, false] => return,
+                            };
+                            let mut keep = |piece, other| {
                                 if other < label {
                                     out.push(BoundaryFace::new(piece, label, other, false));
                                 }
-                            });
+                            };
+                            match (b, a) {
+                                (Some(b), a) => {
+                                    stack.extend(a.map(|a| (above, a)));
+                                    self.clip_pieces(below, b, stack, Some(label), &mut keep);
+                                }
+                                (None, Some(a)) => {
+                                    self.clip_pieces(above, a, stack, Some(label), &mut keep)
+                                }
+                                (None, None) => {}
+                            }
                             return;
                         }
                         (true, false) => below,
@@ -196,17 +219,28 @@ impl Bsp {
         polygon: Polygon,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        self.clip_pieces(n, polygon, &mut Vec::new(), emit);
+        self.clip_pieces(n, polygon, &mut Vec::new(), None, emit);
+    }
+
+    /// Which sides (below, above) of a split with these children can keep
+    /// a piece of a face of `label`: not a leaf whose label is `label` or
+    /// more (the piece would be dropped there).
+    #[inline]
+    fn wanted(&self, label: Label, below: NodeId, above: NodeId) -> [bool; 2] {
+        [below, above].map(|n| !matches!(self.nodes()[n as usize], Node::Leaf(o) if o >= label))
     }
 
     /// [`Bsp::clip_polygon`] of `polygon` at `n` and then of the pieces on
     /// `stack`, depth first, below before above. A piece that is not split
-    /// goes on without passing through the stack.
+    /// goes on without passing through the stack. With `kept_below`, only
+    /// pieces reaching leaves with a smaller label are handed to `emit`
+    /// (others are not built).
     fn clip_pieces(
         &self,
         n: NodeId,
         polygon: Polygon,
         stack: &mut Vec<(NodeId, Polygon)>,
+        kept_below: Option<Label>,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
         let mut current = Some((n, polygon));
@@ -218,7 +252,8 @@ impl Bsp {
                     below,
                     above,
                 } => {
-                    current = match polygon.split(&self.planes()[plane as usize]) {
+                    let wanted = kept_below.map_or([true; 2], |l| self.wanted(l, below, above));
+                    current = match polygon.split_wanted(&self.planes()[plane as usize], wanted) {
                         (Some(b), Some(a)) => {
                             stack.push((above, a));
                             Some((below, b))

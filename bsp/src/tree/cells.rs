@@ -69,41 +69,40 @@ pub(crate) enum Reach {
     Above,
 }
 
-/// Working memory of [`Survey`]: index maps from an arena's elements to
-/// their copies and the elements of the surveyed polyhedron, reused
-/// between surveys (map entries are written before they are read, so they
-/// are never cleared).
+/// Working memory of [`Survey`]: the elements of the surveyed polyhedron
+/// and the survey that last reached each vertex and face, reused between
+/// surveys; and a stack of saved polyhedra ([`Survey::save`]).
 #[derive(Default)]
 pub(crate) struct Survey {
-    half_edge_map: Vec<u32>,
-    vertex_map: Vec<u32>,
-    face_map: Vec<u32>,
     /// The survey that last reached each vertex and face.
     vertex_stamp: Vec<u32>,
     face_stamp: Vec<u32>,
     stamp: u32,
     faces: Vec<u32>,
     vertices: Vec<u32>,
+    /// Saved records with their indices, innermost save last.
+    saved_half_edges: Vec<(u32, HalfEdge)>,
+    saved_vertices: Vec<(u32, Vertex)>,
+    saved_faces: Vec<(u32, Face)>,
+}
+
+/// Where one save starts on the stacks of saved records.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Saved {
+    half_edges: usize,
+    vertices: usize,
+    faces: usize,
 }
 
 impl Survey {
     /// Lists the faces and vertices of `poly` (faces in depth-first order
     /// over their neighbours, vertices as first met).
     pub(crate) fn survey(&mut self, arena: &ConvexArena, poly: PolyId) {
-        let (nh, nv, nf) = (
-            arena.half_edges.len(),
-            arena.vertices.len(),
-            arena.faces.len(),
-        );
-        if self.half_edge_map.len() < nh {
-            self.half_edge_map.resize(nh, u32::MAX);
-        }
-        if self.vertex_map.len() < nv {
-            self.vertex_map.resize(nv, u32::MAX);
+        let (nv, nf) = (arena.vertices.len(), arena.faces.len());
+        if self.vertex_stamp.len() < nv {
             self.vertex_stamp.resize(nv, 0);
         }
-        if self.face_map.len() < nf {
-            self.face_map.resize(nf, u32::MAX);
+        if self.face_stamp.len() < nf {
             self.face_stamp.resize(nf, 0);
         }
         self.stamp = self.stamp.wrapping_add(1);
@@ -159,63 +158,59 @@ impl Survey {
         if below { Reach::Below } else { Reach::Above }
     }
 
-    /// Appends a copy of the surveyed polyhedron `poly` to `arena` and
-    /// returns it: the same faces (planes and tags), loops and vertices, so
-    /// that every traversal ([`ConvexArena::faces_of`],
-    /// [`ConvexArena::face_loop`]) visits the copy exactly as it visits the
-    /// original.
-    pub(crate) fn copy(&mut self, arena: &mut ConvexArena, poly: PolyId) -> PolyId {
-        let (h0, v0, f0) = (
-            arena.half_edges.len() as u32,
-            arena.vertices.len() as u32,
-            arena.faces.len() as u32,
-        );
-        for (k, &v) in self.vertices.iter().enumerate() {
-            self.vertex_map[v as usize] = v0 + k as u32;
-        }
-        let mut next = h0;
-        for (k, &f) in self.faces.iter().enumerate() {
-            self.face_map[f as usize] = f0 + k as u32;
-            let first = arena.faces[f as usize].half_edge;
-            let mut h = first;
-            loop {
-                self.half_edge_map[h as usize] = next;
-                next += 1;
-                h = arena.half_edges[h as usize].next;
-                if h == first {
-                    break;
-                }
-            }
-        }
-        for &v in &self.vertices {
-            let vertex = arena.vertices[v as usize];
-            arena.vertices.push(Vertex {
-                half_edge: self.half_edge_map[vertex.half_edge as usize],
-                ..vertex
-            });
-        }
+    /// Saves the records (faces, their half-edges, vertices) of the
+    /// surveyed polyhedron, so that [`Survey::restore`] can undo the cuts
+    /// that change them in place. Saves nest: the last one is restored or
+    /// dropped first.
+    pub(crate) fn save(&mut self, arena: &ConvexArena) -> Saved {
+        let saved = Saved {
+            half_edges: self.saved_half_edges.len(),
+            vertices: self.saved_vertices.len(),
+            faces: self.saved_faces.len(),
+        };
         for &f in &self.faces {
             let face = arena.faces[f as usize];
+            self.saved_faces.push((f, face));
             let mut h = face.half_edge;
             loop {
                 let e = arena.half_edges[h as usize];
-                arena.half_edges.push(HalfEdge {
-                    origin: self.vertex_map[e.origin as usize],
-                    twin: self.half_edge_map[e.twin as usize],
-                    next: self.half_edge_map[e.next as usize],
-                    face: self.face_map[e.face as usize],
-                });
+                self.saved_half_edges.push((h, e));
                 h = e.next;
                 if h == face.half_edge {
                     break;
                 }
             }
-            arena.faces.push(Face {
-                half_edge: self.half_edge_map[face.half_edge as usize],
-                ..face
-            });
         }
-        debug_assert_eq!(arena.half_edges.len() as u32, next);
-        PolyId(self.half_edge_map[poly.0 as usize])
+        self.saved_vertices.extend(
+            self.vertices
+                .iter()
+                .map(|&v| (v, arena.vertices[v as usize])),
+        );
+        saved
+    }
+
+    /// Writes the records of `saved` (the last save not yet restored or
+    /// dropped) back into `arena`, whose elements added since the save the
+    /// caller has released: the polyhedron is again exactly as it was
+    /// saved, element for element.
+    pub(crate) fn restore(&mut self, arena: &mut ConvexArena, saved: Saved) {
+        for &(h, e) in &self.saved_half_edges[saved.half_edges..] {
+            arena.half_edges[h as usize] = e;
+        }
+        for &(v, vertex) in &self.saved_vertices[saved.vertices..] {
+            arena.vertices[v as usize] = vertex;
+        }
+        for &(f, face) in &self.saved_faces[saved.faces..] {
+            arena.faces[f as usize] = face;
+        }
+        self.drop_saved(saved);
+    }
+
+    /// Drops the records of `saved` (the last save not yet restored or
+    /// dropped).
+    pub(crate) fn drop_saved(&mut self, saved: Saved) {
+        self.saved_half_edges.truncate(saved.half_edges);
+        self.saved_vertices.truncate(saved.vertices);
+        self.saved_faces.truncate(saved.faces);
     }
 }

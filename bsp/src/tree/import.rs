@@ -8,6 +8,7 @@
 //! inner node it descends into the side(s) it reaches, split if it straddles
 //! the plane, and is dropped if it lies in the plane.
 
+use super::boundary::BoundaryFace;
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::polygon::{Polygon, classify_corners};
 use crate::Error;
@@ -64,6 +65,19 @@ impl Bsp {
         }
         tree.finish()
     }
+
+    /// [`Bsp::from_polygons`] of the faces' polygons with their labels
+    /// (behind, in front), the same tree; a face is read in place until it
+    /// must be split, so a face that reaches a leaf whole is never copied.
+    pub(crate) fn from_faces<'a>(faces: impl Iterator<Item = &'a BoundaryFace>, seed: u64) -> Bsp {
+        let mut faces: Vec<&BoundaryFace> = faces.collect();
+        shuffle(&mut faces, seed);
+        let mut tree = Builder::default();
+        for face in faces {
+            tree.insert_face(face);
+        }
+        tree.finish()
+    }
 }
 
 /// A tree being built face by face, with working memory reused between
@@ -91,9 +105,63 @@ impl Builder {
         Bsp::from_parts(self.planes, self.nodes)
     }
 
+    /// [`Builder::insert`] of the face's polygon, with the face's labels:
+    /// the face is followed in place down to the leaf it reaches, or to the
+    /// first split it straddles, where its polygon goes on from.
+    fn insert_face(&mut self, face: &BoundaryFace) {
+        let (behind, in_front) = (face.label, face.outside);
+        let mut n = 0;
+        loop {
+            match self.nodes[n as usize] {
+                Node::Leaf(_) => {
+                    self.planes.push(face.plane);
+                    let plane = self.planes.len() as u32 - 1;
+                    self.make_split(n, plane, behind, in_front);
+                    return;
+                }
+                Node::Split {
+                    plane,
+                    below,
+                    above,
+                } => {
+                    let p = &self.planes[plane as usize];
+                    self.sides.clear();
+                    self.sides.resize(face.vertices.len(), Sign::Zero);
+                    n = match classify_corners(&face.vertices, p, &mut self.sides) {
+                        (false, false) => return, // in the plane: already represented
+                        (true, false) => below,
+                        (false, true) => above,
+                        (true, true) => {
+                            self.insert_at(n, face.polygon(), behind, in_front);
+                            return;
+                        }
+                    };
+                }
+            }
+        }
+    }
+
+    /// Turns leaf `n` into a split by palette entry `plane` with new leaves
+    /// `behind` below and `in_front` above.
+    fn make_split(&mut self, n: NodeId, plane: u32, behind: Label, in_front: Label) {
+        let below = self.nodes.len() as NodeId;
+        self.nodes.push(Node::Leaf(behind));
+        self.nodes.push(Node::Leaf(in_front));
+        self.nodes[n as usize] = Node::Split {
+            plane,
+            below,
+            above: below + 1,
+        };
+    }
+
     /// Inserts one face: where it reaches a leaf, that leaf becomes a split
     /// by the face's plane with `behind` below and `in_front` above.
     fn insert(&mut self, polygon: Polygon, behind: Label, in_front: Label) {
+        self.insert_at(0, polygon, behind, in_front);
+    }
+
+    /// [`Builder::insert`] of a face that reaches node `start` whole.
+    fn insert_at(&mut self, start: NodeId, polygon: Polygon, behind: Label, in_front: Label) {
         let Self {
             planes,
             nodes,
@@ -104,7 +172,7 @@ impl Builder {
         let mut palette_index = None;
         // A piece that is not split goes on without passing through the
         // stack; of two parts, the one above goes first.
-        let mut current = Some((0, polygon));
+        let mut current = Some((start, polygon));
         while let Some((n, polygon)) = current.take().or_else(|| stack.pop()) {
             match nodes[n as usize] {
                 Node::Leaf(_) => {

@@ -29,10 +29,14 @@
 //!   so its caps carry a pending tag (the split node, marked) that is
 //!   resolved once the tree is complete.
 //! - Collapsed splits. Their cell is the uncut one, so every proper cut
-//!   first copies its cell ([`Survey::copy`]); when the split collapses, the
-//!   pieces are discarded and the copy becomes the leaf's cell.
+//!   first saves the records of its cell ([`Survey::save`]); when the split
+//!   collapses, the pieces are discarded and the saved records written
+//!   back ([`Survey::restore`]): the cell is again exactly as it was before
+//!   the cut, and becomes the leaf's cell.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::{Cell, Reach, Survey};
@@ -111,7 +115,7 @@ struct Merger<'a> {
     op: BooleanOp,
     arena: &'a mut ConvexArena,
     planes: Vec<Plane>,
-    plane_index: HashMap<Plane, u32>,
+    plane_index: HashMap<Plane, u32, BuildHasherDefault<PlaneHasher>>,
     /// The output palette index of each input plane once it is known
     /// (`A`'s planes first, then `B`'s; `u32::MAX` before), so that the
     /// palette is hashed once per input plane rather than once per split.
@@ -122,13 +126,57 @@ struct Merger<'a> {
 }
 
 /// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
-/// copies.
+/// saves.
 struct KeptCells {
     cells: Vec<Cell>,
     survey: Survey,
     /// The cell `survey` describes, while it is unchanged: a cell that
     /// does not cut properly is tested against the next plane as it is.
     surveyed: Option<PolyId>,
+}
+
+/// A multiply–add hash of a plane's coefficient words (as in
+/// `rustc-hash`): the palette's keys are not adversarial, and lookups only
+/// need a good spread.
+#[derive(Clone, Copy, Debug, Default)]
+struct PlaneHasher(u64);
+
+impl Hasher for PlaneHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    #[inline]
+    fn write_u64(&mut self, x: u64) {
+        self.0 = self.0.wrapping_add(x).wrapping_mul(0xF135_7AEA_2E62_A9C5);
+    }
+
+    #[inline]
+    fn write_i64(&mut self, x: i64) {
+        self.write_u64(x as u64);
+    }
+
+    #[inline]
+    fn write_i128(&mut self, x: i128) {
+        self.write_u64(x as u64);
+        self.write_u64((x >> 64) as u64);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0.rotate_left(26)
+    }
+}
+
+thread_local! {
+    /// The survey memory of earlier merges on this thread, kept so that a
+    /// merge does not regrow it.
+    static SURVEYS: RefCell<Vec<Survey>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Marks a pending tag: the upper child of the split node in the low bits,
@@ -229,7 +277,7 @@ impl<'a> Merger<'a> {
     }
 
     /// [`Merger::split`] keeping the output leaves' cells: a proper cut
-    /// copies the cell first, for the case that the split collapses.
+    /// saves the cell first, for the case that the split collapses.
     fn split_keeping(
         &mut self,
         s: InputPlane<'a>,
@@ -240,7 +288,7 @@ impl<'a> Merger<'a> {
     ) -> NodeId {
         let kept = self.cells.as_mut().expect("cells are kept");
         // A cut changes the cell in place: a proper one is found first and
-        // the cell copied before it, for the case that the split collapses.
+        // the cell saved before it, for the case that the split collapses.
         if kept.surveyed != Some(cell) {
             kept.survey.survey(self.arena, cell);
             kept.surveyed = Some(cell);
@@ -250,11 +298,11 @@ impl<'a> Merger<'a> {
             Reach::Above => return step(self, above, cell),
             Reach::Both => {}
         }
-        let whole = kept.survey.copy(self.arena, cell);
+        let saved = kept.survey.save(self.arena);
         // The cut changes the cell, and a collapse below releases pieces.
         kept.surveyed = None;
         let first_cell = kept.cells.len();
-        let after_copy = self.arena.mark();
+        let before_cut = self.arena.mark();
         let node = self.nodes.len() as NodeId;
         let CutOutcome::Split {
             below: cb,
@@ -264,17 +312,20 @@ impl<'a> Merger<'a> {
             unreachable!("vertices on both sides")
         };
         let (node, collapsed) = self.proper(s, (cb, ca), below, above, step);
+        let kept = self.cells.as_mut().expect("cells are kept");
         if let Some(label) = collapsed {
-            // The pieces are dead; the uncut copy is the leaf's cell.
-            self.arena.release_to(after_copy);
-            let kept = self.cells.as_mut().expect("cells are kept");
+            // The pieces are dead; the cell, restored uncut, is the leaf's.
+            self.arena.release_to(before_cut);
+            kept.survey.restore(self.arena, saved);
             kept.surveyed = None;
             kept.cells.truncate(first_cell);
             kept.cells.push(Cell {
-                poly: whole,
+                poly: cell,
                 leaf: node,
                 label,
             });
+        } else {
+            kept.survey.drop_saved(saved);
         }
         node
     }
@@ -356,9 +407,14 @@ impl Bsp {
         arena: &mut ConvexArena,
         bounds: PolyId,
     ) -> (Bsp, Vec<Cell>) {
+        let survey = SURVEYS
+            .try_with(|s| s.try_borrow_mut().ok().and_then(|mut s| s.pop()))
+            .ok()
+            .flatten()
+            .unwrap_or_default();
         let kept = KeptCells {
             cells: Vec::new(),
-            survey: Survey::default(),
+            survey,
             surveyed: None,
         };
         let first_face = arena.faces().len();
@@ -374,7 +430,16 @@ impl Bsp {
                 }
             }
         }
-        (bsp, cells.map(|k| k.cells).unwrap_or_default())
+        let Some(kept) = cells else {
+            unreachable!("cells are kept")
+        };
+        let survey = kept.survey;
+        let _ = SURVEYS.try_with(|s| {
+            if let Ok(mut s) = s.try_borrow_mut() {
+                s.push(survey);
+            }
+        });
+        (bsp, kept.cells)
     }
 
     fn merger<'a>(
@@ -390,7 +455,10 @@ impl Bsp {
             op,
             arena,
             planes: Vec::new(),
-            plane_index: HashMap::new(),
+            plane_index: HashMap::with_capacity_and_hasher(
+                self.planes().len() + other.planes().len(),
+                BuildHasherDefault::default(),
+            ),
             known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
             cells,

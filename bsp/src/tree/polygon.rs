@@ -165,6 +165,12 @@ impl Polygon {
     /// The parts below and above `p`. A polygon lying in `p` goes to the
     /// side its outward normal points to (the region in front of it).
     pub(crate) fn split(self, p: &Plane) -> (Option<Self>, Option<Self>) {
+        self.split_wanted(p, [true; 2])
+    }
+
+    /// [`Self::split`], building only the parts `wanted` (below, above):
+    /// a part not wanted is `None`, a part wanted is the one `split` gives.
+    pub(crate) fn split_wanted(self, p: &Plane, wanted: [bool; 2]) -> (Option<Self>, Option<Self>) {
         let n = self.corners.len();
         let (mut stack, mut heap) = ([Sign::Zero; SMALL], Vec::new());
         let sides: &mut [Sign] = if n <= SMALL {
@@ -175,20 +181,54 @@ impl Polygon {
         };
         let (below, above) = classify_corners(&self.corners, p, sides);
         let sides = &*sides;
+        let [want_below, want_above] = wanted;
         match (below, above) {
-            (true, true) => {
-                let (b, a) = self.split_straddling(sides, p);
-                (Some(b), Some(a))
-            }
-            (true, false) => (Some(self), None),
-            (false, true) => (None, Some(self)),
+            (true, true) => match (want_below, want_above) {
+                (true, true) => {
+                    let (b, a) = self.split_straddling(sides, p);
+                    (Some(b), Some(a))
+                }
+                (true, false) => (Some(self.one_part(sides, p, Sign::Negative)), None),
+                (false, true) => (None, Some(self.one_part(sides, p, Sign::Positive))),
+                (false, false) => (None, None),
+            },
+            (true, false) => (want_below.then_some(self), None),
+            (false, true) => (None, want_above.then_some(self)),
             (false, false) => {
                 if faces_along(&self.support, p) {
-                    (None, Some(self))
+                    (None, want_above.then_some(self))
                 } else {
-                    (Some(self), None)
+                    (want_below.then_some(self), None)
                 }
             }
+        }
+    }
+
+    /// The part on side `keep` (Negative or Positive) of `p` of a polygon
+    /// with corners on both sides: the part [`Self::split_straddling`]
+    /// gives on that side (its corners on `p` are the same exact meets),
+    /// rewritten in place when it fits.
+    pub(crate) fn one_part(mut self, sides: &[Sign], p: &Plane, keep: Sign) -> Self {
+        let n = self.edges.len();
+        let (mut stack, mut heap) = ([NONE; 2 * SMALL], Vec::new());
+        let buffer: &mut [u32] = if n <= SMALL {
+            &mut stack
+        } else {
+            heap.resize(2 * n, NONE);
+            &mut heap
+        };
+        let m = layout(sides, keep, buffer);
+        let origin = &buffer[..m];
+        let closing = if keep == Sign::Negative {
+            *p
+        } else {
+            p.flipped()
+        };
+        if fits_in_place(origin, n) {
+            self.rewrite(origin, &closing, None);
+            self
+        } else {
+            self.assemble(origin, &closing, None)
         }
     }
 
@@ -220,11 +260,11 @@ impl Polygon {
         // rewritten in place, after the other is built into new memory.
         if fits_in_place(below, n) {
             let a = self.assemble(above, &flipped, None);
-            self.rewrite(below, p, (above, &a.corners));
+            self.rewrite(below, p, Some((above, &a.corners)));
             (self, a)
         } else if fits_in_place(above, n) {
             let b = self.assemble(below, p, None);
-            self.rewrite(above, &flipped, (below, &b.corners));
+            self.rewrite(above, &flipped, Some((below, &b.corners)));
             (b, self)
         } else {
             let b = self.assemble(below, p, None);
@@ -282,7 +322,7 @@ impl Polygon {
     /// This polygon turned, in place, into the part with edges `origin`
     /// (which [`fits_in_place`]); corners on `p` are taken from `other`
     /// where it has them.
-    fn rewrite(&mut self, origin: &[u32], closing: &Plane, other: Other<'_>) {
+    fn rewrite(&mut self, origin: &[u32], closing: &Plane, other: Option<Other<'_>>) {
         let (n, m) = (self.edges.len(), origin.len());
         // Entry j reads original position origin[j] ≥ j, not yet written.
         let mut j = 0;
@@ -315,7 +355,7 @@ impl Polygon {
                     &self.support,
                     (prev, &self.edges[(j + m - 1) % m]),
                     (o, &self.edges[j]),
-                    Some(other),
+                    other,
                 );
                 j += 1;
             }

@@ -66,15 +66,11 @@ impl Bsp {
         let (merged, cells) = self.merge_cells(other, op, arena, bounds);
         let faces = merged.boundary_of_cells(arena, &cells, Bounds::Keep);
         // The same faces in the same order as with `Bounds::Skip`.
-        let polygons: Vec<_> = faces
-            .iter()
-            .filter(|f| !f.on_bounds)
-            .map(|f| (f.polygon(), f.label, f.outside))
-            .collect();
-        let rebuilt = if polygons.is_empty() {
+        let mut inner = faces.iter().filter(|f| !f.on_bounds).peekable();
+        let rebuilt = if inner.peek().is_none() {
             Bsp::uniform(cells.first().map_or(EMPTY, |c| c.label))
         } else {
-            Bsp::from_polygons(polygons, REBUILD_SEED)
+            Bsp::from_faces(inner, REBUILD_SEED)
         };
         (rebuilt, faces)
     }
