@@ -227,6 +227,9 @@ impl SurfaceMesh {
             let edges = core::mem::take(&mut face.edges);
             (&*face, edges)
         }));
+        for face in faces {
+            crate::tree::polygon::give_back_buffers(Vec::new(), face.vertices);
+        }
         mesh.merge_coplanar();
         mesh.split_t_junctions();
         mesh

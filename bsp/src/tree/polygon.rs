@@ -433,31 +433,48 @@ impl Drop for Polygon {
         if self.corners.capacity() == 0 {
             return;
         }
-        let buffers = (mem::take(&mut self.edges), mem::take(&mut self.corners));
-        // When the pool is full, or the thread is ending, the buffers are
-        // simply freed.
-        let _ = SPARE.try_with(|spare| {
-            if let Ok(mut spare) = spare.try_borrow_mut()
-                && spare.len() < MAX_SPARE
-            {
-                let (mut edges, mut corners) = buffers;
-                edges.clear();
-                corners.clear();
-                spare.push((edges, corners));
-            }
-        });
+        give_back_buffers(mem::take(&mut self.edges), mem::take(&mut self.corners));
     }
 }
 
-thread_local! {
-    /// Edge and corner buffers of dropped polygons, for the next polygons
-    /// built on the same thread: clipping and rebuilding drop about as many
-    /// pieces as they create, so most splits allocate nothing.
-    static SPARE: RefCell<Vec<(Vec<Plane>, Vec<Point4>)>> = const { RefCell::new(Vec::new()) };
+/// Edge and corner buffers handed back, kept apart: a boundary face given
+/// to a mesh keeps its edge planes but hands back its corners.
+struct Spare {
+    edges: Vec<Vec<Plane>>,
+    corners: Vec<Vec<Point4>>,
 }
 
-/// Spare buffer pairs kept per thread.
+thread_local! {
+    /// Edge and corner buffers of dropped polygons and consumed boundary
+    /// faces, for the next polygons built on the same thread: clipping and
+    /// rebuilding drop about as many pieces as they create, so most splits
+    /// allocate nothing.
+    static SPARE: RefCell<Spare> = const {
+        RefCell::new(Spare { edges: Vec::new(), corners: Vec::new() })
+    };
+}
+
+/// Spare buffers of each kind kept per thread.
 const MAX_SPARE: usize = 256;
+
+/// Hands `edges` and `corners` (either may be empty) to the spare buffers
+/// of this thread. When the pool is full, or the thread is ending, the
+/// buffers are simply freed.
+#[inline(never)]
+pub(crate) fn give_back_buffers(mut edges: Vec<Plane>, mut corners: Vec<Point4>) {
+    let _ = SPARE.try_with(|spare| {
+        if let Ok(mut spare) = spare.try_borrow_mut() {
+            if edges.capacity() != 0 && spare.edges.len() < MAX_SPARE {
+                edges.clear();
+                spare.edges.push(edges);
+            }
+            if corners.capacity() != 0 && spare.corners.len() < MAX_SPARE {
+                corners.clear();
+                spare.corners.push(corners);
+            }
+        }
+    });
+}
 
 /// Room for corners in new buffers, at least: most polygons have fewer,
 /// so spare buffers usually fit the next polygon.
@@ -467,19 +484,23 @@ const MIN_CAPACITY: usize = 8;
 /// when they are large enough, else new ones (growing a spare buffer would
 /// copy its stale contents).
 pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
-    let spare = SPARE
-        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.pop()))
-        .ok()
-        .flatten();
-    match spare {
-        Some((edges, corners)) if edges.capacity() >= m && corners.capacity() >= m => {
-            (edges, corners)
-        }
-        _ => {
-            let capacity = m.max(MIN_CAPACITY);
-            (Vec::with_capacity(capacity), Vec::with_capacity(capacity))
-        }
-    }
+    let (edges, corners) = SPARE
+        .try_with(|spare| {
+            spare
+                .try_borrow_mut()
+                .map(|mut s| (s.edges.pop(), s.corners.pop()))
+                .unwrap_or_default()
+        })
+        .unwrap_or_default();
+    let capacity = m.max(MIN_CAPACITY);
+    (
+        edges
+            .filter(|e| e.capacity() >= m)
+            .unwrap_or_else(|| Vec::with_capacity(capacity)),
+        corners
+            .filter(|c| c.capacity() >= m)
+            .unwrap_or_else(|| Vec::with_capacity(capacity)),
+    )
 }
 
 /// Marks the closing plane in a part's layout.
