@@ -274,13 +274,20 @@ impl ConvexArena {
         } else {
             Ordering::Greater
         };
-        let mut cur = start;
+        let (mut cur, mut prev) = (start, u32::MAX);
         let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
         loop {
             // The best certified step, and an exactly certified one.
             let mut best: Option<(u32, f64, (f64, f64))> = None;
             let mut uncertain: Option<(u32, (f64, f64))> = None;
             for (h, n) in self.neighbours(cur) {
+                if n == prev {
+                    // The vertex the walk came from: not on side `target`
+                    // (no vertex the walk visits is) and certified farther
+                    // from it than `cur`, so it can end the walk no more
+                    // than it can be its next step.
+                    continue;
+                }
                 let point = self.point(n);
                 // One f64 evaluation gives both the side and the offset.
                 let dot = FilteredDot::new(point, s);
@@ -308,6 +315,7 @@ impl ConvexArena {
                     uncertain = Some((n, (value, error)));
                 }
             }
+            prev = cur;
             (cur, (cur_value, cur_error)) =
                 best.map(|(n, _, estimate)| (n, estimate)).or(uncertain)?;
         }
