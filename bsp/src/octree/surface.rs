@@ -123,7 +123,7 @@ impl Octree {
         while let Some((node, cell, polygon, range)) = stack.pop() {
             match node {
                 OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
-                OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, &mut emit),
+                OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, label, &mut emit),
                 OctNode::Inner(children) => {
                     let mid = cell.mid();
                     pieces.push((polygon, range, 0usize));

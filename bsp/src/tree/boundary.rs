@@ -210,16 +210,18 @@ impl Bsp {
     }
 
     /// Splits `polygon` exactly among the leaves of the subtree at `n`,
-    /// calling `emit(piece, leaf label)` for each piece. A piece lying in a
-    /// node's plane goes to the side its outward normal points to (the
-    /// region in front of it).
+    /// calling `emit(piece, leaf label)` for each piece that reaches a leaf
+    /// with a label smaller than `kept_below` (the other pieces are not
+    /// built). A piece lying in a node's plane goes to the side its outward
+    /// normal points to (the region in front of it).
     pub(crate) fn clip_polygon(
         &self,
         n: NodeId,
         polygon: Polygon,
+        kept_below: Label,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        self.clip_pieces(n, polygon, &mut Vec::new(), None, emit);
+        self.clip_pieces(n, polygon, &mut Vec::new(), Some(kept_below), emit);
     }
 
     /// Which sides (below, above) of a split with these children can keep
