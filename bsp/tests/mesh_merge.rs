@@ -121,6 +121,20 @@ fn check_merge(bsp: &Bsp, what: &str) -> (usize, usize) {
     let owned = SurfaceMesh::from_face_vec(faces.clone());
     assert_eq!(owned.polygons(), after.polygons(), "{what}: owned faces");
     assert_eq!(owned.triangles(), after.triangles(), "{what}: owned faces");
+    // Welded in uneven batches (an empty one, single faces, the rest):
+    // the same vertices in the same order, so the same mesh.
+    let mut rest = faces.clone();
+    let tail = rest.split_off(rest.len().min(3));
+    let mut batches: Vec<Vec<_>> = vec![Vec::new()];
+    batches.extend(rest.into_iter().map(|face| vec![face]));
+    batches.push(tail);
+    let batched = SurfaceMesh::from_face_batches(batches);
+    let same_vertices = batched.vertices().len() == after.vertices().len()
+        && (0..after.vertices().len() as u32)
+            .all(|v| batched.position(v).map(f64::to_bits) == after.position(v).map(f64::to_bits));
+    assert!(same_vertices, "{what}: batches");
+    assert_eq!(batched.polygons(), after.polygons(), "{what}: batches");
+    assert_eq!(batched.triangles(), after.triangles(), "{what}: batches");
     after
         .check_closed()
         .unwrap_or_else(|e| panic!("{what}: not closed: {e}"));

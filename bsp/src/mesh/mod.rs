@@ -235,6 +235,37 @@ impl SurfaceMesh {
         mesh
     }
 
+    /// As [`Self::from_face_vec`] of all batches one after the other (the
+    /// same mesh), welding each batch before the next is asked for: only
+    /// one batch of faces is held at a time besides the welded mesh, whose
+    /// shared vertices take far less memory than every face's own corners.
+    /// For large surfaces built cell by cell.
+    ///
+    /// # Panics
+    /// As [`Self::from_faces`].
+    #[must_use]
+    pub fn from_face_batches(batches: impl IntoIterator<Item = Vec<BoundaryFace>>) -> Self {
+        let mut welder = weld::Welder::with_capacity(0);
+        let mut polygons = Vec::new();
+        for mut faces in batches {
+            polygons.reserve(faces.len());
+            for face in &mut faces {
+                let edges = core::mem::take(&mut face.edges);
+                polygons.push(weld_face(&mut welder, polygons.len(), face, edges));
+            }
+            for face in faces {
+                crate::tree::polygon::give_back_buffers(Vec::new(), face.vertices);
+            }
+        }
+        let mut mesh = Self {
+            vertices: welder.into_vertices(),
+            polygons,
+        };
+        mesh.merge_coplanar();
+        mesh.split_t_junctions();
+        mesh
+    }
+
     /// The welded mesh of faces given with their edge planes.
     fn welded_with<'a>(
         faces: impl ExactSizeIterator<Item = (&'a BoundaryFace, Vec<Plane>)>,
@@ -242,24 +273,7 @@ impl SurfaceMesh {
         let mut welder = weld::Welder::with_capacity(faces.len() * 2);
         let polygons = faces
             .enumerate()
-            .map(|(f, (face, edges))| {
-                assert!(
-                    edges.len() == face.vertices.len() && edges.len() >= 3,
-                    "boundary face {f} has {} edge planes and {} corners",
-                    edges.len(),
-                    face.vertices.len()
-                );
-                let corners: Vec<u32> = face.vertices.iter().map(|v| welder.index(v)).collect();
-                MeshPolygon {
-                    plane: face.plane,
-                    edges,
-                    originals: (0..corners.len() as u32).collect(),
-                    corners,
-                    label: face.label,
-                    outside: face.outside,
-                    on_bounds: face.on_bounds,
-                }
-            })
+            .map(|(f, (face, edges))| weld_face(&mut welder, f, face, edges))
             .collect();
         Self {
             vertices: welder.into_vertices(),
@@ -305,5 +319,31 @@ impl SurfaceMesh {
     #[inline]
     pub fn position(&self, v: u32) -> [f64; 3] {
         self.vertices[v as usize].to_f64()
+    }
+}
+
+/// Boundary face number `f` with its edge planes as a polygon of welded
+/// corners.
+fn weld_face(
+    welder: &mut weld::Welder,
+    f: usize,
+    face: &BoundaryFace,
+    edges: Vec<Plane>,
+) -> MeshPolygon {
+    assert!(
+        edges.len() == face.vertices.len() && edges.len() >= 3,
+        "boundary face {f} has {} edge planes and {} corners",
+        edges.len(),
+        face.vertices.len()
+    );
+    let corners: Vec<u32> = face.vertices.iter().map(|v| welder.index(v)).collect();
+    MeshPolygon {
+        plane: face.plane,
+        edges,
+        originals: (0..corners.len() as u32).collect(),
+        corners,
+        label: face.label,
+        outside: face.outside,
+        on_bounds: face.on_bounds,
     }
 }

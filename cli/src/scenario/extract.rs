@@ -51,10 +51,26 @@ pub struct Closure {
     pub manifold: bool,
 }
 
-/// The whole surface as one mesh, and how closed it is.
+/// Leaf cells whose surfaces are extracted together (in parallel) and
+/// welded before the next batch: bounds the faces held at once.
+const CELLS_PER_BATCH: usize = 64;
+
+/// The whole surface as one mesh, and how closed it is. The same mesh as
+/// welding [`Octree::surface`] at once, built batch by batch of cells so
+/// that only one batch of faces is held beside the welded mesh.
 #[must_use]
 pub fn whole(octree: &Octree) -> (TriangleMesh, Closure) {
-    let mesh = SurfaceMesh::from_face_vec(octree.surface());
+    let keys: Vec<CellKey> = octree.leaves().into_iter().map(|(key, _)| key).collect();
+    let batches = keys.chunks(CELLS_PER_BATCH).map(|batch| {
+        batch
+            .par_iter()
+            .map(|&key| octree.cell_surface(key))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .flatten()
+            .collect::<Vec<BoundaryFace>>()
+    });
+    let mesh = SurfaceMesh::from_face_batches(batches);
     let closure = Closure {
         closed: mesh.check_closed().is_ok(),
         manifold: mesh.check_watertight().is_ok(),
