@@ -52,5 +52,6 @@ pub mod mesh;
 pub mod octree;
 pub mod tools;
 pub mod tree;
+mod word_hash;
 
 pub use error::Error;

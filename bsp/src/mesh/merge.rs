@@ -51,8 +51,8 @@ use std::collections::hash_map::Entry;
 use std::hash::BuildHasherDefault;
 
 use super::MeshPolygon;
-use super::weld::WordHasher;
 use crate::exact::{Plane, Point4, Sign, classify_vertex};
+use crate::word_hash::WordHasher;
 
 /// The owner of a directed edge used by more than one polygon.
 const SHARED: u32 = u32::MAX;

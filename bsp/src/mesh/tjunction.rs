@@ -58,8 +58,8 @@ use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
 use super::MeshPolygon;
-use super::weld::WordHasher;
 use crate::exact::{Point4, Sign, classify_vertex, compare_offsets};
+use crate::word_hash::WordHasher;
 
 /// Directed edge `(from, to)` packed into one word.
 #[inline]

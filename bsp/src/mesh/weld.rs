@@ -24,6 +24,7 @@ use std::collections::hash_map::Entry;
 use std::hash::{BuildHasherDefault, Hash, Hasher};
 
 use crate::exact::Point4;
+use crate::word_hash::WordHasher;
 
 /// Low bits dropped from the ordered `f64` position: cells are `2^8` ulps
 /// wide per axis.
@@ -65,37 +66,6 @@ impl Hash for CellKey {
         for v in self.0 {
             state.write_i64(v);
         }
-    }
-}
-
-/// A multiply–rotate hash of a few words (as in `rustc-hash`): the keys
-/// are not adversarial, and the cell lookups only need a good spread.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct WordHasher(u64);
-
-impl Hasher for WordHasher {
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    #[inline]
-    fn write_u64(&mut self, x: u64) {
-        self.0 = self.0.wrapping_add(x).wrapping_mul(0xF135_7AEA_2E62_A9C5);
-    }
-
-    #[inline]
-    fn write_i64(&mut self, x: i64) {
-        self.write_u64(x as u64);
-    }
-
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0.rotate_left(26)
     }
 }
 

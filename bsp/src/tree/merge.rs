@@ -36,12 +36,13 @@
 
 use std::cell::RefCell;
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::{Cell, Reach, Survey};
 use crate::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
 use crate::exact::Plane;
+use crate::word_hash::WordHasher;
 
 /// How the labels of two overlapping regions combine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -115,7 +116,7 @@ struct Merger<'a> {
     op: BooleanOp,
     arena: &'a mut ConvexArena,
     planes: Vec<Plane>,
-    plane_index: HashMap<Plane, u32, BuildHasherDefault<PlaneHasher>>,
+    plane_index: HashMap<Plane, u32, BuildHasherDefault<WordHasher>>,
     /// The output palette index of each input plane once it is known
     /// (`A`'s planes first, then `B`'s; `u32::MAX` before), so that the
     /// palette is hashed once per input plane rather than once per split.
@@ -133,44 +134,6 @@ struct KeptCells {
     /// The cell `survey` describes, while it is unchanged: a cell that
     /// does not cut properly is tested against the next plane as it is.
     surveyed: Option<PolyId>,
-}
-
-/// A multiply–add hash of a plane's coefficient words (as in
-/// `rustc-hash`): the palette's keys are not adversarial, and lookups only
-/// need a good spread.
-#[derive(Clone, Copy, Debug, Default)]
-struct PlaneHasher(u64);
-
-impl Hasher for PlaneHasher {
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    #[inline]
-    fn write_u64(&mut self, x: u64) {
-        self.0 = self.0.wrapping_add(x).wrapping_mul(0xF135_7AEA_2E62_A9C5);
-    }
-
-    #[inline]
-    fn write_i64(&mut self, x: i64) {
-        self.write_u64(x as u64);
-    }
-
-    #[inline]
-    fn write_i128(&mut self, x: i128) {
-        self.write_u64(x as u64);
-        self.write_u64((x >> 64) as u64);
-    }
-
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0.rotate_left(26)
-    }
 }
 
 thread_local! {
