@@ -20,12 +20,14 @@
 //! and `grafted` ([`Bsp::merge_grafted`], the paper's merge, which copies
 //! `B` whole into those cells, as the paper's figure counts output nodes).
 
+#[path = "../tests/common/random_bsp.rs"]
+mod random_bsp;
+
 use std::hint::black_box;
 
 use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG};
-use chisel_bsp::exact::Plane;
 use chisel_bsp::exact::{IntPoint, plane_from_points};
-use chisel_bsp::tree::{BooleanOp, Bsp, Node};
+use chisel_bsp::tree::{BooleanOp, Bsp};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -90,47 +92,10 @@ fn random_bsp(rng: &mut ChaCha8Rng, nodes: usize) -> Bsp {
     bsp
 }
 
-/// A random BSP with `splits` inner nodes, built as in the paper: the
-/// leaf holding a random point is split by a plane through the point with a
-/// random normal (integer components up to 2^10), and each new leaf is
-/// solid or empty at random.
+/// A random BSP of the paper's Figure 10 with `splits` inner nodes,
+/// solid or empty leaves.
 fn paper_random_bsp(rng: &mut ChaCha8Rng, splits: usize) -> Bsp {
-    let mut planes: Vec<Plane> = Vec::new();
-    let mut nodes = vec![Node::Leaf(rng.random_range(0..2))];
-    while planes.len() < splits {
-        let x = [0; 3].map(|_| rng.random_range(-H + 1..H));
-        let n = [0; 3].map(|_| rng.random_range(-1024i64..=1024));
-        if n == [0; 3] {
-            continue;
-        }
-        let d = -(0..3)
-            .map(|i| i128::from(n[i]) * i128::from(x[i]))
-            .sum::<i128>();
-        let plane = Plane::new(n[0], n[1], n[2], d).expect("small coefficients");
-        // The leaf holding x (points on a plane go below).
-        let mut at = 0;
-        while let Node::Split {
-            plane,
-            below,
-            above,
-        } = nodes[at]
-        {
-            let q = planes[plane as usize];
-            let [a, b, c] = q.normal().map(i128::from);
-            let value = a * i128::from(x[0]) + b * i128::from(x[1]) + c * i128::from(x[2]);
-            at = if value + q.offset() > 0 { above } else { below } as usize;
-        }
-        let below = nodes.len() as u32;
-        nodes.push(Node::Leaf(rng.random_range(0..2)));
-        nodes.push(Node::Leaf(rng.random_range(0..2)));
-        nodes[at] = Node::Split {
-            plane: planes.len() as u32,
-            below,
-            above: below + 1,
-        };
-        planes.push(plane);
-    }
-    Bsp::from_stored_parts(planes, nodes).expect("a well-formed tree")
+    random_bsp::paper_random_bsp(rng, splits, 2, H)
 }
 
 const OPS: [(&str, BooleanOp); 3] = [

@@ -14,6 +14,7 @@ use std::collections::BTreeMap;
 use chisel_bsp::convex::{ConvexArena, PolyId};
 use chisel_bsp::exact::Plane;
 use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label, Node, NodeId};
+use common::random_bsp;
 use common::shapes::{self, p};
 use common::volume::{Fraction, volume};
 use rand::{Rng as _, SeedableRng};
@@ -25,46 +26,9 @@ fn bounds(arena: &mut ConvexArena) -> PolyId {
     arena.add_box(p(-H, -H, -H), p(H, H, H)).unwrap()
 }
 
-/// A random BSP with `splits` inner nodes, built as in the paper's
-/// Figure 10: the leaf holding a random point is split by a plane through
-/// the point with a random normal, and each new leaf gets a random label
-/// below `labels`.
+/// A random BSP of the paper's Figure 10 in the bounding cube.
 fn paper_random_bsp(rng: &mut ChaCha8Rng, splits: usize, labels: Label) -> Bsp {
-    let mut planes: Vec<Plane> = Vec::new();
-    let mut nodes = vec![Node::Leaf(rng.random_range(0..labels))];
-    while planes.len() < splits {
-        let x = [0; 3].map(|_| rng.random_range(-H + 1..H));
-        let n = [0; 3].map(|_| rng.random_range(-1024i64..=1024));
-        if n == [0; 3] {
-            continue;
-        }
-        let d = -(0..3)
-            .map(|i| i128::from(n[i]) * i128::from(x[i]))
-            .sum::<i128>();
-        let plane = Plane::new(n[0], n[1], n[2], d).unwrap();
-        let mut at = 0;
-        while let Node::Split {
-            plane,
-            below,
-            above,
-        } = nodes[at]
-        {
-            let q = planes[plane as usize];
-            let [a, b, c] = q.normal().map(i128::from);
-            let value = a * i128::from(x[0]) + b * i128::from(x[1]) + c * i128::from(x[2]);
-            at = if value + q.offset() > 0 { above } else { below } as usize;
-        }
-        let below = nodes.len() as NodeId;
-        nodes.push(Node::Leaf(rng.random_range(0..labels)));
-        nodes.push(Node::Leaf(rng.random_range(0..labels)));
-        nodes[at] = Node::Split {
-            plane: planes.len() as u32,
-            below,
-            above: below + 1,
-        };
-        planes.push(plane);
-    }
-    Bsp::from_stored_parts(planes, nodes).unwrap()
+    random_bsp::paper_random_bsp(rng, splits, labels, H)
 }
 
 /// A union of one to three random convex polyhedra of random materials
