@@ -30,6 +30,8 @@
 //! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
 //! 40 as `SplatRadius::default()`).
 
+mod common;
+
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -49,16 +51,13 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderAdapterInfo, RenderDevice};
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
-use bevy_chisel::quadric::Scene;
 use bevy_chisel::splat::{
     ChiselSplatPlugin, PropBounds, PropSplats, SplatMode, SplatOutput, SplatSettings,
 };
+use common::{FOV_DEGREES, SCALE, SCENES, load_scene};
 
 const WIDTH: u32 = 1920;
 const HEIGHT: u32 = 1080;
-const FOV_DEGREES: f32 = 30.0;
-/// World units per scene unit, as in the render tests.
-const SCALE: f32 = 0.01;
 /// Frames run after each switch before frame times are recorded (with
 /// pipelined rendering, a frame's time is that of the previous frame's
 /// render). Pass times need none: they are told apart by what they drew.
@@ -70,9 +69,6 @@ const READ_SETTLE: u32 = 5;
 /// Timing rounds, interleaved so that a change of machine load hits every
 /// mode alike.
 const ROUNDS: u32 = 2;
-
-/// The SCENARIOS scenes; each is sampled and viewed in its file's `bounds`.
-const SCENES: [&str; 4] = ["three_spheres", "classic", "sharp8", "machine80"];
 
 fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
     std::env::var(name)
@@ -502,7 +498,7 @@ fn run_scene(splats: PropSplats, centre: Vec3, radius: f32, steps: Vec<Step>) ->
                 },
                 RenderTarget::Image(camera_target.clone().into()),
                 Projection::Perspective(PerspectiveProjection {
-                    fov: FOV_DEGREES.to_radians(),
+                    fov: (FOV_DEGREES as f32).to_radians(),
                     near: 0.01,
                     ..default()
                 }),
@@ -522,10 +518,10 @@ fn run_scene(splats: PropSplats, centre: Vec3, radius: f32, steps: Vec<Step>) ->
         .unwrap_or_else(|shared| std::mem::take(&mut *shared.lock().expect("log")))
 }
 
-/// The eye of the benchmark view in the prop's local (scene) coordinates,
-/// as in the render tests.
+/// The eye of the benchmark view in the prop's local (scene) coordinates:
+/// the render tests' comparison eye.
 fn local_eye(centre: Vec3, radius: f32) -> Vec3 {
-    centre + Vec3::new(1.8, -2.4, 1.5) * radius * 0.85
+    common::eye(centre.as_dvec3(), f64::from(radius)).as_vec3()
 }
 
 /// Of the splats drawn: the fraction whose normal faces away from `eye`
@@ -668,12 +664,13 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         .map(|s| s.split(',').map(str::to_owned).collect());
     let mut times = Vec::new();
     let mut overdraws = Vec::new();
-    for name in SCENES {
+    // The SCENARIOS scenes; each is sampled and viewed in its file's
+    // `bounds`.
+    for (name, _, _) in SCENES {
         if only.as_ref().is_some_and(|o| !o.iter().any(|n| n == name)) {
             continue;
         }
-        let path = format!("{}/assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
-        let scene = Scene::load(&path).expect("shipped scene");
+        let scene = load_scene(name);
         let bounds = PropBounds::resolve(None, &scene).expect("shipped scenes give their bounds");
         let PropBounds { centre, radius } = bounds;
         let splats = PropSplats::build(&scene, bounds, radius / divisor).expect("sampling");

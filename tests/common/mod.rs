@@ -104,6 +104,18 @@ pub struct View {
     pub settings: Option<SplatViewSettings>,
 }
 
+/// An unlit, axis-aligned cube mesh drawn beside the prop (world units),
+/// to check depth compositing with ordinary meshes.
+#[derive(Clone, Copy, Debug)]
+pub struct UnlitCube {
+    /// Centre in world units.
+    pub centre: Vec3,
+    /// Half the edge in world units.
+    pub half: f32,
+    /// Its colour (sRGB), unlike any quadric id or the background.
+    pub rgb: [u8; 3],
+}
+
 /// Renders one prop (`splats` placed by `transform`) with the
 /// [`SplatSettings`] resource `settings`, seen by each of `views` in a
 /// `size`² viewport of its own, left to right in one image
@@ -114,6 +126,18 @@ pub fn render_views(
     settings: SplatSettings,
     views: &[View],
     size: u32,
+) -> Image {
+    render_views_with(splats, transform, settings, views, size, None)
+}
+
+/// [`render_views`] with an optional [`UnlitCube`] in the scene.
+pub fn render_views_with(
+    splats: PropSplats,
+    transform: Transform,
+    settings: SplatSettings,
+    views: &[View],
+    size: u32,
+    cube: Option<UnlitCube>,
 ) -> Image {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
@@ -127,7 +151,12 @@ pub fn render_views(
         capture_frames: vec![8, 10],
         // CHISEL_TEST_SCREENSHOTS=dir keeps the images for inspection.
         output_dir: std::env::var_os("CHISEL_TEST_SCREENSHOTS").map(Into::into),
-        stem: format!("splat_views-{}", SHOT.fetch_add(1, Ordering::Relaxed)),
+        stem: format!(
+            "{}-{:?}-{}",
+            env!("CARGO_CRATE_NAME"),
+            settings.mode,
+            SHOT.fetch_add(1, Ordering::Relaxed)
+        ),
         max_frames: 60,
         // The pixels are checked one by one.
         min_foreground: 0.0,
@@ -138,36 +167,53 @@ pub fn render_views(
         .insert_resource(settings)
         .insert_resource(ClearColor(Color::BLACK));
     let views = views.to_vec();
-    app.add_systems(Startup, move |mut commands: Commands| {
-        commands.spawn((splats.clone(), transform));
-        for (i, view) in (0_u32..).zip(&views) {
-            let mut camera = commands.spawn((
-                Camera3d::default(),
-                Camera {
-                    clear_color: ClearColorConfig::Custom(Color::BLACK),
-                    order: i as isize,
-                    viewport: Some(Viewport {
-                        physical_position: UVec2::new(i * size, 0),
-                        physical_size: UVec2::splat(size),
+    app.add_systems(
+        Startup,
+        move |mut commands: Commands,
+              mut meshes: ResMut<Assets<Mesh>>,
+              mut materials: ResMut<Assets<StandardMaterial>>| {
+            commands.spawn((splats.clone(), transform));
+            for (i, view) in (0_u32..).zip(&views) {
+                let mut camera = commands.spawn((
+                    Camera3d::default(),
+                    Camera {
+                        clear_color: ClearColorConfig::Custom(Color::BLACK),
+                        order: i as isize,
+                        viewport: Some(Viewport {
+                            physical_position: UVec2::new(i * size, 0),
+                            physical_size: UVec2::splat(size),
+                            ..default()
+                        }),
+                        ..default()
+                    },
+                    Projection::Perspective(PerspectiveProjection {
+                        fov: (FOV_DEGREES as f32).to_radians(),
+                        near: 0.01,
                         ..default()
                     }),
-                    ..default()
-                },
-                Projection::Perspective(PerspectiveProjection {
-                    fov: (FOV_DEGREES as f32).to_radians(),
-                    near: 0.01,
-                    ..default()
-                }),
-                Tonemapping::None,
-                DebandDither::Disabled,
-                Msaa::Off,
-                Transform::from_translation(view.eye).looking_at(view.centre, Vec3::Z),
-            ));
-            if let Some(own) = view.settings {
-                camera.insert(own);
+                    Tonemapping::None,
+                    DebandDither::Disabled,
+                    Msaa::Off,
+                    Transform::from_translation(view.eye).looking_at(view.centre, Vec3::Z),
+                ));
+                if let Some(own) = view.settings {
+                    camera.insert(own);
+                }
             }
-        }
-    });
+            if let Some(cube) = cube {
+                let [r, g, b] = cube.rgb;
+                commands.spawn((
+                    Mesh3d(meshes.add(Cuboid::from_length(2.0 * cube.half))),
+                    MeshMaterial3d(materials.add(StandardMaterial {
+                        base_color: Color::srgb_u8(r, g, b),
+                        unlit: true,
+                        ..default()
+                    })),
+                    Transform::from_translation(cube.centre),
+                ));
+            }
+        },
+    );
     assert_eq!(app.run(), AppExit::Success, "headless run failed");
     let mut images = frames.images();
     assert_eq!(images.len(), 2, "two captured frames");
