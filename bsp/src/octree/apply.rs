@@ -64,10 +64,11 @@ impl Edit {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Changes {
     /// Leaf cells of the new octree whose surface may differ: their content
-    /// was replaced, or the closed tool meets their closed box (faces on
-    /// their border may have been exposed or covered: the regions across
-    /// them changed only inside the tool). A leaf not listed has the same
-    /// surface ([`Octree::cell_surface`]) as before the edit. Sorted.
+    /// was replaced, or they hold material and the closed tool meets their
+    /// closed box (faces on their border may have been exposed or covered:
+    /// the regions across them changed only inside the tool). A leaf not
+    /// listed has the same surface ([`Octree::cell_surface`]) as before the
+    /// edit. Sorted.
     pub changed: Vec<CellKey>,
     /// Leaf cells of the previous octree that are no longer leaves (split
     /// or combined). Sorted.
@@ -248,8 +249,12 @@ impl Walk<'_> {
         cell: CellBox,
         touches: bool,
     ) -> (Option<OctNode>, Edited) {
+        // With its content unchanged, a leaf's surface can change only where
+        // the regions across its border faces changed: inside the closed
+        // tool. An empty uniform leaf has no surface at all.
+        let surface_may_change = touches && !matches!(leaf, Leaf::Uniform(EMPTY));
         let touched = || {
-            if touches {
+            if surface_may_change {
                 Changes::leaf(key)
             } else {
                 Changes::default()
@@ -281,7 +286,7 @@ impl Walk<'_> {
             } else {
                 None
             };
-            let changes = if touches || relabeled.is_some() {
+            let changes = if surface_may_change || relabeled.is_some() {
                 Changes::leaf(key)
             } else {
                 Changes::default()

@@ -24,21 +24,29 @@
 //! `|n·x + d| < 3·2^55·2^63 + 2^83 < 2^121` and `|(e × x̂_a)·x| < 2·2^27·2^63
 //! = 2^91`: every product and sum below is exact in `i128`, for any box.
 
+use std::sync::OnceLock;
+
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::budget::{MAX_COORD, MAX_NORMAL, MAX_OFFSET};
 
 /// A closed convex polyhedron with integer vertices, prepared for the
 /// exact contact test against boxes.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 pub(crate) struct ConvexPiece {
     /// The smallest closed box holding the piece: `[v]` on each axis.
     lo: [i64; 3],
     hi: [i64; 3],
     /// Face planes `(n, d)`, positive outside.
     faces: Vec<([i64; 3], i128)>,
+    /// The vertices, each once.
+    vertices: Vec<[i64; 3]>,
+    /// The edge directions `e`, each edge once.
+    edges: Vec<[i64; 3]>,
     /// The axes `e × x̂_a` (non-zero, reduced, first non-zero component
-    /// positive, each once) with the piece's projection `[u]_P` on them.
-    edge_axes: Vec<EdgeAxis>,
+    /// positive, each once) with the piece's projection `[u]_P` on them;
+    /// made on the first test that needs them (most boxes are decided by
+    /// the box axes or the face planes).
+    edge_axes: OnceLock<Vec<EdgeAxis>>,
 }
 
 /// One axis `u = e × x̂_a` and the piece's projection on it.
@@ -54,59 +62,78 @@ impl ConvexPiece {
     /// is not an integer point within the coordinate budget (the test
     /// then has no exact form here; callers fall back to bounds).
     pub(crate) fn of(arena: &ConvexArena, poly: PolyId) -> Option<ConvexPiece> {
+        let face_ids = arena.faces_of(poly);
+        let mut ids: Vec<u32> = face_ids
+            .iter()
+            .flat_map(|&f| arena.face_loop(f))
+            .map(|h| arena.half_edges()[h as usize].origin)
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let vertices = ids
+            .iter()
+            .map(|&v| integer_point(arena, v))
+            .collect::<Option<Vec<_>>>()?;
         let mut lo = [i64::MAX; 3];
         let mut hi = [i64::MIN; 3];
-        let mut faces = Vec::new();
-        let mut edges: Vec<[i64; 3]> = Vec::new();
-        let mut vertices: Vec<[i64; 3]> = Vec::new();
-        for f in arena.faces_of(poly) {
+        for v in &vertices {
+            for a in 0..3 {
+                lo[a] = lo[a].min(v[a]);
+                hi[a] = hi[a].max(v[a]);
+            }
+        }
+        let position = |v: u32| ids.binary_search(&v).ok().map(|i| vertices[i]);
+        let mut faces = Vec::with_capacity(face_ids.len());
+        let mut edges = Vec::new();
+        for &f in &face_ids {
             let plane = arena.face_plane(f);
             debug_assert!(plane.normal().iter().all(|c| c.abs() <= MAX_NORMAL));
             debug_assert!(plane.offset().abs() <= MAX_OFFSET);
             faces.push((plane.normal(), plane.offset()));
             for h in arena.face_loop(f) {
-                let from = integer_point(arena, arena.half_edges()[h as usize].origin)?;
-                let to = integer_point(arena, arena.dest(h))?;
+                let (from, to) = (arena.half_edges()[h as usize].origin, arena.dest(h));
                 // Each edge is seen from both faces; keep it once.
                 if from < to {
+                    let (from, to) = (position(from)?, position(to)?);
                     edges.push([0, 1, 2].map(|a| to[a] - from[a]));
-                }
-                vertices.push(from);
-                for a in 0..3 {
-                    lo[a] = lo[a].min(from[a]);
-                    hi[a] = hi[a].max(from[a]);
                 }
             }
         }
-        vertices.sort_unstable();
-        vertices.dedup();
-        let mut axes: Vec<[i64; 3]> = edges
-            .iter()
-            .flat_map(|e| {
-                // e × x̂, e × ŷ, e × ẑ.
-                [[0, e[2], -e[1]], [-e[2], 0, e[0]], [e[1], -e[0], 0]]
-            })
-            .filter_map(reduced)
-            .collect();
-        axes.sort_unstable();
-        axes.dedup();
-        let edge_axes = axes
-            .into_iter()
-            .map(|u| {
-                let (mut min, mut max) = (i128::MAX, i128::MIN);
-                for v in &vertices {
-                    let p = dot(u, *v);
-                    min = min.min(p);
-                    max = max.max(p);
-                }
-                EdgeAxis { u, min, max }
-            })
-            .collect();
         Some(ConvexPiece {
             lo,
             hi,
             faces,
-            edge_axes,
+            vertices,
+            edges,
+            edge_axes: OnceLock::new(),
+        })
+    }
+
+    /// The axes `e × x̂_a` with the piece's projections.
+    fn edge_axes(&self) -> &[EdgeAxis] {
+        self.edge_axes.get_or_init(|| {
+            let mut axes: Vec<[i64; 3]> = self
+                .edges
+                .iter()
+                .flat_map(|e| {
+                    // e × x̂, e × ŷ, e × ẑ.
+                    [[0, e[2], -e[1]], [-e[2], 0, e[0]], [e[1], -e[0], 0]]
+                })
+                .filter_map(reduced)
+                .collect();
+            axes.sort_unstable();
+            axes.dedup();
+            axes.into_iter()
+                .map(|u| {
+                    let (mut min, mut max) = (i128::MAX, i128::MIN);
+                    for v in &self.vertices {
+                        let p = dot(u, *v);
+                        min = min.min(p);
+                        max = max.max(p);
+                    }
+                    EdgeAxis { u, min, max }
+                })
+                .collect()
         })
     }
 
@@ -116,6 +143,10 @@ impl ConvexPiece {
         if (0..3).any(|a| self.hi[a] < lo[a] || hi[a] < self.lo[a]) {
             return false;
         }
+        // A box around the whole piece (the octree's large cells).
+        if (0..3).all(|a| lo[a] <= self.lo[a] && self.hi[a] <= hi[a]) {
+            return true;
+        }
         // A face plane with the whole box strictly outside.
         if self
             .faces
@@ -124,7 +155,7 @@ impl ConvexPiece {
         {
             return false;
         }
-        !self.edge_axes.iter().any(|axis| {
+        !self.edge_axes().iter().any(|axis| {
             let (min, max) = box_range(axis.u, lo, hi);
             max < axis.min || axis.max < min
         })
@@ -134,6 +165,14 @@ impl ConvexPiece {
 /// Vertex `v` of `arena` as an integer point within `±v⁺`, if it is one.
 fn integer_point(arena: &ConvexArena, v: u32) -> Option<[i64; 3]> {
     let point = arena.point(v);
+    // Fast path: the cached `f64`s are correctly rounded, so `W ≈ 1.0`
+    // means the positive integer `W` is 1, and then each `X ≈ x` with
+    // `|x| ≤ v⁺ < 2^53` is the integer `X` itself.
+    let [x, y, z, w] = point.approx();
+    let limit = MAX_COORD as f64;
+    if w == 1.0 && [x, y, z].iter().all(|c| c.abs() <= limit) {
+        return Some([x, y, z].map(|c| c as i64));
+    }
     let w = point.w().to_i128()?;
     let xyz = point.xyz();
     let mut out = [0; 3];
@@ -215,13 +254,26 @@ mod tests {
     fn a_tetrahedron_keeps_its_faces_and_edge_axes() {
         let t = piece(&[[0, 0, 0], [4, 0, 0], [0, 4, 0], [0, 0, 4]]);
         assert_eq!((t.lo, t.hi), ([0; 3], [4; 3]));
-        assert_eq!(t.faces.len(), 4);
-        // Edges along the axes give one axis each per other box axis; the
-        // three slanted edges give axes like (0, 1, 1), (1, 0, 1), …
-        assert!(t.edge_axes.iter().all(|a| a.u != [0; 3]));
-        let mut us: Vec<[i64; 3]> = t.edge_axes.iter().map(|a| a.u).collect();
-        us.dedup();
-        assert_eq!(us.len(), t.edge_axes.len());
+        assert_eq!((t.faces.len(), t.vertices.len(), t.edges.len()), (4, 4, 6));
+        // Three edges along the axes give two axes each (the axes of the
+        // box, already tested as such, once reduced); the three slanted
+        // edges give (0, 1, 1), (1, 0, 1), (1, 1, 0) and the box axes.
+        let mut us: Vec<[i64; 3]> = t.edge_axes().iter().map(|a| a.u).collect();
+        us.sort_unstable();
+        assert_eq!(
+            us,
+            vec![
+                [0, 0, 1],
+                [0, 1, 0],
+                [0, 1, 1],
+                [1, 0, 0],
+                [1, 0, 1],
+                [1, 1, 0]
+            ]
+        );
+        // Projections of the tetrahedron on (1, 1, 0): [0, 4].
+        let axis = t.edge_axes().iter().find(|a| a.u == [1, 1, 0]).unwrap();
+        assert_eq!((axis.min, axis.max), (0, 4));
     }
 
     #[test]
