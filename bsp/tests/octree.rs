@@ -449,3 +449,69 @@ fn faces_handed_back_finish_into_the_cells_surface() {
     }
     assert!(finished > 24, "only {finished} cells finished from faces");
 }
+
+/// A cuboid on the planes between cells of edge `g` (so that neighbours
+/// meet it only on a face, an edge or a corner), reaching into the block.
+fn snapped_cuboid(rng: &mut ChaCha8Rng) -> Tool {
+    let g = SIZE >> rng.random_range(3..=6);
+    let min = [
+        g * rng.random_range(0..SIZE / g - 2),
+        g * rng.random_range(0..SIZE / g - 2),
+        g * rng.random_range(1..SIZE / 2 / g),
+    ];
+    let size = [0; 3].map(|_| g * rng.random_range(1..3));
+    Tool::cuboid(CellBox {
+        min,
+        max: [0, 1, 2].map(|a| min[a] + size[a]),
+    })
+    .unwrap()
+}
+
+/// Dodecahedra, cuboids on cell planes, and unions of both.
+fn random_contact_tool(rng: &mut ChaCha8Rng) -> Tool {
+    match rng.random_range(0..3) {
+        0 => random_tool(rng),
+        1 => snapped_cuboid(rng),
+        _ => Tool::union(&[random_tool(rng), snapped_cuboid(rng)]).unwrap(),
+    }
+}
+
+/// The exact surface integrals of every leaf.
+fn leaf_surfaces(octree: &Octree) -> BTreeMap<CellKey, BTreeMap<Label, Fraction>> {
+    octree
+        .leaves()
+        .into_iter()
+        .map(|(key, _)| (key, faces_integrals(&octree.cell_surface(key))))
+        .collect()
+}
+
+/// Leaves an edit does not report keep their surface (same exact
+/// integrals per material), including those whose box touches the tool's
+/// bounds but not the tool itself.
+#[test]
+fn leaves_not_reported_keep_their_surface() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
+    let mut surfaces = leaf_surfaces(&octree);
+    let mut narrowed = 0;
+    for step in 0..30 {
+        let tool = random_contact_tool(&mut rng);
+        let edit = random_edit(&mut rng);
+        let before = octree.clone();
+        let changes = octree.apply(&tool, edit).unwrap();
+        check_changes(&before, &octree, &changes);
+        let after = leaf_surfaces(&octree);
+        for (key, integrals) in &after {
+            if changes.changed.binary_search(key).is_err() {
+                assert_eq!(
+                    Some(integrals),
+                    surfaces.get(key),
+                    "step {step}: {edit:?} {key:?}"
+                );
+                narrowed += usize::from(octree.cell_box(*key).touches(&tool.bounds()));
+            }
+        }
+        surfaces = after;
+    }
+    assert!(narrowed > 10, "only {narrowed} leaves narrowed");
+}

@@ -3,8 +3,9 @@
 //! Notation: `C` — a cell's box; `T` — the tool, `bounds(T)` its integer
 //! box; `f` — the label function of the edit ([`BooleanOp`]).
 //!
-//! The walk descends only into cells whose closed box touches `bounds(T)`;
-//! children run in parallel. At a leaf, an exact test (cutting `C` by the
+//! The walk descends only into cells whose closed box the closed tool
+//! meets ([`Tool::touches`]: `bounds(T)` first, then exactly); children run
+//! in parallel. At a leaf, an exact test (cutting `C` by the
 //! tool's planes) decides whether `T` has volume in `C`; if so, the leaf's
 //! BSP is merged with `T` inside `C` (§3.5), rebuilt without redundancy
 //! (§3.7) and, when still over the budget, split into eight children by
@@ -63,8 +64,11 @@ impl Edit {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Changes {
     /// Leaf cells of the new octree whose surface may differ: their content
-    /// was replaced, or their box touches the tool's bounds (faces on their
-    /// border may have been exposed or covered). Sorted.
+    /// was replaced, or they hold material and the closed tool meets their
+    /// closed box (faces on their border may have been exposed or covered:
+    /// the regions across them changed only inside the tool). A leaf not
+    /// listed has the same surface ([`Octree::cell_surface`]) as before the
+    /// edit. Sorted.
     pub changed: Vec<CellKey>,
     /// Leaf cells of the previous octree that are no longer leaves (split
     /// or combined). Sorted.
@@ -114,6 +118,9 @@ impl Edited {
 
 /// The edit, prepared once for the whole walk.
 struct Walk<'a> {
+    /// The tool, for the exact contact test with cell boxes.
+    solid: &'a Tool,
+    /// The tool's solid labelled for the edit.
     tool: Bsp,
     /// The label of the tool's solid.
     tool_label: Label,
@@ -168,6 +175,7 @@ impl Octree {
         }
         let op = edit.op();
         let walk = Walk {
+            solid: tool,
             tool: tool.labelled(edit.tool_label()),
             tool_label: edit.tool_label(),
             bounds: tool.bounds(),
@@ -191,11 +199,14 @@ impl Octree {
 impl Walk<'_> {
     /// The new node (`None` when unchanged) and the changes below it.
     fn node(&self, node: &OctNode, key: CellKey, cell: CellBox) -> (Option<OctNode>, Edited) {
-        if !self.changes_outside && !cell.touches(&self.bounds) {
+        // Where the closed tool misses the closed box, it has no volume in
+        // any cell below, and no border face there changes.
+        let touches = self.solid.touches(&cell);
+        if !self.changes_outside && !touches {
             return (None, Edited::default());
         }
         match node {
-            OctNode::Leaf(leaf) => self.leaf(leaf, key, cell),
+            OctNode::Leaf(leaf) => self.leaf(leaf, key, cell, touches),
             OctNode::Inner(children) => {
                 let results: Vec<(Option<OctNode>, Edited)> = (0..8)
                     .into_par_iter()
@@ -229,10 +240,21 @@ impl Walk<'_> {
         }
     }
 
-    fn leaf(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Edited) {
-        let touches = cell.touches(&self.bounds);
+    /// The new leaf (`None` when unchanged) and the changes; `touches`
+    /// tells whether the closed tool meets the closed `cell`.
+    fn leaf(
+        &self,
+        leaf: &Leaf,
+        key: CellKey,
+        cell: CellBox,
+        touches: bool,
+    ) -> (Option<OctNode>, Edited) {
+        // With its content unchanged, a leaf's surface can change only where
+        // the regions across its border faces changed: inside the closed
+        // tool. An empty uniform leaf has no surface at all.
+        let surface_may_change = touches && !matches!(leaf, Leaf::Uniform(EMPTY));
         let touched = || {
-            if touches {
+            if surface_may_change {
                 Changes::leaf(key)
             } else {
                 Changes::default()
@@ -250,7 +272,8 @@ impl Walk<'_> {
         // For a BSP leaf, an exact test first spares the merge and the
         // rebuild where the tool misses the cell; for a uniform leaf the
         // merge itself is that test.
-        let meets = cell.overlaps(&self.bounds)
+        let meets = touches
+            && cell.overlaps(&self.bounds)
             && (matches!(leaf, Leaf::Uniform(_))
                 || with_arena(|arena| {
                     let poly = cell_poly(arena, cell);
@@ -263,7 +286,7 @@ impl Walk<'_> {
             } else {
                 None
             };
-            let changes = if touches || relabeled.is_some() {
+            let changes = if surface_may_change || relabeled.is_some() {
                 Changes::leaf(key)
             } else {
                 Changes::default()

@@ -3,7 +3,12 @@
 //! A tool is a convex polyhedron (an exact hull of integer points, a box, a
 //! placed or swept shape from [`crate::tools`]) or a union of such; its
 //! bounds are a closed integer box containing it, used to find the cells
-//! it can touch.
+//! it can touch, and its convex pieces decide exactly which of those boxes
+//! the closed solid meets ([`Tool::touches`]).
+
+mod contact;
+
+use contact::ConvexPiece;
 
 use super::cell::CellBox;
 use crate::Error;
@@ -18,6 +23,10 @@ use crate::tree::{BooleanOp, Bsp, Label};
 pub struct Tool {
     bsp: Bsp,
     bounds: CellBox,
+    /// The convex pieces whose union is the solid, each with its bounds;
+    /// a piece with a vertex off the integer grid is `None`, and only its
+    /// bounds decide where it touches.
+    pieces: Vec<(CellBox, Option<ConvexPiece>)>,
 }
 
 impl Tool {
@@ -79,6 +88,7 @@ impl Tool {
         Tool {
             bsp: Bsp::from_convex(arena, poly, 1),
             bounds: CellBox { min, max },
+            pieces: vec![(CellBox { min, max }, ConvexPiece::of(arena, poly))],
         }
     }
 
@@ -99,6 +109,7 @@ impl Tool {
             out.bsp = out
                 .bsp
                 .merge(&tool.bsp, BooleanOp::Union, &mut arena, bounds);
+            out.pieces.extend(tool.pieces.iter().cloned());
         }
         Ok(out)
     }
@@ -107,6 +118,24 @@ impl Tool {
     #[must_use]
     pub fn bounds(&self) -> CellBox {
         self.bounds
+    }
+
+    /// Whether the closed solid meets the closed box `cell` (they share at
+    /// least a point: touching at a vertex, along an edge or on a face
+    /// counts). Exact for tools made of convex hulls of integer points
+    /// ([`Tool::convex_hull`], [`Tool::placed`], [`Tool::swept`],
+    /// [`Tool::cuboid`] and their unions); a piece made by
+    /// [`Tool::from_polyhedron`] with a vertex off the integer grid counts
+    /// as meeting every box that touches its bounds.
+    #[must_use]
+    pub fn touches(&self, cell: &CellBox) -> bool {
+        self.bounds.touches(cell)
+            && self.pieces.iter().any(|(bounds, piece)| {
+                bounds.touches(cell)
+                    && piece
+                        .as_ref()
+                        .is_none_or(|piece| piece.touches(cell.min, cell.max))
+            })
     }
 
     /// The tool's solid (label 1) as a BSP.
