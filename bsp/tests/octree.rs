@@ -419,16 +419,22 @@ fn faces_integrals(faces: &[chisel_bsp::tree::BoundaryFace]) -> BTreeMap<Label, 
     total
 }
 
+/// Whether cell `a` lies strictly inside cell `b`.
+fn strictly_below(a: CellKey, b: CellKey) -> bool {
+    a.depth > b.depth && a.pos.map(|p| p >> (a.depth - b.depth)) == b.pos
+}
+
 /// The faces `apply_with_faces` hands back finish into the same surface as
 /// a fresh `cell_surface` (same exact integrals per material), for changed
-/// leaves only, and the octree is the one `apply` makes.
+/// leaves only — edited leaves, the new children of a split leaf and
+/// combined leaves — and the octree is the one `apply` makes.
 #[test]
 fn faces_handed_back_finish_into_the_cells_surface() {
     let mut rng = ChaCha8Rng::seed_from_u64(17);
     let mut octree = Octree::from_box([0; 3], K, block(), 1, config()).unwrap();
     let mut plain = octree.clone();
-    let mut finished = 0;
-    for step in 0..24 {
+    let (mut finished, mut new_children, mut combined) = (0, 0, 0);
+    for step in 0..80 {
         let tool = random_tool(&mut rng);
         let edit = random_edit(&mut rng);
         let (changes, faces) = octree.apply_with_faces(&tool, edit).unwrap();
@@ -437,6 +443,8 @@ fn faces_handed_back_finish_into_the_cells_surface() {
         assert!(faces.windows(2).all(|w| w[0].0 < w[1].0));
         for (key, faces) in faces {
             assert!(changes.changed.binary_search(&key).is_ok(), "{key:?}");
+            new_children += usize::from(changes.removed.iter().any(|&r| strictly_below(key, r)));
+            combined += usize::from(changes.removed.iter().any(|&r| strictly_below(r, key)));
             let from = octree.cell_surface_from(key, faces);
             let fresh = octree.cell_surface(key);
             assert_eq!(
@@ -448,6 +456,10 @@ fn faces_handed_back_finish_into_the_cells_surface() {
         }
     }
     assert!(finished > 24, "only {finished} cells finished from faces");
+    assert!(
+        new_children > 0 && combined > 0,
+        "faces of {new_children} new children, {combined} combined leaves"
+    );
 }
 
 /// A cuboid on the planes between cells of edge `g` (so that neighbours

@@ -148,8 +148,10 @@ impl Octree {
     }
 
     /// [`Octree::apply`], also handing back, for each leaf whose content
-    /// the edit replaced (a key in [`Changes::changed`] that stayed one
-    /// leaf), the boundary faces the rebuild extracted there: its surface
+    /// the edit rebuilt (a key in [`Changes::changed`]: an edited leaf, a
+    /// new child of a leaf split over the budget, or a leaf combined from
+    /// children that were not all one uniform label), the boundary faces
+    /// the rebuild extracted there: its surface
     /// inside the cell, with the faces on the cell's box marked
     /// [`BoundaryFace::on_bounds`]. [`Octree::cell_surface_from`] finishes
     /// them into what [`Octree::cell_surface`] would give — the same exact
@@ -225,15 +227,19 @@ impl Walk<'_> {
                     }
                     changes.append(c);
                 }
-                if let Some(combined) = combine(&new_children, cell, self.config) {
+                if let Some((combined, faces)) =
+                    combine(&new_children, cell, self.config, self.keep_faces)
+                {
                     let mut removed = Vec::new();
                     collect_leaves(node, key, &mut removed);
-                    // The children's faces are dropped with them.
+                    // The children's faces are dropped with them; the
+                    // combined leaf has those of its rebuild.
                     let changes = Changes {
                         changed: vec![key],
                         removed,
                     };
-                    return (Some(OctNode::Leaf(combined)), changes.into());
+                    let faces = faces.map(|f| vec![(key, f)]).unwrap_or_default();
+                    return (Some(OctNode::Leaf(combined)), Edited { changes, faces });
                 }
                 (Some(OctNode::Inner(Arc::new(new_children))), changes)
             }
@@ -308,7 +314,8 @@ impl Walk<'_> {
         {
             return (None, touched().into());
         }
-        let (node, leaves) = build_leaf(simplified, key, cell, self.config);
+        let (node, leaves, child_faces) =
+            build_leaf_faces(simplified, key, cell, self.config, self.keep_faces);
         let edited = match node {
             OctNode::Leaf(_) => Edited {
                 changes: Changes::leaf(key),
@@ -318,13 +325,15 @@ impl Walk<'_> {
                     Vec::new()
                 },
             },
-            // The children are rebuilt inside their boxes: their surfaces
-            // are extracted afresh.
-            OctNode::Inner(_) => Changes {
-                changed: leaves,
-                removed: vec![key],
-            }
-            .into(),
+            // The children were rebuilt inside their boxes: their faces come
+            // from those rebuilds.
+            OctNode::Inner(_) => Edited {
+                changes: Changes {
+                    changed: leaves,
+                    removed: vec![key],
+                },
+                faces: child_faces,
+            },
         };
         (Some(node), edited)
     }
@@ -411,43 +420,79 @@ pub(crate) fn build_leaf(
     cell: CellBox,
     config: &OctreeConfig,
 ) -> (OctNode, Vec<CellKey>) {
+    let (node, leaves, _) = build_leaf_faces(bsp, key, cell, config, false);
+    (node, leaves)
+}
+
+/// [`build_leaf`], also returning, when `keep_faces`, the boundary faces
+/// the rebuild of each new child leaf extracted inside its box (as
+/// [`Octree::apply_with_faces`] hands them back; none when `bsp` stays one
+/// leaf).
+fn build_leaf_faces(
+    bsp: Bsp,
+    key: CellKey,
+    cell: CellBox,
+    config: &OctreeConfig,
+    keep_faces: bool,
+) -> (OctNode, Vec<CellKey>, CellFaces) {
     let inner = bsp.nodes().len() / 2;
     if inner == 0 {
         let label = match bsp.nodes()[0] {
             crate::tree::Node::Leaf(label) => label,
             crate::tree::Node::Split { .. } => EMPTY,
         };
-        return (OctNode::Leaf(Leaf::Uniform(label)), vec![key]);
+        return (OctNode::Leaf(Leaf::Uniform(label)), vec![key], Vec::new());
     }
     if inner <= config.max_bsp_nodes || key.depth >= config.max_depth || cell.min_edge() < 2 {
-        return (OctNode::Leaf(Leaf::Bsp(Arc::new(bsp))), vec![key]);
+        return (
+            OctNode::Leaf(Leaf::Bsp(Arc::new(bsp))),
+            vec![key],
+            Vec::new(),
+        );
     }
-    let built: Vec<(OctNode, Vec<CellKey>)> = (0..8)
+    let built: Vec<(OctNode, Vec<CellKey>, CellFaces)> = (0..8)
         .into_par_iter()
         .map(|i| {
-            let child = cell.child(i);
-            let simplified = with_arena(|arena| {
+            let (child, child_key) = (cell.child(i), key.child(i));
+            let (simplified, faces) = with_arena(|arena| {
                 let poly = cell_poly(arena, child);
-                bsp.simplified(arena, poly)
+                if keep_faces {
+                    bsp.simplified_faces(arena, poly)
+                } else {
+                    (bsp.simplified(arena, poly), Vec::new())
+                }
             });
-            build_leaf(simplified, key.child(i), child, config)
+            let (node, leaves, mut below) =
+                build_leaf_faces(simplified, child_key, child, config, keep_faces);
+            if keep_faces && matches!(node, OctNode::Leaf(_)) {
+                below.push((child_key, faces));
+            }
+            (node, leaves, below)
         })
         .collect();
     let mut leaves = Vec::new();
+    let mut faces = Vec::new();
     let mut children = Vec::with_capacity(8);
-    for (node, keys) in built {
+    for (node, keys, below) in built {
         children.push(node);
         leaves.extend(keys);
+        faces.extend(below);
     }
     let children: [OctNode; 8] = children
         .try_into()
         .unwrap_or_else(|_| unreachable!("eight children"));
-    (OctNode::Inner(Arc::new(children)), leaves)
+    (OctNode::Inner(Arc::new(children)), leaves, faces)
 }
 
 /// One leaf for eight leaf children that fit the budget together, or
-/// `None`.
-fn combine(children: &[OctNode; 8], cell: CellBox, config: &OctreeConfig) -> Option<Leaf> {
+/// `None`; with it, when `keep_faces` and the children were not all one
+/// uniform label, the boundary faces its rebuild extracted inside `cell`.
+fn combine(
+    children: &[OctNode; 8],
+    cell: CellBox,
+    config: &OctreeConfig,
+    keep_faces: bool,
+) -> Option<(Leaf, Option<Vec<BoundaryFace>>)> {
     let leaves: Vec<&Leaf> = children
         .iter()
         .map(|c| match c {
@@ -460,25 +505,31 @@ fn combine(children: &[OctNode; 8], cell: CellBox, config: &OctreeConfig) -> Opt
             .iter()
             .all(|l| matches!(l, Leaf::Uniform(x) if x == first))
     {
-        return Some(Leaf::Uniform(*first));
+        return Some((Leaf::Uniform(*first), None));
     }
     if leaves.iter().map(|l| l.bsp_nodes()).sum::<usize>() > config.max_bsp_nodes {
         return None;
     }
     let bsps: Vec<Bsp> = leaves.iter().map(|l| l.to_bsp()).collect();
     let grafted = axis_graft(std::array::from_fn(|i| &bsps[i]), cell.mid());
-    let simplified = with_arena(|arena| {
+    let (simplified, faces) = with_arena(|arena| {
         let poly = cell_poly(arena, cell);
-        grafted.simplified(arena, poly)
+        if keep_faces {
+            let (simplified, faces) = grafted.simplified_faces(arena, poly);
+            (simplified, Some(faces))
+        } else {
+            (grafted.simplified(arena, poly), None)
+        }
     });
     let inner = simplified.nodes().len() / 2;
     if inner > config.max_bsp_nodes {
         return None;
     }
-    Some(match simplified.nodes()[0] {
+    let leaf = match simplified.nodes()[0] {
         crate::tree::Node::Leaf(label) if inner == 0 => Leaf::Uniform(label),
         _ => Leaf::Bsp(Arc::new(simplified)),
-    })
+    };
+    Some((leaf, faces))
 }
 
 fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {

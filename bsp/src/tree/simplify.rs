@@ -64,7 +64,25 @@ impl Bsp {
         bounds: PolyId,
     ) -> (Bsp, Vec<BoundaryFace>) {
         let (merged, cells) = self.merge_cells(other, op, arena, bounds);
-        let faces = merged.boundary_of_cells(arena, &cells, Bounds::Keep);
+        merged.rebuilt_with_faces(arena, &cells)
+    }
+
+    /// [`Bsp::simplified`], also returning the boundary inside `bounds`
+    /// that the rebuild starts from, with the faces on the bounds
+    /// ([`Bsp::boundary`] of the result, in other pieces).
+    pub(crate) fn simplified_faces(
+        &self,
+        arena: &mut ConvexArena,
+        bounds: PolyId,
+    ) -> (Bsp, Vec<BoundaryFace>) {
+        let cells = self.cells(arena, bounds);
+        self.rebuilt_with_faces(arena, &cells)
+    }
+
+    /// [`Bsp::rebuilt`], also returning the boundary it starts from with the
+    /// faces on the bounds.
+    fn rebuilt_with_faces(&self, arena: &ConvexArena, cells: &[Cell]) -> (Bsp, Vec<BoundaryFace>) {
+        let faces = self.boundary_of_cells(arena, cells, Bounds::Keep);
         // The same faces in the same order as with `Bounds::Skip`.
         let mut inner = faces.iter().filter(|f| !f.on_bounds).peekable();
         let rebuilt = if inner.peek().is_none() {
