@@ -476,6 +476,25 @@ pub(crate) fn give_back_buffers(mut edges: Vec<Plane>, mut corners: Vec<Point4>)
     });
 }
 
+/// Hands the edge buffers `buffers` yields to the spare buffers of this
+/// thread while there is room, and stops asking for more when the pool is
+/// full (what is left is the caller's to free).
+pub(crate) fn give_back_edge_buffers(buffers: impl Iterator<Item = Vec<Plane>>) {
+    let _ = SPARE.try_with(|spare| {
+        if let Ok(mut spare) = spare.try_borrow_mut() {
+            for mut edges in buffers {
+                if spare.edges.len() >= MAX_SPARE {
+                    break;
+                }
+                if edges.capacity() != 0 {
+                    edges.clear();
+                    spare.edges.push(edges);
+                }
+            }
+        }
+    });
+}
+
 /// Room for corners in new buffers, at least: most polygons have fewer,
 /// so spare buffers usually fit the next polygon.
 const MIN_CAPACITY: usize = 8;
@@ -501,6 +520,17 @@ pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
             .filter(|c| c.capacity() >= m)
             .unwrap_or_else(|| Vec::with_capacity(capacity)),
     )
+}
+
+/// An empty edge buffer with room for `m` planes: a spare one when it is
+/// large enough, else a new one.
+pub(crate) fn spare_edge_buffer(m: usize) -> Vec<Plane> {
+    SPARE
+        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.edges.pop()))
+        .ok()
+        .flatten()
+        .filter(|e| e.capacity() >= m)
+        .unwrap_or_else(|| Vec::with_capacity(m.max(MIN_CAPACITY)))
 }
 
 /// Marks the closing plane in a part's layout.
