@@ -103,8 +103,8 @@ pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon
             let b = b as usize;
             if b == SHARED as usize
                 || b == a
-                || owners.get(&edge_key(p, q)) != Some(&(a as u32))
                 || !same_support(&polygons[a], &polygons[b])
+                || owners.get(&edge_key(p, q)) != Some(&(a as u32))
             {
                 continue;
             }

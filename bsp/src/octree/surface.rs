@@ -25,7 +25,7 @@ use super::tree::{Leaf, OctNode, Octree};
 use crate::convex::with_arena;
 use crate::exact::Plane;
 use crate::tree::polygon::Polygon;
-use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
+use crate::tree::{BoundaryFace, Bsp, EMPTY, Label, NodeId};
 
 impl Octree {
     /// The surface pieces of leaf cell `key` (empty when `key` is not a
@@ -130,6 +130,7 @@ impl Octree {
             stack,
             pieces,
             next,
+            clip,
         } = scratch;
         stack.push((&self.root, root, polygon, *from));
         while let Some((mut node, mut cell, polygon, range)) = stack.pop() {
@@ -145,7 +146,9 @@ impl Octree {
             }
             match node {
                 OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
-                OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, label, &mut emit),
+                OctNode::Leaf(Leaf::Bsp(bsp)) => {
+                    bsp.clip_polygon(0, polygon, label, clip, &mut emit);
+                }
                 OctNode::Inner(children) => {
                     let mid = cell.mid();
                     pieces.push((polygon, range, 0usize));
@@ -177,12 +180,14 @@ impl Octree {
 
 /// Working memory of [`Octree::clip_across`], reused across the border
 /// faces of a cell: the cells still to visit with their piece and the box
-/// range known to hold it, and the pieces of one inner cell, axis by axis.
+/// range known to hold it, the pieces of one inner cell, axis by axis, and
+/// the pieces still to clip in a neighbour's BSP.
 #[derive(Default)]
 struct Descent<'a> {
     stack: Vec<(&'a OctNode, CellBox, Polygon, CellBox)>,
     pieces: Vec<(Polygon, CellBox, usize)>,
     next: Vec<(Polygon, CellBox, usize)>,
+    clip: Vec<(NodeId, Polygon)>,
 }
 
 /// The one axis a normal `n` has a non-zero component on, if only one.
@@ -269,11 +274,12 @@ fn faces_out_of(plane: &Plane, cube: &CellBox) -> bool {
     let Some(axis) = single_axis(n) else {
         return false;
     };
-    // n_a·x + d = 0  ⇔  x = −d / n_a.
-    let (na, d) = (i128::from(n[axis]), plane.offset());
-    if d % na != 0 {
-        return false;
-    }
-    let at = -d / na;
-    (na > 0 && at == i128::from(cube.max[axis])) || (na < 0 && at == i128::from(cube.min[axis]))
+    // n_a·x + d = 0 is the side x = c exactly when n_a·c + d = 0.
+    let na = n[axis];
+    let side = if na > 0 {
+        cube.max[axis]
+    } else {
+        cube.min[axis]
+    };
+    i128::from(na) * i128::from(side) + plane.offset() == 0
 }

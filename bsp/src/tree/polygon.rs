@@ -171,36 +171,47 @@ impl Polygon {
     /// [`Self::split`], building only the parts `wanted` (below, above):
     /// a part not wanted is `None`, a part wanted is the one `split` gives.
     pub(crate) fn split_wanted(self, p: &Plane, wanted: [bool; 2]) -> (Option<Self>, Option<Self>) {
-        let n = self.corners.len();
-        let (mut stack, mut heap) = ([Sign::Zero; SMALL], Vec::new());
-        let sides: &mut [Sign] = if n <= SMALL {
-            &mut stack[..n]
-        } else {
-            heap.resize(n, Sign::Zero);
-            &mut heap
-        };
-        let (below, above) = classify_corners(&self.corners, p, sides);
-        let sides = &*sides;
+        let mut sides = Sides::default();
+        let sides = sides.for_corners(self.corners.len());
         let [want_below, want_above] = wanted;
-        match (below, above) {
-            (true, true) => match (want_below, want_above) {
-                (true, true) => {
-                    let (b, a) = self.split_straddling(sides, p);
-                    (Some(b), Some(a))
-                }
-                (true, false) => (Some(self.one_part(sides, p, Sign::Negative)), None),
-                (false, true) => (None, Some(self.one_part(sides, p, Sign::Positive))),
-                (false, false) => (None, None),
-            },
-            (true, false) => (want_below.then_some(self), None),
-            (false, true) => (None, want_above.then_some(self)),
-            (false, false) => {
-                if faces_along(&self.support, p) {
-                    (None, want_above.then_some(self))
-                } else {
-                    (want_below.then_some(self), None)
-                }
+        match self.whole_side(p, sides) {
+            Some(false) => (want_below.then_some(self), None),
+            Some(true) => (None, want_above.then_some(self)),
+            None => self.split_known(sides, p, wanted),
+        }
+    }
+
+    /// The side of `p` the polygon lies on whole (`false` below, `true`
+    /// above; a polygon lying in `p` goes to the side it faces, as in
+    /// [`Self::split`]), or `None` when it has corners on both sides; the
+    /// sides of the corners are written to `sides` (one per corner).
+    #[inline]
+    pub(crate) fn whole_side(&self, p: &Plane, sides: &mut [Sign]) -> Option<bool> {
+        match classify_corners(&self.corners, p, sides) {
+            (true, true) => None,
+            (true, false) => Some(false),
+            (false, true) => Some(true),
+            (false, false) => Some(faces_along(&self.support, p)),
+        }
+    }
+
+    /// The parts `wanted` (below, above) of a polygon with corners on both
+    /// sides of `p` (`sides` as [`Self::whole_side`] wrote them): those
+    /// [`Self::split_wanted`] gives.
+    pub(crate) fn split_known(
+        self,
+        sides: &[Sign],
+        p: &Plane,
+        wanted: [bool; 2],
+    ) -> (Option<Self>, Option<Self>) {
+        match wanted {
+            [true, true] => {
+                let (b, a) = self.split_straddling(sides, p);
+                (Some(b), Some(a))
             }
+            [true, false] => (Some(self.one_part(sides, p, Sign::Negative)), None),
+            [false, true] => (None, Some(self.one_part(sides, p, Sign::Positive))),
+            [false, false] => (None, None),
         }
     }
 
@@ -362,6 +373,35 @@ impl Polygon {
         }
         self.edges.truncate(m);
         self.corners.truncate(m);
+    }
+}
+
+/// Room for the sides of a polygon's corners: on the stack for the usual
+/// small polygon.
+pub(crate) struct Sides {
+    small: [Sign; SMALL],
+    large: Vec<Sign>,
+}
+
+impl Default for Sides {
+    fn default() -> Self {
+        Self {
+            small: [Sign::Zero; SMALL],
+            large: Vec::new(),
+        }
+    }
+}
+
+impl Sides {
+    /// Room for the sides of `n` corners.
+    #[inline]
+    pub(crate) fn for_corners(&mut self, n: usize) -> &mut [Sign] {
+        if n <= SMALL {
+            &mut self.small[..n]
+        } else {
+            self.large.resize(n, Sign::Zero);
+            &mut self.large
+        }
     }
 }
 
