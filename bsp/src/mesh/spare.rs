@@ -11,7 +11,7 @@ thread_local! {
 }
 
 /// Spare index buffers kept per thread.
-const MAX_SPARE: usize = 512;
+const MAX_SPARE: usize = 2048;
 
 /// Room for indices in new buffers, at least: most polygons have fewer
 /// corners, so spare buffers usually fit the next polygon.

@@ -495,7 +495,7 @@ thread_local! {
 }
 
 /// Spare buffers of each kind kept per thread.
-const MAX_SPARE: usize = 256;
+const MAX_SPARE: usize = 1024;
 
 /// Hands `edges` and `corners` (either may be empty) to the spare buffers
 /// of this thread. When the pool is full, or the thread is ending, the
