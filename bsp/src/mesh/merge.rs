@@ -50,8 +50,9 @@ use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 use std::hash::BuildHasherDefault;
 
-use super::MeshPolygon;
+use super::{MeshPolygon, spare};
 use crate::exact::{Plane, Point4, Sign, classify_vertex};
+use crate::tree::polygon::{give_back_edge_buffers, spare_edge_buffer};
 use crate::word_hash::WordHasher;
 
 /// The owner of a directed edge used by more than one polygon.
@@ -102,8 +103,8 @@ pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon
             let b = b as usize;
             if b == SHARED as usize
                 || b == a
-                || owners.get(&edge_key(p, q)) != Some(&(a as u32))
                 || !same_support(&polygons[a], &polygons[b])
+                || owners.get(&edge_key(p, q)) != Some(&(a as u32))
             {
                 continue;
             }
@@ -133,7 +134,7 @@ pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon
                     .and_modify(|owner| *owner = SHARED)
                     .or_insert(a as u32);
             }
-            polygons[a] = union;
+            recycle(&mut std::mem::replace(&mut polygons[a], union));
             alive[b] = false;
             merged_any = true;
             pending.push(a as u32);
@@ -142,12 +143,28 @@ pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon
     }
     if merged_any {
         let mut f = 0;
-        polygons.retain(|_| {
+        polygons.retain_mut(|polygon| {
             f += 1;
+            if !alive[f - 1] {
+                recycle(polygon);
+            }
             alive[f - 1]
         });
     }
     merged_any
+}
+
+/// Hands the buffers of a polygon merged away to the spare buffers of
+/// this thread, leaving it empty.
+fn recycle(polygon: &mut MeshPolygon) {
+    give_back_edge_buffers(std::iter::once(std::mem::take(&mut polygon.edges)));
+    spare::give_back(
+        [
+            std::mem::take(&mut polygon.corners),
+            std::mem::take(&mut polygon.originals),
+        ]
+        .into_iter(),
+    );
 }
 
 /// Whether `a` and `b` lie on the same oriented plane with the same
@@ -219,8 +236,8 @@ fn merged(
         &b.edges[(j + nb - 1) % nb],
         &a.edges[(k + 1) % na],
     )?;
-    let mut corners = Vec::with_capacity(na + nb - 2);
-    let mut edges = Vec::with_capacity(na + nb - 2);
+    let mut corners = spare::index_buffer(na + nb - 2);
+    let mut edges = spare_edge_buffer(na + nb - 2);
     // Q, a_1, …, a_{−1} with their outgoing edges: `a` from Q round to the
     // corner before P. Q is dropped when straight: B's edge into Q then
     // runs on to a_1, and stays the last edge below.
@@ -244,9 +261,11 @@ fn merged(
         corners.push(b.corners[c]);
         edges.push(b.edges[c]);
     }
+    let mut originals = spare::index_buffer(corners.len());
+    originals.extend(0..corners.len() as u32);
     Some(MeshPolygon {
         plane: a.plane,
-        originals: (0..corners.len() as u32).collect(),
+        originals,
         edges,
         corners,
         label: a.label,

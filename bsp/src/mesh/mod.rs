@@ -62,6 +62,7 @@
 //! ```
 
 mod merge;
+mod spare;
 pub mod tjunction;
 pub mod triangulate;
 pub mod validate;
@@ -322,6 +323,24 @@ impl SurfaceMesh {
     }
 }
 
+impl Drop for SurfaceMesh {
+    /// Hands the polygons' edge planes and index lists to the spare
+    /// buffers of this thread, for the next faces cut and welded there.
+    fn drop(&mut self) {
+        crate::tree::polygon::give_back_edge_buffers(
+            self.polygons
+                .iter_mut()
+                .map(|p| core::mem::take(&mut p.edges)),
+        );
+        spare::give_back(self.polygons.iter_mut().flat_map(|p| {
+            [
+                core::mem::take(&mut p.corners),
+                core::mem::take(&mut p.originals),
+            ]
+        }));
+    }
+}
+
 /// Boundary face number `f` with its edge planes as a polygon of welded
 /// corners.
 fn weld_face(
@@ -336,11 +355,15 @@ fn weld_face(
         edges.len(),
         face.vertices.len()
     );
-    let corners: Vec<u32> = face.vertices.iter().map(|v| welder.index(v)).collect();
+    let n = face.vertices.len();
+    let mut corners = spare::index_buffer(n);
+    corners.extend(face.vertices.iter().map(|v| welder.index(v)));
+    let mut originals = spare::index_buffer(n);
+    originals.extend(0..n as u32);
     MeshPolygon {
         plane: face.plane,
         edges,
-        originals: (0..corners.len() as u32).collect(),
+        originals,
         corners,
         label: face.label,
         outside: face.outside,

@@ -78,10 +78,17 @@ impl MeshPolygon {
     /// [`MeshPolygon`]; polygons of a [`SurfaceMesh`] always fit).
     #[must_use]
     pub fn triangulate(&self) -> Vec<[u32; 3]> {
-        let n = self.original_len();
         let mut out = Vec::with_capacity(self.corners.len().saturating_sub(2));
+        self.triangulate_into(&mut out, &mut Vec::new());
+        out
+    }
+
+    /// [`Self::triangulate`], appending the triangles to `out`; `stack` is
+    /// working memory (left empty).
+    fn triangulate_into(&self, out: &mut Vec<[u32; 3]>, stack: &mut Vec<Pending>) {
+        let n = self.original_len();
         if n < 3 {
-            return out;
+            return;
         }
         let inserted = |k: usize| self.inserted_on_edge(k % n);
         let apex = (0..n)
@@ -89,21 +96,19 @@ impl MeshPolygon {
             .unwrap_or(0);
         let corner = |k: usize| self.corners[self.originals[k % n] as usize];
         let none = 0..0;
-        let mut stack: Vec<Pending> = (1..n - 1)
-            .map(|j| Pending {
-                corners: [corner(apex), corner(apex + j), corner(apex + j + 1)],
-                sides: [
-                    if j == 1 { inserted(apex) } else { none.clone() },
-                    inserted(apex + j),
-                    if j == n - 2 {
-                        inserted(apex + n - 1)
-                    } else {
-                        none.clone()
-                    },
-                ],
-            })
-            .rev()
-            .collect();
+        stack.clear();
+        stack.extend((1..n - 1).rev().map(|j| Pending {
+            corners: [corner(apex), corner(apex + j), corner(apex + j + 1)],
+            sides: [
+                if j == 1 { inserted(apex) } else { none.clone() },
+                inserted(apex + j),
+                if j == n - 2 {
+                    inserted(apex + n - 1)
+                } else {
+                    none.clone()
+                },
+            ],
+        }));
         while let Some(t) = stack.pop() {
             let Some(j) = (0..3).find(|&j| !t.sides[j].is_empty()) else {
                 out.push(t.corners);
@@ -123,7 +128,6 @@ impl MeshPolygon {
                 sides: [side.start..middle, none.clone(), so],
             });
         }
-        out
     }
 
     /// The unit outward normal of the exact plane, in `f64`.
@@ -157,16 +161,32 @@ impl SurfaceMesh {
                 .collect(),
             ..TriangleMesh::default()
         };
+        // A polygon of m corners gives m − 2 triangles.
+        let triangles: usize = self
+            .polygons()
+            .iter()
+            .map(|p| p.corners.len().saturating_sub(2))
+            .sum();
+        mesh.indices.reserve_exact(triangles);
+        mesh.normals.reserve_exact(triangles);
+        mesh.labels.reserve_exact(triangles);
+        mesh.outside.reserve_exact(triangles);
+        mesh.on_bounds.reserve_exact(triangles);
+        mesh.polygons.reserve_exact(triangles);
+        let mut stack = Vec::new();
         for (f, polygon) in self.polygons().iter().enumerate() {
+            let start = mesh.indices.len();
+            polygon.triangulate_into(&mut mesh.indices, &mut stack);
+            let count = mesh.indices.len() - start;
             let normal = polygon.unit_normal().map(|c| c as f32);
-            for t in polygon.triangulate() {
-                mesh.indices.push(t);
-                mesh.normals.push(normal);
-                mesh.labels.push(polygon.label);
-                mesh.outside.push(polygon.outside);
-                mesh.on_bounds.push(polygon.on_bounds);
-                mesh.polygons.push(f as u32);
-            }
+            mesh.normals.extend(core::iter::repeat_n(normal, count));
+            mesh.labels
+                .extend(core::iter::repeat_n(polygon.label, count));
+            mesh.outside
+                .extend(core::iter::repeat_n(polygon.outside, count));
+            mesh.on_bounds
+                .extend(core::iter::repeat_n(polygon.on_bounds, count));
+            mesh.polygons.extend(core::iter::repeat_n(f as u32, count));
         }
         mesh
     }

@@ -13,8 +13,22 @@
 
 use core::fmt;
 use std::collections::{HashMap, HashSet};
+use std::hash::BuildHasherDefault;
 
 use super::SurfaceMesh;
+use crate::word_hash::WordHasher;
+
+/// Directed edge `(from, to)` packed into one word.
+#[inline]
+fn edge_key(from: u32, to: u32) -> u64 {
+    (u64::from(from) << 32) | u64::from(to)
+}
+
+/// How often each directed edge is used, by [`edge_key`].
+type EdgeUses = HashMap<u64, u32, BuildHasherDefault<WordHasher>>;
+
+/// A set of directed edges, by [`edge_key`].
+type EdgeSet = HashSet<u64, BuildHasherDefault<WordHasher>>;
 
 /// What is wrong with one directed edge.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,6 +112,16 @@ impl SurfaceMesh {
         })
     }
 
+    /// How often each directed edge is used.
+    fn edge_uses(&self) -> EdgeUses {
+        let edges: usize = self.polygons().iter().map(|p| p.corners.len()).sum();
+        let mut uses = EdgeUses::with_capacity_and_hasher(edges, BuildHasherDefault::default());
+        for (u, v) in self.directed_edges() {
+            *uses.entry(edge_key(u, v)).or_insert(0) += 1;
+        }
+        uses
+    }
+
     /// Checks that every directed edge is used exactly once and its
     /// opposite exactly once: the surface is a closed, oriented 2-manifold.
     /// Solids that touch themselves along an edge (two cubes sharing only
@@ -108,18 +132,15 @@ impl SurfaceMesh {
     /// [`WatertightError`] with the counts of offending edges and the first
     /// one found.
     pub fn check_watertight(&self) -> Result<(), WatertightError> {
-        let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-        for edge in self.directed_edges() {
-            *uses.entry(edge).or_insert(0) += 1;
-        }
+        let uses = self.edge_uses();
         let (mut open, mut repeated, mut opposite_repeated) = (0, 0, 0);
         let mut example = None;
-        let mut seen_repeated: HashSet<(u32, u32)> = HashSet::new();
+        let mut seen_repeated = EdgeSet::default();
         for (u, v) in self.directed_edges() {
-            let here = uses.get(&(u, v)).copied().unwrap_or(0);
-            let opposite = uses.get(&(v, u)).copied().unwrap_or(0);
+            let here = uses.get(&edge_key(u, v)).copied().unwrap_or(0);
+            let opposite = uses.get(&edge_key(v, u)).copied().unwrap_or(0);
             let problem = if here > 1 {
-                if !seen_repeated.insert((u, v)) {
+                if !seen_repeated.insert(edge_key(u, v)) {
                     continue;
                 }
                 repeated += 1;
@@ -163,17 +184,14 @@ impl SurfaceMesh {
     /// distinct directed edges used more often than their opposite (each
     /// reported as [`EdgeProblem::Open`]), and the first of them.
     pub fn check_closed(&self) -> Result<(), WatertightError> {
-        let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-        for edge in self.directed_edges() {
-            *uses.entry(edge).or_insert(0) += 1;
-        }
-        let mut seen: HashSet<(u32, u32)> = HashSet::new();
+        let uses = self.edge_uses();
+        let mut seen = EdgeSet::default();
         let mut open = 0;
         let mut example = None;
         for (u, v) in self.directed_edges() {
-            let here = uses.get(&(u, v)).copied().unwrap_or(0);
-            let opposite = uses.get(&(v, u)).copied().unwrap_or(0);
-            if here > opposite && seen.insert((u, v)) {
+            let here = uses.get(&edge_key(u, v)).copied().unwrap_or(0);
+            let opposite = uses.get(&edge_key(v, u)).copied().unwrap_or(0);
+            if here > opposite && seen.insert(edge_key(u, v)) {
                 open += 1;
                 example.get_or_insert(BadEdge {
                     from: u,

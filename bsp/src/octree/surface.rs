@@ -25,7 +25,7 @@ use super::tree::{Leaf, OctNode, Octree};
 use crate::convex::with_arena;
 use crate::exact::Plane;
 use crate::tree::polygon::Polygon;
-use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
+use crate::tree::{BoundaryFace, Bsp, EMPTY, Label, NodeId};
 
 impl Octree {
     /// The surface pieces of leaf cell `key` (empty when `key` is not a
@@ -40,7 +40,15 @@ impl Octree {
         if matches!(leaf, Leaf::Uniform(EMPTY)) {
             return Vec::new();
         }
-        let bsp: Bsp = leaf.to_bsp();
+        // The leaf's own BSP, borrowed (a uniform leaf's is one node).
+        let uniform;
+        let bsp: &Bsp = match leaf {
+            Leaf::Bsp(bsp) => bsp,
+            Leaf::Uniform(label) => {
+                uniform = Bsp::uniform(*label);
+                &uniform
+            }
+        };
         let cell = self.cell_box(key);
         let faces = with_arena(|arena| match cell.add_to(arena) {
             Ok(bounds) => bsp.boundary(arena, bounds),
@@ -67,10 +75,11 @@ impl Octree {
     /// clipped against the regions across and the others kept.
     fn resolve_borders(&self, faces: Vec<BoundaryFace>, cell: &CellBox) -> Vec<BoundaryFace> {
         let mut out = Vec::with_capacity(faces.len());
+        let mut scratch = Descent::default();
         for face in faces {
             if face.on_bounds {
                 let label = face.label;
-                self.clip_across(face.into_polygon(), label, cell, &mut out);
+                self.clip_across(face.into_polygon(), label, cell, &mut scratch, &mut out);
             } else {
                 out.push(face);
             }
@@ -98,11 +107,12 @@ impl Octree {
     /// earlier splits): elsewhere the split would return the piece whole,
     /// to the same side, so the pieces and their order are those of
     /// splitting at every axis plane.
-    fn clip_across(
-        &self,
+    fn clip_across<'a>(
+        &'a self,
         polygon: Polygon,
         label: Label,
         from: &CellBox,
+        scratch: &mut Descent<'a>,
         out: &mut Vec<BoundaryFace>,
     ) {
         let mut emit = |piece: Polygon, other: Label| {
@@ -116,14 +126,29 @@ impl Octree {
             return;
         }
         let facing = Facing::of(&polygon.support, from);
-        let mut stack: Vec<(&OctNode, CellBox, Polygon, CellBox)> =
-            vec![(&self.root, root, polygon, *from)];
-        // The pieces of one inner cell, axis by axis (reused).
-        let (mut pieces, mut next) = (Vec::new(), Vec::new());
-        while let Some((node, cell, polygon, range)) = stack.pop() {
+        let Descent {
+            stack,
+            pieces,
+            next,
+            clip,
+        } = scratch;
+        stack.push((&self.root, root, polygon, *from));
+        while let Some((mut node, mut cell, polygon, range)) = stack.pop() {
+            // Down through the inner cells that no axis plane cuts the piece
+            // in (most of the way from the root): the piece goes on whole,
+            // as the split below would hand it on.
+            while let OctNode::Inner(children) = node {
+                let Some(i) = facing.child_holding(&cell, &range) else {
+                    break;
+                };
+                node = &children[i];
+                cell = cell.child(i);
+            }
             match node {
                 OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
-                OctNode::Leaf(Leaf::Bsp(bsp)) => bsp.clip_polygon(0, polygon, label, &mut emit),
+                OctNode::Leaf(Leaf::Bsp(bsp)) => {
+                    bsp.clip_polygon(0, polygon, label, clip, &mut emit);
+                }
                 OctNode::Inner(children) => {
                     let mid = cell.mid();
                     pieces.push((polygon, range, 0usize));
@@ -142,7 +167,7 @@ impl Octree {
                                 }
                             }
                         }
-                        std::mem::swap(&mut pieces, &mut next);
+                        std::mem::swap(pieces, next);
                     }
                     for (piece, range, i) in pieces.drain(..) {
                         stack.push((&children[i], cell.child(i), piece, range));
@@ -150,6 +175,29 @@ impl Octree {
                 }
             }
         }
+    }
+}
+
+/// Working memory of [`Octree::clip_across`], reused across the border
+/// faces of a cell: the cells still to visit with their piece and the box
+/// range known to hold it, the pieces of one inner cell, axis by axis, and
+/// the pieces still to clip in a neighbour's BSP.
+#[derive(Default)]
+struct Descent<'a> {
+    stack: Vec<(&'a OctNode, CellBox, Polygon, CellBox)>,
+    pieces: Vec<(Polygon, CellBox, usize)>,
+    next: Vec<(Polygon, CellBox, usize)>,
+    clip: Vec<(NodeId, Polygon)>,
+}
+
+/// The one axis a normal `n` has a non-zero component on, if only one.
+#[inline]
+fn single_axis(n: [i64; 3]) -> Option<usize> {
+    match (n[0] != 0, n[1] != 0, n[2] != 0) {
+        (true, false, false) => Some(0),
+        (false, true, false) => Some(1),
+        (false, false, true) => Some(2),
+        _ => None,
     }
 }
 
@@ -170,8 +218,7 @@ impl Facing {
     /// The facing of a face with support `plane` lying on the box `from`.
     fn of(plane: &Plane, from: &CellBox) -> Self {
         let n = plane.normal();
-        let axes: Vec<usize> = (0..3).filter(|&a| n[a] != 0).collect();
-        let [axis] = axes[..] else {
+        let Some(axis) = single_axis(n) else {
             return Self(None);
         };
         let positive = n[axis] > 0;
@@ -183,6 +230,21 @@ impl Facing {
         };
         let on_box = i128::from(n[axis]) * i128::from(at) + plane.offset() == 0;
         Self(on_box.then_some((axis, positive)))
+    }
+
+    /// The child of the inner cell `cell` that a piece of the face within
+    /// `range` goes to whole, or `None` when an axis plane of the cell may
+    /// cut it.
+    #[inline]
+    fn child_holding(self, cell: &CellBox, range: &CellBox) -> Option<usize> {
+        let mid = cell.mid();
+        let mut i = 0;
+        for (axis, &m) in mid.iter().enumerate() {
+            if self.side(axis, m, range)? {
+                i |= 1 << axis;
+            }
+        }
+        Some(i)
     }
 
     /// The side of the plane `x_axis = m` (`true` above) that a piece of
@@ -209,15 +271,15 @@ impl Facing {
 /// Whether a plane is one of the faces of `cube`, oriented outward.
 fn faces_out_of(plane: &Plane, cube: &CellBox) -> bool {
     let n = plane.normal();
-    let axes: Vec<usize> = (0..3).filter(|&a| n[a] != 0).collect();
-    let [axis] = axes[..] else {
+    let Some(axis) = single_axis(n) else {
         return false;
     };
-    // n_a·x + d = 0  ⇔  x = −d / n_a.
-    let (na, d) = (i128::from(n[axis]), plane.offset());
-    if d % na != 0 {
-        return false;
-    }
-    let at = -d / na;
-    (na > 0 && at == i128::from(cube.max[axis])) || (na < 0 && at == i128::from(cube.min[axis]))
+    // n_a·x + d = 0 is the side x = c exactly when n_a·c + d = 0.
+    let na = n[axis];
+    let side = if na > 0 {
+        cube.max[axis]
+    } else {
+        cube.min[axis]
+    };
+    i128::from(na) * i128::from(side) + plane.offset() == 0
 }

@@ -19,7 +19,7 @@
 
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
-use super::polygon::{Polygon, faces_along, side_of, spare_buffers};
+use super::polygon::{Polygon, Sides, faces_along, side_of, spare_buffers};
 use crate::convex::{ConvexArena, NO_TAG, PolyId};
 use crate::exact::{Plane, Point4, Sign};
 
@@ -213,15 +213,17 @@ impl Bsp {
     /// calling `emit(piece, leaf label)` for each piece that reaches a leaf
     /// with a label smaller than `kept_below` (the other pieces are not
     /// built). A piece lying in a node's plane goes to the side its outward
-    /// normal points to (the region in front of it).
+    /// normal points to (the region in front of it). `stack` is working
+    /// memory (left empty), reused by callers that clip many polygons.
     pub(crate) fn clip_polygon(
         &self,
         n: NodeId,
         polygon: Polygon,
         kept_below: Label,
+        stack: &mut Vec<(NodeId, Polygon)>,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        self.clip_pieces(n, polygon, &mut Vec::new(), Some(kept_below), emit);
+        self.clip_pieces(n, polygon, stack, Some(kept_below), emit);
     }
 
     /// Which sides (below, above) of a split with these children can keep
@@ -245,25 +247,40 @@ impl Bsp {
         kept_below: Option<Label>,
         emit: &mut impl FnMut(Polygon, Label),
     ) {
-        let mut current = Some((n, polygon));
-        while let Some((n, polygon)) = current.take().or_else(|| stack.pop()) {
-            match self.nodes()[n as usize] {
-                Node::Leaf(other) => emit(polygon, other),
-                Node::Split {
-                    plane,
-                    below,
-                    above,
-                } => {
-                    let wanted = kept_below.map_or([true; 2], |l| self.wanted(l, below, above));
-                    current = match polygon.split_wanted(&self.planes()[plane as usize], wanted) {
-                        (Some(b), Some(a)) => {
-                            stack.push((above, a));
-                            Some((below, b))
-                        }
-                        (Some(b), None) => Some((below, b)),
-                        (None, Some(a)) => Some((above, a)),
-                        (None, None) => None,
-                    };
+        let mut room = Sides::default();
+        let mut first = Some((n, polygon));
+        while let Some((mut n, mut polygon)) = first.take().or_else(|| stack.pop()) {
+            // Down the tree with one piece, in place while it is not split.
+            loop {
+                let (plane, below, above) = match self.nodes()[n as usize] {
+                    Node::Leaf(other) => {
+                        emit(polygon, other);
+                        break;
+                    }
+                    Node::Split {
+                        plane,
+                        below,
+                        above,
+                    } => (plane, below, above),
+                };
+                let p = &self.planes()[plane as usize];
+                let wanted = kept_below.map_or([true; 2], |l| self.wanted(l, below, above));
+                let sides = room.for_corners(polygon.vertices().len());
+                match polygon.whole_side(p, sides) {
+                    Some(false) if wanted[0] => n = below,
+                    Some(true) if wanted[1] => n = above,
+                    Some(_) => break,
+                    None => {
+                        (n, polygon) = match polygon.split_known(sides, p, wanted) {
+                            (Some(b), Some(a)) => {
+                                stack.push((above, a));
+                                (below, b)
+                            }
+                            (Some(b), None) => (below, b),
+                            (None, Some(a)) => (above, a),
+                            (None, None) => break,
+                        };
+                    }
                 }
             }
         }

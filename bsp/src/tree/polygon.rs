@@ -171,36 +171,47 @@ impl Polygon {
     /// [`Self::split`], building only the parts `wanted` (below, above):
     /// a part not wanted is `None`, a part wanted is the one `split` gives.
     pub(crate) fn split_wanted(self, p: &Plane, wanted: [bool; 2]) -> (Option<Self>, Option<Self>) {
-        let n = self.corners.len();
-        let (mut stack, mut heap) = ([Sign::Zero; SMALL], Vec::new());
-        let sides: &mut [Sign] = if n <= SMALL {
-            &mut stack[..n]
-        } else {
-            heap.resize(n, Sign::Zero);
-            &mut heap
-        };
-        let (below, above) = classify_corners(&self.corners, p, sides);
-        let sides = &*sides;
+        let mut sides = Sides::default();
+        let sides = sides.for_corners(self.corners.len());
         let [want_below, want_above] = wanted;
-        match (below, above) {
-            (true, true) => match (want_below, want_above) {
-                (true, true) => {
-                    let (b, a) = self.split_straddling(sides, p);
-                    (Some(b), Some(a))
-                }
-                (true, false) => (Some(self.one_part(sides, p, Sign::Negative)), None),
-                (false, true) => (None, Some(self.one_part(sides, p, Sign::Positive))),
-                (false, false) => (None, None),
-            },
-            (true, false) => (want_below.then_some(self), None),
-            (false, true) => (None, want_above.then_some(self)),
-            (false, false) => {
-                if faces_along(&self.support, p) {
-                    (None, want_above.then_some(self))
-                } else {
-                    (want_below.then_some(self), None)
-                }
+        match self.whole_side(p, sides) {
+            Some(false) => (want_below.then_some(self), None),
+            Some(true) => (None, want_above.then_some(self)),
+            None => self.split_known(sides, p, wanted),
+        }
+    }
+
+    /// The side of `p` the polygon lies on whole (`false` below, `true`
+    /// above; a polygon lying in `p` goes to the side it faces, as in
+    /// [`Self::split`]), or `None` when it has corners on both sides; the
+    /// sides of the corners are written to `sides` (one per corner).
+    #[inline]
+    pub(crate) fn whole_side(&self, p: &Plane, sides: &mut [Sign]) -> Option<bool> {
+        match classify_corners(&self.corners, p, sides) {
+            (true, true) => None,
+            (true, false) => Some(false),
+            (false, true) => Some(true),
+            (false, false) => Some(faces_along(&self.support, p)),
+        }
+    }
+
+    /// The parts `wanted` (below, above) of a polygon with corners on both
+    /// sides of `p` (`sides` as [`Self::whole_side`] wrote them): those
+    /// [`Self::split_wanted`] gives.
+    pub(crate) fn split_known(
+        self,
+        sides: &[Sign],
+        p: &Plane,
+        wanted: [bool; 2],
+    ) -> (Option<Self>, Option<Self>) {
+        match wanted {
+            [true, true] => {
+                let (b, a) = self.split_straddling(sides, p);
+                (Some(b), Some(a))
             }
+            [true, false] => (Some(self.one_part(sides, p, Sign::Negative)), None),
+            [false, true] => (None, Some(self.one_part(sides, p, Sign::Positive))),
+            [false, false] => (None, None),
         }
     }
 
@@ -365,6 +376,35 @@ impl Polygon {
     }
 }
 
+/// Room for the sides of a polygon's corners: on the stack for the usual
+/// small polygon.
+pub(crate) struct Sides {
+    small: [Sign; SMALL],
+    large: Vec<Sign>,
+}
+
+impl Default for Sides {
+    fn default() -> Self {
+        Self {
+            small: [Sign::Zero; SMALL],
+            large: Vec::new(),
+        }
+    }
+}
+
+impl Sides {
+    /// Room for the sides of `n` corners.
+    #[inline]
+    pub(crate) fn for_corners(&mut self, n: usize) -> &mut [Sign] {
+        if n <= SMALL {
+            &mut self.small[..n]
+        } else {
+            self.large.resize(n, Sign::Zero);
+            &mut self.large
+        }
+    }
+}
+
 /// The other part of a split, already built: its layout and corners.
 type Other<'a> = (&'a [u32], &'a [Point4]);
 
@@ -455,7 +495,7 @@ thread_local! {
 }
 
 /// Spare buffers of each kind kept per thread.
-const MAX_SPARE: usize = 256;
+const MAX_SPARE: usize = 1024;
 
 /// Hands `edges` and `corners` (either may be empty) to the spare buffers
 /// of this thread. When the pool is full, or the thread is ending, the
@@ -471,6 +511,25 @@ pub(crate) fn give_back_buffers(mut edges: Vec<Plane>, mut corners: Vec<Point4>)
             if corners.capacity() != 0 && spare.corners.len() < MAX_SPARE {
                 corners.clear();
                 spare.corners.push(corners);
+            }
+        }
+    });
+}
+
+/// Hands the edge buffers `buffers` yields to the spare buffers of this
+/// thread while there is room, and stops asking for more when the pool is
+/// full (what is left is the caller's to free).
+pub(crate) fn give_back_edge_buffers(buffers: impl Iterator<Item = Vec<Plane>>) {
+    let _ = SPARE.try_with(|spare| {
+        if let Ok(mut spare) = spare.try_borrow_mut() {
+            for mut edges in buffers {
+                if spare.edges.len() >= MAX_SPARE {
+                    break;
+                }
+                if edges.capacity() != 0 {
+                    edges.clear();
+                    spare.edges.push(edges);
+                }
             }
         }
     });
@@ -501,6 +560,17 @@ pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
             .filter(|c| c.capacity() >= m)
             .unwrap_or_else(|| Vec::with_capacity(capacity)),
     )
+}
+
+/// An empty edge buffer with room for `m` planes: a spare one when it is
+/// large enough, else a new one.
+pub(crate) fn spare_edge_buffer(m: usize) -> Vec<Plane> {
+    SPARE
+        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.edges.pop()))
+        .ok()
+        .flatten()
+        .filter(|e| e.capacity() >= m)
+        .unwrap_or_else(|| Vec::with_capacity(m.max(MIN_CAPACITY)))
 }
 
 /// Marks the closing plane in a part's layout.
