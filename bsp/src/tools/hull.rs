@@ -12,11 +12,13 @@
 //! strictly convex polyhedron of a [`ConvexArena`].
 
 use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 
 use crate::Error;
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::orient::{cross, orient, sub};
 use crate::exact::{IntPoint, Plane, Point4, plane_from_points};
+use crate::word_hash::WordHasher;
 
 /// Adds the convex hull of `points` to `arena` as a strictly convex
 /// polyhedron and returns it. Duplicate and interior points are ignored.
@@ -138,7 +140,8 @@ fn build_polyhedron(arena: &mut ConvexArena, pts: &[[i64; 3]], faces: &[[usize; 
     // Group triangles by their (canonical) plane; the boundary of a group is
     // its directed edges whose reverse lies in another group.
     let mut groups: Vec<(Plane, Vec<[usize; 3]>)> = Vec::new();
-    let mut group_of_plane: HashMap<Plane, usize> = HashMap::new();
+    let mut group_of_plane: HashMap<Plane, usize, BuildHasherDefault<WordHasher>> =
+        HashMap::with_capacity_and_hasher(faces.len(), BuildHasherDefault::default());
     for f in faces {
         let plane = plane_of(f);
         let g = *group_of_plane.entry(plane).or_insert_with(|| {
@@ -148,7 +151,8 @@ fn build_polyhedron(arena: &mut ConvexArena, pts: &[[i64; 3]], faces: &[[usize; 
         groups[g].1.push(*f);
     }
     let mut used: Vec<usize> = Vec::new();
-    let mut index_of: HashMap<usize, u32> = HashMap::new();
+    let mut index_of: HashMap<usize, u32, BuildHasherDefault<WordHasher>> =
+        HashMap::with_capacity_and_hasher(pts.len(), BuildHasherDefault::default());
     let mut polygons: Vec<(Plane, Vec<u32>)> = Vec::new();
     let (mut edges, mut boundary) = (Vec::new(), Vec::new());
     for (plane, tris) in &groups {
