@@ -13,9 +13,9 @@ pub const PER_STEP: &str = "tool hull + apply (keeping the rebuilt cells' faces)
 /// Re-extracts the triangles of every cell in `keys` (cells in parallel),
 /// as a game rebuilds the meshes of the cells an edit changed; `faces` are
 /// the faces [`Octree::apply_with_faces`] handed back (sorted by key): a
-/// cell listed there finishes from them, the others (cells that only touch
-/// the tool, new children of a split) are extracted afresh. Returns the
-/// number of triangles.
+/// cell listed there finishes from them, the others (cells whose content
+/// did not change but which the tool touches, leaves combined from uniform
+/// children) are extracted afresh. Returns the number of triangles.
 #[must_use]
 pub fn changed_cells(octree: &Octree, keys: &[CellKey], faces: CellFaces) -> usize {
     let mut faces = faces.into_iter().peekable();
