@@ -273,3 +273,57 @@ fn random_cuts(seed: u64, steps: usize) -> (ConvexArena, Vec<PolyId>) {
         (arena, parts)
     }
 }
+
+/// A box's corners are exactly the points where the planes of its three
+/// sides meet (`intersect_3_planes`), and the box is a valid polyhedron,
+/// for random boxes up to the coordinate budget.
+#[test]
+fn box_corners_are_the_exact_meets_of_its_side_planes() {
+    use chisel_bsp::exact::budget::MAX_COORD;
+    use chisel_bsp::exact::intersect_3_planes;
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    for case in 0..200 {
+        let limit = if case % 2 == 0 { MAX_COORD } else { 1000 };
+        let (mut lo, mut hi) = ([0i64; 3], [0i64; 3]);
+        for a in 0..3 {
+            let (u, w) = (
+                rng.random_range(-limit..=limit),
+                rng.random_range(-limit..=limit),
+            );
+            (lo[a], hi[a]) = (u.min(w), u.max(w));
+            if lo[a] == hi[a] {
+                lo[a] -= 1;
+            }
+        }
+        let mut arena = ConvexArena::new();
+        let poly = arena
+            .add_box(p(lo[0], lo[1], lo[2]), p(hi[0], hi[1], hi[2]))
+            .unwrap();
+        arena.validate(poly).unwrap();
+        let side = |axis: usize, upper: bool| {
+            let mut n = [0i64; 3];
+            n[axis] = if upper { 1 } else { -1 };
+            let d = if upper { -hi[axis] } else { lo[axis] };
+            Plane::new(n[0], n[1], n[2], i128::from(d)).unwrap()
+        };
+        let vertices = arena.vertices_of(poly);
+        assert_eq!(vertices.len(), 8);
+        for v in vertices {
+            let at = arena.position(v);
+            let upper = [0, 1, 2].map(|a| at[a] == hi[a] as f64);
+            let expected =
+                intersect_3_planes(&side(0, upper[0]), &side(1, upper[1]), &side(2, upper[2]))
+                    .unwrap();
+            let got = arena.point(v);
+            assert_eq!(
+                (got.xyz(), got.w(), got.approx().map(f64::to_bits)),
+                (
+                    expected.xyz(),
+                    expected.w(),
+                    expected.approx().map(f64::to_bits)
+                ),
+                "case {case}: {lo:?} {hi:?}"
+            );
+        }
+    }
+}

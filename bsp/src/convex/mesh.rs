@@ -18,7 +18,7 @@ use std::collections::{HashMap, HashSet};
 use super::pool;
 use super::scratch::Scratch;
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes};
+use crate::exact::{IntPoint, Plane, Point4};
 
 /// Tag of a face with no opposite BSP node.
 pub const NO_TAG: u32 = u32::MAX;
@@ -267,26 +267,37 @@ impl ConvexArena {
             return Err(Error::DegenerateBox { min: lo, max: hi });
         }
         // Outward planes: −x, +x, −y, +y, −z, +z.
-        let mut planes = Vec::with_capacity(6);
-        for axis in 0..3 {
+        let side = |axis: usize, upper: bool| {
             let mut n = [0i64; 3];
-            n[axis] = -1;
-            planes.push(Plane::new(n[0], n[1], n[2], lo[axis] as i128)?);
-            n[axis] = 1;
-            planes.push(Plane::new(n[0], n[1], n[2], -(hi[axis] as i128))?);
-        }
-        // Vertex i has x from bit 0, y from bit 1, z from bit 2; each face
-        // lists its corners counter-clockwise seen from outside.
-        let corner = |i: usize| -> Point4 {
-            let (px, py, pz) = (
-                &planes[i & 1],
-                &planes[2 + (i >> 1 & 1)],
-                &planes[4 + (i >> 2)],
-            );
-            intersect_3_planes(px, py, pz).expect("axis planes are independent")
+            n[axis] = if upper { 1 } else { -1 };
+            let d = if upper { -hi[axis] } else { lo[axis] };
+            Plane::new(n[0], n[1], n[2], i128::from(d))
         };
-        let points: Vec<Point4> = (0..8).map(corner).collect();
-        let faces: [(usize, [u32; 4]); 6] = [
+        let planes = [
+            side(0, false)?,
+            side(0, true)?,
+            side(1, false)?,
+            side(1, true)?,
+            side(2, false)?,
+            side(2, true)?,
+        ];
+        // Vertex i has x from bit 0, y from bit 1, z from bit 2: the point
+        // where the planes of its three sides meet, (x, y, z, 1) exactly as
+        // `intersect_3_planes` gives it for unit normals.
+        let v0 = self.vertices.len() as u32;
+        let h0 = self.half_edges.len() as u32;
+        for i in 0..8 {
+            let pick = |axis: usize| {
+                if i >> axis & 1 == 0 {
+                    lo[axis]
+                } else {
+                    hi[axis]
+                }
+            };
+            self.push_vertex(Point4::from_small(pick(0), pick(1), pick(2), 1), u32::MAX);
+        }
+        // Each face lists its corners counter-clockwise seen from outside.
+        const FACES: [(usize, [u32; 4]); 6] = [
             (0, [0, 4, 6, 2]),
             (1, [1, 3, 7, 5]),
             (2, [0, 1, 5, 4]),
@@ -294,11 +305,11 @@ impl ConvexArena {
             (4, [0, 2, 3, 1]),
             (5, [4, 5, 7, 6]),
         ];
-        let faces: Vec<(Plane, Vec<u32>)> = faces
-            .iter()
-            .map(|&(p, corners)| (planes[p], corners.to_vec()))
-            .collect();
-        Ok(self.add_polyhedron(&points, &faces))
+        for (p, corners) in FACES {
+            self.push_face(v0, planes[p], &corners);
+        }
+        self.link_twins(h0);
+        Ok(PolyId(h0))
     }
 
     /// Adds a closed polyhedron given its vertices and, per face, its plane
@@ -314,36 +325,51 @@ impl ConvexArena {
         for &point in points {
             self.push_vertex(point, u32::MAX);
         }
-        let mut by_ends: HashMap<(u32, u32), u32> = HashMap::new();
         for (plane, corners) in faces {
-            let face = self.faces.len() as u32;
-            let first = self.half_edges.len() as u32;
-            let n = corners.len() as u32;
-            for (k, &c) in corners.iter().enumerate() {
-                let h = first + k as u32;
-                let to = corners[(k + 1) % corners.len()];
-                self.half_edges.push(HalfEdge {
-                    origin: v0 + c,
-                    twin: u32::MAX,
-                    next: first + (k as u32 + 1) % n,
-                    face,
-                });
-                self.vertices[(v0 + c) as usize].half_edge = h;
-                by_ends.insert((c, to), h);
-            }
-            let plane = self.push_plane(*plane);
-            self.faces.push(Face {
-                plane,
-                half_edge: first,
-                tag: NO_TAG,
-            });
+            self.push_face(v0, *plane, corners);
         }
-        for (&(a, b), &h) in &by_ends {
-            if let Some(&t) = by_ends.get(&(b, a)) {
-                self.half_edges[h as usize].twin = t;
-            }
-        }
+        self.link_twins(h0);
         PolyId(h0)
+    }
+
+    /// Adds a face on `plane` whose corners are the vertices `v0 + c` for
+    /// `c` in `corners` (counter-clockwise seen from outside), its
+    /// half-edges not yet paired.
+    fn push_face(&mut self, v0: u32, plane: Plane, corners: &[u32]) {
+        let face = self.faces.len() as u32;
+        let first = self.half_edges.len() as u32;
+        let n = corners.len() as u32;
+        for (k, &c) in (0u32..).zip(corners) {
+            self.half_edges.push(HalfEdge {
+                origin: v0 + c,
+                twin: u32::MAX,
+                next: first + (k + 1) % n,
+                face,
+            });
+            self.vertices[(v0 + c) as usize].half_edge = first + k;
+        }
+        let plane = self.push_plane(plane);
+        self.faces.push(Face {
+            plane,
+            half_edge: first,
+            tag: NO_TAG,
+        });
+    }
+
+    /// Pairs every half-edge from `h0` on with its opposite, the half-edge
+    /// between the same vertices the other way (by sorted end pairs).
+    fn link_twins(&mut self, h0: u32) {
+        let edges = &self.half_edges[h0 as usize..];
+        let mut ends: Vec<(u32, u32, u32)> = (h0..)
+            .zip(edges)
+            .map(|(h, e)| (e.origin, edges[(e.next - h0) as usize].origin, h))
+            .collect();
+        ends.sort_unstable();
+        for &(a, b, h) in &ends {
+            if let Ok(j) = ends.binary_search_by(|&(u, w, _)| (u, w).cmp(&(b, a))) {
+                self.half_edges[h as usize].twin = ends[j].2;
+            }
+        }
     }
 
     /// A new arena holding only polyhedron `poly`, compactly renumbered
