@@ -25,10 +25,7 @@
 use super::mesh::{ConvexArena, PolyId};
 use super::scratch::Scratch;
 use super::survey::FaceSurvey;
-use crate::exact::{
-    FilteredDot, Plane, Sign, classify_vertex, classify_vertex_exact, compare_offsets,
-    offset_estimate,
-};
+use crate::exact::{FilteredDot, Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
 
 /// The result of cutting a polyhedron `P` by a plane `s`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -278,8 +275,8 @@ impl ConvexArena {
         let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
         loop {
             // The best certified step, and an exactly certified one.
-            let mut best: Option<(u32, f64, (f64, f64))> = None;
-            let mut uncertain: Option<(u32, (f64, f64))> = None;
+            let mut best: Option<(u32, f64, (f64, f64), Sign)> = None;
+            let mut uncertain: Option<(u32, (f64, f64), Sign)> = None;
             for (h, n) in self.neighbours(cur) {
                 if n == prev {
                     // The vertex the walk came from: not on side `target`
@@ -289,35 +286,40 @@ impl ConvexArena {
                     continue;
                 }
                 let point = self.point(n);
-                // One f64 evaluation gives both the side and the offset.
+                // One f64 evaluation gives both the side and the offset;
+                // the side is recorded only for the vertices the walk
+                // stops at (the march classifies the others it needs).
                 let dot = FilteredDot::new(point, s);
-                let side = scratch.sides.get(n).unwrap_or_else(|| {
-                    let side = dot
-                        .sign()
-                        .unwrap_or_else(|| classify_vertex_exact(point, s));
-                    scratch.sides.insert(n, side);
-                    side
-                });
+                let side = match dot.sign() {
+                    Some(side) => side,
+                    None => self.side(n, s, scratch),
+                };
                 if side == target {
+                    scratch.sides.insert(n, side);
                     return Some(h);
                 }
                 let (value, error) = dot.offset(point);
                 let gain = toward(value) - toward(cur_value);
                 if gain > error + cur_error {
-                    if best.is_none_or(|(_, g, _)| gain > g) {
-                        best = Some((n, gain, (value, error)));
+                    if best.is_none_or(|(_, g, _, _)| gain > g) {
+                        best = Some((n, gain, (value, error), side));
                     }
                 } else if gain >= -(error + cur_error)
                     && uncertain.is_none()
                     && compare_offsets(point, self.point(cur), s) == wanted
                 {
                     // Too close to call in f64: exactly closer.
-                    uncertain = Some((n, (value, error)));
+                    uncertain = Some((n, (value, error), side));
                 }
             }
             prev = cur;
-            (cur, (cur_value, cur_error)) =
-                best.map(|(n, _, estimate)| (n, estimate)).or(uncertain)?;
+            let side;
+            (cur, (cur_value, cur_error), side) = best
+                .map(|(n, _, estimate, side)| (n, estimate, side))
+                .or(uncertain)?;
+            // The half-edge the walk returns leaves `cur`: the march needs
+            // its side.
+            scratch.sides.insert(cur, side);
         }
     }
 
@@ -359,35 +361,41 @@ impl ConvexArena {
             // its vertices on s.
             on_plane.clear();
             let first = self.faces[f as usize].half_edge;
-            let first_side = self.side(self.half_edges[first as usize].origin, s, scratch);
+            let mut e = self.half_edges[first as usize];
+            let first_side = self.side(e.origin, s, scratch);
             let mut survey = FaceSurvey::new();
-            let (mut h, mut here) = (first, first_side);
+            let (mut h, mut before, mut here) = (first, u32::MAX, first_side);
             loop {
-                let e = self.half_edges[h as usize];
+                // Each half-edge is read once: the next one is carried on.
+                let next = self.half_edges[e.next as usize];
                 let there = if e.next == first {
                     first_side
                 } else {
-                    self.side(self.half_edges[e.next as usize].origin, s, scratch)
+                    self.side(next.origin, s, scratch)
                 };
-                survey.step(h, here, there);
-                if here.as_i32() * there.as_i32() < 0 || (here == Sign::Zero && there == Sign::Zero)
-                {
-                    // A crossing edge or an edge in s: f meets the section,
-                    // so the march goes on across it.
-                    let g = self.half_edges[e.twin as usize].face;
-                    if scratch.faces.insert(g, true) {
-                        queue.push(g);
+                // Runs along one side (most half-edges) need nothing more.
+                if here != there || here == Sign::Zero {
+                    survey.step(h, before, here, there);
+                    if here.as_i32() * there.as_i32() < 0
+                        || (here == Sign::Zero && there == Sign::Zero)
+                    {
+                        // A crossing edge or an edge in s: f meets the
+                        // section, so the march goes on across it.
+                        let g = self.half_edges[e.twin as usize].face;
+                        if scratch.faces.insert(g, true) {
+                            queue.push(g);
+                        }
                     }
-                }
-                if here == Sign::Zero {
-                    on_plane.push(e.origin);
+                    if here == Sign::Zero {
+                        on_plane.push(e.origin);
+                    }
                 }
                 if e.next == first {
                     break;
                 }
-                (h, here) = (e.next, there);
+                (before, h, e, here) = (h, e.next, next, there);
             }
-            let Some(info) = survey.finish() else {
+            let Some(info) = survey.finish(h) else {
                 continue;
             };
             relevant.push((f, info));

@@ -106,7 +106,7 @@ impl ConvexArena {
         let first = self.faces[f as usize].half_edge;
         let first_side = side(first);
         let mut survey = FaceSurvey::new();
-        let (mut h, mut here) = (first, first_side);
+        let (mut h, mut before, mut here) = (first, u32::MAX, first_side);
         loop {
             let next = self.half_edges[h as usize].next;
             let there = if next == first {
@@ -114,13 +114,15 @@ impl ConvexArena {
             } else {
                 side(next)
             };
-            survey.step(h, here, there);
+            if here != there || here == Sign::Zero {
+                survey.step(h, before, here, there);
+            }
             if next == first {
                 break;
             }
-            (h, here) = (next, there);
+            (before, h, here) = (h, next, there);
         }
-        survey.finish()
+        survey.finish(h)
     }
 
     /// Splits the edge of half-edge `h` at its intersection with `s`;

@@ -36,8 +36,11 @@ pub(crate) enum FaceInfo {
     },
 }
 
-/// The state of one walk around a face: feed every half-edge in loop order
-/// to [`FaceSurvey::step`], then call [`FaceSurvey::finish`].
+/// The state of one walk around a face: feed in loop order every half-edge
+/// that does not run along one side of the plane (`here ≠ there`, or
+/// `here = 0`) to [`FaceSurvey::step`], then call [`FaceSurvey::finish`].
+/// A half-edge from `+` to `+` or `−` to `−` tells nothing: every run of
+/// one side ends in a half-edge that leaves it, which records the side.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FaceSurvey {
     plus: bool,
@@ -53,8 +56,6 @@ pub(crate) struct FaceSurvey {
     enter: [u32; 2],
     events: u32,
     first_chain: Sign,
-    /// The half-edge walked before the current one, or `u32::MAX`.
-    prev: u32,
 }
 
 impl FaceSurvey {
@@ -69,14 +70,15 @@ impl FaceSurvey {
             enter: [u32::MAX; 2],
             events: 0,
             first_chain: Sign::Zero,
-            prev: u32::MAX,
         }
     }
 
     /// Records half-edge `h`, from a vertex on side `here` to one on side
-    /// `there`.
+    /// `there` (not both `+` nor both `−`); `before` is the half-edge of
+    /// the loop just before `h`, or `u32::MAX` when `h` is the first.
     #[inline]
-    pub(crate) fn step(&mut self, h: u32, here: Sign, there: Sign) {
+    pub(crate) fn step(&mut self, h: u32, before: u32, here: Sign, there: Sign) {
+        debug_assert!(here != there || here == Sign::Zero);
         self.plus |= here == Sign::Positive;
         self.minus |= here == Sign::Negative;
         if here == Sign::Positive && there == Sign::Negative {
@@ -86,7 +88,7 @@ impl FaceSurvey {
             self.in_plane = h;
         }
         let entered = if here == Sign::Zero {
-            Some(self.prev)
+            Some(before)
         } else if here.as_i32() * there.as_i32() < 0 {
             Some(h)
         } else {
@@ -101,19 +103,18 @@ impl FaceSurvey {
             }
             self.events += 1;
         }
-        self.prev = h;
     }
 
-    /// What the split needs to know about the face, once every half-edge
-    /// has been recorded; `None` when it does not meet the section.
+    /// What the split needs to know about the face, once the walk has
+    /// ended at half-edge `last`; `None` when it does not meet the section.
     #[inline]
-    pub(crate) fn finish(self) -> Option<FaceInfo> {
+    pub(crate) fn finish(self, last: u32) -> Option<FaceInfo> {
         if self.plus && self.minus {
             debug_assert_eq!(self.events, 2, "a convex face meets a plane twice");
             let mut enter = self.enter;
             if enter[0] == u32::MAX {
                 // The walk started at a `0` vertex: it is entered last.
-                enter[0] = self.prev;
+                enter[0] = last;
             }
             Some(FaceInfo::Straddling {
                 enter,
