@@ -24,7 +24,7 @@
 
 use super::mesh::{ConvexArena, PolyId};
 use super::scratch::Scratch;
-use super::survey::FaceSurvey;
+use super::survey::{FaceInfo, FaceSurvey};
 use crate::exact::{FilteredDot, Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
 
 /// The result of cutting a polyhedron `P` by a plane `s`.
@@ -273,6 +273,9 @@ impl ConvexArena {
         };
         let (mut cur, mut prev) = (start, u32::MAX);
         let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
+        // The side of `cur`, to record when the walk stops there (the
+        // caller has recorded that of `start`).
+        let mut cur_side: Option<Sign> = None;
         loop {
             // The best certified step, and an exactly certified one.
             let mut best: Option<(u32, f64, (f64, f64), Sign)> = None;
@@ -295,7 +298,11 @@ impl ConvexArena {
                     None => self.side(n, s, scratch),
                 };
                 if side == target {
+                    // The march needs the sides of both ends of `h`.
                     scratch.sides.insert(n, side);
+                    if let Some(cur_side) = cur_side {
+                        scratch.sides.insert(cur, cur_side);
+                    }
                     return Some(h);
                 }
                 let (value, error) = dot.offset(point);
@@ -317,28 +324,30 @@ impl ConvexArena {
             (cur, (cur_value, cur_error), side) = best
                 .map(|(n, _, estimate, side)| (n, estimate, side))
                 .or(uncertain)?;
-            // The half-edge the walk returns leaves `cur`: the march needs
-            // its side.
-            scratch.sides.insert(cur, side);
+            cur_side = Some(side);
         }
     }
 
     /// Marches around the section from the faces at `seed`: visits the
     /// faces that meet the section, crossing from one to the next through
     /// crossing edges, edges in `s` and vertices on `s`, and leaves them in
-    /// `scratch.relevant`.
+    /// `scratch.relevant`. A face entered through a crossing edge is walked
+    /// only as far as the section's other end on it
+    /// (`survey_from_crossing`); the others all around.
     fn march(&self, seed: Seed, s: &Plane, scratch: &mut Scratch) {
         let mut queue = std::mem::take(&mut scratch.queue);
         let mut relevant = std::mem::take(&mut scratch.relevant);
         let mut on_plane = std::mem::take(&mut scratch.on_plane);
         queue.clear();
         relevant.clear();
-        let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
+        // Queue entries: a face and the crossing half-edge it is entered
+        // by, or `u32::MAX` to walk it all around.
+        let around = |v: u32, queue: &mut Vec<(u32, u32)>, scratch: &mut Scratch| {
             if scratch.vertices.insert(v, true) {
                 for h in self.outgoing(v) {
                     let f = self.half_edges[h as usize].face;
                     if scratch.faces.insert(f, true) {
-                        queue.push(f);
+                        queue.push((f, u32::MAX));
                     }
                 }
             }
@@ -349,12 +358,27 @@ impl ConvexArena {
                 for e in [h, self.half_edges[h as usize].twin] {
                     let f = self.half_edges[e as usize].face;
                     if scratch.faces.insert(f, true) {
-                        queue.push(f);
+                        queue.push((f, e));
                     }
                 }
             }
         }
-        while let Some(f) = queue.pop() {
+        while let Some((f, entry)) = queue.pop() {
+            if entry != u32::MAX {
+                let (info, exit) = self.survey_from_crossing(f, entry, s, scratch);
+                relevant.push((f, info));
+                match exit {
+                    SectionExit::Crossing(y) => {
+                        let t = self.half_edges[y as usize].twin;
+                        let g = self.half_edges[t as usize].face;
+                        if scratch.faces.insert(g, true) {
+                            queue.push((g, t));
+                        }
+                    }
+                    SectionExit::Vertex(z) => around(z, &mut queue, scratch),
+                }
+                continue;
+            }
             // Classify the face's vertices, noting whether it meets the
             // section (vertices on both sides, or an edge in s); the march
             // goes on across its crossing edges and edges in s, and around
@@ -376,14 +400,13 @@ impl ConvexArena {
                 // Runs along one side (most half-edges) need nothing more.
                 if here != there || here == Sign::Zero {
                     survey.step(h, before, here, there);
-                    if here.as_i32() * there.as_i32() < 0
-                        || (here == Sign::Zero && there == Sign::Zero)
-                    {
+                    let crossing = here.as_i32() * there.as_i32() < 0;
+                    if crossing || (here == Sign::Zero && there == Sign::Zero) {
                         // A crossing edge or an edge in s: f meets the
                         // section, so the march goes on across it.
                         let g = self.half_edges[e.twin as usize].face;
                         if scratch.faces.insert(g, true) {
-                            queue.push(g);
+                            queue.push((g, if crossing { e.twin } else { u32::MAX }));
                         }
                     }
                     if here == Sign::Zero {
@@ -409,6 +432,77 @@ impl ConvexArena {
         scratch.queue = queue;
         scratch.relevant = relevant;
     }
+
+    /// What a whole walk around face `f` from its stored half-edge tells
+    /// ([`FaceSurvey`]), from a walk along part of it only, given its
+    /// half-edge `x` whose ends lie on opposite sides of `s`; and where the
+    /// section leaves `f`.
+    ///
+    /// By convexity the section meets the boundary of `f` exactly twice:
+    /// inside `x`, and at the first vertex after `x` that is off the side
+    /// `A` of `x`'s destination — on `s` (a `0` vertex), or else on the
+    /// other side (the half-edge entering it crosses `s`). So the walk
+    /// classifies only the chain on side `A`, and every vertex beyond lies
+    /// on the other side. The stored half-edge's place decides which of
+    /// the two comes first in loop order.
+    fn survey_from_crossing(
+        &self,
+        f: u32,
+        x: u32,
+        s: &Plane,
+        scratch: &mut Scratch,
+    ) -> (FaceInfo, SectionExit) {
+        let first = self.faces[f as usize].half_edge;
+        let mut h = self.half_edges[x as usize].next;
+        let mut e = self.half_edges[h as usize];
+        let side_a = self.side(e.origin, s, scratch);
+        debug_assert_ne!(side_a, Sign::Zero, "x crosses s");
+        // Whether `first` lies after x, up to where the walk finds the
+        // second place the section meets the boundary.
+        let mut passed_first = false;
+        let exit = loop {
+            passed_first |= h == first;
+            let next = self.half_edges[e.next as usize];
+            let there = self.side(next.origin, s, scratch);
+            if there == Sign::Zero {
+                // Found when the half-edge leaving that vertex is walked.
+                passed_first |= e.next == first;
+                break SectionExit::Vertex(next.origin);
+            }
+            if there != side_a {
+                break SectionExit::Crossing(h);
+            }
+            (h, e) = (e.next, next);
+        };
+        // h enters the second place: as the entering half-edge of a `0`
+        // vertex, or as the crossing half-edge.
+        let (enter, first_chain) = if passed_first {
+            ([h, x], -side_a)
+        } else {
+            ([x, h], side_a)
+        };
+        let crossing = match (side_a, exit) {
+            (Sign::Negative, _) => x,
+            (_, SectionExit::Crossing(y)) => y,
+            (_, SectionExit::Vertex(_)) => u32::MAX,
+        };
+        let info = FaceInfo::Straddling {
+            enter,
+            first_chain,
+            crossing,
+        };
+        (info, exit)
+    }
+}
+
+/// Where the section leaves a straddling face, the walk having entered it
+/// through a crossing edge.
+#[derive(Clone, Copy, Debug)]
+enum SectionExit {
+    /// Across this crossing half-edge of the face.
+    Crossing(u32),
+    /// At this vertex on the cutting plane.
+    Vertex(u32),
 }
 
 /// Where the march around the section starts.

@@ -81,8 +81,9 @@ pub(crate) struct Scratch {
     pub(crate) vertices: StampMap<bool>,
     /// Cap half-edge starting at each section vertex.
     pub(crate) cap_starts: StampMap<u32>,
-    /// The march's queue of faces to visit.
-    pub(crate) queue: Vec<u32>,
+    /// The march's queue of faces to visit, each with the crossing
+    /// half-edge it is entered by (or `u32::MAX`).
+    pub(crate) queue: Vec<(u32, u32)>,
     /// The faces that meet the section, with what the split needs to know
     /// about each.
     pub(crate) relevant: Vec<(u32, FaceInfo)>,
