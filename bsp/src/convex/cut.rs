@@ -24,11 +24,8 @@
 
 use super::mesh::{ConvexArena, PolyId};
 use super::scratch::Scratch;
-use super::survey::FaceSurvey;
-use crate::exact::{
-    FilteredDot, Plane, Sign, classify_vertex, classify_vertex_exact, compare_offsets,
-    offset_estimate,
-};
+use super::survey::{FaceSurvey, SectionExit};
+use crate::exact::{FilteredDot, Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
 
 /// The result of cutting a polyhedron `P` by a plane `s`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -217,7 +214,7 @@ impl ConvexArena {
 
     /// The side of vertex `v`, classified once per operation.
     #[inline]
-    fn side(&self, v: u32, s: &Plane, scratch: &mut Scratch) -> Sign {
+    pub(super) fn side(&self, v: u32, s: &Plane, scratch: &mut Scratch) -> Sign {
         scratch.sides.get(v).unwrap_or_else(|| {
             let side = classify_vertex(self.point(v), s);
             scratch.sides.insert(v, side);
@@ -276,10 +273,13 @@ impl ConvexArena {
         };
         let (mut cur, mut prev) = (start, u32::MAX);
         let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
+        // The side of `cur`, to record when the walk stops there (the
+        // caller has recorded that of `start`).
+        let mut cur_side: Option<Sign> = None;
         loop {
             // The best certified step, and an exactly certified one.
-            let mut best: Option<(u32, f64, (f64, f64))> = None;
-            let mut uncertain: Option<(u32, (f64, f64))> = None;
+            let mut best: Option<(u32, f64, (f64, f64), Sign)> = None;
+            let mut uncertain: Option<(u32, (f64, f64), Sign)> = None;
             for (h, n) in self.neighbours(cur) {
                 if n == prev {
                     // The vertex the walk came from: not on side `target`
@@ -289,54 +289,65 @@ impl ConvexArena {
                     continue;
                 }
                 let point = self.point(n);
-                // One f64 evaluation gives both the side and the offset.
+                // One f64 evaluation gives both the side and the offset;
+                // the side is recorded only for the vertices the walk
+                // stops at (the march classifies the others it needs).
                 let dot = FilteredDot::new(point, s);
-                let side = scratch.sides.get(n).unwrap_or_else(|| {
-                    let side = dot
-                        .sign()
-                        .unwrap_or_else(|| classify_vertex_exact(point, s));
-                    scratch.sides.insert(n, side);
-                    side
-                });
+                let side = match dot.sign() {
+                    Some(side) => side,
+                    None => self.side(n, s, scratch),
+                };
                 if side == target {
+                    // The march needs the sides of both ends of `h`.
+                    scratch.sides.insert(n, side);
+                    if let Some(cur_side) = cur_side {
+                        scratch.sides.insert(cur, cur_side);
+                    }
                     return Some(h);
                 }
                 let (value, error) = dot.offset(point);
                 let gain = toward(value) - toward(cur_value);
                 if gain > error + cur_error {
-                    if best.is_none_or(|(_, g, _)| gain > g) {
-                        best = Some((n, gain, (value, error)));
+                    if best.is_none_or(|(_, g, _, _)| gain > g) {
+                        best = Some((n, gain, (value, error), side));
                     }
                 } else if gain >= -(error + cur_error)
                     && uncertain.is_none()
                     && compare_offsets(point, self.point(cur), s) == wanted
                 {
                     // Too close to call in f64: exactly closer.
-                    uncertain = Some((n, (value, error)));
+                    uncertain = Some((n, (value, error), side));
                 }
             }
             prev = cur;
-            (cur, (cur_value, cur_error)) =
-                best.map(|(n, _, estimate)| (n, estimate)).or(uncertain)?;
+            let side;
+            (cur, (cur_value, cur_error), side) = best
+                .map(|(n, _, estimate, side)| (n, estimate, side))
+                .or(uncertain)?;
+            cur_side = Some(side);
         }
     }
 
     /// Marches around the section from the faces at `seed`: visits the
     /// faces that meet the section, crossing from one to the next through
     /// crossing edges, edges in `s` and vertices on `s`, and leaves them in
-    /// `scratch.relevant`.
+    /// `scratch.relevant`. A face entered through a crossing edge is walked
+    /// only as far as the section's other end on it
+    /// (`survey_from_crossing`); the others all around.
     fn march(&self, seed: Seed, s: &Plane, scratch: &mut Scratch) {
         let mut queue = std::mem::take(&mut scratch.queue);
         let mut relevant = std::mem::take(&mut scratch.relevant);
         let mut on_plane = std::mem::take(&mut scratch.on_plane);
         queue.clear();
         relevant.clear();
-        let around = |v: u32, queue: &mut Vec<u32>, scratch: &mut Scratch| {
+        // Queue entries: a face and the crossing half-edge it is entered
+        // by, or `u32::MAX` to walk it all around.
+        let around = |v: u32, queue: &mut Vec<(u32, u32)>, scratch: &mut Scratch| {
             if scratch.vertices.insert(v, true) {
                 for h in self.outgoing(v) {
                     let f = self.half_edges[h as usize].face;
                     if scratch.faces.insert(f, true) {
-                        queue.push(f);
+                        queue.push((f, u32::MAX));
                     }
                 }
             }
@@ -347,47 +358,67 @@ impl ConvexArena {
                 for e in [h, self.half_edges[h as usize].twin] {
                     let f = self.half_edges[e as usize].face;
                     if scratch.faces.insert(f, true) {
-                        queue.push(f);
+                        queue.push((f, e));
                     }
                 }
             }
         }
-        while let Some(f) = queue.pop() {
+        while let Some((f, entry)) = queue.pop() {
+            if entry != u32::MAX {
+                let (info, exit) = self.survey_from_crossing(f, entry, s, scratch);
+                relevant.push((f, info));
+                match exit {
+                    SectionExit::Crossing(y) => {
+                        let t = self.half_edges[y as usize].twin;
+                        let g = self.half_edges[t as usize].face;
+                        if scratch.faces.insert(g, true) {
+                            queue.push((g, t));
+                        }
+                    }
+                    SectionExit::Vertex(z) => around(z, &mut queue, scratch),
+                }
+                continue;
+            }
             // Classify the face's vertices, noting whether it meets the
             // section (vertices on both sides, or an edge in s); the march
             // goes on across its crossing edges and edges in s, and around
             // its vertices on s.
             on_plane.clear();
             let first = self.faces[f as usize].half_edge;
-            let first_side = self.side(self.half_edges[first as usize].origin, s, scratch);
+            let mut e = self.half_edges[first as usize];
+            let first_side = self.side(e.origin, s, scratch);
             let mut survey = FaceSurvey::new();
-            let (mut h, mut here) = (first, first_side);
+            let (mut h, mut before, mut here) = (first, u32::MAX, first_side);
             loop {
-                let e = self.half_edges[h as usize];
+                // Each half-edge is read once: the next one is carried on.
+                let next = self.half_edges[e.next as usize];
                 let there = if e.next == first {
                     first_side
                 } else {
-                    self.side(self.half_edges[e.next as usize].origin, s, scratch)
+                    self.side(next.origin, s, scratch)
                 };
-                survey.step(h, here, there);
-                if here.as_i32() * there.as_i32() < 0 || (here == Sign::Zero && there == Sign::Zero)
-                {
-                    // A crossing edge or an edge in s: f meets the section,
-                    // so the march goes on across it.
-                    let g = self.half_edges[e.twin as usize].face;
-                    if scratch.faces.insert(g, true) {
-                        queue.push(g);
+                // Runs along one side (most half-edges) need nothing more.
+                if here != there || here == Sign::Zero {
+                    survey.step(h, before, here, there);
+                    let crossing = here.as_i32() * there.as_i32() < 0;
+                    if crossing || (here == Sign::Zero && there == Sign::Zero) {
+                        // A crossing edge or an edge in s: f meets the
+                        // section, so the march goes on across it.
+                        let g = self.half_edges[e.twin as usize].face;
+                        if scratch.faces.insert(g, true) {
+                            queue.push((g, if crossing { e.twin } else { u32::MAX }));
+                        }
                     }
-                }
-                if here == Sign::Zero {
-                    on_plane.push(e.origin);
+                    if here == Sign::Zero {
+                        on_plane.push(e.origin);
+                    }
                 }
                 if e.next == first {
                     break;
                 }
-                (h, here) = (e.next, there);
+                (before, h, e, here) = (h, e.next, next, there);
             }
-            let Some(info) = survey.finish() else {
+            let Some(info) = survey.finish(h) else {
                 continue;
             };
             relevant.push((f, info));

@@ -46,15 +46,26 @@ impl<T: Copy + Default> StampMap<T> {
     /// Sets the value at `i`; returns true when `i` had no value yet.
     #[inline]
     pub(crate) fn insert(&mut self, i: u32, value: T) -> bool {
-        let i = i as usize;
-        if i >= self.entries.len() {
-            let len = (i + 1).max(2 * self.entries.len());
-            self.entries.resize(len, (0, T::default()));
+        let stamp = self.stamp;
+        match self.entries.get_mut(i as usize) {
+            Some(entry) => {
+                let fresh = entry.0 != stamp;
+                *entry = (stamp, value);
+                fresh
+            }
+            None => self.grow_and_insert(i as usize, value),
         }
-        let entry = &mut self.entries[i];
-        let fresh = entry.0 != self.stamp;
-        *entry = (self.stamp, value);
-        fresh
+    }
+
+    /// [`StampMap::insert`] beyond the entries: grows them (at least
+    /// doubling), then inserts.
+    #[cold]
+    #[inline(never)]
+    fn grow_and_insert(&mut self, i: usize, value: T) -> bool {
+        let len = (i + 1).max(2 * self.entries.len());
+        self.entries.resize(len, (0, T::default()));
+        self.entries[i] = (self.stamp, value);
+        true
     }
 }
 
@@ -70,8 +81,9 @@ pub(crate) struct Scratch {
     pub(crate) vertices: StampMap<bool>,
     /// Cap half-edge starting at each section vertex.
     pub(crate) cap_starts: StampMap<u32>,
-    /// The march's queue of faces to visit.
-    pub(crate) queue: Vec<u32>,
+    /// The march's queue of faces to visit, each with the crossing
+    /// half-edge it is entered by (or `u32::MAX`).
+    pub(crate) queue: Vec<(u32, u32)>,
     /// The faces that meet the section, with what the split needs to know
     /// about each.
     pub(crate) relevant: Vec<(u32, FaceInfo)>,

@@ -47,8 +47,8 @@ impl ConvexArena {
             if let FaceInfo::Straddling { crossing, .. } = info
                 && crossing != u32::MAX
             {
-                let m = self.split_edge(crossing, s);
-                scratch.sides.insert(m, Sign::Zero);
+                // The new vertex lies on s; nothing reads sides from here on.
+                self.split_edge(crossing, s);
             }
         }
         // 2. Split straddling faces; list the section edges, those of the
@@ -106,7 +106,7 @@ impl ConvexArena {
         let first = self.faces[f as usize].half_edge;
         let first_side = side(first);
         let mut survey = FaceSurvey::new();
-        let (mut h, mut here) = (first, first_side);
+        let (mut h, mut before, mut here) = (first, u32::MAX, first_side);
         loop {
             let next = self.half_edges[h as usize].next;
             let there = if next == first {
@@ -114,13 +114,15 @@ impl ConvexArena {
             } else {
                 side(next)
             };
-            survey.step(h, here, there);
+            if here != there || here == Sign::Zero {
+                survey.step(h, before, here, there);
+            }
             if next == first {
                 break;
             }
-            (h, here) = (next, there);
+            (before, h, here) = (h, next, there);
         }
-        survey.finish()
+        survey.finish(h)
     }
 
     /// Splits the edge of half-edge `h` at its intersection with `s`;
@@ -136,22 +138,24 @@ impl ConvexArena {
         );
         let m = self.push_vertex(point, h2);
         // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
-        self.half_edges.push(HalfEdge {
-            origin: m,
-            twin: e.twin,
-            next: e.next,
-            face: e.face,
-        });
-        self.half_edges.push(HalfEdge {
-            origin: m,
-            twin: h,
-            next: t.next,
-            face: t.face,
-        });
-        self.half_edges[h as usize].next = h2;
-        self.half_edges[h as usize].twin = t2;
-        self.half_edges[e.twin as usize].next = t2;
-        self.half_edges[e.twin as usize].twin = h2;
+        self.half_edges.extend_from_slice(&[
+            HalfEdge {
+                origin: m,
+                twin: e.twin,
+                next: e.next,
+                face: e.face,
+            },
+            HalfEdge {
+                origin: m,
+                twin: h,
+                next: t.next,
+                face: t.face,
+            },
+        ]);
+        let old = &mut self.half_edges[h as usize];
+        (old.next, old.twin) = (h2, t2);
+        let old_twin = &mut self.half_edges[e.twin as usize];
+        (old_twin.next, old_twin.twin) = (t2, h2);
         m
     }
 

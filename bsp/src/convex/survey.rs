@@ -8,9 +8,14 @@
 //!
 //! The march walks every face it visits once, classifying its vertices;
 //! [`FaceSurvey`] gathers in that same walk everything the split needs, so
-//! no face is walked twice.
+//! no face is walked twice. A face the march enters through a crossing
+//! edge is walked only along the chain of vertices after it, up to the
+//! section's other end (`ConvexArena::survey_from_crossing`), which tells
+//! the same.
 
-use crate::exact::Sign;
+use super::mesh::ConvexArena;
+use super::scratch::Scratch;
+use crate::exact::{Plane, Sign};
 
 /// What the split needs to know about one face that meets the section,
 /// found in a single walk around it before anything changes.
@@ -36,8 +41,11 @@ pub(crate) enum FaceInfo {
     },
 }
 
-/// The state of one walk around a face: feed every half-edge in loop order
-/// to [`FaceSurvey::step`], then call [`FaceSurvey::finish`].
+/// The state of one walk around a face: feed in loop order every half-edge
+/// that does not run along one side of the plane (`here ≠ there`, or
+/// `here = 0`) to [`FaceSurvey::step`], then call [`FaceSurvey::finish`].
+/// A half-edge from `+` to `+` or `−` to `−` tells nothing: every run of
+/// one side ends in a half-edge that leaves it, which records the side.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FaceSurvey {
     plus: bool,
@@ -53,8 +61,6 @@ pub(crate) struct FaceSurvey {
     enter: [u32; 2],
     events: u32,
     first_chain: Sign,
-    /// The half-edge walked before the current one, or `u32::MAX`.
-    prev: u32,
 }
 
 impl FaceSurvey {
@@ -69,14 +75,15 @@ impl FaceSurvey {
             enter: [u32::MAX; 2],
             events: 0,
             first_chain: Sign::Zero,
-            prev: u32::MAX,
         }
     }
 
     /// Records half-edge `h`, from a vertex on side `here` to one on side
-    /// `there`.
+    /// `there` (not both `+` nor both `−`); `before` is the half-edge of
+    /// the loop just before `h`, or `u32::MAX` when `h` is the first.
     #[inline]
-    pub(crate) fn step(&mut self, h: u32, here: Sign, there: Sign) {
+    pub(crate) fn step(&mut self, h: u32, before: u32, here: Sign, there: Sign) {
+        debug_assert!(here != there || here == Sign::Zero);
         self.plus |= here == Sign::Positive;
         self.minus |= here == Sign::Negative;
         if here == Sign::Positive && there == Sign::Negative {
@@ -86,7 +93,7 @@ impl FaceSurvey {
             self.in_plane = h;
         }
         let entered = if here == Sign::Zero {
-            Some(self.prev)
+            Some(before)
         } else if here.as_i32() * there.as_i32() < 0 {
             Some(h)
         } else {
@@ -101,19 +108,18 @@ impl FaceSurvey {
             }
             self.events += 1;
         }
-        self.prev = h;
     }
 
-    /// What the split needs to know about the face, once every half-edge
-    /// has been recorded; `None` when it does not meet the section.
+    /// What the split needs to know about the face, once the walk has
+    /// ended at half-edge `last`; `None` when it does not meet the section.
     #[inline]
-    pub(crate) fn finish(self) -> Option<FaceInfo> {
+    pub(crate) fn finish(self, last: u32) -> Option<FaceInfo> {
         if self.plus && self.minus {
             debug_assert_eq!(self.events, 2, "a convex face meets a plane twice");
             let mut enter = self.enter;
             if enter[0] == u32::MAX {
                 // The walk started at a `0` vertex: it is entered last.
-                enter[0] = self.prev;
+                enter[0] = last;
             }
             Some(FaceInfo::Straddling {
                 enter,
@@ -132,5 +138,78 @@ impl FaceSurvey {
         } else {
             None
         }
+    }
+}
+
+/// Where the section leaves a straddling face, the walk having entered it
+/// through a crossing edge.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum SectionExit {
+    /// Across this crossing half-edge of the face.
+    Crossing(u32),
+    /// At this vertex on the cutting plane.
+    Vertex(u32),
+}
+
+impl ConvexArena {
+    /// What a whole walk around face `f` from its stored half-edge tells
+    /// ([`FaceSurvey`]), from a walk along part of it only, given its
+    /// half-edge `x` whose ends lie on opposite sides of `s`; and where the
+    /// section leaves `f`.
+    ///
+    /// By convexity the section meets the boundary of `f` exactly twice:
+    /// inside `x`, and at the first vertex after `x` that is off the side
+    /// `A` of `x`'s destination — on `s` (a `0` vertex), or else on the
+    /// other side (the half-edge entering it crosses `s`). So the walk
+    /// classifies only the chain on side `A`, and every vertex beyond lies
+    /// on the other side. The stored half-edge's place decides which of
+    /// the two comes first in loop order.
+    pub(super) fn survey_from_crossing(
+        &self,
+        f: u32,
+        x: u32,
+        s: &Plane,
+        scratch: &mut Scratch,
+    ) -> (FaceInfo, SectionExit) {
+        let first = self.faces[f as usize].half_edge;
+        let mut h = self.half_edges[x as usize].next;
+        let mut e = self.half_edges[h as usize];
+        let side_a = self.side(e.origin, s, scratch);
+        debug_assert_ne!(side_a, Sign::Zero, "x crosses s");
+        // Whether `first` lies after x, up to where the walk finds the
+        // second place the section meets the boundary.
+        let mut passed_first = false;
+        let exit = loop {
+            passed_first |= h == first;
+            let next = self.half_edges[e.next as usize];
+            let there = self.side(next.origin, s, scratch);
+            if there == Sign::Zero {
+                // Found when the half-edge leaving that vertex is walked.
+                passed_first |= e.next == first;
+                break SectionExit::Vertex(next.origin);
+            }
+            if there != side_a {
+                break SectionExit::Crossing(h);
+            }
+            (h, e) = (e.next, next);
+        };
+        // h enters the second place: as the entering half-edge of a `0`
+        // vertex, or as the crossing half-edge.
+        let (enter, first_chain) = if passed_first {
+            ([h, x], -side_a)
+        } else {
+            ([x, h], side_a)
+        };
+        let crossing = match (side_a, exit) {
+            (Sign::Negative, _) => x,
+            (_, SectionExit::Crossing(y)) => y,
+            (_, SectionExit::Vertex(_)) => u32::MAX,
+        };
+        let info = FaceInfo::Straddling {
+            enter,
+            first_chain,
+            crossing,
+        };
+        (info, exit)
     }
 }

@@ -49,8 +49,17 @@ pub const FILTER_EPSILON: f64 = 1.0 / (1u64 << 50) as f64;
 pub fn classify_vertex(v: &Point4, s: &Plane) -> Sign {
     match classify_vertex_filtered(v, s) {
         Some(sign) => sign,
-        None => classify_vertex_exact(v, s),
+        None => classify_vertex_fallback(v, s),
     }
+}
+
+/// The exact path of [`classify_vertex`], kept out of line: the filter
+/// decides almost every call, and the inlined exact path would take the
+/// registers of the loops that classify.
+#[cold]
+#[inline(never)]
+fn classify_vertex_fallback(v: &Point4, s: &Plane) -> Sign {
+    classify_vertex_exact(v, s)
 }
 
 /// The side of `s` that `v` is on, computed in 256-bit integer arithmetic

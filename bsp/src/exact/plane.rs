@@ -95,7 +95,18 @@ impl Plane {
     #[must_use]
     #[inline]
     pub fn flipped(&self) -> Plane {
-        Plane::new_unchecked(-self.a, -self.b, -self.c, -self.d)
+        // Negation keeps the bit counts, and the cached values are
+        // correctly rounded, so negating them gives those of the negated
+        // coefficients (rounding to nearest is symmetric); `0 − x` rather
+        // than `−x` keeps a zero `+0.0`, as the conversions give it.
+        Plane {
+            a: -self.a,
+            b: -self.b,
+            c: -self.c,
+            d: -self.d,
+            approx: self.approx.map(|x| 0.0 - x),
+            ..*self
+        }
     }
 
     /// `n·p + d`, exactly: the signed distance of `p` to the plane scaled by
@@ -239,4 +250,41 @@ pub fn are_planes_parallel(p: &Plane, q: &Plane) -> bool {
     let (pa, pb, pc) = (p.a as i128, p.b as i128, p.c as i128);
     let (qa, qb, qc) = (q.a as i128, q.b as i128, q.c as i128);
     pb * qc == pc * qb && pc * qa == pa * qc && pa * qb == pb * qa
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Plane;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A flipped plane is the plane built from the negated coefficients,
+    /// cached values and bit counts included, at every offset magnitude.
+    #[test]
+    fn flipped_is_the_plane_of_negated_coefficients() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for bits in 0..=83u32 {
+            for _ in 0..20 {
+                // Some normal components zero, as in axis-aligned planes.
+                let n = [0; 3].map(|_| {
+                    if rng.random_bool(0.3) {
+                        0
+                    } else {
+                        rng.random_range(-(1i64 << 55)..=1i64 << 55)
+                    }
+                });
+                let d = rng.random::<i128>() >> (127 - bits);
+                let Ok(p) = Plane::new(n[0], n[1], n[2], d) else {
+                    continue;
+                };
+                let (f, g) = (p.flipped(), Plane::new(-n[0], -n[1], -n[2], -d).unwrap());
+                assert_eq!(f, g);
+                assert_eq!(f.approx.map(f64::to_bits), g.approx.map(f64::to_bits));
+                assert_eq!(
+                    (f.normal_bits, f.offset_bits),
+                    (g.normal_bits, g.offset_bits)
+                );
+            }
+        }
+    }
 }
