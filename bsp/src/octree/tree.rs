@@ -19,7 +19,8 @@ use crate::tree::{Bsp, EMPTY, Label, Node};
 pub struct OctreeConfig {
     /// A leaf whose BSP has more inner nodes than this is split into eight;
     /// eight leaf children whose combined BSP fits are merged. The paper
-    /// finds 100–200 best (§4.5).
+    /// finds 100–200 best (§4.5) and the default is 150; carving many small
+    /// tools runs faster here with 20–40 (BENCHMARKS.md, "Octree budget").
     pub max_bsp_nodes: usize,
     /// No cell is split below this depth (or below an edge of 2 units),
     /// whatever its BSP size.
