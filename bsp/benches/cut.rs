@@ -12,6 +12,9 @@
 //!   of the finished `N`-face polyhedron (a large section), each applied to
 //!   a fresh, cache-warm copy.
 
+#[path = "../tests/common/fig9.rs"]
+mod fig9;
+
 use std::hint::black_box;
 
 use chisel_bsp::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
@@ -20,31 +23,7 @@ use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-const R: i64 = 1 << 20;
-
-fn random_direction(rng: &mut ChaCha8Rng, scale: f64) -> [i64; 3] {
-    loop {
-        let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        if (0.1..=1.0).contains(&n) {
-            return v.map(|c| (c / n * scale).round() as i64);
-        }
-    }
-}
-
-/// `count` planes tangent to the sphere of radius `0.95 R` in random
-/// directions, outward.
-fn tangent_planes(count: usize, seed: u64) -> Vec<Plane> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let radius = 0.95 * R as f64;
-    (0..count)
-        .map(|_| {
-            let n = random_direction(&mut rng, 1024.0);
-            let len = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
-            Plane::new(n[0], n[1], n[2], -(radius * len).round() as i128).expect("in budget")
-        })
-        .collect()
-}
+use fig9::{R, random_direction, tangent_planes};
 
 fn bounding_box(arena: &mut ConvexArena) -> PolyId {
     let corner = |c| IntPoint::new(c, c, c).expect("in budget");

@@ -15,36 +15,12 @@
 //! (that removes the fixed start-up cost). It prints a checksum of the
 //! cell's vertices so that two builds can be compared.
 
+#[path = "../tests/common/fig9.rs"]
+mod fig9;
+
 use chisel_bsp::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-
-const R: i64 = 1 << 20;
-
-fn random_direction(rng: &mut ChaCha8Rng, scale: f64) -> [i64; 3] {
-    loop {
-        let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        if (0.1..=1.0).contains(&n) {
-            return v.map(|c| (c / n * scale).round() as i64);
-        }
-    }
-}
-
-/// `count` planes tangent to the sphere of radius `0.95 R`, as in
-/// `benches/cut.rs` (same seed: `count`).
-fn tangent_planes(count: usize) -> Vec<Plane> {
-    let mut rng = ChaCha8Rng::seed_from_u64(count as u64);
-    let radius = 0.95 * R as f64;
-    (0..count)
-        .map(|_| {
-            let n = random_direction(&mut rng, 1024.0);
-            let len = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
-            Plane::new(n[0], n[1], n[2], -(radius * len).round() as i128).expect("in budget")
-        })
-        .collect()
-}
+use fig9::{R, tangent_planes};
 
 /// The cell of the linear BSP of `planes` in `arena` (cleared first).
 fn extract_cell(arena: &mut ConvexArena, planes: &[Plane], two_sided: bool) -> PolyId {
@@ -75,7 +51,8 @@ fn main() {
     let two_sided = args.get(1).is_none_or(|m| m != "one");
     let count = args.get(2).and_then(|n| n.parse().ok()).unwrap_or(250);
     let repeats: usize = args.get(3).and_then(|n| n.parse().ok()).unwrap_or(10);
-    let planes = tangent_planes(count);
+    // Seeded by the count, as in `benches/cut.rs`.
+    let planes = tangent_planes(count, count as u64);
     let mut arena = ConvexArena::new();
     let mut poly = extract_cell(&mut arena, &planes, two_sided);
     for _ in 1..repeats {
