@@ -6,70 +6,23 @@ mod common;
 
 use std::collections::HashMap;
 
-use chisel_bsp::convex::{ConvexArena, PolyId};
-use chisel_bsp::exact::{Plane, Point4, intersect_3_planes};
+use chisel_bsp::exact::{Plane, intersect_3_planes};
 use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label};
 use common::backends::to_big;
 use common::shapes;
-use common::volume::{Fraction, polygons_volume};
+use common::surface::{H, boundary, box_bsp, corners, merge, polygons_volume_of};
+use common::volume::Fraction;
 use num_bigint::BigInt;
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-
-const H: i64 = 1 << 16;
-
-fn bounds(arena: &mut ConvexArena) -> PolyId {
-    arena
-        .add_box(shapes::p(-H, -H, -H), shapes::p(H, H, H))
-        .unwrap()
-}
-
-fn box_bsp(min: [i64; 3], max: [i64; 3], label: Label) -> Bsp {
-    let mut arena = ConvexArena::new();
-    let b = arena
-        .add_box(
-            shapes::p(min[0], min[1], min[2]),
-            shapes::p(max[0], max[1], max[2]),
-        )
-        .unwrap();
-    Bsp::from_convex(&arena, b, label)
-}
-
-fn merge(a: &Bsp, b: &Bsp, op: BooleanOp) -> Bsp {
-    let mut arena = ConvexArena::new();
-    let bd = bounds(&mut arena);
-    a.merge(b, op, &mut arena, bd)
-}
-
-fn boundary(bsp: &Bsp) -> Vec<BoundaryFace> {
-    let mut arena = ConvexArena::new();
-    let bd = bounds(&mut arena);
-    bsp.boundary(&mut arena, bd)
-}
 
 /// The mesh without merging: welded, then T-junctions split.
 fn unmerged(faces: &[BoundaryFace]) -> SurfaceMesh {
     let mut mesh = SurfaceMesh::welded(faces);
     mesh.split_t_junctions();
     mesh
-}
-
-fn corners(mesh: &SurfaceMesh, vertices: &[u32]) -> Vec<Point4> {
-    vertices
-        .iter()
-        .map(|&v| mesh.vertices()[v as usize])
-        .collect()
-}
-
-fn polygons_volume_of(mesh: &SurfaceMesh) -> Fraction {
-    let polygons: Vec<Vec<Point4>> = mesh
-        .polygons()
-        .iter()
-        .map(|p| corners(mesh, &p.corners))
-        .collect();
-    polygons_volume(&polygons)
 }
 
 /// The exact vector area `½ Σ p_k × p_{k+1}` of every group of polygons

@@ -13,38 +13,14 @@ use chisel_bsp::tools::convex_hull;
 use chisel_bsp::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label};
 use common::backends::to_big;
 use common::shapes::{self, p};
+use common::surface::{H, boundary, bounds, box_bsp, corners, merge, polygons_volume_of};
 use common::volume::{Fraction, polygons_volume, volume};
 use num_bigint::BigInt;
 use num_traits::Signed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-const H: i64 = 1 << 16;
 const CUTS: usize = 5;
-
-fn bounds(arena: &mut ConvexArena) -> PolyId {
-    arena.add_box(p(-H, -H, -H), p(H, H, H)).unwrap()
-}
-
-fn box_bsp(min: [i64; 3], max: [i64; 3], label: Label) -> Bsp {
-    let mut arena = ConvexArena::new();
-    let b = arena
-        .add_box(p(min[0], min[1], min[2]), p(max[0], max[1], max[2]))
-        .unwrap();
-    Bsp::from_convex(&arena, b, label)
-}
-
-fn merge(a: &Bsp, b: &Bsp, op: BooleanOp) -> Bsp {
-    let mut arena = ConvexArena::new();
-    let bd = bounds(&mut arena);
-    a.merge(b, op, &mut arena, bd)
-}
-
-fn boundary(bsp: &Bsp) -> Vec<BoundaryFace> {
-    let mut arena = ConvexArena::new();
-    let bd = bounds(&mut arena);
-    bsp.boundary(&mut arena, bd)
-}
 
 /// The exact volume of the BSP's solid (all materials) inside the bounds.
 fn solid_volume(bsp: &Bsp) -> Fraction {
@@ -57,24 +33,6 @@ fn solid_volume(bsp: &Bsp) -> Fraction {
         }
     }
     total
-}
-
-fn corners(mesh: &SurfaceMesh, vertices: &[u32]) -> Vec<Point4> {
-    vertices
-        .iter()
-        .map(|&v| mesh.vertices()[v as usize])
-        .collect()
-}
-
-/// The exact volume enclosed by the mesh's polygons (with their inserted
-/// corners).
-fn polygons_volume_of(mesh: &SurfaceMesh) -> Fraction {
-    let polygons: Vec<Vec<Point4>> = mesh
-        .polygons()
-        .iter()
-        .map(|p| corners(mesh, &p.corners))
-        .collect();
-    polygons_volume(&polygons)
 }
 
 /// The exact volume enclosed by the triangles.

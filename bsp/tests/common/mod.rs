@@ -6,4 +6,5 @@ pub mod bigint_reference;
 pub mod inputs;
 pub mod random_bsp;
 pub mod shapes;
+pub mod surface;
 pub mod volume;
