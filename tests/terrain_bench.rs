@@ -16,12 +16,12 @@ use std::time::{Duration, Instant};
 
 use bevy::asset::AssetPlugin;
 use bevy::prelude::*;
-use bevy_chisel::bsp::octree::Edit;
+use bevy_chisel::bsp::octree::{Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::mesh::{cell_meshes, cell_meshes_from};
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainCellChanged, TerrainPlugin,
-    TerrainSystems, apply_carve_with_faces,
+    TerrainSystems, apply_carve_with_faces, terrain_octree_config,
 };
 use rayon::prelude::*;
 
@@ -81,8 +81,16 @@ fn crater(next: &mut impl FnMut() -> f64) -> CarveTool {
 #[ignore = "benchmark"]
 fn crater_carves_on_a_large_terrain() {
     let carves = env_or("CHISEL_BENCH_CARVES", 1000);
+    // CHISEL_BENCH_BUDGET: the octree's BSP node budget per cell (default:
+    // the terrains' own).
+    let config = OctreeConfig {
+        max_bsp_nodes: env_or("CHISEL_BENCH_BUDGET", terrain_octree_config().max_bsp_nodes),
+        ..terrain_octree_config()
+    };
+    let budget = config.max_bsp_nodes;
     let terrain = large_terrain();
     let grid = *terrain.quantization();
+    let terrain = Terrain::from_base(grid, terrain.base().clone(), config).expect("same base");
     let mut octree = terrain.octree().clone();
     let mut next = uniform(0x9E37_79B9_7F4A_7C15);
     let (mut apply, mut total) = (Vec::new(), Vec::new());
@@ -124,7 +132,7 @@ fn crater_carves_on_a_large_terrain() {
     total.sort();
     let stats = octree.stats();
     println!(
-        "{carves} crater carves (r = 2 m, 1 mm grid, 256 m × 256 m), {} threads",
+        "{carves} crater carves (r = 2 m, 1 mm grid, 256 m × 256 m), {} threads, budget {budget}",
         rayon::current_num_threads()
     );
     println!(

@@ -79,7 +79,7 @@ pub use component::{
 pub use error::TerrainError;
 pub use mesh::CellMesh;
 pub use raycast::TerrainHit;
-pub use spawn::{HeightLayer, Heightfield};
+pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
 pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
 
 /// The terrain systems, in this order within `Update`.
