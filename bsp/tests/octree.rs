@@ -527,3 +527,23 @@ fn leaves_not_reported_keep_their_surface() {
     }
     assert!(narrowed > 10, "only {narrowed} leaves narrowed");
 }
+
+#[test]
+fn the_enclosing_box_holds_exactly_the_points() {
+    assert_eq!(CellBox::enclosing(std::iter::empty()), None);
+    let points = [[3, -1, 7], [-2, 5, 7], [0, 0, -4]];
+    assert_eq!(
+        CellBox::enclosing(points),
+        Some(CellBox {
+            min: [-2, -1, -4],
+            max: [3, 5, 7],
+        })
+    );
+    assert_eq!(
+        CellBox::enclosing([[1, 2, 3]]),
+        Some(CellBox {
+            min: [1, 2, 3],
+            max: [1, 2, 3],
+        })
+    );
+}

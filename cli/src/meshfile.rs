@@ -37,16 +37,8 @@ pub fn read_grid(path: &Path) -> Result<GridMesh, String> {
                 .map_err(|e| format!("{}: vertex {}: {e}", path.display(), v + 1))
         })
         .collect::<Result<Vec<IntPoint>, String>>()?;
-    let mut bounds = CellBox {
-        min: [i64::MAX; 3],
-        max: [i64::MIN; 3],
-    };
-    for p in &positions {
-        for (a, c) in p.coords().into_iter().enumerate() {
-            bounds.min[a] = bounds.min[a].min(c);
-            bounds.max[a] = bounds.max[a].max(c);
-        }
-    }
+    let bounds = CellBox::enclosing(positions.iter().map(IntPoint::coords))
+        .ok_or_else(|| format!("{}: the mesh has no vertices", path.display()))?;
     let triangles = soup
         .triangles
         .iter()

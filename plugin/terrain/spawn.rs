@@ -279,19 +279,10 @@ impl Terrain {
                 Ok([corner(t[0])?, corner(t[1])?, corner(t[2])?])
             })
             .collect::<Result<Vec<_>, TerrainError>>()?;
-        let mut min = [i64::MAX; 3];
-        let mut max = [i64::MIN; 3];
-        for p in &points {
-            for a in 0..3 {
-                min[a] = min[a].min(p[a]);
-                max[a] = max[a].max(p[a]);
-            }
-        }
-        if points.is_empty() {
-            return Err(TerrainError::InvalidMesh {
+        let CellBox { min, max } =
+            CellBox::enclosing(points.iter().copied()).ok_or(TerrainError::InvalidMesh {
                 reason: "the mesh has no vertices",
-            });
-        }
+            })?;
         let extent = (0..3).map(|a| max[a] - min[a]).max().unwrap_or(0);
         let (origin, size_log2) = cube_around(min, max, extent / 8 + 1);
         Self::from_base(

@@ -58,6 +58,25 @@ pub struct CellBox {
 }
 
 impl CellBox {
+    /// The smallest closed box holding every point of `points`, or `None`
+    /// when there are none (the box may be flat).
+    #[must_use]
+    pub fn enclosing(points: impl IntoIterator<Item = [i64; 3]>) -> Option<CellBox> {
+        let mut points = points.into_iter();
+        let first = points.next()?;
+        let mut out = CellBox {
+            min: first,
+            max: first,
+        };
+        for p in points {
+            for (a, c) in p.into_iter().enumerate() {
+                out.min[a] = out.min[a].min(c);
+                out.max[a] = out.max[a].max(c);
+            }
+        }
+        Some(out)
+    }
+
     /// Whether the closed boxes share at least a point.
     #[must_use]
     pub fn touches(&self, other: &CellBox) -> bool {

@@ -28,6 +28,7 @@ use std::sync::OnceLock;
 
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::budget::{MAX_COORD, MAX_NORMAL, MAX_OFFSET};
+use crate::octree::CellBox;
 
 /// A closed convex polyhedron with integer vertices, prepared for the
 /// exact contact test against boxes.
@@ -74,14 +75,7 @@ impl ConvexPiece {
             .iter()
             .map(|&v| integer_point(arena, v))
             .collect::<Option<Vec<_>>>()?;
-        let mut lo = [i64::MAX; 3];
-        let mut hi = [i64::MIN; 3];
-        for v in &vertices {
-            for a in 0..3 {
-                lo[a] = lo[a].min(v[a]);
-                hi[a] = hi[a].max(v[a]);
-            }
-        }
+        let CellBox { min: lo, max: hi } = CellBox::enclosing(vertices.iter().copied())?;
         let position = |v: u32| ids.binary_search(&v).ok().map(|i| vertices[i]);
         let mut faces = Vec::with_capacity(face_ids.len());
         let mut edges = Vec::new();
