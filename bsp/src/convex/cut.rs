@@ -352,18 +352,36 @@ impl ConvexArena {
                 }
             }
         };
+        // From a seed edge h, the march starts on the face of h and goes
+        // around from there, so that every face is entered the same way as
+        // that one: its walk runs along the chain on the side the descent
+        // ended on, which is usually the smaller part (the descent starts
+        // from a vertex of the larger part more often than not). The face
+        // of h's twin is walked last, and only if the march has not reached
+        // it by then through the other end of the section on it.
+        let mut deferred = None;
         match seed {
             Seed::Vertex(v) => around(v, &mut queue, scratch),
             Seed::Edge(h) => {
-                for e in [h, self.half_edges[h as usize].twin] {
-                    let f = self.half_edges[e as usize].face;
-                    if scratch.faces.insert(f, true) {
-                        queue.push((f, e));
-                    }
-                }
+                scratch.faces.insert(self.half_edges[h as usize].face, true);
+                queue.push((self.half_edges[h as usize].face, h));
+                deferred = Some(self.half_edges[h as usize].twin);
             }
         }
-        while let Some((f, entry)) = queue.pop() {
+        loop {
+            let (f, entry) = match queue.pop() {
+                Some(next) => next,
+                None => match deferred.take() {
+                    Some(t) => {
+                        let g = self.half_edges[t as usize].face;
+                        if !scratch.faces.insert(g, true) {
+                            continue;
+                        }
+                        (g, t)
+                    }
+                    None => break,
+                },
+            };
             if entry != u32::MAX {
                 let (info, exit) = self.survey_from_crossing(f, entry, s, scratch);
                 relevant.push((f, info));

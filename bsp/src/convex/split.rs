@@ -22,7 +22,7 @@
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::Scratch;
 use super::survey::{FaceInfo, FaceSurvey};
-use crate::exact::{Plane, Sign, intersect_3_planes};
+use crate::exact::{Plane, Sign, intersect_3_planes_with};
 
 impl ConvexArena {
     /// Splits along the section, given the faces that meet it in
@@ -41,7 +41,7 @@ impl ConvexArena {
         let mut section = std::mem::take(&mut scratch.section);
         let mut section_new = std::mem::take(&mut scratch.section_new);
         // Sorted, so the result does not depend on how the faces were found.
-        relevant.sort_unstable_by_key(|&(f, _)| f);
+        sort_by_face(&mut relevant);
         // 1. Split crossing edges.
         for &(_, info) in &relevant {
             if let FaceInfo::Straddling { crossing, .. } = info
@@ -130,13 +130,21 @@ impl ConvexArena {
     fn split_edge(&mut self, h: u32, s: &Plane) -> u32 {
         let e = self.half_edges[h as usize];
         let t = self.half_edges[e.twin as usize];
-        let point = intersect_3_planes(self.face_plane(e.face), self.face_plane(t.face), s)
-            .expect("a crossing edge meets the cutting plane in one point");
         let (h2, t2) = (
             self.half_edges.len() as u32,
             self.half_edges.len() as u32 + 1,
         );
-        let m = self.push_vertex(point, h2);
+        // The new point is written straight into the point array.
+        let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
+        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
+        let point = points.len() as u32;
+        intersect_3_planes_with(plane(e.face), plane(t.face), s, |p| points.push(p))
+            .expect("a crossing edge meets the cutting plane in one point");
+        let m = self.vertices.len() as u32;
+        self.vertices.push(Vertex {
+            point,
+            half_edge: h2,
+        });
         // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
         self.half_edges.extend_from_slice(&[
             HalfEdge {
@@ -339,6 +347,27 @@ impl ConvexArena {
         }
         scratch.cap_edges = cap_edges;
         first_cap_edge
+    }
+}
+
+/// Sorts the faces that meet the section by face index. A plane meets few
+/// faces of a convex polyhedron (a handful, typically), where an insertion
+/// sort costs less than the general sort's set-up; long lists go to the
+/// general sort. Face indices are distinct, so both give the same order.
+fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
+    const SHORT: usize = 24;
+    if relevant.len() > SHORT {
+        relevant.sort_unstable_by_key(|&(f, _)| f);
+        return;
+    }
+    for i in 1..relevant.len() {
+        let item = relevant[i];
+        let mut j = i;
+        while j > 0 && relevant[j - 1].0 > item.0 {
+            relevant[j] = relevant[j - 1];
+            j -= 1;
+        }
+        relevant[j] = item;
     }
 }
 

@@ -160,6 +160,19 @@ fn intersect_narrow(n: [[i64; 3]; 3], d: [i128; 3], c: [[i128; 3]; 3]) -> Option
 #[must_use]
 #[inline]
 pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
+    intersect_3_planes_with(p, q, r, |v| v)
+}
+
+/// [`intersect_3_planes`], handing the vertex to `sink` inside the path
+/// that built it: a caller that stores it (pushes it onto an array) writes
+/// it once, in place, instead of building it on the stack and copying it.
+#[inline(always)]
+pub(crate) fn intersect_3_planes_with<R>(
+    p: &Plane,
+    q: &Plane,
+    r: &Plane,
+    sink: impl FnOnce(Point4) -> R,
+) -> Option<R> {
     let n = [p.normal(), q.normal(), r.normal()];
     let d = [p.d, q.d, r.d];
     let bn = u32::from(p.normal_bits.max(q.normal_bits).max(r.normal_bits));
@@ -167,13 +180,13 @@ pub fn intersect_3_planes(p: &Plane, q: &Plane, r: &Plane) -> Option<Point4> {
     let path = Path::for_bits(bn, bd);
     if path == Path::Small {
         // |d| < 2^(63 − 3 − 2bn): the conversions are exact.
-        return intersect_small(n, d.map(|d| d as i64));
+        return intersect_small(n, d.map(|d| d as i64)).map(sink);
     }
     let minors = minors(n);
     if path == Path::Narrow {
-        intersect_narrow(n, d, minors)
+        intersect_narrow(n, d, minors).map(sink)
     } else {
-        intersect_wide(n, d, minors)
+        intersect_wide(n, d, minors).map(sink)
     }
 }
 

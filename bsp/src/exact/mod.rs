@@ -28,6 +28,7 @@ pub use classify::{
     compare_offsets, offset_estimate, plane_dot_exact,
 };
 pub use intersect::intersect_3_planes;
+pub(crate) use intersect::intersect_3_planes_with;
 pub use plane::{Plane, are_planes_parallel, plane_from_points, plane_from_points_normalized};
 pub use point::{IntPoint, Point4};
 pub use sign::Sign;
