@@ -195,6 +195,28 @@ impl Polygon {
         }
     }
 
+    /// [`Self::whole_side`], without recording the sides of the corners:
+    /// it stops at the first corner that shows the polygon straddles `p`.
+    #[inline]
+    pub(crate) fn side_of_plane(&self, p: &Plane) -> Option<bool> {
+        let (mut below, mut above) = (false, false);
+        for v in &self.corners {
+            match side_of(v, p) {
+                Sign::Negative => below = true,
+                Sign::Positive => above = true,
+                Sign::Zero => {}
+            }
+            if below && above {
+                return None;
+            }
+        }
+        Some(match (below, above) {
+            (true, _) => false,
+            (false, true) => true,
+            (false, false) => faces_along(&self.support, p),
+        })
+    }
+
     /// The parts `wanted` (below, above) of a polygon with corners on both
     /// sides of `p` (`sides` as [`Self::whole_side`] wrote them): those
     /// [`Self::split_wanted`] gives.
