@@ -195,13 +195,30 @@ impl Polygon {
         }
     }
 
+    /// The exact side of `p` that corner `k` is on: zero without
+    /// arithmetic when `p` is one of the two edge planes meeting there (as
+    /// given, or flipped), as for the corners that a cut by `p` made.
+    #[cold]
+    #[inline(never)]
+    fn corner_side_exact(&self, k: usize, p: &Plane) -> Sign {
+        let n = self.edges.len();
+        let on = |e: &Plane| e == p || *e == p.flipped();
+        if on(&self.edges[k]) || on(&self.edges[(k + n - 1) % n]) {
+            Sign::Zero
+        } else {
+            classify_vertex_exact(&self.corners[k], p)
+        }
+    }
+
     /// [`Self::whole_side`], without recording the sides of the corners:
     /// it stops at the first corner that shows the polygon straddles `p`.
     #[inline]
     pub(crate) fn side_of_plane(&self, p: &Plane) -> Option<bool> {
         let (mut below, mut above) = (false, false);
-        for v in &self.corners {
-            match side_of(v, p) {
+        for (k, v) in self.corners.iter().enumerate() {
+            let side =
+                classify_vertex_filtered(v, p).unwrap_or_else(|| self.corner_side_exact(k, p));
+            match side {
                 Sign::Negative => below = true,
                 Sign::Positive => above = true,
                 Sign::Zero => {}
@@ -742,5 +759,55 @@ mod tests {
             }
         }
         assert!(checked > 3000, "only {checked} corners checked");
+    }
+
+    /// [`Polygon::side_of_plane`] agrees with [`Polygon::whole_side`] for
+    /// the parts of repeated splits, against the splitting planes (on which
+    /// the parts have corners, found without arithmetic), their flips and
+    /// other planes through corners.
+    #[test]
+    fn side_of_plane_agrees_with_whole_side() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let (mut checked, mut touching) = (0, 0);
+        for _ in 0..200 {
+            let corners = [0; 3].map(|_| random_point(&mut rng));
+            let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
+                continue;
+            };
+            let mut pieces = vec![triangle];
+            let mut planes = Vec::new();
+            for round in 0..5 {
+                let x = if round % 2 == 0 {
+                    corners[rng.random_range(0..3)]
+                } else {
+                    random_point(&mut rng)
+                };
+                let Some(plane) = plane_through(&mut rng, x) else {
+                    continue;
+                };
+                planes.push(plane);
+                planes.push(plane.flipped());
+                pieces = pieces
+                    .into_iter()
+                    .flat_map(|piece| {
+                        let (below, above) = piece.split(&plane);
+                        below.into_iter().chain(above)
+                    })
+                    .collect();
+            }
+            for piece in &pieces {
+                let mut sides = vec![Sign::Zero; piece.vertices().len()];
+                for p in &planes {
+                    let whole = piece.whole_side(p, &mut sides);
+                    assert_eq!(piece.side_of_plane(p), whole);
+                    touching += usize::from(sides.contains(&Sign::Zero));
+                    checked += 1;
+                }
+            }
+        }
+        assert!(
+            checked > 2000 && touching > 500,
+            "{checked} checked, {touching} touching"
+        );
     }
 }
