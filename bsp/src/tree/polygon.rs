@@ -187,7 +187,13 @@ impl Polygon {
     /// sides of the corners are written to `sides` (one per corner).
     #[inline]
     pub(crate) fn whole_side(&self, p: &Plane, sides: &mut [Sign]) -> Option<bool> {
-        match classify_corners(&self.corners, p, sides) {
+        let (mut below, mut above) = (false, false);
+        for (k, (side, v)) in sides.iter_mut().zip(&self.corners).enumerate() {
+            *side = classify_vertex_filtered(v, p).unwrap_or_else(|| self.corner_side_exact(k, p));
+            below |= *side == Sign::Negative;
+            above |= *side == Sign::Positive;
+        }
+        match (below, above) {
             (true, true) => None,
             (true, false) => Some(false),
             (false, true) => Some(true),
@@ -761,12 +767,12 @@ mod tests {
         assert!(checked > 3000, "only {checked} corners checked");
     }
 
-    /// [`Polygon::side_of_plane`] agrees with [`Polygon::whole_side`] for
-    /// the parts of repeated splits, against the splitting planes (on which
-    /// the parts have corners, found without arithmetic), their flips and
-    /// other planes through corners.
+    /// [`Polygon::whole_side`] and [`Polygon::side_of_plane`] agree with
+    /// classifying every corner in full, for the parts of repeated splits
+    /// against the splitting planes (on which the parts have corners, found
+    /// without arithmetic) and their flips.
     #[test]
-    fn side_of_plane_agrees_with_whole_side() {
+    fn whole_side_agrees_with_full_classification() {
         let mut rng = ChaCha8Rng::seed_from_u64(9);
         let (mut checked, mut touching) = (0, 0);
         for _ in 0..200 {
@@ -796,11 +802,20 @@ mod tests {
                     .collect();
             }
             for piece in &pieces {
-                let mut sides = vec![Sign::Zero; piece.vertices().len()];
+                let n = piece.vertices().len();
+                let (mut sides, mut exact) = (vec![Sign::Zero; n], vec![Sign::Zero; n]);
                 for p in &planes {
-                    let whole = piece.whole_side(p, &mut sides);
-                    assert_eq!(piece.side_of_plane(p), whole);
-                    touching += usize::from(sides.contains(&Sign::Zero));
+                    // Every corner classified in full, as the reference.
+                    let expected = match classify_corners(piece.vertices(), p, &mut exact) {
+                        (true, true) => None,
+                        (true, false) => Some(false),
+                        (false, true) => Some(true),
+                        (false, false) => Some(faces_along(&piece.support, p)),
+                    };
+                    assert_eq!(piece.whole_side(p, &mut sides), expected);
+                    assert_eq!(sides, exact);
+                    assert_eq!(piece.side_of_plane(p), expected);
+                    touching += usize::from(exact.contains(&Sign::Zero));
                     checked += 1;
                 }
             }
