@@ -11,8 +11,11 @@
 //! A border face is clipped exactly against the region across: descending
 //! from the root, it is split by the axis planes of each inner cell it
 //! reaches (a face lying in such a plane goes to the side it faces), then
-//! against the neighbour's BSP. Pieces are kept where the label across is
-//! smaller — empty, or a material with a smaller label (an interface is
+//! against the neighbour's BSP — unless, followed down that BSP whole (to
+//! both sides of each plane it straddles), it reaches no leaf with a
+//! smaller label (`Bsp::drops_whole`): then nothing of it would be kept,
+//! and it is dropped uncut, as most border faces are. Pieces are kept
+//! where the label across is smaller — empty, or a material with a smaller label (an interface is
 //! reported once) — so the union of all cells' surfaces is the boundary of
 //! every material region of the octree, with no face between two cells of
 //! the same material. T-junctions between cells remain; the mesh stage
@@ -131,6 +134,7 @@ impl Octree {
             pieces,
             next,
             clip,
+            nodes,
         } = scratch;
         stack.push((&self.root, root, polygon, *from));
         while let Some((mut node, mut cell, polygon, range)) = stack.pop() {
@@ -147,7 +151,11 @@ impl Octree {
             match node {
                 OctNode::Leaf(Leaf::Uniform(other)) => emit(polygon, *other),
                 OctNode::Leaf(Leaf::Bsp(bsp)) => {
-                    bsp.clip_polygon(0, polygon, label, clip, &mut emit);
+                    // Mostly the neighbour's solid covers the piece: then
+                    // it is dropped without being cut up.
+                    if !bsp.drops_whole(&polygon, label, nodes) {
+                        bsp.clip_polygon(0, polygon, label, clip, &mut emit);
+                    }
                 }
                 OctNode::Inner(children) => {
                     let mid = cell.mid();
@@ -181,13 +189,15 @@ impl Octree {
 /// Working memory of [`Octree::clip_across`], reused across the border
 /// faces of a cell: the cells still to visit with their piece and the box
 /// range known to hold it, the pieces of one inner cell, axis by axis, and
-/// the pieces still to clip in a neighbour's BSP.
+/// the pieces still to clip in a neighbour's BSP, and its nodes still to
+/// visit when testing whether a piece is dropped whole.
 #[derive(Default)]
 struct Descent<'a> {
     stack: Vec<(&'a OctNode, CellBox, Polygon, CellBox)>,
     pieces: Vec<(Polygon, CellBox, usize)>,
     next: Vec<(Polygon, CellBox, usize)>,
     clip: Vec<(NodeId, Polygon)>,
+    nodes: Vec<NodeId>,
 }
 
 /// The one axis a normal `n` has a non-zero component on, if only one.

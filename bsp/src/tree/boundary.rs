@@ -226,6 +226,47 @@ impl Bsp {
         self.clip_pieces(n, polygon, stack, Some(kept_below), emit);
     }
 
+    /// Whether [`Bsp::clip_polygon`] of `polygon` at the root, keeping
+    /// pieces below `kept_below`, would certainly hand nothing on: the
+    /// polygon is followed down whole, to both sides of every plane it
+    /// straddles, and no leaf it reaches has a smaller label. Every piece of
+    /// the clip is part of the polygon and goes only to sides the polygon
+    /// goes to, so it reaches only leaves reached here. `false` does not
+    /// mean that something is kept. `stack` is working memory (left empty).
+    pub(crate) fn drops_whole(
+        &self,
+        polygon: &Polygon,
+        kept_below: Label,
+        stack: &mut Vec<NodeId>,
+    ) -> bool {
+        stack.clear();
+        stack.push(0);
+        while let Some(n) = stack.pop() {
+            let (plane, below, above) = match self.nodes()[n as usize] {
+                Node::Leaf(other) if other < kept_below => {
+                    stack.clear();
+                    return false;
+                }
+                Node::Leaf(_) => continue,
+                Node::Split {
+                    plane,
+                    below,
+                    above,
+                } => (plane, below, above),
+            };
+            let [want_below, want_above] = self.wanted(kept_below, below, above);
+            match polygon.side_of_plane(&self.planes()[plane as usize]) {
+                Some(false) => stack.extend(want_below.then_some(below)),
+                Some(true) => stack.extend(want_above.then_some(above)),
+                None => {
+                    stack.extend(want_above.then_some(above));
+                    stack.extend(want_below.then_some(below));
+                }
+            }
+        }
+        true
+    }
+
     /// Which sides (below, above) of a split with these children can keep
     /// a piece of a face of `label`: not a leaf whose label is `label` or
     /// more (the piece would be dropped there).
@@ -299,4 +340,95 @@ fn cell_face(arena: &ConvexArena, f: u32) -> Polygon {
         corners.push(*arena.point(half.origin));
     }
     Polygon::with_corners(*arena.face_plane(f), edges, corners)
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::exact::IntPoint;
+    use crate::tree::BooleanOp;
+
+    fn point(x: i64, y: i64, z: i64) -> IntPoint {
+        IntPoint::new(x, y, z).expect("in budget")
+    }
+
+    /// A box with corners `lo` and `hi` filled with `label`.
+    fn solid_box(lo: [i64; 3], hi: [i64; 3], label: Label) -> Bsp {
+        let mut arena = ConvexArena::new();
+        let poly = arena
+            .add_box(point(lo[0], lo[1], lo[2]), point(hi[0], hi[1], hi[2]))
+            .expect("in budget");
+        Bsp::from_convex(&arena, poly, label)
+    }
+
+    /// A box of random size (edges 4 to 19) and place inside `[-40, 40]³`.
+    fn random_box(rng: &mut ChaCha8Rng, label: Label) -> Bsp {
+        let lo = [0; 3].map(|_| rng.random_range(-40..20));
+        let hi = lo.map(|l| l + rng.random_range(4..20));
+        solid_box(lo, hi, label)
+    }
+
+    /// A block of material 1 with a box of material 2 and box holes, and
+    /// small triangles inside it: every triangle that [`Bsp::drops_whole`]
+    /// drops has no piece kept by the exact clip, and both answers occur,
+    /// also for triangles the tree's planes cut.
+    #[test]
+    fn drops_whole_only_when_the_clip_keeps_nothing() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (mut dropped, mut dropped_cut, mut kept) = (0, 0, 0);
+        for _ in 0..40 {
+            let mut bsp = solid_box([-40; 3], [40; 3], 1);
+            for i in 0..4 {
+                let (other, op) = match i {
+                    0 => (random_box(&mut rng, 2), BooleanOp::Union),
+                    _ => (random_box(&mut rng, 1), BooleanOp::Difference),
+                };
+                let mut arena = ConvexArena::new();
+                let bounds = arena
+                    .add_box(point(-64, -64, -64), point(64, 64, 64))
+                    .expect("in budget");
+                bsp = bsp.merge(&other, op, &mut arena, bounds);
+            }
+            for _ in 0..50 {
+                let centre = [0; 3].map(|_| rng.random_range(-36..36));
+                let corners = [0; 3].map(|_| {
+                    let mut c = |i: usize| centre[i] + rng.random_range(-8..8);
+                    point(c(0), c(1), c(2))
+                });
+                let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
+                    continue;
+                };
+                let label = rng.random_range(1..=2);
+                let mut sides = [Sign::Zero; 3];
+                let cut = bsp
+                    .planes()
+                    .iter()
+                    .any(|p| triangle.whole_side(p, &mut sides).is_none());
+                let mut nodes = Vec::new();
+                let drops = bsp.drops_whole(&triangle, label, &mut nodes);
+                assert!(nodes.is_empty());
+                let mut pieces = 0;
+                let mut stack = Vec::new();
+                bsp.clip_polygon(0, triangle, label, &mut stack, &mut |_, _| pieces += 1);
+                if drops {
+                    assert_eq!(pieces, 0, "a dropped triangle has kept pieces");
+                    dropped += 1;
+                    dropped_cut += usize::from(cut);
+                } else {
+                    kept += usize::from(pieces > 0);
+                }
+            }
+        }
+        assert!(
+            dropped > 100 && kept > 100,
+            "{dropped} dropped, {kept} kept"
+        );
+        assert!(
+            dropped_cut > 10,
+            "only {dropped_cut} dropped triangles were cut"
+        );
+    }
 }

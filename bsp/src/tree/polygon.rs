@@ -187,12 +187,57 @@ impl Polygon {
     /// sides of the corners are written to `sides` (one per corner).
     #[inline]
     pub(crate) fn whole_side(&self, p: &Plane, sides: &mut [Sign]) -> Option<bool> {
-        match classify_corners(&self.corners, p, sides) {
+        let (mut below, mut above) = (false, false);
+        for (k, (side, v)) in sides.iter_mut().zip(&self.corners).enumerate() {
+            *side = classify_vertex_filtered(v, p).unwrap_or_else(|| self.corner_side_exact(k, p));
+            below |= *side == Sign::Negative;
+            above |= *side == Sign::Positive;
+        }
+        match (below, above) {
             (true, true) => None,
             (true, false) => Some(false),
             (false, true) => Some(true),
             (false, false) => Some(faces_along(&self.support, p)),
         }
+    }
+
+    /// The exact side of `p` that corner `k` is on: zero without
+    /// arithmetic when `p` is one of the two edge planes meeting there (as
+    /// given, or flipped), as for the corners that a cut by `p` made.
+    #[cold]
+    #[inline(never)]
+    fn corner_side_exact(&self, k: usize, p: &Plane) -> Sign {
+        let n = self.edges.len();
+        let on = |e: &Plane| e == p || *e == p.flipped();
+        if on(&self.edges[k]) || on(&self.edges[(k + n - 1) % n]) {
+            Sign::Zero
+        } else {
+            classify_vertex_exact(&self.corners[k], p)
+        }
+    }
+
+    /// [`Self::whole_side`], without recording the sides of the corners:
+    /// it stops at the first corner that shows the polygon straddles `p`.
+    #[inline]
+    pub(crate) fn side_of_plane(&self, p: &Plane) -> Option<bool> {
+        let (mut below, mut above) = (false, false);
+        for (k, v) in self.corners.iter().enumerate() {
+            let side =
+                classify_vertex_filtered(v, p).unwrap_or_else(|| self.corner_side_exact(k, p));
+            match side {
+                Sign::Negative => below = true,
+                Sign::Positive => above = true,
+                Sign::Zero => {}
+            }
+            if below && above {
+                return None;
+            }
+        }
+        Some(match (below, above) {
+            (true, _) => false,
+            (false, true) => true,
+            (false, false) => faces_along(&self.support, p),
+        })
     }
 
     /// The parts `wanted` (below, above) of a polygon with corners on both
@@ -720,5 +765,64 @@ mod tests {
             }
         }
         assert!(checked > 3000, "only {checked} corners checked");
+    }
+
+    /// [`Polygon::whole_side`] and [`Polygon::side_of_plane`] agree with
+    /// classifying every corner in full, for the parts of repeated splits
+    /// against the splitting planes (on which the parts have corners, found
+    /// without arithmetic) and their flips.
+    #[test]
+    fn whole_side_agrees_with_full_classification() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let (mut checked, mut touching) = (0, 0);
+        for _ in 0..200 {
+            let corners = [0; 3].map(|_| random_point(&mut rng));
+            let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
+                continue;
+            };
+            let mut pieces = vec![triangle];
+            let mut planes = Vec::new();
+            for round in 0..5 {
+                let x = if round % 2 == 0 {
+                    corners[rng.random_range(0..3)]
+                } else {
+                    random_point(&mut rng)
+                };
+                let Some(plane) = plane_through(&mut rng, x) else {
+                    continue;
+                };
+                planes.push(plane);
+                planes.push(plane.flipped());
+                pieces = pieces
+                    .into_iter()
+                    .flat_map(|piece| {
+                        let (below, above) = piece.split(&plane);
+                        below.into_iter().chain(above)
+                    })
+                    .collect();
+            }
+            for piece in &pieces {
+                let n = piece.vertices().len();
+                let (mut sides, mut exact) = (vec![Sign::Zero; n], vec![Sign::Zero; n]);
+                for p in &planes {
+                    // Every corner classified in full, as the reference.
+                    let expected = match classify_corners(piece.vertices(), p, &mut exact) {
+                        (true, true) => None,
+                        (true, false) => Some(false),
+                        (false, true) => Some(true),
+                        (false, false) => Some(faces_along(&piece.support, p)),
+                    };
+                    assert_eq!(piece.whole_side(p, &mut sides), expected);
+                    assert_eq!(sides, exact);
+                    assert_eq!(piece.side_of_plane(p), expected);
+                    touching += usize::from(exact.contains(&Sign::Zero));
+                    checked += 1;
+                }
+            }
+        }
+        assert!(
+            checked > 2000 && touching > 500,
+            "{checked} checked, {touching} touching"
+        );
     }
 }
