@@ -5,11 +5,15 @@
 //!
 //! The walk descends only into cells whose closed box the closed tool
 //! meets ([`Tool::touches`]: `bounds(T)` first, then exactly); children run
-//! in parallel. At a leaf, an exact test (cutting `C` by the
-//! tool's planes) decides whether `T` has volume in `C`; if so, the leaf's
-//! BSP is merged with `T` inside `C` (§3.5), rebuilt without redundancy
-//! (§3.7) and, when still over the budget, split into eight children by
-//! rebuilding it inside each child box. After the children of an inner cell
+//! in parallel. At a leaf, `T` is first restricted to `C` (its splits whose
+//! planes cut `C`; the merge finds the same tree with it). When that leaves
+//! one region, `C` lies outside `T` or inside it — inside, where the edit
+//! maps every label of the leaf to empty, the leaf becomes empty without a
+//! cut. Otherwise an exact test (a corner of `C` strictly inside `T`, else
+//! cutting `C` by the tool's planes) decides whether `T` has volume in `C`;
+//! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
+//! without redundancy (§3.7) and, when still over the budget, split into
+//! eight children by rebuilding it inside each child box. After the children of an inner cell
 //! changed, eight leaf children that fit the budget together are combined:
 //! their BSPs are grafted under the axis planes (Fig. 8, combine A) and
 //! rebuilt inside the cell (combine B). Every step is exact and every
@@ -22,7 +26,7 @@ use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
 use super::graft::axis_graft;
-use super::tool::Tool;
+use super::tool::{Tool, restricted, solid_at_a_corner};
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
 use crate::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId, with_arena};
@@ -275,16 +279,25 @@ impl Walk<'_> {
                 return (None, touched().into());
             }
         }
-        // For a BSP leaf, an exact test first spares the merge and the
-        // rebuild where the tool misses the cell; for a uniform leaf the
-        // merge itself is that test.
-        let meets = touches
-            && cell.overlaps(&self.bounds)
-            && (matches!(leaf, Leaf::Uniform(_))
-                || with_arena(|arena| {
-                    let poly = cell_poly(arena, cell);
-                    self.tool_meets(arena, poly)
-                }));
+        // The tool restricted to the cell: the merge gives the same tree
+        // with it, and when it is one region the cell lies in that region.
+        let tool = (touches && cell.overlaps(&self.bounds)).then(|| restricted(&self.tool, &cell));
+        let meets = match tool.as_ref().map(|t| t.nodes()) {
+            None => false,
+            Some([Node::Leaf(l)]) => *l != EMPTY,
+            // For a BSP leaf, an exact test first spares the merge and the
+            // rebuild where the tool misses the cell; for a uniform leaf
+            // the merge itself is that test.
+            Some(_) => {
+                let tool = tool.as_ref().expect("restricted");
+                matches!(leaf, Leaf::Uniform(_))
+                    || solid_at_a_corner(tool, &cell)
+                    || with_arena(|arena| {
+                        let poly = cell_poly(arena, cell);
+                        tool_meets(tool, arena, poly)
+                    })
+            }
+        };
         if !meets {
             // The tool has no volume here: only labels outside it change.
             let relabeled = if self.changes_outside {
@@ -299,13 +312,37 @@ impl Walk<'_> {
             };
             return (relabeled.map(OctNode::Leaf), changes.into());
         }
+        let tool = tool.expect("the tool meets the cell");
+        // The whole cell inside the tool, every label mapped to empty
+        // there: what the merge and the rebuild would find, without a cut.
+        if let [Node::Leaf(t)] = tool.nodes()
+            && leaf_labels(leaf).all(|l| self.op.apply(l, *t) == EMPTY)
+        {
+            let faces = if self.keep_faces {
+                vec![(key, Vec::new())]
+            } else {
+                Vec::new()
+            };
+            let edited = Edited {
+                changes: Changes::leaf(key),
+                faces,
+            };
+            return (Some(OctNode::Leaf(Leaf::Uniform(EMPTY))), edited);
+        }
         let (simplified, faces) = with_arena(|arena| {
             let poly = cell_poly(arena, cell);
-            let bsp = leaf.to_bsp();
+            let uniform;
+            let bsp = match leaf {
+                Leaf::Bsp(bsp) => bsp.as_ref(),
+                Leaf::Uniform(label) => {
+                    uniform = Bsp::uniform(*label);
+                    &uniform
+                }
+            };
             if self.keep_faces {
-                bsp.merge_simplified_faces(&self.tool, self.op, arena, poly)
+                bsp.merge_simplified_faces(&tool, self.op, arena, poly)
             } else {
-                let simplified = bsp.merge_simplified(&self.tool, self.op, arena, poly);
+                let simplified = bsp.merge_simplified(&tool, self.op, arena, poly);
                 (simplified, Vec::new())
             }
         });
@@ -337,56 +374,66 @@ impl Walk<'_> {
         };
         (Some(node), edited)
     }
+}
 
-    /// Whether the tool's solid has volume in `cell` (a polyhedron of
-    /// `arena`, cut up in place): whether [`Bsp::cells`] of the tool there
-    /// has a non-empty cell, found with the same cuts but stopping at the
-    /// first such cell, and building only the part of a cut whose other
-    /// side is an empty leaf.
-    fn tool_meets(&self, arena: &mut ConvexArena, cell: PolyId) -> bool {
-        let nodes = self.tool.nodes();
-        let mut stack = vec![(0 as NodeId, cell)];
-        while let Some((n, poly)) = stack.pop() {
-            let (plane, below, above) = match nodes[n as usize] {
-                Node::Leaf(label) if label != EMPTY => return true,
-                Node::Leaf(_) => continue,
-                Node::Split {
-                    plane,
-                    below,
-                    above,
-                } => (plane, below, above),
-            };
-            let s = &self.tool.planes()[plane as usize];
-            let empty = |n: NodeId| nodes[n as usize] == Node::Leaf(EMPTY);
-            let keep = match (empty(below), empty(above)) {
-                (true, true) => continue,
-                (false, true) => Some((Part::Below, below)),
-                (true, false) => Some((Part::Above, above)),
-                (false, false) => None,
-            };
-            if let Some((part, child)) = keep {
-                match arena.cut_keeping(poly, s, part, NO_TAG) {
-                    KeptOutcome::Cut(kept) => stack.push((child, kept)),
-                    KeptOutcome::Below => {
-                        stack.extend((part == Part::Below).then_some((below, poly)))
-                    }
-                    KeptOutcome::Above => {
-                        stack.extend((part == Part::Above).then_some((above, poly)))
-                    }
+/// Whether `tool`'s solid has volume in `cell` (a polyhedron of
+/// `arena`, cut up in place): whether [`Bsp::cells`] of the tool there
+/// has a non-empty cell, found with the same cuts but stopping at the
+/// first such cell, and building only the part of a cut whose other
+/// side is an empty leaf.
+fn tool_meets(tool: &Bsp, arena: &mut ConvexArena, cell: PolyId) -> bool {
+    let nodes = tool.nodes();
+    let mut stack = vec![(0 as NodeId, cell)];
+    while let Some((n, poly)) = stack.pop() {
+        let (plane, below, above) = match nodes[n as usize] {
+            Node::Leaf(label) if label != EMPTY => return true,
+            Node::Leaf(_) => continue,
+            Node::Split {
+                plane,
+                below,
+                above,
+            } => (plane, below, above),
+        };
+        let s = &tool.planes()[plane as usize];
+        let empty = |n: NodeId| nodes[n as usize] == Node::Leaf(EMPTY);
+        let keep = match (empty(below), empty(above)) {
+            (true, true) => continue,
+            (false, true) => Some((Part::Below, below)),
+            (true, false) => Some((Part::Above, above)),
+            (false, false) => None,
+        };
+        if let Some((part, child)) = keep {
+            match arena.cut_keeping(poly, s, part, NO_TAG) {
+                KeptOutcome::Cut(kept) => stack.push((child, kept)),
+                KeptOutcome::Below => stack.extend((part == Part::Below).then_some((below, poly))),
+                KeptOutcome::Above => stack.extend((part == Part::Above).then_some((above, poly))),
+            }
+        } else {
+            match arena.cut(poly, s, NO_TAG, NO_TAG) {
+                CutOutcome::Split { below: b, above: a } => {
+                    stack.push((above, a));
+                    stack.push((below, b));
                 }
-            } else {
-                match arena.cut(poly, s, NO_TAG, NO_TAG) {
-                    CutOutcome::Split { below: b, above: a } => {
-                        stack.push((above, a));
-                        stack.push((below, b));
-                    }
-                    CutOutcome::Below => stack.push((below, poly)),
-                    CutOutcome::Above => stack.push((above, poly)),
-                }
+                CutOutcome::Below => stack.push((below, poly)),
+                CutOutcome::Above => stack.push((above, poly)),
             }
         }
-        false
     }
+    false
+}
+
+/// The labels of the leaf's regions (with repeats).
+fn leaf_labels(leaf: &Leaf) -> impl Iterator<Item = Label> + '_ {
+    let (uniform, nodes) = match leaf {
+        Leaf::Uniform(label) => (Some(*label), &[][..]),
+        Leaf::Bsp(bsp) => (None, bsp.nodes()),
+    };
+    uniform
+        .into_iter()
+        .chain(nodes.iter().filter_map(|n| match n {
+            Node::Leaf(l) => Some(*l),
+            Node::Split { .. } => None,
+        }))
 }
 
 /// The leaf with every label `l` replaced by `f(l, EMPTY)`, or `None` when

@@ -7,8 +7,10 @@
 //! the closed solid meets ([`Tool::touches`]).
 
 mod contact;
+mod restrict;
 
 use contact::ConvexPiece;
+pub(crate) use restrict::{restricted, solid_at_a_corner};
 
 use super::cell::CellBox;
 use crate::Error;

@@ -215,7 +215,7 @@ fn dot(u: [i64; 3], x: [i64; 3]) -> i128 {
 
 /// `[u]_B` for the box `[lo, hi]`: each term takes the corner coordinate
 /// that makes it smallest (largest).
-fn box_range(u: [i64; 3], lo: [i64; 3], hi: [i64; 3]) -> (i128, i128) {
+pub(super) fn box_range(u: [i64; 3], lo: [i64; 3], hi: [i64; 3]) -> (i128, i128) {
     let (mut min, mut max) = (0i128, 0i128);
     for a in 0..3 {
         let (l, h) = (
