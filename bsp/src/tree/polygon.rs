@@ -716,6 +716,39 @@ mod tests {
         (n != [0; 3]).then(|| Plane::new(n[0], n[1], n[2], d).expect("small coefficients"))
     }
 
+    /// The parts of `triangle` after `rounds` splits by random planes, every
+    /// `corner_every`-th through one of its `corners` (so corners land on
+    /// the plane), and the planes used with their flips.
+    fn split_repeatedly(
+        rng: &mut ChaCha8Rng,
+        triangle: Polygon,
+        corners: [IntPoint; 3],
+        rounds: usize,
+        corner_every: usize,
+    ) -> (Vec<Polygon>, Vec<Plane>) {
+        let mut pieces = vec![triangle];
+        let mut planes = Vec::new();
+        for round in 0..rounds {
+            let x = if round % corner_every == 0 {
+                corners[rng.random_range(0..3)]
+            } else {
+                random_point(rng)
+            };
+            let Some(plane) = plane_through(rng, x) else {
+                continue;
+            };
+            planes.extend([plane, plane.flipped()]);
+            pieces = pieces
+                .into_iter()
+                .flat_map(|piece| {
+                    let (below, above) = piece.split(&plane);
+                    below.into_iter().chain(above)
+                })
+                .collect();
+        }
+        (pieces, planes)
+    }
+
     /// Every corner of every part, after repeated splits by random planes
     /// (some through corners, so corners land on the plane), has exactly
     /// the digits of a fresh meet of its planes: the corners a split takes
@@ -729,24 +762,7 @@ mod tests {
             let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
                 continue;
             };
-            let mut pieces = vec![triangle];
-            for round in 0..6 {
-                let x = if round % 3 == 0 {
-                    corners[rng.random_range(0..3)]
-                } else {
-                    random_point(&mut rng)
-                };
-                let Some(plane) = plane_through(&mut rng, x) else {
-                    continue;
-                };
-                pieces = pieces
-                    .into_iter()
-                    .flat_map(|piece| {
-                        let (below, above) = piece.split(&plane);
-                        below.into_iter().chain(above)
-                    })
-                    .collect();
-            }
+            let (pieces, _) = split_repeatedly(&mut rng, triangle, corners, 6, 3);
             for piece in &pieces {
                 let n = piece.edges.len();
                 assert_eq!(piece.vertices().len(), n);
@@ -780,27 +796,7 @@ mod tests {
             let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
                 continue;
             };
-            let mut pieces = vec![triangle];
-            let mut planes = Vec::new();
-            for round in 0..5 {
-                let x = if round % 2 == 0 {
-                    corners[rng.random_range(0..3)]
-                } else {
-                    random_point(&mut rng)
-                };
-                let Some(plane) = plane_through(&mut rng, x) else {
-                    continue;
-                };
-                planes.push(plane);
-                planes.push(plane.flipped());
-                pieces = pieces
-                    .into_iter()
-                    .flat_map(|piece| {
-                        let (below, above) = piece.split(&plane);
-                        below.into_iter().chain(above)
-                    })
-                    .collect();
-            }
+            let (pieces, planes) = split_repeatedly(&mut rng, triangle, corners, 5, 2);
             for piece in &pieces {
                 let n = piece.vertices().len();
                 let (mut sides, mut exact) = (vec![Sign::Zero; n], vec![Sign::Zero; n]);
