@@ -22,7 +22,7 @@
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::Scratch;
 use super::survey::{FaceInfo, FaceSurvey};
-use crate::exact::{Plane, Sign, intersect_3_planes_with};
+use crate::exact::{Plane, Sign};
 
 impl ConvexArena {
     /// Splits along the section, given the faces that meet it in
@@ -134,17 +134,9 @@ impl ConvexArena {
             self.half_edges.len() as u32,
             self.half_edges.len() as u32 + 1,
         );
-        // The new point is written straight into the point array.
-        let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
-        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
-        let point = points.len() as u32;
-        intersect_3_planes_with(plane(e.face), plane(t.face), s, |p| points.push(p))
+        let m = self
+            .push_meet_vertex(e.face, t.face, s, h2)
             .expect("a crossing edge meets the cutting plane in one point");
-        let m = self.vertices.len() as u32;
-        self.vertices.push(Vertex {
-            point,
-            half_edge: h2,
-        });
         // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
         self.half_edges.extend_from_slice(&[
             HalfEdge {

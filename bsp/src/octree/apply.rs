@@ -13,8 +13,9 @@
 //! cutting `C` by the tool's planes) decides whether `T` has volume in `C`;
 //! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
 //! without redundancy (§3.7) and, when still over the budget, split into
-//! eight children by rebuilding it inside each child box. After the children of an inner cell
-//! changed, eight leaf children that fit the budget together are combined:
+//! eight children by rebuilding it inside each child box. After the
+//! children of an inner cell changed, eight leaf children that fit the
+//! budget together are combined:
 //! their BSPs are grafted under the axis planes (Fig. 8, combine A) and
 //! rebuilt inside the cell (combine B). Every step is exact and every
 //! result a pure function of its inputs, so the octree is bit-identical
@@ -282,14 +283,12 @@ impl Walk<'_> {
         // The tool restricted to the cell: the merge gives the same tree
         // with it, and when it is one region the cell lies in that region.
         let tool = (touches && cell.overlaps(&self.bounds)).then(|| restricted(&self.tool, &cell));
-        let meets = match tool.as_ref().map(|t| t.nodes()) {
-            None => false,
-            Some([Node::Leaf(l)]) => *l != EMPTY,
+        let meets = tool.as_ref().is_some_and(|tool| match tool.nodes() {
+            [Node::Leaf(l)] => *l != EMPTY,
             // For a BSP leaf, an exact test first spares the merge and the
             // rebuild where the tool misses the cell; for a uniform leaf
             // the merge itself is that test.
-            Some(_) => {
-                let tool = tool.as_ref().expect("restricted");
+            _ => {
                 matches!(leaf, Leaf::Uniform(_))
                     || solid_at_a_corner(tool, &cell)
                     || with_arena(|arena| {
@@ -297,7 +296,7 @@ impl Walk<'_> {
                         tool_meets(tool, arena, poly)
                     })
             }
-        };
+        });
         if !meets {
             // The tool has no volume here: only labels outside it change.
             let relabeled = if self.changes_outside {

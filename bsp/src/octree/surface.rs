@@ -15,10 +15,10 @@
 //! both sides of each plane it straddles), it reaches no leaf with a
 //! smaller label (`Bsp::drops_whole`): then nothing of it would be kept,
 //! and it is dropped uncut, as most border faces are. Pieces are kept
-//! where the label across is smaller — empty, or a material with a smaller label (an interface is
-//! reported once) — so the union of all cells' surfaces is the boundary of
-//! every material region of the octree, with no face between two cells of
-//! the same material. T-junctions between cells remain; the mesh stage
+//! where the label across is smaller — empty, or a material with a
+//! smaller label (an interface is reported once) — so the union of all
+//! cells' surfaces is the boundary of every material region of the
+//! octree, with no face between two cells of the same material. T-junctions between cells remain; the mesh stage
 //! removes them.
 
 use rayon::prelude::*;

@@ -188,17 +188,32 @@ impl Polygon {
     #[inline]
     pub(crate) fn whole_side(&self, p: &Plane, sides: &mut [Sign]) -> Option<bool> {
         let (mut below, mut above) = (false, false);
-        for (k, (side, v)) in sides.iter_mut().zip(&self.corners).enumerate() {
-            *side = classify_vertex_filtered(v, p).unwrap_or_else(|| self.corner_side_exact(k, p));
+        for (k, side) in sides.iter_mut().enumerate() {
+            *side = self.corner_side(k, p);
             below |= *side == Sign::Negative;
             above |= *side == Sign::Positive;
         }
+        self.side_from_corners(below, above, p)
+    }
+
+    /// The side of `p` a polygon with corners `below` and `above` it lies
+    /// on whole: see [`Self::whole_side`].
+    #[inline]
+    fn side_from_corners(&self, below: bool, above: bool, p: &Plane) -> Option<bool> {
         match (below, above) {
             (true, true) => None,
             (true, false) => Some(false),
             (false, true) => Some(true),
             (false, false) => Some(faces_along(&self.support, p)),
         }
+    }
+
+    /// The side of `p` that corner `k` is on: the filter's answer, else
+    /// [`Self::corner_side_exact`].
+    #[inline]
+    fn corner_side(&self, k: usize, p: &Plane) -> Sign {
+        classify_vertex_filtered(&self.corners[k], p)
+            .unwrap_or_else(|| self.corner_side_exact(k, p))
     }
 
     /// The exact side of `p` that corner `k` is on: zero without
@@ -221,10 +236,8 @@ impl Polygon {
     #[inline]
     pub(crate) fn side_of_plane(&self, p: &Plane) -> Option<bool> {
         let (mut below, mut above) = (false, false);
-        for (k, v) in self.corners.iter().enumerate() {
-            let side =
-                classify_vertex_filtered(v, p).unwrap_or_else(|| self.corner_side_exact(k, p));
-            match side {
+        for k in 0..self.corners.len() {
+            match self.corner_side(k, p) {
                 Sign::Negative => below = true,
                 Sign::Positive => above = true,
                 Sign::Zero => {}
@@ -233,11 +246,7 @@ impl Polygon {
                 return None;
             }
         }
-        Some(match (below, above) {
-            (true, _) => false,
-            (false, true) => true,
-            (false, false) => faces_along(&self.support, p),
-        })
+        self.side_from_corners(below, above, p)
     }
 
     /// The parts `wanted` (below, above) of a polygon with corners on both
@@ -802,12 +811,8 @@ mod tests {
                 let (mut sides, mut exact) = (vec![Sign::Zero; n], vec![Sign::Zero; n]);
                 for p in &planes {
                     // Every corner classified in full, as the reference.
-                    let expected = match classify_corners(piece.vertices(), p, &mut exact) {
-                        (true, true) => None,
-                        (true, false) => Some(false),
-                        (false, true) => Some(true),
-                        (false, false) => Some(faces_along(&piece.support, p)),
-                    };
+                    let (below, above) = classify_corners(piece.vertices(), p, &mut exact);
+                    let expected = piece.side_from_corners(below, above, p);
                     assert_eq!(piece.whole_side(p, &mut sides), expected);
                     assert_eq!(sides, exact);
                     assert_eq!(piece.side_of_plane(p), expected);

@@ -209,7 +209,7 @@ fn gcd(mut a: u64, mut b: u64) -> u64 {
 }
 
 /// `u·x`, exact (see the bit budget above).
-fn dot(u: [i64; 3], x: [i64; 3]) -> i128 {
+pub(super) fn dot(u: [i64; 3], x: [i64; 3]) -> i128 {
     (0..3).map(|a| i128::from(u[a]) * i128::from(x[a])).sum()
 }
 

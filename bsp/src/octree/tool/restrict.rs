@@ -15,7 +15,8 @@
 //! every cell reaching them per plane. When no split is left, the box lies
 //! in one region of `T`.
 
-use super::contact::box_range;
+use super::contact::{box_range, dot};
+use crate::exact::Plane;
 use crate::octree::CellBox;
 use crate::tree::{Bsp, EMPTY, Node, NodeId};
 
@@ -58,8 +59,7 @@ fn strictly_in_solid(tool: &Bsp, p: [i64; 3]) -> bool {
                 above,
             } => {
                 let s = &tool.planes()[plane as usize];
-                let (value, _) = box_range(s.normal(), p, p);
-                n = match (value + s.offset()).signum() {
+                n = match (dot(s.normal(), p) + s.offset()).signum() {
                     -1 => below,
                     1 => above,
                     _ => return false,
@@ -73,7 +73,7 @@ fn strictly_in_solid(tool: &Bsp, p: [i64; 3]) -> bool {
 struct Restrict<'a> {
     tool: &'a Bsp,
     cell: &'a CellBox,
-    planes: Vec<crate::exact::Plane>,
+    planes: Vec<Plane>,
     /// The output palette index of each plane of `tool` once used.
     palette: Vec<u32>,
     nodes: Vec<Node>,
