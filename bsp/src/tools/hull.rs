@@ -11,14 +11,10 @@
 //! middle of a straight boundary are dropped, and the result becomes a
 //! strictly convex polyhedron of a [`ConvexArena`].
 
-use std::collections::HashMap;
-use std::hash::BuildHasherDefault;
-
 use crate::Error;
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::orient::{cross, orient, sub};
-use crate::exact::{IntPoint, Plane, Point4, plane_from_points};
-use crate::word_hash::WordHasher;
+use crate::exact::{IntPoint, Plane, Point4};
 
 /// Adds the convex hull of `points` to `arena` as a strictly convex
 /// polyhedron and returns it. Duplicate and interior points are ignored.
@@ -51,43 +47,35 @@ pub fn convex_hull(arena: &mut ConvexArena, points: &[IntPoint]) -> Result<PolyI
         [[a, c, b], [a, b, d], [b, c, d], [c, a, d]]
     };
     let mut faces: Vec<Triangle> = first.iter().map(|&f| Triangle::new(f, &pts)).collect();
-    let (mut next_faces, mut visible_edges, mut sorted_edges) =
-        (Vec::new(), Vec::new(), Vec::new());
-    let mut sees = Vec::new();
+    let (mut next_faces, mut visible_edges) = (Vec::new(), Vec::new());
     for p in 0..pts.len() {
         if [a, b, c, d].contains(&p) {
             continue;
         }
-        sees.clear();
-        sees.extend(faces.iter().map(|f| f.sees(pts[p])));
-        if !sees.contains(&true) {
-            continue;
-        }
         // Horizon: directed edges of visible faces whose reverse belongs to
         // a face that is not visible, i.e. is not an edge of a visible face
-        // (looked up in a sorted copy; new faces follow the visible faces'
-        // order).
+        // (a point sees a handful of faces: a linear scan); new faces follow
+        // the visible faces' order.
         visible_edges.clear();
         next_faces.clear();
-        for (f, &seen) in faces.iter().zip(&sees) {
-            if seen {
+        for f in &faces {
+            if f.sees(pts[p]) {
                 let v = f.corners;
-                visible_edges.extend((0..3).map(|k| (v[k], v[(k + 1) % 3])));
+                visible_edges.extend([(v[0], v[1]), (v[1], v[2]), (v[2], v[0])]);
             } else {
                 next_faces.push(*f);
             }
         }
-        sorted_edges.clear();
-        sorted_edges.extend_from_slice(&visible_edges);
-        sorted_edges.sort_unstable();
+        if visible_edges.is_empty() {
+            continue;
+        }
         for &(u, w) in &visible_edges {
-            if sorted_edges.binary_search(&(w, u)).is_err() {
+            if !visible_edges.contains(&(w, u)) {
                 next_faces.push(Triangle::new([u, w, p], &pts));
             }
         }
         std::mem::swap(&mut faces, &mut next_faces);
     }
-    let faces: Vec<[usize; 3]> = faces.iter().map(|f| f.corners).collect();
     Ok(build_polyhedron(arena, &pts, &faces))
 }
 
@@ -117,93 +105,173 @@ impl Triangle {
         }
     }
 
+    /// `orient(a, b, c, d)`: positive when `d` lies strictly outside.
+    #[inline]
+    fn side(&self, d: [i64; 3]) -> i128 {
+        let n = self.normal;
+        let w = [0, 1, 2].map(|i| d[i] - self.origin[i]);
+        (0..3)
+            .map(|i| i128::from(n[i]) * i128::from(w[i]))
+            .sum::<i128>()
+    }
+
     /// Whether `d` lies strictly outside (`orient(a, b, c, d) > 0`).
     #[inline]
     fn sees(&self, d: [i64; 3]) -> bool {
-        let n = self.normal;
-        let w = [0, 1, 2].map(|i| d[i] - self.origin[i]);
-        let dot = (0..3)
-            .map(|i| i128::from(n[i]) * i128::from(w[i]))
-            .sum::<i128>();
-        dot > 0
+        self.side(d) > 0
+    }
+
+    /// The supporting plane, as [`crate::exact::plane_from_points`] of the
+    /// corners.
+    fn plane(&self) -> Plane {
+        let [a, b, c] = self.normal;
+        let [x, y, z] = self.origin.map(i128::from);
+        Plane::new_unchecked(
+            a,
+            b,
+            c,
+            -(i128::from(a) * x + i128::from(b) * y + i128::from(c) * z),
+        )
     }
 }
 
 /// Merges coplanar neighbouring triangles and adds the polyhedron.
-fn build_polyhedron(arena: &mut ConvexArena, pts: &[[i64; 3]], faces: &[[usize; 3]]) -> PolyId {
-    let point = |i: usize| IntPoint::from_array(pts[i]).expect("input points are in budget");
-    let plane_of = |f: &[usize; 3]| -> Plane {
-        plane_from_points(point(f[0]), point(f[1]), point(f[2]))
-            .expect("hull triangles are not degenerate")
-            .normalized()
-    };
-    // Group triangles by their (canonical) plane; the boundary of a group is
-    // its directed edges whose reverse lies in another group.
-    let mut groups: Vec<(Plane, Vec<[usize; 3]>)> = Vec::new();
-    let mut group_of_plane: HashMap<Plane, usize, BuildHasherDefault<WordHasher>> =
-        HashMap::with_capacity_and_hasher(faces.len(), BuildHasherDefault::default());
-    for f in faces {
-        let plane = plane_of(f);
-        let g = *group_of_plane.entry(plane).or_insert_with(|| {
-            groups.push((plane, Vec::new()));
-            groups.len() - 1
-        });
-        groups[g].1.push(*f);
-    }
+///
+/// Faces are the groups of coplanar triangles (connected on a convex
+/// hull), in the order of their first triangle; each face's corners run
+/// from its smallest vertex index, and vertices are numbered in order of
+/// first appearance.
+fn build_polyhedron(arena: &mut ConvexArena, pts: &[[i64; 3]], faces: &[Triangle]) -> PolyId {
+    let groups = coplanar_groups(pts, faces);
+    let mut index_of = vec![u32::MAX; pts.len()];
     let mut used: Vec<usize> = Vec::new();
-    let mut index_of: HashMap<usize, u32, BuildHasherDefault<WordHasher>> =
-        HashMap::with_capacity_and_hasher(pts.len(), BuildHasherDefault::default());
-    let mut polygons: Vec<(Plane, Vec<u32>)> = Vec::new();
+    let mut polygons: Vec<(Plane, Vec<u32>)> = Vec::with_capacity(groups.len());
     let (mut edges, mut boundary) = (Vec::new(), Vec::new());
-    for (plane, tris) in &groups {
-        edges.clear();
-        edges.extend(
-            tris.iter()
-                .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3]))),
-        );
-        edges.sort_unstable();
-        // The group's boundary, sorted by first vertex: one edge leaves
-        // each boundary vertex of a convex polygon.
-        boundary.clear();
-        boundary.extend(
-            edges
-                .iter()
-                .filter(|&&(u, w)| edges.binary_search(&(w, u)).is_err()),
-        );
-        let after = |v: usize| -> usize {
-            let i = boundary
-                .binary_search_by_key(&v, |&(u, _)| u)
-                .expect("the boundary is a closed loop");
-            boundary[i].1
+    for group in &groups {
+        let first = &faces[group[0]];
+        let corners: Vec<usize> = if let [_] = group[..] {
+            // One triangle: its corners from the smallest.
+            let v = first.corners;
+            let k = (0..3).min_by_key(|&k| v[k]).unwrap_or(0);
+            vec![v[k], v[(k + 1) % 3], v[(k + 2) % 3]]
+        } else {
+            boundary_loop(pts, faces, group, &mut edges, &mut boundary)
         };
-        // Walk the loop from its smallest vertex, dropping straight-through
-        // vertices.
-        let start = boundary.first().expect("a face has a boundary").0;
-        let mut ring = vec![start];
-        let mut v = after(start);
-        while v != start {
-            ring.push(v);
-            v = after(v);
-        }
-        let n = ring.len();
-        let corners: Vec<usize> = (0..n)
-            .filter(|&k| {
-                let (prev, cur, next) = (ring[(k + n - 1) % n], ring[k], ring[(k + 1) % n]);
-                cross(sub(pts[cur], pts[prev]), sub(pts[next], pts[cur])) != [0; 3]
-            })
-            .map(|k| ring[k])
-            .collect();
         let loop_ids = corners
             .iter()
             .map(|&c| {
-                *index_of.entry(c).or_insert_with(|| {
+                if index_of[c] == u32::MAX {
+                    index_of[c] = used.len() as u32;
                     used.push(c);
-                    used.len() as u32 - 1
-                })
+                }
+                index_of[c]
             })
             .collect();
-        polygons.push((*plane, loop_ids));
+        polygons.push((first.plane().normalized(), loop_ids));
     }
-    let points: Vec<Point4> = used.iter().map(|&i| Point4::from(point(i))).collect();
+    let points: Vec<Point4> = used
+        .iter()
+        .map(|&i| Point4::from(IntPoint::from_array(pts[i]).expect("input points are in budget")))
+        .collect();
     arena.add_polyhedron(&points, &polygons)
+}
+
+/// The triangles grouped by supporting plane (indices into `faces`), in
+/// order of each group's first triangle: neighbours across an edge are
+/// joined when the one's far corner lies in the other's plane.
+fn coplanar_groups(pts: &[[i64; 3]], faces: &[Triangle]) -> Vec<Vec<usize>> {
+    // Directed edges (from, to, triangle), sorted: the neighbour across
+    // `(u, w)` holds `(w, u)`.
+    let mut ends: Vec<(usize, usize, usize)> = faces
+        .iter()
+        .enumerate()
+        .flat_map(|(t, f)| {
+            let v = f.corners;
+            [(v[0], v[1], t), (v[1], v[2], t), (v[2], v[0], t)]
+        })
+        .collect();
+    ends.sort_unstable();
+    let mut root: Vec<usize> = (0..faces.len()).collect();
+    fn find(root: &mut [usize], mut t: usize) -> usize {
+        while root[t] != t {
+            root[t] = root[root[t]];
+            t = root[t];
+        }
+        t
+    }
+    for &(u, w, t) in &ends {
+        if u > w {
+            continue; // each undirected edge once
+        }
+        let i = ends.partition_point(|&(x, y, _)| (x, y) < (w, u));
+        let Some(&(_, _, s)) = ends.get(i).filter(|&&(x, y, _)| (x, y) == (w, u)) else {
+            continue;
+        };
+        let far = faces[s]
+            .corners
+            .into_iter()
+            .find(|&k| k != u && k != w)
+            .unwrap_or(u);
+        if faces[t].side(pts[far]) == 0 {
+            let (rt, rs) = (find(&mut root, t), find(&mut root, s));
+            root[rt.max(rs)] = rt.min(rs);
+        }
+    }
+    let mut group_of = vec![usize::MAX; faces.len()];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for t in 0..faces.len() {
+        let r = find(&mut root, t);
+        if group_of[r] == usize::MAX {
+            group_of[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[group_of[r]].push(t);
+    }
+    groups
+}
+
+/// The corners of a group of coplanar triangles: its boundary loop from
+/// its smallest vertex, without vertices in the middle of a straight side.
+fn boundary_loop(
+    pts: &[[i64; 3]],
+    faces: &[Triangle],
+    group: &[usize],
+    edges: &mut Vec<(usize, usize)>,
+    boundary: &mut Vec<(usize, usize)>,
+) -> Vec<usize> {
+    edges.clear();
+    edges.extend(group.iter().flat_map(|&t| {
+        let v = faces[t].corners;
+        [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])]
+    }));
+    edges.sort_unstable();
+    // The group's boundary, sorted by first vertex: one edge leaves each
+    // boundary vertex of a convex polygon.
+    boundary.clear();
+    boundary.extend(
+        edges
+            .iter()
+            .filter(|&&(u, w)| edges.binary_search(&(w, u)).is_err()),
+    );
+    let after = |v: usize| -> usize {
+        let i = boundary
+            .binary_search_by_key(&v, |&(u, _)| u)
+            .expect("the boundary is a closed loop");
+        boundary[i].1
+    };
+    let start = boundary.first().expect("a face has a boundary").0;
+    let mut ring = vec![start];
+    let mut v = after(start);
+    while v != start {
+        ring.push(v);
+        v = after(v);
+    }
+    let n = ring.len();
+    (0..n)
+        .filter(|&k| {
+            let (prev, cur, next) = (ring[(k + n - 1) % n], ring[k], ring[(k + 1) % n]);
+            cross(sub(pts[cur], pts[prev]), sub(pts[next], pts[cur])) != [0; 3]
+        })
+        .map(|k| ring[k])
+        .collect()
 }
