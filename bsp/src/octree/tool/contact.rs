@@ -46,7 +46,7 @@ pub(crate) struct ConvexPiece {
     /// The axes `e × x̂_a` (non-zero, reduced, first non-zero component
     /// positive, each once) with the piece's projection `[u]_P` on them;
     /// made on the first test that needs them (most boxes are decided by
-    /// the box axes or the face planes).
+    /// the box axes, the face planes or a point inside).
     edge_axes: OnceLock<Vec<EdgeAxis>>,
 }
 
@@ -148,6 +148,25 @@ impl ConvexPiece {
             .any(|&(n, d)| box_range(n, lo, hi).0 + d > 0)
         {
             return false;
+        }
+        // Two cheap sufficient conditions decide most boxes that do meet
+        // the piece before the edge axes: a vertex of the piece in the box,
+        // or the box's centre in the piece (`n·(lo + hi) + 2d ≤ 0` for
+        // every face; `|lo + hi| < 2^64`, so each term is `< 2^120`).
+        if self
+            .vertices
+            .iter()
+            .any(|v| (0..3).all(|a| lo[a] <= v[a] && v[a] <= hi[a]))
+        {
+            return true;
+        }
+        let centre2 = [0, 1, 2].map(|a| i128::from(lo[a]) + i128::from(hi[a]));
+        if self
+            .faces
+            .iter()
+            .all(|&(n, d)| (0..3).map(|a| i128::from(n[a]) * centre2[a]).sum::<i128>() + 2 * d <= 0)
+        {
+            return true;
         }
         !self.edge_axes().iter().any(|axis| {
             let (min, max) = box_range(axis.u, lo, hi);
