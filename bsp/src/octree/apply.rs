@@ -13,7 +13,8 @@
 //! cutting `C` by the tool's planes) decides whether `T` has volume in `C`;
 //! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
 //! without redundancy (§3.7) and, when still over the budget, split into
-//! eight children by rebuilding it inside each child box. After the
+//! eight children rebuilt from the pieces of its boundary faces inside
+//! each child box (`split.rs`). After the
 //! children of an inner cell changed, eight leaf children that fit the
 //! budget together are combined:
 //! their BSPs are grafted under the axis planes (Fig. 8, combine A) and
@@ -27,6 +28,7 @@ use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
 use super::graft::axis_graft;
+use super::split::{child_bsp, split_faces};
 use super::tool::{Tool, restricted, solid_at_a_corner};
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
@@ -158,7 +160,10 @@ impl Octree {
     /// children that were not all one uniform label), the boundary faces
     /// the rebuild extracted there: its surface
     /// inside the cell, with the faces on the cell's box marked
-    /// [`BoundaryFace::on_bounds`]. [`Octree::cell_surface_from`] finishes
+    /// [`BoundaryFace::on_bounds`] (for the children of a split leaf, the
+    /// pieces of the leaf's faces: on a wall between two of them only
+    /// where a face of the leaf lies, the material elsewhere being the
+    /// same on both sides). [`Octree::cell_surface_from`] finishes
     /// them into what [`Octree::cell_surface`] would give — the same exact
     /// surface, possibly in different pieces — without cutting the cell's
     /// BSP again. Sorted by key; deterministic for any thread count.
@@ -328,6 +333,8 @@ impl Walk<'_> {
             };
             return (Some(OctNode::Leaf(Leaf::Uniform(EMPTY))), edited);
         }
+        // The faces are kept also when not handed back: a leaf over the
+        // budget is split from them.
         let (simplified, faces) = with_arena(|arena| {
             let poly = cell_poly(arena, cell);
             let uniform;
@@ -338,40 +345,30 @@ impl Walk<'_> {
                     &uniform
                 }
             };
-            if self.keep_faces {
-                bsp.merge_simplified_faces(&tool, self.op, arena, poly)
-            } else {
-                let simplified = bsp.merge_simplified(&tool, self.op, arena, poly);
-                (simplified, Vec::new())
-            }
+            bsp.merge_simplified_faces(&tool, self.op, arena, poly)
         });
         if let (Leaf::Uniform(label), [crate::tree::Node::Leaf(new)]) = (leaf, simplified.nodes())
             && label == new
         {
             return (None, touched().into());
         }
-        let (node, leaves, child_faces) =
-            build_leaf_faces(simplified, key, cell, self.config, self.keep_faces);
-        let edited = match node {
-            OctNode::Leaf(_) => Edited {
-                changes: Changes::leaf(key),
-                faces: if self.keep_faces {
-                    vec![(key, faces)]
-                } else {
-                    Vec::new()
-                },
-            },
-            // The children were rebuilt inside their boxes: their faces come
-            // from those rebuilds.
-            OctNode::Inner(_) => Edited {
-                changes: Changes {
-                    changed: leaves,
-                    removed: vec![key],
-                },
-                faces: child_faces,
-            },
+        let (node, leaves, faces) = build_leaf_faces(
+            simplified,
+            Some(faces),
+            key,
+            cell,
+            self.config,
+            self.keep_faces,
+        );
+        let removed = match node {
+            OctNode::Leaf(_) => Vec::new(),
+            OctNode::Inner(_) => vec![key],
         };
-        (Some(node), edited)
+        let changes = Changes {
+            changed: leaves,
+            removed,
+        };
+        (Some(node), Edited { changes, faces })
     }
 }
 
@@ -466,54 +463,64 @@ pub(crate) fn build_leaf(
     cell: CellBox,
     config: &OctreeConfig,
 ) -> (OctNode, Vec<CellKey>) {
-    let (node, leaves, _) = build_leaf_faces(bsp, key, cell, config, false);
+    let (node, leaves, _) = build_leaf_faces(bsp, None, key, cell, config, false);
     (node, leaves)
 }
 
-/// [`build_leaf`], also returning, when `keep_faces`, the boundary faces
-/// the rebuild of each new child leaf extracted inside its box (as
-/// [`Octree::apply_with_faces`] hands them back; none when `bsp` stays one
-/// leaf).
+/// [`build_leaf`] from `bsp`'s exact boundary inside `cell` with the faces
+/// on the cell's box marked (`faces`; found here when `None` and needed),
+/// also returning, when `keep_faces`, the boundary faces of each new leaf
+/// (as [`Octree::apply_with_faces`] hands them back): `faces` when `bsp`
+/// stays one leaf, else each child's pieces of them ([`split_faces`]).
 fn build_leaf_faces(
     bsp: Bsp,
+    faces: Option<Vec<BoundaryFace>>,
     key: CellKey,
     cell: CellBox,
     config: &OctreeConfig,
     keep_faces: bool,
 ) -> (OctNode, Vec<CellKey>, CellFaces) {
     let inner = bsp.nodes().len() / 2;
+    let own_faces = |faces: Option<Vec<BoundaryFace>>| {
+        if keep_faces {
+            vec![(key, faces.unwrap_or_default())]
+        } else {
+            Vec::new()
+        }
+    };
     if inner == 0 {
         let label = match bsp.nodes()[0] {
             crate::tree::Node::Leaf(label) => label,
             crate::tree::Node::Split { .. } => EMPTY,
         };
-        return (OctNode::Leaf(Leaf::Uniform(label)), vec![key], Vec::new());
+        let node = OctNode::Leaf(Leaf::Uniform(label));
+        return (node, vec![key], own_faces(faces));
     }
     if inner <= config.max_bsp_nodes || key.depth >= config.max_depth || cell.min_edge() < 2 {
-        return (
-            OctNode::Leaf(Leaf::Bsp(Arc::new(bsp))),
-            vec![key],
-            Vec::new(),
-        );
+        let node = OctNode::Leaf(Leaf::Bsp(Arc::new(bsp)));
+        return (node, vec![key], own_faces(faces));
     }
-    let built: Vec<(OctNode, Vec<CellKey>, CellFaces)> = (0..8)
+    let faces = faces.unwrap_or_else(|| {
+        with_arena(|arena| {
+            let poly = cell_poly(arena, cell);
+            bsp.boundary(arena, poly)
+        })
+    });
+    let pieces = split_faces(faces, &cell);
+    let built: Vec<(OctNode, Vec<CellKey>, CellFaces)> = pieces
         .into_par_iter()
-        .map(|i| {
-            let (child, child_key) = (cell.child(i), key.child(i));
-            let (simplified, faces) = with_arena(|arena| {
-                let poly = cell_poly(arena, child);
-                if keep_faces {
-                    bsp.simplified_faces(arena, poly)
-                } else {
-                    (bsp.simplified(arena, poly), Vec::new())
-                }
-            });
-            let (node, leaves, mut below) =
-                build_leaf_faces(simplified, child_key, child, config, keep_faces);
-            if keep_faces && matches!(node, OctNode::Leaf(_)) {
-                below.push((child_key, faces));
-            }
-            (node, leaves, below)
+        .enumerate()
+        .map(|(i, pieces)| {
+            let child = cell.child(i);
+            let child_bsp = child_bsp(&bsp, &pieces, &child);
+            build_leaf_faces(
+                child_bsp,
+                Some(pieces),
+                key.child(i),
+                child,
+                config,
+                keep_faces,
+            )
         })
         .collect();
     let mut leaves = Vec::new();

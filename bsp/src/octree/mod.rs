@@ -49,6 +49,7 @@ mod graft;
 pub mod import;
 pub mod measure;
 mod mesh_check;
+mod split;
 pub mod store;
 pub mod surface;
 pub mod tool;

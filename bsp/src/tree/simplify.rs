@@ -83,14 +83,21 @@ impl Bsp {
     /// faces on the bounds.
     fn rebuilt_with_faces(&self, arena: &ConvexArena, cells: &[Cell]) -> (Bsp, Vec<BoundaryFace>) {
         let faces = self.boundary_of_cells(arena, cells, Bounds::Keep);
+        let rebuilt = Bsp::rebuilt_from_boundary(&faces)
+            .unwrap_or_else(|| Bsp::uniform(cells.first().map_or(EMPTY, |c| c.label)));
+        (rebuilt, faces)
+    }
+
+    /// The rebuild from `faces`, the exact boundary of some regions inside
+    /// some bounds with the faces on the bounds marked (those are left
+    /// out): the tree [`Bsp::simplified`] builds from that boundary, or
+    /// `None` when no face lies inside the bounds (the regions are then one
+    /// label there).
+    pub(crate) fn rebuilt_from_boundary(faces: &[BoundaryFace]) -> Option<Bsp> {
         // The same faces in the same order as with `Bounds::Skip`.
         let mut inner = faces.iter().filter(|f| !f.on_bounds).peekable();
-        let rebuilt = if inner.peek().is_none() {
-            Bsp::uniform(cells.first().map_or(EMPTY, |c| c.label))
-        } else {
-            Bsp::from_faces(inner, REBUILD_SEED)
-        };
-        (rebuilt, faces)
+        inner.peek()?;
+        Some(Bsp::from_faces(inner, REBUILD_SEED))
     }
 
     /// The rebuild from `self`'s cells inside some bounds (from
