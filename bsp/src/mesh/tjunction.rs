@@ -45,14 +45,16 @@
 //!
 //! # Candidates
 //!
-//! A dense uniform grid over the `f64` positions of the vertices, about
-//! `2∛V` cells per axis (`8V` cells in all, stored as one offset array and
-//! one index array). Each edge visits the cells near it in steps of at most
-//! one cell, every step's box widened by a tolerance (`2^-40` of the largest
-//! coordinate) far above the rounding of the positions (each within
-//! `2^-51` relative, see [`super::weld`]); a cheap `f64` test then drops
-//! vertices certainly off the segment, with the same margin. So a vertex
-//! exactly on the segment always reaches the exact test, which decides.
+//! Up to [`SCAN_MAX`] vertices (the surface of one octree cell), every
+//! vertex; above, a dense uniform grid over the `f64` positions of the
+//! vertices, about `2∛V` cells per axis (`8V` cells in all, stored as one
+//! offset array and one index array), where each edge visits the cells
+//! near it in steps of at most one cell, every step's box widened by a
+//! tolerance (`2^-40` of the largest coordinate) far above the rounding of
+//! the positions (each within `2^-51` relative, see [`super::weld`]). A
+//! cheap `f64` test then drops vertices certainly off the segment, with
+//! the same margin. So a vertex exactly on the segment always reaches the
+//! exact test, which decides: both ways find the same vertices.
 
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
@@ -70,11 +72,17 @@ fn edge_key(from: u32, to: u32) -> u64 {
 /// Inserts every T-junction into every polygon, except on edges matched
 /// whole (see the module docs).
 pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
+    split_with(vertices, polygons, SCAN_MAX);
+}
+
+/// [`split`], scanning every vertex for every edge up to `scan_max`
+/// vertices, with a grid above.
+fn split_with(vertices: &[Point4], polygons: &mut [MeshPolygon], scan_max: usize) {
     let whole = matched_whole(polygons);
     let mut edge_index = 0;
     let positions: Vec<[f64; 3]> = vertices.iter().map(Point4::to_f64).collect();
-    let grid = Grid::new(&positions);
-    let mut seen = vec![u64::MAX; positions.len()];
+    let grid = Grid::new(&positions, scan_max);
+    let mut seen = vec![u64::MAX; if grid.is_dense() { positions.len() } else { 0 }];
     let mut edge_number = 0u64;
     let mut candidates = Vec::new();
     let mut inside = Vec::new();
@@ -99,19 +107,23 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
             if whole[edge_index - 1] {
                 continue;
             }
-            candidates.clear();
             let (pa, pb) = (positions[a as usize], positions[b as usize]);
-            grid.near_segment(pa, pb, edge_number, &mut seen, &mut candidates);
-            edge_number += 1;
+            let segment = Segment::new(pa, pb, grid.tolerance);
+            let on_edge = |&w: &u32| {
+                w != a
+                    && w != b
+                    && segment.may_hold(positions[w as usize])
+                    && strictly_inside_edge(&vertices[w as usize], polygon, k)
+            };
             inside.clear();
-            inside.extend(
-                candidates
-                    .iter()
-                    .copied()
-                    .filter(|&w| w != a && w != b)
-                    .filter(|&w| grid.may_lie_on_segment(positions[w as usize], pa, pb))
-                    .filter(|&w| strictly_inside_edge(&vertices[w as usize], polygon, k)),
-            );
+            if grid.is_dense() {
+                candidates.clear();
+                grid.near_segment(pa, pb, edge_number, &mut seen, &mut candidates);
+                edge_number += 1;
+                inside.extend(candidates.iter().copied().filter(on_edge));
+            } else {
+                inside.extend((0..positions.len() as u32).filter(on_edge));
+            }
             let previous = polygon.edges[(k + n - 1) % n];
             inside.sort_by(|&p, &q| {
                 compare_offsets(&vertices[q as usize], &vertices[p as usize], &previous)
@@ -176,8 +188,66 @@ pub(crate) fn strictly_inside_edge(w: &Point4, polygon: &MeshPolygon, k: usize) 
         && classify_vertex(w, &polygon.plane) == Sign::Zero
 }
 
+/// A segment `a b` with what [`Segment::may_hold`] needs, computed once
+/// per edge.
+struct Segment {
+    /// The segment's box, widened by the slack.
+    lo: [f64; 3],
+    hi: [f64; 3],
+    a: [f64; 3],
+    /// `b − a`.
+    u: [f64; 3],
+    /// `slack² · |u|²`.
+    bound: f64,
+}
+
+impl Segment {
+    /// The segment `a b`, tested with twice the grid's `tolerance` as
+    /// slack.
+    #[inline]
+    fn new(a: [f64; 3], b: [f64; 3], tolerance: f64) -> Self {
+        let slack = 2.0 * tolerance;
+        let u = [0, 1, 2].map(|i| b[i] - a[i]);
+        let length2: f64 = u.iter().map(|c| c * c).sum();
+        Self {
+            lo: [0, 1, 2].map(|i| a[i].min(b[i]) - slack),
+            hi: [0, 1, 2].map(|i| a[i].max(b[i]) + slack),
+            a,
+            u,
+            bound: slack * slack * length2,
+        }
+    }
+
+    /// False only when `p` is certainly off the segment: outside its box,
+    /// or farther from its line than the tolerance (twice over). The
+    /// rounding of the positions and of this arithmetic is below `2^-48`
+    /// of the magnitude, far inside the tolerance of `2^-40`, so a vertex
+    /// exactly on the segment always passes.
+    #[inline]
+    fn may_hold(&self, p: [f64; 3]) -> bool {
+        if (0..3).any(|i| p[i] < self.lo[i] || p[i] > self.hi[i]) {
+            return false;
+        }
+        let (a, u) = (self.a, self.u);
+        let v = [0, 1, 2].map(|i| p[i] - a[i]);
+        let cross = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let cross2: f64 = cross.iter().map(|c| c * c).sum();
+        cross2 <= self.bound
+    }
+}
+
+/// Up to this many vertices, every vertex is a candidate of every edge
+/// (tested with [`Segment::may_hold`]): cheaper than building a grid and
+/// walking its cells, as for the surface of one octree cell.
+const SCAN_MAX: usize = 64;
+
 /// A dense uniform grid of vertex indices by `f64` position: the vertices
-/// of cell `c` are `items[start[c]..start[c + 1]]`.
+/// of cell `c` are `items[start[c]..start[c + 1]]` (for few vertices none
+/// are stored, and every vertex is a candidate).
 struct Grid {
     origin: [f64; 3],
     cell: f64,
@@ -188,7 +258,9 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(positions: &[[f64; 3]]) -> Self {
+    /// The grid of `positions`, holding none (every vertex a candidate)
+    /// up to `scan_max` of them.
+    fn new(positions: &[[f64; 3]], scan_max: usize) -> Self {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for p in positions {
@@ -210,6 +282,16 @@ impl Grid {
         // Cells no finer than the tolerance, so stepping stays bounded.
         let tolerance = magnitude * f64::powi(2.0, -40) + f64::MIN_POSITIVE;
         let cell = (extent / per_axis).max(tolerance * 1024.0);
+        if positions.len() <= scan_max {
+            return Self {
+                origin: lo,
+                cell,
+                dims: [0; 3],
+                tolerance,
+                start: Vec::new(),
+                items: Vec::new(),
+            };
+        }
         let dims = [0, 1, 2].map(|i| (((hi[i] - lo[i]) / cell).floor() as usize + 1).min(1025));
         let mut grid = Self {
             origin: lo,
@@ -234,6 +316,13 @@ impl Grid {
         grid
     }
 
+    /// Whether the grid holds the vertices in cells: else every vertex is
+    /// a candidate of every edge (few vertices).
+    #[inline]
+    fn is_dense(&self) -> bool {
+        !self.start.is_empty()
+    }
+
     /// The cell of `p`, clamped into the grid (a superset for queries).
     /// The saturating cast truncates, which is the floor for the positive
     /// values it keeps, and gives 0 below 1 and for NaN.
@@ -246,28 +335,6 @@ impl Grid {
 
     fn index(&self, [x, y, z]: [usize; 3]) -> usize {
         (z * self.dims[1] + y) * self.dims[0] + x
-    }
-
-    /// False only when `p` is certainly off the segment `a b`: outside its
-    /// box, or farther from its line than the tolerance (twice over). The
-    /// rounding of the positions and of this arithmetic is below `2^-48`
-    /// of the magnitude, far inside the tolerance of `2^-40`, so a vertex
-    /// exactly on the segment always passes.
-    fn may_lie_on_segment(&self, p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> bool {
-        let slack = 2.0 * self.tolerance;
-        if (0..3).any(|i| p[i] < a[i].min(b[i]) - slack || p[i] > a[i].max(b[i]) + slack) {
-            return false;
-        }
-        let u = [0, 1, 2].map(|i| b[i] - a[i]);
-        let v = [0, 1, 2].map(|i| p[i] - a[i]);
-        let cross = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        let cross2: f64 = cross.iter().map(|c| c * c).sum();
-        let length2: f64 = u.iter().map(|c| c * c).sum();
-        cross2 <= slack * slack * length2
     }
 
     /// Appends every vertex whose position lies in a cell near the segment
@@ -304,5 +371,77 @@ impl Grid {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::convex::ConvexArena;
+    use crate::exact::IntPoint;
+    use crate::mesh::SurfaceMesh;
+    use crate::tree::{BooleanOp, Bsp};
+
+    fn point(c: [i64; 3]) -> IntPoint {
+        IntPoint::from_array(c).expect("in budget")
+    }
+
+    /// A box of random size and place inside `[-24, 24]³`, of `label`.
+    fn random_box(rng: &mut ChaCha8Rng, label: u8) -> Bsp {
+        let lo = [0; 3].map(|_| rng.random_range(-24..12));
+        let hi = lo.map(|l| l + rng.random_range(2..12));
+        let mut arena = ConvexArena::new();
+        let poly = arena.add_box(point(lo), point(hi)).expect("in budget");
+        Bsp::from_convex(&arena, poly, label)
+    }
+
+    /// Unions and differences of boxes (faces meeting in T-junctions), cut
+    /// by random bounds so that the meshes are open and small or large:
+    /// scanning every vertex and walking the grid insert exactly the same
+    /// corners, and corners are inserted.
+    #[test]
+    fn scanning_every_vertex_finds_what_the_grid_finds() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let (mut inserted, mut small) = (0, 0);
+        for _ in 0..60 {
+            let mut bsp = random_box(&mut rng, 1);
+            for i in 0..rng.random_range(1..8) {
+                let op = if i % 3 == 2 {
+                    BooleanOp::Difference
+                } else {
+                    BooleanOp::Union
+                };
+                let label = rng.random_range(1..3);
+                let other = random_box(&mut rng, label);
+                let mut arena = ConvexArena::new();
+                let bounds = arena.add_box(point([-32; 3]), point([32; 3])).unwrap();
+                bsp = bsp.merge(&other, op, &mut arena, bounds);
+            }
+            let lo = [0; 3].map(|_| rng.random_range(-30..0));
+            let hi = lo.map(|l| l + rng.random_range(8..40));
+            let mut arena = ConvexArena::new();
+            let bounds = arena.add_box(point(lo), point(hi)).unwrap();
+            let faces = bsp.boundary(&mut arena, bounds);
+            if faces.is_empty() {
+                continue;
+            }
+            let mut mesh = SurfaceMesh::welded(&faces);
+            mesh.merge_coplanar();
+            small += usize::from(mesh.vertices.len() <= SCAN_MAX);
+            let mut scanned = mesh.polygons.clone();
+            let mut gridded = mesh.polygons.clone();
+            split_with(&mesh.vertices, &mut scanned, usize::MAX);
+            split_with(&mesh.vertices, &mut gridded, 0);
+            assert_eq!(scanned, gridded);
+            inserted += scanned
+                .iter()
+                .map(|p| p.corners.len() - p.original_len())
+                .sum::<usize>();
+        }
+        assert!(inserted > 20, "only {inserted} corners inserted");
+        assert!(small > 5, "only {small} meshes of few vertices");
     }
 }

@@ -77,8 +77,17 @@ impl Octree {
     /// The boundary `faces` of a leaf inside `cell`, with its border faces
     /// clipped against the regions across and the others kept.
     fn resolve_borders(&self, faces: Vec<BoundaryFace>, cell: &CellBox) -> Vec<BoundaryFace> {
+        self.resolve_borders_in(faces, cell, Descent::default())
+    }
+
+    /// [`Self::resolve_borders`] with the working memory `scratch`.
+    fn resolve_borders_in<'a>(
+        &'a self,
+        faces: Vec<BoundaryFace>,
+        cell: &CellBox,
+        mut scratch: Descent<'a>,
+    ) -> Vec<BoundaryFace> {
         let mut out = Vec::with_capacity(faces.len());
-        let mut scratch = Descent::default();
         for face in faces {
             if face.on_bounds {
                 let label = face.label;
@@ -129,14 +138,20 @@ impl Octree {
             return;
         }
         let facing = Facing::of(&polygon.support, from);
+        let (start, start_box) = match facing.0 {
+            Some((axis, positive)) => *scratch.starts[2 * axis + usize::from(positive)]
+                .get_or_insert_with(|| self.first_split(facing, from)),
+            None => (&self.root, root),
+        };
         let Descent {
             stack,
             pieces,
             next,
             clip,
             nodes,
+            starts: _,
         } = scratch;
-        stack.push((&self.root, root, polygon, *from));
+        stack.push((start, start_box, polygon, *from));
         while let Some((mut node, mut cell, polygon, range)) = stack.pop() {
             // Down through the inner cells that no axis plane cuts the piece
             // in (most of the way from the root): the piece goes on whole,
@@ -190,7 +205,9 @@ impl Octree {
 /// faces of a cell: the cells still to visit with their piece and the box
 /// range known to hold it, the pieces of one inner cell, axis by axis, and
 /// the pieces still to clip in a neighbour's BSP, and its nodes still to
-/// visit when testing whether a piece is dropped whole.
+/// visit when testing whether a piece is dropped whole; and per side of
+/// the cell (`2·axis + positive`), once known, where every border face on
+/// that side starts ([`Octree::first_split`]).
 #[derive(Default)]
 struct Descent<'a> {
     stack: Vec<(&'a OctNode, CellBox, Polygon, CellBox)>,
@@ -198,6 +215,27 @@ struct Descent<'a> {
     next: Vec<(Polygon, CellBox, usize)>,
     clip: Vec<(NodeId, Polygon)>,
     nodes: Vec<NodeId>,
+    starts: [Option<(&'a OctNode, CellBox)>; 6],
+}
+
+impl Octree {
+    /// The octree node (with its box) where the descent of a border face
+    /// with `facing` on the leaf box `from` first meets an inner cell
+    /// whose axis planes may cut it, or a leaf: down from the root through
+    /// the inner cells that hold `from`'s side whole. The descent depends
+    /// only on the side (its range is `from` until the first split), so
+    /// it is found once per side and every face on that side starts there.
+    fn first_split(&self, facing: Facing, from: &CellBox) -> (&OctNode, CellBox) {
+        let (mut node, mut cell) = (&self.root, self.root_box());
+        while let OctNode::Inner(children) = node {
+            let Some(i) = facing.child_holding(&cell, from) else {
+                break;
+            };
+            node = &children[i];
+            cell = cell.child(i);
+        }
+        (node, cell)
+    }
 }
 
 /// The one axis a normal `n` has a non-zero component on, if only one.
@@ -292,4 +330,88 @@ fn faces_out_of(plane: &Plane, cube: &CellBox) -> bool {
         cube.min[axis]
     };
     i128::from(na) * i128::from(side) + plane.offset() == 0
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::octree::{Edit, OctreeConfig, Tool};
+    use crate::tools::{Pose, dodecahedron_corners};
+
+    const SIZE: i64 = 1 << 12;
+
+    /// A dodecahedron of random size, rotation and place in the block.
+    fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
+        let scale = rng.random_range(60.0..300.0);
+        let a = rng.random_range(0.0..6.3f64);
+        let (ca, sa) = (a.cos(), a.sin());
+        let pose = Pose {
+            rotation: [[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0, 1, 2].map(|_| rng.random_range(0.0..SIZE as f64)),
+        };
+        Tool::placed(&dodecahedron_corners(scale), &pose).unwrap()
+    }
+
+    /// Every leaf's border faces resolved with the descent of each side
+    /// found once and with every face descending from the root give the
+    /// same pieces, element for element, after random edits (materials
+    /// 1 to 3, so that faces are kept towards smaller labels too).
+    #[test]
+    fn faces_start_where_the_descent_from_the_root_first_splits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let config = OctreeConfig {
+            max_bsp_nodes: 30,
+            max_depth: 6,
+        };
+        let block = CellBox {
+            min: [100; 3],
+            max: [SIZE - 100; 3],
+        };
+        let mut octree = Octree::from_box([0; 3], 12, block, 1, config).unwrap();
+        for i in 0..24 {
+            let edit = match i % 4 {
+                3 => Edit::Add(rng.random_range(2..=3)),
+                _ => Edit::Subtract,
+            };
+            octree.apply(&random_tool(&mut rng), edit).unwrap();
+        }
+        let (mut borders, mut kept) = (0, 0);
+        for (key, leaf) in octree.leaves() {
+            let Leaf::Bsp(bsp) = leaf else { continue };
+            let cell = octree.cell_box(key);
+            let faces = with_arena(|arena| {
+                let bounds = cell.add_to(arena).unwrap();
+                bsp.boundary(arena, bounds)
+            });
+            borders += faces.iter().filter(|f| f.on_bounds).count();
+            let cached = octree.resolve_borders(faces.clone(), &cell);
+            let from_root = Descent {
+                starts: [Some((&octree.root, octree.root_box())); 6],
+                ..Descent::default()
+            };
+            let reference = octree.resolve_borders_in(faces, &cell, from_root);
+            assert_eq!(cached.len(), reference.len(), "{key:?}");
+            for (a, b) in cached.iter().zip(&reference) {
+                assert_eq!(
+                    (a.plane, &a.edges, a.label, a.outside, a.on_bounds),
+                    (b.plane, &b.edges, b.label, b.outside, b.on_bounds),
+                    "{key:?}"
+                );
+                assert!(
+                    a.vertices
+                        .iter()
+                        .zip(&b.vertices)
+                        .all(|(p, q)| { (p.xyz_digits, p.w_digits) == (q.xyz_digits, q.w_digits) })
+                );
+            }
+            kept += cached.len();
+        }
+        assert!(
+            borders > 500 && kept > 500,
+            "{borders} border faces, {kept} kept"
+        );
+    }
 }
