@@ -81,6 +81,7 @@ impl ConvexArena {
         above_tag: u32,
     ) -> CutOutcome {
         self.with_scratch(|arena, scratch| {
+            scratch.landmarks.forget();
             let faces = arena.faces_of(poly);
             let (mut plus, mut minus) = (false, false);
             for &f in &faces {
@@ -120,13 +121,18 @@ impl ConvexArena {
     /// element, to [`ConvexArena::cut_naive`].
     pub fn cut(&mut self, poly: PolyId, s: &Plane, below_tag: u32, above_tag: u32) -> CutOutcome {
         self.with_scratch(|arena, scratch| {
-            if let Some(outcome) = arena.find_section(poly, s, scratch) {
+            let start = arena.start_vertex(poly, s, scratch);
+            if let Some(outcome) = arena.find_section(start, s, scratch) {
+                arena.keep_landmarks(poly, scratch);
                 return outcome;
             }
-            let [below, above] = arena.split_along(scratch, s, [below_tag, above_tag], None);
+            let parts = arena.split_along(scratch, s, [below_tag, above_tag], None);
+            for (k, side) in [Sign::Negative, Sign::Positive].into_iter().enumerate() {
+                arena.pass_landmarks(k, parts[k], side, scratch);
+            }
             CutOutcome::Split {
-                below: PolyId(below),
-                above: PolyId(above),
+                below: PolyId(parts[0]),
+                above: PolyId(parts[1]),
             }
         })
     }
@@ -143,28 +149,32 @@ impl ConvexArena {
         cap_tag: u32,
     ) -> KeptOutcome {
         self.with_scratch(|arena, scratch| {
-            match arena.find_section(poly, s, scratch) {
-                Some(CutOutcome::Below) => return KeptOutcome::Below,
-                Some(CutOutcome::Above) => return KeptOutcome::Above,
-                Some(CutOutcome::Split { .. }) | None => {}
+            let start = arena.start_vertex(poly, s, scratch);
+            if let Some(outcome) = arena.find_section(start, s, scratch) {
+                arena.keep_landmarks(poly, scratch);
+                return match outcome {
+                    CutOutcome::Above => KeptOutcome::Above,
+                    CutOutcome::Below | CutOutcome::Split { .. } => KeptOutcome::Below,
+                };
             }
             let side = match keep {
                 Part::Below => Sign::Negative,
                 Part::Above => Sign::Positive,
             };
             let [below, above] = arena.split_along(scratch, s, [cap_tag; 2], Some(side));
-            KeptOutcome::Cut(PolyId(match keep {
+            let kept = match keep {
                 Part::Below => below,
                 Part::Above => above,
-            }))
+            };
+            arena.pass_landmarks(0, kept, side, scratch);
+            KeptOutcome::Cut(PolyId(kept))
         })
     }
 
-    /// Edge descent and marching: `None` when the cut is proper, with the
-    /// faces that meet the section in `scratch.relevant`, else the outcome
-    /// ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
-    fn find_section(&self, poly: PolyId, s: &Plane, scratch: &mut Scratch) -> Option<CutOutcome> {
-        let v0 = self.half_edges[poly.0 as usize].origin;
+    /// Edge descent from vertex `v0` and marching: `None` when the cut is
+    /// proper, with the faces that meet the section in `scratch.relevant`,
+    /// else the outcome ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
+    fn find_section(&self, v0: u32, s: &Plane, scratch: &mut Scratch) -> Option<CutOutcome> {
         // Walk towards the side v0 is not on; a step onto that side
         // brackets the section. From a vertex on s, both sides must exist
         // for a proper cut, and v0 itself is on the section.
@@ -320,6 +330,7 @@ impl ConvexArena {
                 }
             }
             prev = cur;
+            scratch.descent_steps += 1;
             let side;
             (cur, (cur_value, cur_error), side) = best
                 .map(|(n, _, estimate, side)| (n, estimate, side))

@@ -132,14 +132,28 @@ impl ConvexArena {
                 half_edges: arrays.half_edges,
                 faces: arrays.faces,
                 planes: arrays.planes,
-                scratch: arrays.scratch,
+                scratch: arrays.scratch.map(|mut scratch| {
+                    scratch.landmarks.forget();
+                    scratch
+                }),
             },
             None => Self::default(),
         }
     }
 
+    /// Forgets where the next cuts start (see `landmarks`): called by
+    /// everything but the cuts that may change which vertices a
+    /// polyhedron has.
+    #[inline]
+    fn forget_landmarks(&mut self) {
+        if let Some(scratch) = &mut self.scratch {
+            scratch.landmarks.forget();
+        }
+    }
+
     /// Removes every polyhedron, keeping the memory.
     pub fn clear(&mut self) {
+        self.forget_landmarks();
         self.vertices.clear();
         self.points.clear();
         self.half_edges.clear();
@@ -166,6 +180,7 @@ impl ConvexArena {
     /// after the mark may now point at discarded elements.
     #[inline]
     pub(crate) fn release_to(&mut self, mark: ArenaMark) {
+        self.forget_landmarks();
         self.vertices.truncate(mark.vertices);
         self.points.truncate(mark.points);
         self.half_edges.truncate(mark.half_edges);
@@ -357,6 +372,7 @@ impl ConvexArena {
     /// `c` in `corners` (counter-clockwise seen from outside), its
     /// half-edges not yet paired.
     fn push_face(&mut self, v0: u32, plane: Plane, corners: &[u32]) {
+        self.forget_landmarks();
         let face = self.faces.len() as u32;
         let first = self.half_edges.len() as u32;
         let n = corners.len() as u32;

@@ -12,10 +12,12 @@
 //! - [`validate`] — every invariant, checked exactly (tests call it after
 //!   every step).
 //! - [`cut`] — cutting a polyhedron by a plane: finding the section.
+//! - `landmarks` — where the descent of the next cut starts.
 //! - `survey` — what one walk around a face tells the split.
 //! - `split` — splitting along the section once it is found.
 
 pub mod cut;
+mod landmarks;
 pub mod mesh;
 pub mod pool;
 mod scratch;

@@ -6,6 +6,7 @@
 //! starting a new operation is a single increment, and lookups are one
 //! comparison.
 
+use super::landmarks::Landmarks;
 use super::survey::FaceInfo;
 use crate::exact::Sign;
 
@@ -95,6 +96,11 @@ pub(crate) struct Scratch {
     pub(crate) section_new: Vec<(u32, Sign)>,
     /// The cap half-edges of one side and the vertex each one ends at.
     pub(crate) cap_edges: Vec<(u32, u32)>,
+    /// Where the next cut of a part of the last cut starts (kept from one
+    /// operation to the next, unlike the rest).
+    pub(crate) landmarks: Landmarks,
+    /// The steps the edge descents of the operation took.
+    pub(crate) descent_steps: u32,
 }
 
 impl Scratch {
@@ -112,5 +118,6 @@ impl Scratch {
         self.faces.clear();
         self.vertices.clear();
         self.cap_starts.clear();
+        self.descent_steps = 0;
     }
 }

@@ -134,6 +134,12 @@ impl FilteredDot {
         }
     }
 
+    /// `s`, the `f64` value of `T`.
+    #[inline]
+    pub(crate) fn sum(self) -> f64 {
+        self.sum
+    }
+
     /// The side, when the error bound certifies it.
     ///
     /// One comparison, `|s| > 2^-50·m`, tells whether the filter decides

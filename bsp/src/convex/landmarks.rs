@@ -1,0 +1,317 @@
+//! Where the edge descent of the next cut starts (paper 1 §3.3).
+//!
+//! Notation: `P` — the polyhedron a cut splits, named by its id; `s` — the
+//! cutting plane; a *landmark* is a vertex of `P` known from earlier cuts.
+//!
+//! The descent walks from a start vertex to the section, one neighbour at
+//! a time; from an arbitrary vertex of a large polyhedron that takes many
+//! steps. A cut leaves, for each part it builds, a few landmarks of that
+//! part: the landmarks of `P` that the `f64` filter places strictly on that
+//! part's side of `s`, and one vertex of the part's new cap. The next cut
+//! of that part (by the id the cut returned) starts from the landmark
+//! nearest to its plane by the `f64` estimate of the offset (the vertex
+//! of the part's id, on its cap, is among them when there was room). Any
+//! start vertex gives the same section, so the result does not depend on
+//! the landmarks; only the length of the walk does. A cut of a polyhedron
+//! without landmarks leaves some only when its descent was long (small
+//! polyhedra do without). Only the parts of the last cut have landmarks:
+//! any other change to the arena (another cut, clearing or truncating it,
+//! adding polyhedra) forgets them.
+
+use super::mesh::{ConvexArena, PolyId};
+use super::scratch::Scratch;
+use crate::exact::{FilteredDot, Plane, Sign};
+
+/// The descent steps from which a cut without landmarks leaves some: on
+/// small polyhedra the descent from any vertex is short, and the landmarks
+/// would cost more than they save.
+const LONG_DESCENT: u32 = 4;
+
+/// The most landmarks kept for one part.
+const MAX_LANDMARKS: usize = 4;
+
+/// A few vertices of each part of the last cut, and those of the
+/// polyhedron the current cut splits.
+#[derive(Clone, Debug)]
+pub(crate) struct Landmarks {
+    /// The id of each part (`u32::MAX` for none): the lower and upper part
+    /// of a two-sided cut, or the kept part and none.
+    parts: [u32; 2],
+    /// The landmarks of each part.
+    vertices: [[u32; MAX_LANDMARKS]; 2],
+    /// How many of `vertices` each part has.
+    counts: [usize; 2],
+    /// The landmarks of the polyhedron being cut.
+    current: [u32; MAX_LANDMARKS],
+    /// The side of each of `current`, where the `f64` filter tells it.
+    current_sides: [Option<Sign>; MAX_LANDMARKS],
+    /// How many of `current` there are.
+    current_count: usize,
+}
+
+impl Default for Landmarks {
+    fn default() -> Self {
+        Self {
+            parts: [u32::MAX; 2],
+            vertices: [[u32::MAX; MAX_LANDMARKS]; 2],
+            counts: [0; 2],
+            current: [u32::MAX; MAX_LANDMARKS],
+            current_sides: [None; MAX_LANDMARKS],
+            current_count: 0,
+        }
+    }
+}
+
+impl Landmarks {
+    /// Forgets every landmark.
+    #[inline]
+    pub(crate) fn forget(&mut self) {
+        self.forget_parts();
+        self.current_count = 0;
+    }
+
+    /// Makes the landmarks of the part with id `poly` current (none when
+    /// `poly` is no part of the last cut) and forgets the parts: the cut
+    /// records new ones once it is done. Returns how many there are.
+    ///
+    /// The parts are forgotten even when `poly` is neither: it may be one
+    /// of them named by another of its half-edges, which the cut changes.
+    #[inline]
+    fn take_for(&mut self, poly: u32) -> usize {
+        if self.parts == [u32::MAX; 2] {
+            // Nothing to forget (the common case of small polyhedra).
+            self.current_count = 0;
+            return 0;
+        }
+        // Forgotten parts have id `u32::MAX` and no landmarks.
+        self.current_count = if self.parts[0] == poly {
+            self.current = self.vertices[0];
+            self.counts[0]
+        } else if self.parts[1] == poly {
+            self.current = self.vertices[1];
+            self.counts[1]
+        } else {
+            0
+        };
+        self.forget_parts();
+        self.current_count
+    }
+
+    /// Forgets the landmarks of the parts.
+    #[inline]
+    fn forget_parts(&mut self) {
+        self.parts = [u32::MAX; 2];
+        self.counts = [0; 2];
+    }
+
+    /// Records part `k` (0 or 1) with id `part`: the current landmarks on
+    /// a side for which `keep` holds, then `cap_vertex` if there is room.
+    #[inline]
+    fn set_part(
+        &mut self,
+        k: usize,
+        part: u32,
+        keep: impl Fn(Option<Sign>) -> bool,
+        cap_vertex: u32,
+    ) {
+        let slots = &mut self.vertices[k];
+        let mut n = 0;
+        let mut has_cap = false;
+        let count = self.current_count;
+        for (&v, &side) in self.current[..count].iter().zip(&self.current_sides) {
+            slots[n] = v;
+            has_cap |= v == cap_vertex;
+            n += usize::from(keep(side));
+        }
+        if n < MAX_LANDMARKS && !has_cap {
+            slots[n] = cap_vertex;
+            n += 1;
+        }
+        self.parts[k] = part;
+        self.counts[k] = n;
+    }
+
+    /// Whether the cut leaves landmarks: when it had some, or when its
+    /// descent took `descent_steps ≥ LONG_DESCENT`.
+    #[inline]
+    fn worth_keeping(&self, descent_steps: u32) -> bool {
+        self.current_count > 0 || descent_steps >= LONG_DESCENT
+    }
+}
+
+impl ConvexArena {
+    /// The vertex the cut of `poly` by `s` starts from: the landmark of
+    /// `poly` with the smallest estimated distance to `s`, or without
+    /// landmarks the vertex of `poly`'s id; its side is recorded in
+    /// `scratch` when the filter tells it.
+    #[inline]
+    pub(super) fn start_vertex(&self, poly: PolyId, s: &Plane, scratch: &mut Scratch) -> u32 {
+        if scratch.landmarks.take_for(poly.0) == 0 {
+            return self.half_edges[poly.0 as usize].origin;
+        }
+        self.nearest_landmark(s, scratch)
+    }
+
+    /// The current landmark with the smallest estimated distance to `s`
+    /// (`|T̃|/W̃`, compared by cross-multiplication), with the side of
+    /// every landmark that the filter tells.
+    #[inline(never)]
+    fn nearest_landmark(&self, s: &Plane, scratch: &mut Scratch) -> u32 {
+        let marks = &mut scratch.landmarks;
+        let (mut nearest, mut nearest_w) = (f64::INFINITY, 1.0);
+        let (mut start, mut start_side) = (marks.current[0], None);
+        for k in 0..marks.current_count {
+            let v = marks.current[k];
+            let point = self.point(v);
+            let dot = FilteredDot::new(point, s);
+            // A landmark the filter cannot place is passed to no part.
+            let side = dot.sign();
+            marks.current_sides[k] = side;
+            let (distance, w) = (dot.sum().abs(), point.approx[3]);
+            if distance * nearest_w < nearest * w {
+                (nearest, nearest_w, start, start_side) = (distance, w, v, side);
+            }
+        }
+        if let Some(side) = start_side {
+            scratch.sides.insert(start, side);
+        }
+        start
+    }
+
+    /// Keeps the landmarks of `poly`, which the cut left unchanged.
+    #[inline]
+    pub(super) fn keep_landmarks(&self, poly: PolyId, scratch: &mut Scratch) {
+        if scratch.landmarks.worth_keeping(scratch.descent_steps) {
+            let v0 = self.half_edges[poly.0 as usize].origin;
+            scratch.landmarks.set_part(0, poly.0, |_| true, v0);
+        }
+    }
+
+    /// Records the landmarks of part `k` of a proper cut, the part on side
+    /// `side` whose id `part` is a half-edge of its cap: the current ones
+    /// the filter placed strictly on that side (a landmark on the plane may
+    /// have been copied for the other part), and the vertex of `part`.
+    #[inline]
+    pub(super) fn pass_landmarks(&self, k: usize, part: u32, side: Sign, scratch: &mut Scratch) {
+        if scratch.landmarks.worth_keeping(scratch.descent_steps) {
+            let cap_vertex = self.half_edges[part as usize].origin;
+            scratch
+                .landmarks
+                .set_part(k, part, |v| v == Some(side), cap_vertex);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
+    use crate::exact::{IntPoint, Plane};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Half the edge of the box the polyhedra start from.
+    const R: i64 = 1 << 20;
+
+    /// A plane with a normal of length about 2^10 in a random direction,
+    /// tangent to the sphere of a random radius below `R` about the origin
+    /// (outward), so that chains of cuts build large round polyhedra.
+    fn tangent_plane(rng: &mut ChaCha8Rng) -> Plane {
+        loop {
+            let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
+            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if !(0.1..=1.0).contains(&len) {
+                continue;
+            }
+            let n = v.map(|c| (c / len * 1024.0).round() as i64);
+            let norm = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
+            let radius = rng.random_range(0.8..0.99) * R as f64;
+            let d = -(radius * norm).round() as i128;
+            return Plane::new(n[0], n[1], n[2], d).expect("in budget");
+        }
+    }
+
+    /// The cube `[-R, R]³`.
+    fn cube(arena: &mut ConvexArena) -> PolyId {
+        let corner = |c| IntPoint::new(c, c, c).expect("in budget");
+        arena.add_box(corner(-R), corner(R)).expect("a box")
+    }
+
+    /// Element-for-element equality of two arenas.
+    fn assert_same_arena(a: &ConvexArena, b: &ConvexArena) {
+        assert_eq!(a.half_edges, b.half_edges);
+        assert_eq!(a.faces.len(), b.faces.len());
+        for (x, y) in a.faces.iter().zip(&b.faces) {
+            assert_eq!((x.half_edge, x.tag), (y.half_edge, y.tag));
+            assert_eq!(a.planes[x.plane as usize], b.planes[y.plane as usize]);
+        }
+        assert_eq!(a.vertices.len(), b.vertices.len());
+        for v in 0..a.vertices.len() as u32 {
+            assert_eq!(a.vertex_half_edge(v), b.vertex_half_edge(v));
+            let (p, q) = (a.point(v), b.point(v));
+            assert_eq!((p.xyz_digits, p.w_digits), (q.xyz_digits, q.w_digits));
+        }
+    }
+
+    /// Chains of two-sided cuts of two polyhedra in one arena, in random
+    /// order, each going on with the lower part of its last cut (once with
+    /// the upper part): every cut,
+    /// started from landmarks, leaves the arena element for element as the
+    /// classify-all cut of a copy without landmarks does; and the
+    /// landmarks are in use for most cuts.
+    #[test]
+    fn cuts_from_landmarks_equal_the_naive_cut() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut arena = ConvexArena::new();
+        let mut polys = [cube(&mut arena), cube(&mut arena)];
+        let (mut cuts, mut from_landmarks) = (0, 0);
+        for step in 0..400 {
+            let i = usize::from(rng.random_bool(0.2));
+            let s = tangent_plane(&mut rng);
+            let mut reference = arena.clone();
+            let expected = reference.cut_naive(polys[i], &s, NO_TAG, NO_TAG);
+            let outcome = arena.cut(polys[i], &s, NO_TAG, NO_TAG);
+            assert_eq!(outcome, expected);
+            assert_same_arena(&arena, &reference);
+            let scratch = arena.scratch.as_ref().expect("a cut lends the scratch");
+            from_landmarks += usize::from(scratch.landmarks.current_count > 0);
+            cuts += 1;
+            if let CutOutcome::Split { below, above } = outcome {
+                // The large part, once the cap.
+                polys[i] = if step == 300 { above } else { below };
+            }
+        }
+        assert!(from_landmarks * 2 > cuts, "{from_landmarks} of {cuts}");
+    }
+
+    /// A chain of one-sided cuts keeping the lower part (once the upper): every cut, started
+    /// from landmarks, leaves the arena element for element as the same
+    /// cut of a copy without landmarks does; and the landmarks are in use
+    /// for most cuts.
+    #[test]
+    fn one_sided_cuts_from_landmarks_equal_those_without() {
+        let mut rng = ChaCha8Rng::seed_from_u64(6);
+        let mut arena = ConvexArena::new();
+        let mut poly = cube(&mut arena);
+        let (mut cuts, mut from_landmarks) = (0, 0);
+        for step in 0..400 {
+            let s = tangent_plane(&mut rng);
+            let part = if step == 300 {
+                Part::Above
+            } else {
+                Part::Below
+            };
+            let mut reference = arena.clone();
+            let expected = reference.cut_keeping(poly, &s, part, NO_TAG);
+            let outcome = arena.cut_keeping(poly, &s, part, NO_TAG);
+            assert_eq!(outcome, expected);
+            assert_same_arena(&arena, &reference);
+            let scratch = arena.scratch.as_ref().expect("a cut lends the scratch");
+            from_landmarks += usize::from(scratch.landmarks.current_count > 0);
+            cuts += 1;
+            if let KeptOutcome::Cut(kept) = outcome {
+                poly = kept;
+            }
+        }
+        assert!(from_landmarks * 2 > cuts, "{from_landmarks} of {cuts}");
+    }
+}
