@@ -41,7 +41,7 @@ use std::hash::BuildHasherDefault;
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::{Cell, Reach, Survey};
 use crate::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
-use crate::exact::Plane;
+use crate::exact::{Plane, Sign, classify_vertex};
 use crate::word_hash::WordHasher;
 
 /// How the labels of two overlapping regions combine.
@@ -124,6 +124,11 @@ struct Merger<'a> {
     nodes: Vec<Node>,
     /// The output leaves' cells when they are kept ([`Bsp::merge_cells`]).
     cells: Option<KeptCells>,
+    /// The splits of `B` whose proper cut cannot collapse below the
+    /// current leaf of `A` (see [`Merger::find_sure_splits`]), and which
+    /// are set.
+    sure: Vec<bool>,
+    sure_set: Vec<NodeId>,
 }
 
 /// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
@@ -177,7 +182,17 @@ impl<'a> Merger<'a> {
             // make splits that all collapse into this one leaf.
             Node::Leaf(label) => match self.op.regardless_of_b(label) {
                 Some(label) => self.leaf(label, cell),
-                None => self.insert_b(0, cell, label),
+                None => match self.one_label_of_b(cell, label) {
+                    Some(label) => self.leaf(label, cell),
+                    None => {
+                        self.find_sure_splits(label);
+                        let node = self.insert_b(0, cell, label);
+                        for n in self.sure_set.drain(..) {
+                            self.sure[n as usize] = false;
+                        }
+                        node
+                    }
+                },
             },
             Node::Split {
                 plane,
@@ -188,7 +203,118 @@ impl<'a> Merger<'a> {
                     slot: plane as usize,
                     plane: &self.a.planes()[plane as usize],
                 };
-                self.split(s, cell, below, above, Self::merge_a)
+                self.split(s, cell, below, above, false, Self::merge_a)
+            }
+        }
+    }
+
+    /// The label every region of `B` in `cell` gives with `a`, when the
+    /// vertices of `cell` show that it is one, without cutting: then
+    /// [`Merger::insert_b`] would make only splits that all collapse, and
+    /// its result is this leaf with the uncut cell. Only where cells are
+    /// kept (the survey lists the vertices).
+    fn one_label_of_b(&mut self, cell: PolyId, a: Label) -> Option<Label> {
+        let kept = self.cells.as_mut()?;
+        if kept.surveyed != Some(cell) {
+            kept.survey.survey(self.arena, cell);
+            kept.surveyed = Some(cell);
+        }
+        let mut found = None;
+        self.labels_reached(0, a, &mut found).then_some(found?)
+    }
+
+    /// Whether the leaves of `B`'s subtree `n` that the surveyed cell
+    /// reaches give one label with `a` (also `found`'s, when set): a
+    /// split whose plane the cell straddles is followed on both sides, so
+    /// every leaf a cut of the cell would reach is visited.
+    fn labels_reached(&self, n: NodeId, a: Label, found: &mut Option<Label>) -> bool {
+        match self.b.nodes()[n as usize] {
+            Node::Leaf(b) => {
+                let label = self.op.apply(a, b);
+                *found.get_or_insert(label) == label
+            }
+            Node::Split {
+                plane,
+                below,
+                above,
+            } => {
+                let Some(kept) = &self.cells else {
+                    return false;
+                };
+                match kept
+                    .survey
+                    .reach(self.arena, &self.b.planes()[plane as usize])
+                {
+                    Reach::Below => self.labels_reached(below, a, found),
+                    Reach::Above => self.labels_reached(above, a, found),
+                    Reach::Both => {
+                        self.labels_reached(above, a, found) && self.labels_reached(below, a, found)
+                    }
+                }
+            }
+        }
+    }
+
+    /// Marks the splits of `B` whose proper cut cannot collapse under the
+    /// surveyed cell `C` with label `a` in `A`, from a witness: a vertex
+    /// `v` of `C` strictly inside a leaf region of `B`, with label `x`
+    /// there. Each split on the way to that leaf is reached by the piece
+    /// of `C` around `v`, whose part near `v` has volume and goes on to the
+    /// leaf: the child towards `v` yields a leaf `x` or a split. When the
+    /// other child is a leaf of another label, a proper cut there makes two
+    /// different children, and the cell need not be saved before it.
+    fn find_sure_splits(&mut self, a: Label) {
+        let Some(kept) = &self.cells else {
+            return;
+        };
+        if self.sure.len() < self.b.nodes().len() {
+            self.sure.resize(self.b.nodes().len(), false);
+        }
+        let nodes = self.b.nodes();
+        let label_of = |n: NodeId| match nodes[n as usize] {
+            Node::Leaf(b) => Some(self.op.apply(a, b)),
+            Node::Split { .. } => None,
+        };
+        for &v in kept.survey.vertices() {
+            let point = self.arena.point(v);
+            let mut n = 0;
+            let x = loop {
+                match nodes[n as usize] {
+                    Node::Leaf(b) => break Some(self.op.apply(a, b)),
+                    Node::Split {
+                        plane,
+                        below,
+                        above,
+                    } => {
+                        n = match classify_vertex(point, &self.b.planes()[plane as usize]) {
+                            Sign::Negative => below,
+                            Sign::Positive => above,
+                            Sign::Zero => break None,
+                        };
+                    }
+                }
+            };
+            let Some(x) = x else { continue };
+            // Down the same way again, marking the splits.
+            let mut n = 0;
+            while let Node::Split {
+                plane,
+                below,
+                above,
+            } = nodes[n as usize]
+            {
+                let (on, off) = match classify_vertex(point, &self.b.planes()[plane as usize]) {
+                    Sign::Negative => (below, above),
+                    _ => (above, below),
+                };
+                if label_of(off).is_some_and(|y| y != x) {
+                    self.sure[n as usize] = true;
+                    self.sure_set.push(n);
+                }
+                n = on;
+            }
+            if !self.sure_set.is_empty() {
+                return;
             }
         }
     }
@@ -207,22 +333,30 @@ impl<'a> Merger<'a> {
                     slot: self.a.planes().len() + plane as usize,
                     plane: &self.b.planes()[plane as usize],
                 };
-                self.split(s, cell, below, above, |m, child, c| m.insert_b(child, c, a))
+                let sure = self.sure.get(n as usize).is_some_and(|&sure| sure);
+                self.split(s, cell, below, above, sure, |m, child, c| {
+                    m.insert_b(child, c, a)
+                })
             }
         }
     }
 
     /// Cuts `cell` by `s` and recurses with `step` into the children it
     /// reaches; a split node only when the cut is proper. `cell` is used up.
+    /// `sure`: a proper cut cannot collapse.
     fn split(
         &mut self,
         s: InputPlane<'a>,
         cell: PolyId,
         below: NodeId,
         above: NodeId,
+        sure: bool,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
         if self.cells.is_some() {
+            if sure {
+                return self.split_unsaved(s, cell, below, above, step);
+            }
             return self.split_keeping(s, cell, below, above, step);
         }
         let mark = self.arena.mark();
@@ -293,6 +427,34 @@ impl<'a> Merger<'a> {
         node
     }
 
+    /// [`Merger::split_keeping`] where a proper cut cannot collapse: the
+    /// cell is cut without a survey or a save.
+    fn split_unsaved(
+        &mut self,
+        s: InputPlane<'a>,
+        cell: PolyId,
+        below: NodeId,
+        above: NodeId,
+        mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
+    ) -> NodeId {
+        let node = self.nodes.len() as NodeId;
+        match self.arena.cut(cell, s.plane, PENDING | node, node + 1) {
+            CutOutcome::Below => step(self, below, cell),
+            CutOutcome::Above => step(self, above, cell),
+            CutOutcome::Split {
+                below: cb,
+                above: ca,
+            } => {
+                if let Some(kept) = &mut self.cells {
+                    kept.surveyed = None;
+                }
+                let (node, collapsed) = self.proper(s, (cb, ca), below, above, step);
+                debug_assert!(collapsed.is_none(), "a sure split collapsed");
+                node
+            }
+        }
+    }
+
     /// The split for a proper cut into `cb` below and `ca` above, or the
     /// leaf it collapses into (then also its label).
     fn proper(
@@ -303,6 +465,7 @@ impl<'a> Merger<'a> {
         above: NodeId,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> (NodeId, Option<Label>) {
+        let palette = self.planes.len();
         let plane = self.plane(s);
         let node = self.push(Node::Leaf(EMPTY));
         let b = step(self, below, cb);
@@ -311,6 +474,7 @@ impl<'a> Merger<'a> {
             // Equal leaves on both sides: the plane separates nothing.
             (Node::Leaf(x), Node::Leaf(y)) if x == y => {
                 self.nodes.truncate(node as usize);
+                self.forget_planes_from(palette);
                 return (self.push(Node::Leaf(x)), Some(x));
             }
             _ => Node::Split {
@@ -333,6 +497,24 @@ impl<'a> Merger<'a> {
             });
         }
         leaf
+    }
+
+    /// Drops the palette entries from `len` on, which no node uses (a
+    /// collapsed split's and those of the splits below it), so that the
+    /// palette holds exactly the planes of the tree's splits, in the order
+    /// they were first used.
+    fn forget_planes_from(&mut self, len: usize) {
+        if self.planes.len() == len {
+            return;
+        }
+        for plane in self.planes.drain(len..) {
+            self.plane_index.remove(&plane);
+        }
+        for index in &mut self.known {
+            if *index != u32::MAX && *index as usize >= len {
+                *index = u32::MAX;
+            }
+        }
     }
 
     fn push(&mut self, node: Node) -> NodeId {
@@ -425,6 +607,8 @@ impl Bsp {
             known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
             cells,
+            sure: Vec::new(),
+            sure_set: Vec::new(),
         }
     }
 }
