@@ -124,11 +124,22 @@ struct Merger<'a> {
     nodes: Vec<Node>,
     /// The output leaves' cells when they are kept ([`Bsp::merge_cells`]).
     cells: Option<KeptCells>,
-    /// The splits of `B` whose proper cut cannot collapse below the
-    /// current leaf of `A` (see [`Merger::find_sure_splits`]), and which
-    /// are set.
-    sure: Vec<bool>,
-    sure_set: Vec<NodeId>,
+    /// What is known of each split of `B` below the current leaf of `A`,
+    /// and which are set.
+    facts: Vec<SplitFacts>,
+    facts_set: Vec<NodeId>,
+}
+
+/// What is known of a split of `B` below a leaf of `A` with cell `C`,
+/// before any piece of `C` reaches it.
+#[derive(Clone, Copy, Debug, Default)]
+struct SplitFacts {
+    /// A proper cut there cannot collapse ([`Merger::find_sure_splits`]).
+    sure: bool,
+    /// The side of the plane `C` lies on ([`Reach::Below`] or
+    /// [`Reach::Above`]), found by [`Merger::labels_reached`]: every piece
+    /// of `C` lies there too, and the cut is not proper.
+    side: Option<Reach>,
 }
 
 /// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
@@ -182,17 +193,19 @@ impl<'a> Merger<'a> {
             // make splits that all collapse into this one leaf.
             Node::Leaf(label) => match self.op.regardless_of_b(label) {
                 Some(label) => self.leaf(label, cell),
-                None => match self.one_label_of_b(cell, label) {
-                    Some(label) => self.leaf(label, cell),
-                    None => {
-                        self.find_sure_splits(label);
-                        let node = self.insert_b(0, cell, label);
-                        for n in self.sure_set.drain(..) {
-                            self.sure[n as usize] = false;
+                None => {
+                    let node = match self.one_label_of_b(cell, label) {
+                        Some(label) => self.leaf(label, cell),
+                        None => {
+                            self.find_sure_splits(label);
+                            self.insert_b(0, cell, label)
                         }
-                        node
+                    };
+                    for n in self.facts_set.drain(..) {
+                        self.facts[n as usize] = SplitFacts::default();
                     }
-                },
+                    node
+                }
             },
             Node::Split {
                 plane,
@@ -219,6 +232,10 @@ impl<'a> Merger<'a> {
             kept.survey.survey(self.arena, cell);
             kept.surveyed = Some(cell);
         }
+        if self.facts.len() < self.b.nodes().len() {
+            self.facts
+                .resize(self.b.nodes().len(), SplitFacts::default());
+        }
         let mut found = None;
         self.labels_reached(0, a, &mut found).then_some(found?)
     }
@@ -226,8 +243,9 @@ impl<'a> Merger<'a> {
     /// Whether the leaves of `B`'s subtree `n` that the surveyed cell
     /// reaches give one label with `a` (also `found`'s, when set): a
     /// split whose plane the cell straddles is followed on both sides, so
-    /// every leaf a cut of the cell would reach is visited.
-    fn labels_reached(&self, n: NodeId, a: Label, found: &mut Option<Label>) -> bool {
+    /// every leaf a cut of the cell would reach is visited. Notes the side
+    /// of each plane the cell lies on.
+    fn labels_reached(&mut self, n: NodeId, a: Label, found: &mut Option<Label>) -> bool {
         match self.b.nodes()[n as usize] {
             Node::Leaf(b) => {
                 let label = self.op.apply(a, b);
@@ -241,10 +259,14 @@ impl<'a> Merger<'a> {
                 let Some(kept) = &self.cells else {
                     return false;
                 };
-                match kept
+                let reach = kept
                     .survey
-                    .reach(self.arena, &self.b.planes()[plane as usize])
-                {
+                    .reach(self.arena, &self.b.planes()[plane as usize]);
+                if reach != Reach::Both {
+                    self.facts[n as usize].side = Some(reach);
+                    self.facts_set.push(n);
+                }
+                match reach {
                     Reach::Below => self.labels_reached(below, a, found),
                     Reach::Above => self.labels_reached(above, a, found),
                     Reach::Both => {
@@ -267,14 +289,12 @@ impl<'a> Merger<'a> {
         let Some(kept) = &self.cells else {
             return;
         };
-        if self.sure.len() < self.b.nodes().len() {
-            self.sure.resize(self.b.nodes().len(), false);
-        }
         let nodes = self.b.nodes();
         let label_of = |n: NodeId| match nodes[n as usize] {
             Node::Leaf(b) => Some(self.op.apply(a, b)),
             Node::Split { .. } => None,
         };
+        let mut marked = false;
         for &v in kept.survey.vertices() {
             let point = self.arena.point(v);
             let mut n = 0;
@@ -308,12 +328,13 @@ impl<'a> Merger<'a> {
                     _ => (above, below),
                 };
                 if label_of(off).is_some_and(|y| y != x) {
-                    self.sure[n as usize] = true;
-                    self.sure_set.push(n);
+                    self.facts[n as usize].sure = true;
+                    self.facts_set.push(n);
+                    marked = true;
                 }
                 n = on;
             }
-            if !self.sure_set.is_empty() {
+            if marked {
                 return;
             }
         }
@@ -333,10 +354,14 @@ impl<'a> Merger<'a> {
                     slot: self.a.planes().len() + plane as usize,
                     plane: &self.b.planes()[plane as usize],
                 };
-                let sure = self.sure.get(n as usize).is_some_and(|&sure| sure);
-                self.split(s, cell, below, above, sure, |m, child, c| {
-                    m.insert_b(child, c, a)
-                })
+                let facts = self.facts.get(n as usize).copied().unwrap_or_default();
+                match facts.side {
+                    Some(Reach::Below) => self.insert_b(below, cell, a),
+                    Some(Reach::Above) => self.insert_b(above, cell, a),
+                    _ => self.split(s, cell, below, above, facts.sure, |m, child, c| {
+                        m.insert_b(child, c, a)
+                    }),
+                }
             }
         }
     }
@@ -607,8 +632,8 @@ impl Bsp {
             known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
             cells,
-            sure: Vec::new(),
-            sure_set: Vec::new(),
+            facts: Vec::new(),
+            facts_set: Vec::new(),
         }
     }
 }
