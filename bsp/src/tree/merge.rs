@@ -651,7 +651,12 @@ impl Merger<'_> {
 
 #[cfg(test)]
 mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
     use super::*;
+    use crate::exact::IntPoint;
+    use crate::octree::{CellBox, Tool};
 
     /// `regardless_of_b` promises exactly what `apply` does, for every
     /// label on either side.
@@ -672,6 +677,68 @@ mod tests {
                     None => assert!(!constant, "{op:?} {a}: a constant missed"),
                 }
             }
+        }
+    }
+
+    fn random_hull(rng: &mut ChaCha8Rng, centre: i64, radius: i64) -> Bsp {
+        loop {
+            let points: Vec<IntPoint> = (0..10)
+                .map(|_| {
+                    let c = [0; 3].map(|_: i64| centre + rng.random_range(-radius..=radius));
+                    IntPoint::from_array(c).unwrap()
+                })
+                .collect();
+            if let Ok(tool) = Tool::convex_hull(&points) {
+                return tool.bsp().clone();
+            }
+        }
+    }
+
+    /// With cells kept or not, the merge gives the same tree, and its
+    /// palette holds exactly the planes of its splits, each once: the
+    /// splits that collapse, and those skipped because they would, leave
+    /// nothing in it.
+    #[test]
+    fn palette_holds_exactly_the_planes_of_the_splits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(29);
+        let ops = [
+            BooleanOp::Union,
+            BooleanOp::Intersection,
+            BooleanOp::Difference,
+            BooleanOp::Paint(2),
+        ];
+        let cell = CellBox {
+            min: [-40; 3],
+            max: [40; 3],
+        };
+        for round in 0..40 {
+            let (one, two) = (random_hull(&mut rng, 0, 50), random_hull(&mut rng, 10, 50));
+            let mut arena = ConvexArena::new();
+            let poly = cell.add_to(&mut arena).unwrap();
+            let a = one.merge(&two, BooleanOp::Difference, &mut arena, poly);
+            let b = random_hull(&mut rng, 0, 45);
+            let op = ops[round % ops.len()];
+            let mut arena = ConvexArena::new();
+            let poly = cell.add_to(&mut arena).unwrap();
+            let (kept, _) = a.merge_cells(&b, op, &mut arena, poly);
+            let mut arena = ConvexArena::new();
+            let poly = cell.add_to(&mut arena).unwrap();
+            let plain = a.merge(&b, op, &mut arena, poly);
+            assert_eq!(kept, plain, "round {round}");
+            let mut used: Vec<u32> = kept
+                .nodes()
+                .iter()
+                .filter_map(|n| match n {
+                    Node::Split { plane, .. } => Some(*plane),
+                    Node::Leaf(_) => None,
+                })
+                .collect();
+            used.sort_unstable();
+            used.dedup();
+            let all: Vec<u32> = (0..kept.planes().len() as u32).collect();
+            assert_eq!(used, all, "round {round}: a palette entry no split uses");
+            let distinct: std::collections::HashSet<&Plane> = kept.planes().iter().collect();
+            assert_eq!(distinct.len(), kept.planes().len(), "round {round}");
         }
     }
 }
