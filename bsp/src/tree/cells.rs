@@ -140,6 +140,11 @@ impl Survey {
         }
     }
 
+    /// The vertices of the surveyed polyhedron.
+    pub(crate) fn vertices(&self) -> &[u32] {
+        &self.vertices
+    }
+
     /// Which sides of `s` the surveyed polyhedron reaches: [`Reach::Both`]
     /// exactly when cutting it by `s` is proper.
     pub(crate) fn reach(&self, arena: &ConvexArena, s: &Plane) -> Reach {

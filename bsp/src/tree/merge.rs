@@ -41,7 +41,7 @@ use std::hash::BuildHasherDefault;
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::{Cell, Reach, Survey};
 use crate::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
-use crate::exact::Plane;
+use crate::exact::{Plane, Sign, classify_vertex};
 use crate::word_hash::WordHasher;
 
 /// How the labels of two overlapping regions combine.
@@ -124,6 +124,22 @@ struct Merger<'a> {
     nodes: Vec<Node>,
     /// The output leaves' cells when they are kept ([`Bsp::merge_cells`]).
     cells: Option<KeptCells>,
+    /// What is known of each split of `B` below the current leaf of `A`,
+    /// and which are set.
+    facts: Vec<SplitFacts>,
+    facts_set: Vec<NodeId>,
+}
+
+/// What is known of a split of `B` below a leaf of `A` with cell `C`,
+/// before any piece of `C` reaches it.
+#[derive(Clone, Copy, Debug, Default)]
+struct SplitFacts {
+    /// A proper cut there cannot collapse ([`Merger::find_sure_splits`]).
+    sure: bool,
+    /// The side of the plane `C` lies on ([`Reach::Below`] or
+    /// [`Reach::Above`]), found by [`Merger::labels_reached`]: every piece
+    /// of `C` lies there too, and the cut is not proper.
+    side: Option<Reach>,
 }
 
 /// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
@@ -177,7 +193,19 @@ impl<'a> Merger<'a> {
             // make splits that all collapse into this one leaf.
             Node::Leaf(label) => match self.op.regardless_of_b(label) {
                 Some(label) => self.leaf(label, cell),
-                None => self.insert_b(0, cell, label),
+                None => {
+                    let node = match self.one_label_of_b(cell, label) {
+                        Some(label) => self.leaf(label, cell),
+                        None => {
+                            self.find_sure_splits(label);
+                            self.insert_b(0, cell, label)
+                        }
+                    };
+                    for n in self.facts_set.drain(..) {
+                        self.facts[n as usize] = SplitFacts::default();
+                    }
+                    node
+                }
             },
             Node::Split {
                 plane,
@@ -188,7 +216,126 @@ impl<'a> Merger<'a> {
                     slot: plane as usize,
                     plane: &self.a.planes()[plane as usize],
                 };
-                self.split(s, cell, below, above, Self::merge_a)
+                self.split(s, cell, below, above, false, Self::merge_a)
+            }
+        }
+    }
+
+    /// The label every region of `B` in `cell` gives with `a`, when the
+    /// vertices of `cell` show that it is one, without cutting: then
+    /// [`Merger::insert_b`] would make only splits that all collapse, and
+    /// its result is this leaf with the uncut cell. Only where cells are
+    /// kept (the survey lists the vertices).
+    fn one_label_of_b(&mut self, cell: PolyId, a: Label) -> Option<Label> {
+        let kept = self.cells.as_mut()?;
+        if kept.surveyed != Some(cell) {
+            kept.survey.survey(self.arena, cell);
+            kept.surveyed = Some(cell);
+        }
+        if self.facts.len() < self.b.nodes().len() {
+            self.facts
+                .resize(self.b.nodes().len(), SplitFacts::default());
+        }
+        let mut found = None;
+        self.labels_reached(0, a, &mut found).then_some(found?)
+    }
+
+    /// Whether the leaves of `B`'s subtree `n` that the surveyed cell
+    /// reaches give one label with `a` (also `found`'s, when set): a
+    /// split whose plane the cell straddles is followed on both sides, so
+    /// every leaf a cut of the cell would reach is visited. Notes the side
+    /// of each plane the cell lies on.
+    fn labels_reached(&mut self, n: NodeId, a: Label, found: &mut Option<Label>) -> bool {
+        match self.b.nodes()[n as usize] {
+            Node::Leaf(b) => {
+                let label = self.op.apply(a, b);
+                *found.get_or_insert(label) == label
+            }
+            Node::Split {
+                plane,
+                below,
+                above,
+            } => {
+                let Some(kept) = &self.cells else {
+                    return false;
+                };
+                let reach = kept
+                    .survey
+                    .reach(self.arena, &self.b.planes()[plane as usize]);
+                if reach != Reach::Both {
+                    self.facts[n as usize].side = Some(reach);
+                    self.facts_set.push(n);
+                }
+                match reach {
+                    Reach::Below => self.labels_reached(below, a, found),
+                    Reach::Above => self.labels_reached(above, a, found),
+                    Reach::Both => {
+                        self.labels_reached(above, a, found) && self.labels_reached(below, a, found)
+                    }
+                }
+            }
+        }
+    }
+
+    /// Marks the splits of `B` whose proper cut cannot collapse under the
+    /// surveyed cell `C` with label `a` in `A`, from a witness: a vertex
+    /// `v` of `C` strictly inside a leaf region of `B`, with label `x`
+    /// there. Each split on the way to that leaf is reached by the piece
+    /// of `C` around `v`, whose part near `v` has volume and goes on to the
+    /// leaf: the child towards `v` yields a leaf `x` or a split. When the
+    /// other child is a leaf of another label, a proper cut there makes two
+    /// different children, and the cell need not be saved before it.
+    fn find_sure_splits(&mut self, a: Label) {
+        let Some(kept) = &self.cells else {
+            return;
+        };
+        let nodes = self.b.nodes();
+        let label_of = |n: NodeId| match nodes[n as usize] {
+            Node::Leaf(b) => Some(self.op.apply(a, b)),
+            Node::Split { .. } => None,
+        };
+        let mut marked = false;
+        for &v in kept.survey.vertices() {
+            let point = self.arena.point(v);
+            let mut n = 0;
+            let x = loop {
+                match nodes[n as usize] {
+                    Node::Leaf(b) => break Some(self.op.apply(a, b)),
+                    Node::Split {
+                        plane,
+                        below,
+                        above,
+                    } => {
+                        n = match classify_vertex(point, &self.b.planes()[plane as usize]) {
+                            Sign::Negative => below,
+                            Sign::Positive => above,
+                            Sign::Zero => break None,
+                        };
+                    }
+                }
+            };
+            let Some(x) = x else { continue };
+            // Down the same way again, marking the splits.
+            let mut n = 0;
+            while let Node::Split {
+                plane,
+                below,
+                above,
+            } = nodes[n as usize]
+            {
+                let (on, off) = match classify_vertex(point, &self.b.planes()[plane as usize]) {
+                    Sign::Negative => (below, above),
+                    _ => (above, below),
+                };
+                if label_of(off).is_some_and(|y| y != x) {
+                    self.facts[n as usize].sure = true;
+                    self.facts_set.push(n);
+                    marked = true;
+                }
+                n = on;
+            }
+            if marked {
+                return;
             }
         }
     }
@@ -207,22 +354,34 @@ impl<'a> Merger<'a> {
                     slot: self.a.planes().len() + plane as usize,
                     plane: &self.b.planes()[plane as usize],
                 };
-                self.split(s, cell, below, above, |m, child, c| m.insert_b(child, c, a))
+                let facts = self.facts.get(n as usize).copied().unwrap_or_default();
+                match facts.side {
+                    Some(Reach::Below) => self.insert_b(below, cell, a),
+                    Some(Reach::Above) => self.insert_b(above, cell, a),
+                    _ => self.split(s, cell, below, above, facts.sure, |m, child, c| {
+                        m.insert_b(child, c, a)
+                    }),
+                }
             }
         }
     }
 
     /// Cuts `cell` by `s` and recurses with `step` into the children it
     /// reaches; a split node only when the cut is proper. `cell` is used up.
+    /// `sure`: a proper cut cannot collapse.
     fn split(
         &mut self,
         s: InputPlane<'a>,
         cell: PolyId,
         below: NodeId,
         above: NodeId,
+        sure: bool,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
         if self.cells.is_some() {
+            if sure {
+                return self.split_unsaved(s, cell, below, above, step);
+            }
             return self.split_keeping(s, cell, below, above, step);
         }
         let mark = self.arena.mark();
@@ -293,6 +452,34 @@ impl<'a> Merger<'a> {
         node
     }
 
+    /// [`Merger::split_keeping`] where a proper cut cannot collapse: the
+    /// cell is cut without a survey or a save.
+    fn split_unsaved(
+        &mut self,
+        s: InputPlane<'a>,
+        cell: PolyId,
+        below: NodeId,
+        above: NodeId,
+        mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
+    ) -> NodeId {
+        let node = self.nodes.len() as NodeId;
+        match self.arena.cut(cell, s.plane, PENDING | node, node + 1) {
+            CutOutcome::Below => step(self, below, cell),
+            CutOutcome::Above => step(self, above, cell),
+            CutOutcome::Split {
+                below: cb,
+                above: ca,
+            } => {
+                if let Some(kept) = &mut self.cells {
+                    kept.surveyed = None;
+                }
+                let (node, collapsed) = self.proper(s, (cb, ca), below, above, step);
+                debug_assert!(collapsed.is_none(), "a sure split collapsed");
+                node
+            }
+        }
+    }
+
     /// The split for a proper cut into `cb` below and `ca` above, or the
     /// leaf it collapses into (then also its label).
     fn proper(
@@ -303,6 +490,7 @@ impl<'a> Merger<'a> {
         above: NodeId,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> (NodeId, Option<Label>) {
+        let palette = self.planes.len();
         let plane = self.plane(s);
         let node = self.push(Node::Leaf(EMPTY));
         let b = step(self, below, cb);
@@ -311,6 +499,7 @@ impl<'a> Merger<'a> {
             // Equal leaves on both sides: the plane separates nothing.
             (Node::Leaf(x), Node::Leaf(y)) if x == y => {
                 self.nodes.truncate(node as usize);
+                self.forget_planes_from(palette);
                 return (self.push(Node::Leaf(x)), Some(x));
             }
             _ => Node::Split {
@@ -333,6 +522,24 @@ impl<'a> Merger<'a> {
             });
         }
         leaf
+    }
+
+    /// Drops the palette entries from `len` on, which no node uses (a
+    /// collapsed split's and those of the splits below it), so that the
+    /// palette holds exactly the planes of the tree's splits, in the order
+    /// they were first used.
+    fn forget_planes_from(&mut self, len: usize) {
+        if self.planes.len() == len {
+            return;
+        }
+        for plane in self.planes.drain(len..) {
+            self.plane_index.remove(&plane);
+        }
+        for index in &mut self.known {
+            if *index != u32::MAX && *index as usize >= len {
+                *index = u32::MAX;
+            }
+        }
     }
 
     fn push(&mut self, node: Node) -> NodeId {
@@ -425,6 +632,8 @@ impl Bsp {
             known: vec![u32::MAX; self.planes().len() + other.planes().len()],
             nodes: Vec::new(),
             cells,
+            facts: Vec::new(),
+            facts_set: Vec::new(),
         }
     }
 }
@@ -442,7 +651,12 @@ impl Merger<'_> {
 
 #[cfg(test)]
 mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
     use super::*;
+    use crate::exact::IntPoint;
+    use crate::octree::{CellBox, Tool};
 
     /// `regardless_of_b` promises exactly what `apply` does, for every
     /// label on either side.
@@ -463,6 +677,68 @@ mod tests {
                     None => assert!(!constant, "{op:?} {a}: a constant missed"),
                 }
             }
+        }
+    }
+
+    fn random_hull(rng: &mut ChaCha8Rng, centre: i64, radius: i64) -> Bsp {
+        loop {
+            let points: Vec<IntPoint> = (0..10)
+                .map(|_| {
+                    let c = [0; 3].map(|_: i64| centre + rng.random_range(-radius..=radius));
+                    IntPoint::from_array(c).unwrap()
+                })
+                .collect();
+            if let Ok(tool) = Tool::convex_hull(&points) {
+                return tool.bsp().clone();
+            }
+        }
+    }
+
+    /// With cells kept or not, the merge gives the same tree, and its
+    /// palette holds exactly the planes of its splits, each once: the
+    /// splits that collapse, and those skipped because they would, leave
+    /// nothing in it.
+    #[test]
+    fn palette_holds_exactly_the_planes_of_the_splits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(29);
+        let ops = [
+            BooleanOp::Union,
+            BooleanOp::Intersection,
+            BooleanOp::Difference,
+            BooleanOp::Paint(2),
+        ];
+        let cell = CellBox {
+            min: [-40; 3],
+            max: [40; 3],
+        };
+        for round in 0..40 {
+            let (one, two) = (random_hull(&mut rng, 0, 50), random_hull(&mut rng, 10, 50));
+            let mut arena = ConvexArena::new();
+            let poly = cell.add_to(&mut arena).unwrap();
+            let a = one.merge(&two, BooleanOp::Difference, &mut arena, poly);
+            let b = random_hull(&mut rng, 0, 45);
+            let op = ops[round % ops.len()];
+            let mut arena = ConvexArena::new();
+            let poly = cell.add_to(&mut arena).unwrap();
+            let (kept, _) = a.merge_cells(&b, op, &mut arena, poly);
+            let mut arena = ConvexArena::new();
+            let poly = cell.add_to(&mut arena).unwrap();
+            let plain = a.merge(&b, op, &mut arena, poly);
+            assert_eq!(kept, plain, "round {round}");
+            let mut used: Vec<u32> = kept
+                .nodes()
+                .iter()
+                .filter_map(|n| match n {
+                    Node::Split { plane, .. } => Some(*plane),
+                    Node::Leaf(_) => None,
+                })
+                .collect();
+            used.sort_unstable();
+            used.dedup();
+            let all: Vec<u32> = (0..kept.planes().len() as u32).collect();
+            assert_eq!(used, all, "round {round}: a palette entry no split uses");
+            let distinct: std::collections::HashSet<&Plane> = kept.planes().iter().collect();
+            assert_eq!(distinct.len(), kept.planes().len(), "round {round}");
         }
     }
 }
