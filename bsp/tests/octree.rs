@@ -13,7 +13,8 @@ use chisel_bsp::convex::ConvexArena;
 use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Leaf, Octree, OctreeConfig, Tool};
 use chisel_bsp::tools::{Pose, dodecahedron_corners};
-use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
+use chisel_bsp::tree::{Bsp, EMPTY, Label};
+use common::octree_reference::{add, octree_volumes, reference_edit};
 use common::shapes::p;
 use common::volume::{Fraction, polygons_volume, volume};
 use rand::{Rng as _, SeedableRng};
@@ -34,28 +35,6 @@ fn block() -> CellBox {
         min: [100, 100, 100],
         max: [SIZE - 100, SIZE - 100, SIZE / 2],
     }
-}
-
-fn add(total: &mut BTreeMap<Label, Fraction>, label: Label, v: Fraction) {
-    let e = total.entry(label).or_insert_with(Fraction::zero);
-    *e = e.add(&v);
-}
-
-/// Exact volume per non-empty label, over all leaves.
-fn octree_volumes(octree: &Octree) -> BTreeMap<Label, Fraction> {
-    let mut total = BTreeMap::new();
-    for (key, leaf) in octree.leaves() {
-        let bsp = leaf.to_bsp();
-        bsp.validate().unwrap();
-        let mut arena = ConvexArena::new();
-        let cell = octree.cell_box(key).add_to(&mut arena).unwrap();
-        for c in bsp.cells(&mut arena, cell) {
-            if c.label != EMPTY {
-                add(&mut total, c.label, volume(&arena, c.poly));
-            }
-        }
-    }
-    total
 }
 
 fn bsp_volumes(bsp: &Bsp) -> BTreeMap<Label, Fraction> {
@@ -103,24 +82,6 @@ fn random_edit(rng: &mut ChaCha8Rng) -> Edit {
     }
 }
 
-fn reference_edit(reference: &Bsp, tool: &Tool, edit: Edit) -> Bsp {
-    let (op, label) = match edit {
-        Edit::Subtract => (BooleanOp::Difference, 1),
-        Edit::Add(m) => (BooleanOp::Union, m),
-        Edit::Paint(m) => (BooleanOp::Paint(m), 1),
-        Edit::Intersect => (BooleanOp::Intersection, 1),
-    };
-    let tool = tool
-        .bsp()
-        .relabeled(|l| if l == EMPTY { EMPTY } else { label });
-    let mut arena = ConvexArena::new();
-    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
-    let merged = reference.merge(&tool, op, &mut arena, root);
-    let mut arena = ConvexArena::new();
-    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
-    merged.simplified(&mut arena, root)
-}
-
 /// Unreported leaves keep their stored value; reported keys are right.
 fn check_changes(before: &Octree, after: &Octree, changes: &Changes) {
     for (key, leaf) in after.leaves() {
@@ -162,7 +123,7 @@ fn random_edits_match_one_big_bsp_exactly() {
         let edit = random_edit(&mut rng);
         let before = octree.clone();
         let changes = octree.apply(&tool, edit).unwrap();
-        reference = reference_edit(&reference, &tool, edit);
+        reference = reference_edit(&reference, &tool, edit, SIZE);
         assert_eq!(
             octree_volumes(&octree),
             bsp_volumes(&reference),

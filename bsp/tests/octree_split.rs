@@ -14,9 +14,9 @@ use std::collections::BTreeMap;
 use chisel_bsp::convex::ConvexArena;
 use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
 use chisel_bsp::tools::{Pose, dodecahedron_corners};
-use chisel_bsp::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label};
-use common::shapes::p;
-use common::volume::{Fraction, polygons_volume, volume};
+use chisel_bsp::tree::{BoundaryFace, Bsp, EMPTY, Label};
+use common::octree_reference::{add, octree_volumes, reference_edit};
+use common::volume::{Fraction, polygons_volume};
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -77,24 +77,6 @@ fn random_edit(rng: &mut ChaCha8Rng) -> Edit {
     }
 }
 
-fn reference_edit(reference: &Bsp, tool: &Tool, edit: Edit) -> Bsp {
-    let (op, label) = match edit {
-        Edit::Subtract => (BooleanOp::Difference, 1),
-        Edit::Add(m) => (BooleanOp::Union, m),
-        Edit::Paint(m) => (BooleanOp::Paint(m), 1),
-        Edit::Intersect => (BooleanOp::Intersection, 1),
-    };
-    let tool = tool
-        .bsp()
-        .relabeled(|l| if l == EMPTY { EMPTY } else { label });
-    let mut arena = ConvexArena::new();
-    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
-    let merged = reference.merge(&tool, op, &mut arena, root);
-    let mut arena = ConvexArena::new();
-    let root = arena.add_box(p(0, 0, 0), p(SIZE, SIZE, SIZE)).unwrap();
-    merged.simplified(&mut arena, root)
-}
-
 /// Whether `a` and `b` have the same label everywhere inside `cell`: each
 /// cell of `a` there, cut by `b`, has only pieces of its label.
 fn same_regions(a: &Bsp, b: &Bsp, cell: &CellBox) -> bool {
@@ -106,27 +88,6 @@ fn same_regions(a: &Bsp, b: &Bsp, cell: &CellBox) -> bool {
             .iter()
             .all(|piece| piece.label == c.label)
     })
-}
-
-fn add(total: &mut BTreeMap<Label, Fraction>, label: Label, v: Fraction) {
-    let e = total.entry(label).or_insert_with(Fraction::zero);
-    *e = e.add(&v);
-}
-
-/// Exact volume per non-empty label, over all leaves.
-fn octree_volumes(octree: &Octree) -> BTreeMap<Label, Fraction> {
-    let mut total = BTreeMap::new();
-    for (key, leaf) in octree.leaves() {
-        let bsp = leaf.to_bsp();
-        let mut arena = ConvexArena::new();
-        let cell = octree.cell_box(key).add_to(&mut arena).unwrap();
-        for c in bsp.cells(&mut arena, cell) {
-            if c.label != EMPTY {
-                add(&mut total, c.label, volume(&arena, c.poly));
-            }
-        }
-    }
-    total
 }
 
 /// Exact per-label divergence integrals of surface pieces (each face
@@ -165,7 +126,7 @@ fn check_edits(seed: u64, steps: usize, tool: fn(&mut ChaCha8Rng) -> Tool) -> us
         let (changes, faces) = octree.apply_with_faces(&tool, edit).unwrap();
         assert_eq!(plain.apply(&tool, edit).unwrap(), changes, "step {step}");
         assert_eq!(plain.to_bytes(), octree.to_bytes(), "step {step}");
-        reference = reference_edit(&reference, &tool, edit);
+        reference = reference_edit(&reference, &tool, edit, SIZE);
         for (key, leaf) in octree.leaves() {
             let bsp = leaf.to_bsp();
             bsp.validate().unwrap();

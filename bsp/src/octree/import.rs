@@ -38,7 +38,7 @@ use crate::Error;
 use crate::convex::ConvexArena;
 use crate::exact::{IntPoint, Plane, Sign, classify_vertex};
 use crate::tree::polygon::Polygon;
-use crate::tree::{Bsp, EMPTY, Label, Node};
+use crate::tree::{Bsp, EMPTY, Label};
 
 /// Seed of the face order in imported cells.
 const IMPORT_SEED: u64 = 0x1A90_27ED_0C7E_0001;
@@ -131,7 +131,7 @@ impl Octree {
                 }
                 return Some(match leaf {
                     Leaf::Uniform(l) => *l,
-                    Leaf::Bsp(bsp) => label_near(bsp, c, dir, order),
+                    Leaf::Bsp(bsp) => bsp.label_near(c.map(|x| 2 * i128::from(x)), dir, order),
                 });
             }
         }
@@ -265,37 +265,6 @@ fn split_among_children(pieces: Vec<Polygon>, cell: CellBox) -> Vec<Vec<Polygon>
         }
     }
     out
-}
-
-/// The label of `bsp` at `c + ε·dir[order[0]] + ε²·dir[order[1]] +
-/// ε³·dir[order[2]]` (axes pushed in that order).
-fn label_near(bsp: &Bsp, c: [i64; 3], dir: [i64; 3], order: [usize; 3]) -> Label {
-    let p = IntPoint::from_array(c).expect("cell corners are in range");
-    let mut n = 0;
-    loop {
-        match bsp.nodes()[n as usize] {
-            Node::Leaf(label) => return label,
-            Node::Split {
-                plane,
-                below,
-                above,
-            } => {
-                let s = &bsp.planes()[plane as usize];
-                let normal = s.normal();
-                let v = s.eval(p);
-                let side = if v != 0 {
-                    v.signum()
-                } else {
-                    order
-                        .iter()
-                        .map(|&a| i128::from(normal[a].signum() * dir[a]))
-                        .find(|&x| x != 0)
-                        .unwrap_or(1)
-                };
-                n = if side < 0 { below } else { above };
-            }
-        }
-    }
 }
 
 /// Eight uniform children of one label become one leaf, bottom up.

@@ -31,7 +31,7 @@
 use super::cell::CellBox;
 use crate::exact::{Plane, Sign};
 use crate::tree::polygon::{Polygon, classify_corners};
-use crate::tree::{BoundaryFace, Bsp, EMPTY, Label, Node};
+use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
 
 /// The pieces of `faces` (the exact boundary inside `cell`, faces on its
 /// box marked) inside each child of `cell`, by child index: inner pieces
@@ -100,34 +100,8 @@ pub(crate) fn child_bsp(parent: &Bsp, pieces: &[BoundaryFace], child: &CellBox) 
 /// The label of `bsp` at the centre of `cell` pushed by `ε·(1, ε, ε²)`: a
 /// point strictly inside `cell` on no plane.
 fn label_inside(bsp: &Bsp, cell: &CellBox) -> Label {
-    // Twice the centre, on the integer grid. With |n| ≤ 2^55, coordinates
-    // below 2^28 and |d| ≤ 2^83, n·(2c) + 2d stays far inside i128.
     let twice = [0, 1, 2].map(|a| i128::from(cell.min[a]) + i128::from(cell.max[a]));
-    let mut n = 0;
-    loop {
-        match bsp.nodes()[n as usize] {
-            Node::Leaf(label) => return label,
-            Node::Split {
-                plane,
-                below,
-                above,
-            } => {
-                let s = &bsp.planes()[plane as usize];
-                let normal = s.normal();
-                let value = (0..3)
-                    .map(|a| i128::from(normal[a]) * twice[a])
-                    .sum::<i128>()
-                    + 2 * s.offset();
-                // On the plane, the push decides: the sign of the first
-                // non-zero normal component.
-                let is_above = match value.signum() {
-                    0 => normal.iter().find(|&&c| c != 0).is_some_and(|&c| c > 0),
-                    sign => sign > 0,
-                };
-                n = if is_above { above } else { below };
-            }
-        }
-    }
+    bsp.label_near(twice, [1; 3], [0, 1, 2])
 }
 
 /// The same polygon facing the other way.
@@ -152,7 +126,7 @@ mod tests {
 
     use super::*;
     use crate::convex::{ConvexArena, with_arena};
-    use crate::tree::NodeId;
+    use crate::tree::{Node, NodeId};
 
     /// The cell the tests split: centre 0, so that the middle planes are
     /// the coordinate planes.

@@ -14,12 +14,14 @@
 //! - [`import`] — a BSP from a closed triangle soup (§3.6).
 //! - [`boundary`] — the solid's boundary without interior faces (§3.4).
 //! - [`simplify`] — redundancy removal by extraction and rebuilding (§3.7).
+//! - `locate` — the label just beside a point (symbolic perturbation).
 
 pub mod boundary;
 pub mod bsp;
 pub mod cells;
 pub mod graft;
 pub mod import;
+mod locate;
 pub mod merge;
 pub(crate) mod polygon;
 pub mod simplify;
