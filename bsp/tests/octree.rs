@@ -423,21 +423,10 @@ fn faces_handed_back_finish_into_the_cells_surface() {
     );
 }
 
-/// A cuboid on the planes between cells of edge `g` (so that neighbours
-/// meet it only on a face, an edge or a corner), reaching into the block.
+/// A cuboid on the planes between cells (so that neighbours meet it only
+/// on a face, an edge or a corner), reaching into the block.
 fn snapped_cuboid(rng: &mut ChaCha8Rng) -> Tool {
-    let g = SIZE >> rng.random_range(3..=6);
-    let min = [
-        g * rng.random_range(0..SIZE / g - 2),
-        g * rng.random_range(0..SIZE / g - 2),
-        g * rng.random_range(1..SIZE / 2 / g),
-    ];
-    let size = [0; 3].map(|_| g * rng.random_range(1..3));
-    Tool::cuboid(CellBox {
-        min,
-        max: [0, 1, 2].map(|a| min[a] + size[a]),
-    })
-    .unwrap()
+    common::octree_reference::snapped_cuboid(rng, SIZE, 3..=6, 1)
 }
 
 /// Dodecahedra, cuboids on cell planes, and unions of both.

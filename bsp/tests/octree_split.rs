@@ -37,20 +37,9 @@ fn block() -> CellBox {
     }
 }
 
-/// A cuboid with corners on the middle planes of cells of edge `2g`.
+/// A cuboid with corners on the middle planes of cells.
 fn snapped_cuboid(rng: &mut ChaCha8Rng) -> Tool {
-    let g = SIZE >> rng.random_range(2..=5);
-    let min = [
-        g * rng.random_range(0..SIZE / g - 2),
-        g * rng.random_range(0..SIZE / g - 2),
-        g * rng.random_range(0..SIZE / 2 / g),
-    ];
-    let size = [0; 3].map(|_| g * rng.random_range(1..3));
-    Tool::cuboid(CellBox {
-        min,
-        max: [0, 1, 2].map(|a| min[a] + size[a]),
-    })
-    .unwrap()
+    common::octree_reference::snapped_cuboid(rng, SIZE, 2..=5, 0)
 }
 
 fn dodecahedron(rng: &mut ChaCha8Rng) -> Tool {

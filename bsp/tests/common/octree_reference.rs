@@ -6,8 +6,10 @@
 use std::collections::BTreeMap;
 
 use chisel_bsp::convex::ConvexArena;
-use chisel_bsp::octree::{Edit, Octree, Tool};
+use chisel_bsp::octree::{CellBox, Edit, Octree, Tool};
 use chisel_bsp::tree::{BooleanOp, Bsp, EMPTY, Label};
+use rand::Rng as _;
+use rand_chacha::ChaCha8Rng;
 
 use super::shapes::p;
 use super::volume::{Fraction, volume};
@@ -54,4 +56,29 @@ pub fn reference_edit(reference: &Bsp, tool: &Tool, edit: Edit, size: i64) -> Bs
     let mut arena = ConvexArena::new();
     let root = arena.add_box(p(0, 0, 0), p(size, size, size)).unwrap();
     merged.simplified(&mut arena, root)
+}
+
+/// A cuboid on the planes between cells of edge `g = size >> k` for a
+/// random `k` in `levels` (so that it meets cells only on whole faces,
+/// edges or corners, or on their middle planes), one or two cells of edge
+/// `g` long on each axis, its lowest corner at `z ≥ g·z_from` and below
+/// `size / 2`.
+pub fn snapped_cuboid(
+    rng: &mut ChaCha8Rng,
+    size: i64,
+    levels: std::ops::RangeInclusive<u32>,
+    z_from: i64,
+) -> Tool {
+    let g = size >> rng.random_range(levels);
+    let min = [
+        g * rng.random_range(0..size / g - 2),
+        g * rng.random_range(0..size / g - 2),
+        g * rng.random_range(z_from..size / 2 / g),
+    ];
+    let extent = [0; 3].map(|_| g * rng.random_range(1..3));
+    Tool::cuboid(CellBox {
+        min,
+        max: [0, 1, 2].map(|a| min[a] + extent[a]),
+    })
+    .unwrap()
 }
