@@ -581,8 +581,8 @@ fn shows_solid(p: &[f32; 4]) -> bool {
 struct SceneFigures {
     pass_ms: HashMap<Variant, f64>,
     frame_minus_empty_ms: HashMap<Variant, f64>,
-    /// Fragments per covered pixel (exact) and lavapipe's fragment shader
-    /// invocations per covered pixel.
+    /// Fragments per covered pixel (exact) and the adapter's fragment
+    /// shader invocations per covered pixel.
     overdraw: HashMap<Variant, (f64, f64)>,
     covered: u64,
 }
@@ -600,7 +600,7 @@ fn figures(log: &Log) -> SceneFigures {
         let pass = log.pass_ms.get(&draw).cloned().unwrap_or_default();
         let frame = log.frame_ms.get(&draw).cloned().unwrap_or_default();
         println!(
-            "  {draw:?}: pass median {:.1} ms of {:.0?}; frame median {:.1} ms of {:.0?}",
+            "  {draw:?}: pass median {:.2} ms of {:.1?}; frame median {:.1} ms of {:.0?}",
             median(&pass),
             pass,
             median(&frame),
@@ -691,7 +691,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         let check = |v| f.frame_minus_empty_ms.get(&v).copied().unwrap_or(f64::NAN);
         let od = |v| f.overdraw.get(&v).copied().unwrap_or((f64::NAN, f64::NAN));
         times.push(format!(
-            "| {name} | {quadrics} | {splat_count} | {:.0} | {:.0} | {:.1}× | {:.1}× | {:.0} | {:.0} |",
+            "| {name} | {quadrics} | {splat_count} | {:.2} | {:.2} | {:.1}× | {:.1}× | {:.2} | {:.2} |",
             pass(Variant::Boxes),
             pass(Variant::Global),
             pass(Variant::Global) / pass(Variant::Boxes),
@@ -717,7 +717,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         println!("{row}");
     }
     println!(
-        "\n| scene | covered px | overdraw | lavapipe invocations per covered px | \
+        "\n| scene | covered px | overdraw | invocations per covered px | \
          open boxes overdraw | screen quads overdraw |"
     );
     println!("|---|---:|---:|---:|---:|---:|");
