@@ -394,17 +394,24 @@ impl ConvexArena {
                 },
             };
             if entry != u32::MAX {
-                let (info, exit) = self.survey_from_crossing(f, entry, s, scratch);
-                relevant.push((f, info));
-                match exit {
-                    SectionExit::Crossing(y) => {
-                        let t = self.half_edges[y as usize].twin;
-                        let g = self.half_edges[t as usize].face;
-                        if scratch.faces.insert(g, true) {
-                            queue.push((g, t));
+                // Along the section from face to face across crossing
+                // edges, straight on (what the queue would give next).
+                let (mut f, mut entry) = (f, entry);
+                loop {
+                    let (info, exit) = self.survey_from_crossing(f, entry, s, scratch);
+                    relevant.push((f, info));
+                    match exit {
+                        SectionExit::Crossing(y) => {
+                            let t = self.half_edges[y as usize].twin;
+                            let g = self.half_edges[t as usize].face;
+                            if scratch.faces.insert(g, true) {
+                                (f, entry) = (g, t);
+                                continue;
+                            }
                         }
+                        SectionExit::Vertex(z) => around(z, &mut queue, scratch),
                     }
-                    SectionExit::Vertex(z) => around(z, &mut queue, scratch),
+                    break;
                 }
                 continue;
             }

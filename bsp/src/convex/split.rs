@@ -51,9 +51,11 @@ impl ConvexArena {
                 self.split_edge(crossing, s);
             }
         }
-        // 2. Split straddling faces; list the section edges, those of the
-        // new faces last.
-        section.clear();
+        // 2. Split straddling faces; list the section edges by the side of
+        // their face, those of the new faces (all `+`) last.
+        for list in &mut section {
+            list.clear();
+        }
         section_new.clear();
         for &(f, info) in &relevant {
             match (info, keep) {
@@ -64,8 +66,8 @@ impl ConvexArena {
                     None,
                 ) => {
                     let (kept, new) = self.split_face(f, &self.face_zeros(enter, first_chain));
-                    section.push((kept, Sign::Negative));
-                    section_new.push((new, Sign::Positive));
+                    section[0].push(kept);
+                    section_new.push(new);
                 }
                 (
                     FaceInfo::Straddling {
@@ -77,19 +79,19 @@ impl ConvexArena {
                     // the kept part comes out the same.
                     let edge = self.trim_face(f, side, &self.face_zeros(enter, first_chain));
                     if side == Sign::Negative {
-                        section.push((edge, side));
+                        section[0].push(edge);
                     } else {
-                        section_new.push((edge, side));
+                        section_new.push(edge);
                     }
                 }
                 (FaceInfo::Touching { side, edge }, _) => {
                     if keep.is_none_or(|k| k == side) {
-                        section.push((edge, side));
+                        section[usize::from(side == Sign::Positive)].push(edge);
                     }
                 }
             }
         }
-        section.extend_from_slice(&section_new);
+        section[1].extend_from_slice(&section_new);
         // 3. Caps.
         let outcome = self.add_caps(&section, scratch, s, tags, keep);
         scratch.relevant = relevant;
@@ -226,18 +228,20 @@ impl ConvexArena {
             }
             h = self.half_edges[h as usize].next;
         }
-        self.half_edges.push(HalfEdge {
-            origin: z2,
-            twin: u32::MAX,
-            next: z.leave[0],
-            face: face_0,
-        });
-        self.half_edges.push(HalfEdge {
-            origin: z1,
-            twin: u32::MAX,
-            next: z.leave[1],
-            face: face_1,
-        });
+        self.half_edges.extend_from_slice(&[
+            HalfEdge {
+                origin: z2,
+                twin: u32::MAX,
+                next: z.leave[0],
+                face: face_0,
+            },
+            HalfEdge {
+                origin: z1,
+                twin: u32::MAX,
+                next: z.leave[1],
+                face: face_1,
+            },
+        ]);
         self.half_edges[z.enter[1] as usize].next = a;
         self.half_edges[z.enter[0] as usize].next = b;
         let (kept, new) = if chain_0_positive { (b, a) } else { (a, b) };
@@ -250,13 +254,13 @@ impl ConvexArena {
     }
 
     /// Builds the two caps along the section and separates the parts, or
-    /// with `keep` only the cap of that side's part; `section` lists every
-    /// half-edge lying in `s` with the side of its face (of the kept side
-    /// only, with `keep`). Returns the first half-edge of each cap
-    /// (`u32::MAX` for a cap not built).
+    /// with `keep` only the cap of that side's part; `section[k]` lists the
+    /// half-edges lying in `s` on faces of the lower (`k = 0`) and upper
+    /// part (of the kept side only, with `keep`). Returns the first
+    /// half-edge of each cap (`u32::MAX` for a cap not built).
     fn add_caps(
         &mut self,
-        section: &[(u32, Sign)],
+        section: &[Vec<u32>; 2],
         scratch: &mut Scratch,
         s: &Plane,
         tags: [u32; 2],
@@ -279,28 +283,29 @@ impl ConvexArena {
             let first = self.half_edges.len() as u32;
             scratch.cap_starts.clear();
             cap_edges.clear();
-            for &(h, hside) in section {
-                if hside != side {
-                    continue;
-                }
-                let (u, v) = (self.half_edges[h as usize].origin, self.dest(h));
-                let c = self.half_edges.len() as u32;
-                self.half_edges.push(HalfEdge {
-                    origin: v,
-                    twin: h,
-                    next: u32::MAX,
-                    face: cap,
-                });
+            // The cap half-edges get the indices from `first` on, in the
+            // order of the section list: pair them and note where each
+            // starts before writing them all at once.
+            for (c, &h) in (first..).zip(&section[k]) {
+                let e = self.half_edges[h as usize];
+                let (u, v) = (e.origin, self.half_edges[e.next as usize].origin);
                 self.half_edges[h as usize].twin = c;
                 scratch.cap_starts.insert(v, c);
-                cap_edges.push((c, u));
+                cap_edges.push((u, v));
             }
-            for &(c, u) in &cap_edges {
-                self.half_edges[c as usize].next = scratch
-                    .cap_starts
-                    .get(u)
-                    .expect("the section is a closed loop");
-            }
+            let starts = &scratch.cap_starts;
+            self.half_edges
+                .extend(
+                    section[k]
+                        .iter()
+                        .zip(&cap_edges)
+                        .map(|(&h, &(u, v))| HalfEdge {
+                            origin: v,
+                            twin: h,
+                            next: starts.get(u).expect("the section is a closed loop"),
+                            face: cap,
+                        }),
+                );
             self.faces.push(Face {
                 plane,
                 half_edge: first,
@@ -310,8 +315,7 @@ impl ConvexArena {
             if side == Sign::Negative || keep.is_some() {
                 // The lower part (or the only part built) keeps the section
                 // vertices.
-                for &(c, _) in &cap_edges {
-                    let v = self.half_edges[c as usize].origin;
+                for (c, &(_, v)) in (first..).zip(&cap_edges) {
                     self.vertices[v as usize].half_edge = c;
                 }
             } else {
@@ -319,8 +323,7 @@ impl ConvexArena {
                 // rotate around each section
                 // vertex through the upper part's half-edges (now closed off
                 // by the cap) and re-point their origins.
-                for &(c, _) in &cap_edges {
-                    let v = self.half_edges[c as usize].origin;
+                for (c, &(_, v)) in (first..).zip(&cap_edges) {
                     let copy = self.vertices.len() as u32;
                     self.vertices.push(Vertex {
                         point: self.vertices[v as usize].point,
