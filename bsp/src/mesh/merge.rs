@@ -46,6 +46,7 @@
 //! labels agree. A directed edge used by more than one polygon (a solid
 //! touching itself along an edge) is never merged across.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 use std::hash::BuildHasherDefault;
@@ -70,8 +71,51 @@ fn edge_key(from: u32, to: u32) -> u64 {
 /// them); the merged ones have none either. The order of the remaining
 /// polygons is that of their first pieces.
 pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon>) -> bool {
-    let mut owners: HashMap<u64, u32, BuildHasherDefault<WordHasher>> =
-        HashMap::with_capacity_and_hasher(polygons.len() * 4, BuildHasherDefault::default());
+    let mut scratch = SCRATCH
+        .try_with(|s| s.try_borrow_mut().map(|mut s| std::mem::take(&mut *s)))
+        .ok()
+        .and_then(Result::ok)
+        .unwrap_or_default();
+    let merged_any = merge_in(vertices, polygons, &mut scratch);
+    if scratch.owners.capacity() <= KEEP_MAX {
+        let _ = SCRATCH.try_with(|s| {
+            if let Ok(mut s) = s.try_borrow_mut() {
+                *s = scratch;
+            }
+        });
+    }
+    merged_any
+}
+
+/// Working memory of [`merge_coplanar`], kept per thread (a game
+/// re-meshes a few cells after every edit, each about as large as the
+/// last): the owner of each directed edge, which polygons are still
+/// alive, and the polygons still to try.
+#[derive(Default)]
+struct Scratch {
+    owners: HashMap<u64, u32, BuildHasherDefault<WordHasher>>,
+    alive: Vec<bool>,
+    pending: Vec<u32>,
+}
+
+thread_local! {
+    /// The [`Scratch`] of this thread, between calls.
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Edges above which the working memory is freed rather than kept (after
+/// a whole-surface mesh).
+const KEEP_MAX: usize = 1 << 14;
+
+/// [`merge_coplanar`] with the working memory `scratch`.
+fn merge_in(vertices: &[Point4], polygons: &mut Vec<MeshPolygon>, scratch: &mut Scratch) -> bool {
+    let Scratch {
+        owners,
+        alive,
+        pending,
+    } = scratch;
+    owners.clear();
+    owners.reserve(polygons.len() * 4);
     for (f, polygon) in polygons.iter().enumerate() {
         let n = polygon.corners.len();
         for k in 0..n {
@@ -86,9 +130,11 @@ pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon
             }
         }
     }
-    let mut alive = vec![true; polygons.len()];
+    alive.clear();
+    alive.resize(polygons.len(), true);
     let mut merged_any = false;
-    let mut pending: Vec<u32> = (0..polygons.len() as u32).rev().collect();
+    pending.clear();
+    pending.extend((0..polygons.len() as u32).rev());
     while let Some(a) = pending.pop() {
         let a = a as usize;
         if !alive[a] {

@@ -46,7 +46,8 @@
 //! # Candidates
 //!
 //! Up to [`SCAN_MAX`] vertices (the surface of one octree cell), every
-//! vertex; above, a dense uniform grid over the `f64` positions of the
+//! vertex near the polygon's plane (a cheap `f64` test with a tolerance
+//! of `2^-40` of the magnitude, found once per polygon); above, a dense uniform grid over the `f64` positions of the
 //! vertices, about `2∛V` cells per axis (`8V` cells in all, stored as one
 //! offset array and one index array), where each edge visits the cells
 //! near it in steps of at most one cell, every step's box widened by a
@@ -56,6 +57,7 @@
 //! the same margin. So a vertex exactly on the segment always reaches the
 //! exact test, which decides: both ways find the same vertices.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
@@ -78,18 +80,108 @@ pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
 /// [`split`], scanning every vertex for every edge up to `scan_max`
 /// vertices, with a grid above.
 fn split_with(vertices: &[Point4], polygons: &mut [MeshPolygon], scan_max: usize) {
-    let whole = matched_whole(polygons);
+    let mut scratch = Scratch::take();
+    split_in(vertices, polygons, scan_max, &mut scratch);
+    scratch.give_back();
+}
+
+/// Working memory of [`split`], kept per thread: a game re-meshes a few
+/// cells after every edit, each surface about as large as the last, so
+/// these buffers are reused rather than grown anew for every cell.
+#[derive(Default)]
+struct Scratch {
+    /// The one polygon using each original directed edge, or `SHARED`.
+    owners: HashMap<u64, u32, BuildHasherDefault<WordHasher>>,
+    /// Per original edge of every polygon: whether it is matched whole.
+    whole: Vec<bool>,
+    /// The `f64` position of every vertex.
+    positions: Vec<[f64; 3]>,
+    /// Per vertex, the last edge whose grid candidates included it.
+    seen: Vec<u64>,
+    /// Vertices near the edge (grid) or the polygon's plane (scan).
+    candidates: Vec<u32>,
+    /// Vertices strictly inside the edge, in order along it.
+    inside: Vec<u32>,
+    /// The polygon's original corners, its new corners and the positions
+    /// of the original ones among them.
+    originals: Vec<u32>,
+    corners: Vec<u32>,
+    positions_of_originals: Vec<u32>,
+}
+
+thread_local! {
+    /// The [`Scratch`] of this thread, between calls.
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Vertices above which the working memory is freed rather than kept
+/// (after a whole-surface mesh).
+const KEEP_MAX: usize = 1 << 12;
+
+impl Scratch {
+    /// The working memory of this thread, or a new one when it is in use.
+    fn take() -> Self {
+        SCRATCH
+            .try_with(|s| s.try_borrow_mut().map(|mut s| std::mem::take(&mut *s)))
+            .ok()
+            .and_then(Result::ok)
+            .unwrap_or_default()
+    }
+
+    /// Keeps the working memory for the next call on this thread, unless
+    /// it grew large.
+    fn give_back(self) {
+        if self.positions.capacity() > KEEP_MAX {
+            return;
+        }
+        let _ = SCRATCH.try_with(|s| {
+            if let Ok(mut s) = s.try_borrow_mut() {
+                *s = self;
+            }
+        });
+    }
+}
+
+/// [`split_with`] with the working memory `scratch`.
+fn split_in(
+    vertices: &[Point4],
+    polygons: &mut [MeshPolygon],
+    scan_max: usize,
+    scratch: &mut Scratch,
+) {
+    let Scratch {
+        owners,
+        whole,
+        positions,
+        seen,
+        candidates,
+        inside,
+        originals,
+        corners,
+        positions_of_originals,
+    } = scratch;
+    matched_whole(polygons, owners, whole);
     let mut edge_index = 0;
-    let positions: Vec<[f64; 3]> = vertices.iter().map(Point4::to_f64).collect();
-    let grid = Grid::new(&positions, scan_max);
-    let mut seen = vec![u64::MAX; if grid.is_dense() { positions.len() } else { 0 }];
+    positions.clear();
+    positions.extend(vertices.iter().map(Point4::to_f64));
+    let grid = Grid::new(positions, scan_max);
+    seen.clear();
+    if grid.is_dense() {
+        seen.resize(positions.len(), u64::MAX);
+    }
     let mut edge_number = 0u64;
-    let mut candidates = Vec::new();
-    let mut inside = Vec::new();
-    let mut originals = Vec::new();
-    let (mut corners, mut positions_of_originals) = (Vec::new(), Vec::new());
     for polygon in polygons.iter_mut() {
         let n = polygon.original_len();
+        let first_edge = edge_index;
+        if !grid.is_dense() && whole[first_edge..first_edge + n].contains(&false) {
+            candidates.clear();
+            let plane = PlaneFilter::of(&polygon.plane);
+            for (w, &p) in positions.iter().enumerate() {
+                if plane.may_hold(p) {
+                    candidates.push(w as u32);
+                }
+            }
+        }
         originals.clear();
         originals.extend(
             polygon
@@ -118,37 +210,39 @@ fn split_with(vertices: &[Point4], polygons: &mut [MeshPolygon], scan_max: usize
             inside.clear();
             if grid.is_dense() {
                 candidates.clear();
-                grid.near_segment(pa, pb, edge_number, &mut seen, &mut candidates);
+                grid.near_segment(pa, pb, edge_number, seen, candidates);
                 edge_number += 1;
-                inside.extend(candidates.iter().copied().filter(on_edge));
-            } else {
-                inside.extend((0..positions.len() as u32).filter(on_edge));
             }
+            inside.extend(candidates.iter().copied().filter(on_edge));
             let previous = polygon.edges[(k + n - 1) % n];
             inside.sort_by(|&p, &q| {
                 compare_offsets(&vertices[q as usize], &vertices[p as usize], &previous)
             });
-            corners.extend_from_slice(&inside);
+            corners.extend_from_slice(inside);
         }
         // Reuse the polygon's own storage (most polygons are unchanged).
-        if polygon.corners != corners {
-            polygon.corners.clone_from(&corners);
-            polygon.originals.clone_from(&positions_of_originals);
+        if polygon.corners != *corners {
+            polygon.corners.clone_from(corners);
+            polygon.originals.clone_from(positions_of_originals);
         }
     }
 }
 
 /// Per original edge of every polygon (in order): whether it is matched
-/// whole (see the module docs).
-fn matched_whole(polygons: &[MeshPolygon]) -> Vec<bool> {
+/// whole (see the module docs), into `whole`; `owners` is working memory.
+fn matched_whole(
+    polygons: &[MeshPolygon],
+    owners: &mut HashMap<u64, u32, BuildHasherDefault<WordHasher>>,
+    whole: &mut Vec<bool>,
+) {
     const SHARED: u32 = u32::MAX;
     let original = |polygon: &MeshPolygon, k: usize| {
         let n = polygon.original_len();
         polygon.corners[polygon.originals[k % n] as usize]
     };
     // The one polygon using each original directed edge, or SHARED.
-    let mut owners: HashMap<u64, u32, BuildHasherDefault<WordHasher>> =
-        HashMap::with_capacity_and_hasher(polygons.len() * 5, BuildHasherDefault::default());
+    owners.clear();
+    owners.reserve(polygons.len() * 5);
     for (f, polygon) in polygons.iter().enumerate() {
         for k in 0..polygon.original_len() {
             let key = edge_key(original(polygon, k), original(polygon, k + 1));
@@ -158,7 +252,7 @@ fn matched_whole(polygons: &[MeshPolygon]) -> Vec<bool> {
                 .or_insert(f as u32);
         }
     }
-    let mut whole = Vec::with_capacity(owners.len());
+    whole.clear();
     for polygon in polygons {
         for k in 0..polygon.original_len() {
             let (a, b) = (original(polygon, k), original(polygon, k + 1));
@@ -174,7 +268,6 @@ fn matched_whole(polygons: &[MeshPolygon]) -> Vec<bool> {
             }));
         }
     }
-    whole
 }
 
 /// Whether `w` lies strictly inside original edge `k` of `polygon`, exactly
@@ -237,6 +330,38 @@ impl Segment {
         ];
         let cross2: f64 = cross.iter().map(|c| c * c).sum();
         cross2 <= self.bound
+    }
+}
+
+/// A polygon's support plane `s` in `f64`, for [`PlaneFilter::may_hold`],
+/// computed once per polygon.
+struct PlaneFilter {
+    /// The correctly rounded `[a, b, c, d]`.
+    coefficients: [f64; 4],
+}
+
+impl PlaneFilter {
+    /// The `f64` filter of `plane`.
+    #[inline]
+    fn of(plane: &crate::exact::Plane) -> Self {
+        Self {
+            coefficients: plane.approx(),
+        }
+    }
+
+    /// False only when `p` is certainly off the plane: `|s(p)|` above
+    /// `2^-40` of `|a·x| + |b·y| + |c·z| + |d|`. The coefficients are
+    /// within `2^-53` relative, the position within `2^-51` per coordinate
+    /// (see [`super::weld`]), and the three sums add below `2^-51` of the
+    /// same magnitude, so `s(p)` computed for a point exactly on the plane
+    /// stays below `2^-49` of it, far inside the tolerance.
+    #[inline]
+    fn may_hold(&self, p: [f64; 3]) -> bool {
+        let [a, b, c, d] = self.coefficients;
+        let terms = [a * p[0], b * p[1], c * p[2]];
+        let value = terms[0] + terms[1] + terms[2] + d;
+        let magnitude = terms[0].abs() + terms[1].abs() + terms[2].abs() + d.abs();
+        value.abs() <= magnitude * f64::powi(2.0, -40)
     }
 }
 
@@ -443,5 +568,44 @@ mod tests {
         }
         assert!(inserted > 20, "only {inserted} corners inserted");
         assert!(small > 5, "only {small} meshes of few vertices");
+    }
+
+    /// Meets of random plane triples (coefficients of every size up to the
+    /// kernel's range, far from the origin) pass the `f64` plane filter of
+    /// each of their three planes, and points moved off the plane by a
+    /// visible amount fail it.
+    #[test]
+    fn points_on_a_plane_always_pass_its_filter() {
+        use crate::exact::{Plane, intersect_3_planes};
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (mut tested, mut rejected) = (0, 0);
+        while tested < 3000 {
+            let bits = rng.random_range(1..=54);
+            let mut plane = || {
+                let n = [0; 3].map(|_| rng.random_range(-(1i64 << bits)..=1i64 << bits));
+                let d = rng.random_range(-(1i128 << (bits + 28))..=1i128 << (bits + 28));
+                Plane::new(n[0], n[1], n[2], d)
+            };
+            let (Ok(p), Ok(q), Ok(r)) = (plane(), plane(), plane()) else {
+                continue;
+            };
+            let Some(v) = intersect_3_planes(&p, &q, &r) else {
+                continue;
+            };
+            tested += 1;
+            let position = v.to_f64();
+            for s in [p, q, r] {
+                assert!(PlaneFilter::of(&s).may_hold(position), "{v:?} on {s:?}");
+            }
+            let scale = position.iter().fold(1.0f64, |m, c| m.max(c.abs()));
+            let n = p.approx();
+            let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            let off = [0, 1, 2].map(|i| position[i] + n[i] / length * scale * 1e-6);
+            rejected += usize::from(!PlaneFilter::of(&p).may_hold(off));
+        }
+        assert!(
+            rejected > 2900,
+            "only {rejected} points off the plane rejected"
+        );
     }
 }

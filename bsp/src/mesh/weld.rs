@@ -26,9 +26,12 @@ use std::hash::{BuildHasherDefault, Hash, Hasher};
 use crate::exact::Point4;
 use crate::word_hash::WordHasher;
 
-/// Low bits dropped from the ordered `f64` position: cells are `2^8` ulps
-/// wide per axis.
-pub const CELL_SHIFT: u32 = 8;
+/// Low bits dropped from the ordered `f64` position: cells are `2^12` ulps
+/// wide per axis, so that a point lies within [`MARGIN`] of a border (and
+/// a neighbouring cell is searched too) on under 2% of the axes, while
+/// distinct vertices of a mesh are still far apart in ulps and rarely
+/// share a cell.
+pub const CELL_SHIFT: u32 = 12;
 
 /// Ulps from a cell border within which the neighbouring cell is searched:
 /// above the 8 ulps that two roundings of one point can differ by, with a
