@@ -276,17 +276,20 @@ pub(super) fn dot(u: [i64; 3], x: [i64; 3]) -> i128 {
     (0..3).map(|a| i128::from(u[a]) * i128::from(x[a])).sum()
 }
 
-/// `[u]_B` for the box `[lo, hi]`: each term takes the corner coordinate
-/// that makes it smallest (largest).
+/// `[u]_B` for the box `[lo, hi]` (`lo ≤ hi` on every axis): each term
+/// takes the corner coordinate that makes it smallest (largest), `lo` for
+/// the minimum where `u_a ≥ 0` and `hi` where `u_a < 0`.
 pub(super) fn box_range(u: [i64; 3], lo: [i64; 3], hi: [i64; 3]) -> (i128, i128) {
+    debug_assert!((0..3).all(|a| lo[a] <= hi[a]), "an ordered box");
     let (mut min, mut max) = (0i128, 0i128);
     for a in 0..3 {
-        let (l, h) = (
-            i128::from(u[a]) * i128::from(lo[a]),
-            i128::from(u[a]) * i128::from(hi[a]),
-        );
-        min += l.min(h);
-        max += l.max(h);
+        let (near, far) = if u[a] >= 0 {
+            (lo[a], hi[a])
+        } else {
+            (hi[a], lo[a])
+        };
+        min += i128::from(u[a]) * i128::from(near);
+        max += i128::from(u[a]) * i128::from(far);
     }
     (min, max)
 }
