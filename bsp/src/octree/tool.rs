@@ -140,6 +140,30 @@ impl Tool {
             })
     }
 
+    /// Whether the solid shares volume with the box `cell` (with volume
+    /// itself), decided exactly from the convex pieces; `None` when a piece
+    /// that may share it has a vertex off the integer grid. The same answer
+    /// as asking whether the tool's BSP has a solid cell with volume in
+    /// `cell` ([`Bsp::cells`]), without cutting.
+    #[must_use]
+    pub fn shares_volume(&self, cell: &CellBox) -> Option<bool> {
+        if !self.bounds.overlaps(cell) || (0..3).any(|a| cell.min[a] >= cell.max[a]) {
+            return Some(false);
+        }
+        let mut unknown = false;
+        for (bounds, piece) in &self.pieces {
+            if !bounds.overlaps(cell) {
+                continue;
+            }
+            match piece {
+                Some(piece) if piece.shares_volume(cell.min, cell.max) => return Some(true),
+                Some(_) => {}
+                None => unknown = true,
+            }
+        }
+        (!unknown).then_some(false)
+    }
+
     /// The tool's solid (label 1) as a BSP.
     #[must_use]
     pub fn bsp(&self) -> &Bsp {

@@ -98,6 +98,25 @@ impl Survey {
     /// Lists the faces and vertices of `poly` (faces in depth-first order
     /// over their neighbours, vertices as first met).
     pub(crate) fn survey(&mut self, arena: &ConvexArena, poly: PolyId) {
+        self.walk::<false>(arena, poly);
+    }
+
+    /// [`Survey::survey`] and [`Survey::save`] in one walk over `poly`:
+    /// the same lists and the same saved records, in the same order.
+    pub(crate) fn survey_and_save(&mut self, arena: &ConvexArena, poly: PolyId) -> Saved {
+        let saved = self.saved_lengths();
+        self.walk::<true>(arena, poly);
+        self.saved_vertices.extend(
+            self.vertices
+                .iter()
+                .map(|&v| (v, arena.vertices[v as usize])),
+        );
+        saved
+    }
+
+    /// Lists the faces and vertices of `poly`; with `SAVE`, also pushes
+    /// the records of its faces and half-edges as [`Survey::save`] does.
+    fn walk<const SAVE: bool>(&mut self, arena: &ConvexArena, poly: PolyId) {
         let (nv, nf) = (arena.vertices.len(), arena.faces.len());
         if self.vertex_stamp.len() < nv {
             self.vertex_stamp.resize(nv, 0);
@@ -118,10 +137,18 @@ impl Survey {
         self.faces.push(start);
         let mut i = 0;
         while i < self.faces.len() {
-            let first = arena.faces[self.faces[i] as usize].half_edge;
+            let f = self.faces[i];
+            let face = arena.faces[f as usize];
+            if SAVE {
+                self.saved_faces.push((f, face));
+            }
+            let first = face.half_edge;
             let mut h = first;
             loop {
                 let e = arena.half_edges[h as usize];
+                if SAVE {
+                    self.saved_half_edges.push((h, e));
+                }
                 if self.vertex_stamp[e.origin as usize] != self.stamp {
                     self.vertex_stamp[e.origin as usize] = self.stamp;
                     self.vertices.push(e.origin);
@@ -168,11 +195,7 @@ impl Survey {
     /// that change them in place. Saves nest: the last one is restored or
     /// dropped first.
     pub(crate) fn save(&mut self, arena: &ConvexArena) -> Saved {
-        let saved = Saved {
-            half_edges: self.saved_half_edges.len(),
-            vertices: self.saved_vertices.len(),
-            faces: self.saved_faces.len(),
-        };
+        let saved = self.saved_lengths();
         for &f in &self.faces {
             let face = arena.faces[f as usize];
             self.saved_faces.push((f, face));
@@ -192,6 +215,15 @@ impl Survey {
                 .map(|&v| (v, arena.vertices[v as usize])),
         );
         saved
+    }
+
+    /// Where a save made now starts on the stacks of saved records.
+    fn saved_lengths(&self) -> Saved {
+        Saved {
+            half_edges: self.saved_half_edges.len(),
+            vertices: self.saved_vertices.len(),
+            faces: self.saved_faces.len(),
+        }
     }
 
     /// Writes the records of `saved` (the last save not yet restored or
@@ -217,5 +249,89 @@ impl Survey {
         self.saved_half_edges.truncate(saved.half_edges);
         self.saved_vertices.truncate(saved.vertices);
         self.saved_faces.truncate(saved.faces);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::convex::NO_TAG;
+    use crate::exact::IntPoint;
+
+    /// The saved records of one save, comparable.
+    type Records = (
+        Vec<(u32, HalfEdge)>,
+        Vec<(u32, [u32; 2])>,
+        Vec<(u32, [u32; 3])>,
+    );
+
+    fn records(survey: &Survey, saved: Saved) -> Records {
+        (
+            survey.saved_half_edges[saved.half_edges..].to_vec(),
+            survey.saved_vertices[saved.vertices..]
+                .iter()
+                .map(|&(v, x)| (v, [x.point, x.half_edge]))
+                .collect(),
+            survey.saved_faces[saved.faces..]
+                .iter()
+                .map(|&(f, x)| (f, [x.plane, x.half_edge, x.tag]))
+                .collect(),
+        )
+    }
+
+    /// One walk surveying and saving lists the same faces and vertices
+    /// and saves the same records, in the same order, as a survey and a
+    /// save; restoring either save after a cut gives back the cell
+    /// element for element.
+    #[test]
+    fn survey_and_save_is_a_survey_then_a_save() {
+        let mut rng = ChaCha8Rng::seed_from_u64(41);
+        let mut saves = 0;
+        for _ in 0..60 {
+            let mut arena = ConvexArena::new();
+            let lo = IntPoint::new(-50, -50, -50).unwrap();
+            let hi = IntPoint::new(50, 50, 50).unwrap();
+            let mut cells = vec![arena.add_box(lo, hi).unwrap()];
+            for _ in 0..6 {
+                let n = [0; 3].map(|_: i64| rng.random_range(-9..=9));
+                if n == [0; 3] {
+                    continue;
+                }
+                let s = Plane::new(n[0], n[1], n[2], rng.random_range(-200..=200)).unwrap();
+                let poly = cells.swap_remove(rng.random_range(0..cells.len()));
+                match arena.cut(poly, &s, NO_TAG, NO_TAG) {
+                    CutOutcome::Split { below, above } => cells.extend([below, above]),
+                    CutOutcome::Below | CutOutcome::Above => cells.push(poly),
+                }
+            }
+            for &poly in &cells {
+                let (mut one, mut two) = (Survey::default(), Survey::default());
+                one.survey(&arena, poly);
+                let first = one.save(&arena);
+                let second = two.survey_and_save(&arena, poly);
+                assert_eq!(one.faces, two.faces);
+                assert_eq!(one.vertices(), two.vertices());
+                assert_eq!(records(&one, first), records(&two, second));
+                // Cut the cell, then undo the cut with the one-walk save.
+                let before: Vec<HalfEdge> = arena.half_edges().to_vec();
+                let mark = arena.mark();
+                let s = Plane::new(1, 2, 3, 0).unwrap();
+                if let CutOutcome::Split { .. } = arena.cut(poly, &s, NO_TAG, NO_TAG) {
+                    saves += 1;
+                    arena.release_to(mark);
+                    two.restore(&mut arena, second);
+                    assert_eq!(arena.half_edges(), &before[..]);
+                    one.survey(&arena, poly);
+                    assert_eq!(one.vertices(), two.vertices());
+                } else {
+                    two.drop_saved(second);
+                }
+                assert!(two.saved_half_edges.is_empty() && two.saved_faces.is_empty());
+            }
+        }
+        assert!(saves > 20, "{saves}");
     }
 }

@@ -142,6 +142,22 @@ struct SplitFacts {
     side: Option<Reach>,
 }
 
+/// What the merge knows of a split of `A` or `B` before cutting the cell
+/// by it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Expect {
+    /// A proper cut cannot collapse: the cell is cut without a save.
+    Sure,
+    /// A split of `B`, often not cutting the cell: the sides are found
+    /// from the cell's vertices first, and the cell saved only before a
+    /// proper cut.
+    Unknown,
+    /// A split of `A`, whose simplified tree has almost only splits that
+    /// cut their cells: the cell is surveyed and saved in one walk, and
+    /// the cut itself tells whether it is proper.
+    Proper,
+}
+
 /// The cells [`Bsp::merge_cells`] keeps, with the working memory of the
 /// saves.
 struct KeptCells {
@@ -216,7 +232,7 @@ impl<'a> Merger<'a> {
                     slot: plane as usize,
                     plane: &self.a.planes()[plane as usize],
                 };
-                self.split(s, cell, below, above, false, Self::merge_a)
+                self.split(s, cell, below, above, Expect::Proper, Self::merge_a)
             }
         }
     }
@@ -355,10 +371,15 @@ impl<'a> Merger<'a> {
                     plane: &self.b.planes()[plane as usize],
                 };
                 let facts = self.facts.get(n as usize).copied().unwrap_or_default();
+                let expect = if facts.sure {
+                    Expect::Sure
+                } else {
+                    Expect::Unknown
+                };
                 match facts.side {
                     Some(Reach::Below) => self.insert_b(below, cell, a),
                     Some(Reach::Above) => self.insert_b(above, cell, a),
-                    _ => self.split(s, cell, below, above, facts.sure, |m, child, c| {
+                    _ => self.split(s, cell, below, above, expect, |m, child, c| {
                         m.insert_b(child, c, a)
                     }),
                 }
@@ -368,21 +389,21 @@ impl<'a> Merger<'a> {
 
     /// Cuts `cell` by `s` and recurses with `step` into the children it
     /// reaches; a split node only when the cut is proper. `cell` is used up.
-    /// `sure`: a proper cut cannot collapse.
     fn split(
         &mut self,
         s: InputPlane<'a>,
         cell: PolyId,
         below: NodeId,
         above: NodeId,
-        sure: bool,
+        expect: Expect,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
         if self.cells.is_some() {
-            if sure {
-                return self.split_unsaved(s, cell, below, above, step);
-            }
-            return self.split_keeping(s, cell, below, above, step);
+            return match expect {
+                Expect::Sure => self.split_unsaved(s, cell, below, above, step),
+                Expect::Unknown => self.split_keeping(s, cell, below, above, false, step),
+                Expect::Proper => self.split_keeping(s, cell, below, above, true, step),
+            };
         }
         let mark = self.arena.mark();
         let node = match self.arena.cut(cell, s.plane, NO_TAG, NO_TAG) {
@@ -400,39 +421,58 @@ impl<'a> Merger<'a> {
 
     /// [`Merger::split`] keeping the output leaves' cells: a proper cut
     /// saves the cell first, for the case that the split collapses.
+    /// `proper_likely`: save before knowing whether the cut is proper
+    /// ([`Expect::Proper`]).
     fn split_keeping(
         &mut self,
         s: InputPlane<'a>,
         cell: PolyId,
         below: NodeId,
         above: NodeId,
+        proper_likely: bool,
         mut step: impl FnMut(&mut Self, NodeId, PolyId) -> NodeId,
     ) -> NodeId {
         let kept = self.cells.as_mut().expect("cells are kept");
-        // A cut changes the cell in place: a proper one is found first and
-        // the cell saved before it, for the case that the split collapses.
-        if kept.surveyed != Some(cell) {
-            kept.survey.survey(self.arena, cell);
+        // A cut changes the cell in place: the cell is saved before a
+        // proper one, for the case that the split collapses.
+        let saved = if proper_likely {
+            let saved = if kept.surveyed == Some(cell) {
+                kept.survey.save(self.arena)
+            } else {
+                kept.survey.survey_and_save(self.arena, cell)
+            };
             kept.surveyed = Some(cell);
-        }
-        match kept.survey.reach(self.arena, s.plane) {
-            Reach::Below => return step(self, below, cell),
-            Reach::Above => return step(self, above, cell),
-            Reach::Both => {}
-        }
-        let saved = kept.survey.save(self.arena);
-        // The cut changes the cell, and a collapse below releases pieces.
-        kept.surveyed = None;
+            saved
+        } else {
+            if kept.surveyed != Some(cell) {
+                kept.survey.survey(self.arena, cell);
+                kept.surveyed = Some(cell);
+            }
+            match kept.survey.reach(self.arena, s.plane) {
+                Reach::Below => return step(self, below, cell),
+                Reach::Above => return step(self, above, cell),
+                Reach::Both => {}
+            }
+            kept.survey.save(self.arena)
+        };
         let first_cell = kept.cells.len();
         let before_cut = self.arena.mark();
         let node = self.nodes.len() as NodeId;
-        let CutOutcome::Split {
-            below: cb,
-            above: ca,
-        } = self.arena.cut(cell, s.plane, PENDING | node, node + 1)
-        else {
-            unreachable!("vertices on both sides")
+        let (cb, ca) = match self.arena.cut(cell, s.plane, PENDING | node, node + 1) {
+            CutOutcome::Split { below, above } => (below, above),
+            // Not proper: the cell is unchanged, and still surveyed.
+            outcome => {
+                kept.survey.drop_saved(saved);
+                let child = if outcome == CutOutcome::Below {
+                    below
+                } else {
+                    above
+                };
+                return step(self, child, cell);
+            }
         };
+        // The cut changed the cell, and a collapse below releases pieces.
+        kept.surveyed = None;
         let (node, collapsed) = self.proper(s, (cb, ca), below, above, step);
         let kept = self.cells.as_mut().expect("cells are kept");
         if let Some(label) = collapsed {

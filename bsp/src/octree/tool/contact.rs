@@ -173,6 +173,50 @@ impl ConvexPiece {
             max < axis.min || axis.max < min
         })
     }
+
+    /// Whether the piece and the box `[lo, hi]` (with `lo < hi` on every
+    /// axis) share volume: their interiors meet (exact). Two
+    /// full-dimensional convex polyhedra have disjoint interiors exactly
+    /// when a plane separates them weakly, and the same axes as for
+    /// [`ConvexPiece::touches`] suffice (the facet normals of `P − B`:
+    /// `0` lies outside the interior of `P − B` exactly when it is on or
+    /// beyond one of its facets).
+    pub(crate) fn shares_volume(&self, lo: [i64; 3], hi: [i64; 3]) -> bool {
+        debug_assert!((0..3).all(|a| lo[a] < hi[a]), "a box with volume");
+        if (0..3).any(|a| self.hi[a] <= lo[a] || hi[a] <= self.lo[a]) {
+            return false;
+        }
+        // A face plane with the whole box on or outside it.
+        if self
+            .faces
+            .iter()
+            .any(|&(n, d)| box_range(n, lo, hi).0 + d >= 0)
+        {
+            return false;
+        }
+        // Sufficient: a vertex of the piece strictly inside the box (the
+        // piece has volume near each vertex), or the box's centre strictly
+        // inside the piece.
+        if self
+            .vertices
+            .iter()
+            .any(|v| (0..3).all(|a| lo[a] < v[a] && v[a] < hi[a]))
+        {
+            return true;
+        }
+        let centre2 = [0, 1, 2].map(|a| i128::from(lo[a]) + i128::from(hi[a]));
+        if self
+            .faces
+            .iter()
+            .all(|&(n, d)| (0..3).map(|a| i128::from(n[a]) * centre2[a]).sum::<i128>() + 2 * d < 0)
+        {
+            return true;
+        }
+        !self.edge_axes().iter().any(|axis| {
+            let (min, max) = box_range(axis.u, lo, hi);
+            max <= axis.min || axis.max <= min
+        })
+    }
 }
 
 /// Vertex `v` of `arena` as an integer point within `±v⁺`, if it is one.
@@ -232,17 +276,20 @@ pub(super) fn dot(u: [i64; 3], x: [i64; 3]) -> i128 {
     (0..3).map(|a| i128::from(u[a]) * i128::from(x[a])).sum()
 }
 
-/// `[u]_B` for the box `[lo, hi]`: each term takes the corner coordinate
-/// that makes it smallest (largest).
+/// `[u]_B` for the box `[lo, hi]` (`lo ≤ hi` on every axis): each term
+/// takes the corner coordinate that makes it smallest (largest), `lo` for
+/// the minimum where `u_a ≥ 0` and `hi` where `u_a < 0`.
 pub(super) fn box_range(u: [i64; 3], lo: [i64; 3], hi: [i64; 3]) -> (i128, i128) {
+    debug_assert!((0..3).all(|a| lo[a] <= hi[a]), "an ordered box");
     let (mut min, mut max) = (0i128, 0i128);
     for a in 0..3 {
-        let (l, h) = (
-            i128::from(u[a]) * i128::from(lo[a]),
-            i128::from(u[a]) * i128::from(hi[a]),
-        );
-        min += l.min(h);
-        max += l.max(h);
+        let (near, far) = if u[a] >= 0 {
+            (lo[a], hi[a])
+        } else {
+            (hi[a], lo[a])
+        };
+        min += i128::from(u[a]) * i128::from(near);
+        max += i128::from(u[a]) * i128::from(far);
     }
     (min, max)
 }
@@ -287,6 +334,57 @@ mod tests {
         // Projections of the tetrahedron on (1, 1, 0): [0, 4].
         let axis = t.edge_axes().iter().find(|a| a.u == [1, 1, 0]).unwrap();
         assert_eq!((axis.min, axis.max), (0, 4));
+    }
+
+    /// Sharing volume with a box, decided from the pieces, agrees with
+    /// the tool's BSP cut into cells inside the box: some solid cell (each
+    /// has volume) exactly when they share volume. Boxes are small and
+    /// on the grid of the hull's points, so many only touch the tool.
+    #[test]
+    fn shares_volume_agrees_with_the_cells() {
+        use rand::{Rng, SeedableRng};
+        use rand_chacha::ChaCha8Rng;
+
+        use crate::octree::{CellBox, Tool};
+        use crate::tree::EMPTY;
+
+        let mut rng = ChaCha8Rng::seed_from_u64(23);
+        let (mut shared, mut touching_only) = (0, 0);
+        for _ in 0..200 {
+            let points: Vec<IntPoint> = (0..8)
+                .map(|_| {
+                    IntPoint::from_array([0; 3].map(|_: i64| rng.random_range(0..=8))).unwrap()
+                })
+                .collect();
+            let Ok(tool) = Tool::convex_hull(&points) else {
+                continue;
+            };
+            for _ in 0..10 {
+                let min = [0; 3].map(|_: i64| rng.random_range(-3..=8));
+                let edge = [0; 3].map(|_: i64| rng.random_range(1..=4));
+                let cell = CellBox {
+                    min,
+                    max: [0, 1, 2].map(|a| min[a] + edge[a]),
+                };
+                let mut arena = ConvexArena::new();
+                let poly = cell.add_to(&mut arena).unwrap();
+                let solid = tool
+                    .bsp()
+                    .cells(&mut arena, poly)
+                    .iter()
+                    .any(|c| c.label != EMPTY);
+                assert_eq!(tool.shares_volume(&cell), Some(solid), "{cell:?}");
+                if solid {
+                    shared += 1;
+                } else if tool.touches(&cell) {
+                    touching_only += 1;
+                }
+            }
+        }
+        assert!(
+            shared > 100 && touching_only > 20,
+            "{shared} {touching_only}"
+        );
     }
 
     #[test]
