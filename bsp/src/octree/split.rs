@@ -30,7 +30,7 @@
 
 use super::cell::CellBox;
 use crate::exact::{Plane, Sign};
-use crate::tree::polygon::{Polygon, classify_corners};
+use crate::tree::polygon::{Polygon, classify_polygon_corners};
 use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
 
 /// The pieces of `faces` (the exact boundary inside `cell`, faces on its
@@ -54,7 +54,9 @@ pub(crate) fn split_faces(faces: Vec<BoundaryFace>, cell: &CellBox) -> [Vec<Boun
             for (piece, bits, lies_in) in pieces.drain(..) {
                 sides.clear();
                 sides.resize(piece.vertices().len(), Sign::Zero);
-                match classify_corners(piece.vertices(), plane, &mut sides) {
+                let (support, edges) = (&piece.support, &piece.edges);
+                match classify_polygon_corners(support, edges, piece.vertices(), plane, &mut sides)
+                {
                     (true, true) => {
                         let (below, above) = piece.split_straddling(&sides, plane);
                         next.push((below, bits, lies_in));
@@ -93,8 +95,21 @@ pub(crate) fn split_faces(faces: Vec<BoundaryFace>, cell: &CellBox) -> [Vec<Boun
 /// The BSP of `child` from its pieces (from [`split_faces`]): rebuilt from
 /// the inner pieces, or one label — that of `parent` inside the child —
 /// when there is none.
+#[cfg(test)]
 pub(crate) fn child_bsp(parent: &Bsp, pieces: &[BoundaryFace], child: &CellBox) -> Bsp {
     Bsp::rebuilt_from_boundary(pieces).unwrap_or_else(|| Bsp::uniform(label_inside(parent, child)))
+}
+
+/// [`child_bsp`] when it has at most `max_splits` splits, else `None`
+/// (the rebuild is left unfinished as soon as it has more).
+pub(crate) fn child_bsp_within(
+    parent: &Bsp,
+    pieces: &[BoundaryFace],
+    child: &CellBox,
+    max_splits: usize,
+) -> Option<Bsp> {
+    let rebuilt = Bsp::rebuilt_from_boundary_within(pieces, max_splits)?;
+    Some(rebuilt.unwrap_or_else(|| Bsp::uniform(label_inside(parent, child))))
 }
 
 /// The label of `bsp` at the centre of `cell` pushed by `ε·(1, ε, ε²)`: a
