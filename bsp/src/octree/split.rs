@@ -42,16 +42,20 @@ pub(crate) fn split_faces(faces: Vec<BoundaryFace>, cell: &CellBox) -> [Vec<Boun
     let mid = cell.mid();
     let planes = [0, 1, 2].map(|axis| axis_plane(axis, mid[axis]));
     let mut out: [Vec<BoundaryFace>; 8] = Default::default();
-    let mut pieces = Vec::new();
-    let mut next = Vec::new();
+    // Parts above a plane, waiting with their child bits so far, the axis
+    // whose middle plane they lie in (if any) and the next axis.
+    let mut waiting = Vec::new();
     let mut sides = Vec::new();
     for face in faces {
         let (label, outside, on_bounds) = (face.label, face.outside, face.on_bounds);
-        // Each piece with its child bits so far and the axis whose middle
-        // plane it lies in, if any.
-        pieces.push((face.into_polygon(), 0usize, None::<usize>));
-        for (axis, plane) in planes.iter().enumerate() {
-            for (piece, bits, lies_in) in pieces.drain(..) {
+        // Depth first, below before above: the pieces in the order that
+        // splitting all of them by one plane after the other gives. A
+        // piece that is not split goes on in place.
+        let mut first = Some((face.into_polygon(), 0usize, None::<usize>, 0usize));
+        while let Some((mut piece, mut bits, mut lies_in, start)) =
+            first.take().or_else(|| waiting.pop())
+        {
+            for (axis, plane) in planes.iter().enumerate().skip(start) {
                 sides.clear();
                 sides.resize(piece.vertices().len(), Sign::Zero);
                 let (support, edges) = (&piece.support, &piece.edges);
@@ -59,19 +63,16 @@ pub(crate) fn split_faces(faces: Vec<BoundaryFace>, cell: &CellBox) -> [Vec<Boun
                 {
                     (true, true) => {
                         let (below, above) = piece.split_straddling(&sides, plane);
-                        next.push((below, bits, lies_in));
-                        next.push((above, bits | 1 << axis, lies_in));
+                        waiting.push((above, bits | 1 << axis, lies_in, axis + 1));
+                        piece = below;
                     }
-                    (true, false) => next.push((piece, bits, lies_in)),
-                    (false, true) => next.push((piece, bits | 1 << axis, lies_in)),
+                    (true, false) => {}
+                    (false, true) => bits |= 1 << axis,
                     // In the plane: the child bit on this axis is the side
                     // behind the face, set below.
-                    (false, false) => next.push((piece, bits, Some(axis))),
+                    (false, false) => lies_in = Some(axis),
                 }
             }
-            std::mem::swap(&mut pieces, &mut next);
-        }
-        for (piece, bits, lies_in) in pieces.drain(..) {
             let Some(axis) = lies_in else {
                 out[bits].push(BoundaryFace::new(piece, label, outside, on_bounds));
                 continue;
