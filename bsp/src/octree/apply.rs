@@ -14,7 +14,9 @@
 //! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
 //! without redundancy (§3.7) and, when still over the budget, split into
 //! eight children rebuilt from the pieces of its boundary faces inside
-//! each child box (`split.rs`). After the
+//! each child box (`split.rs`); a rebuild stops as soon as it is over the
+//! budget, and is not started where the faces lie in more distinct planes
+//! than the budget allows splits. After the
 //! children of an inner cell changed, eight leaf children that fit the
 //! budget together are combined:
 //! their BSPs are grafted under the axis planes (Fig. 8, combine A) and
@@ -28,11 +30,12 @@ use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
 use super::graft::axis_graft;
-use super::split::{child_bsp, split_faces};
+use super::split::{child_bsp_within, split_faces};
 use super::tool::{Tool, restricted, solid_at_a_corner};
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;
 use crate::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId, with_arena};
+use crate::tree::boundary::Bounds;
 use crate::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label, Node, NodeId};
 
 /// What an edit does where the tool is.
@@ -334,8 +337,15 @@ impl Walk<'_> {
             return (Some(OctNode::Leaf(Leaf::Uniform(EMPTY))), edited);
         }
         // The faces are kept also when not handed back: a leaf over the
-        // budget is split from them.
-        let (simplified, faces) = with_arena(|arena| {
+        // budget is split from them. Only what is handed back needs the
+        // faces on the cell's box: the children are rebuilt from the
+        // inner pieces.
+        let on_bounds = if self.keep_faces {
+            Bounds::Keep
+        } else {
+            Bounds::Skip
+        };
+        let merged = with_arena(|arena| {
             let poly = cell_poly(arena, cell);
             let uniform;
             let bsp = match leaf {
@@ -345,8 +355,34 @@ impl Walk<'_> {
                     &uniform
                 }
             };
-            bsp.merge_simplified_faces(&tool, self.op, arena, poly)
+            bsp.merge_boundary(&tool, self.op, arena, poly, on_bounds)
         });
+        // Over the budget, the leaf is split without finishing its rebuild
+        // (nor starting it where the faces' planes show it): the merged
+        // tree labels the children without surface.
+        let rebuilt = if splits_certainly(&merged.faces, key, cell, self.config) {
+            Err(merged)
+        } else {
+            merged.rebuilt_within(split_limit(key, cell, self.config))
+        };
+        let (simplified, faces) = match rebuilt {
+            Ok(rebuilt) => rebuilt,
+            Err(merged) => {
+                let (node, leaves, faces) = split_leaf(
+                    &merged.merged,
+                    merged.faces,
+                    key,
+                    cell,
+                    self.config,
+                    self.keep_faces,
+                );
+                let changes = Changes {
+                    changed: leaves,
+                    removed: vec![key],
+                };
+                return (Some(node), Edited { changes, faces });
+            }
+        };
         if let (Leaf::Uniform(label), [crate::tree::Node::Leaf(new)]) = (leaf, simplified.nodes())
             && label == new
         {
@@ -506,21 +542,65 @@ fn build_leaf_faces(
             bsp.boundary(arena, poly)
         })
     });
+    split_leaf(&bsp, faces, key, cell, config, keep_faces)
+}
+
+/// Whether a leaf at `key` whose rebuild starts from `faces` (its exact
+/// boundary inside `cell`, faces on the box marked) is certainly split
+/// by [`build_leaf_faces`]: it may be split, and its rebuild would be over
+/// the budget ([`Bsp::rebuild_exceeds`]).
+fn splits_certainly(
+    faces: &[BoundaryFace],
+    key: CellKey,
+    cell: CellBox,
+    config: &OctreeConfig,
+) -> bool {
+    may_split(key, cell, config) && Bsp::rebuild_exceeds(faces, config.max_bsp_nodes)
+}
+
+/// Whether [`build_leaf_faces`] splits a leaf at `key` that is over the
+/// budget.
+fn may_split(key: CellKey, cell: CellBox, config: &OctreeConfig) -> bool {
+    key.depth < config.max_depth && cell.min_edge() >= 2
+}
+
+/// The most splits a leaf at `key` may have without being split: the
+/// budget, or no limit where it is not split.
+fn split_limit(key: CellKey, cell: CellBox, config: &OctreeConfig) -> usize {
+    if may_split(key, cell, config) {
+        config.max_bsp_nodes
+    } else {
+        usize::MAX
+    }
+}
+
+/// The inner node [`build_leaf_faces`] makes of a leaf over the budget
+/// from its exact boundary `faces` inside `cell`: the children rebuilt
+/// from their pieces, split again while over the budget. `regions` has the
+/// leaf's regions inside `cell` (its rebuild, or the tree it was rebuilt
+/// from): it labels the children without surface.
+fn split_leaf(
+    regions: &Bsp,
+    faces: Vec<BoundaryFace>,
+    key: CellKey,
+    cell: CellBox,
+    config: &OctreeConfig,
+    keep_faces: bool,
+) -> (OctNode, Vec<CellKey>, CellFaces) {
     let pieces = split_faces(faces, &cell);
     let built: Vec<(OctNode, Vec<CellKey>, CellFaces)> = pieces
         .into_par_iter()
         .enumerate()
         .map(|(i, pieces)| {
-            let child = cell.child(i);
-            let child_bsp = child_bsp(&bsp, &pieces, &child);
-            build_leaf_faces(
-                child_bsp,
-                Some(pieces),
-                key.child(i),
-                child,
-                config,
-                keep_faces,
-            )
+            let (key, child) = (key.child(i), cell.child(i));
+            if splits_certainly(&pieces, key, child, config) {
+                return split_leaf(regions, pieces, key, child, config, keep_faces);
+            }
+            let limit = split_limit(key, child, config);
+            match child_bsp_within(regions, &pieces, &child, limit) {
+                Some(bsp) => build_leaf_faces(bsp, Some(pieces), key, child, config, keep_faces),
+                None => split_leaf(regions, pieces, key, child, config, keep_faces),
+            }
         })
         .collect();
     let mut leaves = Vec::new();

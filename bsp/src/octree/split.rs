@@ -30,7 +30,7 @@
 
 use super::cell::CellBox;
 use crate::exact::{Plane, Sign};
-use crate::tree::polygon::{Polygon, classify_corners};
+use crate::tree::polygon::{Polygon, classify_polygon_corners};
 use crate::tree::{BoundaryFace, Bsp, EMPTY, Label};
 
 /// The pieces of `faces` (the exact boundary inside `cell`, faces on its
@@ -42,34 +42,37 @@ pub(crate) fn split_faces(faces: Vec<BoundaryFace>, cell: &CellBox) -> [Vec<Boun
     let mid = cell.mid();
     let planes = [0, 1, 2].map(|axis| axis_plane(axis, mid[axis]));
     let mut out: [Vec<BoundaryFace>; 8] = Default::default();
-    let mut pieces = Vec::new();
-    let mut next = Vec::new();
+    // Parts above a plane, waiting with their child bits so far, the axis
+    // whose middle plane they lie in (if any) and the next axis.
+    let mut waiting = Vec::new();
     let mut sides = Vec::new();
     for face in faces {
         let (label, outside, on_bounds) = (face.label, face.outside, face.on_bounds);
-        // Each piece with its child bits so far and the axis whose middle
-        // plane it lies in, if any.
-        pieces.push((face.into_polygon(), 0usize, None::<usize>));
-        for (axis, plane) in planes.iter().enumerate() {
-            for (piece, bits, lies_in) in pieces.drain(..) {
+        // Depth first, below before above: the pieces in the order that
+        // splitting all of them by one plane after the other gives. A
+        // piece that is not split goes on in place.
+        let mut first = Some((face.into_polygon(), 0usize, None::<usize>, 0usize));
+        while let Some((mut piece, mut bits, mut lies_in, start)) =
+            first.take().or_else(|| waiting.pop())
+        {
+            for (axis, plane) in planes.iter().enumerate().skip(start) {
                 sides.clear();
                 sides.resize(piece.vertices().len(), Sign::Zero);
-                match classify_corners(piece.vertices(), plane, &mut sides) {
+                let (support, edges) = (&piece.support, &piece.edges);
+                match classify_polygon_corners(support, edges, piece.vertices(), plane, &mut sides)
+                {
                     (true, true) => {
                         let (below, above) = piece.split_straddling(&sides, plane);
-                        next.push((below, bits, lies_in));
-                        next.push((above, bits | 1 << axis, lies_in));
+                        waiting.push((above, bits | 1 << axis, lies_in, axis + 1));
+                        piece = below;
                     }
-                    (true, false) => next.push((piece, bits, lies_in)),
-                    (false, true) => next.push((piece, bits | 1 << axis, lies_in)),
+                    (true, false) => {}
+                    (false, true) => bits |= 1 << axis,
                     // In the plane: the child bit on this axis is the side
                     // behind the face, set below.
-                    (false, false) => next.push((piece, bits, Some(axis))),
+                    (false, false) => lies_in = Some(axis),
                 }
             }
-            std::mem::swap(&mut pieces, &mut next);
-        }
-        for (piece, bits, lies_in) in pieces.drain(..) {
             let Some(axis) = lies_in else {
                 out[bits].push(BoundaryFace::new(piece, label, outside, on_bounds));
                 continue;
@@ -93,8 +96,21 @@ pub(crate) fn split_faces(faces: Vec<BoundaryFace>, cell: &CellBox) -> [Vec<Boun
 /// The BSP of `child` from its pieces (from [`split_faces`]): rebuilt from
 /// the inner pieces, or one label — that of `parent` inside the child —
 /// when there is none.
+#[cfg(test)]
 pub(crate) fn child_bsp(parent: &Bsp, pieces: &[BoundaryFace], child: &CellBox) -> Bsp {
     Bsp::rebuilt_from_boundary(pieces).unwrap_or_else(|| Bsp::uniform(label_inside(parent, child)))
+}
+
+/// [`child_bsp`] when it has at most `max_splits` splits, else `None`
+/// (the rebuild is left unfinished as soon as it has more).
+pub(crate) fn child_bsp_within(
+    parent: &Bsp,
+    pieces: &[BoundaryFace],
+    child: &CellBox,
+    max_splits: usize,
+) -> Option<Bsp> {
+    let rebuilt = Bsp::rebuilt_from_boundary_within(pieces, max_splits)?;
+    Some(rebuilt.unwrap_or_else(|| Bsp::uniform(label_inside(parent, child))))
 }
 
 /// The label of `bsp` at the centre of `cell` pushed by `ε·(1, ε, ε²)`: a

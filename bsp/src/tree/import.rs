@@ -10,7 +10,7 @@
 
 use super::boundary::BoundaryFace;
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
-use super::polygon::{Polygon, classify_corners};
+use super::polygon::{Polygon, classify_polygon_corners};
 use crate::Error;
 use crate::exact::{IntPoint, Plane, Sign};
 
@@ -67,16 +67,26 @@ impl Bsp {
     }
 
     /// [`Bsp::from_polygons`] of the faces' polygons with their labels
-    /// (behind, in front), the same tree; a face is read in place until it
-    /// must be split, so a face that reaches a leaf whole is never copied.
-    pub(crate) fn from_faces<'a>(faces: impl Iterator<Item = &'a BoundaryFace>, seed: u64) -> Bsp {
+    /// (behind, in front), the same tree, when it has at most `max_splits`
+    /// splits, else `None`: the tree only grows as faces are inserted, so
+    /// the building stops as soon as it has more. A face is read in place
+    /// until it must be split, so a face that reaches a leaf whole is never
+    /// copied.
+    pub(crate) fn from_faces_within<'a>(
+        faces: impl Iterator<Item = &'a BoundaryFace>,
+        seed: u64,
+        max_splits: usize,
+    ) -> Option<Bsp> {
         let mut faces: Vec<&BoundaryFace> = faces.collect();
         shuffle(&mut faces, seed);
         let mut tree = Builder::default();
         for face in faces {
             tree.insert_face(face);
+            if tree.splits() > max_splits {
+                return None;
+            }
         }
-        tree.finish()
+        Some(tree.finish())
     }
 }
 
@@ -105,6 +115,11 @@ impl Builder {
         Bsp::from_parts(self.planes, self.nodes)
     }
 
+    /// The number of splits so far (each adds two nodes to the root).
+    fn splits(&self) -> usize {
+        self.nodes.len() / 2
+    }
+
     /// [`Builder::insert`] of the face's polygon, with the face's labels:
     /// the face is followed in place down to the leaf it reaches, or to the
     /// first split it straddles, where its polygon goes on from.
@@ -127,7 +142,14 @@ impl Builder {
                     let p = &self.planes[plane as usize];
                     self.sides.clear();
                     self.sides.resize(face.vertices.len(), Sign::Zero);
-                    n = match classify_corners(&face.vertices, p, &mut self.sides) {
+                    let sides = &mut self.sides;
+                    n = match classify_polygon_corners(
+                        &face.plane,
+                        &face.edges,
+                        &face.vertices,
+                        p,
+                        sides,
+                    ) {
                         (false, false) => return, // in the plane: already represented
                         (true, false) => below,
                         (false, true) => above,
@@ -197,7 +219,8 @@ impl Builder {
                     let p = &planes[plane as usize];
                     sides.clear();
                     sides.resize(polygon.vertices().len(), Sign::Zero);
-                    match classify_corners(polygon.vertices(), p, sides) {
+                    let (support, edges) = (&polygon.support, &polygon.edges);
+                    match classify_polygon_corners(support, edges, polygon.vertices(), p, sides) {
                         (false, false) => {} // in the plane: already represented
                         (true, false) => current = Some((below, polygon)),
                         (false, true) => current = Some((above, polygon)),

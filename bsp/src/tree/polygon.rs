@@ -209,26 +209,11 @@ impl Polygon {
     }
 
     /// The side of `p` that corner `k` is on: the filter's answer, else
-    /// [`Self::corner_side_exact`].
+    /// the exact side ([`corner_side_exact`]).
     #[inline]
     fn corner_side(&self, k: usize, p: &Plane) -> Sign {
         classify_vertex_filtered(&self.corners[k], p)
-            .unwrap_or_else(|| self.corner_side_exact(k, p))
-    }
-
-    /// The exact side of `p` that corner `k` is on: zero without
-    /// arithmetic when `p` is one of the two edge planes meeting there (as
-    /// given, or flipped), as for the corners that a cut by `p` made.
-    #[cold]
-    #[inline(never)]
-    fn corner_side_exact(&self, k: usize, p: &Plane) -> Sign {
-        let n = self.edges.len();
-        let on = |e: &Plane| e == p || *e == p.flipped();
-        if on(&self.edges[k]) || on(&self.edges[(k + n - 1) % n]) {
-            Sign::Zero
-        } else {
-            classify_vertex_exact(&self.corners[k], p)
-        }
+            .unwrap_or_else(|| corner_side_exact(&self.edges, &self.corners, k, p))
     }
 
     /// [`Self::whole_side`], without recording the sides of the corners:
@@ -298,7 +283,7 @@ impl Polygon {
     }
 
     /// The parts below and above `p` of a polygon with corners on both
-    /// sides (`sides` as [`classify_corners`] gives them): the same as
+    /// sides (`sides` as [`classify_polygon_corners`] gives them): the same as
     /// [`Self::part`] on each side, but each corner on `p` that both parts
     /// share is computed once, runs of kept edges and corners are copied
     /// whole, and one part reuses this polygon's memory.
@@ -649,7 +634,7 @@ pub(crate) fn side_of(v: &Point4, p: &Plane) -> Sign {
 
 /// The sides of `corners` with respect to `p`, written to `sides`, and
 /// whether any is below and any above.
-#[inline]
+#[cfg(test)]
 pub(crate) fn classify_corners(corners: &[Point4], p: &Plane, sides: &mut [Sign]) -> (bool, bool) {
     let (mut below, mut above) = (false, false);
     for (side, v) in sides.iter_mut().zip(corners) {
@@ -658,6 +643,55 @@ pub(crate) fn classify_corners(corners: &[Point4], p: &Plane, sides: &mut [Sign]
         above |= *side == Sign::Positive;
     }
     (below, above)
+}
+
+/// The sides of the corners of a polygon in plane-based form (support
+/// `support`, edge planes `edges`, corners `corners`) with respect to `p`,
+/// written to `sides`, and whether any is below and any above: the sides
+/// [`side_of`] gives, but a polygon lying in `p` (its support is
+/// `p`, as given or flipped) and a corner where one of its edge planes is
+/// `p` are found on `p` without arithmetic — as where the polygon is a
+/// piece of a face already in a tree, or was cut by `p`.
+#[inline]
+pub(crate) fn classify_polygon_corners(
+    support: &Plane,
+    edges: &[Plane],
+    corners: &[Point4],
+    p: &Plane,
+    sides: &mut [Sign],
+) -> (bool, bool) {
+    if same_plane_either_way(support, p) {
+        sides.fill(Sign::Zero);
+        return (false, false);
+    }
+    let (mut below, mut above) = (false, false);
+    for (k, side) in sides.iter_mut().enumerate() {
+        *side = classify_vertex_filtered(&corners[k], p)
+            .unwrap_or_else(|| corner_side_exact(edges, corners, k, p));
+        below |= *side == Sign::Negative;
+        above |= *side == Sign::Positive;
+    }
+    (below, above)
+}
+
+/// The exact side of `p` that corner `k` of a polygon with edge planes
+/// `edges` and corners `corners` is on: zero without arithmetic when `p`
+/// is one of the two edge planes meeting there (as given, or flipped).
+#[cold]
+#[inline(never)]
+fn corner_side_exact(edges: &[Plane], corners: &[Point4], k: usize, p: &Plane) -> Sign {
+    let n = edges.len();
+    if same_plane_either_way(&edges[k], p) || same_plane_either_way(&edges[(k + n - 1) % n], p) {
+        Sign::Zero
+    } else {
+        classify_vertex_exact(&corners[k], p)
+    }
+}
+
+/// Whether `e` has the coefficients of `p` or of `p` flipped.
+#[inline]
+fn same_plane_either_way(e: &Plane, p: &Plane) -> bool {
+    (e.a, e.b, e.c, e.d) == (p.a, p.b, p.c, p.d) || (e.a, e.b, e.c, e.d) == (-p.a, -p.b, -p.c, -p.d)
 }
 
 /// Writes the layout of the part on side `keep` into `origin` (as
