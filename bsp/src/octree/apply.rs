@@ -9,8 +9,10 @@
 //! planes cut `C`; the merge finds the same tree with it). When that leaves
 //! one region, `C` lies outside `T` or inside it — inside, where the edit
 //! maps every label of the leaf to empty, the leaf becomes empty without a
-//! cut. Otherwise an exact test (a corner of `C` strictly inside `T`, else
-//! cutting `C` by the tool's planes) decides whether `T` has volume in `C`;
+//! cut. Otherwise an exact test (the tool's convex pieces against `C` by
+//! separating axes, [`Tool::shares_volume`]; where a piece is off the
+//! integer grid, a corner of `C` strictly inside `T`, else cutting `C` by
+//! the tool's planes) decides whether `T` has volume in `C`;
 //! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
 //! without redundancy (§3.7) and, when still over the budget, split into
 //! eight children rebuilt from the pieces of its boundary faces inside
@@ -298,10 +300,14 @@ impl Walk<'_> {
             // the merge itself is that test.
             _ => {
                 matches!(leaf, Leaf::Uniform(_))
-                    || solid_at_a_corner(tool, &cell)
-                    || with_arena(|arena| {
-                        let poly = cell_poly(arena, cell);
-                        tool_meets(tool, arena, poly)
+                    // From the tool's convex pieces without a cut; the
+                    // cuts decide where a piece is off the integer grid.
+                    || self.solid.shares_volume(&cell).unwrap_or_else(|| {
+                        solid_at_a_corner(tool, &cell)
+                            || with_arena(|arena| {
+                                let poly = cell_poly(arena, cell);
+                                tool_meets(tool, arena, poly)
+                            })
                     })
             }
         });
