@@ -82,6 +82,7 @@ impl ConvexArena {
     ) -> CutOutcome {
         self.with_scratch(|arena, scratch| {
             scratch.landmarks.forget();
+            scratch.extremes.forget();
             let faces = arena.faces_of(poly);
             let (mut plus, mut minus) = (false, false);
             for &f in &faces {
@@ -124,9 +125,11 @@ impl ConvexArena {
             let start = arena.start_vertex(poly, s, scratch);
             if let Some(outcome) = arena.find_section(start, s, scratch) {
                 arena.keep_landmarks(poly, scratch);
+                arena.keep_extremes(poly, scratch);
                 return outcome;
             }
             let parts = arena.split_along(scratch, s, [below_tag, above_tag], None);
+            arena.pass_extremes(s, parts, None, scratch);
             for (k, side) in [Sign::Negative, Sign::Positive].into_iter().enumerate() {
                 arena.pass_landmarks(k, parts[k], side, scratch);
             }
@@ -152,6 +155,7 @@ impl ConvexArena {
             let start = arena.start_vertex(poly, s, scratch);
             if let Some(outcome) = arena.find_section(start, s, scratch) {
                 arena.keep_landmarks(poly, scratch);
+                arena.keep_extremes(poly, scratch);
                 return match outcome {
                     CutOutcome::Above => KeptOutcome::Above,
                     CutOutcome::Below | CutOutcome::Split { .. } => KeptOutcome::Below,
@@ -167,6 +171,7 @@ impl ConvexArena {
                 Part::Above => above,
             };
             arena.pass_landmarks(0, kept, side, scratch);
+            arena.pass_extremes(s, [kept, u32::MAX], Some(side), scratch);
             KeptOutcome::Cut(PolyId(kept))
         })
     }
@@ -180,11 +185,11 @@ impl ConvexArena {
         // for a proper cut, and v0 itself is on the section.
         let seed = match self.side(v0, s, scratch) {
             Sign::Positive => match self.descend(v0, s, Sign::Negative, scratch) {
-                Some(h) => self.seed_at(h, scratch),
+                Some(h) => self.seed_at(h, Sign::Negative, scratch),
                 None => return Some(CutOutcome::Above),
             },
             Sign::Negative => match self.descend(v0, s, Sign::Positive, scratch) {
-                Some(h) => self.seed_at(h, scratch),
+                Some(h) => self.seed_at(h, Sign::Positive, scratch),
                 None => return Some(CutOutcome::Below),
             },
             Sign::Zero => {
@@ -203,11 +208,15 @@ impl ConvexArena {
 
     /// Where the march starts after the descent stepped along `h` onto the
     /// far side: around the origin of `h` when it lies on `s`, else at the
-    /// two faces of `h`, whose edge crosses `s`.
-    fn seed_at(&self, h: u32, scratch: &Scratch) -> Seed {
+    /// two faces of `h`, whose edge crosses `s`: from `h` (its end on side
+    /// `target`), or from its twin when the chain on the other side is the
+    /// one to walk (`scratch.chain`).
+    fn seed_at(&self, h: u32, target: Sign, scratch: &Scratch) -> Seed {
         let from = self.half_edges[h as usize].origin;
         if Self::known_side(from, scratch) == Sign::Zero {
             Seed::Vertex(from)
+        } else if scratch.chain.is_some_and(|chain| chain != target) {
+            Seed::Edge(self.half_edges[h as usize].twin)
         } else {
             Seed::Edge(h)
         }

@@ -140,23 +140,29 @@ impl Landmarks {
 }
 
 impl ConvexArena {
-    /// The vertex the cut of `poly` by `s` starts from: the landmark of
-    /// `poly` with the smallest estimated distance to `s`, or without
-    /// landmarks the vertex of `poly`'s id; its side is recorded in
-    /// `scratch` when the filter tells it.
+    /// The vertex the cut of `poly` by `s` starts from: of the extremes of
+    /// `poly` in the directions closest to `±n` (see `extremes`), or else
+    /// of its landmarks, the one with the smallest estimated distance to
+    /// `s`; without either, the vertex of `poly`'s id. Its side is recorded
+    /// in `scratch` when the filter tells it.
     #[inline]
     pub(super) fn start_vertex(&self, poly: PolyId, s: &Plane, scratch: &mut Scratch) -> u32 {
-        if scratch.landmarks.take_for(poly.0) == 0 {
+        if self.take_extremes(poly, scratch) {
+            scratch.landmarks.forget();
+        } else if scratch.landmarks.take_for(poly.0) == 0 {
             return self.half_edges[poly.0 as usize].origin;
         }
         self.nearest_landmark(s, scratch)
     }
 
-    /// The current landmark with the smallest estimated distance to `s`
-    /// (`|T̃|/W̃`, compared by cross-multiplication), with the side of
-    /// every landmark that the filter tells.
+    /// The current landmark or extreme candidate with the smallest
+    /// estimated distance to `s` (`|T̃|/W̃`, compared by
+    /// cross-multiplication), with the side of every landmark that the
+    /// filter tells; an extreme notes in `scratch.chain` the side whose
+    /// chain the march walks first.
     #[inline(never)]
     fn nearest_landmark(&self, s: &Plane, scratch: &mut Scratch) -> u32 {
+        let extremes = self.extreme_candidates(s, scratch);
         let marks = &mut scratch.landmarks;
         let (mut nearest, mut nearest_w) = (f64::INFINITY, 1.0);
         let (mut start, mut start_side) = (marks.current[0], None);
@@ -170,6 +176,18 @@ impl ConvexArena {
             let (distance, w) = (dot.sum().abs(), point.approx[3]);
             if distance * nearest_w < nearest * w {
                 (nearest, nearest_w, start, start_side) = (distance, w, v, side);
+            }
+        }
+        scratch.chain = None;
+        if let Some(candidates) = extremes {
+            for (v, chain) in candidates.into_iter().zip([Sign::Positive, Sign::Negative]) {
+                let point = self.point(v);
+                let dot = FilteredDot::new(point, s);
+                let (distance, w) = (dot.sum().abs(), point.approx[3]);
+                if distance * nearest_w < nearest * w {
+                    (nearest, nearest_w, start, start_side) = (distance, w, v, dot.sign());
+                    scratch.chain = Some(chain);
+                }
             }
         }
         if let Some(side) = start_side {
@@ -255,9 +273,9 @@ mod tests {
     /// Chains of two-sided cuts of two polyhedra in one arena, in random
     /// order, each going on with the lower part of its last cut (once with
     /// the upper part): every cut,
-    /// started from landmarks, leaves the arena element for element as the
-    /// classify-all cut of a copy without landmarks does; and the
-    /// landmarks are in use for most cuts.
+    /// started from landmarks or extremes, leaves the arena element for
+    /// element as the classify-all cut of a copy without them does; and
+    /// they are in use for most cuts.
     #[test]
     fn cuts_from_landmarks_equal_the_naive_cut() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -273,7 +291,8 @@ mod tests {
             assert_eq!(outcome, expected);
             assert_same_arena(&arena, &reference);
             let scratch = arena.scratch.as_ref().expect("a cut lends the scratch");
-            from_landmarks += usize::from(scratch.landmarks.current_count > 0);
+            from_landmarks +=
+                usize::from(scratch.landmarks.current_count > 0 || scratch.extremes.in_use());
             cuts += 1;
             if let CutOutcome::Split { below, above } = outcome {
                 // The large part, once the cap.
@@ -283,10 +302,10 @@ mod tests {
         assert!(from_landmarks * 2 > cuts, "{from_landmarks} of {cuts}");
     }
 
-    /// A chain of one-sided cuts keeping the lower part (once the upper): every cut, started
-    /// from landmarks, leaves the arena element for element as the same
-    /// cut of a copy without landmarks does; and the landmarks are in use
-    /// for most cuts.
+    /// A chain of one-sided cuts keeping the lower part (once the upper):
+    /// every cut, started from landmarks or extremes, leaves the arena
+    /// element for element as the same cut of a copy without them does;
+    /// and they are in use for most cuts.
     #[test]
     fn one_sided_cuts_from_landmarks_equal_those_without() {
         let mut rng = ChaCha8Rng::seed_from_u64(6);
@@ -306,7 +325,8 @@ mod tests {
             assert_eq!(outcome, expected);
             assert_same_arena(&arena, &reference);
             let scratch = arena.scratch.as_ref().expect("a cut lends the scratch");
-            from_landmarks += usize::from(scratch.landmarks.current_count > 0);
+            from_landmarks +=
+                usize::from(scratch.landmarks.current_count > 0 || scratch.extremes.in_use());
             cuts += 1;
             if let KeptOutcome::Cut(kept) = outcome {
                 poly = kept;

@@ -134,6 +134,7 @@ impl ConvexArena {
                 planes: arrays.planes,
                 scratch: arrays.scratch.map(|mut scratch| {
                     scratch.landmarks.forget();
+                    scratch.extremes.forget();
                     scratch
                 }),
             },
@@ -148,6 +149,7 @@ impl ConvexArena {
     fn forget_landmarks(&mut self) {
         if let Some(scratch) = &mut self.scratch {
             scratch.landmarks.forget();
+            scratch.extremes.forget();
         }
     }
 

@@ -13,10 +13,12 @@
 //!   every step).
 //! - [`cut`] — cutting a polyhedron by a plane: finding the section.
 //! - `landmarks` — where the descent of the next cut starts.
+//! - `extremes` — vertices farthest in fixed directions, as starts too.
 //! - `survey` — what one walk around a face tells the split.
 //! - `split` — splitting along the section once it is found.
 
 pub mod cut;
+mod extremes;
 mod landmarks;
 pub mod mesh;
 pub mod pool;

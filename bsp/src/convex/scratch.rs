@@ -6,6 +6,7 @@
 //! starting a new operation is a single increment, and lookups are one
 //! comparison.
 
+use super::extremes::Extremes;
 use super::landmarks::Landmarks;
 use super::survey::FaceInfo;
 use crate::exact::Sign;
@@ -101,6 +102,13 @@ pub(crate) struct Scratch {
     /// Where the next cut of a part of the last cut starts (kept from one
     /// operation to the next, unlike the rest).
     pub(crate) landmarks: Landmarks,
+    /// The extreme vertices of the parts of the last cut in fixed
+    /// directions (kept from one operation to the next, like `landmarks`).
+    pub(crate) extremes: Extremes,
+    /// The side whose chain the march should walk on the face it starts
+    /// from, when the start vertex tells (an extreme vertex lies near the
+    /// small part).
+    pub(crate) chain: Option<Sign>,
     /// The steps the edge descents of the operation took.
     pub(crate) descent_steps: u32,
 }
@@ -121,5 +129,6 @@ impl Scratch {
         self.vertices.clear();
         self.cap_starts.clear();
         self.descent_steps = 0;
+        self.chain = None;
     }
 }

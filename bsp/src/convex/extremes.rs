@@ -1,0 +1,356 @@
+//! Extreme vertices in fixed directions, as start vertices of the edge
+//! descent (paper 1 §3.3).
+//!
+//! Notation: `P` — the polyhedron a cut splits, named by its id; `s` — the
+//! cutting plane, `n` its normal; `u_i` — one of the six axis directions
+//! `±x, ±y, ±z`; `e_i` — a vertex of `P` that is (by the `f64` estimates)
+//! farthest in direction `u_i`.
+//!
+//! A plane near tangent to `P` cuts off a small cap around the vertices
+//! farthest in the direction of its normal, so the descent started from
+//! `e_i` for the `u_i` closest to `n` (or to `−n`) is short; and the march
+//! then walks the chain of that cap's side first (`Scratch::chain`).
+//! After a cut, `e_i` stays extreme in the part that keeps it (a part is a
+//! subset of `P`); a part that loses it has its extreme in direction `u_i`
+//! on its cap (or tied with another vertex of `P`), so only the cap is
+//! scanned, when the part is cut next. The extremes are estimates: any
+//! start vertex gives the same section, only the walk is longer. As the
+//! landmarks, only the parts of the last cut have extremes, and a part
+//! gets them only when the descent of its cut was long; a polyhedron with
+//! extremes starts from them instead of landmarks.
+
+use super::mesh::{ConvexArena, PolyId};
+use super::scratch::Scratch;
+use crate::exact::{FILTER_EPSILON, Plane, Sign};
+
+/// The number of fixed directions: `±u_i` for the axes of [`projections`].
+const DIRECTIONS: usize = 2 * HALF;
+
+/// The number of directions up to sign.
+const HALF: usize = 3;
+
+/// Every direction known.
+const ALL: u16 = (1 << DIRECTIONS) - 1;
+
+/// The descent steps from which a cut without extremes records some.
+const LONG_DESCENT: u32 = 6;
+
+/// The offsets of the point with homogeneous `f64` coordinates `p` along
+/// the first `HALF` directions (direction `i + HALF` is the opposite of
+/// `i`).
+#[inline]
+fn projections(p: [f64; 4]) -> [f64; HALF] {
+    let [x, y, z, w] = p;
+    [x / w, y / w, z / w]
+}
+
+/// The direction closest to `n`, the normal of `approx`.
+#[inline]
+fn closest_direction(approx: [f64; 4]) -> usize {
+    let [a, b, c, _] = approx;
+    let scores = [a, b, c];
+    let (mut best, mut best_score) = (0, -1.0);
+    for (i, &score) in scores.iter().enumerate() {
+        if score.abs() > best_score {
+            (best, best_score) = (i, score.abs());
+        }
+    }
+    if scores[best] < 0.0 {
+        best + HALF
+    } else {
+        best
+    }
+}
+
+/// The extreme vertices of the polyhedron the current cut splits, or of
+/// the one the last cut split, and which of them each part of that cut
+/// kept.
+#[derive(Clone, Debug)]
+pub(crate) struct Extremes {
+    /// The id of each part of the last cut (`u32::MAX` for none).
+    parts: [u32; 2],
+    /// Which of `vertices` each part has kept (a bit per direction).
+    valid: [u16; 2],
+    /// `e_i`.
+    vertices: [u32; DIRECTIONS],
+    /// The homogeneous `f64` coordinates of the `e_i`, coordinate by
+    /// coordinate (`X`, `Y`, `Z`, `W`), and the largest magnitude of the
+    /// four of each.
+    approx: [[f64; DIRECTIONS]; 5],
+    /// Whether the polyhedron being cut has extremes.
+    has_current: bool,
+}
+
+impl Default for Extremes {
+    fn default() -> Self {
+        Self {
+            parts: [u32::MAX; 2],
+            valid: [0; 2],
+            vertices: [u32::MAX; DIRECTIONS],
+            approx: [[0.0; DIRECTIONS]; 5],
+            has_current: false,
+        }
+    }
+}
+
+impl Extremes {
+    /// Forgets every extreme.
+    #[inline]
+    pub(crate) fn forget(&mut self) {
+        self.parts = [u32::MAX; 2];
+        self.has_current = false;
+    }
+
+    /// Whether the polyhedron being cut has extremes.
+    #[cfg(test)]
+    pub(crate) fn in_use(&self) -> bool {
+        self.has_current
+    }
+
+    /// Whether the cut records extremes for its parts.
+    #[inline]
+    fn worth_keeping(&self, descent_steps: u32) -> bool {
+        self.has_current || descent_steps >= LONG_DESCENT
+    }
+
+    /// The directions whose `e_i` the filter places strictly below and
+    /// strictly above `s` (a bit per direction). The error bound of the
+    /// `f64` value `Σ t_k` of `T` is taken as `2^-50·M·Σ|s_k|`, `M` the
+    /// largest magnitude of the point's coordinates, which bounds the
+    /// `2^-50·Σ|t_k|` of [`FilteredDot`](crate::exact::FilteredDot).
+    #[inline]
+    fn sides(&self, s: &Plane) -> (u16, u16) {
+        let [a, b, c, d] = s.approx;
+        let scale = ((a.abs() + b.abs()) + (c.abs() + d.abs())) * (FILTER_EPSILON * 1.01);
+        let [xs, ys, zs, ws, ms] = &self.approx;
+        let (mut below, mut above) = (0u16, 0u16);
+        for i in 0..DIRECTIONS {
+            let sum = (xs[i] * a + ys[i] * b) + (zs[i] * c + ws[i] * d);
+            let bound = ms[i] * scale;
+            below |= u16::from(sum < -bound) << i;
+            above |= u16::from(sum > bound) << i;
+        }
+        (below, above)
+    }
+
+    /// Records `v`, with homogeneous `f64` coordinates `p`, as `e_i`.
+    #[inline]
+    fn set(&mut self, i: usize, v: u32, p: [f64; 4]) {
+        self.vertices[i] = v;
+        let magnitude = p.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (k, &x) in p.iter().chain([magnitude].iter()).enumerate() {
+            self.approx[k][i] = x;
+        }
+    }
+}
+
+impl ConvexArena {
+    /// Makes the extremes of `poly` current when it is a part of the last
+    /// cut (finding those it lost on its cap, or all of them), and forgets
+    /// the parts. Returns whether `poly` has extremes.
+    pub(super) fn take_extremes(&self, poly: PolyId, scratch: &mut Scratch) -> bool {
+        let marks = &mut scratch.extremes;
+        marks.has_current = false;
+        if marks.parts == [u32::MAX; 2] {
+            return false;
+        }
+        let valid = if marks.parts[0] == poly.0 {
+            marks.valid[0]
+        } else if marks.parts[1] == poly.0 {
+            marks.valid[1]
+        } else {
+            marks.forget();
+            return false;
+        };
+        marks.forget();
+        if valid != ALL {
+            self.find_extremes(poly, valid, scratch);
+        }
+        scratch.extremes.has_current = true;
+        true
+    }
+
+    /// Finds `e_i` for the directions not in `valid`: over the cap of
+    /// `poly` (its face) when some are valid, else over all its vertices
+    /// (face by face, breadth first, a vertex once per face around it).
+    #[inline(never)]
+    fn find_extremes(&self, poly: PolyId, valid: u16, scratch: &mut Scratch) {
+        let mut best = [f64::NEG_INFINITY; DIRECTIONS];
+        let Scratch {
+            extremes: marks,
+            faces,
+            on_plane: order,
+            ..
+        } = scratch;
+        let mut visit = |v: u32| {
+            let approx = self.point(v).approx;
+            let p = projections(approx);
+            for i in 0..HALF {
+                let j = i + HALF;
+                if valid & (1 << i) == 0 && p[i] > best[i] {
+                    best[i] = p[i];
+                    marks.set(i, v, approx);
+                }
+                if valid & (1 << j) == 0 && -p[i] > best[j] {
+                    best[j] = -p[i];
+                    marks.set(j, v, approx);
+                }
+            }
+        };
+        let first = self.half_edges[poly.0 as usize].face;
+        order.clear();
+        order.push(first);
+        faces.insert(first, true);
+        let mut k = 0;
+        while k < order.len() {
+            let f = order[k];
+            k += 1;
+            let start = self.faces[f as usize].half_edge;
+            let mut h = start;
+            loop {
+                let e = self.half_edges[h as usize];
+                visit(e.origin);
+                let g = self.half_edges[e.twin as usize].face;
+                if valid == 0 && faces.insert(g, true) {
+                    order.push(g);
+                }
+                h = e.next;
+                if h == start {
+                    break;
+                }
+            }
+        }
+        // The march counts on finding no face marked.
+        faces.clear();
+    }
+
+    /// The extremes in the direction closest to `n` and to `−n`, when the
+    /// polyhedron being cut has extremes.
+    #[inline]
+    pub(super) fn extreme_candidates(&self, s: &Plane, scratch: &Scratch) -> Option<[u32; 2]> {
+        let marks = &scratch.extremes;
+        if !marks.has_current {
+            return None;
+        }
+        let i = closest_direction(s.approx);
+        let opposite = if i < HALF { i + HALF } else { i - HALF };
+        Some([marks.vertices[i], marks.vertices[opposite]])
+    }
+
+    /// Keeps the extremes of `poly`, which the cut left unchanged.
+    #[inline]
+    pub(super) fn keep_extremes(&self, poly: PolyId, scratch: &mut Scratch) {
+        let marks = &mut scratch.extremes;
+        if marks.has_current {
+            marks.parts[0] = poly.0;
+            marks.valid[0] = ALL;
+        } else if scratch.descent_steps >= LONG_DESCENT {
+            marks.parts[0] = poly.0;
+            marks.valid[0] = 0;
+        }
+    }
+
+    /// Records the extremes of the parts of a proper cut: `parts[0]` (a
+    /// half-edge of its cap) keeps the extremes strictly below `s` and
+    /// `parts[1]` those strictly above, or with `keep`, the one part built
+    /// (`parts[0]`) those strictly on side `keep`.
+    #[inline]
+    pub(super) fn pass_extremes(
+        &self,
+        s: &Plane,
+        parts: [u32; 2],
+        keep: Option<Sign>,
+        scratch: &mut Scratch,
+    ) {
+        let marks = &mut scratch.extremes;
+        if !marks.worth_keeping(scratch.descent_steps) {
+            return;
+        }
+        // A part that lost all its extremes is searched whole.
+        let (below, above) = if marks.has_current {
+            marks.sides(s)
+        } else {
+            (0, 0)
+        };
+        marks.parts = parts;
+        marks.valid = match keep {
+            None => [below, above],
+            Some(Sign::Positive) => [above, 0],
+            Some(_) => [below, 0],
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{ConvexArena, CutOutcome, NO_TAG};
+    use super::{DIRECTIONS, HALF, projections};
+    use crate::exact::{IntPoint, Plane};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Half the edge of the box the polyhedra start from.
+    const R: i64 = 1 << 20;
+
+    /// A plane tangent to a sphere of random radius below `R` about the
+    /// origin, outward, with a normal of length about 2^10.
+    fn tangent_plane(rng: &mut ChaCha8Rng) -> Plane {
+        loop {
+            let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
+            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if !(0.1..=1.0).contains(&len) {
+                continue;
+            }
+            let n = v.map(|c| (c / len * 1024.0).round() as i64);
+            let norm = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
+            let radius = rng.random_range(0.8..0.99) * R as f64;
+            let d = -(radius * norm).round() as i128;
+            return Plane::new(n[0], n[1], n[2], d).expect("in budget");
+        }
+    }
+
+    /// The offset of vertex `v` of `arena` along direction `i`.
+    fn offset(arena: &ConvexArena, v: u32, i: usize) -> f64 {
+        let p = projections(arena.point(v).approx);
+        if i < HALF { p[i] } else { -p[i - HALF] }
+    }
+
+    /// Along chains of two-sided cuts going on with either part, the
+    /// extremes the next cut of a part starts from are vertices of that
+    /// part, each farthest in its direction (the offsets of distinct
+    /// vertices of these polyhedra differ far beyond `f64` rounding); and
+    /// the extremes are in use for most cuts.
+    #[test]
+    fn extremes_are_the_farthest_vertices_of_the_part() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut arena = ConvexArena::new();
+        let corner = |c| IntPoint::new(c, c, c).expect("in budget");
+        let mut poly = arena.add_box(corner(-R), corner(R)).expect("a box");
+        let (mut cuts, mut in_use) = (0, 0);
+        for step in 0..300 {
+            let s = tangent_plane(&mut rng);
+            if let CutOutcome::Split { below, above } = arena.cut(poly, &s, NO_TAG, NO_TAG) {
+                poly = if step % 50 == 49 { above } else { below };
+            }
+            // A copy of the scratch, so that the chain goes on as it was.
+            let mut scratch = arena.scratch.clone().expect("a cut lends the scratch");
+            // As a cut does first.
+            scratch.clear();
+            if arena.take_extremes(poly, &mut scratch) {
+                let vertices = arena.vertices_of(poly);
+                for i in 0..DIRECTIONS {
+                    let e = scratch.extremes.vertices[i];
+                    assert!(vertices.contains(&e), "step {step}: e_{i} not in the part");
+                    let farthest = vertices
+                        .iter()
+                        .map(|&v| offset(&arena, v, i))
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    assert_eq!(offset(&arena, e, i), farthest, "step {step}, direction {i}");
+                }
+            }
+            in_use += usize::from(arena.scratch.as_ref().is_some_and(|s| s.extremes.in_use()));
+            cuts += 1;
+        }
+        assert!(in_use * 2 > cuts, "{in_use} of {cuts}");
+    }
+}
