@@ -214,7 +214,10 @@ impl SurfaceMesh {
     /// As [`Self::from_faces`].
     #[must_use]
     pub fn welded(faces: &[BoundaryFace]) -> Self {
-        Self::welded_with(faces.iter().map(|face| (face, face.edges.clone())))
+        Self::welded_with(
+            faces.iter().map(|face| (face, face.edges.clone())),
+            vertex_room(faces),
+        )
     }
 
     /// As [`Self::from_faces`], taking the faces (their edge planes move
@@ -224,10 +227,14 @@ impl SurfaceMesh {
     /// As [`Self::from_faces`].
     #[must_use]
     pub fn from_face_vec(mut faces: Vec<BoundaryFace>) -> Self {
-        let mut mesh = Self::welded_with(faces.iter_mut().map(|face| {
-            let edges = core::mem::take(&mut face.edges);
-            (&*face, edges)
-        }));
+        let room = vertex_room(&faces);
+        let mut mesh = Self::welded_with(
+            faces.iter_mut().map(|face| {
+                let edges = core::mem::take(&mut face.edges);
+                (&*face, edges)
+            }),
+            room,
+        );
         for face in faces {
             crate::tree::polygon::give_back_buffers(Vec::new(), face.vertices);
         }
@@ -267,11 +274,13 @@ impl SurfaceMesh {
         mesh
     }
 
-    /// The welded mesh of faces given with their edge planes.
+    /// The welded mesh of faces given with their edge planes, with room
+    /// for `room` vertices.
     fn welded_with<'a>(
         faces: impl ExactSizeIterator<Item = (&'a BoundaryFace, Vec<Plane>)>,
+        room: usize,
     ) -> Self {
-        let mut welder = weld::Welder::with_capacity(faces.len() * 2);
+        let mut welder = weld::Welder::with_capacity(room);
         let polygons = faces
             .enumerate()
             .map(|(f, (face, edges))| weld_face(&mut welder, f, face, edges))
@@ -339,6 +348,13 @@ impl Drop for SurfaceMesh {
             ]
         }));
     }
+}
+
+/// Room for the welded vertices of `faces`: about half their corners, as
+/// most corners are shared by two or more faces, and a little more so
+/// that the vertices of one cell's surface rarely outgrow it.
+fn vertex_room(faces: &[BoundaryFace]) -> usize {
+    faces.iter().map(|f| f.vertices.len()).sum::<usize>() / 2 + 8
 }
 
 /// Boundary face number `f` with its edge planes as a polygon of welded

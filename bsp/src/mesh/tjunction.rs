@@ -397,26 +397,27 @@ impl Grid {
         if positions.is_empty() {
             (lo, hi) = ([0.0; 3], [0.0; 3]);
         }
-        let extent = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
         let magnitude = (0..3)
             .map(|i| lo[i].abs().max(hi[i].abs()))
             .fold(0.0, f64::max);
-        let per_axis = (2.0 * (positions.len() as f64).cbrt())
-            .ceil()
-            .clamp(1.0, 1024.0);
-        // Cells no finer than the tolerance, so stepping stays bounded.
         let tolerance = magnitude * f64::powi(2.0, -40) + f64::MIN_POSITIVE;
-        let cell = (extent / per_axis).max(tolerance * 1024.0);
         if positions.len() <= scan_max {
+            // No cells: their size is never asked for.
             return Self {
                 origin: lo,
-                cell,
+                cell: 0.0,
                 dims: [0; 3],
                 tolerance,
                 start: Vec::new(),
                 items: Vec::new(),
             };
         }
+        let extent = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+        let per_axis = (2.0 * (positions.len() as f64).cbrt())
+            .ceil()
+            .clamp(1.0, 1024.0);
+        // Cells no finer than the tolerance, so stepping stays bounded.
+        let cell = (extent / per_axis).max(tolerance * 1024.0);
         let dims = [0, 1, 2].map(|i| (((hi[i] - lo[i]) / cell).floor() as usize + 1).min(1025));
         let mut grid = Self {
             origin: lo,

@@ -18,6 +18,12 @@
 //! per axis, and a different key only when the position lies within
 //! [`MARGIN`] ulps of a cell border, where the neighbouring cell is searched
 //! too. Candidates are then confirmed exactly.
+//!
+//! Up to [`SCAN_MAX`] vertices (the surface of one octree cell) no cells
+//! are kept: each new point is compared with every vertex so far, first
+//! by its ordered position (within [`MARGIN`] ulps per axis, which every
+//! equal point is), then exactly. Both ways find the one equal vertex, if
+//! any, so the indices are the same.
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
@@ -72,6 +78,11 @@ impl Hash for CellKey {
     }
 }
 
+/// Vertices up to which every new point is compared with every vertex
+/// (see the module docs): cheaper than hashing cells for a few dozen.
+/// At most 64, the bits of the mask [`Welder`] scans with.
+pub const SCAN_MAX: usize = 64;
+
 /// Marks the end of a cell's list of vertices.
 const END: u32 = u32::MAX;
 
@@ -83,8 +94,13 @@ pub struct Welder {
     /// The first and last vertex of each cell; the others are linked by
     /// [`Self::next`], in order of first appearance.
     cells: HashMap<CellKey, (u32, u32), BuildHasherDefault<WordHasher>>,
-    /// The vertex after each in its cell, or [`END`].
+    /// The vertex after each in its cell, or [`END`] (empty while the
+    /// vertices are scanned).
     next: Vec<u32>,
+    /// The ordered position of each vertex ([`ordered_bits`] per axis).
+    ordered: Vec<[i64; 3]>,
+    /// The ordered x of each vertex up to [`SCAN_MAX`] of them.
+    xs: Vec<i64>,
 }
 
 impl Welder {
@@ -93,14 +109,76 @@ impl Welder {
     pub fn with_capacity(n: usize) -> Self {
         Self {
             vertices: Vec::with_capacity(n),
-            cells: HashMap::with_capacity_and_hasher(n, BuildHasherDefault::default()),
-            next: Vec::with_capacity(n),
+            cells: HashMap::default(),
+            next: Vec::new(),
+            ordered: Vec::with_capacity(n),
+            xs: Vec::with_capacity(n.min(SCAN_MAX + 1)),
         }
     }
 
     /// The index of `p`: that of an earlier equal point, or a new one.
     pub fn index(&mut self, p: &Point4) -> u32 {
         let ordered = p.to_f64().map(ordered_bits);
+        if self.vertices.len() < SCAN_MAX {
+            return self.scan(p, ordered);
+        }
+        self.search(p, ordered)
+    }
+
+    /// [`Self::index`] up to [`SCAN_MAX`] vertices: `p`, at `ordered`,
+    /// compared with every vertex; the cells are filled when the vertices
+    /// grow past.
+    fn scan(&mut self, p: &Point4, ordered: [i64; 3]) -> u32 {
+        // Newest first (a corner mostly recurs in the next faces), each
+        // vertex near along x (`|x − c| ≤ MARGIN` as one wrapping
+        // subtraction and one unsigned comparison) checked on y and z,
+        // then exactly.
+        let near =
+            |o: i64, c: i64| (o.wrapping_sub(c).wrapping_add(MARGIN) as u64) <= 2 * MARGIN as u64;
+        let mut end = self.xs.len();
+        while let Some(i) = self.xs[..end].iter().rposition(|&x| near(x, ordered[0])) {
+            let o = self.ordered[i];
+            if near(o[1], ordered[1]) && near(o[2], ordered[2]) && same_point(&self.vertices[i], p)
+            {
+                return i as u32;
+            }
+            end = i;
+        }
+        let index = self.vertices.len() as u32;
+        self.vertices.push(*p);
+        self.ordered.push(ordered);
+        self.xs.push(ordered[0]);
+        if self.vertices.len() == SCAN_MAX {
+            let room = self.vertices.capacity();
+            self.cells.reserve(room);
+            self.next.reserve(room);
+            for v in 0..self.vertices.len() {
+                self.next.push(END);
+                self.file(v as u32);
+            }
+        }
+        index
+    }
+
+    /// Files vertex `v` (its [`Self::next`] entry pushed, [`END`]) at the
+    /// end of its cell's list.
+    fn file(&mut self, v: u32) {
+        let key = self.ordered[v as usize].map(|o| o >> CELL_SHIFT);
+        match self.cells.entry(CellKey(key)) {
+            Entry::Occupied(mut cell) => {
+                let (_, last) = cell.get_mut();
+                self.next[*last as usize] = v;
+                *last = v;
+            }
+            Entry::Vacant(cell) => {
+                cell.insert((v, v));
+            }
+        }
+    }
+
+    /// [`Self::index`] above [`SCAN_MAX`] vertices: `p`, at `ordered`,
+    /// looked up in its cells.
+    fn search(&mut self, p: &Point4, ordered: [i64; 3]) -> u32 {
         let key = ordered.map(|o| o >> CELL_SHIFT);
         // Per axis the cell itself and, near a border, its neighbour.
         let choices = |axis: usize| -> [Option<i64>; 2] {
@@ -135,17 +213,9 @@ impl Welder {
         }
         let index = self.vertices.len() as u32;
         self.vertices.push(*p);
+        self.ordered.push(ordered);
         self.next.push(END);
-        match self.cells.entry(CellKey(key)) {
-            Entry::Occupied(mut cell) => {
-                let (_, last) = cell.get_mut();
-                self.next[*last as usize] = index;
-                *last = index;
-            }
-            Entry::Vacant(cell) => {
-                cell.insert((index, index));
-            }
-        }
+        self.file(index);
         index
     }
 
@@ -171,6 +241,57 @@ mod tests {
             ordered_bits(1.0) + 1,
             ordered_bits(f64::from_bits(1.0f64.to_bits() + 1))
         );
+    }
+
+    /// Meets of plane triples through a few hundred points, each point
+    /// reached several times in random order: the welder gives every
+    /// point the index of its first appearance, as comparing it exactly
+    /// with every earlier vertex does, below and above [`SCAN_MAX`].
+    #[test]
+    fn scanning_and_cells_give_first_appearance_indices() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move |range: i64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % (2 * range as u64)) as i64 - range
+        };
+        // Points (i/3, j/7, k/11) reached through planes 3a·x + 7b·y +
+        // 11c·z + d = 0 with d = −(a·i + b·j + c·k).
+        let targets: Vec<[i64; 3]> = (0..300).map(|_| [0; 3].map(|_| next(1000))).collect();
+        let mut points = Vec::new();
+        for round in 0..3 {
+            for (t, &[i, j, k]) in targets.iter().enumerate() {
+                if (t + round) % 2 == 1 {
+                    continue;
+                }
+                let mut plane = || {
+                    let (a, b, c) = (next(1 << 20), next(1 << 20), next(1 << 20));
+                    Plane::new(3 * a, 7 * b, 11 * c, -i128::from(a * i + b * j + c * k))
+                };
+                let (Ok(p), Ok(q), Ok(r)) = (plane(), plane(), plane()) else {
+                    continue;
+                };
+                if let Some(v) = intersect_3_planes(&p, &q, &r) {
+                    points.push(v);
+                }
+            }
+        }
+        for count in [SCAN_MAX / 2, points.len()] {
+            let mut welder = Welder::default();
+            let mut reference: Vec<Point4> = Vec::new();
+            for p in &points[..count] {
+                let expected = reference
+                    .iter()
+                    .position(|q| q.same_position(p))
+                    .unwrap_or_else(|| {
+                        reference.push(*p);
+                        reference.len() - 1
+                    });
+                assert_eq!(welder.index(p) as usize, expected);
+            }
+        }
+        assert!(points.len() > 3 * SCAN_MAX);
     }
 
     /// The point `(1/3, 1/7, 1/11)` as the meet of many different plane
