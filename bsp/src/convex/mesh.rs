@@ -18,7 +18,7 @@ use std::collections::{HashMap, HashSet};
 use super::pool;
 use super::scratch::Scratch;
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes_with};
+use crate::exact::{IntPoint, Plane, Point4};
 
 /// Tag of a face with no opposite BSP node.
 pub const NO_TAG: u32 = u32::MAX;
@@ -264,27 +264,6 @@ impl ConvexArena {
         });
         self.points.push(point);
         v
-    }
-
-    /// Adds a vertex where the planes of faces `f` and `g` meet `s`,
-    /// writing its exact point straight into the point array (no copy
-    /// through the stack); `None` when the three planes do not meet in one
-    /// point.
-    #[inline]
-    pub(crate) fn push_meet_vertex(
-        &mut self,
-        f: u32,
-        g: u32,
-        s: &Plane,
-        half_edge: u32,
-    ) -> Option<u32> {
-        let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
-        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
-        let point = points.len() as u32;
-        intersect_3_planes_with(plane(f), plane(g), s, |p| points.push(p))?;
-        let v = self.vertices.len() as u32;
-        self.vertices.push(Vertex { point, half_edge });
-        Some(v)
     }
 
     /// Adds `plane` to the plane array; returns its index for
