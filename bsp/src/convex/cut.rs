@@ -223,7 +223,7 @@ impl ConvexArena {
     }
 
     /// Runs `op` with the arena's scratch space, cleared.
-    fn with_scratch<T>(&mut self, op: impl FnOnce(&mut Self, &mut Scratch) -> T) -> T {
+    pub(super) fn with_scratch<T>(&mut self, op: impl FnOnce(&mut Self, &mut Scratch) -> T) -> T {
         let mut scratch = self.scratch.take().unwrap_or_default();
         scratch.clear();
         let out = op(self, &mut scratch);

@@ -18,7 +18,49 @@ use std::collections::{HashMap, HashSet};
 use super::pool;
 use super::scratch::Scratch;
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Point4, intersect_3_planes_with};
+use crate::exact::{IntPoint, Plane, Point4};
+
+/// The faces of [`ConvexArena::add_box`]: the index of each one's plane
+/// (−x, +x, −y, +y, −z, +z) and its corners counter-clockwise seen from
+/// outside (corner `i` has x from bit 0 of `i`, y from bit 1, z from bit
+/// 2).
+const BOX_FACES: [(usize, [u32; 4]); 6] = [
+    (0, [0, 4, 6, 2]),
+    (1, [1, 3, 7, 5]),
+    (2, [0, 1, 5, 4]),
+    (3, [2, 6, 7, 3]),
+    (4, [0, 2, 3, 1]),
+    (5, [4, 5, 7, 6]),
+];
+
+/// The twin of each half-edge of a box, relative to its first half-edge
+/// (half-edge `4f + k` leaves corner `k` of face `f` of [`BOX_FACES`]):
+/// the half-edge between the same corners the other way.
+const BOX_TWINS: [u32; 24] = box_twins();
+
+/// Computes [`BOX_TWINS`].
+const fn box_twins() -> [u32; 24] {
+    /// The corners half-edge `h` joins.
+    const fn ends(h: usize) -> (u32, u32) {
+        let corners = BOX_FACES[h / 4].1;
+        (corners[h % 4], corners[(h % 4 + 1) % 4])
+    }
+    let mut twins = [u32::MAX; 24];
+    let mut h = 0;
+    while h < 24 {
+        let (a, b) = ends(h);
+        let mut g = 0;
+        while g < 24 {
+            let (c, d) = ends(g);
+            if c == b && d == a {
+                twins[h] = g as u32;
+            }
+            g += 1;
+        }
+        h += 1;
+    }
+    twins
+}
 
 /// Tag of a face with no opposite BSP node.
 pub const NO_TAG: u32 = u32::MAX;
@@ -266,27 +308,6 @@ impl ConvexArena {
         v
     }
 
-    /// Adds a vertex where the planes of faces `f` and `g` meet `s`,
-    /// writing its exact point straight into the point array (no copy
-    /// through the stack); `None` when the three planes do not meet in one
-    /// point.
-    #[inline]
-    pub(crate) fn push_meet_vertex(
-        &mut self,
-        f: u32,
-        g: u32,
-        s: &Plane,
-        half_edge: u32,
-    ) -> Option<u32> {
-        let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
-        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
-        let point = points.len() as u32;
-        intersect_3_planes_with(plane(f), plane(g), s, |p| points.push(p))?;
-        let v = self.vertices.len() as u32;
-        self.vertices.push(Vertex { point, half_edge });
-        Some(v)
-    }
-
     /// Adds `plane` to the plane array; returns its index for
     /// [`Face::plane`].
     #[inline]
@@ -334,19 +355,13 @@ impl ConvexArena {
             };
             self.push_vertex(Point4::from_small(pick(0), pick(1), pick(2), 1), u32::MAX);
         }
-        // Each face lists its corners counter-clockwise seen from outside.
-        const FACES: [(usize, [u32; 4]); 6] = [
-            (0, [0, 4, 6, 2]),
-            (1, [1, 3, 7, 5]),
-            (2, [0, 1, 5, 4]),
-            (3, [2, 6, 7, 3]),
-            (4, [0, 2, 3, 1]),
-            (5, [4, 5, 7, 6]),
-        ];
-        for (p, corners) in FACES {
+        for (p, corners) in BOX_FACES {
             self.push_face(v0, planes[p], &corners);
         }
-        self.link_twins(h0);
+        // The twins `link_twins` would find, known in advance.
+        for (e, &twin) in self.half_edges[h0 as usize..].iter_mut().zip(&BOX_TWINS) {
+            e.twin = h0 + twin;
+        }
         Ok(PolyId(h0))
     }
 
@@ -605,5 +620,34 @@ impl SeenSet {
             self.len += 1;
         }
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ConvexArena, HalfEdge};
+    use crate::exact::IntPoint;
+
+    /// A box gets the twins that pairing its half-edges by their ends
+    /// gives, in an arena holding other polyhedra too.
+    #[test]
+    fn box_twins_are_those_of_the_ends() {
+        let mut arena = ConvexArena::new();
+        let p = |c| IntPoint::new(c, c, c).expect("in budget");
+        arena.add_box(p(0), p(3)).expect("a box");
+        let h0 = arena.half_edges.len() as u32;
+        arena.add_box(p(-5), p(7)).expect("a box");
+        let mut paired = arena.clone();
+        for e in &mut paired.half_edges[h0 as usize..] {
+            e.twin = u32::MAX;
+        }
+        paired.link_twins(h0);
+        assert!(
+            paired
+                .half_edges
+                .iter()
+                .all(|e: &HalfEdge| e.twin != u32::MAX)
+        );
+        assert_eq!(arena.half_edges, paired.half_edges);
     }
 }

@@ -24,6 +24,8 @@ pub mod mesh;
 pub mod pool;
 mod scratch;
 mod split;
+#[cfg(test)]
+mod split_reference;
 mod survey;
 pub mod validate;
 

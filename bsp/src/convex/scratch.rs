@@ -94,11 +94,6 @@ pub(crate) struct Scratch {
     /// The half-edges lying in the cutting plane, on faces of the lower
     /// and of the upper part.
     pub(crate) section: [Vec<u32>; 2],
-    /// Section half-edges of faces created by the split (listed last).
-    pub(crate) section_new: Vec<u32>,
-    /// The ends `(u, v)` of the section half-edges of one side, in the
-    /// order of its cap's half-edges (each from `v` to `u`).
-    pub(crate) cap_edges: Vec<(u32, u32)>,
     /// Where the next cut of a part of the last cut starts (kept from one
     /// operation to the next, unlike the rest).
     pub(crate) landmarks: Landmarks,

@@ -21,8 +21,9 @@
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::Scratch;
+use super::scratch::StampMap;
 use super::survey::{FaceInfo, FaceSurvey};
-use crate::exact::{Plane, Sign};
+use crate::exact::{Plane, Sign, intersect_3_planes_with};
 
 impl ConvexArena {
     /// Splits along the section, given the faces that meet it in
@@ -38,66 +39,174 @@ impl ConvexArena {
         keep: Option<Sign>,
     ) -> [u32; 2] {
         let mut relevant = std::mem::take(&mut scratch.relevant);
-        let mut section = std::mem::take(&mut scratch.section);
-        let mut section_new = std::mem::take(&mut scratch.section_new);
         // Sorted, so the result does not depend on how the faces were found.
         sort_by_face(&mut relevant);
-        // 1. Split crossing edges.
-        for &(_, info) in &relevant {
-            if let FaceInfo::Straddling { crossing, .. } = info
-                && crossing != u32::MAX
-            {
-                // The new vertex lies on s; nothing reads sides from here on.
-                self.split_edge(crossing, s);
+        let counts = Counts::of(&relevant);
+        let two_sided = keep.is_none();
+        let built = [
+            keep.is_none_or(|k| k == Sign::Negative),
+            keep.is_none_or(|k| k == Sign::Positive),
+        ];
+        // The section half-edges of each part built, one per cap half-edge.
+        let sizes = [0, 1].map(|k| {
+            if built[k] {
+                counts.straddling + counts.touching[k]
+            } else {
+                0
             }
-        }
-        // 2. Split straddling faces; list the section edges by the side of
-        // their face, those of the new faces (all `+`) last.
+        });
+        // Every half-edge, face and vertex the split adds, in the order
+        // they are made: the halves of the crossing edges, then of the
+        // straddling faces (and the new faces), then the caps; the crossing
+        // vertices, then the copies of the section vertices for the upper
+        // part.
+        let (h0, f0, v0) = (self.half_edges.len(), self.faces.len(), self.vertices.len());
+        let face_halves = if two_sided { 2 } else { 1 };
+        let new_faces = if two_sided { counts.straddling } else { 0 };
+        let caps = usize::from(built[0]) + usize::from(built[1]);
+        let copies = if two_sided { sizes[1] } else { 0 };
+        self.half_edges.resize(
+            h0 + 2 * counts.crossings + face_halves * counts.straddling + sizes[0] + sizes[1],
+            HalfEdge {
+                origin: 0,
+                twin: 0,
+                next: 0,
+                face: 0,
+            },
+        );
+        self.faces.resize(
+            f0 + new_faces + caps,
+            Face {
+                plane: 0,
+                half_edge: 0,
+                tag: 0,
+            },
+        );
+        self.vertices.resize(
+            v0 + counts.crossings + copies,
+            Vertex {
+                point: 0,
+                half_edge: 0,
+            },
+        );
+        // 1. Split crossing edges.
+        self.split_edges(&relevant, counts.crossings, s, h0 as u32, v0 as u32);
+        // 2. Split (or trim) straddling faces, listing the section edges of
+        // each part: `section[0]` in face order, `section[1]` the touching
+        // faces' first, then those of the new faces.
+        let mut section = std::mem::take(&mut scratch.section);
         for list in &mut section {
             list.clear();
         }
-        section_new.clear();
-        for &(f, info) in &relevant {
-            match (info, keep) {
-                (
-                    FaceInfo::Straddling {
-                        enter, first_chain, ..
-                    },
-                    None,
-                ) => {
-                    let (kept, new) = self.split_face(f, &self.face_zeros(enter, first_chain));
-                    section[0].push(kept);
-                    section_new.push(new);
-                }
-                (
-                    FaceInfo::Straddling {
-                        enter, first_chain, ..
-                    },
-                    Some(side),
-                ) => {
-                    // Listed where the two-sided split lists them, so that
-                    // the kept part comes out the same.
-                    let edge = self.trim_face(f, side, &self.face_zeros(enter, first_chain));
-                    if side == Sign::Negative {
-                        section[0].push(edge);
-                    } else {
-                        section_new.push(edge);
-                    }
-                }
-                (FaceInfo::Touching { side, edge }, _) => {
-                    if keep.is_none_or(|k| k == side) {
-                        section[usize::from(side == Sign::Positive)].push(edge);
-                    }
-                }
-            }
+        if built[1] {
+            section[1].resize(counts.touching[1], u32::MAX);
         }
-        section[1].extend_from_slice(&section_new);
+        let mut next = Next {
+            half_edge: (h0 + 2 * counts.crossings) as u32,
+            face: f0 as u32,
+        };
+        split_faces(
+            &mut self.half_edges,
+            &mut self.faces,
+            &relevant,
+            keep,
+            &mut section,
+            &mut next,
+        );
+        debug_assert_eq!([section[0].len(), section[1].len()], sizes);
         // 3. Caps.
-        let outcome = self.add_caps(&section, scratch, s, tags, keep);
+        let mut first_cap_edge = [u32::MAX; 2];
+        for k in 0..2 {
+            if !built[k] {
+                continue;
+            }
+            let plane = self.push_plane(if k == 0 { *s } else { s.flipped() });
+            let cap = next.face;
+            next.face += 1;
+            self.faces[cap as usize] = Face {
+                plane,
+                half_edge: next.half_edge,
+                tag: tags[k],
+            };
+            first_cap_edge[k] = next.half_edge;
+            // The lower part (or the only part built) keeps the section
+            // vertices; the upper part gets copies.
+            let keeps_vertices = k == 0 || !two_sided;
+            add_cap(
+                &mut self.half_edges,
+                &mut self.vertices,
+                &mut scratch.cap_starts,
+                &section[k],
+                cap,
+                next.half_edge,
+                keeps_vertices,
+            );
+            next.half_edge += section[k].len() as u32;
+        }
+        debug_assert_eq!(next.half_edge as usize, self.half_edges.len());
+        debug_assert_eq!(next.face as usize, self.faces.len());
         scratch.relevant = relevant;
         scratch.section = section;
-        scratch.section_new = section_new;
-        outcome
+        first_cap_edge
+    }
+
+    /// Splits the crossing edges of the straddling faces in `relevant` (in
+    /// that order), `crossings` of them, at their intersections with `s`:
+    /// crossing `i` gets vertex `v0 + i` and half-edges `h0 + 2i` (after
+    /// the half-edge split) and `h0 + 2i + 1` (after its twin), whose slots
+    /// are there already.
+    fn split_edges(
+        &mut self,
+        relevant: &[(u32, FaceInfo)],
+        crossings: usize,
+        s: &Plane,
+        h0: u32,
+        v0: u32,
+    ) {
+        let crossing_edges = relevant.iter().filter_map(|&(_, info)| match info {
+            FaceInfo::Straddling { crossing, .. } if crossing != u32::MAX => Some(crossing),
+            _ => None,
+        });
+        let p0 = self.points.len() as u32;
+        // The new points, each written in place: the meet of the planes of
+        // the edge's two faces and s.
+        self.points.reserve(crossings);
+        let (half_edges, vertices, faces, planes, points) = (
+            &mut self.half_edges[..],
+            &mut self.vertices[..],
+            &self.faces,
+            &self.planes,
+            &mut self.points,
+        );
+        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
+        for (i, h) in (0u32..).zip(crossing_edges) {
+            let (h2, t2, m) = (h0 + 2 * i, h0 + 2 * i + 1, v0 + i);
+            let e = half_edges[h as usize];
+            let t = half_edges[e.twin as usize];
+            intersect_3_planes_with(plane(e.face), plane(t.face), s, |p| points.push(p))
+                .expect("a crossing edge meets the cutting plane in one point");
+            vertices[m as usize] = Vertex {
+                point: p0 + i,
+                half_edge: h2,
+            };
+            // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
+            half_edges[h2 as usize] = HalfEdge {
+                origin: m,
+                twin: e.twin,
+                next: e.next,
+                face: e.face,
+            };
+            half_edges[t2 as usize] = HalfEdge {
+                origin: m,
+                twin: h,
+                next: t.next,
+                face: t.face,
+            };
+            let old = &mut half_edges[h as usize];
+            (old.next, old.twin) = (h2, t2);
+            let old_twin = &mut half_edges[e.twin as usize];
+            (old_twin.next, old_twin.twin) = (t2, h2);
+        }
     }
 
     /// What the split needs to know about face `f` (all vertices
@@ -126,222 +235,244 @@ impl ConvexArena {
         }
         survey.finish(h)
     }
+}
 
-    /// Splits the edge of half-edge `h` at its intersection with `s`;
-    /// returns the new vertex, which `h` now ends at.
-    fn split_edge(&mut self, h: u32, s: &Plane) -> u32 {
-        let e = self.half_edges[h as usize];
-        let t = self.half_edges[e.twin as usize];
-        let (h2, t2) = (
-            self.half_edges.len() as u32,
-            self.half_edges.len() as u32 + 1,
-        );
-        let m = self
-            .push_meet_vertex(e.face, t.face, s, h2)
-            .expect("a crossing edge meets the cutting plane in one point");
-        // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
-        self.half_edges.extend_from_slice(&[
-            HalfEdge {
-                origin: m,
-                twin: e.twin,
-                next: e.next,
-                face: e.face,
-            },
-            HalfEdge {
-                origin: m,
-                twin: h,
-                next: t.next,
-                face: t.face,
-            },
-        ]);
-        let old = &mut self.half_edges[h as usize];
-        (old.next, old.twin) = (h2, t2);
-        let old_twin = &mut self.half_edges[e.twin as usize];
-        (old_twin.next, old_twin.twin) = (t2, h2);
-        m
-    }
+/// How many faces of each kind meet the section.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    /// Straddling faces.
+    straddling: usize,
+    /// Straddling faces with a crossing half-edge (from `+` to `−`).
+    crossings: usize,
+    /// Touching faces on the lower and on the upper side.
+    touching: [usize; 2],
+}
 
-    /// The two `0` vertices of a straddling face once its crossing edges
-    /// are split, from what the survey of the face found.
-    fn face_zeros(&self, enter: [u32; 2], first_chain: Sign) -> FaceZeros {
-        FaceZeros {
-            leave: enter.map(|e| self.half_edges[e as usize].next),
-            enter,
-            first_chain,
-        }
-    }
-
-    /// Trims straddling face `f` to its half on side `keep` by one new
-    /// half-edge between its two `0` vertices (the other half's half-edges
-    /// are left unused); returns the new half-edge, which lies in `s`.
-    fn trim_face(&mut self, f: u32, keep: Sign, z: &FaceZeros) -> u32 {
-        // The kept chain runs from zero k to zero 1 − k; the new half-edge
-        // closes it, from zero 1 − k back to zero k.
-        let k = usize::from(z.first_chain != keep);
-        let new = self.half_edges.len() as u32;
-        self.half_edges.push(HalfEdge {
-            origin: self.half_edges[z.leave[1 - k] as usize].origin,
-            twin: u32::MAX,
-            next: z.leave[k],
-            face: f,
-        });
-        self.half_edges[z.enter[1 - k] as usize].next = new;
-        self.faces[f as usize].half_edge = new;
-        new
-    }
-
-    /// Splits straddling face `f` (now with exactly two `0` vertices) along
-    /// the segment between them: `f` keeps the `−` half and a new face gets
-    /// the `+` half. Returns the new half-edge in `s` of each half, `f`'s
-    /// first.
-    fn split_face(&mut self, f: u32, z: &FaceZeros) -> (u32, u32) {
-        let (z1, z2) = (
-            self.half_edges[z.leave[0] as usize].origin,
-            self.half_edges[z.leave[1] as usize].origin,
-        );
-        // Chain 0 runs from z1 to z2 (half-edges leave[0] … enter[1]),
-        // chain 1 from z2 to z1; a: z2→z1 closes chain 0, b: z1→z2 closes
-        // chain 1. Twins are set when the caps are built.
-        let chain_0_positive = z.first_chain == Sign::Positive;
-        let (a, b) = (
-            self.half_edges.len() as u32,
-            self.half_edges.len() as u32 + 1,
-        );
-        let new_face = self.faces.len() as u32;
-        let face = self.faces[f as usize];
-        let (face_0, face_1) = if chain_0_positive {
-            (new_face, f)
-        } else {
-            (f, new_face)
-        };
-        // The `+` chain moves to the new face (before the loop is cut).
-        let (start, end) = if chain_0_positive {
-            (z.leave[0], z.enter[1])
-        } else {
-            (z.leave[1], z.enter[0])
-        };
-        let mut h = start;
-        loop {
-            self.half_edges[h as usize].face = new_face;
-            if h == end {
-                break;
-            }
-            h = self.half_edges[h as usize].next;
-        }
-        self.half_edges.extend_from_slice(&[
-            HalfEdge {
-                origin: z2,
-                twin: u32::MAX,
-                next: z.leave[0],
-                face: face_0,
-            },
-            HalfEdge {
-                origin: z1,
-                twin: u32::MAX,
-                next: z.leave[1],
-                face: face_1,
-            },
-        ]);
-        self.half_edges[z.enter[1] as usize].next = a;
-        self.half_edges[z.enter[0] as usize].next = b;
-        let (kept, new) = if chain_0_positive { (b, a) } else { (a, b) };
-        self.faces.push(Face {
-            half_edge: new,
-            ..face
-        });
-        self.faces[f as usize].half_edge = kept;
-        (kept, new)
-    }
-
-    /// Builds the two caps along the section and separates the parts, or
-    /// with `keep` only the cap of that side's part; `section[k]` lists the
-    /// half-edges lying in `s` on faces of the lower (`k = 0`) and upper
-    /// part (of the kept side only, with `keep`). Returns the first
-    /// half-edge of each cap (`u32::MAX` for a cap not built).
-    fn add_caps(
-        &mut self,
-        section: &[Vec<u32>; 2],
-        scratch: &mut Scratch,
-        s: &Plane,
-        tags: [u32; 2],
-        keep: Option<Sign>,
-    ) -> [u32; 2] {
-        // One cap per side: for each section half-edge u→v on a face of that
-        // side, the cap gets v→u, and cap edges chain by shared vertices.
-        let mut cap_edges = std::mem::take(&mut scratch.cap_edges);
-        let mut first_cap_edge = [u32::MAX; 2];
-        for (k, side) in [Sign::Negative, Sign::Positive].into_iter().enumerate() {
-            if keep.is_some_and(|kept| kept != side) {
-                continue;
-            }
-            let plane = self.push_plane(if side == Sign::Negative {
-                *s
-            } else {
-                s.flipped()
-            });
-            let cap = self.faces.len() as u32;
-            let first = self.half_edges.len() as u32;
-            scratch.cap_starts.clear();
-            cap_edges.clear();
-            // The cap half-edges get the indices from `first` on, in the
-            // order of the section list: pair them and note where each
-            // starts before writing them all at once.
-            for (c, &h) in (first..).zip(&section[k]) {
-                let e = self.half_edges[h as usize];
-                let (u, v) = (e.origin, self.half_edges[e.next as usize].origin);
-                self.half_edges[h as usize].twin = c;
-                scratch.cap_starts.insert(v, c);
-                cap_edges.push((u, v));
-            }
-            let starts = &scratch.cap_starts;
-            self.half_edges
-                .extend(
-                    section[k]
-                        .iter()
-                        .zip(&cap_edges)
-                        .map(|(&h, &(u, v))| HalfEdge {
-                            origin: v,
-                            twin: h,
-                            next: starts.get(u).expect("the section is a closed loop"),
-                            face: cap,
-                        }),
-                );
-            self.faces.push(Face {
-                plane,
-                half_edge: first,
-                tag: tags[k],
-            });
-            first_cap_edge[k] = first;
-            if side == Sign::Negative || keep.is_some() {
-                // The lower part (or the only part built) keeps the section
-                // vertices.
-                for (c, &(_, v)) in (first..).zip(&cap_edges) {
-                    self.vertices[v as usize].half_edge = c;
+impl Counts {
+    /// The counts of the faces in `relevant`.
+    #[inline]
+    fn of(relevant: &[(u32, FaceInfo)]) -> Self {
+        let mut counts = Counts::default();
+        for (_, info) in relevant {
+            match *info {
+                FaceInfo::Straddling { crossing, .. } => {
+                    counts.straddling += 1;
+                    counts.crossings += usize::from(crossing != u32::MAX);
                 }
-            } else {
-                // The upper part gets copies (sharing the exact point):
-                // rotate around each section
-                // vertex through the upper part's half-edges (now closed off
-                // by the cap) and re-point their origins.
-                for (c, &(_, v)) in (first..).zip(&cap_edges) {
-                    let copy = self.vertices.len() as u32;
-                    self.vertices.push(Vertex {
-                        point: self.vertices[v as usize].point,
-                        half_edge: c,
-                    });
-                    let mut h = c;
-                    loop {
-                        self.half_edges[h as usize].origin = copy;
-                        h = self.half_edges[self.half_edges[h as usize].twin as usize].next;
-                        if h == c {
-                            break;
+                FaceInfo::Touching { side, .. } => {
+                    counts.touching[usize::from(side == Sign::Positive)] += 1;
+                }
+            }
+        }
+        counts
+    }
+}
+
+/// The indices of the next half-edge and face the split writes.
+#[derive(Clone, Copy, Debug)]
+struct Next {
+    half_edge: u32,
+    face: u32,
+}
+
+/// Step 2 of the split, on the arrays grown to their final sizes: splits
+/// each straddling face of `relevant` (crossing edges split) between its
+/// two `0` vertices — the face keeps its `−` half and a new face gets the
+/// `+` half — or with `keep`, trims it to its half on that side; lists the
+/// section half-edges in `section` (those of touching faces above first,
+/// in the slots `section[1]` has for them).
+fn split_faces(
+    half_edges: &mut [HalfEdge],
+    faces: &mut [Face],
+    relevant: &[(u32, FaceInfo)],
+    keep: Option<Sign>,
+    section: &mut [Vec<u32>; 2],
+    next: &mut Next,
+) {
+    // `section[1]` holds a slot for each touching face above already.
+    let [below, above] = section;
+    let mut n_touching = 0;
+    for &(f, info) in relevant {
+        match info {
+            FaceInfo::Straddling {
+                enter, first_chain, ..
+            } => {
+                // The half-edges leaving the two `0` vertices.
+                let leave = enter.map(|e| half_edges[e as usize].next);
+                match keep {
+                    None => {
+                        let (kept, new) =
+                            split_face(half_edges, faces, f, enter, leave, first_chain, next);
+                        below.push(kept);
+                        above.push(new);
+                    }
+                    Some(side) => {
+                        // Listed where the two-sided split lists them, so
+                        // that the kept part comes out the same.
+                        let edge = next.half_edge;
+                        next.half_edge += 1;
+                        // The kept chain runs from zero k to zero 1 − k;
+                        // the new half-edge closes it, from zero 1 − k
+                        // back to zero k.
+                        let k = usize::from(first_chain != side);
+                        half_edges[edge as usize] = HalfEdge {
+                            origin: half_edges[leave[1 - k] as usize].origin,
+                            twin: u32::MAX,
+                            next: leave[k],
+                            face: f,
+                        };
+                        half_edges[enter[1 - k] as usize].next = edge;
+                        faces[f as usize].half_edge = edge;
+                        if side == Sign::Negative {
+                            below.push(edge);
+                        } else {
+                            above.push(edge);
                         }
                     }
                 }
             }
+            FaceInfo::Touching { side, edge } => {
+                if keep.is_none_or(|k| k == side) {
+                    if side == Sign::Positive {
+                        above[n_touching] = edge;
+                        n_touching += 1;
+                    } else {
+                        below.push(edge);
+                    }
+                }
+            }
         }
-        scratch.cap_edges = cap_edges;
-        first_cap_edge
+    }
+}
+
+/// Splits straddling face `f` along the segment between its two `0`
+/// vertices, entered by half-edges `enter` and left by `leave` in loop
+/// order: `f` keeps the `−` half and a new face gets the `+` half. Returns
+/// the new half-edge in `s` of each half, `f`'s first.
+#[inline]
+fn split_face(
+    half_edges: &mut [HalfEdge],
+    faces: &mut [Face],
+    f: u32,
+    enter: [u32; 2],
+    leave: [u32; 2],
+    first_chain: Sign,
+    next: &mut Next,
+) -> (u32, u32) {
+    let (z1, z2) = (
+        half_edges[leave[0] as usize].origin,
+        half_edges[leave[1] as usize].origin,
+    );
+    // Chain 0 runs from z1 to z2 (half-edges leave[0] … enter[1]), chain 1
+    // from z2 to z1; a: z2→z1 closes chain 0, b: z1→z2 closes chain 1.
+    // Twins are set when the caps are built.
+    let chain_0_positive = first_chain == Sign::Positive;
+    let (a, b) = (next.half_edge, next.half_edge + 1);
+    next.half_edge += 2;
+    let new_face = next.face;
+    next.face += 1;
+    let (face_0, face_1) = if chain_0_positive {
+        (new_face, f)
+    } else {
+        (f, new_face)
+    };
+    // The `+` chain moves to the new face (before the loop is cut).
+    let (start, end) = if chain_0_positive {
+        (leave[0], enter[1])
+    } else {
+        (leave[1], enter[0])
+    };
+    let mut h = start;
+    loop {
+        let e = &mut half_edges[h as usize];
+        e.face = new_face;
+        if h == end {
+            break;
+        }
+        h = e.next;
+    }
+    half_edges[a as usize] = HalfEdge {
+        origin: z2,
+        twin: u32::MAX,
+        next: leave[0],
+        face: face_0,
+    };
+    half_edges[b as usize] = HalfEdge {
+        origin: z1,
+        twin: u32::MAX,
+        next: leave[1],
+        face: face_1,
+    };
+    half_edges[enter[1] as usize].next = a;
+    half_edges[enter[0] as usize].next = b;
+    let (kept, new) = if chain_0_positive { (b, a) } else { (a, b) };
+    let face = faces[f as usize];
+    faces[new_face as usize] = Face {
+        half_edge: new,
+        ..face
+    };
+    faces[f as usize].half_edge = kept;
+    (kept, new)
+}
+
+/// Builds the cap face `cap` on the half-edges from `first` on, one per
+/// section half-edge of `section` (a closed loop): for `h` from `u` to
+/// `v`, the cap gets its twin from `v` to `u`, and cap half-edges chain by
+/// shared vertices. The part keeps the section vertices with
+/// `keeps_vertices`, else gets copies (appended to `vertices`, whose slots
+/// are there already), sharing their exact points.
+fn add_cap(
+    half_edges: &mut [HalfEdge],
+    vertices: &mut [Vertex],
+    starts: &mut StampMap<u32>,
+    section: &[u32],
+    cap: u32,
+    first: u32,
+    keeps_vertices: bool,
+) {
+    starts.clear();
+    let count = section.len() as u32;
+    for (c, &h) in (first..).zip(section) {
+        let e = half_edges[h as usize];
+        let v = half_edges[e.next as usize].origin;
+        half_edges[h as usize].twin = c;
+        starts.insert(v, c);
+        // `next` holds `u` until every start is known.
+        half_edges[c as usize] = HalfEdge {
+            origin: v,
+            twin: h,
+            next: e.origin,
+            face: cap,
+        };
+        if keeps_vertices {
+            vertices[v as usize].half_edge = c;
+        }
+    }
+    for c in first..first + count {
+        let e = &mut half_edges[c as usize];
+        e.next = starts.get(e.next).expect("the section is a closed loop");
+    }
+    if keeps_vertices {
+        return;
+    }
+    // The copies take the last slots, in the order of the cap: rotate
+    // around each section vertex through the upper part's half-edges (now
+    // closed off by the cap) and re-point their origins.
+    let copies = vertices.len() as u32 - count;
+    for (c, copy) in (first..first + count).zip(copies..) {
+        let v = half_edges[c as usize].origin;
+        vertices[copy as usize] = Vertex {
+            point: vertices[v as usize].point,
+            half_edge: c,
+        };
+        let mut h = c;
+        loop {
+            half_edges[h as usize].origin = copy;
+            h = half_edges[half_edges[h as usize].twin as usize].next;
+            if h == c {
+                break;
+            }
+        }
     }
 }
 
@@ -364,15 +495,4 @@ fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
         }
         relevant[j] = item;
     }
-}
-
-/// The two `0` vertices of a straddling face, in the order its loop from
-/// its stored half-edge meets them (crossing edges split).
-struct FaceZeros {
-    /// The half-edge of the face leaving each.
-    leave: [u32; 2],
-    /// The half-edge of the face entering each.
-    enter: [u32; 2],
-    /// The side of the vertices on the chain from the first to the second.
-    first_chain: Sign,
 }

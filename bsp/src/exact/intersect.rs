@@ -24,6 +24,12 @@
 //! are at most `2^126` ([`NARROW_BITS`]), plain `i128` arithmetic is exact and
 //! gives the same vertex, digit for digit, as the wide path.
 //!
+//! Between the two, when the minors and the offsets fit `i64` (`2bn + 1 ≤
+//! 63`, `bd ≤ 63`: normals below `2^31`, as those of tool planes built from
+//! micrometre coordinates), every product in `W` and `X, Y, Z` is a single
+//! `i64 × i64 → i128` product, summed in `i128` under the same bounds (the
+//! medium path); it gives the narrow path's values.
+//!
 //! When both bounds are at most `2^63` ([`SMALL_BITS`]), plain `i64` is
 //! exact (the minors too: `3bn + 3 ≤ 63` gives `2bn + 1 ≤ 41`), which is
 //! the case of planes with normals and offsets below `2^20`, or normals
@@ -46,6 +52,8 @@ const SMALL_BITS: u32 = 63;
 enum Path {
     /// `i64` throughout.
     Small,
+    /// `i64` minors and offsets, `i128` sums of their products.
+    Medium,
     /// `i128` throughout.
     Narrow,
     /// Digit sums into 192- and 256-bit values.
@@ -59,6 +67,12 @@ impl Path {
         let (w_bits, xyz_bits) = (3 * bn + 3, 2 * bn + bd + 3);
         if w_bits <= SMALL_BITS && xyz_bits <= SMALL_BITS {
             Path::Small
+        } else if 2 * bn < SMALL_BITS
+            && bd <= SMALL_BITS
+            && w_bits <= NARROW_BITS
+            && xyz_bits <= NARROW_BITS
+        {
+            Path::Medium
         } else if w_bits <= NARROW_BITS && xyz_bits <= NARROW_BITS {
             Path::Narrow
         } else {
@@ -67,8 +81,8 @@ impl Path {
     }
 }
 
-/// `u × v` for vectors with components below `2^20`; each component of the
-/// result is below `2^41`.
+/// `u × v` for vectors with components below `2^31`; each component of the
+/// result is below `2^63` (below `2^41` for components below `2^20`).
 #[inline(always)]
 fn cross_small(u: [i64; 3], v: [i64; 3]) -> [i64; 3] {
     [
@@ -100,6 +114,33 @@ fn intersect_small(n: [[i64; 3]; 3], d: [i64; 3]) -> Option<Point4> {
         Point4::from_small(x, y, z, w)
     } else {
         Point4::from_small(-x, -y, -z, -w)
+    })
+}
+
+/// [`intersect_3_planes`] for normals `n` and offsets `d` whose bit counts
+/// select [`Path::Medium`] (module docs): the minors `n_i × n_j` in `i64`
+/// (each product below `2^(2bn)`, each component below `2^(2bn+1) ≤
+/// 2^63`), then every product of a normal or offset with a minor as one
+/// `i64 × i64 → i128` product, with the sums below `2^126`.
+#[inline(always)]
+fn intersect_medium(n: [[i64; 3]; 3], d: [i64; 3]) -> Option<Point4> {
+    let [np, nq, nr] = n;
+    let c = [
+        cross_small(nq, nr),
+        cross_small(nr, np),
+        cross_small(np, nq),
+    ];
+    let w = mul(np[0], c[0][0]) + mul(np[1], c[0][1]) + mul(np[2], c[0][2]);
+    if w == 0 {
+        return None;
+    }
+    let coord =
+        |i: usize| -> i128 { -(mul(d[0], c[0][i]) + mul(d[1], c[1][i]) + mul(d[2], c[2][i])) };
+    let (x, y, z) = (coord(0), coord(1), coord(2));
+    Some(if w > 0 {
+        Point4::from_narrow(x, y, z, w)
+    } else {
+        Point4::from_narrow(-x, -y, -z, -w)
     })
 }
 
@@ -181,6 +222,10 @@ pub(crate) fn intersect_3_planes_with<R>(
     if path == Path::Small {
         // |d| < 2^(63 − 3 − 2bn): the conversions are exact.
         return intersect_small(n, d.map(|d| d as i64)).map(sink);
+    }
+    if path == Path::Medium {
+        // |d| < 2^63: the conversions are exact.
+        return intersect_medium(n, d.map(|d| d as i64)).map(sink);
     }
     let minors = minors(n);
     if path == Path::Narrow {
@@ -264,6 +309,55 @@ mod tests {
             }
         }
         assert!(narrow > 10_000);
+    }
+
+    /// The medium path gives the wide path's vertex, digit for digit, for
+    /// random planes over its whole range of normal bit counts, offsets up
+    /// to the largest it takes, and coefficients at their largest
+    /// magnitudes.
+    #[test]
+    fn medium_and_wide_paths_agree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        let mut medium = 0;
+        for _ in 0..40_000 {
+            let bn = rng.random_range(1..=31u32);
+            let bd_max = 63u32.min(NARROW_BITS - 3 - 2 * bn);
+            let bd = rng.random_range(1..=bd_max);
+            let extreme = rng.random_bool(0.1);
+            let n_max = (1i64 << bn) - 1;
+            let plane = |rng: &mut ChaCha8Rng| {
+                if extreme {
+                    let mut n = [n_max; 3];
+                    n[rng.random_range(0..3)] = rng.random_range(0..=n_max);
+                    signed_plane(rng, n, (1i128 << bd) - 1)
+                } else {
+                    let n = [0; 3].map(|_| rng.random_range(-n_max..=n_max));
+                    let d = rng.random_range(-(1i128 << bd) + 1..1i128 << bd);
+                    Plane::new(n[0], n[1], n[2], d).ok()
+                }
+            };
+            let (Some(p), Some(q), Some(r)) = (plane(&mut rng), plane(&mut rng), plane(&mut rng))
+            else {
+                continue;
+            };
+            let pbn = u32::from(p.normal_bits.max(q.normal_bits).max(r.normal_bits));
+            let pbd = u32::from(p.offset_bits.max(q.offset_bits).max(r.offset_bits));
+            if Path::for_bits(pbn, pbd) != Path::Medium {
+                continue;
+            }
+            let n = [p.normal(), q.normal(), r.normal()];
+            let (a, b) = (
+                intersect_3_planes(&p, &q, &r),
+                intersect_wide(n, [p.d, q.d, r.d], minors(n)),
+            );
+            assert_eq!(a.is_some(), b.is_some());
+            if let (Some(a), Some(b)) = (a, b) {
+                assert_eq!((a.xyz_digits, a.w_digits), (b.xyz_digits, b.w_digits));
+                assert_eq!(a.approx.map(f64::to_bits), b.approx.map(f64::to_bits));
+                medium += 1;
+            }
+        }
+        assert!(medium > 10_000, "{medium}");
     }
 
     /// A plane with normal components and offset of the given magnitudes
