@@ -105,23 +105,26 @@ impl Point4 {
     /// `w > 0`: the same digits and `f64`s as [`Point4::from_parts`] gives
     /// for these values (balanced digits are unique, and the `i128` to
     /// `f64` conversion rounds to nearest), without wide arithmetic.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn from_narrow(x: i128, y: i128, z: i128, w: i128) -> Self {
         debug_assert!(w > 0);
-        let digits = |v: i128| -> (i64, i64) {
+        // Written out rather than through `array::map`, which the compiler
+        // leaves as a call per array on this hot path (every new vertex).
+        let digits = |v: i128| -> [i64; 2] {
             debug_assert!(v.unsigned_abs() < 1 << 126);
             let (lo, hi) = split_balanced(v);
-            (lo, hi as i64)
+            [lo, hi as i64]
         };
-        let xyz = [x, y, z].map(|v| {
-            let (lo, hi) = digits(v);
-            [lo, hi, 0, 0]
-        });
-        let (w0, w1) = digits(w);
+        let ([x0, x1], [y0, y1], [z0, z1], [w0, w1]) = (digits(x), digits(y), digits(z), digits(w));
         Self {
-            xyz_digits: xyz,
+            xyz_digits: [[x0, x1, 0, 0], [y0, y1, 0, 0], [z0, z1, 0, 0]],
             w_digits: [w0, w1, 0],
-            approx: [x, y, z, w].map(narrow_to_f64),
+            approx: [
+                narrow_to_f64(x),
+                narrow_to_f64(y),
+                narrow_to_f64(z),
+                narrow_to_f64(w),
+            ],
         }
     }
 
@@ -184,7 +187,7 @@ impl Point4 {
 /// above, the leading 64 bits are kept with a sticky bit for the rest (9
 /// bits below the rounding position, so rounding is still correct) and
 /// scaled by an exact power of two.
-#[inline]
+#[inline(always)]
 fn narrow_to_f64(v: i128) -> f64 {
     if let Ok(small) = i64::try_from(v) {
         return small as f64;
