@@ -17,6 +17,8 @@
 //! ([`crate::mesh`]). A split whose one side is a leaf that would drop its
 //! piece builds only the other piece.
 
+use std::slice;
+
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
 use super::polygon::{Polygon, Sides, faces_along, side_of, spare_buffers};
@@ -73,6 +75,13 @@ impl BoundaryFace {
     }
 }
 
+/// Room reserved for the faces of one cell and the corners of one face:
+/// more than most have.
+const FEW_FACES: usize = 32;
+
+/// Room reserved per cell for its faces: more than most have.
+const FACES_PER_CELL: usize = 8;
+
 /// Whether [`Bsp::boundary_of_cells`] reports the faces on the bounds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Bounds {
@@ -101,26 +110,23 @@ impl Bsp {
         cells: &[Cell],
         bounds: Bounds,
     ) -> Vec<BoundaryFace> {
-        let mut out = Vec::new();
-        let mut stack = Vec::new();
-        let mut sides = Vec::new();
-        let mut faces = Vec::new();
-        for cell in cells {
-            if cell.label == EMPTY {
-                continue;
-            }
+        // The faces of the solid cells are gathered first: their number
+        // bounds the pieces kept in nearly every case (most faces are kept
+        // whole or dropped, few are split), so `out` rarely grows.
+        let mut faces = Vec::with_capacity(FEW_FACES);
+        let mut solid_faces: Vec<(Label, u32)> = Vec::with_capacity(FACES_PER_CELL * cells.len());
+        for cell in cells.iter().filter(|c| c.label != EMPTY) {
             arena.faces_of_into(cell.poly, &mut faces);
-            for &f in &faces {
-                if arena.faces()[f as usize].tag != NO_TAG {
-                    self.clip_cell_face(arena, f, cell.label, &mut sides, &mut stack, &mut out);
-                } else if bounds == Bounds::Keep {
-                    out.push(BoundaryFace::new(
-                        cell_face(arena, f),
-                        cell.label,
-                        EMPTY,
-                        true,
-                    ));
-                }
+            solid_faces.extend(faces.iter().map(|&f| (cell.label, f)));
+        }
+        let mut out = Vec::with_capacity(solid_faces.len());
+        let mut stack = Vec::new();
+        let mut sides = Vec::with_capacity(FEW_FACES);
+        for &(label, f) in &solid_faces {
+            if arena.faces()[f as usize].tag != NO_TAG {
+                self.clip_cell_face(arena, f, label, &mut sides, &mut stack, &mut out);
+            } else if bounds == Bounds::Keep {
+                out.push(BoundaryFace::new(cell_face(arena, f), label, EMPTY, true));
             }
         }
         out
@@ -336,8 +342,10 @@ fn cell_face(arena: &ConvexArena, f: u32) -> Polygon {
     for h in arena.face_loop(f) {
         let half = arena.half_edges()[h as usize];
         let across = arena.half_edges()[half.twin as usize].face;
-        edges.push(*arena.face_plane(across));
-        corners.push(*arena.point(half.origin));
+        // Copied straight from the arena into the buffers: a `push` would
+        // first copy each value to the stack.
+        edges.extend_from_slice(slice::from_ref(arena.face_plane(across)));
+        corners.extend_from_slice(slice::from_ref(arena.point(half.origin)));
     }
     Polygon::with_corners(*arena.face_plane(f), edges, corners)
 }
