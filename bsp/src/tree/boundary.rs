@@ -82,6 +82,16 @@ const FEW_FACES: usize = 32;
 /// Room reserved per cell for its faces: more than most have.
 const FACES_PER_CELL: usize = 8;
 
+/// Working memory of [`Bsp::clip_cell_face`], reused from face to face.
+struct FaceWork {
+    /// The sides of the face's corners of the plane it is tested against.
+    sides: Vec<Sign>,
+    /// The face's half-edges, in order (half-edge `k` leaves corner `k`).
+    halves: Vec<u32>,
+    /// The pieces still to clip, with the node each has reached.
+    stack: Vec<(NodeId, Polygon)>,
+}
+
 /// Whether [`Bsp::boundary_of_cells`] reports the faces on the bounds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Bounds {
@@ -120,11 +130,14 @@ impl Bsp {
             solid_faces.extend(faces.iter().map(|&f| (cell.label, f)));
         }
         let mut out = Vec::with_capacity(solid_faces.len());
-        let mut stack = Vec::new();
-        let mut sides = Vec::with_capacity(FEW_FACES);
+        let mut work = FaceWork {
+            sides: Vec::with_capacity(FEW_FACES),
+            halves: Vec::with_capacity(FEW_FACES),
+            stack: Vec::new(),
+        };
         for &(label, f) in &solid_faces {
             if arena.faces()[f as usize].tag != NO_TAG {
-                self.clip_cell_face(arena, f, label, &mut sides, &mut stack, &mut out);
+                self.clip_cell_face(arena, f, label, &mut work, &mut out);
             } else if bounds == Bounds::Keep {
                 out.push(BoundaryFace::new(cell_face(arena, f), label, EMPTY, true));
             }
@@ -142,10 +155,14 @@ impl Bsp {
         arena: &ConvexArena,
         f: u32,
         label: Label,
-        sides: &mut Vec<Sign>,
-        stack: &mut Vec<(NodeId, Polygon)>,
+        work: &mut FaceWork,
         out: &mut Vec<BoundaryFace>,
     ) {
+        let FaceWork {
+            sides,
+            halves,
+            stack,
+        } = work;
         let face = &arena.faces()[f as usize];
         let mut n = face.tag;
         loop {
@@ -163,6 +180,7 @@ impl Bsp {
                 } => {
                     let p = &self.planes()[plane as usize];
                     sides.clear();
+                    halves.clear();
                     let (mut neg, mut pos) = (false, false);
                     for h in arena.face_loop(f) {
                         let origin = arena.half_edges()[h as usize].origin;
@@ -170,24 +188,28 @@ impl Bsp {
                         neg |= side == Sign::Negative;
                         pos |= side == Sign::Positive;
                         sides.push(side);
+                        halves.push(h);
                     }
                     // The choices of [`Polygon::split`].
                     n = match (neg, pos) {
                         (true, true) => {
-                            let face = cell_face(arena, f);
-                            let (b, a) = match self.wanted(label, below, above) {
-                                [true, true] => {
-                                    let (b, a) = face.split_straddling(sides, p);
-                                    (Some(b), Some(a))
-                                }
-                                [true, false] => {
-                                    (Some(face.one_part(sides, p, Sign::Negative)), None)
-                                }
-                                [false, true] => {
-                                    (None, Some(face.one_part(sides, p, Sign::Positive)))
-                                }
-                                [false, false] => return,
-                            };
+                            let wanted = self.wanted(label, below, above);
+                            if wanted == [false, false] {
+                                return;
+                            }
+                            // Only the wanted parts are built, from the
+                            // arena: the face is never copied whole.
+                            let half = |k: usize| arena.half_edges()[halves[k] as usize];
+                            let (b, a) = Polygon::parts_of(
+                                arena.face_plane(f),
+                                |k| {
+                                    arena.face_plane(arena.half_edges()[half(k).twin as usize].face)
+                                },
+                                |k| arena.point(half(k).origin),
+                                sides,
+                                p,
+                                wanted,
+                            );
                             let mut keep = |piece, other| {
                                 if other < label {
                                     out.push(BoundaryFace::new(piece, label, other, false));
