@@ -99,13 +99,21 @@ struct Builder {
     sides: Vec<Sign>,
 }
 
+/// Room reserved in a new builder for planes (twice as many nodes) and
+/// for the corners of a face: the tree's vectors then skip their smallest
+/// sizes, which nearly every rebuild outgrows, and end with the capacity
+/// they would have grown to.
+const FIRST_PLANES: usize = 8;
+
 impl Default for Builder {
     fn default() -> Self {
+        let mut nodes = Vec::with_capacity(2 * FIRST_PLANES);
+        nodes.push(Node::Leaf(EMPTY));
         Self {
-            planes: Vec::new(),
-            nodes: vec![Node::Leaf(EMPTY)],
+            planes: Vec::with_capacity(FIRST_PLANES),
+            nodes,
             stack: Vec::new(),
-            sides: Vec::new(),
+            sides: Vec::with_capacity(2 * FIRST_PLANES),
         }
     }
 }
