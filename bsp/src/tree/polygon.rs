@@ -21,6 +21,11 @@ use crate::exact::{
 /// working memory.
 const SMALL: usize = 32;
 
+/// Polygons with at most this many corners are laid out for a split in
+/// working memory on the stack: few polygons have more, and a larger
+/// buffer costs its filling at every split.
+const FEW_CORNERS: usize = 12;
+
 /// A convex polygon in plane-based form, with its corners computed once
 /// (a split computes only the corners it creates).
 #[derive(Clone, Debug)]
@@ -261,8 +266,8 @@ impl Polygon {
     /// rewritten in place when it fits.
     pub(crate) fn one_part(mut self, sides: &[Sign], p: &Plane, keep: Sign) -> Self {
         let n = self.edges.len();
-        let (mut stack, mut heap) = ([NONE; 2 * SMALL], Vec::new());
-        let buffer: &mut [u32] = if n <= SMALL {
+        let (mut stack, mut heap) = ([NONE; 2 * FEW_CORNERS], Vec::new());
+        let buffer: &mut [u32] = if n <= FEW_CORNERS {
             &mut stack
         } else {
             heap.resize(2 * n, NONE);
@@ -300,8 +305,8 @@ impl Polygon {
         wanted: [bool; 2],
     ) -> (Option<Self>, Option<Self>) {
         let n = sides.len();
-        let (mut stack, mut heap) = ([NONE; 4 * SMALL], Vec::new());
-        let buffer: &mut [u32] = if n <= SMALL {
+        let (mut stack, mut heap) = ([NONE; 4 * FEW_CORNERS], Vec::new());
+        let buffer: &mut [u32] = if n <= FEW_CORNERS {
             &mut stack
         } else {
             heap.resize(4 * n, NONE);
@@ -360,8 +365,8 @@ impl Polygon {
         // The layout of each part: the original index of each of its edges
         // (NONE for the closing one). At most 2n entries each (n + 1 for a
         // convex polygon).
-        let (mut stack, mut heap) = ([NONE; 4 * SMALL], Vec::new());
-        let buffer: &mut [u32] = if n <= SMALL {
+        let (mut stack, mut heap) = ([NONE; 4 * FEW_CORNERS], Vec::new());
+        let buffer: &mut [u32] = if n <= FEW_CORNERS {
             &mut stack
         } else {
             heap.resize(4 * n, NONE);
