@@ -17,6 +17,8 @@
 //! ([`crate::mesh`]). A split whose one side is a leaf that would drop its
 //! piece builds only the other piece.
 
+use std::slice;
+
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::Cell;
 use super::polygon::{Polygon, Sides, faces_along, side_of, spare_buffers};
@@ -73,6 +75,23 @@ impl BoundaryFace {
     }
 }
 
+/// Room reserved for the faces of one cell and the corners of one face:
+/// more than most have.
+const FEW_FACES: usize = 32;
+
+/// Room reserved per cell for its faces: more than most have.
+const FACES_PER_CELL: usize = 8;
+
+/// Working memory of [`Bsp::clip_cell_face`], reused from face to face.
+struct FaceWork {
+    /// The sides of the face's corners of the plane it is tested against.
+    sides: Vec<Sign>,
+    /// The face's half-edges, in order (half-edge `k` leaves corner `k`).
+    halves: Vec<u32>,
+    /// The pieces still to clip, with the node each has reached.
+    stack: Vec<(NodeId, Polygon)>,
+}
+
 /// Whether [`Bsp::boundary_of_cells`] reports the faces on the bounds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Bounds {
@@ -101,26 +120,26 @@ impl Bsp {
         cells: &[Cell],
         bounds: Bounds,
     ) -> Vec<BoundaryFace> {
-        let mut out = Vec::new();
-        let mut stack = Vec::new();
-        let mut sides = Vec::new();
-        let mut faces = Vec::new();
-        for cell in cells {
-            if cell.label == EMPTY {
-                continue;
-            }
+        // The faces of the solid cells are gathered first: their number
+        // bounds the pieces kept in nearly every case (most faces are kept
+        // whole or dropped, few are split), so `out` rarely grows.
+        let mut faces = Vec::with_capacity(FEW_FACES);
+        let mut solid_faces: Vec<(Label, u32)> = Vec::with_capacity(FACES_PER_CELL * cells.len());
+        for cell in cells.iter().filter(|c| c.label != EMPTY) {
             arena.faces_of_into(cell.poly, &mut faces);
-            for &f in &faces {
-                if arena.faces()[f as usize].tag != NO_TAG {
-                    self.clip_cell_face(arena, f, cell.label, &mut sides, &mut stack, &mut out);
-                } else if bounds == Bounds::Keep {
-                    out.push(BoundaryFace::new(
-                        cell_face(arena, f),
-                        cell.label,
-                        EMPTY,
-                        true,
-                    ));
-                }
+            solid_faces.extend(faces.iter().map(|&f| (cell.label, f)));
+        }
+        let mut out = Vec::with_capacity(solid_faces.len());
+        let mut work = FaceWork {
+            sides: Vec::with_capacity(FEW_FACES),
+            halves: Vec::with_capacity(FEW_FACES),
+            stack: Vec::new(),
+        };
+        for &(label, f) in &solid_faces {
+            if arena.faces()[f as usize].tag != NO_TAG {
+                self.clip_cell_face(arena, f, label, &mut work, &mut out);
+            } else if bounds == Bounds::Keep {
+                out.push(BoundaryFace::new(cell_face(arena, f), label, EMPTY, true));
             }
         }
         out
@@ -136,10 +155,14 @@ impl Bsp {
         arena: &ConvexArena,
         f: u32,
         label: Label,
-        sides: &mut Vec<Sign>,
-        stack: &mut Vec<(NodeId, Polygon)>,
+        work: &mut FaceWork,
         out: &mut Vec<BoundaryFace>,
     ) {
+        let FaceWork {
+            sides,
+            halves,
+            stack,
+        } = work;
         let face = &arena.faces()[f as usize];
         let mut n = face.tag;
         loop {
@@ -157,6 +180,7 @@ impl Bsp {
                 } => {
                     let p = &self.planes()[plane as usize];
                     sides.clear();
+                    halves.clear();
                     let (mut neg, mut pos) = (false, false);
                     for h in arena.face_loop(f) {
                         let origin = arena.half_edges()[h as usize].origin;
@@ -164,24 +188,28 @@ impl Bsp {
                         neg |= side == Sign::Negative;
                         pos |= side == Sign::Positive;
                         sides.push(side);
+                        halves.push(h);
                     }
                     // The choices of [`Polygon::split`].
                     n = match (neg, pos) {
                         (true, true) => {
-                            let face = cell_face(arena, f);
-                            let (b, a) = match self.wanted(label, below, above) {
-                                [true, true] => {
-                                    let (b, a) = face.split_straddling(sides, p);
-                                    (Some(b), Some(a))
-                                }
-                                [true, false] => {
-                                    (Some(face.one_part(sides, p, Sign::Negative)), None)
-                                }
-                                [false, true] => {
-                                    (None, Some(face.one_part(sides, p, Sign::Positive)))
-                                }
-                                [false, false] => return,
-                            };
+                            let wanted = self.wanted(label, below, above);
+                            if wanted == [false, false] {
+                                return;
+                            }
+                            // Only the wanted parts are built, from the
+                            // arena: the face is never copied whole.
+                            let half = |k: usize| arena.half_edges()[halves[k] as usize];
+                            let (b, a) = Polygon::parts_of(
+                                arena.face_plane(f),
+                                |k| {
+                                    arena.face_plane(arena.half_edges()[half(k).twin as usize].face)
+                                },
+                                |k| arena.point(half(k).origin),
+                                sides,
+                                p,
+                                wanted,
+                            );
                             let mut keep = |piece, other| {
                                 if other < label {
                                     out.push(BoundaryFace::new(piece, label, other, false));
@@ -336,8 +364,10 @@ fn cell_face(arena: &ConvexArena, f: u32) -> Polygon {
     for h in arena.face_loop(f) {
         let half = arena.half_edges()[h as usize];
         let across = arena.half_edges()[half.twin as usize].face;
-        edges.push(*arena.face_plane(across));
-        corners.push(*arena.point(half.origin));
+        // Copied straight from the arena into the buffers: a `push` would
+        // first copy each value to the stack.
+        edges.extend_from_slice(slice::from_ref(arena.face_plane(across)));
+        corners.extend_from_slice(slice::from_ref(arena.point(half.origin)));
     }
     Polygon::with_corners(*arena.face_plane(f), edges, corners)
 }

@@ -10,9 +10,9 @@
 
 use super::boundary::BoundaryFace;
 use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
-use super::polygon::{Polygon, classify_polygon_corners};
+use super::polygon::{Polygon, Sides, classify_polygon_corners};
 use crate::Error;
-use crate::exact::{IntPoint, Plane, Sign};
+use crate::exact::{IntPoint, Plane};
 
 /// Deterministic shuffle (xorshift64*), so imports are reproducible.
 fn shuffle<T>(items: &mut [T], seed: u64) {
@@ -96,16 +96,23 @@ struct Builder {
     planes: Vec<Plane>,
     nodes: Vec<Node>,
     stack: Vec<(NodeId, Polygon)>,
-    sides: Vec<Sign>,
+    sides: Sides,
 }
+
+/// Room reserved in a new builder for planes (twice as many nodes): the
+/// tree's vectors then skip their smallest sizes, which nearly every
+/// rebuild outgrows, and end with the capacity they would have grown to.
+const FIRST_PLANES: usize = 8;
 
 impl Default for Builder {
     fn default() -> Self {
+        let mut nodes = Vec::with_capacity(2 * FIRST_PLANES);
+        nodes.push(Node::Leaf(EMPTY));
         Self {
-            planes: Vec::new(),
-            nodes: vec![Node::Leaf(EMPTY)],
+            planes: Vec::with_capacity(FIRST_PLANES),
+            nodes,
             stack: Vec::new(),
-            sides: Vec::new(),
+            sides: Sides::default(),
         }
     }
 }
@@ -140,9 +147,7 @@ impl Builder {
                     above,
                 } => {
                     let p = &self.planes[plane as usize];
-                    self.sides.clear();
-                    self.sides.resize(face.vertices.len(), Sign::Zero);
-                    let sides = &mut self.sides;
+                    let sides = self.sides.for_corners(face.vertices.len());
                     n = match classify_polygon_corners(
                         &face.plane,
                         &face.edges,
@@ -217,8 +222,7 @@ impl Builder {
                     above,
                 } => {
                     let p = &planes[plane as usize];
-                    sides.clear();
-                    sides.resize(polygon.vertices().len(), Sign::Zero);
+                    let sides = sides.for_corners(polygon.vertices().len());
                     let (support, edges) = (&polygon.support, &polygon.edges);
                     match classify_polygon_corners(support, edges, polygon.vertices(), p, sides) {
                         (false, false) => {} // in the plane: already represented

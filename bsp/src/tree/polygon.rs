@@ -9,6 +9,7 @@
 
 use std::cell::RefCell;
 use std::mem;
+use std::slice;
 
 use crate::Error;
 use crate::exact::{
@@ -19,6 +20,11 @@ use crate::exact::{
 /// Polygons with at most this many corners are split without allocating
 /// working memory.
 const SMALL: usize = 32;
+
+/// Polygons with at most this many corners are laid out for a split in
+/// working memory on the stack: few polygons have more, and a larger
+/// buffer costs its filling at every split.
+const FEW_CORNERS: usize = 12;
 
 /// A convex polygon in plane-based form, with its corners computed once
 /// (a split computes only the corners it creates).
@@ -260,8 +266,8 @@ impl Polygon {
     /// rewritten in place when it fits.
     pub(crate) fn one_part(mut self, sides: &[Sign], p: &Plane, keep: Sign) -> Self {
         let n = self.edges.len();
-        let (mut stack, mut heap) = ([NONE; 2 * SMALL], Vec::new());
-        let buffer: &mut [u32] = if n <= SMALL {
+        let (mut stack, mut heap) = ([NONE; 2 * FEW_CORNERS], Vec::new());
+        let buffer: &mut [u32] = if n <= FEW_CORNERS {
             &mut stack
         } else {
             heap.resize(2 * n, NONE);
@@ -282,6 +288,73 @@ impl Polygon {
         }
     }
 
+    /// The parts `wanted` (below, above) of the polygon with support
+    /// `support`, edge planes `edge(k)` and corners `corner(k)` for `k` in
+    /// `0..sides.len()`, which has corners on both sides of `p` (`sides` as
+    /// [`Self::whole_side`] writes them): the parts [`Self::split_known`]
+    /// gives, built straight from where the polygon lies (such as a face
+    /// read in place in a convex arena) instead of from a copy of it that
+    /// would be cut down. A corner on `p` that both parts have is computed
+    /// once.
+    pub(crate) fn parts_of<'a>(
+        support: &Plane,
+        edge: impl Fn(usize) -> &'a Plane,
+        corner: impl Fn(usize) -> &'a Point4,
+        sides: &[Sign],
+        p: &Plane,
+        wanted: [bool; 2],
+    ) -> (Option<Self>, Option<Self>) {
+        let n = sides.len();
+        let (mut stack, mut heap) = ([NONE; 4 * FEW_CORNERS], Vec::new());
+        let buffer: &mut [u32] = if n <= FEW_CORNERS {
+            &mut stack
+        } else {
+            heap.resize(4 * n, NONE);
+            &mut heap
+        };
+        let (low, high) = buffer.split_at_mut(2 * n);
+        let build = |origin: &[u32], closing: &Plane, other: Option<Other<'_>>| {
+            let plane = |o: u32| match o {
+                NONE => closing,
+                o => edge(o as usize),
+            };
+            let m = origin.len();
+            let (mut edges, mut corners) = spare_buffers(m);
+            for &o in origin {
+                edges.extend_from_slice(slice::from_ref(plane(o)));
+            }
+            for j in 0..m {
+                let (prev, o) = (origin[(j + m - 1) % m], origin[j]);
+                match reused_corner(prev, o, n) {
+                    Some(k) => corners.extend_from_slice(slice::from_ref(corner(k))),
+                    None => corners.push(new_corner(
+                        support,
+                        (prev, plane(prev)),
+                        (o, plane(o)),
+                        other,
+                    )),
+                }
+            }
+            Self {
+                support: *support,
+                edges,
+                corners,
+            }
+        };
+        let below = wanted[0].then(|| {
+            let m = layout(sides, Sign::Negative, low);
+            build(&low[..m], p, None)
+        });
+        let above = wanted[1].then(|| {
+            let m = layout(sides, Sign::Positive, high);
+            let other = below
+                .as_ref()
+                .map(|b| (&low[..b.corners.len()], &b.corners[..]));
+            build(&high[..m], &p.flipped(), other)
+        });
+        (below, above)
+    }
+
     /// The parts below and above `p` of a polygon with corners on both
     /// sides (`sides` as [`classify_polygon_corners`] gives them): the same as
     /// [`Self::part`] on each side, but each corner on `p` that both parts
@@ -292,8 +365,8 @@ impl Polygon {
         // The layout of each part: the original index of each of its edges
         // (NONE for the closing one). At most 2n entries each (n + 1 for a
         // convex polygon).
-        let (mut stack, mut heap) = ([NONE; 4 * SMALL], Vec::new());
-        let buffer: &mut [u32] = if n <= SMALL {
+        let (mut stack, mut heap) = ([NONE; 4 * FEW_CORNERS], Vec::new());
+        let buffer: &mut [u32] = if n <= FEW_CORNERS {
             &mut stack
         } else {
             heap.resize(4 * n, NONE);
@@ -824,6 +897,64 @@ mod tests {
             }
         }
         assert!(checked > 3000, "only {checked} corners checked");
+    }
+
+    /// [`Polygon::parts_of`] a polygon read in place gives the parts
+    /// [`Polygon::split_known`] gives, plane for plane and corner for
+    /// corner, for every choice of wanted parts, for the parts of repeated
+    /// splits cut by random planes (some through corners).
+    #[test]
+    fn parts_of_agree_with_split_known() {
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        let same = |a: &Option<Polygon>, b: &Option<Polygon>| match (a, b) {
+            (Some(a), Some(b)) => {
+                a.support == b.support
+                    && a.edges == b.edges
+                    && a.corners.len() == b.corners.len()
+                    && a.corners
+                        .iter()
+                        .zip(&b.corners)
+                        .all(|(x, y)| same_digits(x, y))
+            }
+            (None, None) => true,
+            _ => false,
+        };
+        let mut checked = 0;
+        for _ in 0..200 {
+            let corners = [0; 3].map(|_| random_point(&mut rng));
+            let Some(triangle) = Polygon::triangle(corners).expect("in budget") else {
+                continue;
+            };
+            let (pieces, _) = split_repeatedly(&mut rng, triangle, corners, 4, 2);
+            for piece in &pieces {
+                let x = if rng.random_range(0..3) == 0 {
+                    corners[rng.random_range(0..3)]
+                } else {
+                    random_point(&mut rng)
+                };
+                let Some(p) = plane_through(&mut rng, x) else {
+                    continue;
+                };
+                let mut sides = vec![Sign::Zero; piece.vertices().len()];
+                if piece.whole_side(&p, &mut sides).is_some() {
+                    continue;
+                }
+                for wanted in [[true, true], [true, false], [false, true], [false, false]] {
+                    let direct = Polygon::parts_of(
+                        &piece.support,
+                        |k| &piece.edges[k],
+                        |k| &piece.corners[k],
+                        &sides,
+                        &p,
+                        wanted,
+                    );
+                    let split = piece.clone().split_known(&sides, &p, wanted);
+                    assert!(same(&direct.0, &split.0) && same(&direct.1, &split.1));
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 500, "only {checked} splits checked");
     }
 
     /// [`Polygon::whole_side`] and [`Polygon::side_of_plane`] agree with
