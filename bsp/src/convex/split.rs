@@ -487,6 +487,11 @@ fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
         return;
     }
     for i in 1..relevant.len() {
+        // An entry above its predecessor stays where it is: only the keys
+        // are read, not the whole entry.
+        if relevant[i - 1].0 < relevant[i].0 {
+            continue;
+        }
         let item = relevant[i];
         let mut j = i;
         while j > 0 && relevant[j - 1].0 > item.0 {
