@@ -23,7 +23,7 @@
 //! no vertices, and the faces of the other part are not split.
 
 use super::mesh::{ConvexArena, PolyId};
-use super::scratch::Scratch;
+use super::scratch::{Scratch, StampMap};
 use super::survey::{FaceSurvey, SectionExit};
 use crate::exact::{FilteredDot, Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
 
@@ -234,9 +234,16 @@ impl ConvexArena {
     /// The side of vertex `v`, classified once per operation.
     #[inline]
     pub(super) fn side(&self, v: u32, s: &Plane, scratch: &mut Scratch) -> Sign {
-        scratch.sides.get(v).unwrap_or_else(|| {
+        self.side_in(v, s, &mut scratch.sides)
+    }
+
+    /// [`ConvexArena::side`] with the map of sides alone, for callers that
+    /// hold other parts of the scratch space at the same time.
+    #[inline]
+    pub(super) fn side_in(&self, v: u32, s: &Plane, sides: &mut StampMap<Sign>) -> Sign {
+        sides.get(v).unwrap_or_else(|| {
             let side = classify_vertex(self.point(v), s);
-            scratch.sides.insert(v, side);
+            sides.insert(v, side);
             side
         })
     }
@@ -355,18 +362,28 @@ impl ConvexArena {
     /// only as far as the section's other end on it
     /// (`survey_from_crossing`); the others all around.
     fn march(&self, seed: Seed, s: &Plane, scratch: &mut Scratch) {
-        let mut queue = std::mem::take(&mut scratch.queue);
-        let mut relevant = std::mem::take(&mut scratch.relevant);
-        let mut on_plane = std::mem::take(&mut scratch.on_plane);
+        // The parts of the scratch space are borrowed apart, in place.
+        let Scratch {
+            sides,
+            faces,
+            vertices,
+            queue,
+            relevant,
+            on_plane,
+            ..
+        } = scratch;
         queue.clear();
         relevant.clear();
         // Queue entries: a face and the crossing half-edge it is entered
         // by, or `u32::MAX` to walk it all around.
-        let around = |v: u32, queue: &mut Vec<(u32, u32)>, scratch: &mut Scratch| {
-            if scratch.vertices.insert(v, true) {
+        let around = |v: u32,
+                      queue: &mut Vec<(u32, u32)>,
+                      vertices: &mut StampMap<bool>,
+                      faces: &mut StampMap<bool>| {
+            if vertices.insert(v, true) {
                 for h in self.outgoing(v) {
                     let f = self.half_edges[h as usize].face;
-                    if scratch.faces.insert(f, true) {
+                    if faces.insert(f, true) {
                         queue.push((f, u32::MAX));
                     }
                 }
@@ -381,9 +398,9 @@ impl ConvexArena {
         // it by then through the other end of the section on it.
         let mut deferred = None;
         match seed {
-            Seed::Vertex(v) => around(v, &mut queue, scratch),
+            Seed::Vertex(v) => around(v, queue, vertices, faces),
             Seed::Edge(h) => {
-                scratch.faces.insert(self.half_edges[h as usize].face, true);
+                faces.insert(self.half_edges[h as usize].face, true);
                 queue.push((self.half_edges[h as usize].face, h));
                 deferred = Some(self.half_edges[h as usize].twin);
             }
@@ -394,7 +411,7 @@ impl ConvexArena {
                 None => match deferred.take() {
                     Some(t) => {
                         let g = self.half_edges[t as usize].face;
-                        if !scratch.faces.insert(g, true) {
+                        if !faces.insert(g, true) {
                             continue;
                         }
                         (g, t)
@@ -407,18 +424,18 @@ impl ConvexArena {
                 // edges, straight on (what the queue would give next).
                 let (mut f, mut entry) = (f, entry);
                 loop {
-                    let (info, exit) = self.survey_from_crossing(f, entry, s, scratch);
+                    let (info, exit) = self.survey_from_crossing(f, entry, s, sides);
                     relevant.push((f, info));
                     match exit {
                         SectionExit::Crossing(y) => {
                             let t = self.half_edges[y as usize].twin;
                             let g = self.half_edges[t as usize].face;
-                            if scratch.faces.insert(g, true) {
+                            if faces.insert(g, true) {
                                 (f, entry) = (g, t);
                                 continue;
                             }
                         }
-                        SectionExit::Vertex(z) => around(z, &mut queue, scratch),
+                        SectionExit::Vertex(z) => around(z, queue, vertices, faces),
                     }
                     break;
                 }
@@ -431,7 +448,7 @@ impl ConvexArena {
             on_plane.clear();
             let first = self.faces[f as usize].half_edge;
             let mut e = self.half_edges[first as usize];
-            let first_side = self.side(e.origin, s, scratch);
+            let first_side = self.side_in(e.origin, s, sides);
             let mut survey = FaceSurvey::new();
             let (mut h, mut before, mut here) = (first, u32::MAX, first_side);
             loop {
@@ -440,7 +457,7 @@ impl ConvexArena {
                 let there = if e.next == first {
                     first_side
                 } else {
-                    self.side(next.origin, s, scratch)
+                    self.side_in(next.origin, s, sides)
                 };
                 // Runs along one side (most half-edges) need nothing more.
                 if here != there || here == Sign::Zero {
@@ -450,7 +467,7 @@ impl ConvexArena {
                         // A crossing edge or an edge in s: f meets the
                         // section, so the march goes on across it.
                         let g = self.half_edges[e.twin as usize].face;
-                        if scratch.faces.insert(g, true) {
+                        if faces.insert(g, true) {
                             queue.push((g, if crossing { e.twin } else { u32::MAX }));
                         }
                     }
@@ -469,13 +486,10 @@ impl ConvexArena {
             relevant.push((f, info));
             // Around its vertices on s, now that f is known to meet the
             // section (a face touching s at one vertex only does not).
-            for &v in &on_plane {
-                around(v, &mut queue, scratch);
+            for &v in on_plane.iter() {
+                around(v, queue, vertices, faces);
             }
         }
-        scratch.on_plane = on_plane;
-        scratch.queue = queue;
-        scratch.relevant = relevant;
     }
 }
 

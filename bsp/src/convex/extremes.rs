@@ -133,6 +133,24 @@ impl Extremes {
         (below, above)
     }
 
+    /// The directions whose `e_i` the filter places strictly on side
+    /// `side` of `s`: that mask of [`Extremes::sides`] alone, for a cut
+    /// that keeps one part.
+    #[inline]
+    fn strictly_on(&self, s: &Plane, side: Sign) -> u16 {
+        let [a, b, c, d] = s.approx;
+        let scale = ((a.abs() + b.abs()) + (c.abs() + d.abs())) * (FILTER_EPSILON * 1.01);
+        let [xs, ys, zs, ws, ms] = &self.approx;
+        let flip = if side == Sign::Negative { -1.0 } else { 1.0 };
+        let mut mask = 0u16;
+        for i in 0..DIRECTIONS {
+            let sum = (xs[i] * a + ys[i] * b) + (zs[i] * c + ws[i] * d);
+            // `sum < −bound` is `−sum > bound`: negating is exact.
+            mask |= u16::from(flip * sum > ms[i] * scale) << i;
+        }
+        mask
+    }
+
     /// Records `v`, with homogeneous `f64` coordinates `p`, as `e_i`.
     #[inline]
     fn set(&mut self, i: usize, v: u32, p: [f64; 4]) {
@@ -267,17 +285,15 @@ impl ConvexArena {
             return;
         }
         // A part that lost all its extremes is searched whole.
-        let (below, above) = if marks.has_current {
-            marks.sides(s)
-        } else {
-            (0, 0)
+        marks.valid = match (marks.has_current, keep) {
+            (false, _) => [0, 0],
+            (true, None) => {
+                let (below, above) = marks.sides(s);
+                [below, above]
+            }
+            (true, Some(side)) => [marks.strictly_on(s, side), 0],
         };
         marks.parts = parts;
-        marks.valid = match keep {
-            None => [below, above],
-            Some(Sign::Positive) => [above, 0],
-            Some(_) => [below, 0],
-        };
     }
 }
 

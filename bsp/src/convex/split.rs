@@ -38,10 +38,12 @@ impl ConvexArena {
         tags: [u32; 2],
         keep: Option<Sign>,
     ) -> [u32; 2] {
-        let mut relevant = std::mem::take(&mut scratch.relevant);
+        // The scratch lists are borrowed in place (they are apart from the
+        // arena's arrays), not taken out and put back.
         // Sorted, so the result does not depend on how the faces were found.
-        sort_by_face(&mut relevant);
-        let counts = Counts::of(&relevant);
+        sort_by_face(&mut scratch.relevant);
+        let relevant = &scratch.relevant;
+        let counts = Counts::of(relevant);
         let two_sided = keep.is_none();
         let built = [
             keep.is_none_or(|k| k == Sign::Negative),
@@ -90,12 +92,12 @@ impl ConvexArena {
             },
         );
         // 1. Split crossing edges.
-        self.split_edges(&relevant, counts.crossings, s, h0 as u32, v0 as u32);
+        self.split_edges(relevant, counts.crossings, s, h0 as u32, v0 as u32);
         // 2. Split (or trim) straddling faces, listing the section edges of
         // each part: `section[0]` in face order, `section[1]` the touching
         // faces' first, then those of the new faces.
-        let mut section = std::mem::take(&mut scratch.section);
-        for list in &mut section {
+        let section = &mut scratch.section;
+        for list in section.iter_mut() {
             list.clear();
         }
         if built[1] {
@@ -108,9 +110,9 @@ impl ConvexArena {
         split_faces(
             &mut self.half_edges,
             &mut self.faces,
-            &relevant,
+            relevant,
             keep,
-            &mut section,
+            section,
             &mut next,
         );
         debug_assert_eq!([section[0].len(), section[1].len()], sizes);
@@ -145,8 +147,6 @@ impl ConvexArena {
         }
         debug_assert_eq!(next.half_edge as usize, self.half_edges.len());
         debug_assert_eq!(next.face as usize, self.faces.len());
-        scratch.relevant = relevant;
-        scratch.section = section;
         first_cap_edge
     }
 
@@ -487,6 +487,11 @@ fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
         return;
     }
     for i in 1..relevant.len() {
+        // An entry above its predecessor stays where it is: only the keys
+        // are read, not the whole entry.
+        if relevant[i - 1].0 < relevant[i].0 {
+            continue;
+        }
         let item = relevant[i];
         let mut j = i;
         while j > 0 && relevant[j - 1].0 > item.0 {

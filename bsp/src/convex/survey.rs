@@ -14,7 +14,7 @@
 //! the same.
 
 use super::mesh::ConvexArena;
-use super::scratch::Scratch;
+use super::scratch::StampMap;
 use crate::exact::{Plane, Sign};
 
 /// What the split needs to know about one face that meets the section,
@@ -169,12 +169,12 @@ impl ConvexArena {
         f: u32,
         x: u32,
         s: &Plane,
-        scratch: &mut Scratch,
+        sides: &mut StampMap<Sign>,
     ) -> (FaceInfo, SectionExit) {
         let first = self.faces[f as usize].half_edge;
         let mut h = self.half_edges[x as usize].next;
         let mut e = self.half_edges[h as usize];
-        let side_a = self.side(e.origin, s, scratch);
+        let side_a = self.side_in(e.origin, s, sides);
         debug_assert_ne!(side_a, Sign::Zero, "x crosses s");
         // Whether `first` lies after x, up to where the walk finds the
         // second place the section meets the boundary.
@@ -182,7 +182,7 @@ impl ConvexArena {
         let exit = loop {
             passed_first |= h == first;
             let next = self.half_edges[e.next as usize];
-            let there = self.side(next.origin, s, scratch);
+            let there = self.side_in(next.origin, s, sides);
             if there == Sign::Zero {
                 // Found when the half-edge leaving that vertex is walked.
                 passed_first |= e.next == first;
