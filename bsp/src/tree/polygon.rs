@@ -26,6 +26,33 @@ const SMALL: usize = 32;
 /// buffer costs its filling at every split.
 const FEW_CORNERS: usize = 12;
 
+/// Working memory for the layouts of a split ([`layout`]): `M` entries on
+/// the stack, enough for polygons of up to [`FEW_CORNERS`] corners, and the
+/// heap beyond.
+struct LayoutMemory<const M: usize> {
+    stack: [u32; M],
+    heap: Vec<u32>,
+}
+
+impl<const M: usize> LayoutMemory<M> {
+    fn new() -> Self {
+        Self {
+            stack: [NONE; M],
+            heap: Vec::new(),
+        }
+    }
+
+    /// `len` entries, on the stack when they fit.
+    fn entries(&mut self, len: usize) -> &mut [u32] {
+        if len <= M {
+            &mut self.stack[..len]
+        } else {
+            self.heap.resize(len, NONE);
+            &mut self.heap
+        }
+    }
+}
+
 /// A convex polygon in plane-based form, with its corners computed once
 /// (a split computes only the corners it creates).
 #[derive(Clone, Debug)]
@@ -266,13 +293,8 @@ impl Polygon {
     /// rewritten in place when it fits.
     pub(crate) fn one_part(mut self, sides: &[Sign], p: &Plane, keep: Sign) -> Self {
         let n = self.edges.len();
-        let (mut stack, mut heap) = ([NONE; 2 * FEW_CORNERS], Vec::new());
-        let buffer: &mut [u32] = if n <= FEW_CORNERS {
-            &mut stack
-        } else {
-            heap.resize(2 * n, NONE);
-            &mut heap
-        };
+        let mut memory = LayoutMemory::<{ 2 * FEW_CORNERS }>::new();
+        let buffer = memory.entries(2 * n);
         let m = layout(sides, keep, buffer);
         let origin = &buffer[..m];
         let closing = if keep == Sign::Negative {
@@ -305,13 +327,8 @@ impl Polygon {
         wanted: [bool; 2],
     ) -> (Option<Self>, Option<Self>) {
         let n = sides.len();
-        let (mut stack, mut heap) = ([NONE; 4 * FEW_CORNERS], Vec::new());
-        let buffer: &mut [u32] = if n <= FEW_CORNERS {
-            &mut stack
-        } else {
-            heap.resize(4 * n, NONE);
-            &mut heap
-        };
+        let mut memory = LayoutMemory::<{ 4 * FEW_CORNERS }>::new();
+        let buffer = memory.entries(4 * n);
         let (low, high) = buffer.split_at_mut(2 * n);
         let build = |origin: &[u32], closing: &Plane, other: Option<Other<'_>>| {
             let plane = |o: u32| match o {
@@ -365,13 +382,8 @@ impl Polygon {
         // The layout of each part: the original index of each of its edges
         // (NONE for the closing one). At most 2n entries each (n + 1 for a
         // convex polygon).
-        let (mut stack, mut heap) = ([NONE; 4 * FEW_CORNERS], Vec::new());
-        let buffer: &mut [u32] = if n <= FEW_CORNERS {
-            &mut stack
-        } else {
-            heap.resize(4 * n, NONE);
-            &mut heap
-        };
+        let mut memory = LayoutMemory::<{ 4 * FEW_CORNERS }>::new();
+        let buffer = memory.entries(4 * n);
         let (low, high) = buffer.split_at_mut(2 * n);
         let (mb, ma) = (
             layout(sides, Sign::Negative, low),
