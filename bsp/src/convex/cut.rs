@@ -81,36 +81,52 @@ impl ConvexArena {
         above_tag: u32,
     ) -> CutOutcome {
         self.with_scratch(|arena, scratch| {
-            scratch.landmarks.forget();
-            scratch.extremes.forget();
-            let faces = arena.faces_of(poly);
-            let (mut plus, mut minus) = (false, false);
-            for &f in &faces {
-                for h in arena.face_loop(f) {
-                    let side = arena.side(arena.half_edges[h as usize].origin, s, scratch);
-                    plus |= side == Sign::Positive;
-                    minus |= side == Sign::Negative;
-                }
-            }
-            match (minus, plus) {
+            match arena.classify_all(poly, s, scratch) {
                 (true, true) => {}
                 (false, _) => return CutOutcome::Above,
                 (true, false) => return CutOutcome::Below,
             }
-            let mut relevant = std::mem::take(&mut scratch.relevant);
-            relevant.clear();
-            relevant.extend(
-                faces
-                    .into_iter()
-                    .filter_map(|f| Some((f, arena.survey_face(f, scratch)?))),
-            );
-            scratch.relevant = relevant;
             let [below, above] = arena.split_along(scratch, s, [below_tag, above_tag], None);
             CutOutcome::Split {
                 below: PolyId(below),
                 above: PolyId(above),
             }
         })
+    }
+
+    /// Classifies every vertex of `poly` against `s` (forgetting the
+    /// landmarks and extremes of the previous cut) and returns whether any
+    /// lies below and whether any lies above it. When both do, the faces
+    /// that meet the section are listed in `scratch.relevant` with their
+    /// surveys, ready for the split.
+    pub(super) fn classify_all(
+        &self,
+        poly: PolyId,
+        s: &Plane,
+        scratch: &mut Scratch,
+    ) -> (bool, bool) {
+        scratch.landmarks.forget();
+        scratch.extremes.forget();
+        let faces = self.faces_of(poly);
+        let (mut plus, mut minus) = (false, false);
+        for &f in &faces {
+            for h in self.face_loop(f) {
+                let side = self.side(self.half_edges[h as usize].origin, s, scratch);
+                plus |= side == Sign::Positive;
+                minus |= side == Sign::Negative;
+            }
+        }
+        if minus && plus {
+            let mut relevant = std::mem::take(&mut scratch.relevant);
+            relevant.clear();
+            relevant.extend(
+                faces
+                    .into_iter()
+                    .filter_map(|f| Some((f, self.survey_face(f, scratch)?))),
+            );
+            scratch.relevant = relevant;
+        }
+        (minus, plus)
     }
 
     /// Cuts `poly` by `s` by edge descent and marching (paper 1 §3.3):

@@ -480,7 +480,7 @@ fn add_cap(
 /// faces of a convex polyhedron (a handful, typically), where an insertion
 /// sort costs less than the general sort's set-up; long lists go to the
 /// general sort. Face indices are distinct, so both give the same order.
-fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
+pub(super) fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
     const SHORT: usize = 24;
     if relevant.len() > SHORT {
         relevant.sort_unstable_by_key(|&(f, _)| f);

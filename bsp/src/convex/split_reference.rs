@@ -3,6 +3,7 @@
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::Scratch;
+use super::split::sort_by_face;
 use super::survey::FaceInfo;
 use crate::exact::{Plane, Sign, intersect_3_planes};
 
@@ -310,27 +311,6 @@ impl ConvexArena {
     }
 }
 
-/// Sorts the faces that meet the section by face index. A plane meets few
-/// faces of a convex polyhedron (a handful, typically), where an insertion
-/// sort costs less than the general sort's set-up; long lists go to the
-/// general sort. Face indices are distinct, so both give the same order.
-fn sort_by_face(relevant: &mut [(u32, FaceInfo)]) {
-    const SHORT: usize = 24;
-    if relevant.len() > SHORT {
-        relevant.sort_unstable_by_key(|&(f, _)| f);
-        return;
-    }
-    for i in 1..relevant.len() {
-        let item = relevant[i];
-        let mut j = i;
-        while j > 0 && relevant[j - 1].0 > item.0 {
-            relevant[j] = relevant[j - 1];
-            j -= 1;
-        }
-        relevant[j] = item;
-    }
-}
-
 /// The two `0` vertices of a straddling face, in the order its loop from
 /// its stored half-edge meets them (crossing edges split).
 struct FaceZeros {
@@ -364,28 +344,9 @@ mod tests {
         split: Split,
     ) -> Option<[u32; 2]> {
         arena.with_scratch(|arena, scratch| {
-            scratch.landmarks.forget();
-            scratch.extremes.forget();
-            let faces = arena.faces_of(poly);
-            let (mut plus, mut minus) = (false, false);
-            for &f in &faces {
-                for h in arena.face_loop(f) {
-                    let side = arena.side(arena.half_edges[h as usize].origin, s, scratch);
-                    plus |= side == Sign::Positive;
-                    minus |= side == Sign::Negative;
-                }
-            }
-            if !(plus && minus) {
+            if arena.classify_all(poly, s, scratch) != (true, true) {
                 return None;
             }
-            let mut relevant = std::mem::take(&mut scratch.relevant);
-            relevant.clear();
-            relevant.extend(
-                faces
-                    .into_iter()
-                    .filter_map(|f| Some((f, arena.survey_face(f, scratch)?))),
-            );
-            scratch.relevant = relevant;
             Some(split(arena, scratch, s, [7, 9], keep))
         })
     }
