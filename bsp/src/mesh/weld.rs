@@ -243,19 +243,24 @@ mod tests {
         );
     }
 
+    /// A xorshift generator of integers in `[−range, range)`, from `seed`.
+    fn integers(seed: u64) -> impl FnMut(i64) -> i64 {
+        let mut state = seed;
+        move |range| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % (2 * range as u64)) as i64 - range
+        }
+    }
+
     /// Meets of plane triples through a few hundred points, each point
     /// reached several times in random order: the welder gives every
     /// point the index of its first appearance, as comparing it exactly
     /// with every earlier vertex does, below and above [`SCAN_MAX`].
     #[test]
     fn scanning_and_cells_give_first_appearance_indices() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move |range: i64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % (2 * range as u64)) as i64 - range
-        };
+        let mut next = integers(0x9e37_79b9_7f4a_7c15);
         // Points (i/3, j/7, k/11) reached through planes 3a·x + 7b·y +
         // 11c·z + d = 0 with d = −(a·i + b·j + c·k).
         let targets: Vec<[i64; 3]> = (0..300).map(|_| [0; 3].map(|_| next(1000))).collect();
@@ -300,13 +305,7 @@ mod tests {
     fn equal_points_from_different_planes_weld_to_one_vertex() {
         let mut welder = Welder::default();
         let mut bit_patterns = std::collections::HashSet::new();
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move |range: i64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % (2 * range as u64)) as i64 - range
-        };
+        let mut next = integers(0x2545_f491_4f6c_dd1d);
         let mut count = 0;
         while count < 400 {
             // a·x + b·y + c·z + d = 0 through (1/3, 1/7, 1/11): a = 3a',
