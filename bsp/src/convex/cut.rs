@@ -167,24 +167,54 @@ impl ConvexArena {
         keep: Part,
         cap_tag: u32,
     ) -> KeptOutcome {
+        self.cut_keeping_by(poly, s, keep, cap_tag, true)
+    }
+
+    /// [`ConvexArena::cut_keeping`], cutting a section with no vertex on
+    /// `s` around its ring when `by_ring` (always but in the tests that
+    /// compare it with the general march and split).
+    #[inline(always)]
+    pub(super) fn cut_keeping_by(
+        &mut self,
+        poly: PolyId,
+        s: &Plane,
+        keep: Part,
+        cap_tag: u32,
+        by_ring: bool,
+    ) -> KeptOutcome {
         self.with_scratch(|arena, scratch| {
             let start = arena.start_vertex(poly, s, scratch);
-            if let Some(outcome) = arena.find_section(start, s, scratch) {
-                arena.keep_landmarks(poly, scratch);
-                arena.keep_extremes(poly, scratch);
-                return match outcome {
-                    CutOutcome::Above => KeptOutcome::Above,
-                    CutOutcome::Below | CutOutcome::Split { .. } => KeptOutcome::Below,
-                };
-            }
+            let seed = match arena.locate_section(start, s, scratch) {
+                Ok(seed) => seed,
+                Err(outcome) => {
+                    arena.keep_landmarks(poly, scratch);
+                    arena.keep_extremes(poly, scratch);
+                    return match outcome {
+                        CutOutcome::Above => KeptOutcome::Above,
+                        CutOutcome::Below | CutOutcome::Split { .. } => KeptOutcome::Below,
+                    };
+                }
+            };
             let side = match keep {
                 Part::Below => Sign::Negative,
                 Part::Above => Sign::Positive,
             };
-            let [below, above] = arena.split_along(scratch, s, [cap_tag; 2], Some(side));
-            let kept = match keep {
-                Part::Below => below,
-                Part::Above => above,
+            // Most sections have no vertex on s: their ring is cut in one
+            // pass; the others go through the general march and split.
+            let ring = match seed {
+                Seed::Edge(h) if by_ring => arena.march_ring(h, s, scratch),
+                _ => None,
+            };
+            let kept = match ring {
+                Some(side_a) => arena.split_ring(scratch, s, side_a, side, cap_tag),
+                None => {
+                    arena.march(seed, s, scratch);
+                    let [below, above] = arena.split_along(scratch, s, [cap_tag; 2], Some(side));
+                    match keep {
+                        Part::Below => below,
+                        Part::Above => above,
+                    }
+                }
             };
             arena.pass_landmarks(0, kept, side, scratch);
             arena.pass_extremes(s, [kept, u32::MAX], Some(side), scratch);
@@ -196,30 +226,47 @@ impl ConvexArena {
     /// proper, with the faces that meet the section in `scratch.relevant`,
     /// else the outcome ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
     fn find_section(&self, v0: u32, s: &Plane, scratch: &mut Scratch) -> Option<CutOutcome> {
+        match self.locate_section(v0, s, scratch) {
+            Ok(seed) => {
+                self.march(seed, s, scratch);
+                None
+            }
+            Err(outcome) => Some(outcome),
+        }
+    }
+
+    /// Edge descent from vertex `v0`: where the march around the section
+    /// starts when the cut is proper, else the outcome
+    /// ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
+    fn locate_section(
+        &self,
+        v0: u32,
+        s: &Plane,
+        scratch: &mut Scratch,
+    ) -> Result<Seed, CutOutcome> {
         // Walk towards the side v0 is not on; a step onto that side
         // brackets the section. From a vertex on s, both sides must exist
         // for a proper cut, and v0 itself is on the section.
         let seed = match self.side(v0, s, scratch) {
             Sign::Positive => match self.descend(v0, s, Sign::Negative, scratch) {
                 Some(h) => self.seed_at(h, Sign::Negative, scratch),
-                None => return Some(CutOutcome::Above),
+                None => return Err(CutOutcome::Above),
             },
             Sign::Negative => match self.descend(v0, s, Sign::Positive, scratch) {
                 Some(h) => self.seed_at(h, Sign::Positive, scratch),
-                None => return Some(CutOutcome::Below),
+                None => return Err(CutOutcome::Below),
             },
             Sign::Zero => {
                 if self.descend(v0, s, Sign::Negative, scratch).is_none() {
-                    return Some(CutOutcome::Above);
+                    return Err(CutOutcome::Above);
                 }
                 if self.descend(v0, s, Sign::Positive, scratch).is_none() {
-                    return Some(CutOutcome::Below);
+                    return Err(CutOutcome::Below);
                 }
                 Seed::Vertex(v0)
             }
         };
-        self.march(seed, s, scratch);
-        None
+        Ok(seed)
     }
 
     /// Where the march starts after the descent stepped along `h` onto the

@@ -16,12 +16,15 @@
 //! - `extremes` — vertices farthest in fixed directions, as starts too.
 //! - `survey` — what one walk around a face tells the split.
 //! - `split` — splitting along the section once it is found.
+//! - `ring` — the one-sided cut of a section with no vertex on the plane,
+//!   in one walk and one pass.
 
 pub mod cut;
 mod extremes;
 mod landmarks;
 pub mod mesh;
 pub mod pool;
+mod ring;
 mod scratch;
 mod split;
 #[cfg(test)]

@@ -8,6 +8,7 @@
 
 use super::extremes::Extremes;
 use super::landmarks::Landmarks;
+use super::ring::RingFace;
 use super::survey::FaceInfo;
 use crate::exact::Sign;
 
@@ -94,6 +95,9 @@ pub(crate) struct Scratch {
     /// The half-edges lying in the cutting plane, on faces of the lower
     /// and of the upper part.
     pub(crate) section: [Vec<u32>; 2],
+    /// The faces of a generic section in the order the section crosses
+    /// them (`ring`).
+    pub(crate) ring: Vec<RingFace>,
     /// Where the next cut of a part of the last cut starts (kept from one
     /// operation to the next, unlike the rest).
     pub(crate) landmarks: Landmarks,

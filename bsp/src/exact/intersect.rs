@@ -214,24 +214,33 @@ pub(crate) fn intersect_3_planes_with<R>(
     r: &Plane,
     sink: impl FnOnce(Point4) -> R,
 ) -> Option<R> {
-    let n = [p.normal(), q.normal(), r.normal()];
-    let d = [p.d, q.d, r.d];
     let bn = u32::from(p.normal_bits.max(q.normal_bits).max(r.normal_bits));
     let bd = u32::from(p.offset_bits.max(q.offset_bits).max(r.offset_bits));
     let path = Path::for_bits(bn, bd);
-    if path == Path::Small {
+    // The coefficients are read inside each inlined path, so that they stay
+    // in registers there; the wide paths, out of line, read them again.
+    let n = || [p.normal(), q.normal(), r.normal()];
+    let d = || [p.d, q.d, r.d];
+    match path {
         // |d| < 2^(63 − 3 − 2bn): the conversions are exact.
-        return intersect_small(n, d.map(|d| d as i64)).map(sink);
-    }
-    if path == Path::Medium {
+        Path::Small => intersect_small(n(), d().map(|d| d as i64)).map(sink),
         // |d| < 2^63: the conversions are exact.
-        return intersect_medium(n, d.map(|d| d as i64)).map(sink);
+        Path::Medium => intersect_medium(n(), d().map(|d| d as i64)).map(sink),
+        Path::Narrow | Path::Wide => intersect_beyond_i64(p, q, r, path).map(sink),
     }
+}
+
+/// [`intersect_3_planes`] on the [`Path::Narrow`] or [`Path::Wide`] path,
+/// kept out of line: its callers inline only the `i64` paths.
+#[inline(never)]
+fn intersect_beyond_i64(p: &Plane, q: &Plane, r: &Plane, path: Path) -> Option<Point4> {
+    let n = [p.normal(), q.normal(), r.normal()];
+    let d = [p.d, q.d, r.d];
     let minors = minors(n);
     if path == Path::Narrow {
-        intersect_narrow(n, d, minors).map(sink)
+        intersect_narrow(n, d, minors)
     } else {
-        intersect_wide(n, d, minors).map(sink)
+        intersect_wide(n, d, minors)
     }
 }
 
