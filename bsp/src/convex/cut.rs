@@ -137,14 +137,43 @@ impl ConvexArena {
     /// vertices of faces it visits. The result is identical, element for
     /// element, to [`ConvexArena::cut_naive`].
     pub fn cut(&mut self, poly: PolyId, s: &Plane, below_tag: u32, above_tag: u32) -> CutOutcome {
+        self.cut_by(poly, s, [below_tag, above_tag], true)
+    }
+
+    /// [`ConvexArena::cut`] with cap tags `tags`, splitting a section with
+    /// no vertex on `s` from its ring when `by_ring` (always but in the
+    /// tests that compare it with the general march and split).
+    #[inline(always)]
+    pub(super) fn cut_by(
+        &mut self,
+        poly: PolyId,
+        s: &Plane,
+        tags: [u32; 2],
+        by_ring: bool,
+    ) -> CutOutcome {
         self.with_scratch(|arena, scratch| {
             let start = arena.start_vertex(poly, s, scratch);
-            if let Some(outcome) = arena.find_section(start, s, scratch) {
-                arena.keep_landmarks(poly, scratch);
-                arena.keep_extremes(poly, scratch);
-                return outcome;
-            }
-            let parts = arena.split_along(scratch, s, [below_tag, above_tag], None);
+            let seed = match arena.locate_section(start, s, scratch) {
+                Ok(seed) => seed,
+                Err(outcome) => {
+                    arena.keep_landmarks(poly, scratch);
+                    arena.keep_extremes(poly, scratch);
+                    return outcome;
+                }
+            };
+            // Most sections have no vertex on s: their ring gives the
+            // general split's arrays with less work.
+            let ring = match seed {
+                Seed::Edge(h) if by_ring => arena.march_ring::<true>(h, s, scratch),
+                _ => None,
+            };
+            let parts = match ring {
+                Some(side_a) => arena.split_ring_both(scratch, s, side_a, tags),
+                None => {
+                    arena.march(seed, s, scratch);
+                    arena.split_along(scratch, s, tags, None)
+                }
+            };
             arena.pass_extremes(s, parts, None, scratch);
             for (k, side) in [Sign::Negative, Sign::Positive].into_iter().enumerate() {
                 arena.pass_landmarks(k, parts[k], side, scratch);
@@ -202,7 +231,7 @@ impl ConvexArena {
             // Most sections have no vertex on s: their ring is cut in one
             // pass; the others go through the general march and split.
             let ring = match seed {
-                Seed::Edge(h) if by_ring => arena.march_ring(h, s, scratch),
+                Seed::Edge(h) if by_ring => arena.march_ring::<false>(h, s, scratch),
                 _ => None,
             };
             let kept = match ring {
@@ -220,19 +249,6 @@ impl ConvexArena {
             arena.pass_extremes(s, [kept, u32::MAX], Some(side), scratch);
             KeptOutcome::Cut(PolyId(kept))
         })
-    }
-
-    /// Edge descent from vertex `v0` and marching: `None` when the cut is
-    /// proper, with the faces that meet the section in `scratch.relevant`,
-    /// else the outcome ([`CutOutcome::Below`] or [`CutOutcome::Above`]).
-    fn find_section(&self, v0: u32, s: &Plane, scratch: &mut Scratch) -> Option<CutOutcome> {
-        match self.locate_section(v0, s, scratch) {
-            Ok(seed) => {
-                self.march(seed, s, scratch);
-                None
-            }
-            Err(outcome) => Some(outcome),
-        }
     }
 
     /// Edge descent from vertex `v0`: where the march around the section

@@ -17,7 +17,7 @@
 //! - `survey` — what one walk around a face tells the split.
 //! - `split` — splitting along the section once it is found.
 //! - `ring` — the one-sided cut of a section with no vertex on the plane,
-//!   in one walk and one pass.
+//!   in one walk and one pass; `ring_both` — the two-sided one.
 
 pub mod cut;
 mod extremes;
@@ -25,6 +25,7 @@ mod landmarks;
 pub mod mesh;
 pub mod pool;
 mod ring;
+mod ring_both;
 mod scratch;
 mod split;
 #[cfg(test)]

@@ -37,13 +37,17 @@ use crate::exact::{Plane, Sign, intersect_3_planes_with};
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct RingFace {
     /// The face `f_i`.
-    face: u32,
+    pub(super) face: u32,
     /// `x_i`: its half-edge the section enters it across.
-    entry: u32,
+    pub(super) entry: u32,
     /// `y_i`: its half-edge the section leaves it across.
-    exit: u32,
-    /// Its rank among the ring's faces by face index.
-    rank: u32,
+    pub(super) exit: u32,
+    /// Its rank (see the module docs).
+    pub(super) rank: u32,
+    /// Whether the face's stored half-edge is one of those the walk took,
+    /// from the one after `x_i` to `y_i` (what decides which of the two
+    /// comes first in loop order, for the two-sided split).
+    pub(super) stored_walked: bool,
 }
 
 impl ConvexArena {
@@ -53,19 +57,35 @@ impl ConvexArena {
     /// walk closes the ring, or `None` when it meets a vertex on `s` (the
     /// section is not generic; the general march takes over, and the sides
     /// classified so far stay valid).
-    pub(super) fn march_ring(&self, h: u32, s: &Plane, scratch: &mut Scratch) -> Option<Sign> {
+    ///
+    /// `BOTH`: for a two-sided split, which needs
+    /// [`RingFace::stored_walked`] (false otherwise).
+    #[inline(never)]
+    pub(super) fn march_ring<const BOTH: bool>(
+        &self,
+        h: u32,
+        s: &Plane,
+        scratch: &mut Scratch,
+    ) -> Option<Sign> {
         let Scratch { sides, ring, .. } = scratch;
         ring.clear();
         let side_a = self.side_in(self.dest(h), s, sides);
         debug_assert_ne!(side_a, Sign::Zero, "h crosses s");
         let mut x = h;
         loop {
-            let y = self.ring_exit(x, side_a, s, sides)?;
+            let face = self.half_edges[x as usize].face;
+            let stored = if BOTH {
+                self.faces[face as usize].half_edge
+            } else {
+                u32::MAX
+            };
+            let (y, stored_walked) = self.ring_exit::<BOTH>(x, stored, side_a, s, sides)?;
             ring.push(RingFace {
-                face: self.half_edges[x as usize].face,
+                face,
                 entry: x,
                 exit: y,
                 rank: 0,
+                stored_walked,
             });
             x = self.half_edges[y as usize].twin;
             if x == h {
@@ -81,23 +101,27 @@ impl ConvexArena {
 
     /// Where the section leaves the face of `x` (entered across `x`):
     /// the half-edge after `x` whose destination is the first vertex off
-    /// side `side_a`, or `None` when that vertex lies on `s`.
+    /// side `side_a`, and whether half-edge `stored` is among those walked
+    /// up to it (when `BOTH`); `None` when that vertex lies on `s`.
     #[inline]
-    fn ring_exit(
+    fn ring_exit<const BOTH: bool>(
         &self,
         x: u32,
+        stored: u32,
         side_a: Sign,
         s: &Plane,
         sides: &mut StampMap<Sign>,
-    ) -> Option<u32> {
+    ) -> Option<(u32, bool)> {
         let mut h = self.half_edges[x as usize].next;
         let mut e = self.half_edges[h as usize];
+        let mut walked = false;
         loop {
+            walked |= BOTH && h == stored;
             // Each half-edge is read once: the next one is carried on.
             let next = self.half_edges[e.next as usize];
             let there = self.side_in(next.origin, s, sides);
             if there != side_a {
-                return (there != Sign::Zero).then_some(h);
+                return (there != Sign::Zero).then_some((h, walked));
             }
             (h, e) = (e.next, next);
         }
@@ -176,6 +200,7 @@ impl ConvexArena {
                 entry,
                 exit,
                 rank,
+                ..
             } = ring[i];
             let (m_in, m_out) = (entry_vertex(i), entry_vertex(next(i)));
             let (g, c) = (h0 + rank, c0 + rank);

@@ -98,6 +98,9 @@ pub(crate) struct Scratch {
     /// The faces of a generic section in the order the section crosses
     /// them (`ring`).
     pub(crate) ring: Vec<RingFace>,
+    /// Ring positions in the order of their faces, then the cap half-edge
+    /// leaving each new vertex (`ring_both`).
+    pub(crate) order: Vec<u32>,
     /// Where the next cut of a part of the last cut starts (kept from one
     /// operation to the next, unlike the rest).
     pub(crate) landmarks: Landmarks,
