@@ -8,37 +8,72 @@
 //! valgrind --tool=callgrind target/release/examples/fig9_cuts two 250 10
 //! ```
 //!
-//! Arguments: `two` (both parts built, [`ConvexArena::cut`]) or `one`
-//! ([`ConvexArena::cut_keeping`]), the number of planes `N` (250) and the
-//! repetitions `R` (10; at least 1). Instructions per cut are the difference between
+//! Arguments: `two` (both parts built, [`ConvexArena::cut`]), `one`
+//! ([`ConvexArena::cut_keeping`]) or `naive` (both parts, every vertex
+//! classified, [`ConvexArena::cut_naive`]), the number of planes `N` (250)
+//! and the repetitions `R` (10; at least 1). Instructions per cut are the difference between
 //! two runs with different `R`, divided by `N` times the difference of `R`
 //! (that removes the fixed start-up cost). It prints a checksum of the
-//! cell's vertices so that two builds can be compared.
+//! cell's vertices so that two builds can be compared, and what a cut
+//! takes on average (Figure 9's measures, [`ConvexArena::last_cut_stats`]):
+//! vertices classified, edge-descent steps and exact vertex constructions.
 
 #[path = "../tests/common/fig9.rs"]
 mod fig9;
 
-use chisel_bsp::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
+use chisel_bsp::convex::{ConvexArena, CutOutcome, CutStats, KeptOutcome, NO_TAG, Part, PolyId};
 use chisel_bsp::exact::{IntPoint, Plane};
 use fig9::{R, tangent_planes};
 
-/// The cell of the linear BSP of `planes` in `arena` (cleared first).
-fn extract_cell(arena: &mut ConvexArena, planes: &[Plane], two_sided: bool) -> PolyId {
+/// How the cell is cut.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    TwoSided,
+    OneSided,
+    Naive,
+}
+
+/// What the cuts of one extraction took in all.
+#[derive(Default)]
+struct Totals {
+    stats: CutStats,
+    constructions: usize,
+}
+
+/// The cell of the linear BSP of `planes` in `arena` (cleared first); with
+/// `totals`, also what the cuts took (counting scans the arena after each
+/// cut, so the timed rounds go without).
+fn extract_cell(
+    arena: &mut ConvexArena,
+    planes: &[Plane],
+    mode: Mode,
+    mut totals: Option<&mut Totals>,
+) -> PolyId {
     arena.clear();
     let corner = |c| IntPoint::new(c, c, c).expect("in budget");
     let mut poly = arena.add_box(corner(-R), corner(R)).expect("a box");
     for plane in planes {
-        let below = if two_sided {
-            match arena.cut(poly, plane, NO_TAG, NO_TAG) {
+        let points_before = arena.point_count();
+        let below = match mode {
+            Mode::TwoSided => match arena.cut(poly, plane, NO_TAG, NO_TAG) {
                 CutOutcome::Split { below, .. } => Some(below),
                 _ => None,
-            }
-        } else {
-            match arena.cut_keeping(poly, plane, Part::Below, NO_TAG) {
+            },
+            Mode::Naive => match arena.cut_naive(poly, plane, NO_TAG, NO_TAG) {
+                CutOutcome::Split { below, .. } => Some(below),
+                _ => None,
+            },
+            Mode::OneSided => match arena.cut_keeping(poly, plane, Part::Below, NO_TAG) {
                 KeptOutcome::Cut(below) => Some(below),
                 _ => None,
-            }
+            },
         };
+        if let Some(totals) = totals.as_deref_mut() {
+            let stats = arena.last_cut_stats();
+            totals.stats.classified += stats.classified;
+            totals.stats.descent_steps += stats.descent_steps;
+            totals.constructions += arena.point_count() - points_before;
+        }
         if let Some(below) = below {
             poly = below;
         }
@@ -48,15 +83,21 @@ fn extract_cell(arena: &mut ConvexArena, planes: &[Plane], two_sided: bool) -> P
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let two_sided = args.get(1).is_none_or(|m| m != "one");
+    let mode = match args.get(1).map(String::as_str) {
+        Some("one") => Mode::OneSided,
+        Some("naive") => Mode::Naive,
+        _ => Mode::TwoSided,
+    };
     let count = args.get(2).and_then(|n| n.parse().ok()).unwrap_or(250);
     let repeats: usize = args.get(3).and_then(|n| n.parse().ok()).unwrap_or(10);
     // Seeded by the count, as in `benches/cut.rs`.
     let planes = tangent_planes(count, count as u64);
     let mut arena = ConvexArena::new();
-    let mut poly = extract_cell(&mut arena, &planes, two_sided);
-    for _ in 1..repeats {
-        poly = extract_cell(&mut arena, &planes, two_sided);
+    let mut totals = Totals::default();
+    extract_cell(&mut arena, &planes, mode, Some(&mut totals));
+    let mut poly = PolyId(0);
+    for _ in 0..repeats.max(1) {
+        poly = extract_cell(&mut arena, &planes, mode, None);
     }
     let (cell, _) = arena.extract(poly);
     let faces = cell.faces().len();
@@ -72,6 +113,17 @@ fn main() {
             checksum = checksum.rotate_left(7) ^ limb.wrapping_mul(0x9e37_79b9_7f4a_7c15);
         }
     }
-    let mode = if two_sided { "two-sided" } else { "one-sided" };
-    println!("{mode}, {count} planes x {repeats}: {faces} faces, checksum {checksum:016x}");
+    let name = match mode {
+        Mode::TwoSided => "two-sided",
+        Mode::OneSided => "one-sided",
+        Mode::Naive => "naive",
+    };
+    println!("{name}, {count} planes x {repeats}: {faces} faces, checksum {checksum:016x}");
+    let per_cut = |total: usize| total as f64 / count as f64;
+    println!(
+        "per cut: {:.1} vertices classified, {:.2} descent steps, {:.2} vertex constructions",
+        per_cut(totals.stats.classified),
+        per_cut(totals.stats.descent_steps as usize),
+        per_cut(totals.constructions),
+    );
 }

@@ -44,6 +44,16 @@ pub enum CutOutcome {
     Above,
 }
 
+/// What the last cut of an arena took ([`ConvexArena::last_cut_stats`]),
+/// the measures of paper 1's Figure 9.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CutStats {
+    /// Vertices classified against the cutting plane (each once).
+    pub classified: usize,
+    /// Steps of the edge descent.
+    pub descent_steps: u32,
+}
+
 /// The part of a cut polyhedron that [`ConvexArena::cut_keeping`] builds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Part {
@@ -299,6 +309,19 @@ impl ConvexArena {
         } else {
             Seed::Edge(h)
         }
+    }
+
+    /// What the last cut took (zero before any): counted from the cut's
+    /// working memory after the fact, at a cost proportional to the
+    /// arena's size, so that the cuts themselves count nothing.
+    #[must_use]
+    pub fn last_cut_stats(&self) -> CutStats {
+        self.scratch
+            .as_ref()
+            .map_or_else(CutStats::default, |scratch| CutStats {
+                classified: scratch.sides.count(),
+                descent_steps: scratch.descent_steps,
+            })
     }
 
     /// Runs `op` with the arena's scratch space, cleared.

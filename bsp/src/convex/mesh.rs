@@ -255,6 +255,15 @@ impl ConvexArena {
         self.vertices.len()
     }
 
+    /// The number of exact points the arena holds: every vertex
+    /// construction of a cut adds one (the copies of a section vertex
+    /// share it).
+    #[must_use]
+    #[inline]
+    pub fn point_count(&self) -> usize {
+        self.points.len()
+    }
+
     /// The exact position of vertex `v`.
     #[must_use]
     #[inline]

@@ -33,7 +33,7 @@ mod split_reference;
 mod survey;
 pub mod validate;
 
-pub use cut::{CutOutcome, KeptOutcome, Part};
+pub use cut::{CutOutcome, CutStats, KeptOutcome, Part};
 pub use mesh::{ConvexArena, Face, HalfEdge, NO_TAG, PolyId};
 pub use pool::with_arena;
 pub use validate::InvariantError;

@@ -39,6 +39,15 @@ impl<T: Copy + Default> StampMap<T> {
         }
     }
 
+    /// The number of entries set since the last [`StampMap::clear`] (a
+    /// scan of every slot: for statistics, not for the cuts).
+    pub(crate) fn count(&self) -> usize {
+        self.entries
+            .iter()
+            .filter(|(stamp, _)| *stamp == self.stamp)
+            .count()
+    }
+
     /// Makes room for indices below `len` without reallocating later.
     pub(crate) fn reserve(&mut self, len: usize) {
         if len > self.entries.len() {
