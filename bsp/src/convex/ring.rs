@@ -140,98 +140,91 @@ impl ConvexArena {
         keep: Sign,
         tag: u32,
     ) -> u32 {
-        let ring = &mut scratch.ring;
+        let ring = &scratch.ring;
         let k = ring.len();
-        let (first, step) = rank_faces(ring, side_a);
-        let (h0, v0) = (self.half_edges.len() as u32, self.vertices.len() as u32);
+        let (first, step) = ring_order(ring, side_a);
+        // Ring positions in rank order.
+        let positions = std::iter::successors(Some(first), |&i| {
+            Some(if i + step >= k {
+                i + step - k
+            } else {
+                i + step
+            })
+        })
+        .take(k);
+        let (h0, v0, p0) = (
+            self.half_edges.len() as u32,
+            self.vertices.len() as u32,
+            self.points.len() as u32,
+        );
         let c0 = h0 + k as u32;
         let kept_walked = side_a == keep;
         // The half-edge of each face from `+` to `−`: its entry when `A`
-        // is `−`, else its exit. It names the vertex of its edge.
+        // is `−`, else its exit. It names the vertex of its edge: the
+        // vertex on x_i is the rank of f_i when `A` is `−`, else that of
+        // f_{i−1}, which is one rank more (the ranks then run against the
+        // ring). So the face of rank `r` meets the section at vertices `r`
+        // and `r + 1` (mod `k`, from `v0`), and its new edge runs from
+        // `r + 1` to `r` in the part below, from `r` to `r + 1` above, as
+        // the part's chain requires.
         let entry_owns = side_a == Sign::Negative;
-        let prev = |i: usize| if i == 0 { k - 1 } else { i - 1 };
-        let next = |i: usize| if i + 1 == k { 0 } else { i + 1 };
-        // The vertex on the edge of x_i.
-        let entry_vertex = |i: usize| {
-            v0 + if entry_owns {
-                ring[i].rank
-            } else {
-                ring[prev(i)].rank
-            }
-        };
+        let succ = |r: u32| if r as usize + 1 == k { 0 } else { r + 1 };
+        let pred = |r: u32| if r == 0 { k as u32 - 1 } else { r - 1 };
+        let below = keep == Sign::Negative;
+        // The ends of the new edge of rank r, origin first.
+        let ends = |r: u32| if below { (succ(r), r) } else { (r, succ(r)) };
         // 1. The new points, in the order of their vertices.
-        let p0 = self.points.len() as u32;
         self.points.reserve(k);
         let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
         let plane = |f: u32| &planes[faces[f as usize].plane as usize];
-        let mut i = first;
-        for _ in 0..k {
+        for i in positions.clone() {
             let owner = ring[i];
-            i += step;
-            if i >= k {
-                i -= k;
-            }
             let own = if entry_owns { owner.entry } else { owner.exit };
             let twin_face = self.half_edges[self.half_edges[own as usize].twin as usize].face;
             intersect_3_planes_with(plane(owner.face), plane(twin_face), s, |p| points.push(p))
                 .expect("a crossing edge meets the cutting plane in one point");
         }
-        // 2. Faces, half-edges and vertex records.
-        self.vertices.resize(
-            (v0 as usize) + k,
-            Vertex {
-                point: 0,
-                half_edge: 0,
-            },
-        );
-        self.half_edges.resize(
-            (h0 as usize) + 2 * k,
-            HalfEdge {
-                origin: 0,
-                twin: 0,
-                next: 0,
-                face: 0,
-            },
-        );
-        let cap = self.faces.len() as u32;
-        for i in 0..k {
+        // 2. The faces' new edges g (the kept chain runs from the end of g
+        // round to its start; the half-edge leaving the discarded side now
+        // leaves the new vertex), then their twins c on the cap, each
+        // followed by the next rank's below and the previous one's above;
+        // then the vertex records, each with the cap half-edge leaving it.
+        self.half_edges.reserve(2 * k);
+        for (r, i) in (0u32..).zip(positions) {
             let RingFace {
-                face,
-                entry,
-                exit,
-                rank,
-                ..
+                face, entry, exit, ..
             } = ring[i];
-            let (m_in, m_out) = (entry_vertex(i), entry_vertex(next(i)));
-            let (g, c) = (h0 + rank, c0 + rank);
-            // The kept chain runs m_in → … → m_out when it is the walked
-            // one, else m_out → … → m_in; g closes it, and the half-edge
-            // leaving the discarded side now leaves the new vertex.
-            let (from, to, leaving, entering, c_next) = if kept_walked {
-                (m_out, m_in, entry, exit, c0 + ring[next(i)].rank)
+            let (from, to) = ends(r);
+            let (leaving, entering) = if kept_walked {
+                (entry, exit)
             } else {
-                (m_in, m_out, exit, entry, c0 + ring[prev(i)].rank)
+                (exit, entry)
             };
-            self.half_edges[leaving as usize].origin = to;
+            let g = h0 + r;
+            self.half_edges[leaving as usize].origin = v0 + to;
             self.half_edges[entering as usize].next = g;
-            self.half_edges[g as usize] = HalfEdge {
-                origin: from,
-                twin: c,
+            self.half_edges.push(HalfEdge {
+                origin: v0 + from,
+                twin: c0 + r,
                 next: leaving,
                 face,
-            };
-            self.half_edges[c as usize] = HalfEdge {
-                origin: to,
-                twin: g,
-                next: c_next,
-                face: cap,
-            };
+            });
             self.faces[face as usize].half_edge = g;
-            self.vertices[to as usize] = Vertex {
-                point: p0 + (to - v0),
-                half_edge: c,
-            };
         }
+        let cap = self.faces.len() as u32;
+        for r in 0..k as u32 {
+            let (_, to) = ends(r);
+            self.half_edges.push(HalfEdge {
+                origin: v0 + to,
+                twin: h0 + r,
+                next: c0 + if below { succ(r) } else { pred(r) },
+                face: cap,
+            });
+        }
+        self.vertices.extend((0..k as u32).map(|r| Vertex {
+            point: p0 + r,
+            half_edge: c0 + if below { r } else { pred(r) },
+        }));
         let plane = self.push_plane(if keep == Sign::Negative {
             *s
         } else {
@@ -246,13 +239,14 @@ impl ConvexArena {
     }
 }
 
-/// Sets each ring face's rank: its place around the ring counted from the
-/// face of least index, in the direction the walk takes when `A` is `−`
-/// (a walk with `A = +` goes the other way round: from the other face of
-/// the same crossing edge, it walks the other chain). Both are fixed by the
-/// section alone, wherever the walk started. Returns the position of the
-/// face of rank 0 and the step from one rank to the next (`1` or `k − 1`).
-fn rank_faces(ring: &mut [RingFace], side_a: Sign) -> (usize, usize) {
+/// The ranks of the ring's faces: their places around the ring counted
+/// from the face of least index, in the direction the walk takes when `A`
+/// is `−` (a walk with `A = +` goes the other way round: from the other
+/// face of the same crossing edge, it walks the other chain). Both are
+/// fixed by the section alone, wherever the walk started. Returns the
+/// position of the face of rank 0 and the step from one rank to the next
+/// (`1`, or `k − 1` against the walk).
+fn ring_order(ring: &[RingFace], side_a: Sign) -> (usize, usize) {
     let k = ring.len();
     let first = ring
         .iter()
@@ -260,14 +254,6 @@ fn rank_faces(ring: &mut [RingFace], side_a: Sign) -> (usize, usize) {
         .min_by_key(|(_, r)| r.face)
         .map_or(0, |(i, _)| i);
     let step = if side_a == Sign::Negative { 1 } else { k - 1 };
-    let mut i = first;
-    for rank in 0..k as u32 {
-        ring[i].rank = rank;
-        i += step;
-        if i >= k {
-            i -= k;
-        }
-    }
     (first, step)
 }
 
