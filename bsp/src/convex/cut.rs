@@ -317,19 +317,6 @@ impl ConvexArena {
         scratch.sides.get(v).expect("vertex classified before use")
     }
 
-    /// The outgoing half-edges of vertex `v`, each with the vertex it
-    /// leads to (the origin of its twin, read with the twin's `next`).
-    fn neighbours(&self, v: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
-        let first = self.vertices[v as usize].half_edge;
-        let mut h = Some(first);
-        std::iter::from_fn(move || {
-            let cur = h?;
-            let twin = self.half_edges[self.half_edges[cur as usize].twin as usize];
-            h = (twin.next != first).then_some(twin.next);
-            Some((cur, twin.origin))
-        })
-    }
-
     /// The outgoing half-edges of vertex `v`.
     fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
         let first = self.vertices[v as usize].half_edge;
@@ -354,29 +341,41 @@ impl ConvexArena {
     /// (linear) offset over the convex polyhedron.
     fn descend(&self, start: u32, s: &Plane, target: Sign, scratch: &mut Scratch) -> Option<u32> {
         use core::cmp::Ordering;
-        let toward = |a: f64| if target == Sign::Negative { -a } else { a };
+        // Gains towards the target side: `flip·(a − b)` is exactly
+        // `toward(a) − toward(b)` (negation is exact).
+        let flip = if target == Sign::Negative { -1.0 } else { 1.0 };
         let wanted = if target == Sign::Negative {
             Ordering::Less
         } else {
             Ordering::Greater
         };
-        let (mut cur, mut prev) = (start, u32::MAX);
+        /// A step the walk may take: along half-edge `h` to vertex `n`,
+        /// with the offset estimate and side of `n`.
+        #[derive(Clone, Copy)]
+        struct Step {
+            h: u32,
+            n: u32,
+            estimate: (f64, f64),
+            side: Sign,
+        }
+        let mut cur = start;
         let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
         // The side of `cur`, to record when the walk stops there (the
         // caller has recorded that of `start`).
         let mut cur_side: Option<Sign> = None;
+        // The outgoing half-edges of `cur` to look at: from `first`, turning
+        // around `cur`, up to `stop` (excluded; all of them when equal).
+        let first_out = self.vertices[cur as usize].half_edge;
+        let (mut first, mut stop) = (first_out, first_out);
         loop {
-            // The best certified step, and an exactly certified one.
-            let mut best: Option<(u32, f64, (f64, f64), Sign)> = None;
-            let mut uncertain: Option<(u32, (f64, f64), Sign)> = None;
-            for (h, n) in self.neighbours(cur) {
-                if n == prev {
-                    // The vertex the walk came from: not on side `target`
-                    // (no vertex the walk visits is) and certified farther
-                    // from it than `cur`, so it can end the walk no more
-                    // than it can be its next step.
-                    continue;
-                }
+            // The best certified step, and an exactly certified one, each
+            // with the half-edge that leads to it.
+            let mut best: Option<(Step, f64)> = None;
+            let mut uncertain: Option<Step> = None;
+            let mut h = first;
+            loop {
+                let twin = self.half_edges[self.half_edges[h as usize].twin as usize];
+                let n = twin.origin;
                 let point = self.point(n);
                 // One f64 evaluation gives both the side and the offset;
                 // the side is recorded only for the vertices the walk
@@ -395,26 +394,42 @@ impl ConvexArena {
                     return Some(h);
                 }
                 let (value, error) = dot.offset(point);
-                let gain = toward(value) - toward(cur_value);
+                let gain = flip * (value - cur_value);
+                let step = Step {
+                    h,
+                    n,
+                    estimate: (value, error),
+                    side,
+                };
                 if gain > error + cur_error {
-                    if best.is_none_or(|(_, g, _, _)| gain > g) {
-                        best = Some((n, gain, (value, error), side));
+                    if best.is_none_or(|(_, g)| gain > g) {
+                        best = Some((step, gain));
                     }
                 } else if gain >= -(error + cur_error)
                     && uncertain.is_none()
                     && compare_offsets(point, self.point(cur), s) == wanted
                 {
                     // Too close to call in f64: exactly closer.
-                    uncertain = Some((n, (value, error), side));
+                    uncertain = Some(step);
+                }
+                h = twin.next;
+                if h == stop {
+                    break;
                 }
             }
-            prev = cur;
             scratch.descent_steps += 1;
-            let side;
-            (cur, (cur_value, cur_error), side) = best
-                .map(|(n, _, estimate, side)| (n, estimate, side))
-                .or(uncertain)?;
-            cur_side = Some(side);
+            let step = best.map(|(step, _)| step).or(uncertain)?;
+            (cur, (cur_value, cur_error), cur_side) = (step.n, step.estimate, Some(step.side));
+            let h = step.h;
+            // Around the new vertex from the half-edge after the one back
+            // to the vertex the walk came from, which is not on side
+            // `target` (no vertex the walk visits is) and is certified
+            // farther from it: it can end the walk no more than it can be
+            // its next step.
+            (first, stop) = (
+                self.half_edges[h as usize].next,
+                self.half_edges[h as usize].twin,
+            );
         }
     }
 
