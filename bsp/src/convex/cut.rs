@@ -334,11 +334,13 @@ impl ConvexArena {
     /// `target` and whose origin is not, or `None` when no vertex is on
     /// that side.
     ///
-    /// Each step moves to a neighbour certified to lie strictly closer to
-    /// the target side — by the `f64` estimates and their error bounds, or
-    /// else by exact comparison — so the walk never cycles, and it stops
-    /// only at a vertex no neighbour improves on: a global extremum of the
-    /// (linear) offset over the convex polyhedron.
+    /// Each step moves to the first neighbour (turning around the vertex)
+    /// certified to lie strictly closer to the target side — by the `f64`
+    /// estimates and their error bounds, or else by exact comparison — so
+    /// the walk never cycles, and it stops only at a vertex no neighbour
+    /// improves on: a global extremum of the (linear) offset over the
+    /// convex polyhedron. Taking the first such neighbour rather than the
+    /// closest looks at fewer neighbours for about as many steps.
     fn descend(&self, start: u32, s: &Plane, target: Sign, scratch: &mut Scratch) -> Option<u32> {
         use core::cmp::Ordering;
         // Gains towards the target side: `flip·(a − b)` is exactly
@@ -349,15 +351,6 @@ impl ConvexArena {
         } else {
             Ordering::Greater
         };
-        /// A step the walk may take: along half-edge `h` to vertex `n`,
-        /// with the offset estimate and side of `n`.
-        #[derive(Clone, Copy)]
-        struct Step {
-            h: u32,
-            n: u32,
-            estimate: (f64, f64),
-            side: Sign,
-        }
         let mut cur = start;
         let (mut cur_value, mut cur_error) = offset_estimate(self.point(cur), s);
         // The side of `cur`, to record when the walk stops there (the
@@ -368,12 +361,10 @@ impl ConvexArena {
         let first_out = self.vertices[cur as usize].half_edge;
         let (mut first, mut stop) = (first_out, first_out);
         loop {
-            // The best certified step, and an exactly certified one, each
-            // with the half-edge that leads to it.
-            let mut best: Option<(Step, f64)> = None;
-            let mut uncertain: Option<Step> = None;
             let mut h = first;
-            loop {
+            // The step: the half-edge to the neighbour certified closer,
+            // with that neighbour's offset estimate and side.
+            let (n, value, error, side) = loop {
                 let twin = self.half_edges[self.half_edges[h as usize].twin as usize];
                 let n = twin.origin;
                 let point = self.point(n);
@@ -395,41 +386,30 @@ impl ConvexArena {
                 }
                 let (value, error) = dot.offset(point);
                 let gain = flip * (value - cur_value);
-                let step = Step {
-                    h,
-                    n,
-                    estimate: (value, error),
-                    side,
-                };
-                if gain > error + cur_error {
-                    if best.is_none_or(|(_, g)| gain > g) {
-                        best = Some((step, gain));
-                    }
-                } else if gain >= -(error + cur_error)
-                    && uncertain.is_none()
-                    && compare_offsets(point, self.point(cur), s) == wanted
+                let bound = error + cur_error;
+                if gain > bound
+                    || (gain >= -bound && compare_offsets(point, self.point(cur), s) == wanted)
                 {
-                    // Too close to call in f64: exactly closer.
-                    uncertain = Some(step);
+                    // Certified closer: by the estimates, or when too
+                    // close to call in f64, exactly.
+                    break (n, value, error, side);
                 }
                 h = twin.next;
                 if h == stop {
-                    break;
+                    // No neighbour is closer: `cur` is an extremum.
+                    scratch.descent_steps += 1;
+                    return None;
                 }
-            }
+            };
             scratch.descent_steps += 1;
-            let step = best.map(|(step, _)| step).or(uncertain)?;
-            (cur, (cur_value, cur_error), cur_side) = (step.n, step.estimate, Some(step.side));
-            let h = step.h;
+            (cur, cur_value, cur_error, cur_side) = (n, value, error, Some(side));
+            let e = self.half_edges[h as usize];
             // Around the new vertex from the half-edge after the one back
             // to the vertex the walk came from, which is not on side
             // `target` (no vertex the walk visits is) and is certified
             // farther from it: it can end the walk no more than it can be
             // its next step.
-            (first, stop) = (
-                self.half_edges[h as usize].next,
-                self.half_edges[h as usize].twin,
-            );
+            (first, stop) = (e.next, e.twin);
         }
     }
 
