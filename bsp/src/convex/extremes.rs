@@ -190,13 +190,22 @@ impl ConvexArena {
 
     /// Finds `e_i` for the directions not in `valid`: over the cap of
     /// `poly` (its face) when some are valid, else over all its vertices
-    /// (face by face, breadth first, a vertex once per face around it).
+    /// (face by face, breadth first, each vertex once).
     #[inline(never)]
     fn find_extremes(&self, poly: PolyId, valid: u16, scratch: &mut Scratch) {
-        let mut best = [f64::NEG_INFINITY; DIRECTIONS];
+        // A valid direction starts at +∞, which no vertex passes: the
+        // visits need not test `valid`.
+        let mut best: [f64; DIRECTIONS] = core::array::from_fn(|i| {
+            if valid & (1 << i) == 0 {
+                f64::NEG_INFINITY
+            } else {
+                f64::INFINITY
+            }
+        });
         let Scratch {
             extremes: marks,
             faces,
+            vertices: seen,
             on_plane: order,
             ..
         } = scratch;
@@ -205,11 +214,11 @@ impl ConvexArena {
             let p = projections(approx);
             for i in 0..HALF {
                 let j = i + HALF;
-                if valid & (1 << i) == 0 && p[i] > best[i] {
+                if p[i] > best[i] {
                     best[i] = p[i];
                     marks.set(i, v, approx);
                 }
-                if valid & (1 << j) == 0 && -p[i] > best[j] {
+                if -p[i] > best[j] {
                     best[j] = -p[i];
                     marks.set(j, v, approx);
                 }
@@ -227,7 +236,11 @@ impl ConvexArena {
             let mut h = start;
             loop {
                 let e = self.half_edges[h as usize];
-                visit(e.origin);
+                // Over all the faces, a vertex is met on each face around
+                // it and visited the first time.
+                if valid != 0 || seen.insert(e.origin, true) {
+                    visit(e.origin);
+                }
                 let g = self.half_edges[e.twin as usize].face;
                 if valid == 0 && faces.insert(g, true) {
                     order.push(g);
@@ -238,8 +251,11 @@ impl ConvexArena {
                 }
             }
         }
-        // The march counts on finding no face marked.
+        // The march counts on finding no face or vertex marked.
         faces.clear();
+        if valid == 0 {
+            seen.clear();
+        }
     }
 
     /// The extremes in the direction closest to `n` and to `−n`, when the

@@ -159,7 +159,9 @@ impl ConvexArena {
     /// estimated distance to `s` (`|T̃|/W̃`, compared by
     /// cross-multiplication), with the side of every landmark that the
     /// filter tells; an extreme notes in `scratch.chain` the side whose
-    /// chain the march walks first.
+    /// chain the march walks first. The extreme in the direction opposite
+    /// to `n` is a candidate only when the one closest to `n` is not
+    /// below `s`.
     #[inline(never)]
     fn nearest_landmark(&self, s: &Plane, scratch: &mut Scratch) -> u32 {
         let extremes = self.extreme_candidates(s, scratch);
@@ -184,9 +186,17 @@ impl ConvexArena {
                 let point = self.point(v);
                 let dot = FilteredDot::new(point, s);
                 let (distance, w) = (dot.sum().abs(), point.approx[3]);
+                let side = dot.sign();
                 if distance * nearest_w < nearest * w {
-                    (nearest, nearest_w, start, start_side) = (distance, w, v, dot.sign());
+                    (nearest, nearest_w, start, start_side) = (distance, w, v, side);
                     scratch.chain = Some(chain);
+                }
+                if side == Some(Sign::Negative) {
+                    // The extreme in the direction closest to `n` is below
+                    // `s`: the one in the opposite direction is, as a rule,
+                    // lower still, so farther from `s`; only the length of
+                    // the descent depends on it.
+                    break;
                 }
             }
         }

@@ -102,9 +102,8 @@ pub fn plane_dot_exact(v: &Point4, s: &Plane) -> I256 {
 }
 
 /// An estimate of `T / W` (the signed distance of `v` to `s`, times `|n|`)
-/// and a bound on its absolute error, from the cached `f64`s: the filter's
-/// bound on `T` (module docs), widened for the division by `W̃` (relative
-/// error `u`) and the rounding of the quotient, with a generous margin.
+/// and a bound on its absolute error, from the cached `f64`s (see
+/// [`FilteredDot::offset`]).
 #[must_use]
 #[inline]
 pub fn offset_estimate(v: &Point4, s: &Plane) -> (f64, f64) {
@@ -161,16 +160,23 @@ impl FilteredDot {
         }
     }
 
-    /// [`offset_estimate`] of `v`, the vertex this was evaluated for.
+    /// [`offset_estimate`] of `v`, the vertex this was evaluated for:
+    /// `q = fl(s/W̃)` and the bound `e = fl(fl(m/W̃)·21u)` on `|q − T/W|`.
+    ///
+    /// With `W̃ = W(1+δ)`, `|δ| ≤ u`, and `|s − T| < 5.001·u·m` (module
+    /// docs): `s/W̃ − T/W = (s − T)/W̃ − (T/W)·δ/(1+δ)`, where
+    /// `|T/W| ≤ (1+u)(1 + 5.001·u)·m/W̃` since `|s| ≤ m` (rounding is
+    /// monotone, so `|fl(a+b)| ≤ fl(|a|+|b|)` at each sum); the quotient
+    /// adds `u·|s|/W̃ ≤ u·m/W̃`. In all `|q − T/W| < 7.01·u·m/W̃`, while
+    /// `e ≥ 21u·(1−u)²·m/W̃` (`21u` is exact; `m/W̃` is `0` or far above
+    /// the subnormals, as `m ≥ 1` when not `0` and `W̃ < 2^170`). The
+    /// threefold margin also covers the rounding of the difference of two
+    /// estimates and of the sum of their bounds when they are compared.
     #[inline]
     pub(crate) fn offset(self, v: &Point4) -> (f64, f64) {
         let w = v.approx[3];
-        let value = self.sum / w;
         let u = f64::EPSILON / 2.0;
-        let error = ((self.magnitude * FILTER_EPSILON + 4.0 * u * self.sum.abs()) / w
-            + 4.0 * u * value.abs())
-            * 1.25;
-        (value, error)
+        (self.sum / w, self.magnitude / w * (21.0 * u))
     }
 }
 
