@@ -315,31 +315,12 @@ impl ConvexArena {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_support::{R, tangent_plane};
     use super::super::{ConvexArena, CutOutcome, NO_TAG};
     use super::{DIRECTIONS, HALF, projections};
-    use crate::exact::{IntPoint, Plane};
-    use rand::{Rng, SeedableRng};
+    use crate::exact::IntPoint;
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
-    /// Half the edge of the box the polyhedra start from.
-    const R: i64 = 1 << 20;
-
-    /// A plane tangent to a sphere of random radius below `R` about the
-    /// origin, outward, with a normal of length about 2^10.
-    fn tangent_plane(rng: &mut ChaCha8Rng) -> Plane {
-        loop {
-            let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
-            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if !(0.1..=1.0).contains(&len) {
-                continue;
-            }
-            let n = v.map(|c| (c / len * 1024.0).round() as i64);
-            let norm = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
-            let radius = rng.random_range(0.8..0.99) * R as f64;
-            let d = -(radius * norm).round() as i128;
-            return Plane::new(n[0], n[1], n[2], d).expect("in budget");
-        }
-    }
 
     /// The offset of vertex `v` of `arena` along direction `i`.
     fn offset(arena: &ConvexArena, v: u32, i: usize) -> f64 {

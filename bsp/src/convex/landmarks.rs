@@ -232,53 +232,10 @@ impl ConvexArena {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId};
-    use crate::exact::{IntPoint, Plane};
+    use super::super::test_support::{assert_same_arena, cube, tangent_plane};
+    use super::super::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-
-    /// Half the edge of the box the polyhedra start from.
-    const R: i64 = 1 << 20;
-
-    /// A plane with a normal of length about 2^10 in a random direction,
-    /// tangent to the sphere of a random radius below `R` about the origin
-    /// (outward), so that chains of cuts build large round polyhedra.
-    fn tangent_plane(rng: &mut ChaCha8Rng) -> Plane {
-        loop {
-            let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
-            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if !(0.1..=1.0).contains(&len) {
-                continue;
-            }
-            let n = v.map(|c| (c / len * 1024.0).round() as i64);
-            let norm = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
-            let radius = rng.random_range(0.8..0.99) * R as f64;
-            let d = -(radius * norm).round() as i128;
-            return Plane::new(n[0], n[1], n[2], d).expect("in budget");
-        }
-    }
-
-    /// The cube `[-R, R]³`.
-    fn cube(arena: &mut ConvexArena) -> PolyId {
-        let corner = |c| IntPoint::new(c, c, c).expect("in budget");
-        arena.add_box(corner(-R), corner(R)).expect("a box")
-    }
-
-    /// Element-for-element equality of two arenas.
-    fn assert_same_arena(a: &ConvexArena, b: &ConvexArena) {
-        assert_eq!(a.half_edges, b.half_edges);
-        assert_eq!(a.faces.len(), b.faces.len());
-        for (x, y) in a.faces.iter().zip(&b.faces) {
-            assert_eq!((x.half_edge, x.tag), (y.half_edge, y.tag));
-            assert_eq!(a.planes[x.plane as usize], b.planes[y.plane as usize]);
-        }
-        assert_eq!(a.vertices.len(), b.vertices.len());
-        for v in 0..a.vertices.len() as u32 {
-            assert_eq!(a.vertex_half_edge(v), b.vertex_half_edge(v));
-            let (p, q) = (a.point(v), b.point(v));
-            assert_eq!((p.xyz_digits, p.w_digits), (q.xyz_digits, q.w_digits));
-        }
-    }
 
     /// Chains of two-sided cuts of two polyhedra in one arena, in random
     /// order, each going on with the lower part of its last cut (once with

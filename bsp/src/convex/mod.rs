@@ -31,6 +31,8 @@ mod split;
 #[cfg(test)]
 mod split_reference;
 mod survey;
+#[cfg(test)]
+mod test_support;
 pub mod validate;
 
 pub use cut::{CutOutcome, CutStats, KeptOutcome, Part};

@@ -259,49 +259,17 @@ fn ring_order(ring: &[RingFace], side_a: Sign) -> (usize, usize) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_support::{assert_same_arena, cube, random_plane};
     use super::super::{ConvexArena, KeptOutcome, Part, PolyId};
-    use crate::exact::{IntPoint, Plane};
+    use crate::exact::Plane;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-
-    /// Half the edge of the box the polyhedra start from.
-    const R: i64 = 1 << 20;
-
-    /// A plane with a normal of length about `scale` in a random
-    /// direction, at a random distance below `R` from the origin
-    /// (outward), so that chains of cuts keeping the part below build
-    /// large round polyhedra.
-    fn random_plane(rng: &mut ChaCha8Rng, scale: f64) -> Plane {
-        loop {
-            let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
-            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if !(0.1..=1.0).contains(&len) {
-                continue;
-            }
-            let n = v.map(|c| (c / len * scale).round() as i64);
-            let norm = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
-            let radius = rng.random_range(0.5..0.99) * R as f64;
-            let d = -(radius * norm).round() as i128;
-            return Plane::new(n[0], n[1], n[2], d).expect("in budget");
-        }
-    }
 
     /// Element-for-element equality of two polyhedra once extracted.
     fn assert_same_polyhedron(a: &ConvexArena, pa: PolyId, b: &ConvexArena, pb: PolyId) {
         let ((a, ia), (b, ib)) = (a.extract(pa), b.extract(pb));
         assert_eq!(ia, ib);
-        assert_eq!(a.half_edges, b.half_edges);
-        assert_eq!(a.faces.len(), b.faces.len());
-        for (x, y) in a.faces.iter().zip(&b.faces) {
-            assert_eq!((x.half_edge, x.tag), (y.half_edge, y.tag));
-            assert_eq!(a.planes[x.plane as usize], b.planes[y.plane as usize]);
-        }
-        assert_eq!(a.vertices.len(), b.vertices.len());
-        for v in 0..a.vertices.len() as u32 {
-            assert_eq!(a.vertex_half_edge(v), b.vertex_half_edge(v));
-            let (p, q) = (a.point(v), b.point(v));
-            assert_eq!((p.xyz_digits, p.w_digits), (q.xyz_digits, q.w_digits));
-        }
+        assert_same_arena(&a, &b);
     }
 
     /// Chains of one-sided cuts by random planes (normals of 2^10, where
@@ -314,13 +282,12 @@ mod tests {
     #[test]
     fn ring_cuts_equal_the_general_split() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let corner = |c| IntPoint::new(c, c, c).expect("in budget");
         let (mut cuts, mut by_ring) = (0, 0);
         for scale in [1024.0, 4.0] {
             let mut arena = ConvexArena::new();
-            let mut poly = arena.add_box(corner(-R), corner(R)).expect("a box");
+            let mut poly = cube(&mut arena);
             for _ in 0..300 {
-                let mut s = random_plane(&mut rng, scale);
+                let mut s = random_plane(&mut rng, scale, 0.5..0.99);
                 if scale < 8.0 {
                     s = Plane::new(s.a, s.b, s.c, s.d >> 16 << 16).expect("in budget");
                 }
@@ -351,7 +318,7 @@ mod tests {
                         }
                         poly = kept;
                         if keep == Part::Above {
-                            poly = arena.add_box(corner(-R), corner(R)).expect("a box");
+                            poly = cube(&mut arena);
                         }
                     }
                     (outcome, expected) => assert_eq!(outcome, expected),

@@ -304,31 +304,11 @@ fn rank_by_face(ring: &mut [RingFace], pairs: &mut Vec<(u32, u32)>, order: &mut 
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_support::{assert_same_arena, cube, random_plane};
     use super::super::{ConvexArena, CutOutcome, PolyId};
-    use crate::exact::{IntPoint, Plane};
-    use rand::{Rng, SeedableRng};
+    use crate::exact::Plane;
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
-    /// Half the edge of the box the polyhedra start from.
-    const R: i64 = 1 << 20;
-
-    /// A plane with a normal of length about `scale` in a random
-    /// direction, at a distance from the origin (outward) drawn from
-    /// `radii` times `R`.
-    fn random_plane(rng: &mut ChaCha8Rng, scale: f64, radii: std::ops::Range<f64>) -> Plane {
-        loop {
-            let v = [0; 3].map(|_| rng.random_range(-1.0..1.0f64));
-            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if !(0.1..=1.0).contains(&len) {
-                continue;
-            }
-            let n = v.map(|c| (c / len * scale).round() as i64);
-            let norm = ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt();
-            let radius = rng.random_range(radii.clone()) * R as f64;
-            let d = -(radius * norm).round() as i128;
-            return Plane::new(n[0], n[1], n[2], d).expect("in budget");
-        }
-    }
 
     /// Cuts `poly` by `s` with and without the ring split and checks that
     /// they leave the arena element for element the same, with both parts
@@ -360,22 +340,6 @@ mod tests {
         (outcome, used.then_some(ring))
     }
 
-    /// Element-for-element equality of two arenas.
-    fn assert_same_arena(a: &ConvexArena, b: &ConvexArena) {
-        assert_eq!(a.half_edges, b.half_edges);
-        assert_eq!(a.faces.len(), b.faces.len());
-        for (x, y) in a.faces.iter().zip(&b.faces) {
-            assert_eq!((x.half_edge, x.tag), (y.half_edge, y.tag));
-            assert_eq!(a.planes[x.plane as usize], b.planes[y.plane as usize]);
-        }
-        assert_eq!(a.vertices.len(), b.vertices.len());
-        for v in 0..a.vertices.len() as u32 {
-            assert_eq!(a.vertex_half_edge(v), b.vertex_half_edge(v));
-            let (p, q) = (a.point(v), b.point(v));
-            assert_eq!((p.xyz_digits, p.w_digits), (q.xyz_digits, q.w_digits));
-        }
-    }
-
     /// Chains of two-sided cuts of a box by random planes (normals of
     /// 2^10, where sections are generic, and of 2^2 with offsets on a coarse
     /// grid, where vertices often lie on the plane), going on with the part
@@ -386,11 +350,10 @@ mod tests {
     #[test]
     fn ring_splits_equal_the_general_split() {
         let mut rng = ChaCha8Rng::seed_from_u64(12);
-        let corner = |c| IntPoint::new(c, c, c).expect("in budget");
         let (mut cuts, mut by_ring, mut longest) = (0, 0, 0);
         for scale in [1024.0, 4.0] {
             let mut arena = ConvexArena::new();
-            let mut poly: PolyId = arena.add_box(corner(-R), corner(R)).expect("a box");
+            let mut poly: PolyId = cube(&mut arena);
             for _ in 0..150 {
                 let mut s = random_plane(&mut rng, scale, 0.8..0.99);
                 if scale < 8.0 {
