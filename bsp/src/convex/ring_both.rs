@@ -23,7 +23,7 @@
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::ring::RingFace;
 use super::scratch::Scratch;
-use crate::exact::{Plane, Sign, intersect_3_planes_with};
+use crate::exact::{Plane, Sign};
 
 /// The most ring faces ranked by counting (more go to the general sort).
 const FEW_FACES: usize = 8;
@@ -65,30 +65,7 @@ impl ConvexArena {
                 ring[prev(i)].rank
             }
         };
-        self.half_edges.resize(
-            (h0 + 6 * k32) as usize,
-            HalfEdge {
-                origin: 0,
-                twin: 0,
-                next: 0,
-                face: 0,
-            },
-        );
-        self.faces.resize(
-            (f0 + k32 + 2) as usize,
-            Face {
-                plane: 0,
-                half_edge: 0,
-                tag: 0,
-            },
-        );
-        self.vertices.resize(
-            (v0 + 2 * k32) as usize,
-            Vertex {
-                point: 0,
-                half_edge: 0,
-            },
-        );
+        self.grow(6 * k, k + 2, 2 * k);
         // 1. Split the crossing edges, the points in the order of their
         // vertices.
         self.points.reserve(k);
@@ -232,41 +209,6 @@ impl ConvexArena {
             };
         }
         [below, above]
-    }
-
-    /// Splits the edge of half-edge `h` (from `+` to `−`) at its meet with
-    /// `s`, as the general split does: new vertex `m` at point `p`, `h2 =
-    /// first` after `h` and `t2 = first + 1` after its twin `t`.
-    #[inline(always)]
-    fn split_crossing(&mut self, h: u32, s: &Plane, first: u32, m: u32, p: u32) {
-        let (h2, t2) = (first, first + 1);
-        let e = self.half_edges[h as usize];
-        let t = self.half_edges[e.twin as usize];
-        let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
-        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
-        debug_assert_eq!(points.len() as u32, p);
-        intersect_3_planes_with(plane(e.face), plane(t.face), s, |point| points.push(point))
-            .expect("a crossing edge meets the cutting plane in one point");
-        self.vertices[m as usize] = Vertex {
-            point: p,
-            half_edge: h2,
-        };
-        self.half_edges[h2 as usize] = HalfEdge {
-            origin: m,
-            twin: e.twin,
-            next: e.next,
-            face: e.face,
-        };
-        self.half_edges[t2 as usize] = HalfEdge {
-            origin: m,
-            twin: h,
-            next: t.next,
-            face: t.face,
-        };
-        let old = &mut self.half_edges[h as usize];
-        (old.next, old.twin) = (h2, t2);
-        let old_twin = &mut self.half_edges[e.twin as usize];
-        (old_twin.next, old_twin.twin) = (t2, h2);
     }
 }
 

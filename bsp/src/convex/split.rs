@@ -67,29 +67,10 @@ impl ConvexArena {
         let new_faces = if two_sided { counts.straddling } else { 0 };
         let caps = usize::from(built[0]) + usize::from(built[1]);
         let copies = if two_sided { sizes[1] } else { 0 };
-        self.half_edges.resize(
-            h0 + 2 * counts.crossings + face_halves * counts.straddling + sizes[0] + sizes[1],
-            HalfEdge {
-                origin: 0,
-                twin: 0,
-                next: 0,
-                face: 0,
-            },
-        );
-        self.faces.resize(
-            f0 + new_faces + caps,
-            Face {
-                plane: 0,
-                half_edge: 0,
-                tag: 0,
-            },
-        );
-        self.vertices.resize(
-            v0 + counts.crossings + copies,
-            Vertex {
-                point: 0,
-                half_edge: 0,
-            },
+        self.grow(
+            2 * counts.crossings + face_halves * counts.straddling + sizes[0] + sizes[1],
+            new_faces + caps,
+            counts.crossings + copies,
         );
         // 1. Split crossing edges.
         self.split_edges(relevant, counts.crossings, s, h0 as u32, v0 as u32);
@@ -168,45 +149,73 @@ impl ConvexArena {
             _ => None,
         });
         let p0 = self.points.len() as u32;
-        // The new points, each written in place: the meet of the planes of
-        // the edge's two faces and s.
         self.points.reserve(crossings);
-        let (half_edges, vertices, faces, planes, points) = (
-            &mut self.half_edges[..],
-            &mut self.vertices[..],
-            &self.faces,
-            &self.planes,
-            &mut self.points,
-        );
-        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
         for (i, h) in (0u32..).zip(crossing_edges) {
-            let (h2, t2, m) = (h0 + 2 * i, h0 + 2 * i + 1, v0 + i);
-            let e = half_edges[h as usize];
-            let t = half_edges[e.twin as usize];
-            intersect_3_planes_with(plane(e.face), plane(t.face), s, |p| points.push(p))
-                .expect("a crossing edge meets the cutting plane in one point");
-            vertices[m as usize] = Vertex {
-                point: p0 + i,
-                half_edge: h2,
-            };
-            // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
-            half_edges[h2 as usize] = HalfEdge {
-                origin: m,
-                twin: e.twin,
-                next: e.next,
-                face: e.face,
-            };
-            half_edges[t2 as usize] = HalfEdge {
-                origin: m,
-                twin: h,
-                next: t.next,
-                face: t.face,
-            };
-            let old = &mut half_edges[h as usize];
-            (old.next, old.twin) = (h2, t2);
-            let old_twin = &mut half_edges[e.twin as usize];
-            (old_twin.next, old_twin.twin) = (t2, h2);
+            self.split_crossing(h, s, h0 + 2 * i, v0 + i, p0 + i);
         }
+    }
+
+    /// Splits the edge of half-edge `h` (from `+` to `−`) at its meet with
+    /// `s` (of the planes of the edge's two faces and `s`): new vertex `m`
+    /// at point `p` (pushed: the next point), half-edges `h2 = first` after
+    /// `h` and `t2 = first + 1` after its twin `t`, whose slots are there
+    /// already. Both splits (`split_ring_both` too) split edges this way.
+    #[inline(always)]
+    pub(super) fn split_crossing(&mut self, h: u32, s: &Plane, first: u32, m: u32, p: u32) {
+        let (h2, t2) = (first, first + 1);
+        let e = self.half_edges[h as usize];
+        let t = self.half_edges[e.twin as usize];
+        let (faces, planes, points) = (&self.faces, &self.planes, &mut self.points);
+        let plane = |f: u32| &planes[faces[f as usize].plane as usize];
+        debug_assert_eq!(points.len() as u32, p);
+        intersect_3_planes_with(plane(e.face), plane(t.face), s, |point| points.push(point))
+            .expect("a crossing edge meets the cutting plane in one point");
+        self.vertices[m as usize] = Vertex {
+            point: p,
+            half_edge: h2,
+        };
+        // h: a→b becomes a→m, h2: m→b; twin t: b→a becomes b→m, t2: m→a.
+        self.half_edges[h2 as usize] = HalfEdge {
+            origin: m,
+            twin: e.twin,
+            next: e.next,
+            face: e.face,
+        };
+        self.half_edges[t2 as usize] = HalfEdge {
+            origin: m,
+            twin: h,
+            next: t.next,
+            face: t.face,
+        };
+        let old = &mut self.half_edges[h as usize];
+        (old.next, old.twin) = (h2, t2);
+        let old_twin = &mut self.half_edges[e.twin as usize];
+        (old_twin.next, old_twin.twin) = (t2, h2);
+    }
+
+    /// Grows the half-edge, face and vertex arrays by the given counts, for
+    /// a split to write the new elements at known indices.
+    #[inline]
+    pub(super) fn grow(&mut self, half_edges: usize, faces: usize, vertices: usize) {
+        let half_edge = HalfEdge {
+            origin: 0,
+            twin: 0,
+            next: 0,
+            face: 0,
+        };
+        self.half_edges
+            .resize(self.half_edges.len() + half_edges, half_edge);
+        let face = Face {
+            plane: 0,
+            half_edge: 0,
+            tag: 0,
+        };
+        self.faces.resize(self.faces.len() + faces, face);
+        let vertex = Vertex {
+            point: 0,
+            half_edge: 0,
+        };
+        self.vertices.resize(self.vertices.len() + vertices, vertex);
     }
 
     /// What the split needs to know about face `f` (all vertices
