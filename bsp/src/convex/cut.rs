@@ -20,7 +20,12 @@
 //! Both hand the faces that meet the section to `split`, which
 //! does steps 1–3. [`ConvexArena::cut_keeping`] is the edge-descent cut for
 //! callers that keep one part: step 3 builds only that part's cap and copies
-//! no vertices, and the faces of the other part are not split.
+//! no vertices, and the faces of the other part are not split. When the
+//! descent meets the section at a crossing edge and no vertex lies on `s`
+//! (the common case), the edge-descent cuts walk the section's ring of
+//! faces instead (`ring`, `ring_both`) and split from it with less
+//! bookkeeping: the same arrays for [`ConvexArena::cut`], the same
+//! polyhedron once extracted for [`ConvexArena::cut_keeping`].
 
 use super::mesh::{ConvexArena, PolyId};
 use super::scratch::{Scratch, StampMap};
