@@ -103,7 +103,7 @@ pub fn plane_dot_exact(v: &Point4, s: &Plane) -> I256 {
 
 /// An estimate of `T / W` (the signed distance of `v` to `s`, times `|n|`)
 /// and a bound on its absolute error, from the cached `f64`s (see
-/// [`FilteredDot::offset`]).
+/// `FilteredDot::offset`, which states the bound and proves it).
 #[must_use]
 #[inline]
 pub fn offset_estimate(v: &Point4, s: &Plane) -> (f64, f64) {
