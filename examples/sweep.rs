@@ -242,8 +242,10 @@ fn gear_mesh(gear: &WedgeMesh) -> Mesh {
     for t in &gear.triangles {
         let [a, b, c] = t.map(|v| Vec3::from_array(gear.vertices[v].map(|x| x as f32)));
         let normal = (b - a).cross(c - a).normalize_or_zero().to_array();
+        let first = cell.positions.len() as u32;
         cell.positions.extend([a, b, c].map(|p| p.to_array()));
         cell.normals.extend([normal; 3]);
+        cell.indices.extend(first..first + 3);
     }
     cell.to_mesh()
 }

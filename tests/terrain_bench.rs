@@ -21,7 +21,7 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::mesh::{cell_meshes, cell_meshes_from};
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainCellChanged, TerrainPlugin,
-    TerrainSystems, apply_carve_with_faces, terrain_octree_config,
+    TerrainSettings, TerrainSystems, apply_carve_with_faces, terrain_octree_config,
 };
 use rayon::prelude::*;
 
@@ -475,5 +475,92 @@ fn carving_at_sixty_frames_per_second() {
         lag[lag.len() - 1],
         100.0 * within(1),
         100.0 * within(2)
+    );
+}
+
+/// The latency a game sees: from a crater carve sent as a [`Carve`]
+/// message to its meshes (and, with the `avian` feature, its colliders) in
+/// place, [`CarveApplied::latency`], one carve at a time on
+/// [`large_terrain`], the app updated as fast as it goes (no frame pacing).
+/// Also how many app updates each carve took to show.
+///
+/// `cargo test --release --all-features -p bevy_chisel --test terrain_bench latency -- --ignored --nocapture`
+#[test]
+#[ignore = "benchmark"]
+fn crater_latency_to_meshes_and_colliders() {
+    let carves = env_or("CHISEL_BENCH_CARVES", 1000);
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, AssetPlugin::default(), TerrainPlugin))
+        .init_asset::<Mesh>()
+        .init_asset::<StandardMaterial>();
+    #[cfg(feature = "avian")]
+    app.add_plugins(bevy_chisel::terrain::avian::TerrainAvianPlugin::default());
+    let colliders = cfg!(feature = "avian");
+    let terrain = app.world_mut().spawn(large_terrain()).id();
+    let idle = |app: &App| {
+        app.world()
+            .get::<Terrain>(terrain)
+            .is_some_and(Terrain::is_idle)
+    };
+    while !idle(&app) {
+        app.update();
+    }
+    let mut cursor = app
+        .world()
+        .resource::<Messages<CarveApplied>>()
+        .get_cursor_current();
+    let mut next = uniform(0x9E37_79B9_7F4A_7C15);
+    let (mut latency, mut apply, mut mesh, mut collider, mut updates) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..carves {
+        let tool = crater(&mut next);
+        app.world_mut().write_message(Carve {
+            terrain,
+            tool,
+            edit: Edit::Subtract,
+        });
+        let mut n = 0usize;
+        let report = loop {
+            app.update();
+            n += 1;
+            let messages = app.world().resource::<Messages<CarveApplied>>();
+            if let Some(report) = cursor.read(messages).last() {
+                break report.clone();
+            }
+            assert!(n < 1_000_000, "the carve never landed");
+        };
+        latency.push(report.latency);
+        apply.push(report.apply_time);
+        mesh.push(report.mesh_time);
+        collider.push(report.collider_time);
+        updates.push(n);
+    }
+    for times in [&mut latency, &mut apply, &mut mesh, &mut collider] {
+        times.sort();
+    }
+    updates.sort();
+    println!(
+        "{carves} crater carves (r = 2 m, 1 mm grid, 256 m × 256 m) through the ECS, \
+         colliders {}, {} worker threads",
+        if colliders { "on (avian)" } else { "off" },
+        TerrainSettings::default().worker_threads
+    );
+    for (name, times) in [
+        ("latency", &latency),
+        ("apply", &apply),
+        ("meshes", &mesh),
+        ("colliders", &collider),
+    ] {
+        println!(
+            "{name:>10}: median {:.2} ms, p99 {:.2} ms, max {:.2} ms",
+            percentile(times, 0.5),
+            percentile(times, 0.99),
+            times.last().map_or(0.0, |t| t.as_secs_f64() * 1e3)
+        );
+    }
+    println!(
+        "app updates until shown: median {}, max {}",
+        updates[updates.len() / 2],
+        updates.last().copied().unwrap_or(0)
     );
 }

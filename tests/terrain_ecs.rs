@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::time::Duration;
 
 use bevy::asset::AssetPlugin;
-use bevy::mesh::VertexAttributeValues;
+use bevy::mesh::{Indices, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, CellKey, Edit, Octree, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
@@ -105,7 +105,7 @@ fn shown(app: &mut App) -> BTreeMap<(CellKey, u8), (Entity, AssetId<Mesh>)> {
         .collect()
 }
 
-/// Total area of the shown cell meshes (non-indexed triangle lists): the
+/// Total area of the shown cell meshes (indexed triangle lists): the
 /// same exact surface has the same area whichever pieces its cells were
 /// triangulated into (a cell rebuilt by a carve is meshed from the faces
 /// the carve handed back, one restored by undo afresh).
@@ -120,8 +120,11 @@ fn shown_area(app: &mut App) -> f64 {
         else {
             panic!("cell meshes have Float32x3 positions");
         };
-        for t in p.chunks_exact(3) {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(v).as_dvec3());
+        let Some(Indices::U32(indices)) = mesh.indices() else {
+            panic!("cell meshes have u32 indices");
+        };
+        for t in indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(p[v as usize]).as_dvec3());
             area += 0.5 * (b - a).cross(c - a).length();
         }
     }

@@ -1,5 +1,5 @@
-//! Carving in the ECS: messages in, exact edits on the async compute pool,
-//! meshes of the changed cells out within a per-frame time budget.
+//! Carving in the ECS: messages in, exact edits on worker threads, meshes
+//! and colliders of the changed cells out.
 //!
 //! Flow per terrain, one job at a time and in request order:
 //!
@@ -8,31 +8,34 @@
 //!    once with [`CarveRejected`]).
 //! 2. [`start_jobs`] takes the consecutive carves at the head of the queue
 //!    and runs them on a snapshot of the octree (a cheap persistent clone)
-//!    on the [`AsyncComputeTaskPool`], then meshes every cell they changed
-//!    (in parallel), still off the main thread. An undo swaps the previous
-//!    snapshot in and meshes the cells its carve had changed.
+//!    on the [`AsyncComputeTaskPool`], which then builds the meshes and
+//!    colliders of every cell they changed, in parallel, still off the main
+//!    thread ([`super::jobs`]). An undo swaps the previous snapshot in and
+//!    rebuilds the cells its carve had changed.
 //! 3. [`finish_jobs`] swaps the new octree in, records undo steps and queues
-//!    the cell meshes.
-//! 4. [`upload_meshes`] adds the queued cell meshes (built in step 2) as
-//!    assets and entities until the frame's budget
-//!    ([`TerrainSettings::mesh_budget`]) is spent, writes a [`TerrainCellChanged`] per cell and, once a carve is fully
-//!    visible, its [`CarveApplied`].
+//!    the cells.
+//! 4. [`upload_meshes`] adds the queued meshes as assets and entities, with
+//!    their colliders: all cells of a carve in the same frame, so that
+//!    neighbouring cells always meet and the colliders match what is
+//!    drawn. It writes a [`TerrainCellChanged`] per cell and each carve's
+//!    [`CarveApplied`]. Only the first full build of a terrain is spread
+//!    over frames, within [`TerrainSettings::mesh_budget`].
 
-use std::collections::{BTreeMap, BTreeSet};
-use std::sync::Arc;
+use std::collections::{BTreeMap, VecDeque};
 use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, futures::check_ready};
-use chisel_bsp::octree::{CellKey, Changes, Edit, Octree};
-use chisel_bsp::tools::Quantization;
-use chisel_bsp::tree::BoundaryFace;
-use rayon::prelude::*;
+use chisel_bsp::octree::{CellKey, Edit};
 
-use super::component::{Job, Terrain, TerrainCell, TerrainMaterials, apply_carve_with_faces};
+use super::component::{Job, Runtime, Terrain, TerrainCell, TerrainMaterials};
 use super::error::TerrainError;
-use super::mesh::{ReadyMesh, cell_meshes, cell_meshes_from, cell_translation};
-use super::tool::{CarveTool, GridTool};
+use super::jobs::{
+    BuiltMesh, CellUpdate, JobContext, StepOutcome, Workers, carve_batch, on_pool, remesh,
+};
+use super::mesh::DEFAULT_SMOOTHING_DEGREES;
+use super::physics::TerrainPhysicsBackend;
+use super::tool::CarveTool;
 
 /// Carve a terrain: remove material inside the tool, add material to its
 /// empty space, paint it, or keep only what is inside.
@@ -53,21 +56,27 @@ pub struct UndoCarve {
     pub terrain: Entity,
 }
 
-/// A carve (or undo) is applied and every mesh it changed is visible.
+/// A carve (or undo) is applied and every mesh and collider it changed is
+/// in place.
 #[derive(Message, Clone, Debug)]
 pub struct CarveApplied {
     /// The terrain entity.
     pub terrain: Entity,
     /// The edit (`None` for an undo).
     pub edit: Option<Edit>,
-    /// Leaf cells whose meshes were rebuilt or removed.
+    /// Leaf cells this carve (or undo) changed, split or merged: their
+    /// meshes were rebuilt or removed.
     pub cells: usize,
     /// Time in the exact kernel (off the main thread).
     pub apply_time: Duration,
-    /// Time computing the cell meshes (off the main thread), shared by the
+    /// Time building the cell meshes (off the main thread), shared by the
     /// carves of one batch.
     pub mesh_time: Duration,
-    /// From reading the request to the last changed mesh being in place.
+    /// Time building the cell colliders (off the main thread; zero without
+    /// a physics backend), shared by the carves of one batch.
+    pub collider_time: Duration,
+    /// From reading the request to the last changed mesh and collider
+    /// being in place.
     pub latency: Duration,
 }
 
@@ -80,8 +89,8 @@ pub struct CarveRejected {
     pub error: TerrainError,
 }
 
-/// The meshes of one leaf cell of a terrain were rebuilt (or removed, with
-/// no entities): rebuild its physics collider here.
+/// The meshes (and colliders) of one leaf cell of a terrain were rebuilt,
+/// or removed (no entities).
 #[derive(Message, Clone, Debug, PartialEq, Eq)]
 pub struct TerrainCellChanged {
     /// The terrain entity.
@@ -96,16 +105,21 @@ pub struct TerrainCellChanged {
 /// Tuning of the terrain systems.
 #[derive(Resource, Clone, Debug)]
 pub struct TerrainSettings {
-    /// Main-thread time per frame for turning cell meshes into assets and
-    /// entities (at least one cell is uploaded per frame).
+    /// Main-thread time per frame for adding the cells of a terrain's first
+    /// full build (at least one cell per terrain and frame). A carve's
+    /// cells are always added in one frame.
     pub mesh_budget: Duration,
     /// Most carves applied in one background job.
     pub max_batch: usize,
-    /// Threads that apply carves and mesh cells in the background. The
+    /// Threads that apply carves and build cells in the background. The
     /// default is every core but one (at least one), so that the main
     /// thread keeps a core to itself however large the carve; results are
     /// bit-identical for any number.
     pub worker_threads: usize,
+    /// Faces meeting at less than this angle (degrees) share smooth
+    /// normals; sharper edges, such as crater rims, stay sharp. 0 gives
+    /// flat shading.
+    pub smoothing_degrees: f32,
 }
 
 impl Default for TerrainSettings {
@@ -115,80 +129,19 @@ impl Default for TerrainSettings {
             max_batch: 16,
             worker_threads: std::thread::available_parallelism()
                 .map_or(1, |n| n.get().saturating_sub(1).max(1)),
+            smoothing_degrees: DEFAULT_SMOOTHING_DEGREES,
         }
     }
 }
 
-/// The thread pool of the background jobs (state of [`start_jobs`]), rebuilt when
-/// [`TerrainSettings::worker_threads`] changes (`None`: rayon's global pool,
-/// if a pool could not be built).
-#[derive(Default)]
-pub struct Workers {
-    threads: usize,
-    pool: Option<Arc<rayon::ThreadPool>>,
-}
-
-impl Workers {
-    fn pool(&mut self, threads: usize) -> Option<Arc<rayon::ThreadPool>> {
-        let threads = threads.max(1);
-        if self.threads != threads {
-            self.threads = threads;
-            self.pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .thread_name(|i| format!("chisel-terrain-{i}"))
-                .build()
-                .ok()
-                .map(Arc::new);
-        }
-        self.pool.clone()
-    }
-}
-
-/// Runs `job` on `pool` (or on rayon's global pool).
-fn on_pool<T>(pool: Option<Arc<rayon::ThreadPool>>, job: impl FnOnce() -> T + Send) -> T
-where
-    T: Send,
-{
-    match pool {
-        Some(pool) => pool.install(job),
-        None => job(),
-    }
-}
-
-/// One step of a background job.
-pub(crate) enum StepOutcome {
-    Applied {
-        before: Octree,
-        changes: Changes,
-        tool: GridTool,
-        edit: Edit,
-        apply_time: Duration,
-        requested: Instant,
-    },
-    Rejected {
-        error: TerrainError,
-    },
-    Undone {
-        requested: Instant,
-    },
-}
-
-/// What a background job hands back.
-pub(crate) struct JobOutput {
-    octree: Octree,
-    steps: Vec<StepOutcome>,
-    meshes: Vec<(CellKey, Option<Vec<ReadyMesh>>)>,
-    mesh_time: Duration,
-}
-
-/// Work for [`upload_meshes`].
-pub(crate) enum Upload {
-    Cell {
-        key: CellKey,
-        translation: Vec3,
-        meshes: Option<Vec<ReadyMesh>>,
-    },
-    Report(CarveApplied, Instant),
+/// A finished job's cells and reports, waiting for [`upload_meshes`].
+pub(crate) struct Upload {
+    /// Cells still to add, in key order.
+    cells: VecDeque<CellUpdate>,
+    /// Whether the cells may be spread over frames (a first full build).
+    spread: bool,
+    /// The reports to write once every cell is in place.
+    reports: Vec<(CarveApplied, Instant)>,
 }
 
 /// Reads [`Carve`] and [`UndoCarve`] into the terrains' queues.
@@ -240,6 +193,7 @@ pub fn read_requests(
 /// Starts the next job of every terrain that has none running.
 pub fn start_jobs(
     settings: Res<TerrainSettings>,
+    physics: Res<TerrainPhysicsBackend>,
     mut workers: Local<Workers>,
     mut terrains: Query<(Entity, &mut Terrain)>,
     mut rejected: MessageWriter<CarveRejected>,
@@ -250,14 +204,18 @@ pub fn start_jobs(
         if terrain.runtime.task.is_some() {
             continue;
         }
-        let quantization = terrain.quantization;
+        let context = JobContext {
+            quantization: terrain.quantization,
+            smoothing_degrees: settings.smoothing_degrees,
+            physics: physics.0.clone(),
+        };
         if terrain.runtime.needs_full_mesh {
             terrain.runtime.needs_full_mesh = false;
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {
-                    remesh(octree, quantization, Vec::new(), keys, BTreeMap::new())
+                    remesh(octree, &context, Vec::new(), keys, BTreeMap::new(), true)
                 })
             }));
             continue;
@@ -267,10 +225,13 @@ pub fn start_jobs(
             Some(Job::Undo { requested }) => match terrain.undo_now() {
                 Ok(keys) => {
                     let octree = terrain.octree.clone();
-                    let steps = vec![StepOutcome::Undone { requested }];
+                    let steps = vec![StepOutcome::Undone {
+                        cells: keys.len(),
+                        requested,
+                    }];
                     terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                         on_pool(pool, || {
-                            remesh(octree, quantization, steps, keys, BTreeMap::new())
+                            remesh(octree, &context, steps, keys, BTreeMap::new(), false)
                         })
                     }));
                 }
@@ -300,93 +261,17 @@ pub fn start_jobs(
                     }
                 }
                 let octree = terrain.octree.clone();
-                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                    on_pool(pool, || carve_batch(octree, quantization, batch))
-                }));
+                terrain.runtime.task =
+                    Some(AsyncComputeTaskPool::get().spawn(async move {
+                        on_pool(pool, || carve_batch(octree, &context, batch))
+                    }));
             }
         }
-    }
-}
-
-/// Applies a batch of carves in order to `octree` and meshes the cells
-/// they changed.
-fn carve_batch(
-    mut octree: Octree,
-    quantization: Quantization,
-    batch: Vec<(GridTool, Edit, Instant)>,
-) -> JobOutput {
-    let mut steps = Vec::with_capacity(batch.len());
-    let mut keys = Vec::new();
-    // The latest faces handed back for each cell whose content a carve of
-    // the batch replaced; a later carve that changes the cell otherwise
-    // (relabels it, splits it, or only touches it) drops them.
-    let mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>> = BTreeMap::new();
-    for (tool, edit, requested) in batch {
-        let before = octree.clone();
-        let start = Instant::now();
-        match apply_carve_with_faces(&mut octree, &tool, edit) {
-            Ok((changes, faces)) => {
-                for key in changes.changed.iter().chain(&changes.removed) {
-                    fresh.remove(key);
-                }
-                fresh.extend(faces);
-                keys.extend(changes.changed.iter().copied());
-                keys.extend(changes.removed.iter().copied());
-                steps.push(StepOutcome::Applied {
-                    before,
-                    changes,
-                    tool,
-                    edit,
-                    apply_time: start.elapsed(),
-                    requested,
-                });
-            }
-            Err(error) => steps.push(StepOutcome::Rejected { error }),
-        }
-    }
-    remesh(octree, quantization, steps, keys, fresh)
-}
-
-/// Meshes `keys` of `octree` (a key that is no longer a leaf gets `None`),
-/// from the faces in `fresh` where a carve handed them back.
-fn remesh(
-    octree: Octree,
-    quantization: Quantization,
-    steps: Vec<StepOutcome>,
-    keys: Vec<CellKey>,
-    mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
-) -> JobOutput {
-    let start = Instant::now();
-    let keys: BTreeSet<CellKey> = keys.into_iter().collect();
-    let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> = keys
-        .into_iter()
-        .map(|key| (key, fresh.remove(&key)))
-        .collect();
-    let meshes = jobs
-        .into_par_iter()
-        .map(|(key, faces)| {
-            let meshes = octree.leaf(key).map(|_| {
-                match faces {
-                    Some(faces) => cell_meshes_from(&octree, &quantization, key, faces),
-                    None => cell_meshes(&octree, &quantization, key),
-                }
-                .into_iter()
-                .map(ReadyMesh::from)
-                .collect()
-            });
-            (key, meshes)
-        })
-        .collect();
-    JobOutput {
-        octree,
-        steps,
-        meshes,
-        mesh_time: start.elapsed(),
     }
 }
 
 /// Collects finished jobs: swaps the new octree in, records undo steps and
-/// queues the meshes.
+/// queues the cells.
 pub fn finish_jobs(
     mut terrains: Query<(Entity, &mut Terrain)>,
     mut rejected: MessageWriter<CarveRejected>,
@@ -400,15 +285,16 @@ pub fn finish_jobs(
             continue;
         };
         terrain.runtime.task = None;
-        let cells = output.meshes.len();
-        for (key, meshes) in output.meshes {
-            let translation = cell_translation(&output.octree, &terrain.quantization, key);
-            terrain.runtime.uploads.push_back(Upload::Cell {
-                key,
-                translation,
-                meshes,
-            });
-        }
+        let mut reports = Vec::new();
+        let report = |edit, cells, apply_time| CarveApplied {
+            terrain: entity,
+            edit,
+            cells,
+            apply_time,
+            mesh_time: output.mesh_time,
+            collider_time: output.collider_time,
+            latency: Duration::ZERO,
+        };
         for step in output.steps {
             match step {
                 StepOutcome::Applied {
@@ -419,31 +305,12 @@ pub fn finish_jobs(
                     apply_time,
                     requested,
                 } => {
+                    let cells = changes.changed.len() + changes.removed.len();
+                    reports.push((report(Some(edit), cells, apply_time), requested));
                     terrain.record(before, changes, tool, edit);
-                    terrain.runtime.uploads.push_back(Upload::Report(
-                        CarveApplied {
-                            terrain: entity,
-                            edit: Some(edit),
-                            cells,
-                            apply_time,
-                            mesh_time: output.mesh_time,
-                            latency: Duration::ZERO,
-                        },
-                        requested,
-                    ));
                 }
-                StepOutcome::Undone { requested } => {
-                    terrain.runtime.uploads.push_back(Upload::Report(
-                        CarveApplied {
-                            terrain: entity,
-                            edit: None,
-                            cells,
-                            apply_time: Duration::ZERO,
-                            mesh_time: output.mesh_time,
-                            latency: Duration::ZERO,
-                        },
-                        requested,
-                    ));
+                StepOutcome::Undone { cells, requested } => {
+                    reports.push((report(None, cells, Duration::ZERO), requested));
                 }
                 StepOutcome::Rejected { error } => {
                     rejected.write(CarveRejected {
@@ -453,16 +320,25 @@ pub fn finish_jobs(
                 }
             }
         }
-        // For an undo or a full remesh this is the octree already in place.
+        terrain.runtime.uploads.push_back(Upload {
+            cells: output.cells.into(),
+            spread: output.full,
+            reports,
+        });
+        // For an undo or a full build this is the octree already in place.
         terrain.octree = output.octree;
     }
 }
 
-/// Turns queued cell meshes into assets and entities within the frame's
-/// budget.
+/// Adds queued cells as assets and entities, with their colliders, and
+/// writes the reports of the carves whose cells are all in place.
+///
+/// Every terrain gets its turn each frame: a terrain whose first full
+/// build is still being added does not hold the others back.
 #[allow(clippy::too_many_arguments)]
 pub fn upload_meshes(
     settings: Res<TerrainSettings>,
+    physics: Res<TerrainPhysicsBackend>,
     mut terrains: Query<(Entity, &mut Terrain, Option<&TerrainMaterials>)>,
     mut cells: Query<&mut Mesh3d, With<TerrainCell>>,
     mut meshes: ResMut<Assets<Mesh>>,
@@ -471,78 +347,116 @@ pub fn upload_meshes(
     mut applied: MessageWriter<CarveApplied>,
 ) {
     let start = Instant::now();
-    let mut uploaded = 0usize;
+    let over_budget = |added: usize| added > 0 && start.elapsed() >= settings.mesh_budget;
     for (entity, mut terrain, materials) in &mut terrains {
         let runtime = &mut terrain.runtime;
-        while let Some(upload) = runtime.uploads.front() {
-            if uploaded > 0
-                && matches!(upload, Upload::Cell { .. })
-                && start.elapsed() >= settings.mesh_budget
-            {
-                return;
-            }
-            let Some(upload) = runtime.uploads.pop_front() else {
+        let mut added = 0usize;
+        while let Some(mut upload) = runtime.uploads.pop_front() {
+            if !upload.spread && over_budget(added) {
+                runtime.uploads.push_front(upload);
                 break;
-            };
-            match upload {
-                Upload::Report(mut report, requested) => {
-                    report.latency = requested.elapsed();
-                    applied.write(report);
-                }
-                Upload::Cell {
-                    key,
-                    translation,
-                    meshes: new,
-                } => {
-                    uploaded += 1;
-                    let old = runtime.cells.remove(&key).unwrap_or_default();
-                    let mut new = new.unwrap_or_default();
-                    let mut kept = Vec::new();
-                    for (label, cell_entity, triangles) in old {
-                        runtime.triangles -= triangles;
-                        let reused = new.iter().position(|m| m.label == label);
-                        match (reused, cells.get_mut(cell_entity)) {
-                            (Some(i), Ok(mut handle)) => {
-                                let mesh = new.swap_remove(i);
-                                handle.0 = meshes.add(mesh.mesh);
-                                commands
-                                    .entity(cell_entity)
-                                    .insert(Transform::from_translation(translation));
-                                kept.push((label, cell_entity, mesh.triangles));
-                            }
-                            _ => commands.entity(cell_entity).despawn(),
-                        }
-                    }
-                    for mesh in new {
-                        let material = materials.map(|m| m.get(mesh.label)).unwrap_or_default();
-                        let cell_entity = commands
-                            .spawn((
-                                TerrainCell {
-                                    terrain: entity,
-                                    key,
-                                    label: mesh.label,
-                                },
-                                Mesh3d(meshes.add(mesh.mesh)),
-                                MeshMaterial3d(material),
-                                Transform::from_translation(translation),
-                                ChildOf(entity),
-                            ))
-                            .id();
-                        kept.push((mesh.label, cell_entity, mesh.triangles));
-                    }
-                    kept.sort_by_key(|&(l, _, _)| l);
-                    runtime.triangles += kept.iter().map(|&(_, _, t)| t).sum::<usize>();
-                    let entities = kept.iter().map(|&(_, e, _)| e).collect();
-                    if !kept.is_empty() {
-                        runtime.cells.insert(key, kept);
-                    }
-                    changed.write(TerrainCellChanged {
-                        terrain: entity,
-                        key,
-                        entities,
-                    });
-                }
+            }
+            while !(upload.spread && over_budget(added)) {
+                let Some(cell) = upload.cells.pop_front() else {
+                    break;
+                };
+                added += 1;
+                let mut place = CellPlacement {
+                    terrain: entity,
+                    materials,
+                    physics: &physics,
+                    commands: &mut commands,
+                };
+                let entities = place.show(runtime, &mut cells, &mut meshes, cell);
+                changed.write(TerrainCellChanged {
+                    terrain: entity,
+                    key: entities.0,
+                    entities: entities.1,
+                });
+            }
+            if !upload.cells.is_empty() {
+                runtime.uploads.push_front(upload);
+                break;
+            }
+            for (mut report, requested) in upload.reports {
+                report.latency = requested.elapsed();
+                applied.write(report);
             }
         }
+    }
+}
+
+/// What adding a cell needs besides the queries and assets.
+struct CellPlacement<'a, 'w, 's> {
+    terrain: Entity,
+    materials: Option<&'a TerrainMaterials>,
+    physics: &'a TerrainPhysicsBackend,
+    commands: &'a mut Commands<'w, 's>,
+}
+
+impl CellPlacement<'_, '_, '_> {
+    /// Shows a cell's new meshes: reuses the cell's entities per material,
+    /// despawns those of materials it no longer has, spawns the others;
+    /// returns the cell and its entities now.
+    fn show(
+        &mut self,
+        runtime: &mut Runtime,
+        cells: &mut Query<&mut Mesh3d, With<TerrainCell>>,
+        meshes: &mut Assets<Mesh>,
+        update: CellUpdate,
+    ) -> (CellKey, Vec<Entity>) {
+        let key = update.key;
+        let old = runtime.cells.remove(&key).unwrap_or_default();
+        let mut new = update.meshes.unwrap_or_default();
+        let mut kept = Vec::new();
+        for (label, cell_entity, triangles) in old {
+            runtime.triangles -= triangles;
+            let reused = new.iter().position(|m| m.label == label);
+            match (reused, cells.get_mut(cell_entity)) {
+                (Some(i), Ok(mut handle)) => {
+                    let mesh: BuiltMesh = new.swap_remove(i);
+                    handle.0 = meshes.add(mesh.mesh);
+                    let mut cell = self.commands.entity(cell_entity);
+                    match mesh.collider {
+                        Some(collider) => collider.apply(&mut cell),
+                        None => {
+                            if let Some(physics) = &self.physics.0 {
+                                physics.remove_cell_collider(&mut cell);
+                            }
+                        }
+                    }
+                    kept.push((label, cell_entity, mesh.triangles));
+                }
+                _ => self.commands.entity(cell_entity).despawn(),
+            }
+        }
+        for mesh in new {
+            let material = self
+                .materials
+                .map(|m| m.get(mesh.label))
+                .unwrap_or_default();
+            let mut cell = self.commands.spawn((
+                TerrainCell {
+                    terrain: self.terrain,
+                    key,
+                    label: mesh.label,
+                },
+                Mesh3d(meshes.add(mesh.mesh)),
+                MeshMaterial3d(material),
+                Transform::IDENTITY,
+                ChildOf(self.terrain),
+            ));
+            if let Some(collider) = mesh.collider {
+                collider.apply(&mut cell);
+            }
+            kept.push((mesh.label, cell.id(), mesh.triangles));
+        }
+        kept.sort_by_key(|&(l, _, _)| l);
+        runtime.triangles += kept.iter().map(|&(_, _, t)| t).sum::<usize>();
+        let entities = kept.iter().map(|&(_, e, _)| e).collect();
+        if !kept.is_empty() {
+            runtime.cells.insert(key, kept);
+        }
+        (key, entities)
     }
 }

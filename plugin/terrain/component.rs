@@ -12,8 +12,9 @@ use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::Label;
 
 use super::base::TerrainBase;
-use super::carve::{JobOutput, Upload};
+use super::carve::Upload;
 use super::error::TerrainError;
+use super::jobs::JobOutput;
 use super::tool::GridTool;
 
 /// One carve in a terrain's record: the exact tool and the edit.

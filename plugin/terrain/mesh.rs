@@ -1,34 +1,74 @@
 //! Cell meshes: the visible surface of one leaf cell, per material, as
-//! flat-shaded `f32` triangles relative to the cell's lower corner.
+//! indexed triangles in the terrain's local frame, with smooth normals
+//! within a smoothing angle and a welded triangle list for colliders.
 //!
-//! Pure functions of the octree, run on the async compute pool, which also
-//! builds the [`Mesh`]es; the main thread only adds them as assets.
+//! Notation: `P`, `Q` — surface polygons (faces in front of empty space);
+//! `n_P` — the unit normal of `P`'s exact plane; `v` — a welded exact
+//! vertex of the cell's [`SurfaceMesh`]; `θ` — the smoothing angle.
+//!
+//! Positions. Every position is the exact vertex rounded once, from grid
+//! units to the terrain's local frame ([`Quantization::to_world`], then
+//! `f32`): the same exact vertex gives the same bits in every cell that
+//! has it, so neighbouring cells whose meshes share their border vertices
+//! meet without cracks.
+//!
+//! Normals. The corner of `P` at `v` gets the angle-weighted mean of `n_Q`
+//! over the surface polygons `Q` around `v` with `n_P · n_Q ≥ cos θ`
+//! (polygons of every material count, so normals are smooth across a
+//! change of material). Faces meeting at more than `θ`, such as a crater's
+//! rim, stay sharp; render vertices are shared by the corners of one `v`
+//! that get the same normal.
+//!
+//! Pure functions of the octree, run on the worker threads, which also
+//! build the [`Mesh`]es; the main thread only adds them as assets.
+
+use std::collections::HashMap;
 
 use bevy::asset::RenderAssetUsages;
-use bevy::mesh::PrimitiveTopology;
+use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
-use chisel_bsp::mesh::SurfaceMesh;
+use chisel_bsp::mesh::{MeshPolygon, SurfaceMesh};
 use chisel_bsp::octree::{CellKey, Octree};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, EMPTY, Label};
 
-/// The triangles of one material in one cell, flat shaded: vertex `3t..3t+3`
-/// is triangle `t`, each with its face's exact normal.
+/// The smoothing angle of [`super::TerrainSettings`] by default, in
+/// degrees: gentle slopes (a heightfield's facets) shade smoothly, crater
+/// walls and rims stay sharp.
+pub const DEFAULT_SMOOTHING_DEGREES: f32 = 35.0;
+
+/// The triangles of one material in one cell.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CellMesh {
     /// The material.
     pub label: Label,
-    /// Positions in world units relative to the cell's lower corner.
+    /// Render vertex positions, in the terrain's local frame.
     pub positions: Vec<[f32; 3]>,
-    /// Per vertex, the unit normal of its triangle's exact plane.
+    /// Per render vertex, its unit normal (smoothed within the smoothing
+    /// angle).
     pub normals: Vec<[f32; 3]>,
+    /// Triangles as render vertex indices, counter-clockwise from outside.
+    pub indices: Vec<u32>,
+    /// The same triangles over the welded exact vertices, for a collider.
+    pub collider: ColliderMesh,
+}
+
+/// Indexed, welded triangles: one entry per exact vertex, so adjacent
+/// triangles share their vertices (what a trimesh collider needs to slide
+/// over internal edges).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ColliderMesh {
+    /// Vertex positions, in the terrain's local frame.
+    pub positions: Vec<Vec3>,
+    /// Triangles, counter-clockwise from outside.
+    pub triangles: Vec<[u32; 3]>,
 }
 
 impl CellMesh {
     /// Number of triangles.
     #[must_use]
     pub fn triangle_count(&self) -> usize {
-        self.positions.len() / 3
+        self.indices.len() / 3
     }
 
     /// As a Bevy triangle-list mesh.
@@ -46,40 +86,22 @@ impl CellMesh {
         )
         .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, self.positions)
         .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, self.normals)
-    }
-}
-
-/// One material's mesh of a cell, built off the main thread and ready to be
-/// added as an asset.
-pub(crate) struct ReadyMesh {
-    /// The material.
-    pub label: Label,
-    /// Number of triangles.
-    pub triangles: usize,
-    /// The Bevy mesh.
-    pub mesh: Mesh,
-}
-
-impl From<CellMesh> for ReadyMesh {
-    fn from(mesh: CellMesh) -> Self {
-        Self {
-            label: mesh.label,
-            triangles: mesh.triangle_count(),
-            mesh: mesh.into_mesh(),
-        }
+        .with_inserted_indices(Indices::U32(self.indices))
     }
 }
 
 /// The visible surface of leaf cell `key` (faces in front of empty space),
 /// one [`CellMesh`] per material, sorted by label; empty when the cell has
-/// no surface or is not a leaf.
-///
-/// Positions are computed in `f64` from the exact vertices, made relative
-/// to the cell's lower corner, then scaled by the unit and rounded to
-/// `f32`: the error is about `2^-24` of the cell's edge.
+/// no surface or is not a leaf. Normals are smoothed within
+/// [`DEFAULT_SMOOTHING_DEGREES`]; [`cell_meshes_of`] takes the angle.
 #[must_use]
 pub fn cell_meshes(octree: &Octree, quantization: &Quantization, key: CellKey) -> Vec<CellMesh> {
-    meshes_of_surface(octree, quantization, key, octree.cell_surface(key))
+    let faces = octree.cell_surface(key);
+    cell_meshes_of(
+        &SurfaceMesh::from_face_vec(faces),
+        quantization,
+        DEFAULT_SMOOTHING_DEGREES,
+    )
 }
 
 /// [`cell_meshes`] from the boundary faces a carve handed back for `key`
@@ -92,62 +114,214 @@ pub fn cell_meshes_from(
     key: CellKey,
     faces: Vec<BoundaryFace>,
 ) -> Vec<CellMesh> {
-    meshes_of_surface(
-        octree,
+    let faces = octree.cell_surface_from(key, faces);
+    cell_meshes_of(
+        &SurfaceMesh::from_face_vec(faces),
         quantization,
-        key,
-        octree.cell_surface_from(key, faces),
+        DEFAULT_SMOOTHING_DEGREES,
     )
 }
 
-/// One mesh per material of a cell's surface pieces.
-fn meshes_of_surface(
-    octree: &Octree,
+/// One [`CellMesh`] per material of the surface polygons of `surface` (a
+/// cell's surface, T-junctions split), sorted by label, with normals
+/// smoothed within `smoothing_degrees` (0: flat shading).
+#[must_use]
+pub fn cell_meshes_of(
+    surface: &SurfaceMesh,
     quantization: &Quantization,
-    key: CellKey,
-    faces: Vec<BoundaryFace>,
+    smoothing_degrees: f32,
 ) -> Vec<CellMesh> {
-    if faces.is_empty() {
+    let polygons: Vec<&MeshPolygon> = surface
+        .polygons()
+        .iter()
+        .filter(|p| p.outside == EMPTY)
+        .collect();
+    if polygons.is_empty() {
         return Vec::new();
     }
-    let surface = SurfaceMesh::from_faces(&faces);
-    let corner = octree.cell_box(key).min.map(|c| c as f64);
-    let unit = quantization.unit();
-    let mut out: Vec<CellMesh> = Vec::new();
-    for polygon in surface.polygons() {
-        if polygon.outside != EMPTY {
-            continue;
-        }
-        let slot = match out.iter().position(|m| m.label == polygon.label) {
-            Some(i) => i,
-            None => {
-                out.push(CellMesh {
-                    label: polygon.label,
-                    ..CellMesh::default()
-                });
-                out.len() - 1
+    let positions: Vec<[f64; 3]> = (0..surface.vertices().len() as u32)
+        .map(|v| quantization.to_world(surface.position(v)))
+        .collect();
+    let normals: Vec<[f64; 3]> = polygons.iter().map(|p| p.unit_normal()).collect();
+    let around = corners_around(&polygons, &positions);
+    let cos_limit = f64::from(smoothing_degrees.clamp(0.0, 180.0))
+        .to_radians()
+        .cos();
+
+    let mut labels: Vec<Label> = polygons.iter().map(|p| p.label).collect();
+    labels.sort_unstable();
+    labels.dedup();
+    labels
+        .into_iter()
+        .map(|label| {
+            let mut mesh = CellMesh {
+                label,
+                ..CellMesh::default()
+            };
+            // Render vertex of (exact vertex, normal bits); collider vertex
+            // of an exact vertex.
+            let mut render: HashMap<(u32, [u32; 3]), u32> = HashMap::new();
+            let mut welded: HashMap<u32, u32> = HashMap::new();
+            for (p, polygon) in polygons.iter().enumerate() {
+                if polygon.label != label {
+                    continue;
+                }
+                let n_p = normals[p];
+                let mut corner = |v: u32| -> (u32, u32) {
+                    let normal = smooth_normal(n_p, &around[v as usize], &normals, cos_limit);
+                    let bits = normal.map(f32::to_bits);
+                    let next = mesh.positions.len() as u32;
+                    let r = *render.entry((v, bits)).or_insert_with(|| {
+                        mesh.positions.push(positions[v as usize].map(|c| c as f32));
+                        mesh.normals.push(normal);
+                        next
+                    });
+                    let next = mesh.collider.positions.len() as u32;
+                    let w = *welded.entry(v).or_insert_with(|| {
+                        let p = positions[v as usize];
+                        mesh.collider.positions.push(Vec3::new(
+                            p[0] as f32,
+                            p[1] as f32,
+                            p[2] as f32,
+                        ));
+                        next
+                    });
+                    (r, w)
+                };
+                for triangle in polygon.triangulate() {
+                    let [a, b, c] = triangle.map(&mut corner);
+                    mesh.indices.extend([a.0, b.0, c.0]);
+                    mesh.collider.triangles.push([a.1, b.1, c.1]);
+                }
             }
-        };
-        let mesh = &mut out[slot];
-        let normal = polygon.unit_normal().map(|c| c as f32);
-        for triangle in polygon.triangulate() {
-            for v in triangle {
-                let p = surface.position(v);
-                mesh.positions
-                    .push([0, 1, 2].map(|a| ((p[a] - corner[a]) * unit) as f32));
-                mesh.normals.push(normal);
+            mesh
+        })
+        .filter(|m| !m.indices.is_empty())
+        .collect()
+}
+
+/// Per exact vertex, the surface polygons around it with their corner
+/// angle there: `(polygon, angle)`.
+fn corners_around(polygons: &[&MeshPolygon], positions: &[[f64; 3]]) -> Vec<Vec<(u32, f64)>> {
+    let mut around: Vec<Vec<(u32, f64)>> = vec![Vec::new(); positions.len()];
+    for (p, polygon) in polygons.iter().enumerate() {
+        let c = &polygon.corners;
+        let n = c.len();
+        for k in 0..n {
+            let at = positions[c[k] as usize];
+            let prev = positions[c[(k + n - 1) % n] as usize];
+            let next = positions[c[(k + 1) % n] as usize];
+            around[c[k] as usize].push((p as u32, angle(sub(prev, at), sub(next, at))));
+        }
+    }
+    around
+}
+
+/// The unit normal of a corner of a polygon with normal `n_p`: the
+/// angle-weighted mean of the normals around the vertex within the
+/// smoothing angle (`n_p` itself when nothing else is).
+fn smooth_normal(
+    n_p: [f64; 3],
+    around: &[(u32, f64)],
+    normals: &[[f64; 3]],
+    cos_limit: f64,
+) -> [f32; 3] {
+    let mut sum = [0.0f64; 3];
+    for &(q, weight) in around {
+        let n_q = normals[q as usize];
+        if dot(n_p, n_q) >= cos_limit {
+            for a in 0..3 {
+                sum[a] += weight * n_q[a];
             }
         }
     }
-    out.retain(|m| !m.positions.is_empty());
-    out.sort_by_key(|m| m.label);
-    out
+    let length = dot(sum, sum).sqrt();
+    if length.is_finite() && length > 1e-12 {
+        sum.map(|c| (c / length) as f32)
+    } else {
+        n_p.map(|c| c as f32)
+    }
 }
 
-/// World (terrain-local) position of a cell's lower corner.
-#[must_use]
-pub fn cell_translation(octree: &Octree, quantization: &Quantization, key: CellKey) -> Vec3 {
-    let min = octree.cell_box(key).min.map(|c| c as f64);
-    let p = quantization.to_world(min);
-    Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The angle between two vectors, in radians (0 for a zero vector).
+fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    dot(cross, cross).sqrt().atan2(dot(a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use chisel_bsp::octree::{CellBox, OctreeConfig};
+
+    fn cube() -> (Octree, Quantization) {
+        let solid = CellBox {
+            min: [0; 3],
+            max: [8; 3],
+        };
+        let octree =
+            Octree::from_box([0; 3], 4, solid, 1, OctreeConfig::default()).expect("a valid cube");
+        (
+            octree,
+            Quantization::new(0.5, [1.0, 2.0, 3.0]).expect("unit"),
+        )
+    }
+
+    #[test]
+    fn a_cube_keeps_sharp_edges_and_shares_collider_vertices() {
+        let (octree, grid) = cube();
+        let meshes: Vec<CellMesh> = octree
+            .leaves()
+            .iter()
+            .flat_map(|(key, _)| cell_meshes(&octree, &grid, *key))
+            .collect();
+        let triangles: usize = meshes.iter().map(CellMesh::triangle_count).sum();
+        assert!(triangles >= 12);
+        for mesh in &meshes {
+            // Every normal is one of the six axis directions: 90° edges
+            // stay sharp at the default angle.
+            for n in &mesh.normals {
+                let axis = n.iter().filter(|c| c.abs() == 1.0).count();
+                assert_eq!(axis, 1, "normal {n:?} is smoothed across a 90° edge");
+            }
+            // Welded: fewer collider vertices than render corners.
+            assert!(mesh.collider.positions.len() <= mesh.positions.len());
+            assert_eq!(mesh.collider.triangles.len(), mesh.triangle_count());
+            // Positions are in the terrain's frame: grid 0..8 at unit 0.5
+            // from the origin (1, 2, 3).
+            for p in &mesh.positions {
+                for (a, &c) in p.iter().enumerate() {
+                    let lo = [1.0, 2.0, 3.0][a];
+                    assert!((lo..=lo + 4.0).contains(&c), "{p:?} outside the box");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_wide_angle_smooths_the_cube_corners() {
+        let (octree, grid) = cube();
+        let surface = SurfaceMesh::from_face_vec(octree.surface());
+        let meshes = cell_meshes_of(&surface, &grid, 100.0);
+        let corner = meshes[0]
+            .normals
+            .iter()
+            .find(|n| n.iter().all(|c| c.abs() > 0.5))
+            .expect("a corner normal averaged over three faces");
+        for c in corner {
+            assert!((c.abs() - 1.0 / 3f32.sqrt()).abs() < 1e-5, "{corner:?}");
+        }
+    }
 }

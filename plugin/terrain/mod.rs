@@ -19,7 +19,11 @@
 //!   in, exact edits on the async compute pool, meshes of the changed cells
 //!   within a per-frame budget, [`TerrainCellChanged`] and [`CarveApplied`]
 //!   out.
-//! - [`mesh`] — the surface of one cell as flat-shaded triangles.
+//! - `jobs` — what a carve job does on the worker threads.
+//! - [`mesh`] — the surface of one cell as indexed triangles with smooth
+//!   normals, and welded triangles for its collider.
+//! - [`physics`] — [`TerrainPhysics`], the trait a physics engine
+//!   implements; `avian` implements it (feature `avian`).
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
 //! - [`file`] — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
 //! - [`error`] — [`TerrainError`].
@@ -57,12 +61,16 @@
 //!     .run();
 //! ```
 
+#[cfg(feature = "avian")]
+pub mod avian;
 pub mod base;
 pub mod carve;
 pub mod component;
 pub mod error;
 pub mod file;
+mod jobs;
 pub mod mesh;
+pub mod physics;
 pub mod raycast;
 pub mod spawn;
 pub mod tool;
@@ -77,7 +85,8 @@ pub use component::{
     JournalEntry, Terrain, TerrainCell, TerrainMaterials, apply_carve, apply_carve_with_faces,
 };
 pub use error::TerrainError;
-pub use mesh::CellMesh;
+pub use mesh::{CellMesh, ColliderMesh};
+pub use physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBackend};
 pub use raycast::TerrainHit;
 pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
 pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
@@ -103,6 +112,7 @@ pub struct TerrainPlugin;
 impl Plugin for TerrainPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<TerrainSettings>()
+            .init_resource::<TerrainPhysicsBackend>()
             .add_message::<Carve>()
             .add_message::<UndoCarve>()
             .add_message::<CarveApplied>()

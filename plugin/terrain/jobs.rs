@@ -1,0 +1,233 @@
+//! The background side of carving: what a job does on the worker threads.
+//!
+//! A job owns a snapshot of the octree (a cheap persistent clone). It
+//! applies a batch of carves in order ([`carve_batch`]) or takes the
+//! octree an undo restored, then builds everything the main thread will
+//! show for every cell that changed ([`remesh`]): the cell meshes and, with
+//! a physics backend, their colliders. The main thread only swaps the
+//! octree in and adds the finished assets and components
+//! ([`super::carve::upload_meshes`]).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use bevy::prelude::*;
+use chisel_bsp::mesh::SurfaceMesh;
+use chisel_bsp::octree::{CellKey, Changes, Edit, Octree};
+use chisel_bsp::tools::Quantization;
+use chisel_bsp::tree::{BoundaryFace, Label};
+use rayon::prelude::*;
+
+use super::component::apply_carve_with_faces;
+use super::error::TerrainError;
+use super::mesh::{ColliderMesh, cell_meshes_of};
+use super::physics::{PhysicsInsert, TerrainPhysics};
+use super::tool::GridTool;
+
+/// What a job needs besides its octree: the grid, the shading and the
+/// physics backend.
+#[derive(Clone)]
+pub(crate) struct JobContext {
+    pub quantization: Quantization,
+    pub smoothing_degrees: f32,
+    pub physics: Option<Arc<dyn TerrainPhysics>>,
+}
+
+/// One step of a background job.
+pub(crate) enum StepOutcome {
+    Applied {
+        before: Octree,
+        changes: Changes,
+        tool: GridTool,
+        edit: Edit,
+        apply_time: Duration,
+        requested: Instant,
+    },
+    Rejected {
+        error: TerrainError,
+    },
+    Undone {
+        cells: usize,
+        requested: Instant,
+    },
+}
+
+/// One material's mesh of a cell, built off the main thread, with its
+/// collider.
+pub(crate) struct BuiltMesh {
+    pub label: Label,
+    pub triangles: usize,
+    pub mesh: Mesh,
+    pub collider: Option<PhysicsInsert>,
+}
+
+/// What a cell shows now: `None` when it is no longer a leaf.
+pub(crate) struct CellUpdate {
+    pub key: CellKey,
+    pub meshes: Option<Vec<BuiltMesh>>,
+}
+
+/// What a background job hands back.
+pub(crate) struct JobOutput {
+    pub octree: Octree,
+    pub steps: Vec<StepOutcome>,
+    pub cells: Vec<CellUpdate>,
+    /// Whether the cells are the first full build, which may reach the
+    /// screen over several frames; a carve's cells are shown together.
+    pub full: bool,
+    pub mesh_time: Duration,
+    pub collider_time: Duration,
+}
+
+/// The thread pool of the background jobs, rebuilt when the number of
+/// threads asked for changes (`None`: rayon's global pool, if a pool could
+/// not be built).
+#[derive(Default)]
+pub struct Workers {
+    threads: usize,
+    pool: Option<Arc<rayon::ThreadPool>>,
+}
+
+impl Workers {
+    pub(crate) fn pool(&mut self, threads: usize) -> Option<Arc<rayon::ThreadPool>> {
+        let threads = threads.max(1);
+        if self.threads != threads {
+            self.threads = threads;
+            self.pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(|i| format!("chisel-terrain-{i}"))
+                .build()
+                .ok()
+                .map(Arc::new);
+        }
+        self.pool.clone()
+    }
+}
+
+/// Runs `job` on `pool` (or on rayon's global pool).
+pub(crate) fn on_pool<T>(pool: Option<Arc<rayon::ThreadPool>>, job: impl FnOnce() -> T + Send) -> T
+where
+    T: Send,
+{
+    match pool {
+        Some(pool) => pool.install(job),
+        None => job(),
+    }
+}
+
+/// Applies a batch of carves in order to `octree` and builds the cells
+/// they changed.
+pub(crate) fn carve_batch(
+    mut octree: Octree,
+    context: &JobContext,
+    batch: Vec<(GridTool, Edit, Instant)>,
+) -> JobOutput {
+    let mut steps = Vec::with_capacity(batch.len());
+    let mut keys = Vec::new();
+    // The latest faces handed back for each cell whose content a carve of
+    // the batch replaced; a later carve that changes the cell otherwise
+    // (relabels it, splits it, or only touches it) drops them.
+    let mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>> = BTreeMap::new();
+    for (tool, edit, requested) in batch {
+        let before = octree.clone();
+        let start = Instant::now();
+        match apply_carve_with_faces(&mut octree, &tool, edit) {
+            Ok((changes, faces)) => {
+                for key in changes.changed.iter().chain(&changes.removed) {
+                    fresh.remove(key);
+                }
+                fresh.extend(faces);
+                keys.extend(changes.changed.iter().copied());
+                keys.extend(changes.removed.iter().copied());
+                steps.push(StepOutcome::Applied {
+                    before,
+                    changes,
+                    tool,
+                    edit,
+                    apply_time: start.elapsed(),
+                    requested,
+                });
+            }
+            Err(error) => steps.push(StepOutcome::Rejected { error }),
+        }
+    }
+    remesh(octree, context, steps, keys, fresh, false)
+}
+
+/// Builds `keys` of `octree` (a key that is no longer a leaf gets `None`),
+/// from the faces in `fresh` where a carve handed them back.
+pub(crate) fn remesh(
+    octree: Octree,
+    context: &JobContext,
+    steps: Vec<StepOutcome>,
+    keys: Vec<CellKey>,
+    mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
+    full: bool,
+) -> JobOutput {
+    let start = Instant::now();
+    let keys: BTreeSet<CellKey> = keys.into_iter().collect();
+    let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> = keys
+        .into_iter()
+        .map(|key| (key, fresh.remove(&key)))
+        .collect();
+    // Meshes first (the collider triangles kept aside), then colliders,
+    // so that each is timed on its own.
+    let meshed: Vec<(CellKey, Option<Vec<(BuiltMesh, ColliderMesh)>>)> = jobs
+        .into_par_iter()
+        .map(|(key, faces)| {
+            let meshes = octree.leaf(key).map(|_| {
+                let faces = match faces {
+                    Some(faces) => octree.cell_surface_from(key, faces),
+                    None => octree.cell_surface(key),
+                };
+                cell_meshes_of(
+                    &SurfaceMesh::from_face_vec(faces),
+                    &context.quantization,
+                    context.smoothing_degrees,
+                )
+                .into_iter()
+                .map(|mut mesh| {
+                    let collider = std::mem::take(&mut mesh.collider);
+                    let built = BuiltMesh {
+                        label: mesh.label,
+                        triangles: mesh.triangle_count(),
+                        mesh: mesh.into_mesh(),
+                        collider: None,
+                    };
+                    (built, collider)
+                })
+                .collect()
+            });
+            (key, meshes)
+        })
+        .collect();
+    let mesh_time = start.elapsed();
+    let start = Instant::now();
+    let cells = meshed
+        .into_par_iter()
+        .map(|(key, meshes)| CellUpdate {
+            key,
+            meshes: meshes.map(|meshes| {
+                meshes
+                    .into_iter()
+                    .map(|(mut built, collider)| {
+                        built.collider = context
+                            .physics
+                            .as_ref()
+                            .and_then(|physics| physics.cell_collider(&collider));
+                        built
+                    })
+                    .collect()
+            }),
+        })
+        .collect();
+    JobOutput {
+        octree,
+        steps,
+        cells,
+        full,
+        mesh_time,
+        collider_time: start.elapsed(),
+    }
+}
