@@ -29,7 +29,7 @@ use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::BoundaryFace;
 use rayon::prelude::*;
 
-use super::component::{Job, Terrain, TerrainCell, TerrainMaterials, apply_carve_with_faces};
+use super::component::{Job, Terrain, TerrainCell, apply_carve_with_faces};
 use super::error::TerrainError;
 use super::mesh::{ReadyMesh, cell_meshes, cell_meshes_from, cell_translation};
 use super::tool::{CarveTool, GridTool};
@@ -463,7 +463,7 @@ pub fn finish_jobs(
 #[allow(clippy::too_many_arguments)]
 pub fn upload_meshes(
     settings: Res<TerrainSettings>,
-    mut terrains: Query<(Entity, &mut Terrain, Option<&TerrainMaterials>)>,
+    mut terrains: Query<(Entity, &mut Terrain)>,
     mut cells: Query<&mut Mesh3d, With<TerrainCell>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut commands: Commands,
@@ -472,7 +472,7 @@ pub fn upload_meshes(
 ) {
     let start = Instant::now();
     let mut uploaded = 0usize;
-    for (entity, mut terrain, materials) in &mut terrains {
+    for (entity, mut terrain) in &mut terrains {
         let runtime = &mut terrain.runtime;
         while let Some(upload) = runtime.uploads.front() {
             if uploaded > 0
@@ -514,7 +514,6 @@ pub fn upload_meshes(
                         }
                     }
                     for mesh in new {
-                        let material = materials.map(|m| m.get(mesh.label)).unwrap_or_default();
                         let cell_entity = commands
                             .spawn((
                                 TerrainCell {
@@ -523,7 +522,6 @@ pub fn upload_meshes(
                                     label: mesh.label,
                                 },
                                 Mesh3d(meshes.add(mesh.mesh)),
-                                MeshMaterial3d(material),
                                 Transform::from_translation(translation),
                                 ChildOf(entity),
                             ))
