@@ -162,7 +162,7 @@ def grass(seed):
         d1, _, ident = tufts.at(u, v)
         tuft = 1.0 - smoothstep(0.0, 0.5, d1)
         height = 0.3 * h + 0.4 * b + 0.3 * tuft
-        colour = mix((0.16, 0.30, 0.08), (0.34, 0.52, 0.16), 0.5 * h + 0.5 * tuft)
+        colour = mix((0.16, 0.30, 0.08), (0.34, 0.52, 0.16), 0.2 * h + 0.8 * tuft)
         colour = mix(colour, (0.48, 0.50, 0.20), 0.35 * ident * (h > 0.55))
         colour = tuple(c * (0.75 + 0.5 * b) for c in colour)
         return height, colour

@@ -23,7 +23,7 @@ struct Triplanar {
     scale: f32,
     sharpness: f32,
     normal_strength: f32,
-    padding: f32,
+    macro_variation: f32,
 }
 
 @group(#{MATERIAL_BIND_GROUP}) @binding(100) var<uniform> triplanar: Triplanar;
@@ -110,8 +110,19 @@ fn fragment(
     let nz = tangent_normal(textureSample(normal_texture, normal_sampler, qz.uv), strength);
     let mapped = whiteout(nx, n, qx) * w.x + whiteout(ny, n, qy) * w.y + whiteout(nz, n, qz) * w.z;
 
+    // Macro variation against visible tiling: the albedo's brightness at an
+    // eighth of the frequency (shifted), relative to its mean (the last mip).
+    let pm = p * 0.125 + vec3(0.37, 0.11, 0.73);
+    let coarse = textureSample(albedo_texture, albedo_sampler, projection_x(pm, n).uv) * w.x
+        + textureSample(albedo_texture, albedo_sampler, projection_y(pm, n).uv) * w.y
+        + textureSample(albedo_texture, albedo_sampler, projection_z(pm, n).uv) * w.z;
+    let mean = textureSampleLevel(albedo_texture, albedo_sampler, vec2(0.5), 16.0);
+    let luminance = vec3(0.2126, 0.7152, 0.0722);
+    let ratio = dot(coarse.rgb, luminance) / max(dot(mean.rgb, luminance), 1e-3);
+    let variation = clamp(mix(1.0, ratio, triplanar.macro_variation), 0.5, 1.5);
+
     pbr_input.material.base_color = vec4(
-        pbr_input.material.base_color.rgb * albedo.rgb,
+        pbr_input.material.base_color.rgb * albedo.rgb * variation,
         pbr_input.material.base_color.a,
     );
     pbr_input.N = normalize(mapped);

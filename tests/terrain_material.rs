@@ -42,10 +42,13 @@ impl CellCheck {
     }
 }
 
+/// A cell and its material of type `M`, if any.
+type NewCell<'a, M> = (Entity, &'a TerrainCell, Option<&'a MeshMaterial3d<M>>);
+
 /// Runs after [`TerrainSystems::Material`]: every cell spawned this frame
 /// already has `MeshMaterial3d<M>` with its label's material.
 fn check_new_cells<M: Material>(
-    cells: Query<(Entity, &TerrainCell, Option<&MeshMaterial3d<M>>), Added<TerrainCell>>,
+    cells: Query<NewCell<M>, Added<TerrainCell>>,
     tables: Query<&TerrainMaterials<M>>,
     check: Res<CellCheck>,
 ) {

@@ -16,6 +16,7 @@
 //!
 //! ```no_run
 //! use bevy::prelude::*;
+//! use bevy::render::render_resource::AsBindGroup;
 //! use bevy_chisel::terrain::{Terrain, TerrainMaterialPlugin, TerrainMaterials, TerrainPlugin};
 //!
 //! // A game's own material type, with its own shader.

@@ -58,10 +58,13 @@ pub struct TriplanarExtension {
     /// Factor on the normal texture's tilt: `0` is flat, `1` as authored.
     #[uniform(100)]
     pub normal_strength: f32,
-    /// Keeps the uniform 16 bytes long.
+    /// Brightness variation against visible tiling: `0` is none; `t`
+    /// scales the albedo by `mix(1, b, t)`, `b` the brightness of the
+    /// albedo sampled at an eighth of the frequency over its mean, read
+    /// from its last mip level (so the albedo needs a full mip chain;
+    /// clamped to 0.5–1.5).
     #[uniform(100)]
-    #[reflect(ignore)]
-    padding: f32,
+    pub macro_variation: f32,
     /// Albedo (sRGB), tinted by the base material's `base_color`. Sampled
     /// with repeat addressing: see [`triplanar_sampler`].
     #[texture(101)]
@@ -76,14 +79,14 @@ pub struct TriplanarExtension {
 
 impl TriplanarExtension {
     /// Triplanar mapping of `albedo` and `normal`, one repeat per 4 world
-    /// units, sharpness 4, normals as authored.
+    /// units, sharpness 4, normals as authored, macro variation 0.6.
     #[must_use]
     pub fn new(albedo: Handle<Image>, normal: Handle<Image>) -> Self {
         Self {
             scale: 0.25,
             sharpness: 4.0,
             normal_strength: 1.0,
-            padding: 0.0,
+            macro_variation: 0.6,
             albedo,
             normal,
         }
@@ -129,6 +132,13 @@ impl TriplanarExtension {
     #[must_use]
     pub fn with_normal_strength(mut self, strength: f32) -> Self {
         self.normal_strength = strength;
+        self
+    }
+
+    /// With macro variation `amount`.
+    #[must_use]
+    pub fn with_macro_variation(mut self, amount: f32) -> Self {
+        self.macro_variation = amount;
         self
     }
 }
