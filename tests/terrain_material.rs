@@ -108,6 +108,8 @@ fn carved_cells_get_their_label_material_in_the_frame_they_appear() {
         AssetPlugin::default(),
         TerrainPlugin,
         TerrainMaterialPlugin::<TriplanarMaterial>::default(),
+        // Added twice: still one assignment.
+        TerrainMaterialPlugin::<TriplanarMaterial>::default(),
     ))
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>()

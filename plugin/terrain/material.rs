@@ -114,12 +114,26 @@ impl<M: Material> Default for TerrainMaterialPlugin<M> {
     }
 }
 
+/// Present once [`TerrainMaterialPlugin<M>`] has added its system.
+#[derive(Resource)]
+struct MaterialSystemAdded<M>(PhantomData<M>);
+
 impl<M: Material> Plugin for TerrainMaterialPlugin<M> {
     fn build(&self, app: &mut App) {
-        app.add_systems(
-            Update,
-            assign_materials::<M>.in_set(TerrainSystems::Material),
-        );
+        // Added by several plugins (say `TerrainPlugin` and a game), it
+        // still assigns once per frame.
+        if app.world().contains_resource::<MaterialSystemAdded<M>>() {
+            return;
+        }
+        app.insert_resource(MaterialSystemAdded::<M>(PhantomData))
+            .add_systems(
+                Update,
+                assign_materials::<M>.in_set(TerrainSystems::Material),
+            );
+    }
+
+    fn is_unique(&self) -> bool {
+        false
     }
 }
 
