@@ -315,16 +315,53 @@ fn material_shaders_validate_with_bevys_shader_library() {
                 shader_defs,
                 ..Default::default()
             });
-            if let Err(e) = result {
-                panic!(
+            match result {
+                Ok(module) if path.ends_with("terrain_triplanar.wgsl") => {
+                    check_triplanar_uniform(&module);
+                }
+                Ok(_) => {}
+                Err(e) => panic!(
                     "{path} (defines mask {mask:#b} of {defines:?}) does not validate:\n{}\n\
                      Bevy modules left out:\n{}",
                     e.emit_to_string(&composer),
                     left_out.join("\n")
-                );
+                ),
             }
         }
     }
+}
+
+/// The WGSL `Triplanar` uniform has the `f32` fields of
+/// `TriplanarExtension` (its `#[uniform(100)]` fields), in order, 4 bytes
+/// apart, as the derived uniform lays them out.
+fn check_triplanar_uniform(module: &naga::Module) {
+    use bevy::reflect::structs::Struct;
+    use bevy_chisel::terrain::TriplanarExtension;
+
+    let extension = TriplanarExtension::new(Default::default(), Default::default());
+    let rust: Vec<(String, u32)> = (0..extension.field_len())
+        .filter(|&i| {
+            extension
+                .field_at(i)
+                .is_some_and(|f| f.try_downcast_ref::<f32>().is_some())
+        })
+        .zip(0u32..)
+        .map(|(i, k)| (extension.name_at(i).unwrap_or_default().to_owned(), 4 * k))
+        .collect();
+    let wgsl = module
+        .types
+        .iter()
+        .find_map(|(_, t)| match (&t.name, &t.inner) {
+            (Some(name), naga::TypeInner::Struct { members, .. }) if name == "Triplanar" => Some(
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect::<Vec<_>>(),
+            ),
+            _ => None,
+        })
+        .expect("struct Triplanar in terrain_triplanar.wgsl");
+    assert_eq!(wgsl, rust, "WGSL Triplanar against TriplanarExtension");
 }
 
 #[test]
