@@ -74,29 +74,25 @@ fn main() -> AppExit {
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — showcase");
-    app.add_plugins((
-        TerrainPlugin,
-        TriplanarMaterialPlugin,
-        ChiselSplatPlugin,
-        ViewerPlugin,
-    ))
-    .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
-    .insert_resource(ClickCarving {
-        blast_radius: 2.0,
-        heap_radius: 1.0,
-        heap_label: DIRT,
-        reach: 500.0,
-        undo_key: Some(KeyCode::KeyZ),
-    })
-    .init_resource::<LastCarve>()
-    .add_systems(Startup, spawn_scene)
-    .add_systems(
-        Update,
-        (
-            (opening_craters, splat_keys).before(TerrainSystems::Carve),
-            update_hud.after(TerrainSystems::Mesh),
-        ),
-    );
+    app.add_plugins((TerrainPlugin, ChiselSplatPlugin, ViewerPlugin))
+        .add_plugins(TriplanarMaterialPlugin)
+        .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+        .insert_resource(ClickCarving {
+            blast_radius: 2.0,
+            heap_radius: 1.0,
+            heap_label: DIRT,
+            reach: 500.0,
+            undo_key: Some(KeyCode::KeyZ),
+        })
+        .init_resource::<LastCarve>()
+        .add_systems(Startup, spawn_scene)
+        .add_systems(
+            Update,
+            (
+                (opening_craters, splat_keys).before(TerrainSystems::Carve),
+                update_hud.after(TerrainSystems::Mesh),
+            ),
+        );
     if headless {
         app.insert_resource(HoldCaptures(true))
             .add_systems(Update, headless_tour.after(TerrainSystems::Mesh));
