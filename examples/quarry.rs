@@ -21,7 +21,8 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, Presentation};
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, HeightLayer, Heightfield, Terrain,
-    TerrainMaterials, TerrainPlugin, TerrainSystems,
+    TerrainMaterials, TerrainPlugin, TerrainSurface, TerrainSystems, TriplanarMaterial,
+    TriplanarMaterialPlugin, surface_table,
 };
 use bevy_chisel::viewer::{
     CARVING_HELP, ClickCarving, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
@@ -49,7 +50,7 @@ fn main() -> AppExit {
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — quarry");
-    app.add_plugins((TerrainPlugin, ViewerPlugin))
+    app.add_plugins((TerrainPlugin, TriplanarMaterialPlugin, ViewerPlugin))
         .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
         .insert_resource(ClickCarving {
             blast_radius: BLAST_RADIUS,
@@ -121,23 +122,17 @@ fn build_terrain() -> Result<Terrain, BevyError> {
     Ok(terrain)
 }
 
-fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<StandardMaterial>>) -> Result {
-    let mut material = |color: Color, roughness: f32, metallic: f32| {
-        materials.add(StandardMaterial {
-            base_color: color,
-            perceptual_roughness: roughness,
-            metallic,
-            ..default()
-        })
-    };
-    let table = TerrainMaterials::new(
+fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<TriplanarMaterial>>) -> Result {
+    // Textured, triplanar-mapped surfaces shipped with the plugin.
+    let table = surface_table(
+        &mut materials,
         [
-            (ROCK, material(Color::srgb(0.52, 0.52, 0.55), 0.9, 0.0)),
-            (DIRT, material(Color::srgb(0.45, 0.32, 0.20), 0.95, 0.0)),
-            (GRASS, material(Color::srgb(0.33, 0.55, 0.22), 0.9, 0.0)),
-            (ORE, material(Color::srgb(0.90, 0.70, 0.20), 0.35, 0.7)),
+            (ROCK, TerrainSurface::Rock),
+            (DIRT, TerrainSurface::Dirt),
+            (GRASS, TerrainSurface::Grass),
+            (ORE, TerrainSurface::Ore),
         ],
-        material(Color::srgb(0.8, 0.2, 0.8), 0.5, 0.0),
+        TerrainSurface::Rock,
     );
     let terrain = build_terrain()?;
     commands.spawn((terrain, table.clone(), Name::new("quarry")));
@@ -165,7 +160,7 @@ fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<StandardMate
 
 /// The materials, kept to give a loaded terrain the same look.
 #[derive(Resource)]
-struct Palette(TerrainMaterials);
+struct Palette(TerrainMaterials<TriplanarMaterial>);
 
 /// Carve timings for the HUD.
 #[derive(Resource, Default)]

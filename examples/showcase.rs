@@ -31,8 +31,8 @@ use bevy_chisel::splat::{
     ChiselSplatPlugin, PropSplats, QuadricProp, SplatMode, SplatRadius, SplatSettings,
 };
 use bevy_chisel::terrain::{
-    Carve, CarveApplied, HeightLayer, Heightfield, Terrain, TerrainMaterials, TerrainPlugin,
-    TerrainSystems,
+    Carve, CarveApplied, HeightLayer, Heightfield, Terrain, TerrainPlugin, TerrainSurface,
+    TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
 use bevy_chisel::viewer::{
     CARVING_HELP, ClickCarving, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
@@ -75,6 +75,7 @@ fn main() -> AppExit {
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — showcase");
     app.add_plugins((TerrainPlugin, ChiselSplatPlugin, ViewerPlugin))
+        .add_plugins(TriplanarMaterialPlugin)
         .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
         .insert_resource(ClickCarving {
             blast_radius: 2.0,
@@ -126,22 +127,17 @@ fn ground(terrain: &Terrain, [x, z]: [f32; 2]) -> Option<Vec3> {
 fn spawn_scene(
     mut commands: Commands,
     assets: Res<AssetServer>,
-    mut materials: ResMut<Assets<StandardMaterial>>,
+    mut materials: ResMut<Assets<TriplanarMaterial>>,
 ) -> Result {
-    let mut material = |color: Color, roughness: f32| {
-        materials.add(StandardMaterial {
-            base_color: color,
-            perceptual_roughness: roughness,
-            ..default()
-        })
-    };
-    let table = TerrainMaterials::new(
+    // Textured, triplanar-mapped surfaces shipped with the plugin.
+    let table = surface_table(
+        &mut materials,
         [
-            (ROCK, material(Color::srgb(0.52, 0.52, 0.55), 0.9)),
-            (DIRT, material(Color::srgb(0.45, 0.32, 0.20), 0.95)),
-            (GRASS, material(Color::srgb(0.33, 0.55, 0.22), 0.9)),
+            (ROCK, TerrainSurface::Rock),
+            (DIRT, TerrainSurface::Dirt),
+            (GRASS, TerrainSurface::Grass),
         ],
-        material(Color::srgb(0.8, 0.2, 0.8), 0.5),
+        TerrainSurface::Rock,
     );
     let terrain = build_terrain()?;
     for (path, bottom, spot, turn) in PROPS {

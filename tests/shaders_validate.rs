@@ -4,6 +4,11 @@
 //! combination of the shader defines it lists in a `// Defines: A, B.`
 //! comment line. A shader error therefore fails `cargo test` on a machine
 //! without a GPU.
+//!
+//! Material shaders that import Bevy's shader library (`#import bevy_pbr::…`)
+//! are composed with that library, read from the Bevy crates' sources that
+//! this build uses, and with the defines Bevy's mesh pipeline sets for a
+//! forward-rendered mesh with positions and normals.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -31,6 +36,20 @@ fn wgsl_files() -> Vec<(String, String)> {
         .collect();
     files.sort();
     files
+}
+
+/// Imports a module of Bevy's shader library.
+fn imports_bevy(source: &str) -> bool {
+    source.lines().any(|l| {
+        let l = l.trim_start();
+        [
+            "#import bevy_pbr",
+            "#import bevy_render",
+            "#import bevy_core_pipeline",
+        ]
+        .iter()
+        .any(|p| l.starts_with(p))
+    })
 }
 
 fn is_module(source: &str) -> bool {
@@ -111,7 +130,10 @@ fn every_wgsl_file_validates_with_every_define_combination() {
     );
     let mut composer = composer(&files);
     let mut checked = 0;
-    for (path, source) in files.iter().filter(|(_, s)| !is_module(s)) {
+    for (path, source) in files
+        .iter()
+        .filter(|(_, s)| !is_module(s) && !imports_bevy(s))
+    {
         let defines = listed_defines(source);
         assert!(defines.len() <= 8, "{path}: too many defines to enumerate");
         for mask in 0u32..(1 << defines.len()) {
@@ -140,6 +162,206 @@ fn every_wgsl_file_validates_with_every_define_combination() {
         }
     }
     assert!(checked >= 2, "only {checked} shader variants checked");
+}
+
+/// The version of `name` in `Cargo.lock`.
+fn locked_version(name: &str) -> String {
+    let lock = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.lock"))
+        .expect("Cargo.lock is readable");
+    let entry = format!("name = \"{name}\"\nversion = \"");
+    let start = lock.find(&entry).map(|i| i + entry.len());
+    let version = start.and_then(|i| lock[i..].split('"').next());
+    version
+        .unwrap_or_else(|| panic!("{name} is not in Cargo.lock"))
+        .to_owned()
+}
+
+/// The WGSL modules (`#define_import_path`) of the Bevy crates whose shader
+/// library materials import, from the crates' sources in Cargo's registry
+/// (`$CARGO_HOME/registry/src/*/{crate}-{locked version}/src`).
+fn bevy_shader_library() -> Vec<(String, String)> {
+    let cargo_home = std::env::var_os("CARGO_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cargo")))
+        .expect("CARGO_HOME or HOME is set");
+    let registry = cargo_home.join("registry").join("src");
+    let indexes: Vec<PathBuf> = std::fs::read_dir(&registry)
+        .unwrap_or_else(|e| panic!("{}: {e}", registry.display()))
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    let mut dirs: Vec<PathBuf> = ["bevy_pbr", "bevy_render", "bevy_core_pipeline"]
+        .iter()
+        .map(|name| {
+            let dir = format!("{name}-{}", locked_version(name));
+            indexes
+                .iter()
+                .map(|index| index.join(&dir).join("src"))
+                .find(|src| src.is_dir())
+                .unwrap_or_else(|| panic!("{dir} is not under {}", registry.display()))
+        })
+        .collect();
+    dirs.sort();
+    let mut files = Vec::new();
+    let mut stack = dirs;
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir)
+            .expect("Bevy source is readable")
+            .flatten()
+        {
+            let path = entry.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "wgsl") {
+                let text = std::fs::read_to_string(&path).expect("shader is readable");
+                if is_module(&text) {
+                    files.push((path.display().to_string(), text));
+                }
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// The defines of Bevy 0.19's mesh pipeline for an opaque, forward-rendered
+/// mesh with positions and normals under a perspective camera with one
+/// shadowed directional light (`bevy_pbr/src/render/mesh.rs`, `light.rs`,
+/// `material.rs`).
+fn bevy_mesh_defines() -> HashMap<String, ShaderDefValue> {
+    let mut defs: HashMap<String, ShaderDefValue> = [
+        "MESH_PIPELINE",
+        "VERTEX_OUTPUT_INSTANCE_INDEX",
+        "VERTEX_POSITIONS",
+        "VERTEX_NORMALS",
+        "VIEW_PROJECTION_PERSPECTIVE",
+        "SHADOW_FILTER_METHOD_GAUSSIAN",
+        "TONEMAP_METHOD_TONY_MC_MAPFACE",
+    ]
+    .into_iter()
+    .map(|d| (d.to_owned(), ShaderDefValue::Bool(true)))
+    .collect();
+    for (name, value) in [
+        ("MAX_DIRECTIONAL_LIGHTS", 10),
+        ("MAX_CASCADES_PER_LIGHT", 4),
+        ("MAX_RECT_LIGHTS", 8),
+        ("MATERIAL_BIND_GROUP", 3),
+        ("AVAILABLE_STORAGE_BUFFER_BINDINGS", 8),
+        ("TONEMAPPING_LUT_TEXTURE_BINDING_INDEX", 18),
+        ("TONEMAPPING_LUT_SAMPLER_BINDING_INDEX", 19),
+    ] {
+        defs.insert(name.to_owned(), ShaderDefValue::UInt(value));
+    }
+    defs.insert(
+        "SCREEN_SPACE_SPECULAR_TRANSMISSION_BLUR_TAPS".to_owned(),
+        ShaderDefValue::Int(8),
+    );
+    defs
+}
+
+#[test]
+fn material_shaders_validate_with_bevys_shader_library() {
+    let files = wgsl_files();
+    let materials: Vec<_> = files.iter().filter(|(_, s)| imports_bevy(s)).collect();
+    assert!(
+        materials
+            .iter()
+            .any(|(p, _)| p.ends_with("terrain_triplanar.wgsl")),
+        "the triplanar terrain shader is missing"
+    );
+    let base = bevy_mesh_defines();
+    let mut composer = Composer::default();
+    // Bevy's modules import each other: add until no more can be added
+    // (modules this configuration cannot compose stay out; a shader that
+    // needs one fails below).
+    let mut pending = bevy_shader_library();
+    let mut left_out = Vec::new();
+    loop {
+        let before = pending.len();
+        left_out.clear();
+        pending.retain(|(path, source)| {
+            match composer.add_composable_module(ComposableModuleDescriptor {
+                source,
+                file_path: path,
+                language: ShaderLanguage::Wgsl,
+                shader_defs: base.clone(),
+                ..Default::default()
+            }) {
+                Ok(_) => false,
+                Err(e) => {
+                    left_out.push(format!("{path}: {}", e.emit_to_string(&composer)));
+                    true
+                }
+            }
+        });
+        if pending.is_empty() || pending.len() == before {
+            break;
+        }
+    }
+    for (path, source) in materials {
+        let defines = listed_defines(source);
+        assert!(defines.len() <= 6, "{path}: too many defines to enumerate");
+        for mask in 0u32..(1 << defines.len()) {
+            let mut shader_defs = base.clone();
+            for (i, d) in defines.iter().enumerate() {
+                if mask & (1 << i) != 0 {
+                    shader_defs.insert(d.clone(), ShaderDefValue::Bool(true));
+                }
+            }
+            let result = composer.make_naga_module(NagaModuleDescriptor {
+                source,
+                file_path: path,
+                shader_type: ShaderType::Wgsl,
+                shader_defs,
+                ..Default::default()
+            });
+            match result {
+                Ok(module) if path.ends_with("terrain_triplanar.wgsl") => {
+                    check_triplanar_uniform(&module);
+                }
+                Ok(_) => {}
+                Err(e) => panic!(
+                    "{path} (defines mask {mask:#b} of {defines:?}) does not validate:\n{}\n\
+                     Bevy modules left out:\n{}",
+                    e.emit_to_string(&composer),
+                    left_out.join("\n")
+                ),
+            }
+        }
+    }
+}
+
+/// The WGSL `Triplanar` uniform has the `f32` fields of
+/// `TriplanarExtension` (its `#[uniform(100)]` fields), in order, 4 bytes
+/// apart, as the derived uniform lays them out.
+fn check_triplanar_uniform(module: &naga::Module) {
+    use bevy::reflect::structs::Struct;
+    use bevy_chisel::terrain::TriplanarExtension;
+
+    let extension = TriplanarExtension::new(Default::default(), Default::default());
+    let rust: Vec<(String, u32)> = (0..extension.field_len())
+        .filter(|&i| {
+            extension
+                .field_at(i)
+                .is_some_and(|f| f.try_downcast_ref::<f32>().is_some())
+        })
+        .zip(0u32..)
+        .map(|(i, k)| (extension.name_at(i).unwrap_or_default().to_owned(), 4 * k))
+        .collect();
+    let wgsl = module
+        .types
+        .iter()
+        .find_map(|(_, t)| match (&t.name, &t.inner) {
+            (Some(name), naga::TypeInner::Struct { members, .. }) if name == "Triplanar" => Some(
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect::<Vec<_>>(),
+            ),
+            _ => None,
+        })
+        .expect("struct Triplanar in terrain_triplanar.wgsl");
+    assert_eq!(wgsl, rust, "WGSL Triplanar against TriplanarExtension");
 }
 
 #[test]

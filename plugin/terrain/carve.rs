@@ -28,7 +28,7 @@ use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, futures::check_ready};
 use chisel_bsp::octree::{CellKey, Edit};
 
-use super::component::{Job, Runtime, Terrain, TerrainCell, TerrainMaterials};
+use super::component::{Job, Runtime, Terrain, TerrainCell};
 use super::error::TerrainError;
 use super::jobs::{
     BuiltMesh, CellUpdate, JobContext, StepOutcome, Workers, carve_batch, on_pool, remesh,
@@ -339,7 +339,7 @@ pub fn finish_jobs(
 pub fn upload_meshes(
     settings: Res<TerrainSettings>,
     physics: Res<TerrainPhysicsBackend>,
-    mut terrains: Query<(Entity, &mut Terrain, Option<&TerrainMaterials>)>,
+    mut terrains: Query<(Entity, &mut Terrain)>,
     mut cells: Query<&mut Mesh3d, With<TerrainCell>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut commands: Commands,
@@ -348,7 +348,7 @@ pub fn upload_meshes(
 ) {
     let start = Instant::now();
     let over_budget = |added: usize| added > 0 && start.elapsed() >= settings.mesh_budget;
-    for (entity, mut terrain, materials) in &mut terrains {
+    for (entity, mut terrain) in &mut terrains {
         let runtime = &mut terrain.runtime;
         let mut added = 0usize;
         while let Some(mut upload) = runtime.uploads.pop_front() {
@@ -363,7 +363,6 @@ pub fn upload_meshes(
                 added += 1;
                 let mut place = CellPlacement {
                     terrain: entity,
-                    materials,
                     physics: &physics,
                     commands: &mut commands,
                 };
@@ -389,7 +388,6 @@ pub fn upload_meshes(
 /// What adding a cell needs besides the queries and assets.
 struct CellPlacement<'a, 'w, 's> {
     terrain: Entity,
-    materials: Option<&'a TerrainMaterials>,
     physics: &'a TerrainPhysicsBackend,
     commands: &'a mut Commands<'w, 's>,
 }
@@ -431,10 +429,6 @@ impl CellPlacement<'_, '_, '_> {
             }
         }
         for mesh in new {
-            let material = self
-                .materials
-                .map(|m| m.get(mesh.label))
-                .unwrap_or_default();
             let mut cell = self.commands.spawn((
                 TerrainCell {
                     terrain: self.terrain,
@@ -442,7 +436,6 @@ impl CellPlacement<'_, '_, '_> {
                     label: mesh.label,
                 },
                 Mesh3d(meshes.add(mesh.mesh)),
-                MeshMaterial3d(material),
                 Transform::IDENTITY,
                 ChildOf(self.terrain),
             ));

@@ -288,36 +288,3 @@ pub struct TerrainCell {
     /// The material shown.
     pub label: Label,
 }
-
-/// Materials of a terrain's labels: put it on the terrain entity. Labels
-/// without an entry use `fallback`.
-#[derive(Component, Clone, Debug, Default)]
-pub struct TerrainMaterials {
-    /// Material per label.
-    pub by_label: HashMap<Label, Handle<StandardMaterial>>,
-    /// Material of labels not in the table.
-    pub fallback: Handle<StandardMaterial>,
-}
-
-impl TerrainMaterials {
-    /// A table from `(label, material)` pairs.
-    #[must_use]
-    pub fn new(
-        entries: impl IntoIterator<Item = (Label, Handle<StandardMaterial>)>,
-        fallback: Handle<StandardMaterial>,
-    ) -> Self {
-        Self {
-            by_label: entries.into_iter().collect(),
-            fallback,
-        }
-    }
-
-    /// The material of `label`.
-    #[must_use]
-    pub fn get(&self, label: Label) -> Handle<StandardMaterial> {
-        self.by_label
-            .get(&label)
-            .cloned()
-            .unwrap_or_else(|| self.fallback.clone())
-    }
-}

@@ -5,12 +5,15 @@
 //! on an integer grid ([`chisel_bsp::tools::Quantization`]: unit and
 //! origin). Each leaf cell with a visible surface is shown by one child
 //! entity per material ([`TerrainCell`], `Mesh3d` + the material from the
-//! terrain's [`TerrainMaterials`]).
+//! terrain's [`TerrainMaterials`], of any Bevy material type).
 //!
 //! ## Map
 //!
-//! - [`component`] — [`Terrain`], [`TerrainCell`], [`TerrainMaterials`];
-//!   undo and the record of carves.
+//! - [`component`] — [`Terrain`], [`TerrainCell`]; undo and the record of
+//!   carves.
+//! - [`material`] — [`TerrainMaterials`] (label → material, generic over
+//!   the material type) and [`TerrainMaterialPlugin`];
+//!   [`material::triplanar`]: [`TriplanarMaterial`], textured PBR terrain.
 //! - [`spawn`] — terrains from a box, a [`Heightfield`] (image, layers by
 //!   depth) or a Bevy mesh.
 //! - [`base`] — what a terrain starts from, on the grid.
@@ -69,6 +72,7 @@ pub mod component;
 pub mod error;
 pub mod file;
 mod jobs;
+pub mod material;
 pub mod mesh;
 pub mod physics;
 pub mod raycast;
@@ -81,10 +85,12 @@ pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
     Carve, CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings, UndoCarve,
 };
-pub use component::{
-    JournalEntry, Terrain, TerrainCell, TerrainMaterials, apply_carve, apply_carve_with_faces,
-};
+pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
 pub use error::TerrainError;
+pub use material::triplanar::{
+    TerrainSurface, TriplanarExtension, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
+};
+pub use material::{HasTerrainMaterials, TerrainMaterialPlugin, TerrainMaterials};
 pub use mesh::{CellMesh, ColliderMesh};
 pub use physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBackend};
 pub use raycast::TerrainHit;
@@ -102,6 +108,9 @@ pub enum TerrainSystems {
     /// frame's budget; writes [`TerrainCellChanged`] and [`CarveApplied`].
     /// Read those after this set.
     Mesh,
+    /// Gives the cells spawned in [`TerrainSystems::Mesh`] their materials
+    /// ([`TerrainMaterialPlugin`]), in the same frame.
+    Material,
 }
 
 /// Destructible terrain: messages, settings and systems. Needs Bevy's asset
@@ -120,7 +129,12 @@ impl Plugin for TerrainPlugin {
             .add_message::<TerrainCellChanged>()
             .configure_sets(
                 Update,
-                (TerrainSystems::Carve, TerrainSystems::Mesh).chain(),
+                (
+                    TerrainSystems::Carve,
+                    TerrainSystems::Mesh,
+                    TerrainSystems::Material,
+                )
+                    .chain(),
             )
             .add_systems(
                 Update,
@@ -129,7 +143,9 @@ impl Plugin for TerrainPlugin {
                         .chain()
                         .in_set(TerrainSystems::Carve),
                     carve::upload_meshes.in_set(TerrainSystems::Mesh),
+                    material::default_materials.in_set(TerrainSystems::Material),
                 ),
-            );
+            )
+            .add_plugins(TerrainMaterialPlugin::<StandardMaterial>::default());
     }
 }
