@@ -15,7 +15,8 @@
 //!   rebuild of each replaced leaf extracted, for re-meshing without
 //!   cutting that leaf again ([`Octree::cell_surface_from`]).
 //! - [`import`] — an octree from a closed triangle mesh (§3.9).
-//! - [`measure`] — material volumes for reports.
+//! - [`measure`] — material volumes for reports; [`exact_volume`] — the
+//!   same, exactly, as rationals.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
 //! - [`store`] — octree files: exact, versioned and checked
@@ -45,6 +46,7 @@
 
 pub mod apply;
 pub mod cell;
+pub mod exact_volume;
 mod graft;
 pub mod import;
 pub mod measure;
@@ -57,5 +59,6 @@ pub mod tree;
 
 pub use apply::{CellFaces, Changes, Edit};
 pub use cell::{CellBox, CellKey};
+pub use exact_volume::ExactVolume;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};
