@@ -356,21 +356,20 @@ fn find_debris(
         let mut order = vec![seed];
         let mut heap = BinaryHeap::from([Reverse((graph.gap(seed.key), seed))]);
         let mut held = false;
-        'search: while let Some(Reverse((_, cell))) = heap.pop() {
+        while let Some(Reverse((_, cell))) = heap.pop() {
             next.clear();
-            if graph.expand(cell, &mut next) {
-                held = true;
-                break;
-            }
+            // The neighbours of an anchored cell are anchored too: they
+            // join the search before it stops.
+            held = graph.expand(cell, &mut next);
             for &n in &next {
-                if anchored.contains(&n) {
-                    held = true;
-                    break 'search;
-                }
+                held |= anchored.contains(&n);
                 if reached.insert(n) {
                     order.push(n);
                     heap.push(Reverse((graph.gap(n.key), n)));
                 }
+            }
+            if held {
+                break;
             }
         }
         if held {
