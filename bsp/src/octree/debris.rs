@@ -18,6 +18,26 @@
 //! octree of its own over the same cube, built the same way. The search is
 //! sequential and every step exact, so results are bit-identical for any
 //! thread count.
+//!
+//! ## Example
+//!
+//! ```
+//! use chisel_bsp::octree::{CellBox, DebrisConfig, Edit, Octree, OctreeConfig, Tool};
+//!
+//! // A pillar standing on the bottom (y = 0) with a block on top.
+//! let cube = |min, max| CellBox { min, max };
+//! let pillar = cube([100, 0, 100], [200, 300, 200]);
+//! let mut octree = Octree::from_box([0; 3], 10, pillar, 1, OctreeConfig::default())?;
+//! octree.apply(&Tool::cuboid(cube([50, 300, 50], [250, 400, 250]))?, Edit::Add(2))?;
+//! // Cut the pillar through: everything above the cut falls.
+//! let cut = Tool::cuboid(cube([90, 100, 90], [210, 150, 210]))?;
+//! let carved = octree.apply_detaching(&cut, Edit::Subtract, &DebrisConfig::default())?;
+//! let piece = &carved.detached.pieces[0];
+//! assert_eq!(piece.volume().to_f64(), (100.0 * 150.0 * 100.0) + (200.0 * 100.0 * 200.0));
+//! assert_eq!(octree.exact_solid_volume().to_f64(), 100.0 * 100.0 * 100.0);
+//! assert!(!piece.solid.surface().is_empty());
+//! # Ok::<(), chisel_bsp::Error>(())
+//! ```
 
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap, HashSet};
