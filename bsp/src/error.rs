@@ -145,6 +145,19 @@ pub enum Error {
         /// The defect found.
         reason: String,
     },
+    /// An edit would cut loose more debris than
+    /// [`crate::octree::DebrisConfig`] allows; nothing was changed.
+    TooMuchDebris {
+        /// Convex cells of debris found when the limit was passed.
+        cells: usize,
+        /// Their volume in cubic grid units (at least; the search stops
+        /// at the limit).
+        volume: f64,
+        /// The cell limit.
+        max_cells: Option<usize>,
+        /// The volume limit, in cubic grid units.
+        max_volume: Option<u128>,
+    },
     /// Reading or writing an octree file failed.
     Io {
         /// The operating system's message.
@@ -254,6 +267,23 @@ impl fmt::Display for Error {
                 write!(
                     f,
                     "octree file holds an invalid BSP (number {index}): {reason}"
+                )
+            }
+            Error::TooMuchDebris {
+                cells,
+                volume,
+                max_cells,
+                max_volume,
+            } => {
+                let limit = |l: Option<String>| l.unwrap_or_else(|| "none".into());
+                write!(
+                    f,
+                    "the edit would cut loose at least {cells} cells ({volume:.6e} cubic grid \
+                     units) of unanchored debris, over the limits (cells: {}, volume: {}); carve \
+                     less at once, mark anchor boxes under the piece, or raise the limits of the \
+                     debris config",
+                    limit(max_cells.map(|m| m.to_string())),
+                    limit(max_volume.map(|m| m.to_string())),
                 )
             }
             Error::Io { message } => write!(f, "octree file: {message}"),

@@ -626,7 +626,7 @@ fn split_leaf(
 /// One leaf for eight leaf children that fit the budget together, or
 /// `None`; with it, when `keep_faces` and the children were not all one
 /// uniform label, the boundary faces its rebuild extracted inside `cell`.
-fn combine(
+pub(crate) fn combine(
     children: &[OctNode; 8],
     cell: CellBox,
     config: &OctreeConfig,
@@ -671,7 +671,7 @@ fn combine(
     Some((leaf, faces))
 }
 
-fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {
+pub(crate) fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {
     match node {
         OctNode::Leaf(_) => out.push(key),
         OctNode::Inner(children) => {
@@ -684,7 +684,7 @@ fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {
 
 /// The cell's box in `arena`; cells lie inside the root cube, which was
 /// checked against the coordinate range when the octree was made.
-fn cell_poly(arena: &mut ConvexArena, cell: CellBox) -> PolyId {
+pub(crate) fn cell_poly(arena: &mut ConvexArena, cell: CellBox) -> PolyId {
     cell.add_to(arena)
         .expect("octree cells lie inside the checked root cube")
 }

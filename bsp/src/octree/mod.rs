@@ -15,7 +15,13 @@
 //!   rebuild of each replaced leaf extracted, for re-meshing without
 //!   cutting that leaf again ([`Octree::cell_surface_from`]).
 //! - [`import`] — an octree from a closed triangle mesh (§3.9).
-//! - [`measure`] — material volumes for reports.
+//! - [`measure`] — material volumes for reports; [`exact_volume`] — the
+//!   same, exactly, as rationals.
+//! - [`components`] — connected components of the solid (cells sharing
+//!   faces of positive area) and what anchors them.
+//! - [`debris`] — after an edit, finding the solid no anchor holds and
+//!   taking it out as pieces of their own (`relabel` empties or keeps
+//!   chosen cells).
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
 //! - [`store`] — octree files: exact, versioned and checked
@@ -45,10 +51,14 @@
 
 pub mod apply;
 pub mod cell;
+pub mod components;
+pub mod debris;
+pub mod exact_volume;
 mod graft;
 pub mod import;
 pub mod measure;
 mod mesh_check;
+mod relabel;
 mod split;
 pub mod store;
 pub mod surface;
@@ -57,5 +67,8 @@ pub mod tree;
 
 pub use apply::{CellFaces, Changes, Edit};
 pub use cell::{CellBox, CellKey};
+pub use components::{Anchors, Component, CubeSide, SolidCell};
+pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};
+pub use exact_volume::ExactVolume;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

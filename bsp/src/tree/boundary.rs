@@ -359,7 +359,7 @@ impl Bsp {
 /// Face `f` of the arena as a plane-based polygon. Half-edge k lies in the
 /// face across it (edge plane k) and leaves corner k, the meet of edge
 /// planes k − 1 and k.
-fn cell_face(arena: &ConvexArena, f: u32) -> Polygon {
+pub(crate) fn cell_face(arena: &ConvexArena, f: u32) -> Polygon {
     let (mut edges, mut corners) = spare_buffers(arena.face_loop(f).count());
     for h in arena.face_loop(f) {
         let half = arena.half_edges()[h as usize];
