@@ -1,19 +1,23 @@
 //! Terrain colliders with avian3d (feature `avian`), in an app without
 //! rendering: every cell entity carries a trimesh collider built with its
 //! mesh, a ball comes to rest on the ground and falls into a crater carved
-//! under it, and a box slides over many cell borders without catching.
+//! under it, a box slides over many cell borders without catching, and a
+//! bridge whose supports are carved away falls as a dynamic body with its
+//! exact volume.
 
 use std::time::Duration;
 
 use avian3d::prelude::*;
 use bevy::asset::AssetPlugin;
+use bevy::mesh::MeshPlugin;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_chisel::bsp::octree::Edit;
+use bevy_chisel::bsp::octree::{Edit, ExactVolume, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::avian::TerrainAvianPlugin;
 use bevy_chisel::terrain::{
-    Carve, CarveApplied, CarveTool, Terrain, TerrainCell, TerrainPlugin, TerrainSystems,
+    Carve, CarveApplied, CarveShape, CarveTool, DebrisDetached, Terrain, TerrainCell,
+    TerrainPlugin, TerrainSystems,
 };
 
 /// One physics step per update, whatever the wall clock does.
@@ -34,11 +38,11 @@ fn app_with_slab() -> (App, Entity) {
         MinimalPlugins,
         TransformPlugin,
         AssetPlugin::default(),
+        MeshPlugin,
         PhysicsPlugins::default(),
         TerrainPlugin,
         TerrainAvianPlugin::default(),
     ))
-    .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>()
     .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
         STEP,
@@ -46,14 +50,31 @@ fn app_with_slab() -> (App, Entity) {
     .init_resource::<Applied>()
     .add_systems(Update, record.after(TerrainSystems::Mesh));
     let grid = Quantization::new(0.01, [0.0; 3]).expect("valid unit");
-    let terrain = Terrain::from_box(
+    let slab = Terrain::from_box(
         grid,
         Vec3::new(-8.0, -4.0, -8.0),
         Vec3::new(8.0, 0.0, 8.0),
         1,
     )
     .expect("valid slab");
+    let config = OctreeConfig {
+        max_bsp_nodes: 12,
+        max_depth: 20,
+    };
+    let terrain = Terrain::from_base(grid, slab.base().clone(), config).expect("same base");
+    app.finish();
+    app.cleanup();
     let entity = app.world_mut().spawn(terrain).id();
+    settle(&mut app, entity);
+    // Small craters off to the side split the slab into many cells, whose
+    // borders cross the whole top face.
+    for x in [-5.0, -1.0, 3.0, 6.5] {
+        app.world_mut().write_message(Carve {
+            terrain: entity,
+            tool: CarveTool::dodecahedron(0.8, Vec3::new(x, 0.2, -6.0)),
+            edit: Edit::Subtract,
+        });
+    }
     settle(&mut app, entity);
     (app, entity)
 }
@@ -184,5 +205,88 @@ fn a_box_slides_over_cell_borders_without_catching() {
     assert!(
         min_speed > 3.5,
         "the box caught on an edge: its speed fell to {min_speed} m/s"
+    );
+}
+
+#[derive(Resource, Default)]
+struct Detached(Vec<DebrisDetached>);
+
+fn record_debris(mut seen: ResMut<Detached>, mut detached: MessageReader<DebrisDetached>) {
+    seen.0.extend(detached.read().cloned());
+}
+
+fn cuboid(min: Vec3, max: Vec3) -> CarveTool {
+    CarveTool::new(
+        CarveShape::Cuboid {
+            half_size: (max - min) / 2.0,
+        },
+        Transform::from_translation((min + max) / 2.0),
+    )
+}
+
+#[test]
+fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume() {
+    let (mut app, terrain) = app_with_slab();
+    app.init_resource::<Detached>()
+        .add_systems(Update, record_debris.after(TerrainSystems::Mesh));
+    // Two pillars and a deck of dirt, 7 m × 0.5 m × 1 m, added as one tool.
+    let bridge = CarveTool::union([
+        cuboid(Vec3::new(-3.5, -0.01, -0.5), Vec3::new(-2.5, 2.0, 0.5)),
+        cuboid(Vec3::new(2.5, -0.01, -0.5), Vec3::new(3.5, 2.0, 0.5)),
+        cuboid(Vec3::new(-3.5, 2.0, -0.5), Vec3::new(3.5, 2.5, 0.5)),
+    ]);
+    let carve = |app: &mut App, tool: CarveTool, edit: Edit| {
+        app.world_mut().write_message(Carve {
+            terrain,
+            tool,
+            edit,
+        });
+        settle(app, terrain);
+    };
+    carve(&mut app, bridge, Edit::Add(2));
+    carve(
+        &mut app,
+        cuboid(Vec3::new(-3.6, -0.01, -0.6), Vec3::new(-2.4, 2.0, 0.6)),
+        Edit::Subtract,
+    );
+    assert!(
+        app.world().resource::<Detached>().0.is_empty(),
+        "one pillar still holds the deck"
+    );
+    let before = app
+        .world()
+        .get::<Terrain>(terrain)
+        .expect("terrain")
+        .octree()
+        .exact_solid_volume();
+    carve(
+        &mut app,
+        cuboid(Vec3::new(2.4, -0.01, -0.6), Vec3::new(3.6, 2.0, 0.6)),
+        Edit::Subtract,
+    );
+    let detached = app.world().resource::<Detached>().0.clone();
+    assert_eq!(detached.len(), 1, "the deck alone falls");
+    let deck = &detached[0];
+    // 7 m × 0.5 m × 1 m on a 1 cm grid.
+    assert_eq!(deck.exact_volume, ExactVolume::from_integer(700 * 50 * 100));
+    assert_eq!(deck.main_label, 2);
+    let after = app
+        .world()
+        .get::<Terrain>(terrain)
+        .expect("terrain")
+        .octree()
+        .exact_solid_volume();
+    // The second carve took the pillar and 1 cm of the slab under it.
+    let pillar = ExactVolume::from_integer(100 * 200 * 100 + 120 * 120);
+    assert_eq!(before, after + deck.exact_volume.clone() + pillar);
+
+    // The deck is a dynamic body: it falls onto the ground.
+    let start = position(&app, deck.entity);
+    assert!(app.world().get::<RigidBody>(deck.entity) == Some(&RigidBody::Dynamic));
+    step(&mut app, 120);
+    let end = position(&app, deck.entity);
+    assert!(
+        end.y < start.y - 1.5 && end.y > 0.0,
+        "the deck should fall from {start} onto the ground, it is at {end}"
     );
 }

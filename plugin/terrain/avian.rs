@@ -20,6 +20,8 @@ use avian3d::prelude::*;
 use bevy::ecs::system::EntityCommands;
 use bevy::prelude::*;
 
+use super::TerrainSystems;
+use super::carve::CarveApplied;
 use super::component::Terrain;
 use super::mesh::ColliderMesh;
 use super::physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBackend};
@@ -47,7 +49,24 @@ impl Plugin for TerrainAvianPlugin {
         app.insert_resource(TerrainPhysicsBackend::new(AvianTerrainPhysics {
             trimesh_flags: self.trimesh_flags,
         }))
-        .add_observer(make_terrain_static);
+        .add_observer(make_terrain_static)
+        .add_systems(Update, wake_after_carves.after(TerrainSystems::Mesh));
+    }
+}
+
+/// Wakes the sleeping bodies when a carve lands: a body resting on ground
+/// that was carved away must fall, but sleeping bodies do not notice a
+/// static collider being replaced.
+fn wake_after_carves(
+    mut applied: MessageReader<CarveApplied>,
+    sleeping: Query<Entity, With<Sleeping>>,
+    mut commands: Commands,
+) {
+    if applied.read().count() == 0 {
+        return;
+    }
+    for body in &sleeping {
+        commands.queue(WakeBody(body));
     }
 }
 

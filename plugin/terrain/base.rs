@@ -9,7 +9,9 @@
 use std::collections::HashSet;
 
 use chisel_bsp::exact::IntPoint;
-use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
+use chisel_bsp::octree::{
+    Anchors, CellBox, CubeSide, DebrisConfig, Edit, Octree, OctreeConfig, Tool,
+};
 use chisel_bsp::tree::Label;
 
 use super::error::TerrainError;
@@ -121,6 +123,43 @@ impl TerrainBase {
                 }
                 Ok(octree)
             }
+        }
+    }
+
+    /// The lowest grid layer of the solid: everything with volume in it is
+    /// anchored ([`chisel_bsp::octree::Anchors`]), so debris is what a carve
+    /// separates from the ground the terrain stands on.
+    #[must_use]
+    pub fn floor(&self) -> CellBox {
+        let (origin, size_log2) = self.cube();
+        let edge = 1i64 << size_log2;
+        let bottom = match self {
+            TerrainBase::Box { solid, .. } => solid.min[1],
+            TerrainBase::Heightfield { field, .. } => field.bottom,
+            TerrainBase::Triangles { triangles, .. } => triangles
+                .iter()
+                .flatten()
+                .map(|p| p[1])
+                .min()
+                .unwrap_or(origin[1]),
+        };
+        CellBox {
+            min: [origin[0], bottom, origin[2]],
+            max: [origin[0] + edge, bottom + 1, origin[2] + edge],
+        }
+    }
+
+    /// The debris settings of a terrain on this base: anchored by
+    /// [`TerrainBase::floor`] and the cube's bottom, no limit.
+    #[must_use]
+    pub fn debris_config(&self) -> DebrisConfig {
+        DebrisConfig {
+            anchors: Anchors {
+                sides: vec![CubeSide::BOTTOM],
+                boxes: vec![self.floor()],
+            },
+            max_volume: None,
+            max_cells: None,
         }
     }
 

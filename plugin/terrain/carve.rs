@@ -29,6 +29,9 @@ use bevy::tasks::{AsyncComputeTaskPool, futures::check_ready};
 use chisel_bsp::octree::{CellKey, Edit};
 
 use super::component::{Job, Runtime, Terrain, TerrainCell};
+use super::debris::{
+    BuiltDebris, DEFAULT_DEBRIS_DENSITY, DebrisDetached, DebrisPart, TerrainDebris,
+};
 use super::error::TerrainError;
 use super::jobs::{
     BuiltMesh, CellUpdate, JobContext, StepOutcome, Workers, carve_batch, on_pool, remesh,
@@ -120,6 +123,8 @@ pub struct TerrainSettings {
     /// normals; sharper edges, such as crater rims, stay sharp. 0 gives
     /// flat shading.
     pub smoothing_degrees: f32,
+    /// Mass per cubic world unit of debris bodies.
+    pub debris_density: f32,
 }
 
 impl Default for TerrainSettings {
@@ -130,6 +135,7 @@ impl Default for TerrainSettings {
             worker_threads: std::thread::available_parallelism()
                 .map_or(1, |n| n.get().saturating_sub(1).max(1)),
             smoothing_degrees: DEFAULT_SMOOTHING_DEGREES,
+            debris_density: DEFAULT_DEBRIS_DENSITY,
         }
     }
 }
@@ -142,6 +148,8 @@ pub(crate) struct Upload {
     spread: bool,
     /// The reports to write once every cell is in place.
     reports: Vec<(CarveApplied, Instant)>,
+    /// The pieces to spawn then.
+    debris: Vec<BuiltDebris>,
 }
 
 /// Reads [`Carve`] and [`UndoCarve`] into the terrains' queues.
@@ -208,6 +216,8 @@ pub fn start_jobs(
             quantization: terrain.quantization,
             smoothing_degrees: settings.smoothing_degrees,
             physics: physics.0.clone(),
+            debris: terrain.debris.clone(),
+            debris_density: settings.debris_density,
         };
         if terrain.runtime.needs_full_mesh {
             terrain.runtime.needs_full_mesh = false;
@@ -286,6 +296,7 @@ pub fn finish_jobs(
         };
         terrain.runtime.task = None;
         let mut reports = Vec::new();
+        let mut debris = Vec::new();
         let report = |edit, cells, apply_time| CarveApplied {
             terrain: entity,
             edit,
@@ -304,7 +315,9 @@ pub fn finish_jobs(
                     edit,
                     apply_time,
                     requested,
+                    debris: pieces,
                 } => {
+                    debris.extend(pieces);
                     let cells = changes.changed.len() + changes.removed.len();
                     reports.push((report(Some(edit), cells, apply_time), requested));
                     terrain.record(before, changes, tool, edit);
@@ -324,6 +337,7 @@ pub fn finish_jobs(
             cells: output.cells.into(),
             spread: output.full,
             reports,
+            debris,
         });
         // For an undo or a full build this is the octree already in place.
         terrain.octree = output.octree;
@@ -339,16 +353,18 @@ pub fn finish_jobs(
 pub fn upload_meshes(
     settings: Res<TerrainSettings>,
     physics: Res<TerrainPhysicsBackend>,
-    mut terrains: Query<(Entity, &mut Terrain)>,
+    mut terrains: Query<(Entity, &mut Terrain, Option<&GlobalTransform>)>,
     mut cells: Query<&mut Mesh3d, With<TerrainCell>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut commands: Commands,
     mut changed: MessageWriter<TerrainCellChanged>,
     mut applied: MessageWriter<CarveApplied>,
+    mut detached: MessageWriter<DebrisDetached>,
 ) {
     let start = Instant::now();
     let over_budget = |added: usize| added > 0 && start.elapsed() >= settings.mesh_budget;
-    for (entity, mut terrain) in &mut terrains {
+    for (entity, mut terrain, placed) in &mut terrains {
+        let placed = placed.copied().unwrap_or_default();
         let runtime = &mut terrain.runtime;
         let mut added = 0usize;
         while let Some(mut upload) = runtime.uploads.pop_front() {
@@ -377,11 +393,67 @@ pub fn upload_meshes(
                 runtime.uploads.push_front(upload);
                 break;
             }
+            for piece in upload.debris {
+                detached.write(spawn_debris(
+                    &mut commands,
+                    &mut meshes,
+                    entity,
+                    &placed,
+                    piece,
+                ));
+            }
             for (mut report, requested) in upload.reports {
                 report.latency = requested.elapsed();
                 applied.write(report);
             }
         }
+    }
+}
+
+/// Spawns a piece cut loose from `terrain` (placed at `placed`) where it
+/// was, as a [`TerrainDebris`] with one [`DebrisPart`] child per material.
+fn spawn_debris(
+    commands: &mut Commands,
+    meshes: &mut Assets<Mesh>,
+    terrain: Entity,
+    placed: &GlobalTransform,
+    piece: BuiltDebris,
+) -> DebrisDetached {
+    let main_label = piece.main_label();
+    let at = placed.compute_transform() * Transform::from_translation(piece.centre);
+    let mut body = commands.spawn((
+        TerrainDebris {
+            terrain,
+            exact_volume: piece.exact_volume.clone(),
+            volumes: piece.volumes,
+            volume: piece.volume,
+        },
+        at,
+        Visibility::default(),
+    ));
+    if let Some(insert) = piece.body {
+        insert.apply(&mut body);
+    }
+    let entity = body.id();
+    let mut handles = Vec::new();
+    for (label, mesh) in piece.meshes {
+        let handle = meshes.add(mesh);
+        handles.push((label, handle.clone()));
+        commands.spawn((
+            DebrisPart { terrain, label },
+            Mesh3d(handle),
+            Transform::IDENTITY,
+            ChildOf(entity),
+        ));
+    }
+    DebrisDetached {
+        terrain,
+        entity,
+        meshes: handles,
+        centre: piece.centre,
+        volume: piece.volume,
+        exact_volume: piece.exact_volume,
+        main_label,
     }
 }
 

@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use bevy::prelude::*;
 use bevy::tasks::Task;
-use chisel_bsp::octree::{CellFaces, CellKey, Changes, Edit, Octree, OctreeConfig, Tool};
+use chisel_bsp::octree::{
+    CellFaces, CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, Tool,
+};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::Label;
 
@@ -49,6 +51,7 @@ pub struct Terrain {
     pub(crate) journal: Vec<JournalEntry>,
     pub(crate) history: VecDeque<UndoStep>,
     pub(crate) max_undo: usize,
+    pub(crate) debris: Option<DebrisConfig>,
     pub(crate) runtime: Runtime,
 }
 
@@ -104,6 +107,7 @@ impl Terrain {
         Ok(Self {
             octree,
             quantization,
+            debris: Some(base.debris_config()),
             base: Arc::new(base),
             journal: Vec::new(),
             history: VecDeque::new(),
@@ -120,6 +124,39 @@ impl Terrain {
             self.history.pop_front();
         }
         self
+    }
+
+    /// What anchors the terrain and how much one carve may cut loose
+    /// (`None`: pieces cut loose stay where they are, part of the terrain).
+    /// The default anchors whatever has volume in the lowest grid layer of
+    /// the base solid ([`TerrainBase::debris_config`]), with no limit.
+    #[must_use]
+    pub fn with_debris(mut self, config: Option<DebrisConfig>) -> Self {
+        self.debris = config;
+        self
+    }
+
+    /// Refuses carves that would cut loose more than `volume` cubic world
+    /// units of debris in one go ([`chisel_bsp::Error::TooMuchDebris`]).
+    /// Does nothing when debris detection is off.
+    #[must_use]
+    pub fn with_max_debris_volume(mut self, volume: f64) -> Self {
+        let unit = self.quantization.unit();
+        if let Some(config) = &mut self.debris {
+            let grid = (volume / (unit * unit * unit)).max(0.0);
+            config.max_volume = Some(if grid.is_finite() && grid < u128::MAX as f64 {
+                grid as u128
+            } else {
+                u128::MAX
+            });
+        }
+        self
+    }
+
+    /// The debris settings ([`Terrain::with_debris`]).
+    #[must_use]
+    pub fn debris(&self) -> Option<&DebrisConfig> {
+        self.debris.as_ref()
     }
 
     /// Forgets every undo step (the carves stay in the journal): for edits
@@ -193,13 +230,20 @@ impl Terrain {
 
     /// Applies a carve synchronously to the octree and records it (journal
     /// and undo), without touching meshes: for tools, tests and benchmarks
-    /// outside the ECS. In an app, send [`super::Carve`] instead.
+    /// outside the ECS. In an app, send [`super::Carve`] instead. Pieces
+    /// the carve cuts loose are removed as in the app (without spawning
+    /// anything), so the octree is the one the app would have.
     ///
     /// # Errors
-    /// As [`apply_carve`]; the terrain is then unchanged.
+    /// As [`apply_carve`], and [`chisel_bsp::Error::TooMuchDebris`]; the
+    /// terrain is then unchanged.
     pub fn apply_now(&mut self, tool: &GridTool, edit: Edit) -> Result<Changes, TerrainError> {
         let mut octree = self.octree.clone();
         let changes = apply_carve(&mut octree, tool, edit)?;
+        let changes = match &self.debris {
+            Some(config) => octree.detach_after(&changes, config)?.changes,
+            None => changes,
+        };
         let before = std::mem::replace(&mut self.octree, octree);
         self.record(before, changes.clone(), tool.clone(), edit);
         Ok(changes)

@@ -240,6 +240,7 @@ impl Terrain {
         Ok(Terrain {
             octree,
             quantization,
+            debris: Some(base.debris_config()),
             base: std::sync::Arc::new(base),
             journal,
             history,

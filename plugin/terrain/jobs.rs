@@ -14,12 +14,13 @@ use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use chisel_bsp::mesh::SurfaceMesh;
-use chisel_bsp::octree::{CellKey, Changes, Edit, Octree};
+use chisel_bsp::octree::{CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, Label};
 use rayon::prelude::*;
 
 use super::component::apply_carve_with_faces;
+use super::debris::{BuiltDebris, build_debris};
 use super::error::TerrainError;
 use super::mesh::{ColliderMesh, cell_meshes_of};
 use super::physics::{PhysicsInsert, TerrainPhysics};
@@ -32,6 +33,9 @@ pub(crate) struct JobContext {
     pub quantization: Quantization,
     pub smoothing_degrees: f32,
     pub physics: Option<Arc<dyn TerrainPhysics>>,
+    /// What anchors the terrain (`None`: no debris detection).
+    pub debris: Option<DebrisConfig>,
+    pub debris_density: f32,
 }
 
 /// One step of a background job.
@@ -43,6 +47,7 @@ pub(crate) enum StepOutcome {
         edit: Edit,
         apply_time: Duration,
         requested: Instant,
+        debris: Vec<BuiltDebris>,
     },
     Rejected {
         error: TerrainError,
@@ -132,27 +137,60 @@ pub(crate) fn carve_batch(
     for (tool, edit, requested) in batch {
         let before = octree.clone();
         let start = Instant::now();
-        match apply_carve_with_faces(&mut octree, &tool, edit) {
-            Ok((changes, faces)) => {
+        let carved =
+            apply_carve_with_faces(&mut octree, &tool, edit).and_then(|(changes, faces)| {
+                detach(&mut octree, changes, context).map(|(c, pieces)| (c, faces, pieces))
+            });
+        match carved {
+            Ok((changes, faces, pieces)) => {
                 for key in changes.changed.iter().chain(&changes.removed) {
                     fresh.remove(key);
                 }
-                fresh.extend(faces);
+                // Faces of cells the detach rebuilt again are stale.
+                fresh.extend(
+                    faces
+                        .into_iter()
+                        .filter(|(key, _)| !pieces.iter().any(|p| p.leaves.contains(key))),
+                );
                 keys.extend(changes.changed.iter().copied());
                 keys.extend(changes.removed.iter().copied());
+                let apply_time = start.elapsed();
+                let debris = pieces
+                    .par_iter()
+                    .map(|piece| build_debris(piece, context))
+                    .collect();
                 steps.push(StepOutcome::Applied {
                     before,
                     changes,
                     tool,
                     edit,
-                    apply_time: start.elapsed(),
+                    apply_time,
                     requested,
+                    debris,
                 });
             }
-            Err(error) => steps.push(StepOutcome::Rejected { error }),
+            Err(error) => {
+                octree = before;
+                steps.push(StepOutcome::Rejected { error });
+            }
         }
     }
     remesh(octree, context, steps, keys, fresh, false)
+}
+
+/// Takes the pieces the carve `changes` cut loose out of `octree` (the
+/// terrain after the carve), returning the carve's and the detach's
+/// changes together, against the terrain before the carve.
+pub(crate) fn detach(
+    octree: &mut Octree,
+    changes: Changes,
+    context: &JobContext,
+) -> Result<(Changes, Vec<DebrisPiece>), TerrainError> {
+    let Some(config) = &context.debris else {
+        return Ok((changes, Vec::new()));
+    };
+    let carved = octree.detach_after(&changes, config)?;
+    Ok((carved.changes, carved.detached.pieces))
 }
 
 /// Builds `keys` of `octree` (a key that is no longer a leaf gets `None`),

@@ -52,6 +52,7 @@ use chisel_bsp::tree::Label;
 
 use super::TerrainSystems;
 use super::component::TerrainCell;
+use super::debris::DebrisPart;
 
 /// Materials of a terrain's labels: put it on the terrain entity. Labels
 /// without an entry use `fallback`. `M` is any Bevy [`Material`] (with a
@@ -143,8 +144,16 @@ pub fn assign_materials<M: Material>(
     tables: Query<Ref<TerrainMaterials<M>>>,
     new_cells: Query<(Entity, &TerrainCell), Added<TerrainCell>>,
     all_cells: Query<(Entity, &TerrainCell)>,
+    new_debris: Query<(Entity, &DebrisPart), Added<DebrisPart>>,
     mut commands: Commands,
 ) {
+    for (entity, part) in &new_debris {
+        if let Ok(table) = tables.get(part.terrain) {
+            commands
+                .entity(entity)
+                .try_insert(MeshMaterial3d(table.get(part.label)));
+        }
+    }
     let mut give = |entity: Entity, cell: &TerrainCell, table: &TerrainMaterials<M>| {
         commands
             .entity(entity)
@@ -171,9 +180,17 @@ pub fn assign_materials<M: Material>(
 /// [`StandardMaterial`].
 pub(crate) fn default_materials(
     new_cells: Query<(Entity, &TerrainCell), Added<TerrainCell>>,
+    new_debris: Query<(Entity, &DebrisPart), Added<DebrisPart>>,
     tables: Query<(), With<HasTerrainMaterials>>,
     mut commands: Commands,
 ) {
+    for (entity, part) in &new_debris {
+        if !tables.contains(part.terrain) {
+            commands
+                .entity(entity)
+                .try_insert(MeshMaterial3d::<StandardMaterial>::default());
+        }
+    }
     for (entity, cell) in &new_cells {
         if !tables.contains(cell.terrain) {
             commands

@@ -69,6 +69,7 @@ pub mod avian;
 pub mod base;
 pub mod carve;
 pub mod component;
+pub mod debris;
 pub mod error;
 pub mod file;
 mod jobs;
@@ -86,6 +87,7 @@ pub use carve::{
     Carve, CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings, UndoCarve,
 };
 pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
+pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
 pub use error::TerrainError;
 pub use material::triplanar::{
     TerrainSurface, TriplanarExtension, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
@@ -126,6 +128,7 @@ impl Plugin for TerrainPlugin {
             .add_message::<UndoCarve>()
             .add_message::<CarveApplied>()
             .add_message::<CarveRejected>()
+            .add_message::<DebrisDetached>()
             .add_message::<TerrainCellChanged>()
             .configure_sets(
                 Update,
