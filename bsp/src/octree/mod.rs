@@ -18,6 +18,8 @@
 //! - [`measure`] — material volumes for reports.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
+//! - [`seams`] — sealed cell meshes that meet their neighbours' edge to
+//!   edge, kept up to date across edits ([`SeamedMesher`]).
 //! - [`store`] — octree files: exact, versioned and checked
 //!   ([`Octree::to_bytes`], [`Octree::from_bytes`]).
 //!
@@ -49,6 +51,7 @@ mod graft;
 pub mod import;
 pub mod measure;
 mod mesh_check;
+pub mod seams;
 mod split;
 pub mod store;
 pub mod surface;
@@ -57,5 +60,6 @@ pub mod tree;
 
 pub use apply::{CellFaces, Changes, Edit};
 pub use cell::{CellBox, CellKey};
+pub use seams::SeamedMesher;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};
