@@ -448,28 +448,31 @@ fn the_cost_of_seams_per_edit() {
         let start = Instant::now();
         let (changes, faces) = octree.apply_with_faces(&tool, edit).unwrap();
         carve.push(start.elapsed());
+        let fresh: BTreeMap<CellKey, _> = faces.into_iter().collect();
+        let jobs: Vec<(CellKey, Option<_>)> = changes
+            .changed
+            .iter()
+            .map(|key| (*key, fresh.get(key).cloned()))
+            .collect();
         let start = Instant::now();
         {
             use rayon::prelude::*;
-            let fresh: BTreeMap<CellKey, _> = faces.clone().into_iter().collect();
-            let meshes: Vec<SurfaceMesh> = changes
-                .changed
-                .par_iter()
-                .map(|key| {
-                    let surface = match fresh.get(key) {
-                        Some(faces) => octree.cell_surface_from(*key, faces.clone()),
-                        None => octree.cell_surface(*key),
-                    };
-                    SurfaceMesh::from_face_vec(surface)
+            let meshes: Vec<SurfaceMesh> = jobs
+                .into_par_iter()
+                .map(|(key, faces)| {
+                    SurfaceMesh::from_face_vec(match faces {
+                        Some(faces) => octree.cell_surface_from(key, faces),
+                        None => octree.cell_surface(key),
+                    })
                 })
                 .collect();
             std::hint::black_box(meshes);
         }
         alone.push(start.elapsed());
         let start = Instant::now();
-        let out = mesher.update(&octree, keys_of(&changes), faces.into_iter().collect());
+        let out = mesher.update(&octree, keys_of(&changes), fresh);
         sealed.push(start.elapsed());
-        cells.push(out.len());
+        cells.push((out.len(), changes.changed.len()));
     }
     let median = |v: &mut Vec<Duration>| {
         v.sort_unstable();
@@ -478,11 +481,16 @@ fn the_cost_of_seams_per_edit() {
     cells.sort_unstable();
     println!(
         "first build of {} leaves {first:?}; per carve (median): carve {:?}, cells meshed alone {:?}, \
-         seamed update {:?} ({} cells)",
+         seamed update {:?} (median cells {:?} meshed, {:?} changed)",
         octree.stats().leaves,
         median(&mut carve),
         median(&mut alone),
         median(&mut sealed),
-        cells[cells.len() / 2]
+        cells[cells.len() / 2].0,
+        {
+            let mut c: Vec<usize> = cells.iter().map(|c| c.1).collect();
+            c.sort_unstable();
+            c[c.len() / 2]
+        }
     );
 }

@@ -43,8 +43,9 @@ pub const MAX_WALLS: usize = 8;
 /// An original edge lying on a wall, as the planes that decide whether a
 /// point lies strictly inside it (see [`super::tjunction`]): the face's
 /// support `s`, the edge's own plane `e_k` and the planes of the edges
-/// before and after it, `e_{k−1}` and `e_{k+1}`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// before and after it, `e_{k−1}` and `e_{k+1}`; and a box in `f64` that
+/// holds every such point.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BorderEdge {
     /// The face's support plane `s`.
     pub support: Plane,
@@ -54,14 +55,29 @@ pub struct BorderEdge {
     pub previous: Plane,
     /// The plane of the edge after, `e_{k+1}`.
     pub next: Plane,
+    /// The box of the edge's ends in `f64`, widened by far more than the
+    /// rounding of exact positions (`2^-40` of the largest coordinate,
+    /// against under `2^-51` relative).
+    pub span: ([f64; 3], [f64; 3]),
 }
 
 impl BorderEdge {
+    /// Whether the `f64` position `q` of a point (within `2^-51` relative)
+    /// may lie strictly inside the edge: false only when it certainly
+    /// does not.
+    #[must_use]
+    #[inline]
+    pub fn may_hold(&self, q: [f64; 3]) -> bool {
+        let (lo, hi) = &self.span;
+        (0..3).all(|a| lo[a] <= q[a] && q[a] <= hi[a])
+    }
+
     /// Whether `w` lies strictly inside the edge, exactly (cheap
     /// rejections first).
     #[must_use]
     pub fn holds_strictly(&self, w: &Point4) -> bool {
-        classify_vertex(w, &self.previous) == Sign::Negative
+        self.may_hold(w.to_f64())
+            && classify_vertex(w, &self.previous) == Sign::Negative
             && classify_vertex(w, &self.next) == Sign::Negative
             && classify_vertex(w, &self.edge) == Sign::Zero
             && classify_vertex(w, &self.support) == Sign::Zero
@@ -132,17 +148,24 @@ impl UnsealedMesh {
     /// polygon, edge by edge.
     #[must_use]
     pub fn border_edges(&self) -> Vec<BorderEdge> {
+        Self::border_edges_of(&self.mesh, &self.walls)
+    }
+
+    /// [`Self::border_edges`] of `mesh` with vertex walls `walls`.
+    fn border_edges_of(mesh: &SurfaceMesh, walls: &[u8]) -> Vec<BorderEdge> {
         let mut out = Vec::new();
-        for polygon in &self.mesh.polygons {
+        for polygon in &mesh.polygons {
             let n = polygon.original_len();
             let corner = |k: usize| polygon.corners[polygon.originals[k % n] as usize];
             for k in 0..n {
-                if self.walls[corner(k) as usize] & self.walls[corner(k + 1) as usize] != 0 {
+                let (a, b) = (corner(k), corner(k + 1));
+                if walls[a as usize] & walls[b as usize] != 0 {
                     out.push(BorderEdge {
                         support: polygon.plane,
                         edge: polygon.edges[k],
                         previous: polygon.edges[(k + n - 1) % n],
                         next: polygon.edges[(k + 1) % n],
+                        span: span(mesh.position(a), mesh.position(b)),
                     });
                 }
             }
@@ -189,20 +212,21 @@ impl UnsealedMesh {
     /// points: the extra points that became corners and are no vertex of
     /// the mesh's own, once each, in order of first appearance in `extra`.
     #[must_use]
-    pub fn seal(self, extra: &[Point4]) -> (SurfaceMesh, Vec<Point4>) {
+    pub fn seal<'a>(
+        self,
+        extra: impl IntoIterator<Item = &'a Point4>,
+    ) -> (SurfaceMesh, Vec<Point4>) {
         let Self { mut mesh, walls } = self;
         if mesh.polygons.is_empty() {
             return (mesh, Vec::new());
         }
         let own = mesh.vertices.len();
-        let spans = border_spans(&mesh, &walls);
+        let edges = UnsealedMesh::border_edges_of(&mesh, &walls);
         let extra: Vec<&Point4> = extra
-            .iter()
+            .into_iter()
             .filter(|p| {
                 let q = p.to_f64();
-                spans
-                    .iter()
-                    .any(|(lo, hi)| (0..3).all(|a| lo[a] <= q[a] && q[a] <= hi[a]))
+                edges.iter().any(|e| e.may_hold(q))
             })
             .collect();
         if !extra.is_empty() {
@@ -236,31 +260,17 @@ impl UnsealedMesh {
     }
 }
 
-/// The `f64` box of every border edge of `mesh` (vertex walls `walls`),
-/// widened by far more than the rounding of exact positions (`2^-40` of
-/// the largest coordinate against under `2^-51` relative): a point
-/// strictly inside a border edge lies in its box.
-fn border_spans(mesh: &SurfaceMesh, walls: &[u8]) -> Vec<([f64; 3], [f64; 3])> {
-    let mut spans = Vec::new();
-    for polygon in &mesh.polygons {
-        let n = polygon.original_len();
-        let corner = |k: usize| polygon.corners[polygon.originals[k % n] as usize];
-        for k in 0..n {
-            let (a, b) = (corner(k), corner(k + 1));
-            if walls[a as usize] & walls[b as usize] != 0 {
-                let (p, q) = (mesh.position(a), mesh.position(b));
-                let slack = (0..3)
-                    .map(|i| p[i].abs().max(q[i].abs()))
-                    .fold(f64::MIN_POSITIVE, f64::max)
-                    * f64::powi(2.0, -40);
-                spans.push((
-                    [0, 1, 2].map(|i| p[i].min(q[i]) - slack),
-                    [0, 1, 2].map(|i| p[i].max(q[i]) + slack),
-                ));
-            }
-        }
-    }
-    spans
+/// The box of the segment `p q`, widened by `2^-40` of its largest
+/// coordinate: far more than the rounding of exact positions.
+fn span(p: [f64; 3], q: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let slack = (0..3)
+        .map(|i| p[i].abs().max(q[i].abs()))
+        .fold(f64::MIN_POSITIVE, f64::max)
+        * f64::powi(2.0, -40);
+    (
+        [0, 1, 2].map(|i| p[i].min(q[i]) - slack),
+        [0, 1, 2].map(|i| p[i].max(q[i]) + slack),
+    )
 }
 
 impl SurfaceMesh {

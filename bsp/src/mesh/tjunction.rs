@@ -41,7 +41,8 @@
 //! watertight whenever that one is. As both polygons have the same materials, keeping
 //! polygons by material ([`super::SurfaceMesh::retain`], e.g. the outer
 //! surface) keeps both or neither, and the same holds for what is kept. Most edges between faces of one cell are matched whole,
-//! and skip the search below.
+//! and skip the search below. A mesh sealed against its neighbours
+//! ([`super::seal`]) matches no edge lying in a wall of its cell.
 //!
 //! # Candidates
 //!

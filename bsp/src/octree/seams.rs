@@ -19,16 +19,26 @@
 //!
 //! [`SeamedMesher`] keeps each leaf's wall points, border edges and seam
 //! points between edits, so that meshing a cell needs its neighbours'
-//! wall points only, not their surfaces; and a neighbour outside the
-//! edited cells is meshed again exactly when its seam points change.
+//! wall points only, not their surfaces. A leaf outside the edited cells
+//! is meshed again (from [`Octree::cell_surface`]) in two cases only:
+//!
+//! - a wall point gained or lost by a cell meshed in this update lies
+//!   strictly inside one of its border edges (and is no vertex of its
+//!   own), and its seam points, recomputed, differ from those kept;
+//! - one of its polygons lies in a wall and shares area with a cell whose
+//!   leaf was replaced: that face is clipped against the new leaf (the
+//!   same surface, possibly in other pieces), and its wall points differ.
+//!
+//! Either may change its wall points in turn, so both repeat until no
+//! wall point changes; a cell's own wall points change at most once.
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
-use super::tree::{OctNode, Octree};
-use crate::exact::{Plane, Point4, Sign, classify_vertex};
+use super::tree::{Leaf, OctNode, Octree};
+use crate::exact::{Plane, Point4};
 use crate::mesh::{BorderEdge, SurfaceMesh, UnsealedMesh};
 use crate::tree::BoundaryFace;
 
@@ -72,7 +82,11 @@ impl Octree {
             if other != key {
                 let mesh =
                     UnsealedMesh::new(self.cell_surface(other), &walls(&self.cell_box(other)));
-                extra.extend(mesh.wall_vertices().filter(|p| in_closed_box(p, &cell)));
+                extra.extend(
+                    mesh.wall_vertices()
+                        .filter(|p| may_be_in_box(p, &cell))
+                        .copied(),
+                );
             }
         }
         UnsealedMesh::new(self.cell_surface(key), &walls(&cell))
@@ -102,6 +116,11 @@ struct CellBorder {
 #[derive(Clone, Debug, Default)]
 pub struct SeamedMesher {
     borders: BTreeMap<CellKey, CellBorder>,
+    /// The leaf each meshed cell held when last meshed (shared with the
+    /// octree, so no copy): an edited cell whose leaf is the same stored
+    /// value was only touched, and its neighbours' faces are clipped
+    /// against it as before.
+    leaves: BTreeMap<CellKey, Leaf>,
 }
 
 impl SeamedMesher {
@@ -129,12 +148,15 @@ impl SeamedMesher {
     /// Meshes the cells `keys` of `octree` that an edit or undo may have
     /// changed ([`Changes::changed`](super::Changes::changed) and
     /// [`Changes::removed`](super::Changes::removed); every leaf for a
-    /// first build), and the other leaves whose seam points that changed,
-    /// and hands back each one's sealed mesh, sorted by key: `None` for a
-    /// key that is no longer a leaf (it is forgotten), else the mesh
-    /// (empty where the cell has no surface). A leaf in `fresh` is meshed
-    /// from those boundary faces ([`Octree::apply_with_faces`],
-    /// [`Octree::cell_surface_from`]) rather than cut again.
+    /// first build), and the other leaves whose meshes that changes (see
+    /// the module docs), and hands back each one's sealed mesh, sorted by
+    /// key: `None` for a key that is no longer a leaf (it is forgotten),
+    /// else the mesh (empty where the cell has no surface). A leaf in
+    /// `fresh` is meshed from those boundary faces
+    /// ([`Octree::apply_with_faces`], [`Octree::cell_surface_from`])
+    /// rather than cut again: the same surface, possibly in other pieces
+    /// than a build from the octree gives, so with `fresh` the meshes are
+    /// sealed and watertight together but need not equal a first build.
     ///
     /// The leaves not listed must hold the surface they had at the last
     /// update. Cells run in parallel; the result does not depend on the
@@ -166,8 +188,17 @@ impl SeamedMesher {
             .collect();
         let mut changed = Vec::new();
         for key in &gone {
+            self.leaves.remove(key);
             if let Some(old) = self.borders.remove(key) {
                 changed.extend(old.wall_points);
+            }
+        }
+        let mut replaced = Vec::new();
+        for &key in &live {
+            let leaf = octree.leaf(key).expect("a live key is a leaf");
+            if !self.leaves.get(&key).is_some_and(|old| old.same_as(leaf)) {
+                replaced.push(key);
+                self.leaves.insert(key, leaf.clone());
             }
         }
         for (key, mesh) in &pending {
@@ -177,7 +208,7 @@ impl SeamedMesher {
         // clipped against that cell's new tree, the same surface possibly
         // in other pieces (with other wall points).
         let this = &*self;
-        let facing = this.facing(octree, &pending);
+        let facing = this.facing(octree, &replaced, &pending);
         let again: Vec<(CellKey, UnsealedMesh)> = facing
             .into_par_iter()
             .filter_map(|key| {
@@ -197,7 +228,6 @@ impl SeamedMesher {
         // The neighbours whose seams the changed wall points change, meshed
         // again (from the octree); where that changes their own wall
         // points, their neighbours in turn.
-        let mut remeshed = BTreeSet::new();
         while !changed.is_empty() {
             let this = &*self;
             let candidates = this.touched_by(octree, &changed, &pending);
@@ -208,7 +238,6 @@ impl SeamedMesher {
             changed.clear();
             for (key, mesh) in again {
                 self.record(key, &mesh, &mut changed);
-                remeshed.insert(key);
                 pending.insert(key, mesh);
             }
         }
@@ -218,7 +247,7 @@ impl SeamedMesher {
             .into_par_iter()
             .map(|(key, mesh)| {
                 let extra = this.extra_points(octree, key, &octree.cell_box(key));
-                let (mesh, seams) = mesh.seal(&extra);
+                let (mesh, seams) = mesh.seal(extra);
                 (key, mesh, seams)
             })
             .collect();
@@ -264,10 +293,15 @@ impl SeamedMesher {
     }
 
     /// The leaves not in `pending` with a polygon lying in a wall, across
-    /// which that polygon shares area with the box of a cell in `pending`.
-    fn facing(&self, octree: &Octree, pending: &BTreeMap<CellKey, UnsealedMesh>) -> Vec<CellKey> {
+    /// which that polygon shares area with the box of a `replaced` cell.
+    fn facing(
+        &self,
+        octree: &Octree,
+        replaced: &[CellKey],
+        pending: &BTreeMap<CellKey, UnsealedMesh>,
+    ) -> Vec<CellKey> {
         let mut out = BTreeSet::new();
-        for &edited in pending.keys() {
+        for &edited in replaced {
             let cell = octree.cell_box(edited);
             for key in octree.leaves_touching(&cell) {
                 if pending.contains_key(&key) || out.contains(&key) {
@@ -347,7 +381,7 @@ impl SeamedMesher {
         let cell = octree.cell_box(key);
         let extra = self.extra_points(octree, key, &cell);
         let mut seams: Vec<Point4> = Vec::new();
-        for p in &extra {
+        for &p in &extra {
             if border.edges.iter().any(|e| e.holds_strictly(p))
                 && !border.wall_points.iter().any(|w| same_point(w, p))
                 && !seams.iter().any(|s| same_point(s, p))
@@ -363,15 +397,15 @@ impl SeamedMesher {
     }
 
     /// The wall points of the neighbours of leaf `key` (box `cell`) that
-    /// lie on its closed box, neighbour by neighbour in leaf order.
-    fn extra_points(&self, octree: &Octree, key: CellKey, cell: &CellBox) -> Vec<Point4> {
+    /// may lie on its closed box, neighbour by neighbour in leaf order.
+    fn extra_points(&self, octree: &Octree, key: CellKey, cell: &CellBox) -> Vec<&Point4> {
         let mut extra = Vec::new();
         for other in octree.leaves_touching(cell) {
             if other == key {
                 continue;
             }
             if let Some(border) = self.borders.get(&other) {
-                extra.extend(border.wall_points.iter().filter(|p| in_closed_box(p, cell)));
+                extra.extend(border.wall_points.iter().filter(|p| may_be_in_box(p, cell)));
             }
         }
         extra
@@ -398,30 +432,17 @@ fn axis_plane(axis: usize, at: i64) -> Plane {
     Plane::new(n[0], n[1], n[2], -i128::from(at)).expect("cell coordinates are in range")
 }
 
-/// Whether the exact point `p` lies in the closed box `cell`: decided in
-/// `f64` where `p` is farther from a face than the rounding of its
-/// position (under `2^-51` relative, far inside the margin of `2^-40` of
-/// the box's coordinates), exactly otherwise.
-fn in_closed_box(p: &Point4, cell: &CellBox) -> bool {
+/// Whether the exact point `p` may lie in the closed box `cell`: false
+/// only where its `f64` position (within `2^-51` relative) is farther
+/// outside than a margin of `2^-40` of the box's coordinates. A cheap
+/// filter: the exact decisions are made against the edges themselves.
+fn may_be_in_box(p: &Point4, cell: &CellBox) -> bool {
     let q = p.to_f64();
-    for (axis, &c) in q.iter().enumerate() {
+    q.iter().enumerate().all(|(axis, &c)| {
         let (lo, hi) = (cell.min[axis] as f64, cell.max[axis] as f64);
         let margin = (lo.abs().max(hi.abs()) + 1.0) * f64::powi(2.0, -40);
-        if c < lo - margin || c > hi + margin {
-            return false;
-        }
-        if c < lo + margin
-            && classify_vertex(p, &axis_plane(axis, cell.min[axis])) == Sign::Negative
-        {
-            return false;
-        }
-        if c > hi - margin
-            && classify_vertex(p, &axis_plane(axis, cell.max[axis])) == Sign::Positive
-        {
-            return false;
-        }
-    }
-    true
+        lo - margin <= c && c <= hi + margin
+    })
 }
 
 /// Whether `a` and `b` are the same point (identical digits first).
