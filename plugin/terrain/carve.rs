@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, futures::check_ready};
-use chisel_bsp::octree::{CellKey, Edit};
+use chisel_bsp::octree::{CellKey, Edit, SeamedMesher};
 
 use super::component::{Job, Runtime, Terrain, TerrainCell};
 use super::debris::{
@@ -223,9 +223,19 @@ pub fn start_jobs(
             terrain.runtime.needs_full_mesh = false;
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
+            terrain.runtime.mesher = SeamedMesher::new();
+            let mesher = SeamedMesher::new();
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {
-                    remesh(octree, &context, Vec::new(), keys, BTreeMap::new(), true)
+                    remesh(
+                        octree,
+                        &context,
+                        Vec::new(),
+                        keys,
+                        BTreeMap::new(),
+                        mesher,
+                        true,
+                    )
                 })
             }));
             continue;
@@ -239,9 +249,18 @@ pub fn start_jobs(
                         cells: keys.len(),
                         requested,
                     }];
+                    let mesher = std::mem::take(&mut terrain.runtime.mesher);
                     terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                         on_pool(pool, || {
-                            remesh(octree, &context, steps, keys, BTreeMap::new(), false)
+                            remesh(
+                                octree,
+                                &context,
+                                steps,
+                                keys,
+                                BTreeMap::new(),
+                                mesher,
+                                false,
+                            )
                         })
                     }));
                 }
@@ -271,10 +290,10 @@ pub fn start_jobs(
                     }
                 }
                 let octree = terrain.octree.clone();
-                terrain.runtime.task =
-                    Some(AsyncComputeTaskPool::get().spawn(async move {
-                        on_pool(pool, || carve_batch(octree, &context, batch))
-                    }));
+                let mesher = std::mem::take(&mut terrain.runtime.mesher);
+                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                    on_pool(pool, || carve_batch(octree, mesher, &context, batch))
+                }));
             }
         }
     }
@@ -341,6 +360,7 @@ pub fn finish_jobs(
         });
         // For an undo or a full build this is the octree already in place.
         terrain.octree = output.octree;
+        terrain.runtime.mesher = output.mesher;
     }
 }
 

@@ -8,7 +8,7 @@ use std::time::Instant;
 use bevy::prelude::*;
 use bevy::tasks::Task;
 use chisel_bsp::octree::{
-    CellFaces, CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, Tool,
+    CellFaces, CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, SeamedMesher, Tool,
 };
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::Label;
@@ -63,6 +63,9 @@ pub(crate) struct Runtime {
     pub(crate) cells: HashMap<CellKey, Vec<(Label, Entity, usize)>>,
     pub(crate) triangles: usize,
     pub(crate) needs_full_mesh: bool,
+    /// The border vertices of the cells shown (in the running job while
+    /// there is one).
+    pub(crate) mesher: SeamedMesher,
 }
 
 /// A request waiting for its turn.
@@ -86,6 +89,7 @@ impl Default for Runtime {
             cells: HashMap::new(),
             triangles: 0,
             needs_full_mesh: true,
+            mesher: SeamedMesher::new(),
         }
     }
 }

@@ -13,8 +13,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
-use chisel_bsp::mesh::SurfaceMesh;
-use chisel_bsp::octree::{CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree};
+use chisel_bsp::octree::{CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, SeamedMesher};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, Label};
 use rayon::prelude::*;
@@ -76,6 +75,8 @@ pub(crate) struct CellUpdate {
 /// What a background job hands back.
 pub(crate) struct JobOutput {
     pub octree: Octree,
+    /// The border vertices of the cells now shown, for the next job.
+    pub mesher: SeamedMesher,
     pub steps: Vec<StepOutcome>,
     pub cells: Vec<CellUpdate>,
     /// Whether the cells are the first full build, which may reach the
@@ -125,6 +126,7 @@ where
 /// they changed.
 pub(crate) fn carve_batch(
     mut octree: Octree,
+    mesher: SeamedMesher,
     context: &JobContext,
     batch: Vec<(GridTool, Edit, Instant)>,
 ) -> JobOutput {
@@ -175,7 +177,7 @@ pub(crate) fn carve_batch(
             }
         }
     }
-    remesh(octree, context, steps, keys, fresh, false)
+    remesh(octree, context, steps, keys, fresh, mesher, false)
 }
 
 /// Takes the pieces the carve `changes` cut loose out of `octree` (the
@@ -194,48 +196,40 @@ pub(crate) fn detach(
 }
 
 /// Builds `keys` of `octree` (a key that is no longer a leaf gets `None`),
-/// from the faces in `fresh` where a carve handed them back.
+/// from the faces in `fresh` where a carve handed them back, and every
+/// neighbour whose border the change split differently: `mesher` keeps the
+/// cells' border vertices, so that neighbouring meshes meet edge to edge.
 pub(crate) fn remesh(
     octree: Octree,
     context: &JobContext,
     steps: Vec<StepOutcome>,
     keys: Vec<CellKey>,
-    mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
+    fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
+    mut mesher: SeamedMesher,
     full: bool,
 ) -> JobOutput {
     let start = Instant::now();
     let keys: BTreeSet<CellKey> = keys.into_iter().collect();
-    let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> = keys
-        .into_iter()
-        .map(|key| (key, fresh.remove(&key)))
-        .collect();
+    let sealed = mesher.update(&octree, keys, fresh);
     // Meshes first (the collider triangles kept aside), then colliders,
     // so that each is timed on its own.
-    let meshed: Vec<(CellKey, Option<Vec<(BuiltMesh, ColliderMesh)>>)> = jobs
+    let meshed: Vec<(CellKey, Option<Vec<(BuiltMesh, ColliderMesh)>>)> = sealed
         .into_par_iter()
-        .map(|(key, faces)| {
-            let meshes = octree.leaf(key).map(|_| {
-                let faces = match faces {
-                    Some(faces) => octree.cell_surface_from(key, faces),
-                    None => octree.cell_surface(key),
-                };
-                cell_meshes_of(
-                    &SurfaceMesh::from_face_vec(faces),
-                    &context.quantization,
-                    context.smoothing_degrees,
-                )
-                .into_iter()
-                .map(|mut mesh| {
-                    let collider = std::mem::take(&mut mesh.collider);
-                    let built = BuiltMesh {
-                        label: mesh.label,
-                        triangles: mesh.triangle_count(),
-                        mesh: mesh.into_mesh(),
-                        collider: None,
-                    };
-                    (built, collider)
-                })
-                .collect()
+        .map(|(key, surface)| {
+            let meshes = surface.map(|surface| {
+                cell_meshes_of(&surface, &context.quantization, context.smoothing_degrees)
+                    .into_iter()
+                    .map(|mut mesh| {
+                        let collider = std::mem::take(&mut mesh.collider);
+                        let built = BuiltMesh {
+                            label: mesh.label,
+                            triangles: mesh.triangle_count(),
+                            mesh: mesh.into_mesh(),
+                            collider: None,
+                        };
+                        (built, collider)
+                    })
+                    .collect()
             });
             (key, meshes)
         })
@@ -262,6 +256,7 @@ pub(crate) fn remesh(
         .collect();
     JobOutput {
         octree,
+        mesher,
         steps,
         cells,
         full,

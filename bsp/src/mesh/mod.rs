@@ -26,6 +26,8 @@
 //! - `merge` — coplanar fragments with a whole common edge and a convex
 //!   union become one polygon ([`SurfaceMesh::merge_coplanar`]).
 //! - [`tjunction`] — every vertex strictly inside an edge is inserted there.
+//! - [`seal`] — meshes of neighbouring regions (octree cells) split at each
+//!   other's wall vertices, so that they meet edge to edge.
 //! - [`watertight`] — every directed edge has exactly one opposite.
 //! - [`validate`] — the invariants of a [`SurfaceMesh`], checked exactly.
 //! - [`triangulate`] — polygons to triangles with no zero-area triangle, and
@@ -62,6 +64,7 @@
 //! ```
 
 mod merge;
+pub mod seal;
 mod spare;
 pub mod tjunction;
 pub mod triangulate;
@@ -69,6 +72,7 @@ pub mod validate;
 pub mod watertight;
 pub mod weld;
 
+pub use seal::{BorderEdge, UnsealedMesh};
 pub use triangulate::{FlatShadedMesh, TriangleMesh};
 pub use validate::MeshInvariantError;
 pub use watertight::{BadEdge, EdgeProblem, WatertightError};

@@ -41,7 +41,8 @@
 //! watertight whenever that one is. As both polygons have the same materials, keeping
 //! polygons by material ([`super::SurfaceMesh::retain`], e.g. the outer
 //! surface) keeps both or neither, and the same holds for what is kept. Most edges between faces of one cell are matched whole,
-//! and skip the search below.
+//! and skip the search below. A mesh sealed against its neighbours
+//! ([`super::seal`]) matches no edge lying in a wall of its cell.
 //!
 //! # Candidates
 //!
@@ -74,14 +75,22 @@ fn edge_key(from: u32, to: u32) -> u64 {
 /// Inserts every T-junction into every polygon, except on edges matched
 /// whole (see the module docs).
 pub(crate) fn split(vertices: &[Point4], polygons: &mut [MeshPolygon]) {
-    split_with(vertices, polygons, SCAN_MAX);
+    split_with(vertices, polygons, SCAN_MAX, &[]);
 }
 
-/// [`split`], scanning every vertex for every edge up to `scan_max`
-/// vertices, with a grid above.
-fn split_with(vertices: &[Point4], polygons: &mut [MeshPolygon], scan_max: usize) {
+/// [`split`], but no edge whose two ends share a wall (a set bit of
+/// `walls[v]`, one bit per wall plane, per vertex `v`) is matched whole:
+/// points of a neighbouring mesh may lie inside it (see
+/// [`super::seal`]). Vertices past the end of `walls` lie on no wall.
+pub(crate) fn split_sealed(vertices: &[Point4], polygons: &mut [MeshPolygon], walls: &[u8]) {
+    split_with(vertices, polygons, SCAN_MAX, walls);
+}
+
+/// [`split_sealed`], scanning every vertex for every edge up to
+/// `scan_max` vertices, with a grid above.
+fn split_with(vertices: &[Point4], polygons: &mut [MeshPolygon], scan_max: usize, walls: &[u8]) {
     let mut scratch = Scratch::take();
-    split_in(vertices, polygons, scan_max, &mut scratch);
+    split_in(vertices, polygons, scan_max, walls, &mut scratch);
     scratch.give_back();
 }
 
@@ -147,6 +156,7 @@ fn split_in(
     vertices: &[Point4],
     polygons: &mut [MeshPolygon],
     scan_max: usize,
+    walls: &[u8],
     scratch: &mut Scratch,
 ) {
     let Scratch {
@@ -161,6 +171,9 @@ fn split_in(
         positions_of_originals,
     } = scratch;
     matched_whole(polygons, owners, whole);
+    if !walls.is_empty() {
+        unmatch_wall_edges(polygons, walls, whole);
+    }
     let mut edge_index = 0;
     positions.clear();
     positions.extend(vertices.iter().map(Point4::to_f64));
@@ -266,6 +279,24 @@ fn matched_whole(
                 (o.label, o.outside, o.on_bounds)
                     == (polygon.label, polygon.outside, polygon.on_bounds)
             }));
+        }
+    }
+}
+
+/// Clears `whole` (per original edge, as [`matched_whole`] fills it) for
+/// every edge whose two ends share a wall bit in `walls`.
+fn unmatch_wall_edges(polygons: &[MeshPolygon], walls: &[u8], whole: &mut [bool]) {
+    let wall = |v: u32| walls.get(v as usize).copied().unwrap_or(0);
+    let mut edge = 0;
+    for polygon in polygons {
+        let n = polygon.original_len();
+        for k in 0..n {
+            let a = polygon.corners[polygon.originals[k] as usize];
+            let b = polygon.corners[polygon.originals[(k + 1) % n] as usize];
+            if wall(a) & wall(b) != 0 {
+                whole[edge] = false;
+            }
+            edge += 1;
         }
     }
 }
@@ -559,8 +590,8 @@ mod tests {
             small += usize::from(mesh.vertices.len() <= SCAN_MAX);
             let mut scanned = mesh.polygons.clone();
             let mut gridded = mesh.polygons.clone();
-            split_with(&mesh.vertices, &mut scanned, usize::MAX);
-            split_with(&mesh.vertices, &mut gridded, 0);
+            split_with(&mesh.vertices, &mut scanned, usize::MAX, &[]);
+            split_with(&mesh.vertices, &mut gridded, 0, &[]);
             assert_eq!(scanned, gridded);
             inserted += scanned
                 .iter()

@@ -24,6 +24,8 @@
 //!   chosen cells).
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
+//! - [`seams`] — sealed cell meshes that meet their neighbours' edge to
+//!   edge, kept up to date across edits ([`SeamedMesher`]).
 //! - [`store`] — octree files: exact, versioned and checked
 //!   ([`Octree::to_bytes`], [`Octree::from_bytes`]).
 //!
@@ -59,6 +61,7 @@ pub mod import;
 pub mod measure;
 mod mesh_check;
 mod relabel;
+pub mod seams;
 mod split;
 pub mod store;
 pub mod surface;
@@ -70,5 +73,6 @@ pub use cell::{CellBox, CellKey};
 pub use components::{Anchors, Component, CubeSide, SolidCell};
 pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};
 pub use exact_volume::ExactVolume;
+pub use seams::SeamedMesher;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

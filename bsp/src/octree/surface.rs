@@ -18,8 +18,12 @@
 //! where the label across is smaller — empty, or a material with a
 //! smaller label (an interface is reported once) — so the union of all
 //! cells' surfaces is the boundary of every material region of the
-//! octree, with no face between two cells of the same material. T-junctions between cells remain; the mesh stage
-//! removes them.
+//! octree, with no face between two cells of the same material.
+//!
+//! Meshed cell by cell, neighbouring cells cut their common walls
+//! differently, so a border edge of one cell's mesh may pass through a
+//! vertex of its neighbour's; [`super::seams`] seals each cell's mesh at
+//! its neighbours' wall vertices, so that cell meshes meet edge to edge.
 
 use rayon::prelude::*;
 

@@ -1,0 +1,468 @@
+//! Crack-free seams between cell meshes (paper 1 §3.4 across cells).
+//!
+//! Notation: the *neighbours* of a leaf are the other leaves whose closed
+//! box shares a point with its closed box (across a face, an edge or a
+//! corner, at any depth); a leaf's *walls* are the six planes of its box,
+//! its *wall points* the vertices of its merged, unsplit surface mesh
+//! lying on them ([`UnsealedMesh::wall_vertices`]), its *border edges* the
+//! edges of that mesh lying in a wall, and its *seam points* the wall
+//! points of its neighbours strictly inside one of its border edges, no
+//! vertex of its own.
+//!
+//! A *sealed* cell mesh is its surface split at every T-junction, and
+//! every border edge also at the neighbours' wall points inside it
+//! ([`crate::mesh::seal`]). Every vertex of any cell's sealed mesh is a
+//! wall point of some cell, and one on an edge of another cell's mesh lies
+//! on both closed boxes, so it is a wall point of a neighbour there: the
+//! sealed meshes of all leaves meet edge to edge with identical exact
+//! vertices, whatever the cells' sizes.
+//!
+//! [`SeamedMesher`] keeps each leaf's wall points, border edges and seam
+//! points between edits, so that meshing a cell needs its neighbours'
+//! wall points only, not their surfaces. A leaf outside the edited cells
+//! is meshed again (from [`Octree::cell_surface`]) in two cases only:
+//!
+//! - a wall point gained or lost by a cell meshed in this update lies
+//!   strictly inside one of its border edges (and is no vertex of its
+//!   own), and its seam points, recomputed, differ from those kept;
+//! - one of its polygons lies in a wall and shares area with a cell whose
+//!   leaf was replaced: that face is clipped against the new leaf (the
+//!   same surface, possibly in other pieces), and its wall points differ.
+//!
+//! Either may change its wall points in turn, so both repeat until no
+//! wall point changes; a cell's own wall points change at most once.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use rayon::prelude::*;
+
+use super::cell::{CellBox, CellKey};
+use super::tree::{Leaf, OctNode, Octree};
+use crate::exact::{Plane, Point4};
+use crate::mesh::{BorderEdge, SurfaceMesh, UnsealedMesh};
+use crate::tree::BoundaryFace;
+
+impl Octree {
+    /// Every leaf whose closed box shares a point with the closed box
+    /// `region` (the leaves holding it and their neighbours across faces,
+    /// edges and corners), in leaf order ([`Octree::leaves`]).
+    #[must_use]
+    pub fn leaves_touching(&self, region: &CellBox) -> Vec<CellKey> {
+        let mut out = Vec::new();
+        let mut stack = vec![(&self.root, CellKey::ROOT, self.root_box())];
+        while let Some((node, key, cell)) = stack.pop() {
+            if !cell.touches(region) {
+                continue;
+            }
+            match node {
+                OctNode::Leaf(_) => out.push(key),
+                OctNode::Inner(children) => {
+                    for i in (0..8).rev() {
+                        stack.push((&children[i], key.child(i), cell.child(i)));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The sealed mesh of leaf `key` (empty when `key` is not a leaf),
+    /// from scratch: the surfaces of all its neighbours are meshed here to
+    /// find their wall points. The same mesh as a first
+    /// [`SeamedMesher::update`] over all leaves gives for `key`; that one
+    /// is far cheaper per cell.
+    #[must_use]
+    pub fn sealed_cell_mesh(&self, key: CellKey) -> SurfaceMesh {
+        if self.leaf(key).is_none() {
+            return SurfaceMesh::default();
+        }
+        let cell = self.cell_box(key);
+        let mut extra = Vec::new();
+        for other in self.leaves_touching(&cell) {
+            if other != key {
+                let mesh =
+                    UnsealedMesh::new(self.cell_surface(other), &walls(&self.cell_box(other)));
+                extra.extend(
+                    mesh.wall_vertices()
+                        .filter(|p| may_be_in_box(p, &cell))
+                        .copied(),
+                );
+            }
+        }
+        UnsealedMesh::new(self.cell_surface(key), &walls(&cell))
+            .seal(&extra)
+            .0
+    }
+}
+
+/// What a [`SeamedMesher`] keeps of one leaf: its wall points, border
+/// edges and seam points (see the module docs).
+#[derive(Clone, Debug, Default)]
+struct CellBorder {
+    wall_points: Vec<Point4>,
+    edges: Vec<BorderEdge>,
+    seams: Vec<Point4>,
+    /// The polygons lying in a wall: the wall (`2·axis + upper`) and the
+    /// `f64` box of the corners.
+    exposed: Vec<(usize, [f64; 3], [f64; 3])>,
+}
+
+/// Sealed meshes of octree leaves kept up to date across edits: after
+/// every edit (or undo), [`SeamedMesher::update`] meshes the cells it may
+/// have changed, and the neighbours whose seams it changed.
+///
+/// Holds, per leaf with a wall point, its wall points, border edges and
+/// seam points (a few exact points and planes per cell of the surface).
+#[derive(Clone, Debug, Default)]
+pub struct SeamedMesher {
+    borders: BTreeMap<CellKey, CellBorder>,
+    /// The leaf each meshed cell held when last meshed (shared with the
+    /// octree, so no copy): an edited cell whose leaf is the same stored
+    /// value was only touched, and its neighbours' faces are clipped
+    /// against it as before.
+    leaves: BTreeMap<CellKey, Leaf>,
+}
+
+impl SeamedMesher {
+    /// A mesher that knows no cell yet: its first update should list every
+    /// leaf (`octree.leaves()`).
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Leaves whose wall points are kept (those with surface on their box).
+    #[must_use]
+    pub fn cells(&self) -> usize {
+        self.borders.len()
+    }
+
+    /// The wall points kept for leaf `key` (empty when none are).
+    #[must_use]
+    pub fn wall_points(&self, key: CellKey) -> &[Point4] {
+        self.borders
+            .get(&key)
+            .map_or(&[][..], |b| b.wall_points.as_slice())
+    }
+
+    /// Meshes the cells `keys` of `octree` that an edit or undo may have
+    /// changed ([`Changes::changed`](super::Changes::changed) and
+    /// [`Changes::removed`](super::Changes::removed); every leaf for a
+    /// first build), and the other leaves whose meshes that changes (see
+    /// the module docs), and hands back each one's sealed mesh, sorted by
+    /// key: `None` for a key that is no longer a leaf (it is forgotten),
+    /// else the mesh (empty where the cell has no surface). A leaf in
+    /// `fresh` is meshed from those boundary faces
+    /// ([`Octree::apply_with_faces`], [`Octree::cell_surface_from`])
+    /// rather than cut again: the same surface, possibly in other pieces
+    /// than a build from the octree gives, so with `fresh` the meshes are
+    /// sealed and watertight together but need not equal a first build.
+    ///
+    /// The leaves not listed must hold the surface they had at the last
+    /// update. Cells run in parallel; the result does not depend on the
+    /// thread count.
+    pub fn update(
+        &mut self,
+        octree: &Octree,
+        keys: impl IntoIterator<Item = CellKey>,
+        mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
+    ) -> Vec<(CellKey, Option<SurfaceMesh>)> {
+        let mut keys: Vec<CellKey> = keys.into_iter().chain(fresh.keys().copied()).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let (live, gone): (Vec<CellKey>, Vec<CellKey>) =
+            keys.iter().partition(|&&key| octree.leaf(key).is_some());
+        let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> =
+            live.iter().map(|&key| (key, fresh.remove(&key))).collect();
+        let mut pending: BTreeMap<CellKey, UnsealedMesh> = jobs
+            .into_par_iter()
+            .map(|(key, faces)| {
+                let faces = match faces {
+                    Some(faces) => octree.cell_surface_from(key, faces),
+                    None => octree.cell_surface(key),
+                };
+                (key, UnsealedMesh::new(faces, &walls(&octree.cell_box(key))))
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect();
+        let mut changed = Vec::new();
+        for key in &gone {
+            self.leaves.remove(key);
+            if let Some(old) = self.borders.remove(key) {
+                changed.extend(old.wall_points);
+            }
+        }
+        let mut replaced = Vec::new();
+        for &key in &live {
+            let leaf = octree.leaf(key).expect("a live key is a leaf");
+            if !self.leaves.get(&key).is_some_and(|old| old.same_as(leaf)) {
+                replaced.push(key);
+                self.leaves.insert(key, leaf.clone());
+            }
+        }
+        for (key, mesh) in &pending {
+            self.record(*key, mesh, &mut changed);
+        }
+        // Leaves with a face on a wall against an edited cell: the face is
+        // clipped against that cell's new tree, the same surface possibly
+        // in other pieces (with other wall points).
+        let this = &*self;
+        let facing = this.facing(octree, &replaced, &pending);
+        let again: Vec<(CellKey, UnsealedMesh)> = facing
+            .into_par_iter()
+            .filter_map(|key| {
+                let mesh =
+                    UnsealedMesh::new(octree.cell_surface(key), &walls(&octree.cell_box(key)));
+                let same = same_set(
+                    &mesh.wall_vertices().copied().collect::<Vec<_>>(),
+                    this.wall_points(key),
+                );
+                (!same).then_some((key, mesh))
+            })
+            .collect();
+        for (key, mesh) in again {
+            self.record(key, &mesh, &mut changed);
+            pending.insert(key, mesh);
+        }
+        // The neighbours whose seams the changed wall points change, meshed
+        // again (from the octree); where that changes their own wall
+        // points, their neighbours in turn.
+        while !changed.is_empty() {
+            let this = &*self;
+            let candidates = this.touched_by(octree, &changed, &pending);
+            let again: Vec<(CellKey, UnsealedMesh)> = candidates
+                .into_par_iter()
+                .filter_map(|key| this.remesh_if_seams_change(octree, key))
+                .collect();
+            changed.clear();
+            for (key, mesh) in again {
+                self.record(key, &mesh, &mut changed);
+                pending.insert(key, mesh);
+            }
+        }
+        let this = &*self;
+        let pending: Vec<(CellKey, UnsealedMesh)> = pending.into_iter().collect();
+        let sealed: Vec<(CellKey, SurfaceMesh, Vec<Point4>)> = pending
+            .into_par_iter()
+            .map(|(key, mesh)| {
+                let extra = this.extra_points(octree, key, &octree.cell_box(key));
+                let (mesh, seams) = mesh.seal(extra);
+                (key, mesh, seams)
+            })
+            .collect();
+        let mut out: Vec<(CellKey, Option<SurfaceMesh>)> =
+            gone.into_iter().map(|key| (key, None)).collect();
+        for (key, mesh, seams) in sealed {
+            if let Some(border) = self.borders.get_mut(&key) {
+                border.seams = seams;
+            }
+            out.push((key, Some(mesh)));
+        }
+        out.sort_unstable_by_key(|(key, _)| *key);
+        out
+    }
+
+    /// Keeps the wall points and border edges of leaf `key` from its
+    /// unsealed `mesh` (its seam points are set once it is sealed), and
+    /// appends to `changed` the wall points it gained or lost.
+    fn record(&mut self, key: CellKey, mesh: &UnsealedMesh, changed: &mut Vec<Point4>) {
+        let new = CellBorder {
+            wall_points: mesh.wall_vertices().copied().collect(),
+            edges: mesh.border_edges(),
+            seams: Vec::new(),
+            exposed: mesh.wall_polygons(),
+        };
+        let old = if new.wall_points.is_empty() {
+            self.borders.remove(&key)
+        } else {
+            self.borders.insert(key, new)
+        };
+        let old = old.map(|b| b.wall_points).unwrap_or_default();
+        let now = self.wall_points(key);
+        if !identical(&old, now) {
+            changed.extend(
+                old.iter()
+                    .filter(|p| !now.iter().any(|q| same_digits(p, q))),
+            );
+            changed.extend(
+                now.iter()
+                    .filter(|q| !old.iter().any(|p| same_digits(p, q))),
+            );
+        }
+    }
+
+    /// The leaves not in `pending` with a polygon lying in a wall, across
+    /// which that polygon shares area with the box of a `replaced` cell.
+    fn facing(
+        &self,
+        octree: &Octree,
+        replaced: &[CellKey],
+        pending: &BTreeMap<CellKey, UnsealedMesh>,
+    ) -> Vec<CellKey> {
+        let mut out = BTreeSet::new();
+        for &edited in replaced {
+            let cell = octree.cell_box(edited);
+            for key in octree.leaves_touching(&cell) {
+                if pending.contains_key(&key) || out.contains(&key) {
+                    continue;
+                }
+                let Some(border) = self.borders.get(&key) else {
+                    continue;
+                };
+                let own = octree.cell_box(key);
+                let across = border.exposed.iter().any(|&(wall, lo, hi)| {
+                    let axis = wall / 2;
+                    let at = if wall % 2 == 0 {
+                        own.min[axis]
+                    } else {
+                        own.max[axis]
+                    };
+                    let on_wall = if wall % 2 == 0 {
+                        cell.max[axis] == at
+                    } else {
+                        cell.min[axis] == at
+                    };
+                    // Widened far beyond the rounding of the corners, so
+                    // that no polygon sharing area is missed.
+                    let slack = f64::from(1u32 << 26) * f64::powi(2.0, -40);
+                    on_wall
+                        && (0..3).filter(|&a| a != axis).all(|a| {
+                            lo[a] < cell.max[a] as f64 + slack
+                                && (cell.min[a] as f64) - slack < hi[a]
+                        })
+                });
+                if across {
+                    out.insert(key);
+                }
+            }
+        }
+        out.into_iter().collect()
+    }
+
+    /// The leaves not in `pending` with a border edge strictly holding one
+    /// of the `changed` points that is no wall point of their own, by key:
+    /// the only leaves whose seam points may change.
+    fn touched_by(
+        &self,
+        octree: &Octree,
+        changed: &[Point4],
+        pending: &BTreeMap<CellKey, UnsealedMesh>,
+    ) -> Vec<CellKey> {
+        let mut near = BTreeSet::new();
+        for p in changed {
+            let q = p.to_f64();
+            let around = CellBox {
+                min: q.map(|c| c.floor() as i64 - 1),
+                max: q.map(|c| c.ceil() as i64 + 1),
+            };
+            for key in octree.leaves_touching(&around) {
+                if !pending.contains_key(&key)
+                    && let Some(border) = self.borders.get(&key)
+                    && border.edges.iter().any(|e| e.holds_strictly(p))
+                    && !border.wall_points.iter().any(|w| same_point(w, p))
+                {
+                    near.insert(key);
+                }
+            }
+        }
+        near.into_iter().collect()
+    }
+
+    /// The unsealed mesh of leaf `key` (not edited, with a changed point
+    /// strictly inside one of its border edges) from the octree, if its
+    /// seam points differ from those kept.
+    fn remesh_if_seams_change(
+        &self,
+        octree: &Octree,
+        key: CellKey,
+    ) -> Option<(CellKey, UnsealedMesh)> {
+        let border = self.borders.get(&key)?;
+        let cell = octree.cell_box(key);
+        let extra = self.extra_points(octree, key, &cell);
+        let mut seams: Vec<Point4> = Vec::new();
+        for &p in &extra {
+            if border.edges.iter().any(|e| e.holds_strictly(p))
+                && !border.wall_points.iter().any(|w| same_point(w, p))
+                && !seams.iter().any(|s| same_point(s, p))
+            {
+                seams.push(*p);
+            }
+        }
+        if same_set(&seams, &border.seams) {
+            return None;
+        }
+        let mesh = UnsealedMesh::new(octree.cell_surface(key), &walls(&cell));
+        Some((key, mesh))
+    }
+
+    /// The wall points of the neighbours of leaf `key` (box `cell`) that
+    /// may lie on its closed box, neighbour by neighbour in leaf order.
+    fn extra_points(&self, octree: &Octree, key: CellKey, cell: &CellBox) -> Vec<&Point4> {
+        let mut extra = Vec::new();
+        for other in octree.leaves_touching(cell) {
+            if other == key {
+                continue;
+            }
+            if let Some(border) = self.borders.get(&other) {
+                extra.extend(border.wall_points.iter().filter(|p| may_be_in_box(p, cell)));
+            }
+        }
+        extra
+    }
+}
+
+/// The six planes of a box's faces, `x = min_x, x = max_x, y = min_y, …`.
+fn walls(cell: &CellBox) -> [Plane; 6] {
+    [0, 1, 2, 3, 4, 5].map(|i| {
+        let axis = i / 2;
+        let at = if i % 2 == 0 {
+            cell.min[axis]
+        } else {
+            cell.max[axis]
+        };
+        axis_plane(axis, at)
+    })
+}
+
+/// The plane `x_axis = at`, positive side above.
+fn axis_plane(axis: usize, at: i64) -> Plane {
+    let mut n = [0i64; 3];
+    n[axis] = 1;
+    Plane::new(n[0], n[1], n[2], -i128::from(at)).expect("cell coordinates are in range")
+}
+
+/// Whether the exact point `p` may lie in the closed box `cell`: false
+/// only where its `f64` position (within `2^-51` relative) is farther
+/// outside than a margin of `2^-40` of the box's coordinates. A cheap
+/// filter: the exact decisions are made against the edges themselves.
+fn may_be_in_box(p: &Point4, cell: &CellBox) -> bool {
+    let q = p.to_f64();
+    q.iter().enumerate().all(|(axis, &c)| {
+        let (lo, hi) = (cell.min[axis] as f64, cell.max[axis] as f64);
+        let margin = (lo.abs().max(hi.abs()) + 1.0) * f64::powi(2.0, -40);
+        lo - margin <= c && c <= hi + margin
+    })
+}
+
+/// Whether `a` and `b` are the same point (identical digits first).
+fn same_point(a: &Point4, b: &Point4) -> bool {
+    (a.xyz_digits == b.xyz_digits && a.w_digits == b.w_digits) || a.same_position(b)
+}
+
+/// Whether the points have the same digits (the same point built the
+/// same way).
+fn same_digits(a: &Point4, b: &Point4) -> bool {
+    a.xyz_digits == b.xyz_digits && a.w_digits == b.w_digits
+}
+
+/// Whether the lists hold the same points with the same digits, in order.
+fn identical(a: &[Point4], b: &[Point4]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| same_digits(p, q))
+}
+
+/// Whether the lists hold the same points, as sets.
+fn same_set(a: &[Point4], b: &[Point4]) -> bool {
+    a.iter().all(|p| b.iter().any(|q| same_point(p, q)))
+        && b.iter().all(|q| a.iter().any(|p| same_point(p, q)))
+}
