@@ -223,7 +223,7 @@ pub fn start_jobs(
             terrain.runtime.needs_full_mesh = false;
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
-            terrain.runtime.mesher = SeamedMesher::new();
+            // A first build starts the border vertices afresh.
             let mesher = SeamedMesher::new();
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {

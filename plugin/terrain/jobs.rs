@@ -183,7 +183,7 @@ pub(crate) fn carve_batch(
 /// Takes the pieces the carve `changes` cut loose out of `octree` (the
 /// terrain after the carve), returning the carve's and the detach's
 /// changes together, against the terrain before the carve.
-pub(crate) fn detach(
+fn detach(
     octree: &mut Octree,
     changes: Changes,
     context: &JobContext,

@@ -230,9 +230,18 @@ impl SurfaceMesh {
     /// # Panics
     /// As [`Self::from_faces`].
     #[must_use]
-    pub fn from_face_vec(mut faces: Vec<BoundaryFace>) -> Self {
+    pub fn from_face_vec(faces: Vec<BoundaryFace>) -> Self {
+        let mut mesh = Self::welded_owned(faces);
+        mesh.merge_coplanar();
+        mesh.split_t_junctions();
+        mesh
+    }
+
+    /// The welded mesh of `faces`, taking them: their edge planes move into
+    /// the polygons and their vertex buffers go back to the pool.
+    pub(crate) fn welded_owned(mut faces: Vec<BoundaryFace>) -> Self {
         let room = vertex_room(&faces);
-        let mut mesh = Self::welded_with(
+        let mesh = Self::welded_with(
             faces.iter_mut().map(|face| {
                 let edges = core::mem::take(&mut face.edges);
                 (&*face, edges)
@@ -242,8 +251,6 @@ impl SurfaceMesh {
         for face in faces {
             crate::tree::polygon::give_back_buffers(Vec::new(), face.vertices);
         }
-        mesh.merge_coplanar();
-        mesh.split_t_junctions();
         mesh
     }
 

@@ -104,18 +104,7 @@ impl UnsealedMesh {
     #[must_use]
     pub fn new(faces: Vec<BoundaryFace>, walls: &[Plane]) -> Self {
         assert!(walls.len() <= MAX_WALLS, "{} walls", walls.len());
-        let room = super::vertex_room(&faces);
-        let mut faces = faces;
-        let mut mesh = SurfaceMesh::welded_with(
-            faces.iter_mut().map(|face| {
-                let edges = core::mem::take(&mut face.edges);
-                (&*face, edges)
-            }),
-            room,
-        );
-        for face in faces {
-            crate::tree::polygon::give_back_buffers(Vec::new(), face.vertices);
-        }
+        let mut mesh = SurfaceMesh::welded_owned(faces);
         mesh.merge_coplanar();
         let walls = mesh
             .vertices
