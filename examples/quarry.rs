@@ -90,7 +90,7 @@ fn build_terrain() -> Result<Terrain, BevyError> {
                     label: GRASS,
                 },
             ]);
-    let mut terrain = Terrain::from_heightfield(grid, &field)?;
+    let mut terrain = Terrain::from_heightfield(grid, &field)?.with_labels([ORE]);
     // Veins of ore in the rock, 2.3 m under the surface: painted, and not
     // undoable.
     for (k, (x, z)) in [

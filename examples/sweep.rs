@@ -225,7 +225,9 @@ fn block_terrain() -> Result<Terrain, BevyError> {
         label: STONE,
     };
     // Thousands of carves: no undo snapshots.
-    Ok(Terrain::from_base(grid, base, OctreeConfig::default())?.with_max_undo(0))
+    Ok(Terrain::from_base(grid, base, OctreeConfig::default())?
+        .with_max_undo(0)
+        .with_labels([BRASS]))
 }
 
 /// The sweep's frame (`z` up) in the world (`y` up), with the block's

@@ -49,7 +49,9 @@ fn hill() -> Terrain {
             label: 3,
         },
     ]);
-    Terrain::from_heightfield(mm(), &field).expect("valid heightfield")
+    Terrain::from_heightfield(mm(), &field)
+        .expect("valid heightfield")
+        .with_labels([4, 5])
 }
 
 fn label_at(terrain: &Terrain, p: Vec3) -> Option<u8> {
@@ -176,6 +178,8 @@ fn files_round_trip_bit_identically() {
     assert_eq!(loaded.base(), terrain.base());
     assert_eq!(loaded.to_bytes(), bytes);
     assert_eq!(loaded.undo_depth(), 4);
+    // The labels the journal used are known again after loading.
+    assert_eq!(loaded.labels(), terrain.labels());
     assert_eq!(loaded.octree().volumes(), terrain.octree().volumes());
 
     let dir = std::env::temp_dir().join(format!("chisel-terrain-{}", std::process::id()));
@@ -316,4 +320,28 @@ fn damaged_files_give_typed_errors() {
         }
         other => panic!("expected Corrupt, got {:?}", other.err()),
     }
+}
+
+#[test]
+fn an_unknown_material_is_refused_and_changes_nothing() {
+    let mut terrain = hill();
+    let bytes = terrain.to_bytes();
+    let grid = CarveTool::dodecahedron(0.7, Vec3::new(0.0, 0.2, 0.0))
+        .to_grid(terrain.quantization())
+        .expect("on the grid");
+    for edit in [Edit::Add(6), Edit::Paint(200)] {
+        let error = terrain.apply_now(&grid, edit).expect_err("unknown label");
+        assert!(
+            matches!(error, TerrainError::UnknownLabel { known: ref k, .. } if k == &[1, 2, 3, 4, 5]),
+            "{error:?}"
+        );
+        assert!(error.to_string().contains("with_labels"), "{error}");
+    }
+    assert_eq!(terrain.to_bytes(), bytes, "a refused carve left a trace");
+    // Declared, the same label is accepted.
+    let mut terrain = terrain.with_labels([6]);
+    terrain
+        .apply_now(&grid, Edit::Add(6))
+        .expect("declared label");
+    assert_eq!(terrain.journal().len(), 1);
 }

@@ -52,7 +52,10 @@ fn block() -> Terrain {
         max_bsp_nodes: 12,
         max_depth: 20,
     };
-    Terrain::from_base(grid, base, config).expect("valid block")
+    // Rock (1), with sand (2) and ore (3) for carves to add and paint.
+    Terrain::from_base(grid, base, config)
+        .expect("valid block")
+        .with_labels([2, 3])
 }
 
 fn app_with(terrain: Terrain) -> (App, Entity) {
@@ -368,6 +371,12 @@ fn bad_carves_are_rejected_and_change_nothing() {
         crater(Vec3::new(20.0, 64.0, 20.0), 9.0),
         Edit::Add(0),
     );
+    carve(
+        &mut app,
+        entity,
+        crater(Vec3::new(20.0, 64.0, 20.0), 9.0),
+        Edit::Paint(9),
+    );
     let rejected: Vec<TerrainError> = app
         .world()
         .resource::<Seen>()
@@ -375,7 +384,7 @@ fn bad_carves_are_rejected_and_change_nothing() {
         .iter()
         .map(|r| r.error.clone())
         .collect();
-    assert_eq!(rejected.len(), 6, "{rejected:?}");
+    assert_eq!(rejected.len(), 7, "{rejected:?}");
     assert!(matches!(
         rejected[0],
         TerrainError::Kernel(bevy_chisel::bsp::Error::DegenerateHull { .. })
@@ -391,6 +400,13 @@ fn bad_carves_are_rejected_and_change_nothing() {
         rejected[5],
         TerrainError::Kernel(bevy_chisel::bsp::Error::InvalidEdit { .. })
     ));
+    assert_eq!(
+        rejected[6],
+        TerrainError::UnknownLabel {
+            label: 9,
+            known: vec![1, 2, 3]
+        }
+    );
     let now = terrain(&app, entity).octree();
     let (a, b) = (now.leaves(), octree.leaves());
     assert_eq!(a.len(), b.len());

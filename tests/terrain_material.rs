@@ -71,7 +71,9 @@ fn check_new_cells<M: Material>(
 /// A 4 m cube of rock centred on the origin, on a 1 mm grid.
 fn block() -> Terrain {
     let grid = Quantization::new(0.001, [0.0; 3]).expect("valid grid");
-    Terrain::from_box(grid, Vec3::splat(-2.0), Vec3::splat(2.0), ROCK).expect("valid block")
+    Terrain::from_box(grid, Vec3::splat(-2.0), Vec3::splat(2.0), ROCK)
+        .expect("valid block")
+        .with_labels([ORE])
 }
 
 fn ore_vein() -> Carve {

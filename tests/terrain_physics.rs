@@ -61,7 +61,9 @@ fn app_with_slab() -> (App, Entity) {
         max_bsp_nodes: 12,
         max_depth: 20,
     };
-    let terrain = Terrain::from_base(grid, slab.base().clone(), config).expect("same base");
+    let terrain = Terrain::from_base(grid, slab.base().clone(), config)
+        .expect("same base")
+        .with_labels([2]);
     app.finish();
     app.cleanup();
     let entity = app.world_mut().spawn(terrain).id();

@@ -6,7 +6,7 @@
 //!
 //! Axes: grid axes are the terrain's local axes; heights run along `+y`.
 
-use std::collections::HashSet;
+use std::collections::{BTreeSet, HashSet};
 
 use chisel_bsp::exact::IntPoint;
 use chisel_bsp::octree::{
@@ -123,6 +123,20 @@ impl TerrainBase {
                 }
                 Ok(octree)
             }
+        }
+    }
+
+    /// The materials the base is made of: its solid's label and, for a
+    /// heightfield, every band's.
+    #[must_use]
+    pub fn labels(&self) -> BTreeSet<Label> {
+        match self {
+            TerrainBase::Box { label, .. } | TerrainBase::Triangles { label, .. } => {
+                BTreeSet::from([*label])
+            }
+            TerrainBase::Heightfield { field, .. } => std::iter::once(field.label)
+                .chain(field.layers.iter().map(|&(_, label)| label))
+                .collect(),
         }
     }
 

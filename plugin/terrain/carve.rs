@@ -168,7 +168,10 @@ pub fn read_requests(
             });
             continue;
         };
-        match carve.tool.to_grid(&terrain.quantization) {
+        let tool = terrain
+            .check_edit(carve.edit)
+            .and_then(|()| carve.tool.to_grid(&terrain.quantization));
+        match tool {
             Ok(tool) => terrain.runtime.queue.push_back(Job::Carve {
                 tool,
                 edit: carve.edit,

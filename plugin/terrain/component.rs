@@ -1,7 +1,7 @@
 //! The [`Terrain`] component: an octree with its grid, its history and the
 //! record of what it was built from; and the components of its cells.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{BTreeSet, HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -52,6 +52,8 @@ pub struct Terrain {
     pub(crate) history: VecDeque<UndoStep>,
     pub(crate) max_undo: usize,
     pub(crate) debris: Option<DebrisConfig>,
+    /// The materials carves may add or paint.
+    pub(crate) labels: BTreeSet<Label>,
     pub(crate) runtime: Runtime,
 }
 
@@ -112,6 +114,7 @@ impl Terrain {
             octree,
             quantization,
             debris: Some(base.debris_config()),
+            labels: base.labels(),
             base: Arc::new(base),
             journal: Vec::new(),
             history: VecDeque::new(),
@@ -155,6 +158,42 @@ impl Terrain {
             });
         }
         self
+    }
+
+    /// Declares more materials that carves may add or paint. A terrain
+    /// knows the labels of its base ([`TerrainBase::labels`]) and these;
+    /// an [`Edit::Add`] or [`Edit::Paint`] of any other label is rejected
+    /// with [`TerrainError::UnknownLabel`] and changes nothing. A loaded
+    /// terrain knows its base's labels and those its journal used.
+    #[must_use]
+    pub fn with_labels(mut self, labels: impl IntoIterator<Item = Label>) -> Self {
+        self.labels.extend(labels);
+        self
+    }
+
+    /// The materials carves may add or paint ([`Terrain::with_labels`]).
+    #[must_use]
+    pub fn labels(&self) -> &BTreeSet<Label> {
+        &self.labels
+    }
+
+    /// Checks that `edit` only adds or paints known materials.
+    ///
+    /// # Errors
+    /// [`TerrainError::UnknownLabel`]. Label 0 (empty) is left to the
+    /// kernel, which rejects it as an invalid edit.
+    pub fn check_edit(&self, edit: Edit) -> Result<(), TerrainError> {
+        match edit {
+            Edit::Add(label) | Edit::Paint(label)
+                if label != chisel_bsp::tree::EMPTY && !self.labels.contains(&label) =>
+            {
+                Err(TerrainError::UnknownLabel {
+                    label,
+                    known: self.labels.iter().copied().collect(),
+                })
+            }
+            _ => Ok(()),
+        }
     }
 
     /// The debris settings ([`Terrain::with_debris`]).
@@ -239,9 +278,10 @@ impl Terrain {
     /// anything), so the octree is the one the app would have.
     ///
     /// # Errors
-    /// As [`apply_carve`], and [`chisel_bsp::Error::TooMuchDebris`]; the
-    /// terrain is then unchanged.
+    /// As [`apply_carve`], [`Terrain::check_edit`], and
+    /// [`chisel_bsp::Error::TooMuchDebris`]; the terrain is then unchanged.
     pub fn apply_now(&mut self, tool: &GridTool, edit: Edit) -> Result<Changes, TerrainError> {
+        self.check_edit(edit)?;
         let mut octree = self.octree.clone();
         let changes = apply_carve(&mut octree, tool, edit)?;
         let changes = match &self.debris {

@@ -24,6 +24,14 @@ pub enum TerrainError {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// A carve adds or paints a material the terrain does not know
+    /// ([`super::Terrain::with_labels`]).
+    UnknownLabel {
+        /// The label asked for.
+        label: chisel_bsp::tree::Label,
+        /// The labels the terrain knows, in order.
+        known: Vec<chisel_bsp::tree::Label>,
+    },
     /// Undo was asked for, but no carve is left to undo.
     NothingToUndo,
     /// The entity named in a message has no [`super::Terrain`].
@@ -91,6 +99,11 @@ impl fmt::Display for TerrainError {
                  terrain's cube; move it onto the terrain"
             ),
             TerrainError::InvalidTool { reason } => write!(f, "invalid tool: {reason}"),
+            TerrainError::UnknownLabel { label, known } => write!(
+                f,
+                "material label {label} is not one of the terrain's materials {known:?}; \
+                 declare it with Terrain::with_labels"
+            ),
             TerrainError::NothingToUndo => write!(f, "there is no carve left to undo"),
             TerrainError::NoSuchTerrain => {
                 write!(

@@ -241,6 +241,14 @@ impl Terrain {
             octree,
             quantization,
             debris: Some(base.debris_config()),
+            labels: base
+                .labels()
+                .into_iter()
+                .chain(journal.iter().filter_map(|entry| match entry.edit {
+                    Edit::Add(label) | Edit::Paint(label) => Some(label),
+                    _ => None,
+                }))
+                .collect(),
             base: std::sync::Arc::new(base),
             journal,
             history,
