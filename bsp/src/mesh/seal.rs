@@ -87,7 +87,7 @@ impl BorderEdge {
 /// A mesh welded and merged but not yet split at T-junctions, with the
 /// walls each vertex lies on: what [`UnsealedMesh::seal`] needs, and what
 /// the neighbouring meshes need from it ([`UnsealedMesh::wall_vertices`]).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct UnsealedMesh {
     mesh: SurfaceMesh,
     /// Per vertex, one bit per wall it lies on.

@@ -19,15 +19,19 @@
 //!
 //! [`SeamedMesher`] keeps each leaf's wall points, border edges and seam
 //! points between edits, so that meshing a cell needs its neighbours'
-//! wall points only, not their surfaces. A leaf outside the edited cells
-//! is meshed again (from [`Octree::cell_surface`]) in two cases only:
+//! wall points only, not their surfaces. It also keeps each leaf's
+//! unsealed mesh, so that a leaf whose surface did not change but whose
+//! seams did is only sealed again, not cut out of its tree again. A leaf
+//! outside the edited cells is meshed again in two cases only:
 //!
 //! - a wall point gained or lost by a cell meshed in this update lies
 //!   strictly inside one of its border edges (and is no vertex of its
-//!   own), and its seam points, recomputed, differ from those kept;
+//!   own), and its seam points, recomputed, differ from those kept: its
+//!   kept unsealed mesh is sealed again;
 //! - one of its polygons lies in a wall and shares area with a cell whose
 //!   leaf was replaced: that face is clipped against the new leaf (the
-//!   same surface, possibly in other pieces), and its wall points differ.
+//!   same surface, possibly in other pieces, cut again from
+//!   [`Octree::cell_surface`]), and its wall points differ.
 //!
 //! Either may change its wall points in turn, so both repeat until no
 //! wall point changes; a cell's own wall points change at most once.
@@ -121,6 +125,10 @@ pub struct SeamedMesher {
     /// value was only touched, and its neighbours' faces are clipped
     /// against it as before.
     leaves: BTreeMap<CellKey, Leaf>,
+    /// The unsealed mesh of every leaf meshed so far, as of the last
+    /// update: what [`Octree::cell_surface`] gives while the leaf and the
+    /// leaves it faces across its walls stay the same.
+    unsealed: BTreeMap<CellKey, UnsealedMesh>,
 }
 
 impl SeamedMesher {
@@ -189,6 +197,7 @@ impl SeamedMesher {
         let mut changed = Vec::new();
         for key in &gone {
             self.leaves.remove(key);
+            self.unsealed.remove(key);
             if let Some(old) = self.borders.remove(key) {
                 changed.extend(old.wall_points);
             }
@@ -209,21 +218,27 @@ impl SeamedMesher {
         // in other pieces (with other wall points).
         let this = &*self;
         let facing = this.facing(octree, &replaced, &pending);
-        let again: Vec<(CellKey, UnsealedMesh)> = facing
+        let again: Vec<(CellKey, UnsealedMesh, bool)> = facing
             .into_par_iter()
-            .filter_map(|key| {
+            .map(|key| {
                 let mesh =
                     UnsealedMesh::new(octree.cell_surface(key), &walls(&octree.cell_box(key)));
                 let same = same_set(
                     &mesh.wall_vertices().copied().collect::<Vec<_>>(),
                     this.wall_points(key),
                 );
-                (!same).then_some((key, mesh))
+                (key, mesh, same)
             })
             .collect();
-        for (key, mesh) in again {
-            self.record(key, &mesh, &mut changed);
-            pending.insert(key, mesh);
+        for (key, mesh, same) in again {
+            if same {
+                // The same wall points, so the same seams: the sealed mesh
+                // on screen stays, but the kept one follows the octree.
+                self.unsealed.insert(key, mesh);
+            } else {
+                self.record(key, &mesh, &mut changed);
+                pending.insert(key, mesh);
+            }
         }
         // The neighbours whose seams the changed wall points change, meshed
         // again (from the octree); where that changes their own wall
@@ -243,20 +258,21 @@ impl SeamedMesher {
         }
         let this = &*self;
         let pending: Vec<(CellKey, UnsealedMesh)> = pending.into_iter().collect();
-        let sealed: Vec<(CellKey, SurfaceMesh, Vec<Point4>)> = pending
+        let sealed: Vec<(CellKey, SurfaceMesh, Vec<Point4>, UnsealedMesh)> = pending
             .into_par_iter()
             .map(|(key, mesh)| {
                 let extra = this.extra_points(octree, key, &octree.cell_box(key));
-                let (mesh, seams) = mesh.seal(extra);
-                (key, mesh, seams)
+                let (sealed, seams) = mesh.clone().seal(extra);
+                (key, sealed, seams, mesh)
             })
             .collect();
         let mut out: Vec<(CellKey, Option<SurfaceMesh>)> =
             gone.into_iter().map(|key| (key, None)).collect();
-        for (key, mesh, seams) in sealed {
+        for (key, mesh, seams, unsealed) in sealed {
             if let Some(border) = self.borders.get_mut(&key) {
                 border.seams = seams;
             }
+            self.unsealed.insert(key, unsealed);
             out.push((key, Some(mesh)));
         }
         out.sort_unstable_by_key(|(key, _)| *key);
@@ -392,7 +408,10 @@ impl SeamedMesher {
         if same_set(&seams, &border.seams) {
             return None;
         }
-        let mesh = UnsealedMesh::new(octree.cell_surface(key), &walls(&cell));
+        let mesh = match self.unsealed.get(&key) {
+            Some(kept) => kept.clone(),
+            None => UnsealedMesh::new(octree.cell_surface(key), &walls(&cell)),
+        };
         Some((key, mesh))
     }
 
