@@ -11,6 +11,8 @@
 //!   view's format and MSAA and on its splat settings.
 //! - [`render`] — render world: extraction, buffer upload, and the pass, a
 //!   `Core3d` system between the opaque and transparent passes.
+//! - `avian` (feature `avian`) — static voxel colliders for props, from the
+//!   exact inside test of their solid.
 //!
 //! Settings: the [`SplatSettings`] resource applies to every camera; a
 //! camera with a [`SplatViewSettings`] component is drawn with those
@@ -51,6 +53,8 @@
 //!     .run();
 //! ```
 
+#[cfg(feature = "avian")]
+pub mod avian;
 pub mod gpu;
 pub mod pipeline;
 pub mod prop;
