@@ -47,6 +47,15 @@ pub enum Error {
         /// `"collinear"` or `"coplanar"`.
         reason: &'static str,
     },
+    /// A convex tool from more distinct points than
+    /// [`crate::tools::MAX_HULL_POINTS`]: the hull and the edit would take
+    /// time growing with the square of the points.
+    TooManyHullPoints {
+        /// Distinct points given.
+        points: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// A box needs `min < max` on every axis.
     DegenerateBox {
         /// The requested minimum corner.
@@ -195,6 +204,12 @@ impl fmt::Display for Error {
                 f,
                 "the tool's points are {reason}, so their convex hull has no volume; \
                  give at least four points that do not all lie in one plane"
+            ),
+            Error::TooManyHullPoints { points, limit } => write!(
+                f,
+                "a convex tool of {points} distinct points is over the limit of {limit}; \
+                 give fewer points (a hull's faces follow from its outermost points), or split \
+                 the tool into several convex tools"
             ),
             Error::DegenerateBox { min, max } => write!(
                 f,
