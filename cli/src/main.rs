@@ -78,6 +78,10 @@ enum Command {
         /// Write the samples as a PLY point cloud.
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Refuse to emit more samples than this (checked before each
+        /// grid of samples is allocated).
+        #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_SAMPLES)]
+        max_samples: u64,
         /// One line of JSON instead of a report.
         #[arg(long)]
         json: bool,
@@ -102,23 +106,23 @@ enum Command {
         /// Vertical field of view, degrees.
         #[arg(long, default_value_t = 40.0)]
         fov: f64,
-        /// Image size `WIDTHxHEIGHT`.
+        /// Image size `WIDTHxHEIGHT` (at most 8192x8192 pixels in all).
         #[arg(long, value_parser = args::size, default_value = "800x600")]
         size: (u32, u32),
     },
     /// Mill a block: a flat end mill swept along a zig-zag path, one
     /// subtraction per step (SCENARIOS.md "mill").
     Mill {
-        /// Number of tool moves.
-        #[arg(long, default_value_t = 270)]
+        /// Number of tool moves (1 to 1,000,000).
+        #[arg(long, default_value_t = 270, value_parser = args::steps)]
         steps: usize,
         #[command(flatten)]
         run: RunFlags,
     },
     /// Carve a cube with many random dodecahedra (SCENARIOS.md "cheese").
     Cheese {
-        /// Number of carves.
-        #[arg(long, default_value_t = 1000)]
+        /// Number of carves (1 to 1,000,000).
+        #[arg(long, default_value_t = 1000, value_parser = args::steps)]
         count: usize,
         /// Seed of the random sizes, rotations and places.
         #[arg(long, default_value_t = 1)]
@@ -129,8 +133,8 @@ enum Command {
     /// Sweep a gear along a Bézier curve by unions of per-triangle sweep
     /// prisms (paper 1 §5).
     Sweep {
-        /// Positions sampled along the curve.
-        #[arg(long, default_value_t = 100)]
+        /// Positions sampled along the curve (1 to 1,000,000).
+        #[arg(long, default_value_t = 100, value_parser = args::steps)]
         samples: usize,
         #[command(flatten)]
         run: RunFlags,
@@ -175,12 +179,14 @@ fn main() -> ExitCode {
             radius,
             bounds,
             output,
+            max_samples,
             json,
         } => sample::run(&sample::SampleArgs {
             scene,
             radius,
             bounds,
             output,
+            max_samples,
             json,
         }),
         Command::Trace {

@@ -17,6 +17,8 @@ pub struct SampleArgs {
     pub bounds: Option<(DVec3, f64)>,
     /// Where to write the samples as PLY, if anywhere.
     pub output: Option<PathBuf>,
+    /// The most samples to emit.
+    pub max_samples: u64,
     /// One JSON line instead of a report.
     pub json: bool,
 }
@@ -26,7 +28,8 @@ pub fn run(args: &SampleArgs) -> Result<(), String> {
     let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let dnf = scene.dnf().map_err(|e| e.to_string())?;
     let bounds = crate::args::bounds(args.bounds, &scene, &args.scene)?;
-    let options = SampleOptions::new(args.radius, bounds).map_err(|e| e.to_string())?;
+    let mut options = SampleOptions::new(args.radius, bounds).map_err(|e| e.to_string())?;
+    options.max_samples = args.max_samples;
     let start = Instant::now();
     let samples = sample(&dnf, &options).map_err(|e| e.to_string())?;
     let seconds = start.elapsed().as_secs_f64();

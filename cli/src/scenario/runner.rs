@@ -38,7 +38,8 @@ pub struct RunFlags {
     pub record: Option<PathBuf>,
     /// Inner BSP nodes an octree cell may hold before it is split (a
     /// `.chisel` replay base keeps the settings it was saved with).
-    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
+    /// At least 8: smaller budgets split cells down to the depth limit.
+    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(8..))]
     pub max_bsp_nodes: u32,
     /// Check every step (untimed): exact volume bookkeeping of the edit and
     /// a closed surface. Slow; for small sizes.
