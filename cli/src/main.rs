@@ -29,6 +29,7 @@ use clap::{Parser, Subcommand};
 use glam::DVec3;
 
 mod args;
+mod atomic;
 mod boolean;
 mod budget;
 mod formats;

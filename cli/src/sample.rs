@@ -70,7 +70,10 @@ pub fn run(args: &SampleArgs) -> Result<(), String> {
 
 /// Samples as an ASCII PLY point cloud with normals, colours and radii.
 fn write_ply(path: &Path, splats: &SplatSet) -> std::io::Result<()> {
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    crate::atomic::write_with(path, |out| write_ply_to(out, splats))
+}
+
+fn write_ply_to(out: &mut impl Write, splats: &SplatSet) -> std::io::Result<()> {
     writeln!(
         out,
         "ply\nformat ascii 1.0\nelement vertex {}",
@@ -102,5 +105,5 @@ fn write_ply(path: &Path, splats: &SplatSet) -> std::io::Result<()> {
             s.radius
         )?;
     }
-    out.flush()
+    Ok(())
 }

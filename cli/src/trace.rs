@@ -56,7 +56,10 @@ pub fn run(args: &TraceArgs) -> Result<(), String> {
             image::Rgb([byte(colour[0]), byte(colour[1]), byte(colour[2])])
         };
     }
-    png.save(&args.output)
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    png.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| format!("{}: {e}", args.output.display()))?;
+    crate::atomic::write_bytes(&args.output, bytes.get_ref())
         .map_err(|e| format!("{}: {e}", args.output.display()))?;
     let hits = image.quadric.iter().filter(|&&q| q != NO_HIT).count();
     println!(

@@ -96,3 +96,90 @@ fn oversized_counts_are_refused_by_the_parser() {
     // Before: 6 GB for one carve.
     refused(&["cheese", "--count", "1", "--max-bsp-nodes", "1"], "8");
 }
+
+/// Runs chisel with `args` under a file size limit of 1 KiB (the signal it
+/// would raise ignored, so a write past it fails as a full disk does).
+fn with_small_disk(args: &[&str]) -> std::process::Output {
+    let mut command = std::process::Command::new("sh");
+    command
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 1; exec \"$@\"")
+        .arg("sh")
+        .arg(env!("CARGO_BIN_EXE_chisel"))
+        .args(args);
+    command.output().unwrap()
+}
+
+#[test]
+fn a_failed_write_leaves_the_existing_file_as_it_was() {
+    let folder = temp("small-disk");
+    std::fs::create_dir_all(&folder).unwrap();
+    let keep = b"an existing file that must survive\n";
+    for name in ["out.obj", "out.chisel", "out.ply", "steps.csv", "ops.jsonl"] {
+        std::fs::write(folder.join(name), keep).unwrap();
+    }
+    let at = |name: &str| folder.join(name).to_str().unwrap().to_owned();
+    for args in [
+        vec![
+            "cheese".to_owned(),
+            "--count".into(),
+            "3".into(),
+            "--export".into(),
+            at("out.obj"),
+        ],
+        vec![
+            "cheese".into(),
+            "--count".into(),
+            "3".into(),
+            "--export".into(),
+            at("out.chisel"),
+        ],
+        vec![
+            "cheese".into(),
+            "--count".into(),
+            "300".into(),
+            "--csv".into(),
+            at("steps.csv"),
+        ],
+        vec![
+            "cheese".into(),
+            "--count".into(),
+            "30".into(),
+            "--record".into(),
+            at("ops.jsonl"),
+        ],
+        vec![
+            "sample".into(),
+            path(&scene("classic.ron")).into(),
+            "--radius".into(),
+            "2".into(),
+            "-o".into(),
+            at("out.ply"),
+        ],
+    ] {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = with_small_disk(&args);
+        let message = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.code().is_some_and(|c| c != 0),
+            "{args:?}: {:?} {message}",
+            out.status
+        );
+        assert!(message.contains("File too large"), "{args:?}: {message}");
+    }
+    let classic = scene("classic.ron");
+    let out = with_small_disk(&["trace", path(&classic), "-o", &at("out.png")]);
+    assert!(out.status.code().is_some_and(|c| c != 0));
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("wrote"));
+    assert!(!folder.join("out.png").exists());
+    for name in ["out.obj", "out.chisel", "out.ply", "steps.csv", "ops.jsonl"] {
+        assert_eq!(std::fs::read(folder.join(name)).unwrap(), keep, "{name}");
+    }
+    // No temporary file is left behind.
+    let left: Vec<_> = std::fs::read_dir(&folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .filter(|n| n.to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
