@@ -90,6 +90,15 @@ pub enum Error {
         /// One such edge, in grid coordinates.
         example: [[i64; 3]; 2],
     },
+    /// A closed mesh that is inside out: its triangles face inwards
+    /// (clockwise seen from outside), as a whole or in a shell that is not
+    /// a cavity of another.
+    InsideOut {
+        /// The signed volume enclosed, cubic grid units (negative).
+        volume: f64,
+        /// Which part: the whole mesh or one shell, with its box.
+        shell: String,
+    },
     /// A mesh whose triangles cross each other.
     SelfIntersecting {
         /// Indices of two triangles that meet improperly.
@@ -204,6 +213,12 @@ impl fmt::Display for Error {
                 f,
                 "the tool's points are {reason}, so their convex hull has no volume; \
                  give at least four points that do not all lie in one plane"
+            ),
+            Error::InsideOut { volume, shell } => write!(
+                f,
+                "the mesh is inside out: {shell} encloses a negative volume ({volume} cubic \
+                 grid units); give every triangle counter-clockwise seen from outside \
+                 (cavities clockwise), or reverse the faces"
             ),
             Error::TooManyHullPoints { points, limit } => write!(
                 f,

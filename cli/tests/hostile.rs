@@ -183,3 +183,75 @@ fn a_failed_write_leaves_the_existing_file_as_it_was() {
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+/// An OBJ box with every face reversed, alone or beside an outward box,
+/// is refused as inside out (before: accepted, with a union depending on
+/// the other operand).
+#[test]
+fn inside_out_meshes_are_refused() {
+    let outward = common::box_obj([0.0; 3], [10.0; 3]);
+    let reversed: String = outward
+        .lines()
+        .map(|l| match l.strip_prefix("f ") {
+            Some(f) => {
+                let mut v: Vec<&str> = f.split(' ').collect();
+                v.reverse();
+                format!("f {}\n", v.join(" "))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let inverted = temp("inverted.obj");
+    std::fs::write(&inverted, &reversed).unwrap();
+    let good = temp("good.obj");
+    std::fs::write(&good, &outward).unwrap();
+    let out = temp("inverted-out.obj");
+    refused(
+        &[
+            "boolean",
+            path(&inverted),
+            path(&good),
+            "--op",
+            "union",
+            "-o",
+            path(&out),
+        ],
+        "inside out",
+    );
+    // A reversed small box beside a large outward one: positive in all,
+    // but the reversed shell is no cavity.
+    let mut both = common::box_obj([0.0; 3], [100.0; 3]);
+    for l in reversed.lines() {
+        if let Some(p) = l.strip_prefix("v ") {
+            let c: Vec<f64> = p
+                .split(' ')
+                .map(|x| x.parse::<f64>().unwrap() + 200.0)
+                .collect();
+            both.push_str(&format!("v {} {} {}\n", c[0], c[1], c[2]));
+        }
+    }
+    for l in reversed.lines() {
+        if let Some(f) = l.strip_prefix("f ") {
+            let idx: Vec<String> = f
+                .split(' ')
+                .map(|i| (i.parse::<u32>().unwrap() + 8).to_string())
+                .collect();
+            both.push_str(&format!("f {}\n", idx.join(" ")));
+        }
+    }
+    let two = temp("two-shells.obj");
+    std::fs::write(&two, both).unwrap();
+    refused(
+        &[
+            "boolean",
+            path(&two),
+            path(&good),
+            "--op",
+            "union",
+            "-o",
+            path(&out),
+        ],
+        "inside out",
+    );
+    assert!(!out.exists());
+}

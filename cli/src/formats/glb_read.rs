@@ -463,6 +463,7 @@ fn read_primitive(
         });
     }
     let v = |i: usize| base as u32 + indices[i];
+    let first = soup.triangles.len();
     match mode {
         Mode::TriangleStrip => {
             for i in 0..indices.len().saturating_sub(2) {
@@ -484,6 +485,13 @@ fn read_primitive(
             for i in 0..indices.len() / 3 {
                 soup.triangles.push([v(3 * i), v(3 * i + 1), v(3 * i + 2)]);
             }
+        }
+    }
+    // A mirroring transform (negative determinant) turns counter-clockwise
+    // corners clockwise: glTF says to reverse the winding then.
+    if transform.determinant() < 0.0 {
+        for t in &mut soup.triangles[first..] {
+            t.swap(1, 2);
         }
     }
     Ok(())

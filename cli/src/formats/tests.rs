@@ -633,3 +633,30 @@ fn external_buffers_stay_inside_the_files_folder() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A mirroring node transform (negative determinant) reverses the
+/// winding, so the faces still point outwards: the quad of [`strip_glb`]
+/// faces +z with scale `[2, 2, 2]` and with `[-2, 2, 2]`.
+#[test]
+fn mirrored_glb_nodes_keep_faces_outward() {
+    let normal_z = |soup: &TriangleSoup| -> Vec<f64> {
+        soup.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| soup.positions[v as usize]);
+                (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+            })
+            .collect()
+    };
+    let plain = glb(&strip_glb(4)).unwrap();
+    assert!(normal_z(&plain).iter().all(|&z| z > 0.0));
+    let bytes = strip_glb(4);
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = String::from_utf8(bytes[20..20 + json_len].to_vec()).unwrap();
+    let mirrored_json = json.replace(r#""scale":[2,2,2]"#, r#""scale":[-2,2,2]"#);
+    assert_ne!(json, mirrored_json);
+    let bin = bytes[20 + json_len + 8..].to_vec();
+    let mirrored = glb(&glb_write::container(mirrored_json.into_bytes(), bin)).unwrap();
+    assert_eq!(mirrored.positions[1], [8.0, 0.0, 0.0]);
+    assert!(normal_z(&mirrored).iter().all(|&z| z > 0.0), "{mirrored:?}");
+}
