@@ -19,8 +19,9 @@
 //! bit-identically by `chisel boolean` and by a replay's
 //! `{"base": {"mesh": "FILE.chisel"}}`).
 //!
-//! Bad input (unreadable or malformed files, out-of-range numbers) is
-//! reported on standard error with exit code 2.
+//! A failure is a message on standard error and an exit code by kind
+//! ([`failure::Exit`]): 2 a wrong command line, 3 bad input data, 4 a
+//! failed `--check`, 5 a failed write.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -32,6 +33,7 @@ mod args;
 mod atomic;
 mod boolean;
 mod budget;
+mod failure;
 mod formats;
 mod meshfile;
 mod octree_file;
@@ -170,111 +172,116 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Budget { json } => {
-            budget::print(json);
-            Ok(())
-        }
-        Command::Sample {
-            scene,
-            radius,
-            bounds,
-            output,
-            max_samples,
-            json,
-        } => sample::run(&sample::SampleArgs {
-            scene,
-            radius,
-            bounds,
-            output,
-            max_samples,
-            json,
-        }),
-        Command::Trace {
-            scene,
-            output,
-            bounds,
-            eye,
-            look_at,
-            fov,
-            size,
-        } => trace::run(&trace::TraceArgs {
-            scene,
-            output,
-            bounds,
-            eye,
-            look_at,
-            fov,
-            size,
-        }),
-        Command::Mill { steps, run } => scenario::mill::sequence(steps).and_then(|sequence| {
-            let parameters = serde_json::json!({ "steps": steps });
-            scenario::runner::run(
-                &Scenario {
-                    name: "mill",
-                    parameters,
-                    sequence,
-                },
-                &run,
-            )
-        }),
-        Command::Cheese { count, seed, run } => {
-            scenario::cheese::sequence(count, seed).and_then(|sequence| {
-                let parameters = serde_json::json!({ "count": count, "seed": seed });
-                scenario::runner::run(
-                    &Scenario {
-                        name: "cheese",
-                        parameters,
-                        sequence,
-                    },
-                    &run,
-                )
-            })
-        }
-        Command::Sweep { samples, run } => {
-            scenario::sweep::sequence(samples).and_then(|(sequence, flat)| {
-                let parameters =
-                    serde_json::json!({ "samples": samples, "flat_prisms_left_out": flat });
-                scenario::runner::run(
-                    &Scenario {
-                        name: "sweep",
-                        parameters,
-                        sequence,
-                    },
-                    &run,
-                )
-            })
-        }
-        Command::Boolean {
-            a,
-            b,
-            op,
-            output,
-            json,
-        } => boolean::run(&boolean::BooleanArgs {
-            a,
-            b,
-            op,
-            output,
-            json,
-        }),
-        Command::Replay { ops, run } => scenario::jsonl::read(&ops).and_then(|sequence| {
-            let parameters = serde_json::json!({ "file": ops });
-            scenario::runner::run(
-                &Scenario {
-                    name: "replay",
-                    parameters,
-                    sequence,
-                },
-                &run,
-            )
-        }),
-    };
+    let result =
+        match cli.command {
+            Command::Budget { json } => {
+                budget::print(json);
+                Ok(())
+            }
+            Command::Sample {
+                scene,
+                radius,
+                bounds,
+                output,
+                max_samples,
+                json,
+            } => sample::run(&sample::SampleArgs {
+                scene,
+                radius,
+                bounds,
+                output,
+                max_samples,
+                json,
+            }),
+            Command::Trace {
+                scene,
+                output,
+                bounds,
+                eye,
+                look_at,
+                fov,
+                size,
+            } => trace::run(&trace::TraceArgs {
+                scene,
+                output,
+                bounds,
+                eye,
+                look_at,
+                fov,
+                size,
+            }),
+            Command::Mill { steps, run } => scenario::mill::sequence(steps)
+                .map_err(failure::Failure::usage)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({ "steps": steps });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "mill",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Cheese { count, seed, run } => scenario::cheese::sequence(count, seed)
+                .map_err(failure::Failure::usage)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({ "count": count, "seed": seed });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "cheese",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Sweep { samples, run } => scenario::sweep::sequence(samples)
+                .map_err(failure::Failure::usage)
+                .and_then(|(sequence, flat)| {
+                    let parameters =
+                        serde_json::json!({ "samples": samples, "flat_prisms_left_out": flat });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "sweep",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Boolean {
+                a,
+                b,
+                op,
+                output,
+                json,
+            } => boolean::run(&boolean::BooleanArgs {
+                a,
+                b,
+                op,
+                output,
+                json,
+            }),
+            Command::Replay { ops, run } => scenario::jsonl::read(&ops)
+                .map_err(Into::into)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({ "file": ops });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "replay",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+        };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("chisel: {message}");
-            ExitCode::from(2)
+        Err(failure) => {
+            eprintln!("chisel: {}", failure.message);
+            ExitCode::from(failure.exit as u8)
         }
     }
 }

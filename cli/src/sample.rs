@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::failure::Failure;
 use chisel_quadric::{OUTSIDE_FLAG, SampleOptions, Scene, SplatSet, sample};
 use glam::DVec3;
 
@@ -24,18 +25,22 @@ pub struct SampleArgs {
 }
 
 /// Runs the command; errors are messages for the user.
-pub fn run(args: &SampleArgs) -> Result<(), String> {
+pub fn run(args: &SampleArgs) -> Result<(), Failure> {
+    if let Some(path) = &args.output {
+        crate::failure::check_output(path, false)?;
+    }
     let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let dnf = scene.dnf().map_err(|e| e.to_string())?;
-    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene)?;
-    let mut options = SampleOptions::new(args.radius, bounds).map_err(|e| e.to_string())?;
+    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene).map_err(Failure::usage)?;
+    let mut options =
+        SampleOptions::new(args.radius, bounds).map_err(|e| Failure::usage(e.to_string()))?;
     options.max_samples = args.max_samples;
     let start = Instant::now();
     let samples = sample(&dnf, &options).map_err(|e| e.to_string())?;
     let seconds = start.elapsed().as_secs_f64();
     let splats = SplatSet::new(&dnf, &scene.dag, &samples);
     if let Some(path) = &args.output {
-        write_ply(path, &splats).map_err(|e| format!("{}: {e}", path.display()))?;
+        write_ply(path, &splats).map_err(|e| Failure::write(format!("{}: {e}", path.display())))?;
     }
     let count = samples.samples.len();
     let rate = count as f64 / seconds.max(1e-12);

@@ -160,16 +160,12 @@ fn a_failed_write_leaves_the_existing_file_as_it_was() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = with_small_disk(&args);
         let message = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            out.status.code().is_some_and(|c| c != 0),
-            "{args:?}: {:?} {message}",
-            out.status
-        );
+        assert_eq!(out.status.code(), Some(5), "{args:?}: {message}");
         assert!(message.contains("File too large"), "{args:?}: {message}");
     }
     let classic = scene("classic.ron");
     let out = with_small_disk(&["trace", path(&classic), "-o", &at("out.png")]);
-    assert!(out.status.code().is_some_and(|c| c != 0));
+    assert_eq!(out.status.code(), Some(5));
     assert!(!String::from_utf8_lossy(&out.stdout).contains("wrote"));
     assert!(!folder.join("out.png").exists());
     for name in ["out.obj", "out.chisel", "out.ply", "steps.csv", "ops.jsonl"] {
@@ -254,4 +250,82 @@ fn inside_out_meshes_are_refused() {
         "inside out",
     );
     assert!(!out.exists());
+}
+
+/// Arguments are checked before any work, messages name the real cause
+/// (with the input value and unit), and each kind of failure has its exit
+/// code: 2 command line, 3 input data, 5 a failed write.
+#[test]
+fn late_checks_and_causes() {
+    let code = |args: &[&str]| {
+        let out = chisel().args(args).output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    // The output's extension before the (missing) inputs are read, and
+    // before a long scenario runs.
+    let (c, m) = code(&[
+        "boolean", "nope.obj", "nope.obj", "--op", "union", "-o", "x.xyz",
+    ]);
+    assert_eq!(c, Some(2), "{m}");
+    assert!(m.contains(".xyz"), "{m}");
+    let (c, m) = code(&["mill", "--steps", "1000000", "--export", "x.xyz"]);
+    assert_eq!(c, Some(2), "{m}");
+    let (c, m) = code(&[
+        "cheese",
+        "--count",
+        "1000000",
+        "--csv",
+        "/no/such/folder/x.csv",
+    ]);
+    assert_eq!(c, Some(2), "{m}");
+    assert!(m.contains("does not exist"), "{m}");
+    // A coordinate beyond the grid: the input value and the range in the
+    // input's unit, not a saturated grid value.
+    let far = temp("far.obj");
+    std::fs::write(
+        &far,
+        "v 0 0 0\nv 1e300 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    let out = temp("far-out.obj");
+    let (c, m) = code(&[
+        "boolean",
+        path(&far),
+        path(&far),
+        "--op",
+        "union",
+        "-o",
+        path(&out),
+    ]);
+    assert_eq!(c, Some(3), "{m}");
+    assert!(
+        m.contains("vertex 2") && m.contains("x=1e300") && m.contains("67108.864"),
+        "{m}"
+    );
+    assert!(!m.contains("9223372036854775807"), "{m}");
+    // Camera arguments name themselves.
+    let classic = scene("classic.ron");
+    let png = temp("camera.png");
+    for (option, value) in [("--fov", "0"), ("--eye", "1e300,0,0")] {
+        let (c, m) = code(&["trace", path(&classic), option, value, "-o", path(&png)]);
+        assert_eq!(c, Some(2), "{m}");
+        assert!(m.contains(option) && !m.contains("cone"), "{m}");
+    }
+    // Vertex numbers in messages count from 1 in every format.
+    let nan = temp("nan.obj");
+    std::fs::write(&nan, "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let (c, m) = code(&[
+        "boolean",
+        path(&nan),
+        path(&nan),
+        "--op",
+        "union",
+        "-o",
+        path(&out),
+    ]);
+    assert_eq!(c, Some(3), "{m}");
+    assert!(m.contains("vertex 2 has a NaN"), "{m}");
 }

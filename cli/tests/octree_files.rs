@@ -2,7 +2,7 @@
 //! exactly and combined again with no re-import (`A ∩ A = A`, `A − A = ∅`,
 //! checked exactly by differences of volume zero), a replay continuing from
 //! a stored octree with the identical result, and damaged files reported
-//! with exit code 2.
+//! with exit code 3.
 
 mod common;
 
@@ -121,7 +121,7 @@ fn damaged_octree_files_are_errors_with_exit_code_2() {
             .arg(temp("never.obj"))
             .output()
             .unwrap();
-        assert_eq!(out.status.code(), Some(2), "{}", file.display());
+        assert_eq!(out.status.code(), Some(3), "{}", file.display());
         let message = String::from_utf8_lossy(&out.stderr);
         assert!(message.contains(expected), "{message}");
     }

@@ -6,6 +6,7 @@
 
 use crate::Error;
 use crate::exact::IntPoint;
+use crate::exact::budget::MAX_COORD;
 
 /// A grid in world space: step length and origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,7 +59,15 @@ impl Quantization {
                     what: "world coordinate",
                 });
             }
-            // Saturating: anything beyond i64 fails the range check.
+            if v.abs() > MAX_COORD as f64 {
+                return Err(Error::WorldCoordinateOutOfRange {
+                    axis,
+                    value: p[axis],
+                    unit: self.unit,
+                    origin: self.origin[axis],
+                });
+            }
+            // In range, so exact.
             *o = v as i64;
         }
         IntPoint::from_array(out)
