@@ -18,18 +18,6 @@ pub enum Error {
         /// The offending value.
         value: i64,
     },
-    /// A world coordinate that quantizes outside `±2^26` grid units
-    /// ([`crate::tools::Quantization::to_grid`]).
-    WorldCoordinateOutOfRange {
-        /// Which coordinate: 0 = x, 1 = y, 2 = z.
-        axis: usize,
-        /// The world value given.
-        value: f64,
-        /// The grid unit, in world units.
-        unit: f64,
-        /// The grid origin on that axis, in world units.
-        origin: f64,
-    },
     /// A plane normal component is outside `±2^55` (`MAX_NORMAL`).
     NormalOutOfRange {
         /// Which component: 0 = a, 1 = b, 2 = c.
@@ -206,32 +194,6 @@ impl fmt::Display for Error {
                  scale the input down or use a coarser quantization unit",
                 AXES[(*axis).min(2)]
             ),
-            Error::WorldCoordinateOutOfRange {
-                axis,
-                value,
-                unit,
-                origin,
-            } => {
-                let short = |x: f64| {
-                    if x != 0.0 && !(1e-4..1e15).contains(&x.abs()) {
-                        format!("{x:e}")
-                    } else {
-                        format!("{x}")
-                    }
-                };
-                write!(
-                    f,
-                    "coordinate {}={} (world units) is outside the exact range: with a grid \
-                     unit of {} from {}, coordinates must lie within {} ± {}; scale the input \
-                     down or use a coarser unit",
-                    AXES[(*axis).min(2)],
-                    short(*value),
-                    short(*unit),
-                    short(*origin),
-                    short(*origin),
-                    short(MAX_COORD as f64 * unit)
-                )
-            }
             Error::NormalOutOfRange { component, value } => write!(
                 f,
                 "plane normal component {}={value} is outside ±{MAX_NORMAL} (2^55); \

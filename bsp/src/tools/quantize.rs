@@ -6,7 +6,6 @@
 
 use crate::Error;
 use crate::exact::IntPoint;
-use crate::exact::budget::MAX_COORD;
 
 /// A grid in world space: step length and origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,15 +58,7 @@ impl Quantization {
                     what: "world coordinate",
                 });
             }
-            if v.abs() > MAX_COORD as f64 {
-                return Err(Error::WorldCoordinateOutOfRange {
-                    axis,
-                    value: p[axis],
-                    unit: self.unit,
-                    origin: self.origin[axis],
-                });
-            }
-            // In range, so exact.
+            // Saturating: anything beyond i64 fails the range check.
             *o = v as i64;
         }
         IntPoint::from_array(out)
