@@ -35,6 +35,8 @@ mod boolean;
 mod budget;
 mod failure;
 mod formats;
+#[cfg(test)]
+mod fuzz;
 mod meshfile;
 mod octree_file;
 mod sample;
