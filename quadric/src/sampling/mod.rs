@@ -108,9 +108,9 @@ pub struct SampleOptions {
     pub max_samples: u64,
 }
 
-/// The default [`SampleOptions::max_samples`]: 50 million samples, about
-/// 3 GB of samples and splats.
-pub const DEFAULT_MAX_SAMPLES: u64 = 50_000_000;
+/// The default [`SampleOptions::max_samples`]: 10 million samples, about
+/// 1 GB while sampling.
+pub const DEFAULT_MAX_SAMPLES: u64 = 10_000_000;
 
 /// The largest ratio of bounding-sphere radius to splat radius that
 /// [`sample`] accepts: beyond it, basic regions would need more than the
@@ -287,8 +287,8 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
     if ratio > MAX_BOUNDS_RATIO {
         return Err(Error::CoverageNotReached {
             reason: format!(
-                "the bounding sphere's radius {} is {ratio:.3e} splat radii ({}), more than \
-                 {MAX_BOUNDS_RATIO:.0}; give bounds closer around the solid or a larger radius",
+                "the bounding sphere's radius {:e} is {ratio:.3e} splat radii ({:e}), more than \
+                 2^24; give bounds closer around the solid or a larger radius",
                 options.bounds.radius, options.radius
             ),
         });
