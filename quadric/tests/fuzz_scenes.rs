@@ -114,13 +114,13 @@ proptest! {
                 }
             }
         }
-        if let Ok(scene) = Scene::from_ron(&text) {
-            if let Ok(dnf) = scene.dnf() {
-                prop_assert!(dnf
-                    .quadrics()
-                    .iter()
-                    .all(|q| q.quadric.coefficients().iter().all(|c| c.is_finite())));
-            }
+        if let Ok(scene) = Scene::from_ron(&text)
+            && let Ok(dnf) = scene.dnf()
+        {
+            prop_assert!(dnf
+                .quadrics()
+                .iter()
+                .all(|q| q.quadric.coefficients().iter().all(|c| c.is_finite())));
         }
     }
 }
