@@ -47,6 +47,15 @@ pub enum Error {
         /// `"collinear"` or `"coplanar"`.
         reason: &'static str,
     },
+    /// A convex tool from more distinct points than
+    /// [`crate::tools::MAX_HULL_POINTS`]: the hull and the edit would take
+    /// time growing with the square of the points.
+    TooManyHullPoints {
+        /// Distinct points given.
+        points: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// A box needs `min < max` on every axis.
     DegenerateBox {
         /// The requested minimum corner.
@@ -80,6 +89,15 @@ pub enum Error {
         open_edges: usize,
         /// One such edge, in grid coordinates.
         example: [[i64; 3]; 2],
+    },
+    /// A closed mesh that is inside out: its triangles face inwards
+    /// (clockwise seen from outside), as a whole or in a shell that is not
+    /// a cavity of another.
+    InsideOut {
+        /// The signed volume enclosed, cubic grid units (negative).
+        volume: f64,
+        /// Which part: the whole mesh or one shell, with its box.
+        shell: String,
     },
     /// A mesh whose triangles cross each other.
     SelfIntersecting {
@@ -195,6 +213,18 @@ impl fmt::Display for Error {
                 f,
                 "the tool's points are {reason}, so their convex hull has no volume; \
                  give at least four points that do not all lie in one plane"
+            ),
+            Error::InsideOut { volume, shell } => write!(
+                f,
+                "the mesh is inside out: {shell} encloses a negative volume ({volume} cubic \
+                 grid units); give every triangle counter-clockwise seen from outside \
+                 (cavities clockwise), or reverse the faces"
+            ),
+            Error::TooManyHullPoints { points, limit } => write!(
+                f,
+                "a convex tool of {points} distinct points is over the limit of {limit}; \
+                 give fewer points (a hull's faces follow from its outermost points), or split \
+                 the tool into several convex tools"
             ),
             Error::DegenerateBox { min, max } => write!(
                 f,

@@ -443,3 +443,36 @@ fn faces_from_octree_cells_weld_into_one_watertight_surface() {
     }
     assert!(needed_splitting > 0, "no case had T-junctions across cells");
 }
+
+/// An octree whose upper part is repainted: its surface (interfaces
+/// reported once) is not closed as one mesh, but every material's region
+/// is, and is watertight; dropping one polygon opens a region.
+#[test]
+fn every_material_region_of_a_painted_octree_is_closed() {
+    use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
+    let block = CellBox {
+        min: [0; 3],
+        max: [1000; 3],
+    };
+    let mut octree = Octree::from_box([0; 3], 11, block, 1, OctreeConfig::default()).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    for label in 2..6 {
+        let min = [0; 3].map(|_: i64| rng.random_range(-200..800));
+        let max = min.map(|m| m + rng.random_range(100..600));
+        let paint = Tool::cuboid(CellBox { min, max }).unwrap();
+        octree.apply(&paint, Edit::Paint(label)).unwrap();
+    }
+    let mut mesh = SurfaceMesh::from_faces(&octree.surface());
+    let interfaces = mesh
+        .polygons()
+        .iter()
+        .filter(|p| p.outside != EMPTY)
+        .count();
+    assert!(interfaces > 0);
+    assert!(mesh.check_closed().is_err(), "interfaces are reported once");
+    mesh.check_regions_closed().unwrap();
+    mesh.check_regions_watertight().unwrap();
+    let mut first = true;
+    mesh.retain(|_| !std::mem::take(&mut first));
+    assert!(mesh.check_regions_closed().is_err());
+}

@@ -562,3 +562,22 @@ fn files_save_and_load() {
         Err(Error::Io { .. })
     ));
 }
+
+/// A file storing a node budget below [`OctreeConfig::MIN_BSP_NODES`]
+/// (cells would be split to the depth limit) is refused.
+#[test]
+fn a_stored_budget_below_the_minimum_is_refused() {
+    for budget in [0, 1, 7] {
+        let config = OctreeConfig {
+            max_bsp_nodes: budget,
+            ..OctreeConfig::default()
+        };
+        let block = CellBox {
+            min: [0; 3],
+            max: [10; 3],
+        };
+        let octree = Octree::from_box([0; 3], 5, block, 1, config).unwrap();
+        let err = Octree::from_bytes(&octree.to_bytes()).unwrap_err();
+        assert!(err.to_string().contains("budget below 8"), "{err}");
+    }
+}

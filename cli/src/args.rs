@@ -37,7 +37,15 @@ pub fn bounds(
     }
 }
 
-/// Parses `WIDTHxHEIGHT`.
+/// The most pixels `chisel trace` renders (8192 × 8192).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// The most steps of a scenario (`mill --steps`, `cheese --count`, `sweep
+/// --samples`): the sequence is built before the run, a few hundred bytes
+/// a step.
+pub const MAX_STEPS: usize = 1_000_000;
+
+/// Parses `WIDTHxHEIGHT`, each at least 1, at most [`MAX_PIXELS`] in all.
 pub fn size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text
         .split_once('x')
@@ -45,9 +53,33 @@ pub fn size(text: &str) -> Result<(u32, u32), String> {
     let parse = |s: &str| {
         s.trim()
             .parse::<u32>()
-            .map_err(|_| format!("`{s}` is not a pixel count"))
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("`{s}` is not a pixel count (a whole number from 1)"))
     };
-    Ok((parse(w)?, parse(h)?))
+    let (w, h) = (parse(w)?, parse(h)?);
+    if u64::from(w) * u64::from(h) > MAX_PIXELS {
+        return Err(format!(
+            "{w}x{h} is {} pixels, more than the limit of {MAX_PIXELS} (8192x8192)",
+            u64::from(w) * u64::from(h)
+        ));
+    }
+    Ok((w, h))
+}
+
+/// Parses a step count: a whole number from 1 to [`MAX_STEPS`].
+pub fn steps(text: &str) -> Result<usize, String> {
+    let n: u128 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a whole number of steps"))?;
+    if n == 0 || n > MAX_STEPS as u128 {
+        return Err(format!(
+            "{n} steps: give 1 to {MAX_STEPS} (longer runs: several replays, each from \
+             the `.chisel` export of the one before)"
+        ));
+    }
+    Ok(n as usize)
 }
 
 fn numbers(text: &str, count: usize) -> Result<Vec<f64>, String> {

@@ -21,6 +21,7 @@ use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
 use chisel_bsp::tree::EMPTY;
 use serde_json::json;
 
+use crate::failure::Failure;
 use crate::meshfile;
 use crate::octree_file::{self, leaf_tool};
 use crate::scenario::extract;
@@ -140,7 +141,8 @@ fn common_cube(a: &Operand, b: &Operand) -> Result<([i64; 3], u8), String> {
 }
 
 /// Runs the command; errors are messages for the user.
-pub fn run(args: &BooleanArgs) -> Result<(), String> {
+pub fn run(args: &BooleanArgs) -> Result<(), Failure> {
+    crate::failure::check_output(&args.output, true)?;
     let start = Instant::now();
     let a = Operand::read(&args.a)?;
     let b = Operand::read(&args.b)?;
@@ -182,9 +184,9 @@ pub fn run(args: &BooleanArgs) -> Result<(), String> {
     let (mesh, closure) = extract::whole(&result);
     let seconds = start.elapsed().as_secs_f64();
     if octree_file::is_octree_file(&args.output) {
-        octree_file::write(&args.output, &result)?;
+        octree_file::write(&args.output, &result).map_err(Failure::write)?;
     } else {
-        meshfile::write(&args.output, &mesh)?;
+        meshfile::write(&args.output, &mesh).map_err(Failure::write)?;
     }
     // `+ 0.0` reports an empty result as 0, not −0.
     let mm3 = |v: f64| v / 1e9 + 0.0;

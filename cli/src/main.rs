@@ -19,8 +19,9 @@
 //! bit-identically by `chisel boolean` and by a replay's
 //! `{"base": {"mesh": "FILE.chisel"}}`).
 //!
-//! Bad input (unreadable or malformed files, out-of-range numbers) is
-//! reported on standard error with exit code 2.
+//! A failure is a message on standard error and an exit code by kind
+//! ([`failure::Exit`]): 2 a wrong command line, 3 bad input data, 4 a
+//! failed `--check`, 5 a failed write.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,9 +30,13 @@ use clap::{Parser, Subcommand};
 use glam::DVec3;
 
 mod args;
+mod atomic;
 mod boolean;
 mod budget;
+mod failure;
 mod formats;
+#[cfg(test)]
+mod fuzz;
 mod meshfile;
 mod octree_file;
 mod sample;
@@ -78,6 +83,10 @@ enum Command {
         /// Write the samples as a PLY point cloud.
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Refuse to emit more samples than this (checked before each
+        /// grid of samples is allocated).
+        #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_SAMPLES)]
+        max_samples: u64,
         /// One line of JSON instead of a report.
         #[arg(long)]
         json: bool,
@@ -102,23 +111,23 @@ enum Command {
         /// Vertical field of view, degrees.
         #[arg(long, default_value_t = 40.0)]
         fov: f64,
-        /// Image size `WIDTHxHEIGHT`.
+        /// Image size `WIDTHxHEIGHT` (at most 8192x8192 pixels in all).
         #[arg(long, value_parser = args::size, default_value = "800x600")]
         size: (u32, u32),
     },
     /// Mill a block: a flat end mill swept along a zig-zag path, one
     /// subtraction per step (SCENARIOS.md "mill").
     Mill {
-        /// Number of tool moves.
-        #[arg(long, default_value_t = 270)]
+        /// Number of tool moves (1 to 1,000,000).
+        #[arg(long, default_value_t = 270, value_parser = args::steps)]
         steps: usize,
         #[command(flatten)]
         run: RunFlags,
     },
     /// Carve a cube with many random dodecahedra (SCENARIOS.md "cheese").
     Cheese {
-        /// Number of carves.
-        #[arg(long, default_value_t = 1000)]
+        /// Number of carves (1 to 1,000,000).
+        #[arg(long, default_value_t = 1000, value_parser = args::steps)]
         count: usize,
         /// Seed of the random sizes, rotations and places.
         #[arg(long, default_value_t = 1)]
@@ -129,8 +138,8 @@ enum Command {
     /// Sweep a gear along a Bézier curve by unions of per-triangle sweep
     /// prisms (paper 1 §5).
     Sweep {
-        /// Positions sampled along the curve.
-        #[arg(long, default_value_t = 100)]
+        /// Positions sampled along the curve (1 to 1,000,000).
+        #[arg(long, default_value_t = 100, value_parser = args::steps)]
         samples: usize,
         #[command(flatten)]
         run: RunFlags,
@@ -165,109 +174,116 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Budget { json } => {
-            budget::print(json);
-            Ok(())
-        }
-        Command::Sample {
-            scene,
-            radius,
-            bounds,
-            output,
-            json,
-        } => sample::run(&sample::SampleArgs {
-            scene,
-            radius,
-            bounds,
-            output,
-            json,
-        }),
-        Command::Trace {
-            scene,
-            output,
-            bounds,
-            eye,
-            look_at,
-            fov,
-            size,
-        } => trace::run(&trace::TraceArgs {
-            scene,
-            output,
-            bounds,
-            eye,
-            look_at,
-            fov,
-            size,
-        }),
-        Command::Mill { steps, run } => scenario::mill::sequence(steps).and_then(|sequence| {
-            let parameters = serde_json::json!({ "steps": steps });
-            scenario::runner::run(
-                &Scenario {
-                    name: "mill",
-                    parameters,
-                    sequence,
-                },
-                &run,
-            )
-        }),
-        Command::Cheese { count, seed, run } => {
-            scenario::cheese::sequence(count, seed).and_then(|sequence| {
-                let parameters = serde_json::json!({ "count": count, "seed": seed });
-                scenario::runner::run(
-                    &Scenario {
-                        name: "cheese",
-                        parameters,
-                        sequence,
-                    },
-                    &run,
-                )
-            })
-        }
-        Command::Sweep { samples, run } => {
-            scenario::sweep::sequence(samples).and_then(|(sequence, flat)| {
-                let parameters =
-                    serde_json::json!({ "samples": samples, "flat_prisms_left_out": flat });
-                scenario::runner::run(
-                    &Scenario {
-                        name: "sweep",
-                        parameters,
-                        sequence,
-                    },
-                    &run,
-                )
-            })
-        }
-        Command::Boolean {
-            a,
-            b,
-            op,
-            output,
-            json,
-        } => boolean::run(&boolean::BooleanArgs {
-            a,
-            b,
-            op,
-            output,
-            json,
-        }),
-        Command::Replay { ops, run } => scenario::jsonl::read(&ops).and_then(|sequence| {
-            let parameters = serde_json::json!({ "file": ops });
-            scenario::runner::run(
-                &Scenario {
-                    name: "replay",
-                    parameters,
-                    sequence,
-                },
-                &run,
-            )
-        }),
-    };
+    let result =
+        match cli.command {
+            Command::Budget { json } => {
+                budget::print(json);
+                Ok(())
+            }
+            Command::Sample {
+                scene,
+                radius,
+                bounds,
+                output,
+                max_samples,
+                json,
+            } => sample::run(&sample::SampleArgs {
+                scene,
+                radius,
+                bounds,
+                output,
+                max_samples,
+                json,
+            }),
+            Command::Trace {
+                scene,
+                output,
+                bounds,
+                eye,
+                look_at,
+                fov,
+                size,
+            } => trace::run(&trace::TraceArgs {
+                scene,
+                output,
+                bounds,
+                eye,
+                look_at,
+                fov,
+                size,
+            }),
+            Command::Mill { steps, run } => scenario::mill::sequence(steps)
+                .map_err(failure::Failure::usage)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({ "steps": steps });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "mill",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Cheese { count, seed, run } => scenario::cheese::sequence(count, seed)
+                .map_err(failure::Failure::usage)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({ "count": count, "seed": seed });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "cheese",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Sweep { samples, run } => scenario::sweep::sequence(samples)
+                .map_err(failure::Failure::usage)
+                .and_then(|(sequence, flat)| {
+                    let parameters =
+                        serde_json::json!({ "samples": samples, "flat_prisms_left_out": flat });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "sweep",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Boolean {
+                a,
+                b,
+                op,
+                output,
+                json,
+            } => boolean::run(&boolean::BooleanArgs {
+                a,
+                b,
+                op,
+                output,
+                json,
+            }),
+            Command::Replay { ops, run } => scenario::jsonl::read(&ops)
+                .map_err(Into::into)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({ "file": ops });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "replay",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+        };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("chisel: {message}");
-            ExitCode::from(2)
+        Err(failure) => {
+            eprintln!("chisel: {}", failure.message);
+            ExitCode::from(failure.exit as u8)
         }
     }
 }

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use chisel_bsp::exact::IntPoint;
+use chisel_bsp::exact::budget::MAX_COORD;
 use chisel_bsp::mesh::TriangleMesh;
 use chisel_bsp::octree::CellBox;
 use chisel_bsp::tools::Quantization;
@@ -33,8 +34,21 @@ pub fn read_grid(path: &Path) -> Result<GridMesh, String> {
         .iter()
         .enumerate()
         .map(|(v, &p)| {
-            grid.to_grid(p)
-                .map_err(|e| format!("{}: vertex {}: {e}", path.display(), v + 1))
+            grid.to_grid(p).map_err(|e| {
+                let e = match e {
+                    // The input value and its unit, not the saturated
+                    // grid value.
+                    chisel_bsp::Error::CoordinateOutOfRange { axis, .. } => format!(
+                        "coordinate {}={} mm is outside the exact range of ±{} mm \
+                         (2^26 grid units of 1 µm); scale the mesh down",
+                        ['x', 'y', 'z'][axis.min(2)],
+                        short(p[axis.min(2)]),
+                        short(MAX_COORD as f64 / UNITS_PER_MM)
+                    ),
+                    e => e.to_string(),
+                };
+                format!("{}: vertex {}: {e}", path.display(), v + 1)
+            })
         })
         .collect::<Result<Vec<IntPoint>, String>>()?;
     let bounds = CellBox::enclosing(positions.iter().map(IntPoint::coords))
@@ -59,4 +73,13 @@ pub fn write(path: &Path, mesh: &TriangleMesh) -> Result<(), String> {
         *p = p.map(|c| c * scale);
     }
     write_triangle_mesh(path, &mm).map_err(|e| e.to_string())
+}
+
+/// `x` in plain decimals, or in exponent form when very large or small.
+fn short(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e15).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
 }

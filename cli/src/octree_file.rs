@@ -43,7 +43,8 @@ pub fn read(path: &Path) -> Result<Octree, String> {
 /// # Errors
 /// A message naming the file.
 pub fn write(path: &Path, octree: &Octree) -> Result<(), String> {
-    octree.save(path).map_err(|e| e.to_string())
+    crate::atomic::write_bytes(path, &octree.to_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// The box around every leaf cell that may hold material, or `None` when

@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::failure::Failure;
 use chisel_quadric::{OUTSIDE_FLAG, SampleOptions, Scene, SplatSet, sample};
 use glam::DVec3;
 
@@ -17,22 +18,29 @@ pub struct SampleArgs {
     pub bounds: Option<(DVec3, f64)>,
     /// Where to write the samples as PLY, if anywhere.
     pub output: Option<PathBuf>,
+    /// The most samples to emit.
+    pub max_samples: u64,
     /// One JSON line instead of a report.
     pub json: bool,
 }
 
 /// Runs the command; errors are messages for the user.
-pub fn run(args: &SampleArgs) -> Result<(), String> {
+pub fn run(args: &SampleArgs) -> Result<(), Failure> {
+    if let Some(path) = &args.output {
+        crate::failure::check_output(path, false)?;
+    }
     let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let dnf = scene.dnf().map_err(|e| e.to_string())?;
-    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene)?;
-    let options = SampleOptions::new(args.radius, bounds).map_err(|e| e.to_string())?;
+    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene).map_err(Failure::usage)?;
+    let mut options =
+        SampleOptions::new(args.radius, bounds).map_err(|e| Failure::usage(e.to_string()))?;
+    options.max_samples = args.max_samples;
     let start = Instant::now();
     let samples = sample(&dnf, &options).map_err(|e| e.to_string())?;
     let seconds = start.elapsed().as_secs_f64();
     let splats = SplatSet::new(&dnf, &scene.dag, &samples);
     if let Some(path) = &args.output {
-        write_ply(path, &splats).map_err(|e| format!("{}: {e}", path.display()))?;
+        write_ply(path, &splats).map_err(|e| Failure::write(format!("{}: {e}", path.display())))?;
     }
     let count = samples.samples.len();
     let rate = count as f64 / seconds.max(1e-12);
@@ -67,7 +75,10 @@ pub fn run(args: &SampleArgs) -> Result<(), String> {
 
 /// Samples as an ASCII PLY point cloud with normals, colours and radii.
 fn write_ply(path: &Path, splats: &SplatSet) -> std::io::Result<()> {
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    crate::atomic::write_with(path, |out| write_ply_to(out, splats))
+}
+
+fn write_ply_to(out: &mut impl Write, splats: &SplatSet) -> std::io::Result<()> {
     writeln!(
         out,
         "ply\nformat ascii 1.0\nelement vertex {}",
@@ -99,5 +110,5 @@ fn write_ply(path: &Path, splats: &SplatSet) -> std::io::Result<()> {
             s.radius
         )?;
     }
-    out.flush()
+    Ok(())
 }

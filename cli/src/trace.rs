@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::failure::Failure;
 use chisel_quadric::{Camera, NO_HIT, Scene, trace_image};
 use glam::DVec3;
 
@@ -25,17 +26,34 @@ pub struct TraceArgs {
 }
 
 /// Runs the command; errors are messages for the user.
-pub fn run(args: &TraceArgs) -> Result<(), String> {
+pub fn run(args: &TraceArgs) -> Result<(), Failure> {
+    crate::failure::check_output(&args.output, false)?;
     let scene = Scene::load(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let dnf = scene.dnf().map_err(|e| e.to_string())?;
-    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene)?;
+    let bounds = crate::args::bounds(args.bounds, &scene, &args.scene).map_err(Failure::usage)?;
     let (centre, radius) = (bounds.centre, bounds.radius);
     let eye = args
         .eye
         .unwrap_or(centre + DVec3::new(1.8, -2.4, 1.5) * radius);
     let look_at = args.look_at.unwrap_or(centre);
-    let camera =
-        Camera::new(eye, look_at, args.fov, args.size.0, args.size.1).map_err(|e| e.to_string())?;
+    if !(args.fov > 0.0 && args.fov < 180.0) {
+        return Err(Failure::usage(format!(
+            "--fov {}: the vertical field of view must lie strictly between 0 and 180 degrees",
+            args.fov
+        )));
+    }
+    let view = eye - look_at;
+    if !(view.length_squared().is_finite() && view.length_squared() > 0.0) {
+        return Err(Failure::usage(format!(
+            "--eye {eye} and --look-at {look_at}: the camera must be a finite, non-zero \
+             distance from the point it looks at (squared distance within f64)"
+        )));
+    }
+    let camera = Camera::new(eye, look_at, args.fov, args.size.0, args.size.1).map_err(|e| {
+        Failure::usage(format!(
+            "the camera (--eye, --look-at, --fov, --bounds): {e}"
+        ))
+    })?;
     let start = Instant::now();
     let image = trace_image(&dnf, &camera);
     let seconds = start.elapsed().as_secs_f64();
@@ -56,8 +74,11 @@ pub fn run(args: &TraceArgs) -> Result<(), String> {
             image::Rgb([byte(colour[0]), byte(colour[1]), byte(colour[2])])
         };
     }
-    png.save(&args.output)
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    png.write_to(&mut bytes, image::ImageFormat::Png)
         .map_err(|e| format!("{}: {e}", args.output.display()))?;
+    crate::atomic::write_bytes(&args.output, bytes.get_ref())
+        .map_err(|e| Failure::write(format!("{}: {e}", args.output.display())))?;
     let hits = image.quadric.iter().filter(|&&q| q != NO_HIT).count();
     println!(
         "traced {}x{} ({hits} surface pixels) in {seconds:.3} s; wrote {}",

@@ -1,5 +1,5 @@
 //! The `chisel` binary end to end: real scenes in, summaries and files out,
-//! bad input reported with exit code 2.
+//! bad input reported with exit code 3, a wrong command line with 2.
 
 mod common;
 
@@ -67,36 +67,45 @@ fn trace_writes_an_image_with_the_object_in_it() {
 }
 
 #[test]
-fn bad_input_is_a_clear_error_with_exit_code_2() {
+fn bad_input_is_a_clear_error_with_its_exit_code() {
     let bad = temp("bad.ron");
     std::fs::write(&bad, "Scene(primitives: [], root: Ref(\"x\"))").unwrap();
-    for args in [
-        vec![
-            "sample",
-            "missing.ron",
-            "--radius",
-            "1",
-            "--bounds",
-            "0,0,0,1",
-        ],
-        vec![
-            "sample",
-            bad.to_str().unwrap(),
-            "--radius",
-            "1",
-            "--bounds",
-            "0,0,0,1",
-        ],
-        vec![
-            "sample",
-            scene("classic.ron").to_str().unwrap(),
-            "--radius=-1",
-            "--bounds",
-            "0,0,0,90",
-        ],
+    for (code, args) in [
+        (
+            3,
+            vec![
+                "sample",
+                "missing.ron",
+                "--radius",
+                "1",
+                "--bounds",
+                "0,0,0,1",
+            ],
+        ),
+        (
+            3,
+            vec![
+                "sample",
+                bad.to_str().unwrap(),
+                "--radius",
+                "1",
+                "--bounds",
+                "0,0,0,1",
+            ],
+        ),
+        (
+            2,
+            vec![
+                "sample",
+                scene("classic.ron").to_str().unwrap(),
+                "--radius=-1",
+                "--bounds",
+                "0,0,0,90",
+            ],
+        ),
     ] {
         let out = chisel().args(&args).output().unwrap();
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert_eq!(out.status.code(), Some(code), "{args:?}");
         let message = String::from_utf8(out.stderr).unwrap();
         assert!(
             message.starts_with("chisel: ") && message.len() > 20,

@@ -2,7 +2,7 @@
 //! exactly and combined again with no re-import (`A ∩ A = A`, `A − A = ∅`,
 //! checked exactly by differences of volume zero), a replay continuing from
 //! a stored octree with the identical result, and damaged files reported
-//! with exit code 2.
+//! with exit code 3.
 
 mod common;
 
@@ -121,8 +121,64 @@ fn damaged_octree_files_are_errors_with_exit_code_2() {
             .arg(temp("never.obj"))
             .output()
             .unwrap();
-        assert_eq!(out.status.code(), Some(2), "{}", file.display());
+        assert_eq!(out.status.code(), Some(3), "{}", file.display());
         let message = String::from_utf8_lossy(&out.stderr);
         assert!(message.contains(expected), "{message}");
     }
+}
+
+/// Two materials meeting inside a block: the interface between them is
+/// reported once, so the surface as a whole has edges used once and never
+/// reversed, yet every material's region (its own faces, and the
+/// interface faces turned round for the material in front) is closed.
+/// `boolean` and a replay `--check` must call such a surface closed.
+#[test]
+fn a_two_material_octree_is_closed() {
+    use chisel_bsp::octree::{CellBox, Edit, Octree, OctreeConfig, Tool};
+    let mut octree = Octree::from_box(
+        [0; 3],
+        17,
+        CellBox {
+            min: [0; 3],
+            max: [100_000; 3],
+        },
+        1,
+        OctreeConfig::default(),
+    )
+    .unwrap();
+    // The upper part of the block becomes material 2, with faces on the
+    // outside as well as an interface with material 1.
+    let upper = Tool::cuboid(CellBox {
+        min: [0, 0, 60_000],
+        max: [100_000, 100_000, 100_000],
+    })
+    .unwrap();
+    octree.apply(&upper, Edit::Paint(2)).unwrap();
+    let two = temp("two-materials.chisel");
+    octree.save(&two).unwrap();
+
+    let out = temp("two-out.chisel");
+    let m = boolean(&two, &two, "intersection", &out);
+    assert_eq!(m["closed"].as_bool(), Some(true), "{m}");
+    assert_eq!(f(&m, "volume_mm3"), 1e6, "{m}");
+
+    let replay = temp("two.jsonl");
+    std::fs::write(
+        &replay,
+        "{\"base\": {\"mesh\": \"two-materials.chisel\"}}\n\
+         {\"op\": \"subtract\", \"hull\": [[20,20,50],[60,20,50],[20,60,50],[60,60,50],\
+         [20,20,110],[60,20,110],[20,60,110],[60,60,110]]}\n",
+    )
+    .unwrap();
+    let out = chisel()
+        .args(["replay", path(&replay), "--check", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["closed"].as_bool(), Some(true), "{r}");
 }

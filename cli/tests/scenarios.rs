@@ -3,7 +3,7 @@
 //! subtraction, exact volumes where they are computable, watertight
 //! results), a recorded sequence replays to the identical result, results
 //! do not depend on the thread count, and malformed sequences are errors
-//! naming their line, with exit code 2.
+//! naming their line, with exit code 3.
 
 mod common;
 
@@ -149,7 +149,7 @@ fn sweep_unions_a_closed_solid() {
 }
 
 #[test]
-fn malformed_sequences_name_the_line_and_exit_2() {
+fn malformed_sequences_name_the_line_and_exit_3() {
     let ops = temp("bad.jsonl");
     let base = "{\"base\": {\"box\": [[0,0,0],[10,10,10]]}}";
     let step = "{\"op\": \"subtract\", \"hull\": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]]}";
@@ -171,7 +171,7 @@ fn malformed_sequences_name_the_line_and_exit_2() {
     ] {
         std::fs::write(&ops, &text).unwrap();
         let out = chisel().args(["replay", path(&ops)]).output().unwrap();
-        assert_eq!(out.status.code(), Some(2), "{text}");
+        assert_eq!(out.status.code(), Some(3), "{text}");
         let message = String::from_utf8(out.stderr).unwrap();
         assert!(
             message.starts_with("chisel: ") && message.contains(needle),
@@ -182,7 +182,7 @@ fn malformed_sequences_name_the_line_and_exit_2() {
         .args(["replay", "no-such-file.jsonl"])
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(3));
     let out = chisel().args(["sweep", "--samples", "1"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
@@ -219,7 +219,7 @@ fn boolean_of_two_boxes_has_the_exact_volumes() {
             "{op}: {again}"
         );
     }
-    // An open mesh (one face dropped) is refused with exit code 2.
+    // An open mesh (one face dropped) is refused with exit code 3.
     let open = temp("open.obj");
     let text = box_obj([0.0; 3], [1.0; 3]);
     std::fs::write(&open, text.lines().take(13).collect::<Vec<_>>().join("\n")).unwrap();
@@ -235,7 +235,7 @@ fn boolean_of_two_boxes_has_the_exact_volumes() {
         ])
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(3));
     let message = String::from_utf8(out.stderr).unwrap();
     assert!(
         message.contains("open.obj") && message.contains("watertight"),

@@ -62,6 +62,22 @@ pub enum Error {
         /// The product limit that was hit.
         limit: usize,
     },
+    /// Sampling would emit more samples than
+    /// [`SampleOptions::max_samples`](crate::SampleOptions::max_samples);
+    /// nothing is returned.
+    TooManySamples {
+        /// The limit.
+        limit: u64,
+        /// Samples counted (or reserved for a grid) when it was passed.
+        reached: u64,
+    },
+    /// Sampling cannot keep the coverage guarantee: the bounding sphere is
+    /// too large for the splat radius, or regions stayed unclassified at
+    /// the subdivision limit.
+    CoverageNotReached {
+        /// Why, and what to change.
+        reason: String,
+    },
     /// A scene file could not be read, parsed or understood.
     Scene {
         /// 1-based line of the problem (0 when unknown).
@@ -105,6 +121,15 @@ impl fmt::Display for Error {
             ),
             Error::AngleOutOfRange { degrees } => {
                 write!(f, "the cone half-angle {degrees}° is outside (0°, 90°)")
+            }
+            Error::TooManySamples { limit, reached } => write!(
+                f,
+                "sampling needs more than {limit} samples ({reached} counted when it stopped); \
+                 use a larger splat radius or smaller bounds, or raise the limit \
+                 (`--max-samples` on the command line, `SampleOptions::max_samples`)"
+            ),
+            Error::CoverageNotReached { reason } => {
+                write!(f, "sampling cannot keep its coverage guarantee: {reason}")
             }
             Error::EmptyOperation { op } => {
                 write!(f, "a {op} needs at least one operand")

@@ -81,7 +81,9 @@ pub use error::{Error, Result};
 pub use frame::PrincipalFrame;
 pub use quadric::{AFFINE_TOLERANCE, Quadric, affine_inverse, snap_affine};
 pub use ray::{Hit, LineHits, Ray, Span};
-pub use sampling::{BoundingSphere, Sample, SampleOptions, SampleSet, sample};
+pub use sampling::{
+    BoundingSphere, DEFAULT_MAX_SAMPLES, MAX_BOUNDS_RATIO, Sample, SampleOptions, SampleSet, sample,
+};
 pub use scene::Scene;
 pub use splats::{GpuQuadric, GpuSplat, OUTSIDE_FLAG, QuadricRecord, Splat, SplatSet};
 pub use trace::{Camera, NO_HIT, TraceHit, TraceImage, trace_image, trace_ray};

@@ -8,14 +8,19 @@
 //! that holds for every closed surface, each directed edge used as often as
 //! its opposite. A boundary with material interfaces is
 //! not such a surface (three polygons meet where two materials and empty
-//! space do); check its outer surface instead
-//! ([`SurfaceMesh::retain`] with `outside == EMPTY`).
+//! space do, and an interface polygon is reported once, by the material
+//! with the larger label): check each material's region instead
+//! ([`SurfaceMesh::check_regions_closed`]: a polygon bounds the region of
+//! its [`label`](super::MeshPolygon::label) as it is, and the region of its
+//! [`outside`](super::MeshPolygon::outside) turned round), or its outer
+//! surface ([`SurfaceMesh::retain`] with `outside == EMPTY`).
 
 use core::fmt;
 use std::collections::{HashMap, HashSet};
 use std::hash::BuildHasherDefault;
 
 use super::SurfaceMesh;
+use crate::tree::{EMPTY, Label};
 use crate::word_hash::WordHasher;
 
 /// Directed edge `(from, to)` packed into one word.
@@ -29,6 +34,10 @@ type EdgeUses = HashMap<u64, u32, BuildHasherDefault<WordHasher>>;
 
 /// A set of directed edges, by [`edge_key`].
 type EdgeSet = HashSet<u64, BuildHasherDefault<WordHasher>>;
+
+/// How often each directed edge bounds each material's region, by label
+/// and [`edge_key`].
+type RegionEdgeUses = HashMap<(Label, u64), u32, BuildHasherDefault<WordHasher>>;
 
 /// What is wrong with one directed edge.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -210,6 +219,115 @@ impl SurfaceMesh {
                 opposite_repeated: 0,
                 example,
             }),
+        }
+    }
+
+    /// The directed edges of every material region's boundary, with the
+    /// region's label: a polygon's edges for its `label`, and, for an
+    /// interface polygon (`outside` not empty), the same edges reversed
+    /// for its `outside`.
+    pub fn region_edges(&self) -> impl Iterator<Item = (Label, u32, u32)> + '_ {
+        self.polygons().iter().flat_map(|p| {
+            let n = p.corners.len();
+            (0..n).flat_map(move |k| {
+                let (u, v) = (p.corners[k], p.corners[(k + 1) % n]);
+                let back = (p.outside != EMPTY).then_some((p.outside, v, u));
+                std::iter::once((p.label, u, v)).chain(back)
+            })
+        })
+    }
+
+    /// How often each directed edge bounds each region.
+    fn region_edge_uses(&self) -> RegionEdgeUses {
+        let mut uses = RegionEdgeUses::default();
+        for (label, u, v) in self.region_edges() {
+            *uses.entry((label, edge_key(u, v))).or_insert(0) += 1;
+        }
+        uses
+    }
+
+    /// [`SurfaceMesh::check_closed`] for every material region: each
+    /// directed edge bounds a region as often as its opposite does. This is
+    /// what holds for the boundary of a multi-material solid, where an
+    /// interface between two materials is one polygon (see the module
+    /// doc); for a single material it is [`SurfaceMesh::check_closed`].
+    ///
+    /// # Errors
+    /// As [`SurfaceMesh::check_closed`], counting per region.
+    pub fn check_regions_closed(&self) -> Result<(), WatertightError> {
+        let uses = self.region_edge_uses();
+        let count =
+            |label: Label, u: u32, v: u32| uses.get(&(label, edge_key(u, v))).copied().unwrap_or(0);
+        let mut seen = HashSet::<(Label, u64), BuildHasherDefault<WordHasher>>::default();
+        let mut open = 0;
+        let mut example = None;
+        for (label, u, v) in self.region_edges() {
+            if count(label, u, v) > count(label, v, u) && seen.insert((label, edge_key(u, v))) {
+                open += 1;
+                example.get_or_insert_with(|| self.bad_edge(u, v, EdgeProblem::Open));
+            }
+        }
+        match example {
+            None => Ok(()),
+            Some(example) => Err(WatertightError {
+                open,
+                repeated: 0,
+                opposite_repeated: 0,
+                example,
+            }),
+        }
+    }
+
+    /// [`SurfaceMesh::check_watertight`] for every material region: each
+    /// directed edge of a region's boundary is used once, and its opposite
+    /// once.
+    ///
+    /// # Errors
+    /// As [`SurfaceMesh::check_watertight`], counting per region.
+    pub fn check_regions_watertight(&self) -> Result<(), WatertightError> {
+        let uses = self.region_edge_uses();
+        let count =
+            |label: Label, u: u32, v: u32| uses.get(&(label, edge_key(u, v))).copied().unwrap_or(0);
+        let (mut open, mut repeated, mut opposite_repeated) = (0, 0, 0);
+        let mut example = None;
+        let mut seen_repeated = HashSet::<(Label, u64), BuildHasherDefault<WordHasher>>::default();
+        for (label, u, v) in self.region_edges() {
+            let (here, opposite) = (count(label, u, v), count(label, v, u));
+            let problem = if here > 1 {
+                if !seen_repeated.insert((label, edge_key(u, v))) {
+                    continue;
+                }
+                repeated += 1;
+                EdgeProblem::Repeated
+            } else if opposite == 0 {
+                open += 1;
+                EdgeProblem::Open
+            } else if opposite > 1 {
+                opposite_repeated += 1;
+                EdgeProblem::OppositeRepeated
+            } else {
+                continue;
+            };
+            example.get_or_insert_with(|| self.bad_edge(u, v, problem));
+        }
+        match example {
+            None => Ok(()),
+            Some(example) => Err(WatertightError {
+                open,
+                repeated,
+                opposite_repeated,
+                example,
+            }),
+        }
+    }
+
+    fn bad_edge(&self, from: u32, to: u32, problem: EdgeProblem) -> BadEdge {
+        BadEdge {
+            from,
+            to,
+            from_position: self.position(from),
+            to_position: self.position(to),
+            problem,
         }
     }
 }

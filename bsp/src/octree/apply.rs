@@ -326,6 +326,17 @@ impl Walk<'_> {
             return (relabeled.map(OctNode::Leaf), changes.into());
         }
         let tool = tool.expect("the tool meets the cell");
+        // A tool with many planes across the cell (a hull of thousands of
+        // points) is not merged into it whole: each cell of that merge
+        // would hold up to as many faces, on a stack as deep, so memory
+        // would grow with the square of the planes. The leaf is split
+        // first and the edit applied to its children, each crossed by
+        // fewer of the planes.
+        if tool.nodes().len() / 2 > presplit_planes(self.config)
+            && may_split(key, cell, self.config)
+        {
+            return self.presplit(leaf, key, cell);
+        }
         // The whole cell inside the tool, every label mapped to empty
         // there: what the merge and the rebuild would find, without a cut.
         if let [Node::Leaf(t)] = tool.nodes()
@@ -413,6 +424,49 @@ impl Walk<'_> {
         (Some(node), Edited { changes, faces })
     }
 }
+
+impl Walk<'_> {
+    /// The edit applied to `leaf` split into its eight children first (the
+    /// same regions: a uniform leaf's label in each child, a BSP leaf's
+    /// children rebuilt from its boundary), then combined again where the
+    /// children fit the budget. The changes name the leaves of the result
+    /// and `key` as removed when the result is split.
+    fn presplit(&self, leaf: &Leaf, key: CellKey, cell: CellBox) -> (Option<OctNode>, Edited) {
+        let split = match leaf {
+            Leaf::Uniform(label) => OctNode::Inner(Arc::new(std::array::from_fn(|_| {
+                OctNode::Leaf(Leaf::Uniform(*label))
+            }))),
+            Leaf::Bsp(bsp) => {
+                let faces = with_arena(|arena| {
+                    let poly = cell_poly(arena, cell);
+                    bsp.boundary(arena, poly)
+                });
+                split_leaf(bsp, faces, key, cell, self.config, false).0
+            }
+        };
+        let (node, mut edited) = self.node(&split, key, cell);
+        let node = node.unwrap_or(split);
+        let mut changed = Vec::new();
+        collect_leaves(&node, key, &mut changed);
+        let removed = match node {
+            OctNode::Leaf(_) => Vec::new(),
+            OctNode::Inner(_) => vec![key],
+        };
+        edited.changes = Changes { changed, removed };
+        (Some(node), edited)
+    }
+}
+
+/// The most planes of a tool restricted to a cell that is merged into the
+/// cell whole; a cell crossed by more, and which may split, is split first
+/// ([`Walk::presplit`]). At least the budget, so that ordinary tools (a
+/// few dozen planes) are never split for.
+fn presplit_planes(config: &OctreeConfig) -> usize {
+    config.max_bsp_nodes.max(PRESPLIT_MIN_PLANES)
+}
+
+/// The least value of [`presplit_planes`].
+const PRESPLIT_MIN_PLANES: usize = 64;
 
 /// Whether `tool`'s solid has volume in `cell` (a polyhedron of
 /// `arena`, cut up in place): whether [`Bsp::cells`] of the tool there

@@ -30,10 +30,11 @@ type P = [i64; 3];
 /// corner lies in `cube`, and no two triangles intersect improperly.
 ///
 /// # Errors
-/// [`Error::OutsideOctree`], [`Error::NotWatertight`] or
-/// [`Error::SelfIntersecting`].
+/// [`Error::OutsideOctree`], [`Error::NotWatertight`],
+/// [`Error::InsideOut`] or [`Error::SelfIntersecting`].
 pub(crate) fn check_mesh(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error> {
     check_closed(triangles, cube)?;
+    check_orientation(triangles)?;
     if let Some((i, j)) = first_intersection(triangles) {
         return Err(Error::SelfIntersecting {
             triangles: [i, j],
@@ -75,6 +76,81 @@ fn check_closed(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error
         open_edges: open.len(),
         example: [open[0].0, open[0].1],
     })
+}
+
+/// Checks the orientation of a closed mesh from exact signed volumes
+/// (`6V = Σ a · (b × c)` over its triangles, exact in `i128`: each term is
+/// below `3·2^26·2^53 < 2^81`). The whole mesh must enclose a positive
+/// volume, and each shell (triangles connected through edges) with a
+/// negative volume — a cavity — must lie inside the box of a shell with a
+/// positive one. What this cannot see: a shell nested in another with the
+/// same orientation.
+fn check_orientation(triangles: &[[IntPoint; 3]]) -> Result<(), Error> {
+    let tris: Vec<[P; 3]> = triangles
+        .iter()
+        .map(|t| t.map(|p| p.coords()))
+        .filter(|c| c[0] != c[1] && c[1] != c[2] && c[2] != c[0])
+        .collect();
+    let six_volume = |t: &[P; 3]| -> i128 {
+        let [a, b, c] = t.map(|p| p.map(i128::from));
+        let bc = [
+            b[1] * c[2] - b[2] * c[1],
+            b[2] * c[0] - b[0] * c[2],
+            b[0] * c[1] - b[1] * c[0],
+        ];
+        a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2]
+    };
+    // Shells: union–find over triangles sharing an edge.
+    let mut parent: Vec<usize> = (0..tris.len()).collect();
+    fn find(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut first_on_edge: HashMap<(P, P), usize> = HashMap::new();
+    for (i, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            let edge = (u.min(v), u.max(v));
+            let j = *first_on_edge.entry(edge).or_insert(i);
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    // Per shell root: 6 × volume and box.
+    let mut shells: HashMap<usize, (i128, P, P)> = HashMap::new();
+    for (i, t) in tris.iter().enumerate() {
+        let root = find(&mut parent, i);
+        let (lo, hi) = bounds(t);
+        let e = shells.entry(root).or_insert((0, lo, hi));
+        e.0 += six_volume(t);
+        e.1 = [0, 1, 2].map(|a| e.1[a].min(lo[a]));
+        e.2 = [0, 1, 2].map(|a| e.2[a].max(hi[a]));
+    }
+    let total: i128 = shells.values().map(|s| s.0).sum();
+    let inside_out = |six: i128, shell: &str| Error::InsideOut {
+        volume: six as f64 / 6.0,
+        shell: shell.to_string(),
+    };
+    if total < 0 {
+        return Err(inside_out(total, "the mesh as a whole"));
+    }
+    let mut roots: Vec<&(i128, P, P)> = shells.values().collect();
+    roots.sort_unstable();
+    for (six, lo, hi) in roots.iter().filter(|s| s.0 < 0) {
+        let held = roots
+            .iter()
+            .any(|(v, l, h)| *v > 0 && (0..3).all(|a| l[a] <= lo[a] && hi[a] <= h[a]));
+        if !held {
+            return Err(inside_out(
+                *six,
+                &format!("a shell from {lo:?} to {hi:?}, inside no outward shell"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The first pair (by index) of proper triangles that intersect

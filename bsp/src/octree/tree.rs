@@ -27,6 +27,13 @@ pub struct OctreeConfig {
     pub max_depth: u8,
 }
 
+impl OctreeConfig {
+    /// The smallest [`OctreeConfig::max_bsp_nodes`] an octree file may
+    /// store: smaller budgets split cells down to the depth limit, with
+    /// memory far beyond what the solid needs.
+    pub const MIN_BSP_NODES: usize = 8;
+}
+
 impl Default for OctreeConfig {
     fn default() -> Self {
         Self {

@@ -16,15 +16,31 @@ use crate::convex::{ConvexArena, PolyId};
 use crate::exact::orient::{cross, orient, sub};
 use crate::exact::{IntPoint, Plane, Point4};
 
+/// The most distinct points of one convex hull. The incremental hull takes
+/// time of about points × faces, and an edit with a tool of `F` faces about
+/// `F²` (each cell it crosses is tested against every face): a hull of
+/// 4,500 points on a sphere (9,000 faces) carves a block in about 20 s on
+/// one core, with memory linear in the faces (the octree splits a cell
+/// crossed by many faces before merging the tool into it).
+pub const MAX_HULL_POINTS: usize = 8192;
+
 /// Adds the convex hull of `points` to `arena` as a strictly convex
 /// polyhedron and returns it. Duplicate and interior points are ignored.
 ///
 /// # Errors
-/// [`Error::DegenerateHull`] when the points span no volume.
+/// [`Error::DegenerateHull`] when the points span no volume,
+/// [`Error::TooManyHullPoints`] for more than [`MAX_HULL_POINTS`]
+/// distinct points.
 pub fn convex_hull(arena: &mut ConvexArena, points: &[IntPoint]) -> Result<PolyId, Error> {
     let mut pts: Vec<[i64; 3]> = points.iter().map(|p| p.coords()).collect();
     pts.sort_unstable();
     pts.dedup();
+    if pts.len() > MAX_HULL_POINTS {
+        return Err(Error::TooManyHullPoints {
+            points: pts.len(),
+            limit: MAX_HULL_POINTS,
+        });
+    }
     if pts.len() < 4 {
         return Err(Error::DegenerateHull {
             reason: "fewer than four distinct points",

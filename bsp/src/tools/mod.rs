@@ -7,7 +7,7 @@ pub mod quantize;
 pub mod shapes;
 pub mod sweep;
 
-pub use hull::convex_hull;
+pub use hull::{MAX_HULL_POINTS, convex_hull};
 pub use quantize::Quantization;
 pub use shapes::{Pose, dodecahedron_corners, placed_tool, prism_corners, swept_tool};
 pub use sweep::{CubicBezier, Gear, GearSweep, WedgeMesh, spans_volume};

@@ -50,7 +50,8 @@ pub enum Problem {
     },
     /// A vertex coordinate is NaN or infinite.
     NonFinite {
-        /// The vertex index.
+        /// The vertex index, from 0 (shown from 1, as every vertex number
+        /// in messages is).
         vertex: usize,
     },
     /// A face names a vertex that does not exist.
@@ -140,7 +141,7 @@ impl fmt::Display for Problem {
             Problem::MalformedNumber { text } => write!(f, "malformed number '{text}'"),
             Problem::Missing { what } => write!(f, "missing {what}"),
             Problem::NonFinite { vertex } => {
-                write!(f, "vertex {vertex} has a NaN or infinite coordinate")
+                write!(f, "vertex {} has a NaN or infinite coordinate", vertex + 1)
             }
             Problem::IndexOutOfRange { index, count } => write!(
                 f,

@@ -142,12 +142,7 @@ fn load_buffers<'a>(
                     ),
                 }));
             }
-            (Some(uri), _) => {
-                let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-                let bytes = std::fs::read(&file)
-                    .map_err(|e| FormatError::new(&file, Location::File, Problem::Io(e)))?;
-                Cow::Owned(bytes)
-            }
+            (Some(uri), _) => Cow::Owned(read_external(path, i, uri)?),
         };
         let declared = buffer.byte_length.0;
         if (data.len() as u64) < declared {
@@ -159,6 +154,72 @@ fn load_buffers<'a>(
         buffers.push(data);
     }
     Ok(buffers)
+}
+
+/// The most bytes of one external buffer file.
+pub const MAX_EXTERNAL_BUFFER: u64 = 1 << 30;
+
+/// The bytes of buffer `i`'s external file `uri`, relative to the GLB at
+/// `path`: a relative path with no `..` that stays, links resolved, inside
+/// the GLB's folder, names a regular file (no device, pipe or folder), and
+/// holds at most [`MAX_EXTERNAL_BUFFER`] bytes.
+fn read_external(path: &Path, i: usize, uri: &str) -> Result<Vec<u8>, FormatError> {
+    use std::io::Read;
+    let refuse = |why: String| {
+        FormatError::new(
+            path,
+            Location::File,
+            malformed(format!("buffer {i}'s URI `{uri}` {why}")),
+        )
+    };
+    let relative = Path::new(uri);
+    if uri.contains(':')
+        || uri.contains('\\')
+        || relative.is_absolute()
+        || relative
+            .components()
+            .any(|c| !matches!(c, std::path::Component::Normal(_)))
+    {
+        return Err(refuse(
+            "is not a plain relative path inside the file's folder (no scheme, no leading \
+             `/`, no `.` or `..`)"
+                .into(),
+        ));
+    }
+    let io =
+        |file: &Path, e: std::io::Error| FormatError::new(file, Location::File, Problem::Io(e));
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let folder = std::fs::canonicalize(parent).map_err(|e| io(parent, e))?;
+    let joined = folder.join(relative);
+    let file = std::fs::canonicalize(&joined).map_err(|e| io(&joined, e))?;
+    if !file.starts_with(&folder) {
+        return Err(refuse(
+            "leads out of the file's folder (through a link)".into(),
+        ));
+    }
+    let meta = std::fs::metadata(&file).map_err(|e| io(&file, e))?;
+    if !meta.is_file() {
+        return Err(refuse("does not name a regular file".into()));
+    }
+    if meta.len() > MAX_EXTERNAL_BUFFER {
+        return Err(refuse(format!(
+            "names a file of {} bytes, over the limit of {MAX_EXTERNAL_BUFFER}",
+            meta.len()
+        )));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(&file)
+        .and_then(|f| f.take(MAX_EXTERNAL_BUFFER + 1).read_to_end(&mut bytes))
+        .map_err(|e| io(&file, e))?;
+    if bytes.len() as u64 > MAX_EXTERNAL_BUFFER {
+        return Err(refuse(format!(
+            "grew past the limit of {MAX_EXTERNAL_BUFFER} bytes"
+        )));
+    }
+    Ok(bytes)
 }
 
 /// The local transform of a node: its matrix, or translation · rotation ·
@@ -402,6 +463,7 @@ fn read_primitive(
         });
     }
     let v = |i: usize| base as u32 + indices[i];
+    let first = soup.triangles.len();
     match mode {
         Mode::TriangleStrip => {
             for i in 0..indices.len().saturating_sub(2) {
@@ -423,6 +485,13 @@ fn read_primitive(
             for i in 0..indices.len() / 3 {
                 soup.triangles.push([v(3 * i), v(3 * i + 1), v(3 * i + 2)]);
             }
+        }
+    }
+    // A mirroring transform (negative determinant) turns counter-clockwise
+    // corners clockwise: glTF says to reverse the winding then.
+    if transform.determinant() < 0.0 {
+        for t in &mut soup.triangles[first..] {
+            t.swap(1, 2);
         }
     }
     Ok(())

@@ -128,7 +128,8 @@ pub fn write_triangle_mesh(path: &Path, mesh: &TriangleMesh) -> Result<(), Forma
     let format = MeshFormat::from_path(path)?;
     let bytes = encode_triangle_mesh(mesh, format)
         .map_err(|problem| FormatError::new(path, Location::File, problem))?;
-    std::fs::write(path, bytes).map_err(|e| FormatError::new(path, Location::File, Problem::Io(e)))
+    crate::atomic::write_bytes(path, &bytes)
+        .map_err(|e| FormatError::new(path, Location::File, Problem::Io(e)))
 }
 
 /// The file content of `mesh` in `format`.

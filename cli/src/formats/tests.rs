@@ -569,3 +569,94 @@ fn damaged_files_never_panic() {
     }
     assert!(rejected > 0);
 }
+
+/// [`strip_glb`]'s quad with its buffer in an external file `uri`.
+fn external_glb(uri: &str) -> (Vec<u8>, Vec<u8>) {
+    let with_bin = strip_glb(4);
+    let soup_json = {
+        let json_len = u32::from_le_bytes(with_bin[12..16].try_into().unwrap()) as usize;
+        String::from_utf8(with_bin[20..20 + json_len].to_vec()).unwrap()
+    };
+    let json = soup_json.replace(
+        r#""buffers":[{"byteLength":56}]"#,
+        &format!(r#""buffers":[{{"byteLength":56,"uri":"{uri}"}}]"#),
+    );
+    assert_ne!(json, soup_json);
+    let bin_at = 20 + soup_json.len().next_multiple_of(4) + 8;
+    let bin = with_bin[bin_at..bin_at + 56].to_vec();
+    (
+        glb_write::container(json.trim_end().as_bytes().to_vec(), Vec::new()),
+        bin,
+    )
+}
+
+/// External buffers are read only from regular files inside the GLB's
+/// folder: no `..`, absolute paths, devices, pipes, folders or links out.
+#[test]
+fn external_buffers_stay_inside_the_files_folder() {
+    let dir = std::env::temp_dir().join(format!("chisel-glb-uri-{}", std::process::id()));
+    let sub = dir.join("sub");
+    std::fs::create_dir_all(sub.join("folder.bin")).unwrap();
+    let (_, bin) = external_glb("quad.bin");
+    std::fs::write(sub.join("quad.bin"), &bin).unwrap();
+    std::fs::write(dir.join("outside.bin"), &bin).unwrap();
+    let _ = std::fs::remove_file(sub.join("link.bin"));
+    std::os::unix::fs::symlink(dir.join("outside.bin"), sub.join("link.bin")).unwrap();
+    let _ = std::fs::remove_file(sub.join("pipe.bin"));
+    let made = std::process::Command::new("mkfifo")
+        .arg(sub.join("pipe.bin"))
+        .status()
+        .is_ok_and(|s| s.success());
+    let at = sub.join("test.glb");
+    let read = |uri: &str| parse_triangle_soup(&external_glb(uri).0, MeshFormat::Glb, &at);
+    assert_eq!(read("quad.bin").unwrap().triangles.len(), 2);
+    for uri in [
+        "../outside.bin",
+        "/dev/zero",
+        "/etc/hostname",
+        "file:///etc/hostname",
+        "./quad.bin",
+        "link.bin",
+        "folder.bin",
+        "missing.bin",
+    ] {
+        let e = read(uri).unwrap_err().to_string();
+        assert!(
+            e.contains("URI") || e.contains("No such file"),
+            "{uri}: {e}"
+        );
+    }
+    if made {
+        // Before: blocked forever opening the pipe.
+        let e = read("pipe.bin").unwrap_err().to_string();
+        assert!(e.contains("regular file"), "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A mirroring node transform (negative determinant) reverses the
+/// winding, so the faces still point outwards: the quad of [`strip_glb`]
+/// faces +z with scale `[2, 2, 2]` and with `[-2, 2, 2]`.
+#[test]
+fn mirrored_glb_nodes_keep_faces_outward() {
+    let normal_z = |soup: &TriangleSoup| -> Vec<f64> {
+        soup.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| soup.positions[v as usize]);
+                (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+            })
+            .collect()
+    };
+    let plain = glb(&strip_glb(4)).unwrap();
+    assert!(normal_z(&plain).iter().all(|&z| z > 0.0));
+    let bytes = strip_glb(4);
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = String::from_utf8(bytes[20..20 + json_len].to_vec()).unwrap();
+    let mirrored_json = json.replace(r#""scale":[2,2,2]"#, r#""scale":[-2,2,2]"#);
+    assert_ne!(json, mirrored_json);
+    let bin = bytes[20 + json_len + 8..].to_vec();
+    let mirrored = glb(&glb_write::container(mirrored_json.into_bytes(), bin)).unwrap();
+    assert_eq!(mirrored.positions[1], [8.0, 0.0, 0.0]);
+    assert!(normal_z(&mirrored).iter().all(|&z| z > 0.0), "{mirrored:?}");
+}

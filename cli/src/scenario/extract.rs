@@ -40,14 +40,18 @@ pub fn changed_cells(octree: &Octree, keys: &[CellKey], faces: CellFaces) -> usi
         .sum()
 }
 
-/// Whether a surface is closed, and whether it is also a 2-manifold.
+/// Whether a surface is closed, and whether it is also a 2-manifold, each
+/// material's region on its own: an interface between two materials is one
+/// polygon, which bounds the region behind it as it is and the region in
+/// front of it turned round
+/// ([`SurfaceMesh::check_regions_closed`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Closure {
-    /// Every directed edge is used as often as its opposite: the boundary
-    /// of a solid, possibly touching itself along edges.
+    /// Every directed edge bounds each region as often as its opposite:
+    /// the boundary of a solid, possibly touching itself along edges.
     pub closed: bool,
-    /// Every directed edge is used exactly once, and its opposite once
-    /// (watertight in the strict sense).
+    /// Every directed edge of each region's boundary is used exactly once,
+    /// and its opposite once (watertight in the strict sense).
     pub manifold: bool,
 }
 
@@ -72,8 +76,8 @@ pub fn whole(octree: &Octree) -> (TriangleMesh, Closure) {
     });
     let mesh = SurfaceMesh::from_face_batches(batches);
     let closure = Closure {
-        closed: mesh.check_closed().is_ok(),
-        manifold: mesh.check_watertight().is_ok(),
+        closed: mesh.check_regions_closed().is_ok(),
+        manifold: mesh.check_regions_watertight().is_ok(),
     };
     (mesh.triangles(), closure)
 }

@@ -19,7 +19,7 @@
 //! line.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use chisel_bsp::octree::CellBox;
@@ -150,7 +150,10 @@ pub fn parse(reader: impl BufRead, dir: &Path) -> Result<Sequence, String> {
 /// A message naming the file when it cannot be written.
 pub fn write(path: &Path, sequence: &Sequence) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("{}: {e}", path.display());
-    let mut out = BufWriter::new(File::create(path).map_err(fail)?);
+    crate::atomic::write_with(path, |out| write_to(out, sequence)).map_err(fail)
+}
+
+fn write_to(out: &mut impl Write, sequence: &Sequence) -> std::io::Result<()> {
     let base = match &sequence.base {
         Base::Empty => json!({ "base": "empty" }),
         // Absolute, so that the file can be replayed from any folder.
@@ -160,12 +163,12 @@ pub fn write(path: &Path, sequence: &Sequence) -> Result<(), String> {
         }
         Base::Box(b) => json!({ "base": { "box": [point_mm(b.min), point_mm(b.max)] } }),
     };
-    writeln!(out, "{base}").map_err(fail)?;
+    writeln!(out, "{base}")?;
     for step in &sequence.steps {
         let hull: Vec<[f64; 3]> = step.hull.iter().map(|&p| point_mm(p)).collect();
-        writeln!(out, "{}", json!({ "op": step.op.name(), "hull": hull })).map_err(fail)?;
+        writeln!(out, "{}", json!({ "op": step.op.name(), "hull": hull }))?;
     }
-    out.flush().map_err(fail)
+    Ok(())
 }
 
 fn point_mm(p: [i64; 3]) -> [f64; 3] {

@@ -233,21 +233,21 @@ pub struct StepRecord {
 /// A message naming the file when it cannot be written.
 pub fn write_csv(path: &Path, steps: &[StepRecord]) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("{}: {e}", path.display());
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path).map_err(fail)?);
-    writeln!(
-        out,
-        "step,seconds,hull_seconds,apply_seconds,changed_cells,triangles"
-    )
-    .map_err(fail)?;
-    for (i, s) in steps.iter().enumerate() {
+    crate::atomic::write_with(path, |out| {
         writeln!(
             out,
-            "{i},{:.9},{:.9},{:.9},{},{}",
-            s.seconds, s.hull_seconds, s.apply_seconds, s.changed_cells, s.triangles
-        )
-        .map_err(fail)?;
-    }
-    out.flush().map_err(fail)
+            "step,seconds,hull_seconds,apply_seconds,changed_cells,triangles"
+        )?;
+        for (i, s) in steps.iter().enumerate() {
+            writeln!(
+                out,
+                "{i},{:.9},{:.9},{:.9},{},{}",
+                s.seconds, s.hull_seconds, s.apply_seconds, s.changed_cells, s.triangles
+            )?;
+        }
+        Ok(())
+    })
+    .map_err(fail)
 }
 
 /// Peak resident memory of this process in MiB (`VmHWM`), 0 where the

@@ -16,6 +16,7 @@ use super::extract;
 use super::jsonl;
 use super::report::{Latency, OctreeFigures, Report, StepRecord, peak_memory_mib, write_csv};
 use super::sequence::{Base, Sequence, root_cube};
+use crate::failure::Failure;
 use crate::octree_file;
 
 /// Options shared by every scenario command.
@@ -38,7 +39,8 @@ pub struct RunFlags {
     pub record: Option<PathBuf>,
     /// Inner BSP nodes an octree cell may hold before it is split (a
     /// `.chisel` replay base keeps the settings it was saved with).
-    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
+    /// At least 8: smaller budgets split cells down to the depth limit.
+    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(8..))]
     pub max_bsp_nodes: u32,
     /// Check every step (untimed): exact volume bookkeeping of the edit and
     /// a closed surface. Slow; for small sizes.
@@ -65,9 +67,18 @@ pub struct Scenario {
 /// # Errors
 /// A message for unwritable files, an unreadable base mesh, or geometry
 /// beyond the exact range.
-pub fn run(scenario: &Scenario, flags: &RunFlags) -> Result<(), String> {
+pub fn run(scenario: &Scenario, flags: &RunFlags) -> Result<(), Failure> {
+    for (path, mesh_or_octree) in [
+        (&flags.export, true),
+        (&flags.csv, false),
+        (&flags.record, false),
+    ] {
+        if let Some(path) = path {
+            crate::failure::check_output(path, mesh_or_octree)?;
+        }
+    }
     if let Some(path) = &flags.record {
-        jsonl::write(path, &scenario.sequence)?;
+        jsonl::write(path, &scenario.sequence).map_err(Failure::write)?;
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(flags.threads.map_or(0, |t| t as usize))
@@ -75,13 +86,13 @@ pub fn run(scenario: &Scenario, flags: &RunFlags) -> Result<(), String> {
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
     let (report, steps, mesh, octree) = pool.install(|| execute(scenario, flags))?;
     if let Some(path) = &flags.csv {
-        write_csv(path, &steps)?;
+        write_csv(path, &steps).map_err(Failure::write)?;
     }
     if let Some(path) = &flags.export {
         if octree_file::is_octree_file(path) {
-            octree_file::write(path, &octree)?;
+            octree_file::write(path, &octree).map_err(Failure::write)?;
         } else {
-            crate::meshfile::write(path, &mesh)?;
+            crate::meshfile::write(path, &mesh).map_err(Failure::write)?;
         }
     }
     if flags.json {
@@ -186,7 +197,7 @@ type Outcome = (
     Octree,
 );
 
-fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
+fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, Failure> {
     let config = OctreeConfig {
         max_bsp_nodes: flags.max_bsp_nodes as usize,
         ..OctreeConfig::default()
@@ -223,7 +234,7 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, String> {
         });
         if let Some(before) = &before {
             check::step(before, &octree, &tool, step.op)
-                .map_err(|e| format!("step {}: {e}", i + 1))?;
+                .map_err(|e| Failure::check(format!("step {}: {e}", i + 1)))?;
         }
         bar.inc(1);
     }

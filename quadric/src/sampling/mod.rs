@@ -102,7 +102,20 @@ pub struct SampleOptions {
     /// Unclassified regions smaller than this fraction of `r` (plane
     /// diameter) are dropped (§4.2; the paper suggests `0.1`).
     pub min_region_fraction: f64,
+    /// The most samples [`sample`] may emit ([`DEFAULT_MAX_SAMPLES`] by
+    /// default); a grid fill that would pass it is not allocated, and the
+    /// call fails with [`Error::TooManySamples`].
+    pub max_samples: u64,
 }
+
+/// The default [`SampleOptions::max_samples`]: 10 million samples, about
+/// 1 GB while sampling.
+pub const DEFAULT_MAX_SAMPLES: u64 = 10_000_000;
+
+/// The largest ratio of bounding-sphere radius to splat radius that
+/// [`sample`] accepts: beyond it, basic regions would need more than the
+/// subdivision limit of halvings to come down to the splat radius.
+pub const MAX_BOUNDS_RATIO: f64 = (1u64 << 24) as f64;
 
 impl SampleOptions {
     /// Options with splat radius `radius` inside `bounds` and the default
@@ -115,6 +128,7 @@ impl SampleOptions {
             radius,
             bounds,
             min_region_fraction: 0.1,
+            max_samples: DEFAULT_MAX_SAMPLES,
         })
     }
 }
@@ -173,6 +187,55 @@ pub struct SamplingStats {
     pub discarded: u64,
     /// Unclassified regions dropped at the size threshold (§4.2).
     pub dropped_small: u64,
+    /// Regions still unclassified at the subdivision depth limit (then
+    /// [`sample`] fails: the coverage guarantee would not hold).
+    pub depth_limited: u64,
+}
+
+/// The samples [`sample`] may still emit, shared by the parallel regions.
+/// Grid fills reserve their cell count before allocating: the sum of the
+/// reservations is the same in any order, so whether the limit is passed
+/// does not depend on the thread count.
+pub(crate) struct SampleBudget {
+    limit: u64,
+    reserved: std::sync::atomic::AtomicU64,
+    over: std::sync::atomic::AtomicBool,
+}
+
+impl SampleBudget {
+    fn new(limit: u64) -> Self {
+        Self {
+            limit,
+            reserved: 0.into(),
+            over: false.into(),
+        }
+    }
+
+    /// Reserves `n` samples (any non-negative number, also huge or
+    /// infinite); `false`, and the budget marked over, when that passes
+    /// the limit.
+    pub(crate) fn reserve(&self, n: f64) -> bool {
+        use std::sync::atomic::Ordering::Relaxed;
+        // `n` is a cell count: a non-negative integer in `f64`.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let fits = n.is_finite() && n <= self.limit as f64 && {
+            let n = n as u64;
+            self.reserved.fetch_add(n, Relaxed).saturating_add(n) <= self.limit
+        };
+        if !fits {
+            self.over.store(true, Relaxed);
+        }
+        fits
+    }
+
+    /// Whether the limit was passed.
+    pub(crate) fn is_over(&self) -> bool {
+        self.over.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn reached(&self) -> u64 {
+        self.reserved.load(std::sync::atomic::Ordering::Relaxed)
+    }
 }
 
 impl SamplingStats {
@@ -189,6 +252,7 @@ impl SamplingStats {
         self.filled += other.filled;
         self.discarded += other.discarded;
         self.dropped_small += other.dropped_small;
+        self.depth_limited += other.depth_limited;
     }
 }
 
@@ -219,6 +283,17 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             value: options.min_region_fraction,
         });
     }
+    let ratio = options.bounds.radius / options.radius;
+    if ratio > MAX_BOUNDS_RATIO {
+        return Err(Error::CoverageNotReached {
+            reason: format!(
+                "the bounding sphere's radius {:e} is {ratio:.3e} splat radii ({:e}), more than \
+                 2^24; give bounds closer around the solid or a larger radius",
+                options.bounds.radius, options.radius
+            ),
+        });
+    }
+    let budget = SampleBudget::new(options.max_samples);
     let distance = CsgDistance::new(dnf);
     let sphere = options.bounds;
     let mut patches = Vec::new();
@@ -267,6 +342,7 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
                 heightfield: &patch.heightfield,
                 sphere,
                 options,
+                budget: &budget,
                 hint: std::cell::Cell::new(usize::MAX),
                 others: distance.other_terms(patch.product as usize, patch.literal as usize),
             };
@@ -281,8 +357,24 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             (out, stats)
         })
         .collect();
+    let total: usize = results.iter().map(|r| r.0.len()).sum();
+    if budget.is_over() || total as u64 > options.max_samples {
+        return Err(Error::TooManySamples {
+            limit: options.max_samples,
+            reached: budget.reached().max(total as u64),
+        });
+    }
+    let depth_limited: u64 = results.iter().map(|r| r.1.depth_limited).sum();
+    if depth_limited > 0 {
+        return Err(Error::CoverageNotReached {
+            reason: format!(
+                "{depth_limited} region(s) were still unclassified after the subdivision limit; \
+                 give bounds closer around the solid or a larger radius"
+            ),
+        });
+    }
     let mut stats = SamplingStats::default();
-    let mut samples = Vec::with_capacity(results.iter().map(|r| r.0.len()).sum());
+    let mut samples = Vec::with_capacity(total);
     for (s, st) in results {
         samples.extend(s);
         stats.add(&st);

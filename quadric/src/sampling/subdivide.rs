@@ -46,7 +46,7 @@ use crate::quadric::Quadric;
 use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::regions::{Polygon, Region};
-use crate::sampling::{BoundingSphere, Sample, SampleOptions, SamplingStats};
+use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
 /// are classified. It must be at least `√3`, the largest distortion inside
@@ -84,6 +84,8 @@ pub(crate) struct RegionJob<'a> {
     pub heightfield: &'a Heightfield,
     pub sphere: BoundingSphere,
     pub options: &'a SampleOptions,
+    /// The samples all regions may still emit.
+    pub budget: &'a SampleBudget,
     /// The product nearest to the last query (see [`CsgDistance::relative_distance_hinted`]).
     pub hint: Cell<usize>,
     /// The other products of the normal form as seen from this literal.
@@ -143,7 +145,11 @@ impl RegionJob<'_> {
         stats.regions += 1;
         let hf = self.heightfield;
         let (lo, hi) = region.bounds();
-        if depth >= MAX_DEPTH || hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
+        if self.budget.is_over() || hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
+            return;
+        }
+        if depth >= MAX_DEPTH {
+            stats.depth_limited += 1;
             return;
         }
         let r = self.options.radius;
@@ -188,6 +194,9 @@ impl RegionJob<'_> {
                 if let Corner::Known(_, d) = c {
                     let reach = region.reach(i) * delta;
                     if *d < 0.0 && reach <= r {
+                        if !self.budget.reserve(1.0) {
+                            return;
+                        }
                         out.push(self.sample(verts[i], reach.max(f64::MIN_POSITIVE)));
                         return;
                     }
@@ -284,10 +293,19 @@ impl RegionJob<'_> {
         let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
         let nx = (size.x / step).ceil().max(1.0);
         let ny = (size.y / step).ceil().max(1.0);
+        // One sample per cell inside, up to 16 per border cell (two
+        // quarterings): reserved before the grid is allocated.
+        if !self
+            .budget
+            .reserve((nx + 1.0) * (ny + 1.0) + 32.0 * (nx + ny))
+        {
+            return;
+        }
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let half_diagonal = 0.5 * cell.length();
         let radius = (half_diagonal * delta).min(self.options.radius);
-        // Cell counts are small positive integers stored in f64.
+        // Cell counts are positive integers stored in f64, within the
+        // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as usize, ny as usize);
         let grid = |i: usize, j: usize| {
@@ -390,10 +408,19 @@ impl RegionJob<'_> {
         let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
         let nx = (size.x / step).ceil().max(1.0);
         let ny = (size.y / step).ceil().max(1.0);
+        let cells = if nx.max(ny) > f64::from(u32::MAX) {
+            f64::INFINITY
+        } else {
+            nx * ny
+        };
+        if !self.budget.reserve(cells) {
+            return;
+        }
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let half_diagonal = 0.5 * cell.length();
         let radius = (half_diagonal * delta).min(self.options.radius);
-        // Cell counts are small positive integers stored in f64.
+        // Cell counts are positive integers stored in f64, within the
+        // sample budget just reserved, each below 2^32.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as u32, ny as u32);
         for j in 0..ny {

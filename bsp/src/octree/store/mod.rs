@@ -535,6 +535,9 @@ fn read_octree(r: &mut Reader, nodes: &mut [Stored], inner_count: u64) -> Result
     let at = r.at();
     let max_bsp_nodes = usize::try_from(r.u64()?)
         .map_err(|_| Reader::corrupt(at, "a node budget beyond this machine's range"))?;
+    if max_bsp_nodes < OctreeConfig::MIN_BSP_NODES {
+        return Err(Reader::corrupt(at, "a node budget below 8"));
+    }
     let config = OctreeConfig {
         max_bsp_nodes,
         max_depth: r.u8()?,

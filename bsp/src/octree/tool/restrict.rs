@@ -81,13 +81,41 @@ struct Restrict<'a> {
 
 impl Restrict<'_> {
     /// Appends the restriction of `tool`'s subtree `n`; returns its node.
-    fn node(&mut self, mut n: NodeId) -> NodeId {
+    ///
+    /// Nodes are appended in preorder (a split, then its lower subtree,
+    /// then its upper one), with an explicit stack instead of recursion:
+    /// the tool of a large hull is a chain as deep as its face count.
+    fn node(&mut self, n: NodeId) -> NodeId {
+        let root = self.nodes.len() as NodeId;
+        // Tool subtrees still to restrict, each with the output split
+        // (and which of its children) that it becomes.
+        let mut stack: Vec<(NodeId, Option<(usize, bool)>)> = vec![(n, None)];
+        while let Some((n, parent)) = stack.pop() {
+            let id = self.nodes.len();
+            let node = self.restrict_one(n);
+            self.nodes.push(node);
+            if let Some((at, above_side)) = parent
+                && let Node::Split { below, above, .. } = &mut self.nodes[at]
+            {
+                *(if above_side { above } else { below }) = id as NodeId;
+            }
+            if let Node::Split { below, above, .. } = node {
+                // The lower subtree first: pushed last.
+                stack.push((above, Some((id, true))));
+                stack.push((below, Some((id, false))));
+            }
+        }
+        root
+    }
+
+    /// The first node of `tool`'s subtree `n` kept in the box: a leaf, or
+    /// a split whose plane cuts the box (with the tool's child nodes, for
+    /// [`Self::node`] to replace), following the child holding the box
+    /// past the others.
+    fn restrict_one(&mut self, mut n: NodeId) -> Node {
         loop {
             match self.tool.nodes()[n as usize] {
-                Node::Leaf(label) => {
-                    self.nodes.push(Node::Leaf(label));
-                    return self.nodes.len() as NodeId - 1;
-                }
+                Node::Leaf(label) => return Node::Leaf(label),
                 Node::Split {
                     plane,
                     below,
@@ -106,17 +134,11 @@ impl Restrict<'_> {
                             *index = self.planes.len() as u32;
                             self.planes.push(*s);
                         }
-                        let plane = *index;
-                        let node = self.nodes.len();
-                        self.nodes.push(Node::Leaf(0));
-                        let below = self.node(below);
-                        let above = self.node(above);
-                        self.nodes[node] = Node::Split {
-                            plane,
+                        return Node::Split {
+                            plane: *index,
                             below,
                             above,
                         };
-                        return node as NodeId;
                     }
                 }
             }
