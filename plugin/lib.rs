@@ -28,10 +28,17 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "viewer")]
 pub mod presentation;
+#[cfg(feature = "props")]
 pub mod splat;
+#[cfg(feature = "terrain")]
 pub mod terrain;
+#[cfg(feature = "viewer")]
 pub mod viewer;
+// `net` (replicated carves, with `terrain`) goes here as its own module.
 
+#[cfg(feature = "terrain")]
 pub use chisel_bsp as bsp;
+#[cfg(feature = "props")]
 pub use chisel_quadric as quadric;
