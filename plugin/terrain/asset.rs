@@ -8,7 +8,7 @@
 //!   meshed from scratch).
 //! - [`Heightfield`] as an asset, from a greyscale PNG through
 //!   [`HeightfieldLoader`], tuned by [`HeightfieldSettings`]
-//!   (`AssetServer::load_with_settings`, or a `.meta` file next to the
+//!   (`AssetServer::load_builder().with_settings(..)`, or a `.meta` file next to the
 //!   image).
 //!
 //! Hot reload needs Bevy's `file_watcher` feature in the game's Bevy
@@ -24,13 +24,13 @@
 //!     // A saved level, kept up to date with the file.
 //!     commands.spawn(TerrainSource(assets.load("levels/quarry.chiselterrain")));
 //!     // A heightfield: 0.5 m between samples, heights from 0 to 12 m.
-//!     let _height: Handle<Heightfield> = assets.load_with_settings(
-//!         "terrain/quarry_height.png",
-//!         |s: &mut HeightfieldSettings| {
+//!     let _height: Handle<Heightfield> = assets
+//!         .load_builder()
+//!         .with_settings(|s: &mut HeightfieldSettings| {
 //!             s.spacing = 0.5;
 //!             s.high = 12.0;
-//!         },
-//!     );
+//!         })
+//!         .load("terrain/quarry_height.png");
 //! }
 //! # let _ = setup;
 //! ```
