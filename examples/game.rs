@@ -68,8 +68,8 @@ const JUMP: f32 = 5.5;
 /// `(scene file, lowest z of the solid in scene units, scale, place on the
 /// ground (x, z))`. Scenes are in millimetres, `z` up.
 const PROPS: [(&str, f32, f32, [f32; 2]); 2] = [
-    ("scenes/classic.ron", -50.0, 0.02, [-4.0, 0.5]),
-    ("scenes/three_spheres.ron", -34.6, 0.03, [2.5, 4.0]),
+    ("scenes/classic.quadric.ron", -50.0, 0.02, [-4.0, 0.5]),
+    ("scenes/three_spheres.quadric.ron", -34.6, 0.03, [2.5, 4.0]),
 ];
 
 /// The bridge: two pillars at these `(x, z)` and a slab between them,

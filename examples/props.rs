@@ -29,14 +29,29 @@ const SCALE: f32 = 0.01;
 /// there), repeated here to stand each prop on the ground.
 const PROPS: [(&str, [f32; 3], f32, [f32; 2]); 4] = [
     (
-        "scenes/three_spheres.ron",
+        "scenes/three_spheres.quadric.ron",
         [0.0, 0.0, 10.0],
         75.0,
         [-1.2, -1.2],
     ),
-    ("scenes/classic.ron", [0.0, 0.0, 0.0], 90.0, [1.2, -1.2]),
-    ("scenes/sharp8.ron", [0.0, 0.0, 0.0], 60.0, [-1.2, 1.2]),
-    ("scenes/machine80.ron", [0.0, 0.0, 35.0], 100.0, [1.2, 1.2]),
+    (
+        "scenes/classic.quadric.ron",
+        [0.0, 0.0, 0.0],
+        90.0,
+        [1.2, -1.2],
+    ),
+    (
+        "scenes/sharp8.quadric.ron",
+        [0.0, 0.0, 0.0],
+        60.0,
+        [-1.2, 1.2],
+    ),
+    (
+        "scenes/machine80.quadric.ron",
+        [0.0, 0.0, 35.0],
+        100.0,
+        [1.2, 1.2],
+    ),
 ];
 
 #[derive(Component)]

@@ -48,9 +48,9 @@ const PROP_SCALE: f32 = 0.03;
 /// `(scene file, lowest z of the solid in scene units, place on the
 /// ground (x, z), turn about the vertical)`.
 const PROPS: [(&str, f32, [f32; 2], f32); 3] = [
-    ("scenes/machine80.ron", 0.0, [-5.0, 3.0], 0.4),
-    ("scenes/classic.ron", -50.0, [5.0, -3.0], 0.8),
-    ("scenes/three_spheres.ron", -34.6, [3.5, 6.5], 0.0),
+    ("scenes/machine80.quadric.ron", 0.0, [-5.0, 3.0], 0.4),
+    ("scenes/classic.quadric.ron", -50.0, [5.0, -3.0], 0.8),
+    ("scenes/three_spheres.quadric.ron", -34.6, [3.5, 6.5], 0.0),
 ];
 
 /// Craters blasted at startup, `(x, z)`.

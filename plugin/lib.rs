@@ -2,36 +2,151 @@
 //!
 //! `bevy_chisel` brings two kernels into Bevy:
 //!
-//! - [`chisel_bsp`] (re-exported as [`bsp`]): exact integer plane geometry,
+//! - [`chisel_bsp`] (re-exported as `bsp`): exact integer plane geometry,
 //!   the foundation of destructible octree-BSP terrain whose carves never
 //!   fail, never crack and are bit-identical on every machine.
-//! - [`chisel_quadric`] (re-exported as [`quadric`]): quadric CSG trees for
+//! - [`chisel_quadric`] (re-exported as `quadric`): quadric CSG trees for
 //!   level-design props drawn pixel-exact by splat ray tracing.
 //!
-//! The [`splat`] module draws quadric CSG props: a [`splat::QuadricProp`]
-//! component (a scene file or an in-memory scene), sampled on the async
-//! compute pool, rendered by a splat pass with per-fragment ray tracing,
-//! clipping and depth writes, or by a global ray-tracing pass for
-//! comparison ([`splat::ChiselSplatPlugin`]).
+//! Add [`ChiselPlugins`] after Bevy's `DefaultPlugins`, and `use
+//! bevy_chisel::prelude::*;`. The README's "Use it in your game" program
+//! is `examples/use_in_game.rs`, and runs as a test of this crate.
 //!
-//! The [`terrain`] module is destructible terrain: a [`terrain::Terrain`]
-//! component owning an octree of exact BSPs, carved by [`terrain::Carve`]
-//! messages on the async compute pool, re-meshed only in the cells that
-//! changed, with undo, ray casts and versioned files
-//! ([`terrain::TerrainPlugin`]).
+//! ## Modules
 //!
-//! The [`presentation`] module runs any app either in a window or, where
-//! there is no display, headless on an offscreen target with PNG
-//! screenshots — the examples and the render tests use it. The [`viewer`]
-//! module holds what the examples share: an orbit camera, text overlays and
-//! carving the terrain under the mouse cursor.
+//! - `terrain` (feature `terrain`) is destructible terrain: a `Terrain`
+//!   component owning an octree of exact BSPs, carved by `Carve` messages
+//!   on the async compute pool, re-meshed only in the cells that changed,
+//!   with undo, ray casts, versioned files through the asset server
+//!   (`*.chiselterrain`), entity events for observers, and physics
+//!   colliders with avian3d (feature `avian`). With `render`, terrain cells
+//!   get materials (`TerrainMaterials`, `TriplanarMaterial`).
+//! - `splat` (feature `props`) draws quadric CSG props: a `QuadricProp`
+//!   component (a `*.quadric.ron` scene file or an in-memory scene),
+//!   sampled on the async compute pool, rendered by a splat pass with
+//!   per-fragment ray tracing, clipping and depth writes.
+//! - `presentation` and `viewer` (feature `viewer`) are what the bundled
+//!   examples and render tests share: windowed or headless runs with
+//!   screenshots, an orbit camera, text overlays, carving under the
+//!   cursor. They are not part of the API a game needs.
+//!
+//! ## Features
+//!
+//! | feature   | default | adds |
+//! |-----------|---------|------|
+//! | `terrain` | yes | destructible terrain without a renderer (octree, carves, meshes as assets, journal, files, ray casts, debris, physics hooks) |
+//! | `render`  | yes | Bevy's renderer and PBR: terrain materials, the triplanar material |
+//! | `props`   | yes | quadric CSG props and the splat render pass (implies `render`) |
+//! | `avian`   | no  | colliders and debris bodies with avian3d (implies `terrain`) |
+//! | `serde`   | no  | `Serialize`/`Deserialize` on tools, settings and bounds |
+//! | `viewer`  | no  | the examples' helpers: window or headless screenshots, orbit camera, overlays |
+//!
+//! A dedicated server is `default-features = false, features = ["terrain",
+//! "serde"]`: no window, UI or render crate is built.
+//!
+//! ## Bevy versions
+//!
+//! | bevy_chisel | Bevy |
+//! |-------------|------|
+//! | 0.1         | 0.19 |
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "viewer")]
 pub mod presentation;
+#[cfg(feature = "props")]
 pub mod splat;
+#[cfg(feature = "terrain")]
 pub mod terrain;
+#[cfg(feature = "viewer")]
 pub mod viewer;
+// `net` (replicated carves, with `terrain`) goes here as its own module.
 
+/// The README's "Use it in your game" program (`examples/use_in_game.rs`),
+/// run headless: Bevy's `DefaultPlugins` rendering offscreen, the game's
+/// plugins and systems unchanged, for a few frames.
+#[cfg(all(doctest, feature = "viewer"))]
+#[doc = concat!(
+    "```\n",
+    "# #[allow(dead_code)]\n",
+    "# mod use_in_game {\n",
+    include_str!("../examples/use_in_game.rs"),
+    "# }\n",
+    include_str!("use_in_game.doctest"),
+    "```\n"
+)]
+pub struct UseInGame;
+
+#[cfg(all(feature = "serde", feature = "terrain"))]
+mod serde_transform;
+
+#[cfg(feature = "terrain")]
 pub use chisel_bsp as bsp;
+#[cfg(feature = "props")]
 pub use chisel_quadric as quadric;
+
+use bevy::app::{PluginGroup, PluginGroupBuilder};
+
+/// Every plugin of the enabled features, in one group:
+/// [`terrain::TerrainPlugin`] (feature `terrain`), with
+/// [`terrain::TriplanarMaterialPlugin`] (`terrain` and `render`),
+/// [`splat::ChiselSplatPlugin`] (`props`) and
+/// [`terrain::avian::TerrainAvianPlugin`] (`avian`; add avian's
+/// `PhysicsPlugins` yourself). Add it after `DefaultPlugins`; on a server
+/// without a renderer, after `MinimalPlugins`. As in any Bevy group, single
+/// plugins can be disabled or replaced; terrain systems in `FixedUpdate`:
+///
+/// ```
+/// # use bevy::prelude::*;
+/// # use bevy_chisel::prelude::*;
+/// let plugins = ChiselPlugins
+///     .build()
+///     .disable::<TerrainPlugin>()
+///     .add(TerrainPlugin::in_schedule(FixedUpdate));
+/// // App::new().add_plugins((DefaultPlugins, plugins)).run();
+/// # let _ = plugins;
+/// ```
+pub struct ChiselPlugins;
+
+impl PluginGroup for ChiselPlugins {
+    fn build(self) -> PluginGroupBuilder {
+        let group = PluginGroupBuilder::start::<Self>();
+        #[cfg(feature = "terrain")]
+        let group = group.add(terrain::TerrainPlugin);
+        #[cfg(all(feature = "terrain", feature = "render"))]
+        let group = group.add(terrain::TriplanarMaterialPlugin);
+        #[cfg(feature = "props")]
+        let group = group.add(splat::ChiselSplatPlugin);
+        #[cfg(feature = "avian")]
+        let group = group.add(terrain::avian::TerrainAvianPlugin::default());
+        group
+    }
+}
+
+/// What a game usually needs: `use bevy_chisel::prelude::*;`.
+pub mod prelude {
+    pub use crate::ChiselPlugins;
+    #[cfg(feature = "props")]
+    pub use crate::splat::{
+        ChiselSplatPlugin, PropBounds, QuadricProp, QuadricScene, SplatMode, SplatRadius,
+        SplatSettings, SplatViewSettings,
+    };
+    #[cfg(feature = "avian")]
+    pub use crate::terrain::avian::TerrainAvianPlugin;
+    #[cfg(feature = "terrain")]
+    pub use crate::terrain::{
+        Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, DebrisDetached, HeightLayer,
+        Heightfield, Terrain, TerrainCarveRejected, TerrainCarved, TerrainCell, TerrainCellChanged,
+        TerrainCellRebuilt, TerrainDebris, TerrainError, TerrainHit, TerrainPlugin,
+        TerrainSettings, TerrainSystems, UndoCarve,
+    };
+    #[cfg(all(feature = "terrain", feature = "render"))]
+    pub use crate::terrain::{
+        TerrainMaterialPlugin, TerrainMaterials, TerrainSurface, TriplanarMaterial,
+        TriplanarMaterialPlugin, surface_table,
+    };
+    #[cfg(feature = "terrain")]
+    pub use chisel_bsp::octree::Edit;
+    #[cfg(feature = "terrain")]
+    pub use chisel_bsp::tools::Quantization;
+}

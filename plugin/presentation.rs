@@ -136,8 +136,9 @@ impl Presentation {
 
 /// Images captured by a headless run, shared with whoever started it (a test
 /// reads pixels from here after `App::run` returns).
-#[derive(Resource, Clone, Default)]
-pub struct CapturedFrames(Arc<Mutex<Vec<Image>>>);
+#[derive(Resource, Reflect, Clone, Default)]
+#[reflect(Resource)]
+pub struct CapturedFrames(#[reflect(ignore)] Arc<Mutex<Vec<Image>>>);
 
 impl CapturedFrames {
     /// The images captured so far, in capture order.
@@ -171,7 +172,8 @@ pub struct HeadlessCapturePlugin {
 /// while it is still carving or sampling, so that the screenshots show the
 /// finished state. [`HeadlessConfig::max_frames`] still counts every frame.
 /// Ignored in a window.
-#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Resource, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[reflect(Resource, Default)]
 pub struct HoldCaptures(pub bool);
 
 #[derive(Resource, Clone)]
@@ -188,7 +190,9 @@ struct HeadlessState {
 
 impl Plugin for HeadlessCapturePlugin {
     fn build(&self, app: &mut App) {
-        app.add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO))
+        app.register_type::<CapturedFrames>()
+            .register_type::<HoldCaptures>()
+            .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO))
             .insert_resource(HeadlessState {
                 config: self.config.clone(),
                 target: None,

@@ -22,22 +22,26 @@ pub struct ViewerPlugin;
 
 impl Plugin for ViewerPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(
-            Update,
-            (
-                orbit_cameras,
-                click_carving
-                    .run_if(resource_exists::<ClickCarving>)
-                    .before(TerrainSystems::Carve),
-            ),
-        );
+        app.register_type::<OrbitCamera>()
+            .register_type::<Overlay>()
+            .register_type::<ClickCarving>()
+            .add_systems(
+                Update,
+                (
+                    orbit_cameras,
+                    click_carving
+                        .run_if(resource_exists::<ClickCarving>)
+                        .before(TerrainSystems::Carve),
+                ),
+            );
     }
 }
 
 /// A camera orbiting `focus` at `distance`, `yaw` about the vertical
 /// (`+y`) and `pitch` above the horizon, both in radians. Its `Transform`
 /// is set from these every frame.
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(Component)]
 #[require(Camera3d)]
 pub struct OrbitCamera {
     /// The point looked at.
@@ -142,7 +146,8 @@ fn orbit_cameras(
 }
 
 /// Marks the text of an overlay.
-#[derive(Component, Clone, Copy, Debug, Default)]
+#[derive(Component, Reflect, Clone, Copy, Debug, Default)]
+#[reflect(Component, Default)]
 pub struct Overlay;
 
 /// A block of text in the top-left corner, marked [`Overlay`]: spawn it and
@@ -216,7 +221,8 @@ pub fn blast(centre: Vec3, radius: f32, count: usize) -> CarveTool {
 /// Mouse carving: with this resource present, [`ViewerPlugin`] blasts a
 /// crater ([`blast`]) where a left click hits a terrain, heaps up material
 /// where a right click hits, and undoes the last carve on `undo_key`.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Reflect, Clone, Debug)]
+#[reflect(Resource)]
 pub struct ClickCarving {
     /// Circumradius of a crater.
     pub blast_radius: f32,

@@ -73,10 +73,10 @@ fn carved_slab() -> Terrain {
         // Mostly the top; every fifth on one of the four sides.
         let centre = match k % 5 {
             0 => match k % 4 {
-                0 => Vec3::new(-6.0, -1.0 * next(), u),
-                1 => Vec3::new(6.0, -1.0 * next(), u),
-                2 => Vec3::new(u, -1.0 * next(), -6.0),
-                _ => Vec3::new(u, -1.0 * next(), 6.0),
+                0 => Vec3::new(-6.0, -next(), u),
+                1 => Vec3::new(6.0, -next(), u),
+                2 => Vec3::new(u, -next(), -6.0),
+                _ => Vec3::new(u, -next(), 6.0),
             },
             _ => Vec3::new(u, 0.1 - 0.4 * next(), v),
         };

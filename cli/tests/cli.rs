@@ -17,7 +17,7 @@ fn scene(name: &str) -> PathBuf {
 fn sample_reports_json_and_writes_ply() {
     let ply = temp("classic.ply");
     let out = chisel()
-        .args(["sample", scene("classic.ron").to_str().unwrap()])
+        .args(["sample", scene("classic.quadric.ron").to_str().unwrap()])
         .args(["--radius", "4", "--bounds", "0,0,0,90", "--json", "-o"])
         .arg(&ply)
         .output()
@@ -44,7 +44,7 @@ fn sample_reports_json_and_writes_ply() {
 fn trace_writes_an_image_with_the_object_in_it() {
     let png = temp("classic.png");
     let out = chisel()
-        .args(["trace", scene("classic.ron").to_str().unwrap()])
+        .args(["trace", scene("classic.quadric.ron").to_str().unwrap()])
         .args(["--bounds", "0,0,0,90", "--size", "64x48", "-o"])
         .arg(&png)
         .output()
@@ -97,7 +97,7 @@ fn bad_input_is_a_clear_error_with_its_exit_code() {
             2,
             vec![
                 "sample",
-                scene("classic.ron").to_str().unwrap(),
+                scene("classic.quadric.ron").to_str().unwrap(),
                 "--radius=-1",
                 "--bounds",
                 "0,0,0,90",
@@ -126,7 +126,10 @@ fn sample_and_trace_default_to_the_scene_bounds() {
     // equal `--bounds` gives the same samples.
     let run = |extra: &[&str]| {
         let out = chisel()
-            .args(["sample", scene("three_spheres.ron").to_str().unwrap()])
+            .args([
+                "sample",
+                scene("three_spheres.quadric.ron").to_str().unwrap(),
+            ])
             .args(["--radius", "6", "--json"])
             .args(extra)
             .output()
@@ -149,7 +152,10 @@ fn sample_and_trace_default_to_the_scene_bounds() {
     assert_ne!(from_scene, run(&["--bounds", "0,0,10,20"]));
     let png = temp("three_spheres.png");
     let out = chisel()
-        .args(["trace", scene("three_spheres.ron").to_str().unwrap()])
+        .args([
+            "trace",
+            scene("three_spheres.quadric.ron").to_str().unwrap(),
+        ])
         .args(["--size", "32x24", "-o"])
         .arg(&png)
         .output()

@@ -30,7 +30,7 @@ fn refused(args: &[&str], wanted: &str) {
 
 #[test]
 fn a_tiny_splat_radius_is_refused_before_allocating() {
-    let classic = scene("classic.ron");
+    let classic = scene("classic.quadric.ron");
     let s = path(&classic);
     // Before: an allocation of 8e17 bytes, and an add overflow in the
     // subdivision at 1e-300.
@@ -61,7 +61,7 @@ fn a_tiny_splat_radius_is_refused_before_allocating() {
 
 #[test]
 fn huge_bounds_fail_instead_of_dropping_coverage() {
-    let classic = scene("classic.ron");
+    let classic = scene("classic.quadric.ron");
     let s = path(&classic);
     // Before: 18,672 samples at 1e8 and none at 1e10, both with exit 0.
     for r in ["0,0,0,1e8", "0,0,0,1e10", "0,0,0,1e300"] {
@@ -71,7 +71,7 @@ fn huge_bounds_fail_instead_of_dropping_coverage() {
 
 #[test]
 fn oversized_counts_are_refused_by_the_parser() {
-    let classic = scene("classic.ron");
+    let classic = scene("classic.quadric.ron");
     let out = temp("huge.png");
     refused(
         &[
@@ -150,7 +150,7 @@ fn a_failed_write_leaves_the_existing_file_as_it_was() {
         ],
         vec![
             "sample".into(),
-            path(&scene("classic.ron")).into(),
+            path(&scene("classic.quadric.ron")).into(),
             "--radius".into(),
             "2".into(),
             "-o".into(),
@@ -163,7 +163,7 @@ fn a_failed_write_leaves_the_existing_file_as_it_was() {
         assert_eq!(out.status.code(), Some(5), "{args:?}: {message}");
         assert!(message.contains("File too large"), "{args:?}: {message}");
     }
-    let classic = scene("classic.ron");
+    let classic = scene("classic.quadric.ron");
     let out = with_small_disk(&["trace", path(&classic), "-o", &at("out.png")]);
     assert_eq!(out.status.code(), Some(5));
     assert!(!String::from_utf8_lossy(&out.stdout).contains("wrote"));
@@ -307,7 +307,7 @@ fn late_checks_and_causes() {
     );
     assert!(!m.contains("9223372036854775807"), "{m}");
     // Camera arguments name themselves.
-    let classic = scene("classic.ron");
+    let classic = scene("classic.quadric.ron");
     let png = temp("camera.png");
     for (option, value) in [("--fov", "0"), ("--eye", "1e300,0,0")] {
         let (c, m) = code(&["trace", path(&classic), option, value, "-o", path(&png)]);

@@ -3,7 +3,7 @@
 //! ## Map
 //!
 //! - [`prop`] — main world: the [`QuadricProp`] component, the
-//!   [`QuadricScene`] asset and its `.ron` loader, sampling on the async
+//!   [`QuadricScene`] asset and its `.quadric.ron` loader, sampling on the async
 //!   compute pool into [`PropSplats`].
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
 //!   `ShaderType`); their WGSL mirror is `shaders/quadric_common.wgsl`.
@@ -37,7 +37,7 @@
 //! fn setup(mut commands: Commands, assets: Res<AssetServer>) {
 //!     commands.spawn((
 //!         QuadricProp {
-//!             scene: assets.load("scenes/classic.ron"),
+//!             scene: assets.load("scenes/classic.quadric.ron"),
 //!             // `None` takes the scene file's `bounds`.
 //!             bounds: Some(PropBounds { centre: Vec3::ZERO, radius: 90.0 }),
 //!             radius: SplatRadius::Auto(40.0),
@@ -68,10 +68,13 @@ use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::SpecializedRenderPipelines;
 use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
 
-pub use prop::{PropBounds, PropGpuData, PropSplats, QuadricProp, QuadricScene, SplatRadius};
+pub use prop::{
+    PropBounds, PropGpuData, PropSampleError, PropSplats, QuadricProp, QuadricScene, SplatRadius,
+};
 
 /// How props are drawn.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SplatMode {
     /// Splats as surface-aligned boxes (or quads where flat) with back-face
     /// culling (§6.1): the fast path.
@@ -85,7 +88,8 @@ pub enum SplatMode {
 }
 
 /// What the pass writes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SplatOutput {
     /// Shaded with the scene's first directional light and ambient light.
     #[default]
@@ -105,7 +109,9 @@ pub enum SplatOutput {
 
 /// Settings of the splat pass, for all props, in every view whose camera
 /// has no [`SplatViewSettings`] of its own.
-#[derive(Resource, Clone, Copy, Debug, PartialEq, ExtractResource)]
+#[derive(Resource, Clone, Copy, Debug, PartialEq, ExtractResource, Reflect)]
+#[reflect(Resource, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SplatSettings {
     /// Splats or global ray tracing.
     pub mode: SplatMode,
@@ -165,7 +171,9 @@ impl Default for SplatSettings {
 ///     ));
 /// }
 /// ```
-#[derive(Component, Clone, Copy, Debug, PartialEq, ExtractComponent)]
+#[derive(Component, Clone, Copy, Debug, PartialEq, ExtractComponent, Reflect)]
+#[reflect(Component)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SplatViewSettings(pub SplatSettings);
 
 /// The system sets of the main-world part, in order.
@@ -187,6 +195,11 @@ impl Plugin for ChiselSplatPlugin {
         app.init_asset::<QuadricScene>()
             .init_asset_loader::<prop::QuadricSceneLoader>()
             .init_resource::<SplatSettings>()
+            .register_type::<SplatSettings>()
+            .register_type::<SplatViewSettings>()
+            .register_type::<QuadricProp>()
+            .register_type::<PropSplats>()
+            .register_type::<prop::PropSampling>()
             .configure_sets(
                 Update,
                 (SplatSystems::Request, SplatSystems::Sample).chain(),

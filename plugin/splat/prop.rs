@@ -20,13 +20,14 @@ use chisel_quadric::{BoundingSphere, SampleOptions, Scene, SplatSet, sample};
 
 use super::gpu::{QuadricRecord, SplatRecord};
 
-/// A quadric CSG scene as an asset, loaded from a RON scene file (`.ron`,
-/// format in `quadric/SCENES.md`) or added in memory with
-/// `Assets::<QuadricScene>::add`.
+/// A quadric CSG scene as an asset, loaded from a RON scene file
+/// (`*.quadric.ron`, format in `quadric/SCENES.md`) or added in memory with
+/// `Assets::<QuadricScene>::add`. With Bevy's `file_watcher` feature an
+/// edited scene file is reloaded and its props are re-sampled.
 #[derive(Asset, TypePath, Clone, Debug)]
 pub struct QuadricScene(pub Scene);
 
-/// Loads [`QuadricScene`]s from `.ron` files. A malformed file fails the
+/// Loads [`QuadricScene`]s from `.quadric.ron` files. A malformed file fails the
 /// load with the line, column and problem (Bevy logs it with the path).
 #[derive(Default, TypePath)]
 pub struct QuadricSceneLoader;
@@ -77,12 +78,14 @@ impl AssetLoader for QuadricSceneLoader {
     }
 
     fn extensions(&self) -> &[&str] {
-        &["ron"]
+        &["quadric.ron"]
     }
 }
 
 /// The splat radius of a prop, in scene units.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Reflect)]
+#[reflect(Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SplatRadius {
     /// The bounding radius divided by this number (the default, 40, gives
     /// tens of thousands of splats for the shipped scenes).
@@ -102,7 +105,8 @@ impl Default for SplatRadius {
 ///
 /// Changing the component (or the scene asset) re-samples it on the async
 /// compute pool; the previous splats are drawn until the new ones are in.
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(Component)]
 #[require(Transform, Visibility)]
 pub struct QuadricProp {
     /// The scene.
@@ -116,7 +120,8 @@ pub struct QuadricProp {
 }
 
 /// A bounding sphere in the prop's local coordinates.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PropBounds {
     /// Centre.
     pub centre: Vec3,
@@ -155,9 +160,10 @@ impl PropBounds {
 ///
 /// Spawn it directly (with a `Transform`) to draw splats sampled elsewhere,
 /// e.g. synchronously with [`PropSplats::build`].
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(Component, from_reflect = false)]
 #[require(Transform, Visibility)]
-pub struct PropSplats(pub Arc<PropGpuData>);
+pub struct PropSplats(#[reflect(ignore)] pub Arc<PropGpuData>);
 
 /// The buffers of one prop in GPU form.
 #[derive(Debug)]
@@ -181,6 +187,38 @@ pub struct PropGpuData {
     pub radius: f32,
 }
 
+/// Why a prop could not be sampled ([`PropSplats::build`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum PropSampleError {
+    /// The scene has no valid disjunctive normal form.
+    NormalForm(chisel_quadric::Error),
+    /// The bounding sphere is invalid (not finite, or not positive).
+    Bounds(chisel_quadric::Error),
+    /// The splat radius is invalid for these bounds.
+    Radius(chisel_quadric::Error),
+    /// Adaptive sampling failed.
+    Sampling(chisel_quadric::Error),
+}
+
+impl std::fmt::Display for PropSampleError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NormalForm(e) => write!(f, "normal form: {e}"),
+            Self::Bounds(e) => write!(f, "bounds: {e}"),
+            Self::Radius(e) => write!(f, "radius: {e}"),
+            Self::Sampling(e) => write!(f, "sampling: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for PropSampleError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Self::NormalForm(e) | Self::Bounds(e) | Self::Radius(e) | Self::Sampling(e) => Some(e),
+        }
+    }
+}
+
 static GENERATION: AtomicU64 = AtomicU64::new(1);
 
 impl PropGpuData {
@@ -197,13 +235,13 @@ impl PropSplats {
     ///
     /// Errors: the scene's normal form or the sampling options are invalid
     /// (the message says which).
-    pub fn build(scene: &Scene, bounds: PropBounds, radius: f32) -> Result<Self, String> {
-        let dnf = scene.dnf().map_err(|e| format!("normal form: {e}"))?;
+    pub fn build(scene: &Scene, bounds: PropBounds, radius: f32) -> Result<Self, PropSampleError> {
+        let dnf = scene.dnf().map_err(PropSampleError::NormalForm)?;
         let sphere = BoundingSphere::new(bounds.centre.as_dvec3(), f64::from(bounds.radius))
-            .map_err(|e| format!("bounds: {e}"))?;
+            .map_err(PropSampleError::Bounds)?;
         let options =
-            SampleOptions::new(f64::from(radius), sphere).map_err(|e| format!("radius: {e}"))?;
-        let samples = sample(&dnf, &options).map_err(|e| format!("sampling: {e}"))?;
+            SampleOptions::new(f64::from(radius), sphere).map_err(PropSampleError::Radius)?;
+        let samples = sample(&dnf, &options).map_err(PropSampleError::Sampling)?;
         let set = SplatSet::new(&dnf, &scene.dag, &samples);
         let products = dnf.products();
         let mut terms: Vec<u32> = Vec::new();
@@ -240,12 +278,14 @@ fn to_u32(n: usize) -> u32 {
 }
 
 /// The sampling state of a prop.
-#[derive(Component, Default)]
+#[derive(Component, Reflect, Default)]
+#[reflect(Component, from_reflect = false)]
 pub struct PropSampling {
     /// A (re-)sample is wanted.
     pending: bool,
     /// The running task.
-    task: Option<Task<Result<PropSplats, String>>>,
+    #[reflect(ignore)]
+    task: Option<Task<Result<PropSplats, PropSampleError>>>,
     /// The scene failed to load, or has no bounds, and was reported.
     reported: bool,
 }

@@ -42,18 +42,20 @@ use super::tool::CarveTool;
 
 /// Carve a terrain: remove material inside the tool, add material to its
 /// empty space, paint it, or keep only what is inside.
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct Carve {
     /// The terrain entity.
     pub terrain: Entity,
     /// The tool, in the terrain's local frame.
     pub tool: CarveTool,
     /// What to do inside the tool.
+    #[reflect(ignore)]
     pub edit: Edit,
 }
 
 /// Undo the last carve of a terrain.
-#[derive(Message, Clone, Copy, Debug)]
+#[derive(Message, Reflect, Clone, Copy, Debug)]
 pub struct UndoCarve {
     /// The terrain entity.
     pub terrain: Entity,
@@ -61,11 +63,13 @@ pub struct UndoCarve {
 
 /// A carve (or undo) is applied and every mesh and collider it changed is
 /// in place.
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct CarveApplied {
     /// The terrain entity.
     pub terrain: Entity,
     /// The edit (`None` for an undo).
+    #[reflect(ignore)]
     pub edit: Option<Edit>,
     /// Leaf cells this carve (or undo) changed, split or merged: their
     /// meshes were rebuilt or removed.
@@ -84,21 +88,25 @@ pub struct CarveApplied {
 }
 
 /// A carve or undo that was refused; the terrain is unchanged.
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct CarveRejected {
     /// The terrain entity.
     pub terrain: Entity,
     /// Why.
+    #[reflect(ignore)]
     pub error: TerrainError,
 }
 
 /// The meshes (and colliders) of one leaf cell of a terrain were rebuilt,
 /// or removed (no entities).
-#[derive(Message, Clone, Debug, PartialEq, Eq)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
+#[reflect(from_reflect = false)]
 pub struct TerrainCellChanged {
     /// The terrain entity.
     pub terrain: Entity,
     /// The octree cell.
+    #[reflect(ignore)]
     pub key: CellKey,
     /// Its entities now, one per visible material (empty when the cell is
     /// gone or has no surface).
@@ -106,7 +114,9 @@ pub struct TerrainCellChanged {
 }
 
 /// Tuning of the terrain systems.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Reflect, Clone, Debug)]
+#[reflect(Resource, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TerrainSettings {
     /// Main-thread time per frame for adding the cells of a terrain's first
     /// full build (at least one cell per terrain and frame). A carve's
@@ -452,8 +462,9 @@ fn spawn_debris(
             volume: piece.volume,
         },
         at,
-        Visibility::default(),
     ));
+    #[cfg(feature = "render")]
+    body.insert(Visibility::default());
     if let Some(insert) = piece.body {
         insert.apply(&mut body);
     }

@@ -42,18 +42,29 @@ pub(crate) struct UndoStep {
 /// Coordinates of tools, rays and meshes are in the terrain's local frame;
 /// the [`Quantization`] maps them to the grid. Carve with the
 /// [`super::Carve`] message; undo with [`super::UndoCarve`].
-#[derive(Component)]
-#[require(Transform, Visibility)]
+#[derive(Component, Reflect)]
+#[reflect(Component, from_reflect = false)]
+#[require(Transform)]
+#[cfg_attr(feature = "render", require(Visibility))]
 pub struct Terrain {
+    #[reflect(ignore)]
     pub(crate) octree: Octree,
+    #[reflect(ignore)]
     pub(crate) quantization: Quantization,
+    #[reflect(ignore)]
     pub(crate) base: Arc<TerrainBase>,
+    #[reflect(ignore)]
     pub(crate) journal: Vec<JournalEntry>,
+    #[reflect(ignore)]
     pub(crate) history: VecDeque<UndoStep>,
+    #[reflect(ignore)]
     pub(crate) max_undo: usize,
+    #[reflect(ignore)]
     pub(crate) debris: Option<DebrisConfig>,
     /// The materials carves may add or paint.
+    #[reflect(ignore)]
     pub(crate) labels: BTreeSet<Label>,
+    #[reflect(ignore)]
     pub(crate) runtime: Runtime,
 }
 
@@ -367,11 +378,13 @@ fn built_inside(octree: &Octree, tool: &GridTool) -> Result<Tool, TerrainError> 
 
 /// One entity showing the surface of one material in one leaf cell; a
 /// child of its terrain. Its mesh is rebuilt only when the cell changes.
-#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq)]
+#[reflect(Component, from_reflect = false)]
 pub struct TerrainCell {
     /// The terrain entity.
     pub terrain: Entity,
     /// The octree cell.
+    #[reflect(ignore)]
     pub key: CellKey,
     /// The material shown.
     pub label: Label,

@@ -34,13 +34,16 @@ pub const DEFAULT_DEBRIS_DENSITY: f32 = 2500.0;
 /// A piece cut loose from a terrain, spawned as an entity of its own:
 /// its meshes are children ([`DebrisPart`]), and with a physics backend it
 /// is a dynamic body.
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(Component, from_reflect = false)]
 pub struct TerrainDebris {
     /// The terrain it came from.
     pub terrain: Entity,
     /// Its exact volume in cubic grid units.
+    #[reflect(ignore)]
     pub exact_volume: ExactVolume,
     /// Its exact volume per material, in cubic grid units.
+    #[reflect(ignore)]
     pub volumes: BTreeMap<Label, ExactVolume>,
     /// Its volume in cubic world units.
     pub volume: f32,
@@ -49,7 +52,8 @@ pub struct TerrainDebris {
 /// One material's mesh of a debris piece; a child of its
 /// [`TerrainDebris`]. Gets the material of its label from the terrain's
 /// material table, as the terrain's cells do.
-#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq)]
+#[reflect(Component)]
 pub struct DebrisPart {
     /// The terrain the piece came from.
     pub terrain: Entity,
@@ -58,7 +62,8 @@ pub struct DebrisPart {
 }
 
 /// A piece was cut loose from a terrain and spawned.
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct DebrisDetached {
     /// The terrain it came from.
     pub terrain: Entity,
@@ -71,6 +76,7 @@ pub struct DebrisDetached {
     /// Its volume in cubic world units.
     pub volume: f32,
     /// Its exact volume in cubic grid units.
+    #[reflect(ignore)]
     pub exact_volume: ExactVolume,
     /// The material with the largest volume in it.
     pub main_label: Label,

@@ -58,7 +58,8 @@ use super::debris::DebrisPart;
 /// without an entry use `fallback`. `M` is any Bevy [`Material`] (with a
 /// [`TerrainMaterialPlugin<M>`] in the app; `TerrainPlugin` adds the one
 /// for [`StandardMaterial`]).
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(Component)]
 #[require(HasTerrainMaterials)]
 pub struct TerrainMaterials<M: Material = StandardMaterial> {
     /// Material per label.
@@ -99,7 +100,8 @@ impl<M: Material> TerrainMaterials<M> {
 /// Marks a terrain entity that has a [`TerrainMaterials`] table of some
 /// material type (inserted with it): the cells of a terrain without one
 /// get Bevy's default [`StandardMaterial`].
-#[derive(Component, Clone, Copy, Debug, Default)]
+#[derive(Component, Reflect, Clone, Copy, Debug, Default)]
+#[reflect(Component, Default)]
 pub struct HasTerrainMaterials;
 
 /// Gives every [`TerrainCell`] the `MeshMaterial3d<M>` of its label from
@@ -127,6 +129,8 @@ impl<M: Material> Plugin for TerrainMaterialPlugin<M> {
             return;
         }
         app.insert_resource(MaterialSystemAdded::<M>(PhantomData))
+            .register_type::<TerrainMaterials<M>>()
+            .register_type::<HasTerrainMaterials>()
             .add_systems(
                 Update,
                 assign_materials::<M>.in_set(TerrainSystems::Material),

@@ -29,41 +29,61 @@
 //!   implements; `avian` implements it (feature `avian`).
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
 //! - [`file`] — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
+//! - [`asset`] — terrain files (`*.chiselterrain`) and heightfields through
+//!   the asset server, with hot reload ([`TerrainSource`]).
+//! - [`events`] — the reports as entity events on the terrain
+//!   ([`TerrainCarved`], [`TerrainCarveRejected`], [`TerrainCellRebuilt`],
+//!   [`TerrainDebrisDetached`]), for observers.
 //! - [`error`] — [`TerrainError`].
 //!
 //! ## Example
 //!
-//! ```no_run
+//! A server without a renderer: `MinimalPlugins` and [`TerrainPlugin`],
+//! which adds Bevy's `AssetPlugin` and `MeshPlugin` where they are missing.
+//!
+//! ```
 //! use bevy::prelude::*;
 //! use bevy_chisel::bsp::octree::Edit;
 //! use bevy_chisel::bsp::tools::Quantization;
-//! use bevy_chisel::terrain::{Carve, CarveTool, Terrain, TerrainPlugin};
+//! use bevy_chisel::terrain::{Carve, CarveApplied, CarveTool, Terrain, TerrainPlugin};
 //!
 //! fn setup(mut commands: Commands) -> Result {
 //!     // A 20 m × 4 m × 20 m slab of rock (label 1) on a 1 mm grid.
 //!     let grid = Quantization::new(0.001, [0.0; 3])?;
 //!     let terrain = Terrain::from_box(grid, Vec3::new(-10.0, -4.0, -10.0), Vec3::new(10.0, 0.0, 10.0), 1)?;
-//!     commands.spawn(terrain);
+//!     let terrain = commands.spawn(terrain).id();
+//!     commands.write_message(Carve {
+//!         terrain,
+//!         tool: CarveTool::dodecahedron(2.0, Vec3::ZERO),
+//!         edit: Edit::Subtract,
+//!     });
 //!     Ok(())
 //! }
 //!
-//! fn blast(mut carves: MessageWriter<Carve>, terrains: Query<Entity, With<Terrain>>) {
-//!     for terrain in &terrains {
-//!         carves.write(Carve {
-//!             terrain,
-//!             tool: CarveTool::dodecahedron(2.0, Vec3::ZERO),
-//!             edit: Edit::Subtract,
-//!         });
-//!     }
+//! #[derive(Resource, Default)]
+//! struct Applied(usize);
+//!
+//! fn count(mut applied: MessageReader<CarveApplied>, mut n: ResMut<Applied>) {
+//!     n.0 += applied.read().count();
 //! }
 //!
-//! App::new()
-//!     .add_plugins((MinimalPlugins, TerrainPlugin))
+//! let mut app = App::new();
+//! app.add_plugins((MinimalPlugins, TerrainPlugin))
+//!     .init_resource::<Applied>()
 //!     .add_systems(Startup, setup)
-//!     .add_systems(PostStartup, blast)
-//!     .run();
+//!     .add_systems(Update, count);
+//! // The carve runs on the async compute pool; a game just keeps running.
+//! for _ in 0..2000 {
+//!     app.update();
+//!     if app.world().resource::<Applied>().0 == 1 {
+//!         break;
+//!     }
+//!     std::thread::sleep(std::time::Duration::from_millis(5));
+//! }
+//! assert_eq!(app.world().resource::<Applied>().0, 1);
 //! ```
 
+pub mod asset;
 #[cfg(feature = "avian")]
 pub mod avian;
 pub mod base;
@@ -71,8 +91,10 @@ pub mod carve;
 pub mod component;
 pub mod debris;
 pub mod error;
+pub mod events;
 pub mod file;
 mod jobs;
+#[cfg(feature = "render")]
 pub mod material;
 pub mod mesh;
 pub mod physics;
@@ -80,8 +102,15 @@ pub mod raycast;
 pub mod spawn;
 pub mod tool;
 
+use bevy::asset::AssetPlugin;
+use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleLabel};
+use bevy::mesh::MeshPlugin;
 use bevy::prelude::*;
 
+pub use asset::{
+    HeightfieldLoader, HeightfieldSettings, TERRAIN_EXTENSION, TerrainAsset, TerrainFileLoader,
+    TerrainSource,
+};
 pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
     Carve, CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings, UndoCarve,
@@ -89,9 +118,12 @@ pub use carve::{
 pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
 pub use error::TerrainError;
+pub use events::{TerrainCarveRejected, TerrainCarved, TerrainCellRebuilt, TerrainDebrisDetached};
+#[cfg(feature = "render")]
 pub use material::triplanar::{
     TerrainSurface, TriplanarExtension, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
+#[cfg(feature = "render")]
 pub use material::{HasTerrainMaterials, TerrainMaterialPlugin, TerrainMaterials};
 pub use mesh::{CellMesh, ColliderMesh};
 pub use physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBackend};
@@ -99,7 +131,9 @@ pub use raycast::TerrainHit;
 pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
 pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
 
-/// The terrain systems, in this order within `Update`.
+/// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
+/// runs them in (`Update` unless [`TerrainPlugin::in_schedule`] picks
+/// another).
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TerrainSystems {
     /// Reads [`Carve`] / [`UndoCarve`], collects finished background jobs
@@ -111,44 +145,111 @@ pub enum TerrainSystems {
     /// Read those after this set.
     Mesh,
     /// Gives the cells spawned in [`TerrainSystems::Mesh`] their materials
-    /// ([`TerrainMaterialPlugin`]), in the same frame.
+    /// (`TerrainMaterialPlugin`, feature `render`). Always in `Update`,
+    /// which runs after the frame's fixed steps, so cells meshed in
+    /// `FixedUpdate` get their materials in the same frame.
     Material,
 }
 
-/// Destructible terrain: messages, settings and systems. Needs Bevy's asset
-/// plugin and the `Mesh` asset (both in `DefaultPlugins`); rendering is
-/// optional, so it also runs under `MinimalPlugins` for tests and servers.
+/// Destructible terrain: messages, settings and systems, in `Update`.
+///
+/// Needs Bevy's asset plugin and the `Mesh` asset: `DefaultPlugins` has
+/// both, and where they are missing when this plugin is added (say, under
+/// `MinimalPlugins` on a server) it adds `AssetPlugin` and `MeshPlugin`
+/// itself; add it after `DefaultPlugins` or `MinimalPlugins`. Rendering is
+/// optional; with the feature `render` it adds [`TerrainMaterialPlugin`] for
+/// `StandardMaterial`, and cells of terrains without a material table get
+/// Bevy's default material.
+///
+/// [`TerrainPlugin::in_schedule`] runs the carve and mesh systems in
+/// another schedule, `FixedUpdate` for a game that simulates at a fixed
+/// rate.
 pub struct TerrainPlugin;
+
+impl TerrainPlugin {
+    /// The terrain plugin with [`TerrainSystems::Carve`] and
+    /// [`TerrainSystems::Mesh`] in `schedule` (for example `FixedUpdate`).
+    pub fn in_schedule(schedule: impl ScheduleLabel) -> ScheduledTerrainPlugin {
+        ScheduledTerrainPlugin {
+            schedule: schedule.intern(),
+        }
+    }
+}
 
 impl Plugin for TerrainPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<TerrainSettings>()
-            .init_resource::<TerrainPhysicsBackend>()
-            .add_message::<Carve>()
-            .add_message::<UndoCarve>()
-            .add_message::<CarveApplied>()
-            .add_message::<CarveRejected>()
-            .add_message::<DebrisDetached>()
-            .add_message::<TerrainCellChanged>()
-            .configure_sets(
-                Update,
-                (
-                    TerrainSystems::Carve,
-                    TerrainSystems::Mesh,
-                    TerrainSystems::Material,
-                )
-                    .chain(),
-            )
-            .add_systems(
-                Update,
-                (
-                    (carve::read_requests, carve::finish_jobs, carve::start_jobs)
-                        .chain()
-                        .in_set(TerrainSystems::Carve),
-                    carve::upload_meshes.in_set(TerrainSystems::Mesh),
-                    material::default_materials.in_set(TerrainSystems::Material),
-                ),
-            )
-            .add_plugins(TerrainMaterialPlugin::<StandardMaterial>::default());
+        build_terrain(app, Update.intern());
     }
+}
+
+/// [`TerrainPlugin`] in a schedule of the user's choice
+/// ([`TerrainPlugin::in_schedule`]). Add one of the two, not both.
+pub struct ScheduledTerrainPlugin {
+    schedule: InternedScheduleLabel,
+}
+
+impl Plugin for ScheduledTerrainPlugin {
+    fn build(&self, app: &mut App) {
+        build_terrain(app, self.schedule);
+    }
+}
+
+fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
+    if !app.is_plugin_added::<AssetPlugin>() {
+        app.add_plugins(AssetPlugin::default());
+    }
+    if !app.is_plugin_added::<MeshPlugin>() {
+        app.add_plugins(MeshPlugin);
+    }
+    app.init_resource::<TerrainSettings>()
+        .init_resource::<TerrainPhysicsBackend>()
+        .add_message::<Carve>()
+        .add_message::<UndoCarve>()
+        .add_message::<CarveApplied>()
+        .add_message::<CarveRejected>()
+        .add_message::<DebrisDetached>()
+        .add_message::<TerrainCellChanged>()
+        .register_type::<Terrain>()
+        .register_type::<TerrainCell>()
+        .register_type::<TerrainDebris>()
+        .register_type::<DebrisPart>()
+        .register_type::<TerrainSettings>()
+        .register_type::<TerrainPhysicsBackend>()
+        .register_type::<Carve>()
+        .register_type::<UndoCarve>()
+        .register_type::<CarveApplied>()
+        .register_type::<CarveRejected>()
+        .register_type::<TerrainCellChanged>()
+        .register_type::<DebrisDetached>()
+        .register_type::<CarveTool>()
+        .register_type::<Heightfield>()
+        .register_type::<TerrainSource>()
+        .init_asset::<TerrainAsset>()
+        .init_asset::<Heightfield>()
+        .init_asset_loader::<TerrainFileLoader>()
+        .init_asset_loader::<HeightfieldLoader>()
+        .configure_sets(
+            schedule,
+            (TerrainSystems::Carve, TerrainSystems::Mesh).chain(),
+        )
+        .add_systems(
+            schedule,
+            (
+                (carve::read_requests, carve::finish_jobs, carve::start_jobs)
+                    .chain()
+                    .in_set(TerrainSystems::Carve),
+                carve::upload_meshes.in_set(TerrainSystems::Mesh),
+                events::trigger_events.after(TerrainSystems::Mesh),
+                asset::spawn_from_assets.before(TerrainSystems::Carve),
+            ),
+        );
+    if schedule == Update.intern() {
+        app.configure_sets(Update, TerrainSystems::Material.after(TerrainSystems::Mesh));
+    }
+    #[cfg(feature = "render")]
+    app.add_systems(
+        Update,
+        material::default_materials.in_set(TerrainSystems::Material),
+    )
+    .add_plugins(TerrainMaterialPlugin::<StandardMaterial>::default());
 }

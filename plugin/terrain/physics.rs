@@ -63,8 +63,9 @@ pub trait TerrainPhysics: Send + Sync + 'static {
 
 /// The physics engine of the terrains: `None` (the default) builds no
 /// colliders.
-#[derive(Resource, Clone, Default)]
-pub struct TerrainPhysicsBackend(pub Option<Arc<dyn TerrainPhysics>>);
+#[derive(Resource, Reflect, Clone, Default)]
+#[reflect(Resource)]
+pub struct TerrainPhysicsBackend(#[reflect(ignore)] pub Option<Arc<dyn TerrainPhysics>>);
 
 impl TerrainPhysicsBackend {
     /// A backend from an engine's implementation.

@@ -31,7 +31,7 @@ pub fn terrain_octree_config() -> OctreeConfig {
 }
 
 /// A band of material under a heightfield's surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Reflect, serde::Serialize, serde::Deserialize)]
 pub struct HeightLayer {
     /// Everything less than this far below the surface (world units)…
     pub depth: f32,
@@ -41,7 +41,8 @@ pub struct HeightLayer {
 
 /// A heightfield in world units: `heights[i + j·width]` is the surface
 /// height (local `y`) at `(corner.x + i·spacing, corner.z + j·spacing)`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Asset, Clone, Debug, PartialEq, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Heightfield {
     /// Samples along x and z.
     pub size: UVec2,

@@ -16,7 +16,8 @@ use chisel_bsp::tools::{Quantization, dodecahedron_corners, prism_corners};
 use super::error::TerrainError;
 
 /// A convex shape in its own frame, in world units.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum CarveShape {
     /// A regular dodecahedron centred at the origin with this circumradius.
     Dodecahedron {
@@ -101,21 +102,25 @@ impl CarveShape {
 }
 
 /// One convex piece of a [`CarveTool`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ToolPiece {
     /// The shape in its own frame.
     pub shape: CarveShape,
     /// Where the shape is placed, in the terrain's local frame.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_transform"))]
     pub pose: Transform,
     /// When set, the piece is the volume swept from `pose` to this pose
     /// (the hull of the corners at both: exact for translations, a convex
     /// cover for small rotations).
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_transform::option"))]
     pub sweep_to: Option<Transform>,
 }
 
 /// A union of convex pieces in world units: what a [`super::Carve`] cuts,
 /// adds or paints.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CarveTool {
     /// The pieces; the tool is their union.
     pub pieces: Vec<ToolPiece>,
@@ -193,7 +198,8 @@ impl CarveTool {
 
 /// A tool on the integer grid: the union of the exact convex hulls of
 /// integer point sets. What a terrain file records for every carve.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, Reflect)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GridTool {
     /// One point set per convex piece, in grid units.
     pub pieces: Vec<Vec<[i64; 3]>>,

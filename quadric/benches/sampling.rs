@@ -27,7 +27,10 @@ fn sampling(c: &mut Criterion) {
     let mut group = c.benchmark_group("table2");
     group.sample_size(10);
     for name in SCENES {
-        let path = format!("{}/../assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+        let path = format!(
+            "{}/../assets/scenes/{name}.quadric.ron",
+            env!("CARGO_MANIFEST_DIR")
+        );
         let scene = Scene::load(&path).expect("shipped scene");
         let dnf = scene.dnf().expect("normal form");
         let sphere = scene.bounds.expect("shipped scenes give bounds");

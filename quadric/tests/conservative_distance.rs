@@ -61,7 +61,7 @@ fn never_over_estimates() {
 fn csg_distance_is_conservative() {
     let scene = Scene::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../assets/scenes/classic.ron"
+        "/../assets/scenes/classic.quadric.ron"
     ))
     .unwrap();
     let dnf = scene.dnf().unwrap();
@@ -100,7 +100,7 @@ fn on_csg_surface(dnf: &Dnf, a: usize, b: usize, x: DVec3) -> bool {
 #[test]
 fn relative_distance_keeps_classification_within_radius() {
     let mut rng = common::rng(53);
-    for file in ["three_spheres.ron", "classic.ron"] {
+    for file in ["three_spheres.quadric.ron", "classic.quadric.ron"] {
         let path = format!("{}/../assets/scenes/{file}", env!("CARGO_MANIFEST_DIR"));
         let dnf = Scene::load(path).unwrap().dnf().unwrap();
         let dist = CsgDistance::new(&dnf);

@@ -19,7 +19,7 @@ fn parse_error(text: &str) -> (usize, String) {
 
 #[test]
 fn three_spheres_scene() {
-    let scene = Scene::load(scene_path("three_spheres.ron")).unwrap();
+    let scene = Scene::load(scene_path("three_spheres.quadric.ron")).unwrap();
     assert_eq!(scene.names, ["A", "B", "C"]);
     let dnf = scene.dnf().unwrap();
     assert_eq!(dnf.products().len(), 2);
@@ -32,7 +32,7 @@ fn three_spheres_scene() {
 
 #[test]
 fn classic_scene() {
-    let scene = Scene::load(scene_path("classic.ron")).unwrap();
+    let scene = Scene::load(scene_path("classic.quadric.ron")).unwrap();
     assert_eq!(scene.dag.primitives().len(), 10); // 6 planes, sphere, 3 cylinders
     assert_eq!(scene.names[0], "cube[0]");
     let dnf = scene.dnf().unwrap();
@@ -179,7 +179,7 @@ fn degenerate_transforms_and_files() {
 #[test]
 fn shipped_scenes_carry_bounds_around_their_solids() {
     for name in ["three_spheres", "classic", "sharp8", "machine80"] {
-        let scene = Scene::load(scene_path(&format!("{name}.ron"))).unwrap();
+        let scene = Scene::load(scene_path(&format!("{name}.quadric.ron"))).unwrap();
         let bounds = scene.bounds.unwrap_or_else(|| panic!("{name}: no bounds"));
         // No point of the solid on a coarse grid lies outside the sphere.
         let r = bounds.radius;

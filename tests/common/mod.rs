@@ -57,7 +57,10 @@ pub fn scene_entry(name: &str) -> (&'static str, DVec3, f64) {
 
 /// A shipped scene file.
 pub fn load_scene(name: &str) -> Scene {
-    let path = format!("{}/assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/assets/scenes/{name}.quadric.ron",
+        env!("CARGO_MANIFEST_DIR")
+    );
     Scene::load(&path).expect("shipped scene")
 }
 

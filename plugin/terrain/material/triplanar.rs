@@ -403,12 +403,15 @@ impl Plugin for TriplanarMaterialPlugin {
                     for (handle, bytes, srgb) in
                         [(albedo, albedo_png, true), (normal, normal_png, false)]
                     {
-                        let image = triplanar_image(bytes, "png", srgb).map_err(|e| e.to_string());
-                        let inserted = image.and_then(|image| {
-                            images.insert(handle.id(), image).map_err(|e| e.to_string())
-                        });
-                        if let Err(e) = inserted {
-                            error!("bevy_chisel: cannot add the {surface:?} texture: {e}");
+                        match triplanar_image(bytes, "png", srgb) {
+                            Ok(image) => {
+                                if let Err(e) = images.insert(handle.id(), image) {
+                                    error!("bevy_chisel: cannot add the {surface:?} texture: {e}");
+                                }
+                            }
+                            Err(e) => {
+                                error!("bevy_chisel: cannot decode the {surface:?} texture: {e}");
+                            }
                         }
                     }
                 }

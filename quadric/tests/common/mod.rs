@@ -99,9 +99,12 @@ pub fn quadric(rng: &mut ChaCha8Rng) -> Quadric {
     quadric_of_kind(rng, kind)
 }
 
-/// Loads a shipped scene from `assets/scenes/NAME.ron`.
+/// Loads a shipped scene from `assets/scenes/NAME.quadric.ron`.
 pub fn scene(name: &str) -> chisel_quadric::Scene {
-    let path = format!("{}/../assets/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/../assets/scenes/{name}.quadric.ron",
+        env!("CARGO_MANIFEST_DIR")
+    );
     chisel_quadric::Scene::load(&path).expect("shipped scenes parse")
 }
 
