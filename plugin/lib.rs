@@ -25,9 +25,15 @@
 //! screenshots — the examples and the render tests use it. The [`viewer`]
 //! module holds what the examples share: an orbit camera, text overlays and
 //! carving the terrain under the mouse cursor.
+//!
+//! The [`net`] module (feature `net`) replicates carves from one
+//! authoritative server to its clients: integer carves in sequence order,
+//! state hashes and snapshots, never meshes.
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "net")]
+pub mod net;
 pub mod presentation;
 pub mod splat;
 pub mod terrain;

@@ -84,7 +84,7 @@ use bevy::prelude::*;
 
 pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
-    Carve, CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings, UndoCarve,
+    Carve, CarveApplied, CarveRejected, GridCarve, TerrainCellChanged, TerrainSettings, UndoCarve,
 };
 pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
@@ -125,6 +125,7 @@ impl Plugin for TerrainPlugin {
         app.init_resource::<TerrainSettings>()
             .init_resource::<TerrainPhysicsBackend>()
             .add_message::<Carve>()
+            .add_message::<GridCarve>()
             .add_message::<UndoCarve>()
             .add_message::<CarveApplied>()
             .add_message::<CarveRejected>()

@@ -194,6 +194,7 @@ impl CarveTool {
 /// A tool on the integer grid: the union of the exact convex hulls of
 /// integer point sets. What a terrain file records for every carve.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "net", derive(serde::Serialize, serde::Deserialize))]
 pub struct GridTool {
     /// One point set per convex piece, in grid units.
     pub pieces: Vec<Vec<[i64; 3]>>,
