@@ -330,7 +330,6 @@ fn hud(
 /// Headless: capture once every player's craters are in and meshed, and
 /// the octree is the server's.
 fn release_captures(
-    stats: Res<NetClientStats>,
     player: Res<Player>,
     terrains: Query<&Terrain, With<NetTerrain>>,
     mut hold: ResMut<HoldCaptures>,
@@ -346,8 +345,9 @@ fn release_captures(
         hold.0 = !terrain.is_idle();
         return;
     };
-    let expected = 3 * SCRIPTED as u64;
-    if stats.carves < expected || !terrain.is_idle() {
+    // Carves before this player joined came in its snapshot's journal.
+    let expected = 3 * SCRIPTED;
+    if terrain.journal().len() < expected || !terrain.is_idle() {
         return;
     }
     let Ok(server) = check.lock() else {
