@@ -19,7 +19,7 @@
 //! - [`base`] — what a terrain starts from, on the grid.
 //! - [`tool`] — [`CarveTool`] in world units, [`GridTool`] on the grid.
 //! - [`carve`] — the messages and the systems: [`Carve`] / [`UndoCarve`]
-//!   in, exact edits on the async compute pool, meshes of the changed cells
+//!   in ([`GridCarve`]: a carve already on the grid, with a request id), exact edits on the async compute pool, meshes of the changed cells
 //!   within a per-frame budget, [`TerrainCellChanged`] and [`CarveApplied`]
 //!   out.
 //! - `jobs` — what a carve job does on the worker threads.
