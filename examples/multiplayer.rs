@@ -9,8 +9,8 @@
 //! `--server [ADDR]` listens (default `0.0.0.0:5000`) without a window;
 //! `--client ADDR` opens a window: left click blasts a crater, right click
 //! heaps up dirt, and the server sends every player's carve to everyone.
-//! The HUD shows the carves applied, the hash checks passed and the
-//! terrain's state hash.
+//! The HUD shows the carves in the terrain, its state hash and the hash
+//! checks passed.
 //!
 //! With no arguments and no display (or `CHISEL_HEADLESS=1`), one process
 //! runs a server and two scripted players on 127.0.0.1 (each in its own
@@ -314,16 +314,17 @@ fn hud(
         |_| "waiting for the server's terrain".to_owned(),
         |t| {
             format!(
-                "state hash {:016x} | {} triangles",
+                "{} carves | state hash {:016x} | {} triangles",
+                t.journal().len(),
                 t.state_hash(),
                 t.triangle_count()
             )
         },
     );
     text.0 = format!(
-        "multiplayer | {} carves applied | {} hash checks passed | {state}\n\
+        "multiplayer | {state} | {} hash checks passed\n\
          LMB blast crater | RMB heap dirt | {ORBIT_HELP}",
-        stats.carves, stats.checks_passed
+        stats.checks_passed
     );
 }
 
