@@ -30,6 +30,10 @@
 //!   screenshots, an orbit camera, text overlays, carving under the
 //!   cursor. They are not part of the API a game needs.
 //!
+//! - `net` (feature `net`) replicates carves from one authoritative server
+//!   to its clients: integer carves in sequence order, state hashes and
+//!   snapshots, never meshes.
+//!
 //! ## Features
 //!
 //! | feature   | default | adds |
@@ -40,6 +44,7 @@
 //! | `avian`   | no  | colliders and debris bodies with avian3d (implies `terrain`) |
 //! | `serde`   | no  | `Serialize`/`Deserialize` on tools, settings and bounds |
 //! | `viewer`  | no  | the examples' helpers: window or headless screenshots, orbit camera, overlays |
+//! | `net`     | no  | server-authoritative replicated carves with bevy_replicon and renet (implies `terrain`, `serde`) |
 //!
 //! A dedicated server is `default-features = false, features = ["terrain",
 //! "serde"]`: no window, UI or render crate is built.
@@ -52,6 +57,8 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "net")]
+pub mod net;
 #[cfg(feature = "viewer")]
 pub mod presentation;
 #[cfg(feature = "props")]
@@ -60,7 +67,6 @@ pub mod splat;
 pub mod terrain;
 #[cfg(feature = "viewer")]
 pub mod viewer;
-// `net` (replicated carves, with `terrain`) goes here as its own module.
 
 /// The README's "Use it in your game" program (`examples/use_in_game.rs`),
 /// run headless: Bevy's `DefaultPlugins` rendering offscreen, the game's

@@ -76,6 +76,8 @@ impl TerrainAsset {
             max_undo: t.max_undo,
             debris: t.debris.clone(),
             labels: t.labels.clone(),
+            hash: t.hash.clone(),
+            last_request: t.last_request,
             runtime: Runtime::default(),
         }
     }

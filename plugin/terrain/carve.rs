@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, futures::check_ready};
-use chisel_bsp::octree::{CellKey, Edit, SeamedMesher};
+use chisel_bsp::octree::{CellKey, Edit, Octree, SeamedMesher};
 
 use super::component::{Job, Runtime, Terrain, TerrainCell};
 use super::debris::{
@@ -38,7 +38,7 @@ use super::jobs::{
 };
 use super::mesh::DEFAULT_SMOOTHING_DEGREES;
 use super::physics::TerrainPhysicsBackend;
-use super::tool::CarveTool;
+use super::tool::{CarveTool, GridTool};
 
 /// Carve a terrain: remove material inside the tool, add material to its
 /// empty space, paint it, or keep only what is inside.
@@ -52,6 +52,23 @@ pub struct Carve {
     /// What to do inside the tool.
     #[reflect(ignore)]
     pub edit: Edit,
+}
+
+/// A carve already on the terrain's grid, with a request id that its
+/// [`CarveApplied`] or [`CarveRejected`] echoes: what a replicated carve
+/// is. No floats are involved, so every peer applies the same exact tool.
+/// Grid carves and [`Carve`]s of one frame are queued grid carves first.
+#[derive(Message, Clone, Debug)]
+pub struct GridCarve {
+    /// The terrain entity.
+    pub terrain: Entity,
+    /// The tool on the terrain's grid.
+    pub tool: GridTool,
+    /// What to do inside the tool.
+    pub edit: Edit,
+    /// Chosen by the sender; echoed in the result and recorded as
+    /// [`Terrain::last_request`] once the carve is in the octree.
+    pub request: u64,
 }
 
 /// Undo the last carve of a terrain.
@@ -71,6 +88,13 @@ pub struct CarveApplied {
     /// The edit (`None` for an undo).
     #[reflect(ignore)]
     pub edit: Option<Edit>,
+    /// The request id of a [`GridCarve`] (`None` for a [`Carve`] or an
+    /// undo).
+    pub request: Option<u64>,
+    /// The terrain's state hash right after this carve
+    /// ([`Terrain::state_hash`]; later carves of the same batch may already
+    /// be in the octree when this message is read).
+    pub hash: u64,
     /// Leaf cells this carve (or undo) changed, split or merged: their
     /// meshes were rebuilt or removed.
     pub cells: usize,
@@ -93,6 +117,9 @@ pub struct CarveApplied {
 pub struct CarveRejected {
     /// The terrain entity.
     pub terrain: Entity,
+    /// The request id of a [`GridCarve`] (`None` for a [`Carve`] or an
+    /// undo).
+    pub request: Option<u64>,
     /// Why.
     #[reflect(ignore)]
     pub error: TerrainError,
@@ -162,18 +189,44 @@ pub(crate) struct Upload {
     debris: Vec<BuiltDebris>,
 }
 
-/// Reads [`Carve`] and [`UndoCarve`] into the terrains' queues.
+/// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
+/// queues.
 pub fn read_requests(
+    mut grid_carves: MessageReader<GridCarve>,
     mut carves: MessageReader<Carve>,
     mut undos: MessageReader<UndoCarve>,
     mut terrains: Query<&mut Terrain>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
     let now = Instant::now();
+    for carve in grid_carves.read() {
+        let request = Some(carve.request);
+        let queued = terrains
+            .get_mut(carve.terrain)
+            .map_err(|_| TerrainError::NoSuchTerrain)
+            .and_then(|mut terrain| {
+                terrain.check_edit(carve.edit)?;
+                terrain.runtime.queue.push_back(Job::Carve {
+                    tool: carve.tool.clone(),
+                    edit: carve.edit,
+                    requested: now,
+                    request,
+                });
+                Ok(())
+            });
+        if let Err(error) = queued {
+            rejected.write(CarveRejected {
+                terrain: carve.terrain,
+                request,
+                error,
+            });
+        }
+    }
     for carve in carves.read() {
         let Ok(mut terrain) = terrains.get_mut(carve.terrain) else {
             rejected.write(CarveRejected {
                 terrain: carve.terrain,
+                request: None,
                 error: TerrainError::NoSuchTerrain,
             });
             continue;
@@ -186,10 +239,12 @@ pub fn read_requests(
                 tool,
                 edit: carve.edit,
                 requested: now,
+                request: None,
             }),
             Err(error) => {
                 rejected.write(CarveRejected {
                     terrain: carve.terrain,
+                    request: None,
                     error,
                 });
             }
@@ -204,6 +259,7 @@ pub fn read_requests(
             Err(_) => {
                 rejected.write(CarveRejected {
                     terrain: undo.terrain,
+                    request: None,
                     error: TerrainError::NoSuchTerrain,
                 });
             }
@@ -280,6 +336,7 @@ pub fn start_jobs(
                 Err(error) => {
                     rejected.write(CarveRejected {
                         terrain: entity,
+                        request: None,
                         error,
                     });
                 }
@@ -288,8 +345,9 @@ pub fn start_jobs(
                 tool,
                 edit,
                 requested,
+                request,
             }) => {
-                let mut batch = vec![(tool, edit, requested)];
+                let mut batch = vec![(tool, edit, requested, request)];
                 while batch.len() < settings.max_batch.max(1)
                     && matches!(terrain.runtime.queue.front(), Some(Job::Carve { .. }))
                 {
@@ -297,9 +355,10 @@ pub fn start_jobs(
                         tool,
                         edit,
                         requested,
+                        request,
                     }) = terrain.runtime.queue.pop_front()
                     {
-                        batch.push((tool, edit, requested));
+                        batch.push((tool, edit, requested, request));
                     }
                 }
                 let octree = terrain.octree.clone();
@@ -329,16 +388,36 @@ pub fn finish_jobs(
         terrain.runtime.task = None;
         let mut reports = Vec::new();
         let mut debris = Vec::new();
-        let report = |edit, cells, apply_time| CarveApplied {
+        let report = |edit, request, hash, cells, apply_time| CarveApplied {
             terrain: entity,
             edit,
+            request,
+            hash,
             cells,
             apply_time,
             mesh_time: output.mesh_time,
             collider_time: output.collider_time,
             latency: Duration::ZERO,
         };
-        for step in output.steps {
+        // The octree after each applied step: the next applied step's
+        // `before`, or the job's octree after the last.
+        let afters: Vec<Octree> = {
+            let mut next = output.octree.clone();
+            let mut out: Vec<Octree> = output
+                .steps
+                .iter()
+                .rev()
+                .map(|step| match step {
+                    StepOutcome::Applied { before, .. } => {
+                        std::mem::replace(&mut next, before.clone())
+                    }
+                    _ => next.clone(),
+                })
+                .collect();
+            out.reverse();
+            out
+        };
+        for (step, after) in output.steps.into_iter().zip(afters) {
             match step {
                 StepOutcome::Applied {
                     before,
@@ -347,19 +426,35 @@ pub fn finish_jobs(
                     edit,
                     apply_time,
                     requested,
+                    request,
                     debris: pieces,
                 } => {
                     debris.extend(pieces);
                     let cells = changes.changed.len() + changes.removed.len();
-                    reports.push((report(Some(edit), cells, apply_time), requested));
+                    terrain
+                        .hash
+                        .update(&after, changes.changed.iter().chain(&changes.removed));
+                    if request.is_some() {
+                        terrain.last_request = request;
+                    }
+                    let hash = terrain.hash.value();
+                    reports.push((
+                        report(Some(edit), request, hash, cells, apply_time),
+                        requested,
+                    ));
                     terrain.record(before, changes, tool, edit);
                 }
                 StepOutcome::Undone { cells, requested } => {
-                    reports.push((report(None, cells, Duration::ZERO), requested));
+                    let hash = terrain.hash.value();
+                    reports.push((report(None, None, hash, cells, Duration::ZERO), requested));
                 }
-                StepOutcome::Rejected { error } => {
+                StepOutcome::Rejected { error, request } => {
+                    if request.is_some() {
+                        terrain.last_request = request;
+                    }
                     rejected.write(CarveRejected {
                         terrain: entity,
+                        request,
                         error,
                     });
                 }

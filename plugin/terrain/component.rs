@@ -8,7 +8,8 @@ use std::time::Instant;
 use bevy::prelude::*;
 use bevy::tasks::Task;
 use chisel_bsp::octree::{
-    CellFaces, CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, SeamedMesher, Tool,
+    CellFaces, CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, SeamedMesher, StateHash,
+    Tool,
 };
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::Label;
@@ -64,6 +65,13 @@ pub struct Terrain {
     /// The materials carves may add or paint.
     #[reflect(ignore)]
     pub(crate) labels: BTreeSet<Label>,
+    /// The state hash of `octree`, kept up to date per carve.
+    #[reflect(ignore)]
+    pub(crate) hash: StateHash,
+    /// The request id of the latest tracked carve ([`super::GridCarve`])
+    /// the octree includes, applied or refused.
+    #[reflect(ignore)]
+    pub(crate) last_request: Option<u64>,
     #[reflect(ignore)]
     pub(crate) runtime: Runtime,
 }
@@ -87,6 +95,7 @@ pub(crate) enum Job {
         tool: GridTool,
         edit: Edit,
         requested: Instant,
+        request: Option<u64>,
     },
     Undo {
         requested: Instant,
@@ -122,6 +131,8 @@ impl Terrain {
     ) -> Result<Self, TerrainError> {
         let octree = base.build(config)?;
         Ok(Self {
+            hash: StateHash::of(&octree),
+            last_request: None,
             octree,
             quantization,
             debris: Some(base.debris_config()),
@@ -226,6 +237,23 @@ impl Terrain {
         &self.octree
     }
 
+    /// The state hash of the octree's content ([`chisel_bsp::octree::hash`]):
+    /// equal on every peer whose octree is bit-identical, whatever the
+    /// thread count; updated per carve from the cells it changed.
+    #[must_use]
+    pub fn state_hash(&self) -> u64 {
+        self.hash.value()
+    }
+
+    /// The request id of the latest tracked carve ([`super::GridCarve`])
+    /// the octree includes, whether the kernel applied or refused it
+    /// (`None` before the first). A snapshot taken now ([`Terrain::to_bytes`])
+    /// holds exactly the tracked carves up to this one.
+    #[must_use]
+    pub fn last_request(&self) -> Option<u64> {
+        self.last_request
+    }
+
     /// The grid: unit and origin.
     #[must_use]
     pub fn quantization(&self) -> &Quantization {
@@ -300,6 +328,8 @@ impl Terrain {
             None => changes,
         };
         let before = std::mem::replace(&mut self.octree, octree);
+        self.hash
+            .update(&self.octree, changes.changed.iter().chain(&changes.removed));
         self.record(before, changes.clone(), tool.clone(), edit);
         Ok(changes)
     }
@@ -317,6 +347,7 @@ impl Terrain {
         keys.extend(step.changes.removed);
         keys.sort_unstable();
         keys.dedup();
+        self.hash.update(&self.octree, &keys);
         Ok(keys)
     }
 

@@ -238,6 +238,8 @@ impl Terrain {
             .map(|(before, changes)| UndoStep { before, changes })
             .collect();
         Ok(Terrain {
+            hash: chisel_bsp::octree::StateHash::of(&octree),
+            last_request: None,
             octree,
             quantization,
             debris: Some(base.debris_config()),

@@ -46,10 +46,12 @@ pub(crate) enum StepOutcome {
         edit: Edit,
         apply_time: Duration,
         requested: Instant,
+        request: Option<u64>,
         debris: Vec<BuiltDebris>,
     },
     Rejected {
         error: TerrainError,
+        request: Option<u64>,
     },
     Undone {
         cells: usize,
@@ -128,7 +130,7 @@ pub(crate) fn carve_batch(
     mut octree: Octree,
     mesher: SeamedMesher,
     context: &JobContext,
-    batch: Vec<(GridTool, Edit, Instant)>,
+    batch: Vec<(GridTool, Edit, Instant, Option<u64>)>,
 ) -> JobOutput {
     let mut steps = Vec::with_capacity(batch.len());
     let mut keys = Vec::new();
@@ -136,7 +138,7 @@ pub(crate) fn carve_batch(
     // the batch replaced; a later carve that changes the cell otherwise
     // (relabels it, splits it, or only touches it) drops them.
     let mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>> = BTreeMap::new();
-    for (tool, edit, requested) in batch {
+    for (tool, edit, requested, request) in batch {
         let before = octree.clone();
         let start = Instant::now();
         let carved =
@@ -168,12 +170,13 @@ pub(crate) fn carve_batch(
                     edit,
                     apply_time,
                     requested,
+                    request,
                     debris,
                 });
             }
             Err(error) => {
                 octree = before;
-                steps.push(StepOutcome::Rejected { error });
+                steps.push(StepOutcome::Rejected { error, request });
             }
         }
     }

@@ -19,7 +19,7 @@
 //! - [`base`] — what a terrain starts from, on the grid.
 //! - [`tool`] — [`CarveTool`] in world units, [`GridTool`] on the grid.
 //! - [`carve`] — the messages and the systems: [`Carve`] / [`UndoCarve`]
-//!   in, exact edits on the async compute pool, meshes of the changed cells
+//!   in ([`GridCarve`]: a carve already on the grid, with a request id), exact edits on the async compute pool, meshes of the changed cells
 //!   within a per-frame budget, [`TerrainCellChanged`] and [`CarveApplied`]
 //!   out.
 //! - `jobs` — what a carve job does on the worker threads.
@@ -113,7 +113,7 @@ pub use asset::{
 };
 pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
-    Carve, CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings, UndoCarve,
+    Carve, CarveApplied, CarveRejected, GridCarve, TerrainCellChanged, TerrainSettings, UndoCarve,
 };
 pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
@@ -204,6 +204,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
     app.init_resource::<TerrainSettings>()
         .init_resource::<TerrainPhysicsBackend>()
         .add_message::<Carve>()
+        .add_message::<GridCarve>()
         .add_message::<UndoCarve>()
         .add_message::<CarveApplied>()
         .add_message::<CarveRejected>()

@@ -42,6 +42,7 @@ use crate::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label, Node, NodeId};
 
 /// What an edit does where the tool is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Edit {
     /// Remove all material inside the tool.
     Subtract,

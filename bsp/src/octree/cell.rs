@@ -11,6 +11,7 @@ use crate::exact::IntPoint;
 
 /// One octree cell: its depth and its integer position at that depth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CellKey {
     /// Depth below the root (the root is 0).
     pub depth: u8,

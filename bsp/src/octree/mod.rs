@@ -26,6 +26,8 @@
 //!   faces on cell borders kept only where the neighbour across is empty.
 //! - [`seams`] — sealed cell meshes that meet their neighbours' edge to
 //!   edge, kept up to date across edits ([`SeamedMesher`]).
+//! - [`hash`] — a state hash of an octree's content, updated per edit
+//!   from the cells it changed ([`StateHash`]).
 //! - [`store`] — octree files: exact, versioned and checked
 //!   ([`Octree::to_bytes`], [`Octree::from_bytes`]).
 //!
@@ -57,6 +59,7 @@ pub mod components;
 pub mod debris;
 pub mod exact_volume;
 mod graft;
+pub mod hash;
 pub mod import;
 pub mod measure;
 mod mesh_check;
@@ -73,6 +76,7 @@ pub use cell::{CellBox, CellKey};
 pub use components::{Anchors, Component, CubeSide, SolidCell};
 pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};
 pub use exact_volume::ExactVolume;
+pub use hash::StateHash;
 pub use seams::SeamedMesher;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

@@ -431,6 +431,23 @@ fn check_envelope(bytes: &[u8]) -> Result<usize, Error> {
     Ok(end)
 }
 
+/// One leaf's record as an octree file stores it (tag, then the label or
+/// the BSP's planes and nodes): the bytes [`super::hash`] hashes.
+pub(crate) fn leaf_record(leaf: &Leaf) -> Vec<u8> {
+    let mut w = Writer(Vec::new());
+    match leaf {
+        Leaf::Uniform(label) => {
+            w.u8(NODE_UNIFORM);
+            w.u8(*label);
+        }
+        Leaf::Bsp(bsp) => {
+            w.u8(NODE_BSP);
+            write_bsp(&mut w, bsp);
+        }
+    }
+    w.0
+}
+
 fn write_bsp(w: &mut Writer, bsp: &Bsp) {
     w.index(bsp.planes().len());
     w.index(bsp.nodes().len());

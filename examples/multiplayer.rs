@@ -1,0 +1,445 @@
+//! Multiplayer carving: one authoritative server, clients that see each
+//! other's craters live, every peer with a bit-identical terrain.
+//!
+//! ```text
+//! cargo run --release --all-features --example multiplayer -- --server          # terminal 1
+//! cargo run --release --all-features --example multiplayer -- --client 127.0.0.1:5000   # terminal 2, 3, …
+//! ```
+//!
+//! `--server [ADDR]` listens (default `0.0.0.0:5000`) without a window;
+//! `--client ADDR` opens a window: left click blasts a crater, right click
+//! heaps up dirt, and the server sends every player's carve to everyone.
+//! The HUD shows the carves in the terrain, its state hash and the hash
+//! checks passed.
+//!
+//! With no arguments and no display (or `CHISEL_HEADLESS=1`), one process
+//! runs a server and two scripted players on 127.0.0.1 (each in its own
+//! thread, each its own Bevy app talking UDP), plus a third player that
+//! renders offscreen: once it has applied the others' craters it writes
+//! `screenshots/multiplayer-*.png` and checks that its octree is the
+//! server's, bit for bit.
+
+use std::net::{Ipv4Addr, SocketAddr};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, mpsc};
+use std::time::Duration;
+
+use bevy::app::ScheduleRunnerPlugin;
+use bevy::asset::AssetPlugin;
+use bevy::prelude::*;
+use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
+use bevy_chisel::bsp::tools::Quantization;
+use bevy_chisel::net::{
+    NetCarveRequest, NetClientPlugin, NetClientStats, NetServerPlugin, NetServerStats, NetTerrain,
+    WireTool, start_client, start_server,
+};
+use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
+use bevy_chisel::terrain::{
+    CarveTool, Terrain, TerrainBase, TerrainPlugin, TerrainSurface, TerrainSystems,
+    TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
+};
+use bevy_chisel::viewer::{
+    CursorPick, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
+};
+
+const ROCK: u8 = 1;
+const DIRT: u8 = 2;
+const BLAST_RADIUS: f32 = 1.2;
+const HEAP_RADIUS: f32 = 0.8;
+/// Craters each scripted player blasts in the headless run.
+const SCRIPTED: usize = 6;
+
+fn main() -> AppExit {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("--server") => {
+            let addr = args
+                .get(1)
+                .map_or(Ok(SocketAddr::from((Ipv4Addr::UNSPECIFIED, 5000))), |a| {
+                    a.parse()
+                });
+            match addr {
+                Ok(addr) => run_server(addr),
+                Err(e) => fail(&format!("bad server address: {e}")),
+            }
+        }
+        Some("--client") => match args.get(1).map(|a| a.parse::<SocketAddr>()) {
+            Some(Ok(addr)) => run_player(addr, Presentation::detect("multiplayer"), None),
+            _ => fail("--client needs the server's address, e.g. --client 127.0.0.1:5000"),
+        },
+        Some(other) => fail(&format!(
+            "unknown argument {other}; use --server or --client ADDR"
+        )),
+        None => match Presentation::detect("multiplayer") {
+            Presentation::Window => fail(
+                "start a server with --server and players with --client ADDR \
+                 (or set CHISEL_HEADLESS=1 for the one-process demo)",
+            ),
+            Presentation::Headless(config) => run_headless(config),
+        },
+    }
+}
+
+fn fail(message: &str) -> AppExit {
+    eprintln!("multiplayer: {message}");
+    AppExit::from_code(2)
+}
+
+/// The shared world: a 24 m × 4 m × 24 m slab of rock on a 1 cm grid.
+fn slab() -> Result<Terrain, BevyError> {
+    let grid = Quantization::new(0.01, [-12.0, -4.0, -12.0])?;
+    let base = TerrainBase::Box {
+        origin: [0; 3],
+        size_log2: 12,
+        solid: CellBox {
+            min: [0; 3],
+            max: [2400, 400, 2400],
+        },
+        label: ROCK,
+    };
+    let config = OctreeConfig {
+        max_bsp_nodes: 40,
+        max_depth: 10,
+    };
+    Ok(Terrain::from_base(grid, base, config)?
+        .with_labels([DIRT])
+        .with_max_undo(0))
+}
+
+/// A server app (no window, no renderer): the terrain and the plugins.
+fn server_app() -> App {
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins.set(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(
+            1.0 / 120.0,
+        ))),
+        AssetPlugin::default(),
+        TerrainPlugin,
+        NetServerPlugin,
+    ))
+    .init_asset::<Mesh>()
+    .init_asset::<StandardMaterial>()
+    .add_systems(Startup, |mut commands: Commands| -> Result {
+        commands.spawn((slab()?, NetTerrain(1)));
+        Ok(())
+    });
+    app.finish();
+    app.cleanup();
+    app
+}
+
+fn run_server(addr: SocketAddr) -> AppExit {
+    let mut app = server_app();
+    match start_server(app.world_mut(), addr, 32) {
+        Ok(bound) => println!("multiplayer server listening on {bound}"),
+        Err(e) => return fail(&format!("cannot listen on {addr}: {e}")),
+    }
+    app.add_systems(Update, log_server);
+    app.run()
+}
+
+fn log_server(stats: Res<NetServerStats>, mut last: Local<u64>) {
+    if stats.accepted != *last {
+        *last = stats.accepted;
+        println!(
+            "{} carves accepted, {} refused, {} snapshots sent",
+            stats.accepted, stats.rejected, stats.snapshots
+        );
+    }
+}
+
+/// What a player's HUD shows, and what the headless run waits for.
+#[derive(Resource, Clone)]
+struct Player {
+    /// Scripted players send their craters; `None` for a mouse player.
+    script: Option<usize>,
+    sent: usize,
+    /// In the headless run: the server's octree bytes when all is done.
+    check: Option<Arc<Mutex<Option<(u64, Vec<u8>)>>>>,
+}
+
+/// A player: a window (or offscreen target) with the terrain as the
+/// server sends it.
+fn run_player(
+    addr: SocketAddr,
+    presentation: Presentation,
+    check: Option<Arc<Mutex<Option<(u64, Vec<u8>)>>>>,
+) -> AppExit {
+    let headless = matches!(presentation, Presentation::Headless(_));
+    let mut app = App::new();
+    presentation.add_default_plugins(&mut app, "bevy_chisel — multiplayer");
+    app.add_plugins((
+        TerrainPlugin,
+        TriplanarMaterialPlugin,
+        ViewerPlugin,
+        NetClientPlugin,
+    ))
+    .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+    .insert_resource(Player {
+        // The offscreen player of the one-process run blasts too.
+        script: check.is_some().then_some(2),
+        sent: 0,
+        check,
+    })
+    .add_observer(dress_terrain)
+    .add_systems(Startup, spawn_view)
+    .add_systems(
+        Update,
+        (
+            (click, scripted).before(TerrainSystems::Carve),
+            hud.after(TerrainSystems::Mesh),
+        ),
+    );
+    if headless {
+        app.insert_resource(HoldCaptures(true))
+            .add_systems(Update, release_captures.after(TerrainSystems::Mesh));
+    }
+    app.finish();
+    app.cleanup();
+    let id = std::process::id() as u64 * 1000 + u64::from(headless);
+    if let Err(e) = start_client(app.world_mut(), addr, id) {
+        return fail(&format!("cannot connect to {addr}: {e}"));
+    }
+    app.run()
+}
+
+/// Gives a terrain from the server its textures.
+fn dress_terrain(
+    add: On<Add, NetTerrain>,
+    mut commands: Commands,
+    mut materials: ResMut<Assets<TriplanarMaterial>>,
+) {
+    let table = surface_table(
+        &mut materials,
+        [(ROCK, TerrainSurface::Rock), (DIRT, TerrainSurface::Dirt)],
+        TerrainSurface::Rock,
+    );
+    commands.entity(add.entity).insert(table);
+}
+
+fn spawn_view(mut commands: Commands) {
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 11_000.0,
+            shadow_maps_enabled: true,
+            ..default()
+        },
+        Transform::from_xyz(12.0, 25.0, 8.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    commands.insert_resource(GlobalAmbientLight {
+        brightness: 400.0,
+        ..default()
+    });
+    commands.spawn(OrbitCamera {
+        min_distance: 3.0,
+        max_distance: 80.0,
+        ..OrbitCamera::new(Vec3::new(0.0, 0.0, 0.0), 24.0).with_angles(0.6, 0.75)
+    });
+    commands.spawn(overlay_text());
+}
+
+/// Left click: a crater; right click: a heap of dirt; both as requests to
+/// the server, which sends them back to everyone.
+fn click(
+    buttons: Res<ButtonInput<MouseButton>>,
+    pick: CursorPick,
+    mut player: ResMut<Player>,
+    mut requests: MessageWriter<NetCarveRequest>,
+) {
+    let left = buttons.just_pressed(MouseButton::Left);
+    if !(left || buttons.just_pressed(MouseButton::Right)) {
+        return;
+    }
+    let Some((terrain, hit)) = pick.terrain_hit(200.0) else {
+        return;
+    };
+    let (tool, edit) = if left {
+        (blast(hit.point, BLAST_RADIUS, player.sent), Edit::Subtract)
+    } else {
+        let centre = hit.point + hit.normal * (0.6 * HEAP_RADIUS);
+        (
+            CarveTool::dodecahedron(HEAP_RADIUS, centre),
+            Edit::Add(DIRT),
+        )
+    };
+    player.sent += 1;
+    requests.write(NetCarveRequest {
+        request: player.sent as u64,
+        terrain,
+        tool: WireTool::from(&tool),
+        edit,
+    });
+}
+
+/// A scripted player blasts its craters along a line of its own, all at
+/// once, a few frames after its terrain has arrived.
+fn scripted(
+    mut player: ResMut<Player>,
+    terrains: Query<(Entity, &Terrain), With<NetTerrain>>,
+    mut requests: MessageWriter<NetCarveRequest>,
+    mut frame: Local<u32>,
+) {
+    let Some(lane) = player.script else {
+        return;
+    };
+    let Ok((entity, terrain)) = terrains.single() else {
+        return;
+    };
+    *frame += 1;
+    if player.sent >= SCRIPTED || !terrain.is_idle() || *frame < 3 {
+        return;
+    }
+    for k in 0..SCRIPTED {
+        let x = -7.5 + 3.0 * k as f32;
+        let z = -6.0 + 6.0 * lane as f32;
+        requests.write(NetCarveRequest {
+            request: k as u64,
+            terrain: entity,
+            tool: WireTool::from(&blast(Vec3::new(x, 0.0, z), BLAST_RADIUS, k + 3 * lane)),
+            edit: Edit::Subtract,
+        });
+    }
+    player.sent = SCRIPTED;
+}
+
+fn hud(
+    stats: Res<NetClientStats>,
+    terrains: Query<&Terrain, With<NetTerrain>>,
+    mut text: Query<&mut Text, With<Overlay>>,
+) {
+    let Ok(mut text) = text.single_mut() else {
+        return;
+    };
+    let state = terrains.single().map_or_else(
+        |_| "waiting for the server's terrain".to_owned(),
+        |t| {
+            format!(
+                "{} carves | state hash {:016x} | {} triangles",
+                t.journal().len(),
+                t.state_hash(),
+                t.triangle_count()
+            )
+        },
+    );
+    text.0 = format!(
+        "multiplayer | {state} | {} hash checks passed\n\
+         LMB blast crater | RMB heap dirt | {ORBIT_HELP}",
+        stats.checks_passed
+    );
+}
+
+/// Headless: capture once every player's craters are in and meshed, and
+/// the octree is the server's.
+fn release_captures(
+    player: Res<Player>,
+    terrains: Query<&Terrain, With<NetTerrain>>,
+    mut hold: ResMut<HoldCaptures>,
+) {
+    if !hold.0 {
+        return;
+    }
+    let Ok(terrain) = terrains.single() else {
+        return;
+    };
+    let Some(check) = &player.check else {
+        // A lone player run offscreen: capture what the server has.
+        hold.0 = !terrain.is_idle();
+        return;
+    };
+    // Carves before this player joined came in its snapshot's journal.
+    let expected = 3 * SCRIPTED;
+    if terrain.journal().len() < expected || !terrain.is_idle() {
+        return;
+    }
+    let Ok(server) = check.lock() else {
+        return;
+    };
+    if let Some((hash, bytes)) = server.as_ref()
+        && *hash == terrain.state_hash()
+    {
+        assert!(
+            *bytes == terrain.octree().to_bytes(),
+            "equal hashes but different octrees"
+        );
+        println!(
+            "all {expected} carves applied; octree identical to the server's (hash {hash:016x})"
+        );
+        hold.0 = false;
+    }
+}
+
+/// One process: a server and two scripted players in threads, and a third
+/// scripted player rendering offscreen in the main thread.
+fn run_headless(config: HeadlessConfig) -> AppExit {
+    let stop = Arc::new(AtomicBool::new(false));
+    let server_state: Arc<Mutex<Option<(u64, Vec<u8>)>>> = Arc::default();
+    let (tx, rx) = mpsc::channel();
+    let mut threads = Vec::new();
+    {
+        let (stop, state) = (stop.clone(), server_state.clone());
+        threads.push(std::thread::spawn(move || {
+            let mut app = server_app();
+            let bound = start_server(app.world_mut(), (Ipv4Addr::LOCALHOST, 0).into(), 8);
+            let _ = tx.send(bound.map_err(|e| e.to_string()));
+            while !stop.load(Ordering::Relaxed) {
+                app.update();
+                let world = app.world_mut();
+                let mut q = world.query_filtered::<&Terrain, With<NetTerrain>>();
+                if let Ok(t) = q.single(world)
+                    && t.is_idle()
+                    && let Ok(mut s) = state.lock()
+                {
+                    *s = Some((t.state_hash(), t.octree().to_bytes()));
+                }
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }));
+    }
+    let addr = match rx.recv() {
+        Ok(Ok(addr)) => addr,
+        Ok(Err(e)) => return fail(&format!("server: {e}")),
+        Err(e) => return fail(&format!("server thread: {e}")),
+    };
+    for lane in 0..2 {
+        let stop = stop.clone();
+        threads.push(std::thread::spawn(move || {
+            let mut app = App::new();
+            app.add_plugins((
+                MinimalPlugins,
+                AssetPlugin::default(),
+                TerrainPlugin,
+                NetClientPlugin,
+            ))
+            .init_asset::<Mesh>()
+            .init_asset::<StandardMaterial>()
+            .insert_resource(Player {
+                script: Some(lane),
+                sent: 0,
+                check: None,
+            })
+            .add_systems(Update, scripted.before(TerrainSystems::Carve));
+            app.finish();
+            app.cleanup();
+            if start_client(app.world_mut(), addr, 100 + lane as u64).is_ok() {
+                while !stop.load(Ordering::Relaxed) {
+                    app.update();
+                    std::thread::sleep(Duration::from_millis(2));
+                }
+            }
+        }));
+    }
+    let exit = run_player(
+        addr,
+        Presentation::Headless(HeadlessConfig {
+            capture_frames: vec![6],
+            max_frames: 3000,
+            ..config
+        }),
+        Some(server_state),
+    );
+    stop.store(true, Ordering::Relaxed);
+    for thread in threads {
+        let _ = thread.join();
+    }
+    exit
+}

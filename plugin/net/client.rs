@@ -1,0 +1,356 @@
+//! The client side: sends carve requests, applies the server's carves
+//! strictly in sequence order per terrain, builds terrains from snapshots,
+//! compares hashes and asks for a snapshot when its terrain differs.
+//!
+//! A client never rounds a tool: it sends the request's floats
+//! ([`super::wire::WireTool::World`]) and applies only the integer
+//! [`NetCarve`]s the server sends back, through [`GridCarve`]s whose
+//! request id is the carve's sequence number.
+
+use std::collections::{BTreeMap, HashMap};
+
+use bevy::prelude::*;
+use chisel_bsp::octree::Edit;
+
+use super::wire::{
+    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, ServerPacket, TerrainId, WireTool,
+};
+use crate::terrain::{CarveApplied, GridCarve, Terrain, TerrainCell, TerrainSystems};
+
+/// Ask the server to carve a terrain (on a client).
+#[derive(Message, Clone, Debug)]
+pub struct NetCarveRequest {
+    /// Chosen by the sender; echoed in [`NetCarveResult`].
+    pub request: u64,
+    /// The local terrain entity (with a [`NetTerrain`]).
+    pub terrain: Entity,
+    /// The tool: `WireTool::from(&carve_tool)` for a
+    /// [`crate::terrain::CarveTool`], or a grid tool.
+    pub tool: WireTool,
+    /// What to do inside it.
+    pub edit: Edit,
+}
+
+/// The server's answer to a [`NetCarveRequest`] (or to a packet it could
+/// not read: `request` is then `None`).
+#[derive(Message, Clone, Debug, PartialEq, Eq)]
+pub struct NetCarveResult {
+    /// The request id.
+    pub request: Option<u64>,
+    /// What became of it.
+    pub outcome: Outcome,
+}
+
+/// A terrain arrived from a snapshot: at join, or after a desync.
+#[derive(Message, Clone, Debug, PartialEq, Eq)]
+pub struct TerrainSynced {
+    /// The local terrain entity.
+    pub terrain: Entity,
+    /// Its network id.
+    pub id: TerrainId,
+    /// The last carve the snapshot holds.
+    pub seq: u64,
+    /// Snapshot bytes.
+    pub bytes: usize,
+}
+
+/// The terrain's hash after carve `seq` differs from the server's; the
+/// client asked for a snapshot.
+#[derive(Message, Clone, Debug, PartialEq, Eq)]
+pub struct Desynced {
+    /// The local terrain entity.
+    pub terrain: Entity,
+    /// The carve after which the hashes differ.
+    pub seq: u64,
+    /// This client's hash.
+    pub local: u64,
+    /// The server's hash.
+    pub server: u64,
+}
+
+/// Hashes kept per terrain for comparison with late checks.
+const KEPT_HASHES: usize = 1024;
+
+/// One terrain as this client follows it.
+#[derive(Default)]
+struct Follow {
+    entity: Option<Entity>,
+    /// The next carve to hand to the terrain.
+    next_seq: u64,
+    /// Carves received but not handed over yet.
+    waiting: BTreeMap<u64, NetCarve>,
+    /// A snapshot being received: its last carve and its bytes so far.
+    assembling: Option<(u64, Vec<u8>)>,
+    /// The hash after each recent carve (and after the snapshot).
+    hashes: BTreeMap<u64, u64>,
+    /// The server's latest check not yet compared: (seq, hash).
+    check: Option<(u64, u64)>,
+    /// Waiting for a snapshot after a desync.
+    resyncing: bool,
+}
+
+#[derive(Resource, Default)]
+struct ClientLedger {
+    terrains: HashMap<TerrainId, Follow>,
+}
+
+/// Counters of a client, for reports and tests.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct NetClientStats {
+    /// Server carves handed to the terrains.
+    pub carves: u64,
+    /// Hash checks that matched.
+    pub checks_passed: u64,
+    /// Hash checks that did not (each led to a snapshot).
+    pub desyncs: u64,
+    /// Snapshots installed.
+    pub snapshots: u64,
+}
+
+/// The client side of networked carving; connect with
+/// [`super::start_client`]. Terrains appear (with [`NetTerrain`]) when the
+/// server's snapshots arrive.
+pub struct NetClientPlugin;
+
+impl Plugin for NetClientPlugin {
+    fn build(&self, app: &mut App) {
+        if !app.is_plugin_added::<super::NetProtocolPlugin>() {
+            app.add_plugins(super::NetProtocolPlugin);
+        }
+        app.init_resource::<ClientLedger>()
+            .init_resource::<NetClientStats>()
+            .add_message::<NetCarveRequest>()
+            .add_message::<NetCarveResult>()
+            .add_message::<TerrainSynced>()
+            .add_message::<Desynced>()
+            .add_systems(
+                Update,
+                (
+                    (send_requests, receive_packets, hand_over)
+                        .chain()
+                        .before(TerrainSystems::Carve),
+                    compare_hashes.after(TerrainSystems::Mesh),
+                ),
+            );
+    }
+}
+
+fn send_requests(
+    mut requests: MessageReader<NetCarveRequest>,
+    terrains: Query<&NetTerrain>,
+    mut packets: MessageWriter<ClientPacket>,
+    mut results: MessageWriter<NetCarveResult>,
+) {
+    for request in requests.read() {
+        let Ok(id) = terrains.get(request.terrain) else {
+            results.write(NetCarveResult {
+                request: Some(request.request),
+                outcome: Outcome::Rejected(super::wire::RejectReason::Invalid(
+                    "the entity is no networked terrain".into(),
+                )),
+            });
+            continue;
+        };
+        packets.write(ClientPacket::Request(ClientRequest::Carve {
+            request: request.request,
+            terrain: id.0,
+            tool: request.tool.clone(),
+            edit: request.edit,
+        }));
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn receive_packets(
+    mut packets: MessageReader<ServerPacket>,
+    mut ledger: ResMut<ClientLedger>,
+    mut stats: ResMut<NetClientStats>,
+    cells: Query<(Entity, &TerrainCell)>,
+    mut commands: Commands,
+    mut results: MessageWriter<NetCarveResult>,
+    mut synced: MessageWriter<TerrainSynced>,
+) {
+    for packet in packets.read() {
+        match packet {
+            ServerPacket::Carve(carve) => {
+                let follow = ledger.terrains.entry(carve.terrain).or_default();
+                if carve.seq >= follow.next_seq {
+                    follow
+                        .waiting
+                        .entry(carve.seq)
+                        .or_insert_with(|| carve.clone());
+                }
+            }
+            ServerPacket::Result { request, outcome } => {
+                results.write(NetCarveResult {
+                    request: *request,
+                    outcome: outcome.clone(),
+                });
+            }
+            ServerPacket::Check { terrain, seq, hash } => {
+                let follow = ledger.terrains.entry(*terrain).or_default();
+                follow.check = Some((*seq, *hash));
+            }
+            ServerPacket::Snapshot(part) => {
+                let follow = ledger.terrains.entry(part.terrain).or_default();
+                if part.offset == 0 {
+                    follow.assembling = Some((part.seq, Vec::new()));
+                }
+                let Some((seq, bytes)) = follow.assembling.as_mut() else {
+                    continue;
+                };
+                if *seq != part.seq || bytes.len() as u64 != part.offset {
+                    warn!("snapshot part out of order for terrain {}", part.terrain);
+                    follow.assembling = None;
+                    continue;
+                }
+                bytes.extend_from_slice(&part.bytes);
+                if (bytes.len() as u64) < part.total {
+                    continue;
+                }
+                let Some((seq, bytes)) = follow.assembling.take() else {
+                    continue;
+                };
+                let mut terrain = match Terrain::from_bytes(&bytes) {
+                    Ok(terrain) => terrain,
+                    Err(e) => {
+                        error!("snapshot of terrain {} refused: {e}", part.terrain);
+                        continue;
+                    }
+                };
+                terrain.labels.extend(part.labels.iter().copied());
+                match (&mut terrain.debris, part.debris) {
+                    (Some(config), Some((volume, cells))) => {
+                        config.max_volume = volume;
+                        config.max_cells = cells.map(|c| usize::try_from(c).unwrap_or(usize::MAX));
+                    }
+                    (debris, None) => *debris = None,
+                    _ => {}
+                }
+                let hash = terrain.state_hash();
+                let pose = Transform::from(&part.pose);
+                let entity = match follow.entity {
+                    Some(entity) => {
+                        for (cell, of) in &cells {
+                            if of.terrain == entity {
+                                commands.entity(cell).despawn();
+                            }
+                        }
+                        commands.entity(entity).insert((terrain, pose));
+                        entity
+                    }
+                    None => commands
+                        .spawn((terrain, NetTerrain(part.terrain), pose))
+                        .id(),
+                };
+                follow.entity = Some(entity);
+                follow.next_seq = seq + 1;
+                follow.waiting.retain(|&s, _| s > seq);
+                follow.hashes.clear();
+                follow.hashes.insert(seq, hash);
+                follow.resyncing = false;
+                stats.snapshots += 1;
+                synced.write(TerrainSynced {
+                    terrain: entity,
+                    id: part.terrain,
+                    seq,
+                    bytes: bytes.len(),
+                });
+            }
+        }
+    }
+}
+
+/// Hands the waiting carves to their terrains, in sequence order and
+/// without gaps.
+fn hand_over(
+    mut ledger: ResMut<ClientLedger>,
+    mut stats: ResMut<NetClientStats>,
+    terrains: Query<(), With<Terrain>>,
+    mut carves: MessageWriter<GridCarve>,
+) {
+    for follow in ledger.terrains.values_mut() {
+        let Some(entity) = follow.entity else {
+            continue;
+        };
+        if follow.resyncing || terrains.get(entity).is_err() {
+            continue;
+        }
+        while let Some(carve) = follow.waiting.remove(&follow.next_seq) {
+            carves.write(GridCarve {
+                terrain: entity,
+                tool: carve.tool,
+                edit: carve.edit,
+                request: carve.seq,
+            });
+            stats.carves += 1;
+            follow.next_seq += 1;
+        }
+    }
+}
+
+/// Keeps the hash after each applied carve and compares it with the
+/// server's checks; a difference asks for a snapshot.
+fn compare_hashes(
+    mut applied: MessageReader<CarveApplied>,
+    mut ledger: ResMut<ClientLedger>,
+    mut stats: ResMut<NetClientStats>,
+    terrains: Query<&NetTerrain>,
+    mut packets: MessageWriter<ClientPacket>,
+    mut desynced: MessageWriter<Desynced>,
+) {
+    for report in applied.read() {
+        let (Some(seq), Ok(id)) = (report.request, terrains.get(report.terrain)) else {
+            continue;
+        };
+        if let Some(follow) = ledger.terrains.get_mut(&id.0) {
+            follow.hashes.insert(seq, report.hash);
+            while follow.hashes.len() > KEPT_HASHES {
+                follow.hashes.pop_first();
+            }
+        }
+    }
+    for (&id, follow) in &mut ledger.terrains {
+        let (Some((seq, server)), Some(entity)) = (follow.check, follow.entity) else {
+            continue;
+        };
+        if follow.resyncing {
+            follow.check = None;
+            continue;
+        }
+        let Some(&local) = follow.hashes.get(&seq) else {
+            // Not applied yet (kept until a newer check replaces it), or
+            // older than what is kept.
+            if follow
+                .hashes
+                .first_key_value()
+                .is_some_and(|(&s, _)| s > seq)
+            {
+                follow.check = None;
+            }
+            continue;
+        };
+        follow.check = None;
+        if local == server {
+            stats.checks_passed += 1;
+            continue;
+        }
+        stats.desyncs += 1;
+        follow.resyncing = true;
+        warn!(
+            "terrain {id}: hash {local:#018x} after carve {seq}, server has {server:#018x}; \
+             asking for a snapshot"
+        );
+        desynced.write(Desynced {
+            terrain: entity,
+            seq,
+            local,
+            server,
+        });
+        packets.write(ClientPacket::Request(ClientRequest::Desync {
+            terrain: id,
+            seq,
+            hash: local,
+        }));
+    }
+}

@@ -1,0 +1,481 @@
+//! The authoritative side: validates carve requests, orders them per
+//! terrain, applies them through the terrain plugin, broadcasts accepted
+//! carves with their sequence numbers, answers every request, sends hash
+//! checks, and snapshots to clients that join or fall out of step.
+//!
+//! Per terrain, accepted carves are numbered 1, 2, … in the order they are
+//! queued, which is the order the terrain applies them in. A carve is sent
+//! as a [`GridCarve`] whose request id is its sequence number, so the
+//! terrain's [`Terrain::last_request`] names the last carve in its octree:
+//! a snapshot taken at any moment holds exactly carves `1..=last_request`,
+//! and the carves after it are kept in a log until the terrain has them.
+
+use std::collections::{BTreeMap, HashMap};
+use std::time::{Duration, Instant};
+
+use bevy::prelude::*;
+use bevy_replicon::prelude::*;
+use bevy_replicon::server::AuthorizedClient;
+
+use super::wire::{
+    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, RejectReason, ServerPacket,
+    SnapshotPart, TerrainId, WirePose, WireTool,
+};
+use crate::terrain::{CarveApplied, CarveRejected, GridCarve, GridTool, Terrain, TerrainSystems};
+
+/// What the server accepts from one client.
+#[derive(Resource, Clone, Debug)]
+pub struct NetLimits {
+    /// Most convex pieces in one tool.
+    pub max_pieces: usize,
+    /// Most points in one piece.
+    pub max_points: usize,
+    /// Largest extent of a tool along any axis, in world units.
+    pub max_tool_extent: f64,
+    /// Carves per second a client may keep up.
+    pub carves_per_second: f64,
+    /// Carves a client may send at once after a pause.
+    pub burst: f64,
+    /// How often the server sends its hashes for comparison.
+    pub check_interval: Duration,
+    /// Bytes of one snapshot part.
+    pub snapshot_part_bytes: usize,
+}
+
+impl Default for NetLimits {
+    fn default() -> Self {
+        Self {
+            max_pieces: 16,
+            max_points: 1024,
+            max_tool_extent: 64.0,
+            carves_per_second: 20.0,
+            burst: 40.0,
+            check_interval: Duration::from_millis(250),
+            snapshot_part_bytes: 256 << 10,
+        }
+    }
+}
+
+/// A request the server refused (also sent to the client).
+#[derive(Message, Clone, Debug)]
+pub struct RequestRejected {
+    /// Who sent it.
+    pub client: ClientId,
+    /// Its request id (`None` for a malformed packet).
+    pub request: Option<u64>,
+    /// Why.
+    pub reason: RejectReason,
+}
+
+/// A client reported that its terrain differs from the server's; it gets a
+/// fresh snapshot.
+#[derive(Message, Clone, Debug)]
+pub struct DesyncReported {
+    /// The client.
+    pub client: ClientId,
+    /// The terrain.
+    pub terrain: TerrainId,
+    /// The carve after which the hashes differ.
+    pub seq: u64,
+}
+
+/// Counters of the server, for reports and benchmarks.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct NetServerStats {
+    /// Carves accepted and broadcast.
+    pub accepted: u64,
+    /// Requests refused, by validation or by the kernel.
+    pub rejected: u64,
+    /// Encoded bytes of every carve broadcast (one copy each).
+    pub carve_bytes: u64,
+    /// Snapshots sent.
+    pub snapshots: u64,
+    /// Encoded bytes of every snapshot sent.
+    pub snapshot_bytes: u64,
+}
+
+/// One terrain's order of carves on the server.
+#[derive(Default)]
+struct Ledger {
+    next_seq: u64,
+    /// Accepted carves the terrain may not have applied yet.
+    log: BTreeMap<u64, NetCarve>,
+    /// Who asked for which accepted carve.
+    pending: HashMap<u64, (ClientId, u64)>,
+    /// The latest applied carve and the hash after it.
+    latest: Option<(u64, u64)>,
+    /// The last carve whose hash was sent.
+    checked: Option<u64>,
+}
+
+/// A client's allowance of carves (a token bucket).
+struct Allowance {
+    tokens: f64,
+    at: Instant,
+}
+
+#[derive(Resource, Default)]
+struct ServerLedger {
+    terrains: HashMap<TerrainId, Ledger>,
+    allowance: HashMap<ClientId, Allowance>,
+    /// Clients that need a snapshot of every terrain.
+    joining: Vec<ClientId>,
+    last_check: Option<Instant>,
+}
+
+/// The server side of networked carving: add it with `RepliconPlugins`
+/// and `RepliconRenetPlugins` (see [`super::NetProtocolPlugin`]) and put a
+/// [`NetTerrain`] on each terrain to replicate; start listening with
+/// [`super::start_server`].
+pub struct NetServerPlugin;
+
+impl Plugin for NetServerPlugin {
+    fn build(&self, app: &mut App) {
+        if !app.is_plugin_added::<super::NetProtocolPlugin>() {
+            app.add_plugins(super::NetProtocolPlugin);
+        }
+        app.init_resource::<NetLimits>()
+            .init_resource::<NetServerStats>()
+            .init_resource::<ServerLedger>()
+            .add_message::<RequestRejected>()
+            .add_message::<DesyncReported>()
+            .add_observer(on_authorized)
+            .add_systems(
+                Update,
+                (
+                    (receive_requests, send_snapshots)
+                        .chain()
+                        .before(TerrainSystems::Carve),
+                    report_results.after(TerrainSystems::Mesh),
+                ),
+            );
+    }
+}
+
+fn on_authorized(add: On<Add, AuthorizedClient>, mut ledger: ResMut<ServerLedger>) {
+    ledger.joining.push(ClientId::Client(add.entity));
+}
+
+/// Checks a request against the limits and the terrain, and rounds a
+/// float tool to the grid: the one rounding of a carve.
+fn validate(
+    tool: &WireTool,
+    edit: chisel_bsp::octree::Edit,
+    terrain: &Terrain,
+    limits: &NetLimits,
+) -> Result<GridTool, RejectReason> {
+    let (pieces, points) = tool.size();
+    if pieces > limits.max_pieces {
+        return Err(RejectReason::TooManyPieces {
+            pieces,
+            limit: limits.max_pieces,
+        });
+    }
+    if points > limits.max_points {
+        return Err(RejectReason::TooManyPoints {
+            points,
+            limit: limits.max_points,
+        });
+    }
+    let invalid = |e: crate::terrain::TerrainError| RejectReason::Invalid(e.to_string());
+    terrain.check_edit(edit).map_err(invalid)?;
+    let grid = match tool {
+        WireTool::Grid(grid) => grid.clone(),
+        WireTool::World(_) => tool
+            .to_carve_tool()
+            .ok_or_else(|| RejectReason::Invalid("no tool".into()))?
+            .to_grid(terrain.quantization())
+            .map_err(invalid)?,
+    };
+    let limit = (limits.max_tool_extent / terrain.quantization().unit()).min(1e15) as i64;
+    let extent = grid
+        .pieces
+        .iter()
+        .filter_map(|piece| chisel_bsp::octree::CellBox::enclosing(piece.iter().copied()))
+        .map(|b| {
+            (0..3)
+                .map(|a| b.max[a].saturating_sub(b.min[a]))
+                .max()
+                .unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0);
+    if extent > limit {
+        return Err(RejectReason::TooLarge { extent, limit });
+    }
+    let built = grid.build().map_err(invalid)?;
+    if !built.bounds().overlaps(&terrain.octree().root_box()) {
+        return Err(RejectReason::Invalid(
+            "the tool lies entirely outside the terrain's cube".into(),
+        ));
+    }
+    Ok(grid)
+}
+
+/// Whether `client` may send one more carve now.
+fn allow(ledger: &mut ServerLedger, client: ClientId, limits: &NetLimits) -> bool {
+    let now = Instant::now();
+    let allowance = ledger.allowance.entry(client).or_insert(Allowance {
+        tokens: limits.burst,
+        at: now,
+    });
+    let refill = now.duration_since(allowance.at).as_secs_f64() * limits.carves_per_second;
+    allowance.tokens = (allowance.tokens + refill).min(limits.burst);
+    allowance.at = now;
+    if allowance.tokens >= 1.0 {
+        allowance.tokens -= 1.0;
+        true
+    } else {
+        false
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn receive_requests(
+    mut packets: MessageReader<FromClient<ClientPacket>>,
+    terrains: Query<(Entity, &NetTerrain, &Terrain)>,
+    limits: Res<NetLimits>,
+    mut ledger: ResMut<ServerLedger>,
+    mut stats: ResMut<NetServerStats>,
+    mut carves: MessageWriter<GridCarve>,
+    mut out: MessageWriter<ToClients<ServerPacket>>,
+    mut rejected: MessageWriter<RequestRejected>,
+    mut desyncs: MessageWriter<DesyncReported>,
+) {
+    let ids: HashMap<TerrainId, (Entity, &Terrain)> =
+        terrains.iter().map(|(e, id, t)| (id.0, (e, t))).collect();
+    for packet in packets.read() {
+        let client = packet.client_id;
+        let mut reject = |request: Option<u64>, reason: RejectReason| {
+            out.write(ToClients {
+                targets: SendTargets::Single(client),
+                message: ServerPacket::Result {
+                    request,
+                    outcome: Outcome::Rejected(reason.clone()),
+                },
+            });
+            rejected.write(RequestRejected {
+                client,
+                request,
+                reason,
+            });
+        };
+        match &packet.message {
+            ClientPacket::Malformed { reason } => {
+                stats.rejected += 1;
+                reject(None, RejectReason::Malformed(reason.clone()));
+            }
+            ClientPacket::Request(ClientRequest::Desync { terrain, seq, hash }) => {
+                warn!(
+                    "client {client} reports terrain {terrain} out of step after carve {seq} \
+                     (its hash {hash:#018x}); sending a snapshot"
+                );
+                desyncs.write(DesyncReported {
+                    client,
+                    terrain: *terrain,
+                    seq: *seq,
+                });
+                if !ledger.joining.contains(&client) {
+                    ledger.joining.push(client);
+                }
+            }
+            ClientPacket::Request(ClientRequest::Carve {
+                request,
+                terrain,
+                tool,
+                edit,
+            }) => {
+                let request = Some(*request);
+                if !allow(&mut ledger, client, &limits) {
+                    stats.rejected += 1;
+                    reject(request, RejectReason::RateLimited);
+                    continue;
+                }
+                let Some(&(entity, target)) = ids.get(terrain) else {
+                    stats.rejected += 1;
+                    reject(request, RejectReason::UnknownTerrain(*terrain));
+                    continue;
+                };
+                let tool = match validate(tool, *edit, target, &limits) {
+                    Ok(tool) => tool,
+                    Err(reason) => {
+                        stats.rejected += 1;
+                        reject(request, reason);
+                        continue;
+                    }
+                };
+                let order = ledger.terrains.entry(*terrain).or_default();
+                let base = target.last_request().unwrap_or(0);
+                order.next_seq = order.next_seq.max(base) + 1;
+                let seq = order.next_seq;
+                let carve = NetCarve {
+                    terrain: *terrain,
+                    seq,
+                    tool: tool.clone(),
+                    edit: *edit,
+                };
+                order.log.insert(seq, carve.clone());
+                if let Some(request) = request {
+                    order.pending.insert(seq, (client, request));
+                }
+                carves.write(GridCarve {
+                    terrain: entity,
+                    tool,
+                    edit: *edit,
+                    request: seq,
+                });
+                let packet = ServerPacket::Carve(carve);
+                stats.accepted += 1;
+                stats.carve_bytes += postcard::to_allocvec(&packet).map_or(0, |b| b.len() as u64);
+                out.write(ToClients {
+                    targets: SendTargets::CLIENTS_ONLY,
+                    message: packet,
+                });
+            }
+        }
+    }
+}
+
+/// Answers requests once the terrain applied or refused them, keeps the
+/// latest hash per terrain and sends hash checks.
+#[allow(clippy::too_many_arguments)]
+fn report_results(
+    mut applied: MessageReader<CarveApplied>,
+    mut refused: MessageReader<CarveRejected>,
+    terrains: Query<(&NetTerrain, &Terrain)>,
+    limits: Res<NetLimits>,
+    mut ledger: ResMut<ServerLedger>,
+    mut stats: ResMut<NetServerStats>,
+    mut out: MessageWriter<ToClients<ServerPacket>>,
+    mut rejected: MessageWriter<RequestRejected>,
+) {
+    for report in applied.read() {
+        let (Some(seq), Ok((id, _))) = (report.request, terrains.get(report.terrain)) else {
+            continue;
+        };
+        let order = ledger.terrains.entry(id.0).or_default();
+        order.latest = Some((seq, report.hash));
+        if let Some((client, request)) = order.pending.remove(&seq) {
+            out.write(ToClients {
+                targets: SendTargets::Single(client),
+                message: ServerPacket::Result {
+                    request: Some(request),
+                    outcome: Outcome::Applied { seq },
+                },
+            });
+        }
+    }
+    for report in refused.read() {
+        let (Some(seq), Ok((id, _))) = (report.request, terrains.get(report.terrain)) else {
+            continue;
+        };
+        let order = ledger.terrains.entry(id.0).or_default();
+        if let Some((client, request)) = order.pending.remove(&seq) {
+            stats.rejected += 1;
+            let reason = RejectReason::Invalid(report.error.to_string());
+            out.write(ToClients {
+                targets: SendTargets::Single(client),
+                message: ServerPacket::Result {
+                    request: Some(request),
+                    outcome: Outcome::Rejected(reason.clone()),
+                },
+            });
+            rejected.write(RequestRejected {
+                client,
+                request: Some(request),
+                reason,
+            });
+        }
+    }
+    for (id, terrain) in &terrains {
+        if let Some(order) = ledger.terrains.get_mut(&id.0) {
+            let done = terrain.last_request().unwrap_or(0);
+            order.log.retain(|&seq, _| seq > done);
+        }
+    }
+    let now = Instant::now();
+    if ledger
+        .last_check
+        .is_some_and(|at| now.duration_since(at) < limits.check_interval)
+    {
+        return;
+    }
+    ledger.last_check = Some(now);
+    for (&terrain, order) in &mut ledger.terrains {
+        if let Some((seq, hash)) = order.latest
+            && order.checked != Some(seq)
+        {
+            order.checked = Some(seq);
+            out.write(ToClients {
+                targets: SendTargets::CLIENTS_ONLY,
+                message: ServerPacket::Check { terrain, seq, hash },
+            });
+        }
+    }
+}
+
+/// Sends every terrain's snapshot, then the carves it does not hold yet,
+/// to the clients that joined or asked for one.
+fn send_snapshots(
+    terrains: Query<(&NetTerrain, &Terrain, Option<&Transform>)>,
+    limits: Res<NetLimits>,
+    mut ledger: ResMut<ServerLedger>,
+    mut stats: ResMut<NetServerStats>,
+    mut out: MessageWriter<ToClients<ServerPacket>>,
+) {
+    if ledger.joining.is_empty() {
+        return;
+    }
+    let joining = std::mem::take(&mut ledger.joining);
+    let mut snapshots = Vec::new();
+    for (id, terrain, placed) in &terrains {
+        let bytes = terrain.to_bytes();
+        let seq = terrain.last_request().unwrap_or(0);
+        let debris = terrain
+            .debris()
+            .map(|config| (config.max_volume, config.max_cells.map(|c| c as u64)));
+        let pose = WirePose::from(&placed.copied().unwrap_or_default());
+        let labels: Vec<u8> = terrain.labels().iter().copied().collect();
+        let parts: Vec<SnapshotPart> = bytes
+            .chunks(limits.snapshot_part_bytes.max(1))
+            .scan(0u64, |offset, chunk| {
+                let part = SnapshotPart {
+                    terrain: id.0,
+                    seq,
+                    total: bytes.len() as u64,
+                    offset: *offset,
+                    bytes: chunk.to_vec(),
+                    pose,
+                    debris,
+                    labels: labels.clone(),
+                };
+                *offset += chunk.len() as u64;
+                Some(part)
+            })
+            .collect();
+        let log: Vec<NetCarve> = ledger
+            .terrains
+            .get(&id.0)
+            .map(|order| order.log.range(seq + 1..).map(|(_, c)| c.clone()).collect())
+            .unwrap_or_default();
+        snapshots.push((bytes.len(), parts, log));
+    }
+    for client in joining {
+        for (size, parts, log) in &snapshots {
+            stats.snapshots += 1;
+            stats.snapshot_bytes += *size as u64;
+            for part in parts {
+                out.write(ToClients {
+                    targets: SendTargets::Single(client),
+                    message: ServerPacket::Snapshot(part.clone()),
+                });
+            }
+            for carve in log {
+                out.write(ToClients {
+                    targets: SendTargets::Single(client),
+                    message: ServerPacket::Carve(carve.clone()),
+                });
+            }
+        }
+    }
+}

@@ -1,0 +1,439 @@
+//! What travels between peers: carve requests in, integer carves, results,
+//! hash checks and snapshots out. Every message is plain data with serde
+//! derives, encoded with postcard.
+//!
+//! A client sends its tool as floats ([`WireTool::World`], a copy of the
+//! [`CarveTool`]'s numbers: no trigonometry, no transform) or already on
+//! the grid ([`WireTool::Grid`]); the server rounds a float tool to the
+//! grid once ([`CarveTool::to_grid`]) and from then on only the integer
+//! [`GridTool`] travels ([`NetCarve`]), so every peer builds the same
+//! exact tool.
+//!
+//! Client packets are decoded by [`decode_client_packet`], which never
+//! fails: bytes that are no valid request become
+//! [`ClientPacket::Malformed`], which the server answers with a reason.
+
+use bevy::prelude::*;
+use bevy_replicon::bytes::Bytes;
+use bevy_replicon::prelude::*;
+use bevy_replicon::shared::message::ctx::{ClientSendCtx, ServerReceiveCtx};
+use chisel_bsp::octree::Edit;
+use serde::{Deserialize, Serialize};
+
+use crate::terrain::{CarveShape, CarveTool, GridTool, ToolPiece};
+
+/// A terrain's name on the network: the same on every peer.
+pub type TerrainId = u32;
+
+/// Marks a terrain entity as replicated under this id. Put it on a
+/// server's terrain; clients get their terrains (with it) from snapshots.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct NetTerrain(pub TerrainId);
+
+/// A pose in world units: translation, rotation quaternion `[x, y, z, w]`
+/// and scale, as in a Bevy `Transform`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WirePose {
+    /// Translation.
+    pub translation: [f32; 3],
+    /// Rotation quaternion `[x, y, z, w]`.
+    pub rotation: [f32; 4],
+    /// Scale per axis.
+    pub scale: [f32; 3],
+}
+
+impl From<&Transform> for WirePose {
+    fn from(t: &Transform) -> Self {
+        Self {
+            translation: t.translation.to_array(),
+            rotation: t.rotation.to_array(),
+            scale: t.scale.to_array(),
+        }
+    }
+}
+
+impl From<&WirePose> for Transform {
+    fn from(p: &WirePose) -> Self {
+        Transform {
+            translation: Vec3::from_array(p.translation),
+            rotation: Quat::from_array(p.rotation),
+            scale: Vec3::from_array(p.scale),
+        }
+    }
+}
+
+/// A [`CarveShape`] on the wire.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum WireShape {
+    /// [`CarveShape::Dodecahedron`].
+    Dodecahedron {
+        /// Circumradius.
+        radius: f32,
+    },
+    /// [`CarveShape::Cuboid`].
+    Cuboid {
+        /// Half edge lengths.
+        half_size: [f32; 3],
+    },
+    /// [`CarveShape::Prism`].
+    Prism {
+        /// Sides.
+        sides: u32,
+        /// Circumradius.
+        radius: f32,
+        /// Length along `+z`.
+        length: f32,
+    },
+    /// [`CarveShape::Hull`].
+    Hull(Vec<[f32; 3]>),
+}
+
+/// One [`ToolPiece`] on the wire.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WirePiece {
+    /// The shape in its own frame.
+    pub shape: WireShape,
+    /// Where it is placed.
+    pub pose: WirePose,
+    /// The end pose of a sweep.
+    pub sweep_to: Option<WirePose>,
+}
+
+/// The tool of a carve request.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum WireTool {
+    /// A [`CarveTool`]'s numbers; the server rounds it to the grid.
+    World(Vec<WirePiece>),
+    /// A tool already on the terrain's grid.
+    Grid(GridTool),
+}
+
+impl From<&CarveTool> for WireTool {
+    fn from(tool: &CarveTool) -> Self {
+        WireTool::World(
+            tool.pieces
+                .iter()
+                .map(|piece| WirePiece {
+                    shape: match &piece.shape {
+                        CarveShape::Dodecahedron { radius } => {
+                            WireShape::Dodecahedron { radius: *radius }
+                        }
+                        CarveShape::Cuboid { half_size } => WireShape::Cuboid {
+                            half_size: half_size.to_array(),
+                        },
+                        CarveShape::Prism {
+                            sides,
+                            radius,
+                            length,
+                        } => WireShape::Prism {
+                            sides: *sides,
+                            radius: *radius,
+                            length: *length,
+                        },
+                        CarveShape::Hull(points) => {
+                            WireShape::Hull(points.iter().map(|p| p.to_array()).collect())
+                        }
+                    },
+                    pose: WirePose::from(&piece.pose),
+                    sweep_to: piece.sweep_to.as_ref().map(WirePose::from),
+                })
+                .collect(),
+        )
+    }
+}
+
+impl WireTool {
+    /// Pieces and the most points of one piece (a hull's points; a fixed
+    /// shape counts its corners), for the server's size limits before any
+    /// geometry is built.
+    #[must_use]
+    pub fn size(&self) -> (usize, usize) {
+        match self {
+            WireTool::World(pieces) => (
+                pieces.len(),
+                pieces
+                    .iter()
+                    .map(|p| match &p.shape {
+                        WireShape::Hull(points) => points.len(),
+                        WireShape::Prism { sides, .. } => 2 * *sides as usize,
+                        _ => 20,
+                    })
+                    .max()
+                    .unwrap_or(0),
+            ),
+            WireTool::Grid(tool) => (
+                tool.pieces.len(),
+                tool.pieces.iter().map(Vec::len).max().unwrap_or(0),
+            ),
+        }
+    }
+
+    /// The float tool of a [`WireTool::World`] (`None` for a grid tool).
+    #[must_use]
+    pub fn to_carve_tool(&self) -> Option<CarveTool> {
+        let WireTool::World(pieces) = self else {
+            return None;
+        };
+        Some(CarveTool {
+            pieces: pieces
+                .iter()
+                .map(|piece| ToolPiece {
+                    shape: match &piece.shape {
+                        WireShape::Dodecahedron { radius } => {
+                            CarveShape::Dodecahedron { radius: *radius }
+                        }
+                        WireShape::Cuboid { half_size } => CarveShape::Cuboid {
+                            half_size: Vec3::from_array(*half_size),
+                        },
+                        WireShape::Prism {
+                            sides,
+                            radius,
+                            length,
+                        } => CarveShape::Prism {
+                            sides: *sides,
+                            radius: *radius,
+                            length: *length,
+                        },
+                        WireShape::Hull(points) => {
+                            CarveShape::Hull(points.iter().map(|&p| Vec3::from_array(p)).collect())
+                        }
+                    },
+                    pose: Transform::from(&piece.pose),
+                    sweep_to: piece.sweep_to.as_ref().map(Transform::from),
+                })
+                .collect(),
+        })
+    }
+}
+
+/// What a client asks of the server.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ClientRequest {
+    /// Carve a terrain; answered by [`ServerPacket::Result`] with the same
+    /// request id.
+    Carve {
+        /// Chosen by the client.
+        request: u64,
+        /// The terrain.
+        terrain: TerrainId,
+        /// The tool.
+        tool: WireTool,
+        /// What to do inside it.
+        edit: Edit,
+    },
+    /// The client's hash after carve `seq` differs from the server's:
+    /// send a snapshot.
+    Desync {
+        /// The terrain.
+        terrain: TerrainId,
+        /// The carve after which the hashes were compared.
+        seq: u64,
+        /// The client's hash there.
+        hash: u64,
+    },
+}
+
+/// A client packet as the server received it.
+#[derive(Message, Clone, Debug, PartialEq)]
+pub enum ClientPacket {
+    /// A well-formed request.
+    Request(ClientRequest),
+    /// Bytes that are no request (the server answers with the reason).
+    Malformed {
+        /// What was wrong.
+        reason: String,
+    },
+}
+
+/// Largest client packet decoded (bigger ones are malformed).
+pub const MAX_CLIENT_PACKET_BYTES: usize = 16 << 20;
+
+/// Encodes a client packet (only requests are sent).
+///
+/// # Errors
+/// Never for requests; a [`ClientPacket::Malformed`] is not sent.
+pub fn encode_client_packet(
+    _ctx: &mut ClientSendCtx,
+    packet: &ClientPacket,
+    out: &mut Vec<u8>,
+) -> Result<()> {
+    match packet {
+        ClientPacket::Request(request) => {
+            out.extend_from_slice(&postcard::to_allocvec(request)?);
+            Ok(())
+        }
+        ClientPacket::Malformed { .. } => Err("a malformed packet is not sent".into()),
+    }
+}
+
+/// Decodes a client packet; never fails (see [`ClientPacket::Malformed`]).
+///
+/// # Errors
+/// None.
+pub fn decode_client_packet(
+    _ctx: &mut ServerReceiveCtx,
+    bytes: &mut Bytes,
+) -> Result<ClientPacket> {
+    let data = bytes.split_to(bytes.len());
+    Ok(client_packet_from_bytes(&data))
+}
+
+/// The request in `data`, or why there is none.
+#[must_use]
+pub fn client_packet_from_bytes(data: &[u8]) -> ClientPacket {
+    if data.len() > MAX_CLIENT_PACKET_BYTES {
+        return ClientPacket::Malformed {
+            reason: format!(
+                "packet of {} bytes is over the limit of {MAX_CLIENT_PACKET_BYTES}",
+                data.len()
+            ),
+        };
+    }
+    match postcard::from_bytes::<ClientRequest>(data) {
+        Ok(request) => ClientPacket::Request(request),
+        Err(e) => ClientPacket::Malformed {
+            reason: format!("undecodable request ({} bytes): {e}", data.len()),
+        },
+    }
+}
+
+/// An accepted carve, in the integer form every peer applies.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NetCarve {
+    /// The terrain.
+    pub terrain: TerrainId,
+    /// Its place in the terrain's order of carves, from 1 without gaps.
+    pub seq: u64,
+    /// The exact tool.
+    pub tool: GridTool,
+    /// What it does.
+    pub edit: Edit,
+}
+
+/// Why the server refused a request.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum RejectReason {
+    /// The packet was no request.
+    Malformed(String),
+    /// The client sent more carves than its rate allows.
+    RateLimited,
+    /// No terrain has this id.
+    UnknownTerrain(TerrainId),
+    /// Too many pieces in one tool.
+    TooManyPieces {
+        /// Pieces sent.
+        pieces: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// Too many points in one piece.
+    TooManyPoints {
+        /// Points sent.
+        points: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// The tool spans more of the grid than allowed.
+    TooLarge {
+        /// Its largest extent, in grid units.
+        extent: i64,
+        /// The limit.
+        limit: i64,
+    },
+    /// The tool or edit is invalid: non-finite or out-of-budget
+    /// coordinates, a degenerate hull, an unknown material, a miss.
+    Invalid(String),
+}
+
+impl core::fmt::Display for RejectReason {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            RejectReason::Malformed(why) => write!(f, "malformed packet: {why}"),
+            RejectReason::RateLimited => write!(f, "too many carves; slow down"),
+            RejectReason::UnknownTerrain(id) => write!(f, "no terrain has id {id}"),
+            RejectReason::TooManyPieces { pieces, limit } => {
+                write!(f, "{pieces} tool pieces, at most {limit} allowed")
+            }
+            RejectReason::TooManyPoints { points, limit } => {
+                write!(
+                    f,
+                    "{points} points in a tool piece, at most {limit} allowed"
+                )
+            }
+            RejectReason::TooLarge { extent, limit } => write!(
+                f,
+                "the tool spans {extent} grid units, at most {limit} allowed"
+            ),
+            RejectReason::Invalid(why) => write!(f, "{why}"),
+        }
+    }
+}
+
+/// What became of a request.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Outcome {
+    /// Applied as carve `seq` of its terrain.
+    Applied {
+        /// Its sequence number.
+        seq: u64,
+    },
+    /// Refused; nothing changed.
+    Rejected(RejectReason),
+}
+
+/// One part of a terrain snapshot: the terrain file bytes
+/// ([`crate::terrain::Terrain::to_bytes`]) after carve `seq`, cut into
+/// parts so that no message is large.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SnapshotPart {
+    /// The terrain.
+    pub terrain: TerrainId,
+    /// The last carve the snapshot holds (0: none).
+    pub seq: u64,
+    /// Bytes of the whole snapshot.
+    pub total: u64,
+    /// Where this part starts.
+    pub offset: u64,
+    /// The part's bytes.
+    pub bytes: Vec<u8>,
+    /// The terrain entity's transform.
+    pub pose: WirePose,
+    /// Settings the file does not hold: whether debris is detached, and
+    /// the most volume (grid units) and cells one carve may cut loose.
+    pub debris: Option<(Option<u128>, Option<u64>)>,
+    /// The materials carves may add or paint.
+    pub labels: Vec<u8>,
+}
+
+/// What the server sends.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ServerPacket {
+    /// An accepted carve, to every client.
+    Carve(NetCarve),
+    /// The answer to one client's request.
+    Result {
+        /// The client's request id (`None` for a packet that was no
+        /// request).
+        request: Option<u64>,
+        /// What became of it.
+        outcome: Outcome,
+    },
+    /// The server's hash after carve `seq` of a terrain.
+    Check {
+        /// The terrain.
+        terrain: TerrainId,
+        /// The carve.
+        seq: u64,
+        /// The state hash after it.
+        hash: u64,
+    },
+    /// Part of a snapshot.
+    Snapshot(SnapshotPart),
+}
+
+/// Registers the messages, in the same order on every peer.
+pub(crate) fn register(app: &mut App) {
+    app.add_client_message_with(Channel::Ordered, encode_client_packet, decode_client_packet)
+        .add_server_message::<ServerPacket>(Channel::Ordered)
+        .make_message_independent::<ServerPacket>();
+}
