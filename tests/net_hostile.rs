@@ -178,13 +178,13 @@ fn hostile_requests_are_refused_with_reasons_and_hurt_no_one() {
                 return false;
             };
             let done = |app: &App, n| app.world().resource::<Seen>().results.len() >= n;
-            done(&**honest, HONEST)
-                && done(&**hostile, FLOOD + 9)
+            done(honest, HONEST)
+                && done(hostile, FLOOD + 9)
                 && [&mut **server, &mut **honest]
                     .into_iter()
                     .all(|app| terrain_of(app).is_some_and(|(_, t)| t.is_idle()))
-                && terrain_of(&mut **honest).map(|(_, t)| t.journal().len())
-                    == terrain_of(&mut **server).map(|(_, t)| t.journal().len())
+                && terrain_of(honest).map(|(_, t)| t.journal().len())
+                    == terrain_of(server).map(|(_, t)| t.journal().len())
         },
     );
     println!("settled after {frames} frames");

@@ -95,7 +95,7 @@ fn four_peers_end_with_identical_octrees() {
                 return false;
             };
             let want = journal_len(server);
-            answered(&**a) + answered(&**b) == CARVES
+            answered(a) + answered(b) == CARVES
                 && [&mut **server, &mut **a, &mut **b, &mut **c]
                     .into_iter()
                     .all(|app| idle(app) && journal_len(app) == want)

@@ -113,7 +113,7 @@ pub fn random_carve(rng: &mut Rng) -> (CarveTool, Edit) {
         rng.range(0.5, 9.5),
     );
     let tool = CarveTool::dodecahedron(rng.range(0.15, 0.45), centre);
-    let edit = if rng.next() % 5 == 0 {
+    let edit = if rng.next().is_multiple_of(5) {
         Edit::Add(2)
     } else {
         Edit::Subtract
