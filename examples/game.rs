@@ -22,7 +22,7 @@
 //! Runs in a window when a display exists; otherwise (or with
 //! `CHISEL_HEADLESS=1`) it plays a script headless and checks what a player
 //! would see: the character lands and stands on the ground, walking into a
-//! prop stops at its face, and blasting the bridge's pillars and the
+//! prop is stopped by it, and blasting the bridge's pillars and the
 //! boulders' stalks drops them onto the ground. It writes
 //! `screenshots/game-*.png` and fails if any check fails.
 //!
