@@ -496,7 +496,26 @@ fn crater_latency_to_meshes_and_colliders() {
     #[cfg(feature = "avian")]
     app.add_plugins(bevy_chisel::terrain::avian::TerrainAvianPlugin::default());
     let colliders = cfg!(feature = "avian");
-    let terrain = app.world_mut().spawn(large_terrain()).id();
+    // CHISEL_BENCH_THREADS: the terrain's worker threads (default: the
+    // plugin's own choice).
+    let threads = env_or(
+        "CHISEL_BENCH_THREADS",
+        TerrainSettings::default().worker_threads,
+    );
+    app.insert_resource(TerrainSettings {
+        worker_threads: threads,
+        ..TerrainSettings::default()
+    });
+    // CHISEL_BENCH_BUDGET: the octree's BSP node budget per cell (default:
+    // the terrains' own).
+    let config = OctreeConfig {
+        max_bsp_nodes: env_or("CHISEL_BENCH_BUDGET", terrain_octree_config().max_bsp_nodes),
+        ..terrain_octree_config()
+    };
+    let base = large_terrain();
+    let grid = *base.quantization();
+    let base = Terrain::from_base(grid, base.base().clone(), config).expect("same base");
+    let terrain = app.world_mut().spawn(base).id();
     let idle = |app: &App| {
         app.world()
             .get::<Terrain>(terrain)
@@ -541,9 +560,10 @@ fn crater_latency_to_meshes_and_colliders() {
     updates.sort();
     println!(
         "{carves} crater carves (r = 2 m, 1 mm grid, 256 m × 256 m) through the ECS, \
-         colliders {}, {} worker threads",
+         colliders {}, {} worker threads, budget {}",
         if colliders { "on (avian)" } else { "off" },
-        TerrainSettings::default().worker_threads
+        threads,
+        config.max_bsp_nodes
     );
     for (name, times) in [
         ("latency", &latency),

@@ -1,0 +1,164 @@
+//! The terrain plugin's carve job without the engine: per crater, the
+//! carve ([`Octree::apply_with_faces`]), the debris search
+//! ([`Octree::detach_after`]) and the sealed meshes of every cell that
+//! changed or whose seams did ([`SeamedMesher::update`]), timed one by one.
+//! It is the kernel's share of the latency the plugin's `terrain_bench
+//! latency` reports, on the same kind of terrain, and a stable target for
+//! a profiler or an instruction count:
+//!
+//! ```sh
+//! cargo run --release -p chisel_bsp --example crater_job -- 1000 [THREADS]
+//! perf stat -e task-clock target/release/examples/crater_job 1000
+//! ```
+//!
+//! The terrain is a 256 m × 20 m × 256 m slab on a 1 mm grid in cells of
+//! at most 40 BSP nodes; each crater a dodecahedron of radius 2 m just
+//! under the top face, turned at random about the vertical.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::{Duration, Instant};
+
+use chisel_bsp::exact::IntPoint;
+use chisel_bsp::octree::{
+    Anchors, CellBox, CellKey, CubeSide, DebrisConfig, Edit, Octree, OctreeConfig, SeamedMesher,
+    Tool,
+};
+use chisel_bsp::tools::dodecahedron_corners;
+
+/// Grid units per metre.
+const UNIT: f64 = 1000.0;
+
+/// xorshift64*: a fixed stream of numbers in `[0, 1)`.
+fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+    move || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A radius-2 m dodecahedron somewhere under the slab's top.
+fn crater(next: &mut impl FnMut() -> f64) -> Tool {
+    let centre = [4.0 + 248.0 * next(), -next(), 4.0 + 248.0 * next()];
+    let (sin, cos) = (std::f64::consts::TAU * next()).sin_cos();
+    let points: Vec<IntPoint> = dodecahedron_corners(2.0 / 3f64.sqrt())
+        .into_iter()
+        .map(|[x, y, z]| {
+            let turned = [cos * x + sin * z, y, cos * z - sin * x];
+            let [x, y, z] = [0, 1, 2].map(|a| ((centre[a] + turned[a]) * UNIT).round() as i64);
+            IntPoint::new(x, y, z).expect("inside the grid")
+        })
+        .collect();
+    Tool::convex_hull(&points).expect("a solid hull")
+}
+
+fn median(times: &mut [Duration]) -> f64 {
+    times.sort_unstable();
+    times[times.len() / 2].as_secs_f64() * 1e3
+}
+
+fn main() {
+    let arg = |i: usize, default: usize| {
+        std::env::args()
+            .nth(i)
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(default)
+    };
+    let (carves, threads) = (arg(1, 1000), arg(2, 1));
+    // As the plugin's jobs: everything on the worker pool's threads.
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(|| run(carves));
+}
+
+fn run(carves: usize) {
+    let solid = CellBox {
+        min: [0, -20_000, 0],
+        max: [256_000, 0, 256_000],
+    };
+    // As the plugin's `Terrain::from_box`: a cube with a margin of an eighth.
+    let margin = 256_000 / 8 + 1;
+    let origin = solid.min.map(|m| m - margin);
+    let size_log2 = 19;
+    let config = OctreeConfig {
+        max_bsp_nodes: 40,
+        ..OctreeConfig::default()
+    };
+    let mut octree = Octree::from_box(origin, size_log2, solid, 1, config).expect("a valid box");
+    let edge = 1i64 << size_log2;
+    let debris = DebrisConfig {
+        anchors: Anchors {
+            sides: vec![CubeSide::BOTTOM],
+            boxes: vec![CellBox {
+                min: [origin[0], solid.min[1], origin[2]],
+                max: [origin[0] + edge, solid.min[1] + 1, origin[2] + edge],
+            }],
+        },
+        ..DebrisConfig::default()
+    };
+    let mut mesher = SeamedMesher::new();
+    let all: Vec<CellKey> = octree.leaves().into_iter().map(|(key, _)| key).collect();
+    mesher.update(&octree, all, BTreeMap::new());
+
+    let mut next = uniform(0x9E37_79B9_7F4A_7C15);
+    let (mut apply, mut detach, mut meshes, mut total) = (vec![], vec![], vec![], vec![]);
+    let mut cells = Vec::new();
+    for _ in 0..carves {
+        let tool = crater(&mut next);
+        let start = Instant::now();
+        let before = octree.clone();
+        let (changes, faces) = octree
+            .apply_with_faces(&tool, Edit::Subtract)
+            .expect("a valid carve");
+        let applied = start.elapsed();
+        let carved = octree
+            .detach_after(&changes, &debris)
+            .expect("no debris limit");
+        let detached = start.elapsed();
+        let fresh: BTreeMap<CellKey, _> = faces
+            .into_iter()
+            .filter(|(key, _)| {
+                !carved
+                    .detached
+                    .pieces
+                    .iter()
+                    .any(|p| p.leaves.contains(key))
+            })
+            .collect();
+        let keys: BTreeSet<CellKey> = carved
+            .changes
+            .changed
+            .iter()
+            .chain(&carved.changes.removed)
+            .copied()
+            .collect();
+        let sealed = mesher.update(&octree, keys, fresh);
+        let done = start.elapsed();
+        drop(before);
+        cells.push(sealed.len());
+        apply.push(applied);
+        detach.push(detached - applied);
+        meshes.push(done - detached);
+        total.push(done);
+    }
+    cells.sort_unstable();
+    println!(
+        "{carves} craters: apply {:.3} ms, debris {:.3} ms, sealed meshes {:.3} ms, \
+         total {:.3} ms (medians); cells meshed per carve: median {}",
+        median(&mut apply),
+        median(&mut detach),
+        median(&mut meshes),
+        median(&mut total),
+        cells[cells.len() / 2]
+    );
+    let stats = octree.stats();
+    println!(
+        "octree: {} leaves, {} BSP nodes; mesher keeps {} cells",
+        stats.leaves,
+        stats.bsp_nodes,
+        mesher.cells()
+    );
+}
