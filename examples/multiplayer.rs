@@ -35,8 +35,8 @@ use bevy_chisel::net::{
 };
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
-    CarveTool, Terrain, TerrainBase, TerrainPlugin, TerrainSurface, TerrainSystems,
-    TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
+    CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings, TerrainSurface,
+    TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
 use bevy_chisel::viewer::{
     CursorPick, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
@@ -119,6 +119,12 @@ fn server_app() -> App {
     ))
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>()
+    // Nothing is drawn here: the server keeps the octree and its hash, and
+    // builds no cell meshes.
+    .insert_resource(TerrainSettings {
+        output: CellOutput::Nothing,
+        ..TerrainSettings::default()
+    })
     .add_systems(Startup, |mut commands: Commands| -> Result {
         commands.spawn((slab()?, NetTerrain(1)));
         Ok(())

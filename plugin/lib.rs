@@ -141,10 +141,10 @@ pub mod prelude {
     pub use crate::terrain::avian::TerrainAvianPlugin;
     #[cfg(feature = "terrain")]
     pub use crate::terrain::{
-        Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, DebrisDetached, HeightLayer,
-        Heightfield, Terrain, TerrainCarveRejected, TerrainCarved, TerrainCell, TerrainCellChanged,
-        TerrainCellRebuilt, TerrainDebris, TerrainError, TerrainHit, TerrainPlugin,
-        TerrainSettings, TerrainSystems, UndoCarve,
+        Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, CellOutput, DebrisDetached,
+        HeightLayer, Heightfield, Terrain, TerrainCarveRejected, TerrainCarved, TerrainCell,
+        TerrainCellChanged, TerrainCellRebuilt, TerrainDebris, TerrainError, TerrainHit,
+        TerrainPlugin, TerrainSettings, TerrainSystems, UndoCarve,
     };
     #[cfg(all(feature = "terrain", feature = "render"))]
     pub use crate::terrain::{

@@ -22,8 +22,10 @@ use bevy_chisel::net::{
     ClientPacket, ClientRequest, NetLimits, NetProtocolPlugin, NetServerStats, Outcome,
     ServerPacket, WireTool, start_client,
 };
-use bevy_chisel::terrain::{CarveApplied, TerrainCellChanged};
-use net::{Rng, Seen, client, random_carve, request, run_until, server, slab, terrain_of};
+use bevy_chisel::terrain::{CarveApplied, CellOutput, TerrainCellChanged};
+use net::{
+    Rng, Seen, client, random_carve, request, run_until, server, server_building, slab, terrain_of,
+};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -132,9 +134,10 @@ fn light_client(addr: std::net::SocketAddr, id: u64) -> App {
 #[derive(Resource, Default)]
 struct Answers(usize, usize);
 
-/// Carves per second with 8 clients sending at once.
-fn eight_clients() -> (f64, usize) {
-    let (mut server, addr) = server(slab(), unlimited());
+/// Carves per second with 8 clients sending at once, the server building
+/// `output` for its cells.
+fn eight_clients(output: CellOutput) -> (f64, usize) {
+    let (mut server, addr) = server_building(slab(), unlimited(), output);
     let mut clients: Vec<App> = (0..8).map(|i| light_client(addr, 10 + i)).collect();
     // Connect and let the server mesh its terrain.
     for _ in 0..400 {
@@ -216,12 +219,14 @@ fn join_after(carves: usize) -> (f64, f64, usize) {
 #[ignore = "benchmark: run with --ignored --nocapture"]
 fn net_figures() {
     let (wire, mesh, carves) = wire_against_meshes();
-    let (rate, applied) = eight_clients();
+    let (rate, applied) = eight_clients(CellOutput::Nothing);
+    let (meshing_rate, _) = eight_clients(CellOutput::Meshes);
     let (join, join_meshed, snapshot) = join_after(10_000);
     println!(
         "{{\"carves\": {carves}, \"wire_bytes_per_carve\": {wire:.1}, \
          \"mesh_bytes_per_carve\": {mesh:.0}, \"ratio\": {:.0}, \
          \"eight_clients_carves_per_s\": {rate:.1}, \"eight_clients_applied\": {applied}, \
+         \"eight_clients_meshing_server_carves_per_s\": {meshing_rate:.1}, \
          \"join_after_10000_s\": {join:.3}, \"join_meshed_s\": {join_meshed:.3}, \
          \"snapshot_bytes\": {snapshot}}}",
         mesh / wire

@@ -162,6 +162,29 @@ pub struct TerrainSettings {
     pub smoothing_degrees: f32,
     /// Mass per cubic world unit of debris bodies.
     pub debris_density: f32,
+    /// What is built for the cells a carve changed: render meshes (a game),
+    /// colliders only (a dedicated server running physics) or nothing (a
+    /// server or tool that needs the octree and its hash alone).
+    pub output: CellOutput,
+}
+
+/// What the terrain systems build for each cell a carve changes
+/// ([`TerrainSettings::output`]). The octree, its state hash, undo and
+/// debris detection are the same in every mode, so peers that build
+/// different outputs still agree exactly.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[reflect(Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum CellOutput {
+    /// Sealed render meshes, and colliders when a physics backend is set.
+    #[default]
+    Meshes,
+    /// Colliders only (when a physics backend is set): cell entities have
+    /// no mesh, and nothing is uploaded for rendering.
+    Colliders,
+    /// No cell entities, meshes or colliders. Switching back to another
+    /// output rebuilds every cell once.
+    Nothing,
 }
 
 impl Default for TerrainSettings {
@@ -173,6 +196,7 @@ impl Default for TerrainSettings {
                 .map_or(1, |n| n.get().saturating_sub(1).max(1)),
             smoothing_degrees: DEFAULT_SMOOTHING_DEGREES,
             debris_density: DEFAULT_DEBRIS_DENSITY,
+            output: CellOutput::Meshes,
         }
     }
 }
@@ -287,8 +311,28 @@ pub fn start_jobs(
             physics: physics.0.clone(),
             debris: terrain.debris.clone(),
             debris_density: settings.debris_density,
+            output: settings.output,
         };
-        if terrain.runtime.needs_full_mesh {
+        terrain.runtime.builds_cells = context.builds_cells();
+        if !terrain.runtime.builds_cells {
+            // Cells shown before the output changed are taken away, and
+            // every cell is built again once cells are asked for again.
+            if !terrain.runtime.cells.is_empty() && terrain.runtime.uploads.is_empty() {
+                let cells = terrain
+                    .runtime
+                    .cells
+                    .keys()
+                    .map(|&key| CellUpdate { key, meshes: None })
+                    .collect();
+                terrain.runtime.uploads.push_back(Upload {
+                    cells,
+                    spread: false,
+                    reports: Vec::new(),
+                    debris: Vec::new(),
+                });
+            }
+            terrain.runtime.needs_full_mesh = true;
+        } else if terrain.runtime.needs_full_mesh {
             terrain.runtime.needs_full_mesh = false;
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
@@ -482,7 +526,7 @@ pub fn upload_meshes(
     settings: Res<TerrainSettings>,
     physics: Res<TerrainPhysicsBackend>,
     mut terrains: Query<(Entity, &mut Terrain, Option<&GlobalTransform>)>,
-    mut cells: Query<&mut Mesh3d, With<TerrainCell>>,
+    mut cells: Query<Option<&mut Mesh3d>, With<TerrainCell>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut commands: Commands,
     mut changed: MessageWriter<TerrainCellChanged>,
@@ -600,7 +644,7 @@ impl CellPlacement<'_, '_, '_> {
     fn show(
         &mut self,
         runtime: &mut Runtime,
-        cells: &mut Query<&mut Mesh3d, With<TerrainCell>>,
+        cells: &mut Query<Option<&mut Mesh3d>, With<TerrainCell>>,
         meshes: &mut Assets<Mesh>,
         update: CellUpdate,
     ) -> (CellKey, Vec<Entity>) {
@@ -612,10 +656,19 @@ impl CellPlacement<'_, '_, '_> {
             runtime.triangles -= triangles;
             let reused = new.iter().position(|m| m.label == label);
             match (reused, cells.get_mut(cell_entity)) {
-                (Some(i), Ok(mut handle)) => {
+                (Some(i), Ok(handle)) => {
                     let mesh: BuiltMesh = new.swap_remove(i);
-                    handle.0 = meshes.add(mesh.mesh);
                     let mut cell = self.commands.entity(cell_entity);
+                    match (mesh.mesh, handle) {
+                        (Some(built), Some(mut handle)) => handle.0 = meshes.add(built),
+                        (Some(built), None) => {
+                            cell.insert(Mesh3d(meshes.add(built)));
+                        }
+                        (None, Some(_)) => {
+                            cell.remove::<Mesh3d>();
+                        }
+                        (None, None) => {}
+                    }
                     match mesh.collider {
                         Some(collider) => collider.apply(&mut cell),
                         None => {
@@ -636,10 +689,12 @@ impl CellPlacement<'_, '_, '_> {
                     key,
                     label: mesh.label,
                 },
-                Mesh3d(meshes.add(mesh.mesh)),
                 Transform::IDENTITY,
                 ChildOf(self.terrain),
             ));
+            if let Some(built) = mesh.mesh {
+                cell.insert(Mesh3d(meshes.add(built)));
+            }
             if let Some(collider) = mesh.collider {
                 collider.apply(&mut cell);
             }

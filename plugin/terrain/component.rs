@@ -84,6 +84,9 @@ pub(crate) struct Runtime {
     pub(crate) cells: HashMap<CellKey, Vec<(Label, Entity, usize)>>,
     pub(crate) triangles: usize,
     pub(crate) needs_full_mesh: bool,
+    /// Whether the settings ask for cells ([`super::CellOutput`]): when
+    /// not, a pending full build does not keep the terrain busy.
+    pub(crate) builds_cells: bool,
     /// The border vertices of the cells shown (in the running job while
     /// there is one).
     pub(crate) mesher: SeamedMesher,
@@ -111,6 +114,7 @@ impl Default for Runtime {
             cells: HashMap::new(),
             triangles: 0,
             needs_full_mesh: true,
+            builds_cells: true,
             mesher: SeamedMesher::new(),
         }
     }
@@ -283,7 +287,10 @@ impl Terrain {
     #[must_use]
     pub fn is_idle(&self) -> bool {
         let r = &self.runtime;
-        r.queue.is_empty() && r.task.is_none() && r.uploads.is_empty() && !r.needs_full_mesh
+        r.queue.is_empty()
+            && r.task.is_none()
+            && r.uploads.is_empty()
+            && !(r.needs_full_mesh && r.builds_cells)
     }
 
     /// Triangles currently shown.

@@ -24,6 +24,7 @@ use super::error::TerrainError;
 use super::mesh::{ColliderMesh, cell_meshes_of};
 use super::physics::{PhysicsInsert, TerrainPhysics};
 use super::tool::GridTool;
+use crate::terrain::CellOutput;
 
 /// What a job needs besides its octree: the grid, the shading and the
 /// physics backend.
@@ -35,6 +36,20 @@ pub(crate) struct JobContext {
     /// What anchors the terrain (`None`: no debris detection).
     pub debris: Option<DebrisConfig>,
     pub debris_density: f32,
+    /// What to build for the changed cells.
+    pub output: CellOutput,
+}
+
+impl JobContext {
+    /// Whether the job builds cells at all: not for [`CellOutput::Nothing`],
+    /// nor for colliders alone without a physics backend.
+    pub fn builds_cells(&self) -> bool {
+        match self.output {
+            CellOutput::Meshes => true,
+            CellOutput::Colliders => self.physics.is_some(),
+            CellOutput::Nothing => false,
+        }
+    }
 }
 
 /// One step of a background job.
@@ -60,11 +75,11 @@ pub(crate) enum StepOutcome {
 }
 
 /// One material's mesh of a cell, built off the main thread, with its
-/// collider.
+/// collider (no render mesh for [`CellOutput::Colliders`]).
 pub(crate) struct BuiltMesh {
     pub label: Label,
     pub triangles: usize,
-    pub mesh: Mesh,
+    pub mesh: Option<Mesh>,
     pub collider: Option<PhysicsInsert>,
 }
 
@@ -212,6 +227,20 @@ pub(crate) fn remesh(
     full: bool,
 ) -> JobOutput {
     let start = Instant::now();
+    if !context.builds_cells() {
+        // The mesher is left as it was: the terrain rebuilds every cell
+        // when it is asked for cells again.
+        return JobOutput {
+            octree,
+            mesher,
+            steps,
+            cells: Vec::new(),
+            full,
+            mesh_time: Duration::ZERO,
+            collider_time: Duration::ZERO,
+        };
+    }
+    let render = context.output == CellOutput::Meshes;
     let keys: BTreeSet<CellKey> = keys.into_iter().collect();
     let sealed = mesher.update(&octree, keys, fresh);
     // Meshes first (the collider triangles kept aside), then colliders,
@@ -227,7 +256,7 @@ pub(crate) fn remesh(
                         let built = BuiltMesh {
                             label: mesh.label,
                             triangles: mesh.triangle_count(),
-                            mesh: mesh.into_mesh(),
+                            mesh: render.then(|| mesh.into_mesh()),
                             collider: None,
                         };
                         (built, collider)

@@ -113,7 +113,8 @@ pub use asset::{
 };
 pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
-    Carve, CarveApplied, CarveRejected, GridCarve, TerrainCellChanged, TerrainSettings, UndoCarve,
+    Carve, CarveApplied, CarveRejected, CellOutput, GridCarve, TerrainCellChanged, TerrainSettings,
+    UndoCarve,
 };
 pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
@@ -215,6 +216,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<TerrainDebris>()
         .register_type::<DebrisPart>()
         .register_type::<TerrainSettings>()
+        .register_type::<CellOutput>()
         .register_type::<TerrainPhysicsBackend>()
         .register_type::<Carve>()
         .register_type::<UndoCarve>()

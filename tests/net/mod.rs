@@ -13,7 +13,9 @@ use bevy_chisel::net::{
     NetCarveRequest, NetCarveResult, NetClientPlugin, NetLimits, NetServerPlugin, NetTerrain,
     TerrainSynced, WireTool, start_client, start_server,
 };
-use bevy_chisel::terrain::{CarveTool, Terrain, TerrainBase, TerrainPlugin, TerrainSettings};
+use bevy_chisel::terrain::{
+    CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings,
+};
 
 /// A 10 m × 2 m × 10 m slab of rock on a 1 cm grid, in a cube of 10.24 m.
 pub fn slab() -> Terrain {
@@ -53,13 +55,14 @@ fn record(
     seen.synced.extend(synced.read().cloned());
 }
 
-fn base_app(threads: usize) -> App {
+fn base_app(threads: usize, output: CellOutput) -> App {
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, AssetPlugin::default(), TerrainPlugin))
         .init_asset::<Mesh>()
         .init_asset::<StandardMaterial>()
         .insert_resource(TerrainSettings {
             worker_threads: threads,
+            output,
             ..TerrainSettings::default()
         });
     app
@@ -68,7 +71,17 @@ fn base_app(threads: usize) -> App {
 /// A server with `terrain` as network terrain 1; returns the app and the
 /// address it listens on.
 pub fn server(terrain: Terrain, limits: NetLimits) -> (App, SocketAddr) {
-    let mut app = base_app(1);
+    server_building(terrain, limits, CellOutput::Nothing)
+}
+
+/// [`server`], building `output` for its terrain's cells (a dedicated
+/// server builds nothing).
+pub fn server_building(
+    terrain: Terrain,
+    limits: NetLimits,
+    output: CellOutput,
+) -> (App, SocketAddr) {
+    let mut app = base_app(1, output);
     app.add_plugins(NetServerPlugin).insert_resource(limits);
     app.world_mut().spawn((terrain, NetTerrain(1)));
     app.finish();
@@ -80,7 +93,7 @@ pub fn server(terrain: Terrain, limits: NetLimits) -> (App, SocketAddr) {
 
 /// A client connecting to `addr` with `threads` worker threads.
 pub fn client(addr: SocketAddr, id: u64, threads: usize) -> App {
-    let mut app = base_app(threads);
+    let mut app = base_app(threads, CellOutput::Meshes);
     app.add_plugins(NetClientPlugin)
         .init_resource::<Seen>()
         .add_systems(Last, record);
