@@ -279,7 +279,7 @@ fn ten_thousand_carves_with_undo_save_and_load() {
     let mut entity = app.world_mut().spawn(block()).id();
     settle(&mut app, entity);
 
-    let mut rng = Rng(0x5eed_0f_50a6);
+    let mut rng = Rng(0x005e_ed0f_50a6);
     // Craters around the block's top and sides, 2 to 5 units across.
     let palette: Vec<CarveTool> = (0..PALETTE)
         .map(|_| {
