@@ -99,6 +99,20 @@ pub enum Error {
         /// Which part: the whole mesh or one shell, with its box.
         shell: String,
     },
+    /// A closed mesh whose shells do not nest as the boundary of a solid
+    /// must: an outward shell inside another outward shell, or a cavity
+    /// that is not directly inside an outward shell. Where shells of the
+    /// same orientation nest, the even-odd and the nonzero reading of the
+    /// mesh give different solids, so it has no one meaning.
+    MisnestedShell {
+        /// The shell's signed volume, cubic grid units (positive: outward).
+        volume: f64,
+        /// The winding number of the other shells around it (an outward
+        /// shell needs 0, a cavity 1).
+        winding: i64,
+        /// Which shell, with its box.
+        shell: String,
+    },
     /// A mesh whose triangles cross each other.
     SelfIntersecting {
         /// Indices of two triangles that meet improperly.
@@ -219,6 +233,20 @@ impl fmt::Display for Error {
                 "the mesh is inside out: {shell} encloses a negative volume ({volume} cubic \
                  grid units); give every triangle counter-clockwise seen from outside \
                  (cavities clockwise), or reverse the faces"
+            ),
+            Error::MisnestedShell {
+                volume,
+                winding,
+                shell,
+            } => write!(
+                f,
+                "the mesh's shells do not nest as a solid's boundary: {shell} (volume {volume} \
+                 cubic grid units, {}) lies inside other shells with winding number \
+                 {winding}; an outward shell must lie inside no outward shell, and a cavity \
+                 (faces clockwise seen from outside) directly inside one. Reverse the faces \
+                 of a shell nested in another with the same orientation to make it a cavity, \
+                 or remove it",
+                if *volume > 0.0 { "outward" } else { "a cavity" }
             ),
             Error::TooManyHullPoints { points, limit } => write!(
                 f,

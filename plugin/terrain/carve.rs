@@ -229,7 +229,7 @@ pub fn read_requests(
             .get_mut(carve.terrain)
             .map_err(|_| TerrainError::NoSuchTerrain)
             .and_then(|mut terrain| {
-                terrain.check_edit(carve.edit)?;
+                terrain.check_label(carve.edit)?;
                 terrain.runtime.queue.push_back(Job::Carve {
                     tool: carve.tool.clone(),
                     edit: carve.edit,

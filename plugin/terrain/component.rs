@@ -90,6 +90,10 @@ pub(crate) struct Runtime {
     /// The border vertices of the cells shown (in the running job while
     /// there is one).
     pub(crate) mesher: SeamedMesher,
+    /// The labels the terrain's material table has materials for, kept up
+    /// to date from its `TerrainMaterials` (feature `render`); `None`
+    /// without a table.
+    pub(crate) material_labels: Option<BTreeSet<Label>>,
 }
 
 /// A request waiting for its turn.
@@ -116,6 +120,7 @@ impl Default for Runtime {
             needs_full_mesh: true,
             builds_cells: true,
             mesher: SeamedMesher::new(),
+            material_labels: None,
         }
     }
 }
@@ -203,12 +208,39 @@ impl Terrain {
         &self.labels
     }
 
-    /// Checks that `edit` only adds or paints known materials.
+    /// Checks that `edit` only adds or paints materials the terrain knows
+    /// and, when the terrain entity has a material table
+    /// (`TerrainMaterials`, feature `render`), materials the table has an
+    /// entry for: what [`super::Carve`], [`Terrain::apply_now`] and the
+    /// multiplayer server check before a carve.
     ///
     /// # Errors
-    /// [`TerrainError::UnknownLabel`]. Label 0 (empty) is left to the
-    /// kernel, which rejects it as an invalid edit.
+    /// [`TerrainError::UnknownLabel`], or [`TerrainError::NoMaterial`] for
+    /// a label the table would draw with its fallback. Label 0 (empty) is
+    /// left to the kernel, which rejects it as an invalid edit.
     pub fn check_edit(&self, edit: Edit) -> Result<(), TerrainError> {
+        self.check_label(edit)?;
+        match (edit, &self.runtime.material_labels) {
+            (Edit::Add(label) | Edit::Paint(label), Some(table))
+                if label != chisel_bsp::tree::EMPTY && !table.contains(&label) =>
+            {
+                Err(TerrainError::NoMaterial {
+                    label,
+                    table: table.iter().copied().collect(),
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Checks that `edit` only adds or paints materials the terrain knows,
+    /// whatever its material table holds: the check of a replicated carve
+    /// ([`super::GridCarve`]), which every peer must apply as the server
+    /// accepted it, so that the octrees stay identical.
+    ///
+    /// # Errors
+    /// [`TerrainError::UnknownLabel`].
+    pub fn check_label(&self, edit: Edit) -> Result<(), TerrainError> {
         match edit {
             Edit::Add(label) | Edit::Paint(label)
                 if label != chisel_bsp::tree::EMPTY && !self.labels.contains(&label) =>
@@ -220,6 +252,13 @@ impl Terrain {
             }
             _ => Ok(()),
         }
+    }
+
+    /// The labels the terrain's material table has materials for (`None`
+    /// when the terrain entity has no `TerrainMaterials`).
+    #[must_use]
+    pub fn material_labels(&self) -> Option<&BTreeSet<Label>> {
+        self.runtime.material_labels.as_ref()
     }
 
     /// The debris settings ([`Terrain::with_debris`]).

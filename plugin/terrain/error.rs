@@ -32,6 +32,15 @@ pub enum TerrainError {
         /// The labels the terrain knows, in order.
         known: Vec<chisel_bsp::tree::Label>,
     },
+    /// A carve adds or paints a material that the terrain knows but its
+    /// material table (`TerrainMaterials`) has no entry for, so it would be
+    /// drawn with the table's fallback.
+    NoMaterial {
+        /// The label asked for.
+        label: chisel_bsp::tree::Label,
+        /// The labels the table has materials for, in order.
+        table: Vec<chisel_bsp::tree::Label>,
+    },
     /// Undo was asked for, but no carve is left to undo.
     NothingToUndo,
     /// The entity named in a message has no [`super::Terrain`].
@@ -103,6 +112,11 @@ impl fmt::Display for TerrainError {
                 f,
                 "material label {label} is not one of the terrain's materials {known:?}; \
                  declare it with Terrain::with_labels"
+            ),
+            TerrainError::NoMaterial { label, table } => write!(
+                f,
+                "material label {label} has no entry in the terrain's material table \
+                 (it has {table:?}); add one to its TerrainMaterials"
             ),
             TerrainError::NothingToUndo => write!(f, "there is no carve left to undo"),
             TerrainError::NoSuchTerrain => {

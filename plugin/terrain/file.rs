@@ -47,7 +47,9 @@
 //! agree with the base's cube and the undo steps.
 
 use std::collections::VecDeque;
-use std::path::Path;
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
 
 use chisel_bsp::octree::store::{checksum, snapshots_from_bytes, snapshots_to_bytes};
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree};
@@ -112,12 +114,21 @@ impl Terrain {
         w.0
     }
 
-    /// Writes the terrain to a file.
+    /// Writes the terrain to a file, whole or not at all: the bytes go to
+    /// a new temporary file in the same folder (`.NAME.PID.N.tmp`), which
+    /// is synced to disk and then renamed over `path`.
     ///
     /// # Errors
-    /// [`TerrainError::Io`].
+    /// [`TerrainError::Io`], naming the file, when any step fails (a
+    /// missing or read-only folder, a full disk, `path` naming a folder).
+    /// `path` is then as it was, an older file there intact, and the
+    /// temporary file is removed.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), TerrainError> {
-        Ok(std::fs::write(path, self.to_bytes())?)
+        let path = path.as_ref();
+        let bytes = self.to_bytes();
+        write_atomic(path, |file| file.write_all(&bytes)).map_err(|e| TerrainError::Io {
+            message: format!("cannot save {}: {e}", path.display()),
+        })
     }
 
     /// A terrain from file bytes: checks magic, version and checksum, then
@@ -265,6 +276,58 @@ impl Terrain {
     /// [`TerrainError::Io`] or as [`Terrain::from_bytes`].
     pub fn load(path: impl AsRef<Path>) -> Result<Terrain, TerrainError> {
         Terrain::from_bytes(&std::fs::read(path)?)
+    }
+}
+
+/// Writes `path` atomically with what `fill` writes into a new temporary
+/// file beside it: `fill`, then a sync, then a rename over `path`, then a
+/// sync of the folder (so the rename itself survives a crash). On any
+/// error before the rename the temporary file is removed and `path` is
+/// untouched.
+fn write_atomic(path: &Path, fill: impl FnOnce(&mut File) -> io::Result<()>) -> io::Result<()> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?
+        .to_string_lossy()
+        .into_owned();
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let (temp, mut file) = create_temp(&folder, &name)?;
+    let written = fill(&mut file)
+        .and_then(|()| file.sync_all())
+        .and_then(|()| {
+            drop(file);
+            fs::rename(&temp, path)
+        });
+    if let Err(e) = written {
+        // The error that matters is the write's; a temporary file that
+        // cannot be removed either is left for the user to see.
+        let _ = fs::remove_file(&temp);
+        return Err(e);
+    }
+    // The new file is in place; syncing the folder makes the rename
+    // durable. Folders cannot be opened for syncing everywhere (Windows),
+    // and the data itself is already synced, so a failure here is not an
+    // error of the save.
+    if let Ok(dir) = File::open(&folder) {
+        let _ = dir.sync_all();
+    }
+    Ok(())
+}
+
+/// A new temporary file `.NAME.PID.N.tmp` in `folder`, created only where
+/// no such file exists.
+fn create_temp(folder: &Path, name: &str) -> io::Result<(PathBuf, File)> {
+    let mut n = 0u32;
+    loop {
+        let temp = folder.join(format!(".{name}.{}.{n}.tmp", std::process::id()));
+        match OpenOptions::new().write(true).create_new(true).open(&temp) {
+            Ok(file) => return Ok((temp, file)),
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists && n < 1000 => n += 1,
+            Err(e) => return Err(e),
+        }
     }
 }
 
@@ -477,5 +540,109 @@ impl<'a> Reader<'a> {
     }
     fn point(&mut self) -> Result<[i64; 3], TerrainError> {
         Ok([self.i64()?, self.i64()?, self.i64()?])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use chisel_bsp::octree::OctreeConfig;
+
+    /// A fresh folder for one test.
+    fn folder(tag: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("bevy_chisel_save_{tag}_{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).expect("a temporary folder");
+        dir
+    }
+
+    /// The temporary files left in `dir`.
+    fn leftovers(dir: &Path) -> Vec<String> {
+        fs::read_dir(dir)
+            .expect("a readable folder")
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|name| name.ends_with(".tmp"))
+            .collect()
+    }
+
+    fn terrain(height: i64) -> Terrain {
+        let grid = Quantization::new(1.0, [0.0; 3]).expect("valid unit");
+        let base = TerrainBase::Box {
+            origin: [0; 3],
+            size_log2: 5,
+            solid: CellBox {
+                min: [0; 3],
+                max: [16, height, 16],
+            },
+            label: 1,
+        };
+        Terrain::from_base(grid, base, OctreeConfig::default()).expect("valid box")
+    }
+
+    #[test]
+    fn a_failed_write_keeps_the_old_file_and_leaves_no_temporary_file() {
+        let dir = folder("failed_write");
+        let path = dir.join("level.chiselterrain");
+        let old = terrain(4).to_bytes();
+        fs::write(&path, &old).expect("the old file");
+        // A disk that fills up halfway through the new file.
+        let error = write_atomic(&path, |file| {
+            file.write_all(&terrain(8).to_bytes()[..100])?;
+            Err(io::Error::new(io::ErrorKind::StorageFull, "no space left"))
+        })
+        .expect_err("the write fails");
+        assert_eq!(error.kind(), io::ErrorKind::StorageFull);
+        assert!(fs::read(&path).expect("the old file") == old);
+        assert_eq!(leftovers(&dir), Vec::<String>::new());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn save_replaces_the_whole_file() {
+        let dir = folder("replace");
+        let path = dir.join("level.chiselterrain");
+        terrain(4).save(&path).expect("first save");
+        let newer = terrain(9);
+        newer.save(&path).expect("second save");
+        assert!(fs::read(&path).expect("saved") == newer.to_bytes());
+        assert_eq!(
+            Terrain::load(&path).expect("loads").state_hash(),
+            newer.state_hash()
+        );
+        assert_eq!(leftovers(&dir), Vec::<String>::new());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_failed_save_is_an_error_naming_the_file_and_changes_nothing() {
+        let dir = folder("refused");
+        // A folder that does not exist: nothing can be created.
+        let missing = dir.join("no such folder").join("level.chiselterrain");
+        match terrain(4).save(&missing) {
+            Err(TerrainError::Io { message }) => {
+                assert!(message.contains("no such folder"), "{message}");
+            }
+            other => panic!("expected an I/O error, got {other:?}"),
+        }
+        assert!(!dir.join("no such folder").exists());
+        // A path naming a folder: the new file is written and synced, the
+        // rename fails, and the temporary file goes; the folder and what
+        // is in it stay.
+        let occupied = dir.join("occupied");
+        fs::create_dir(&occupied).expect("a folder");
+        fs::write(occupied.join("keep"), b"kept").expect("a file inside");
+        assert!(matches!(
+            terrain(4).save(&occupied),
+            Err(TerrainError::Io { .. })
+        ));
+        assert_eq!(fs::read(occupied.join("keep")).expect("kept"), b"kept");
+        assert_eq!(leftovers(&dir), Vec::<String>::new());
+        // No file name at all.
+        assert!(matches!(
+            terrain(4).save(dir.join("..")),
+            Err(TerrainError::Io { .. })
+        ));
+        let _ = fs::remove_dir_all(&dir);
     }
 }

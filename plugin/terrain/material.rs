@@ -30,7 +30,9 @@
 //! fn setup(mut commands: Commands, mut toons: ResMut<Assets<Toon>>, terrain: Single<Entity, With<Terrain>>) {
 //!     let rock = toons.add(Toon { color: LinearRgba::gray(0.5) });
 //!     let ore = toons.add(Toon { color: LinearRgba::rgb(0.9, 0.7, 0.2) });
-//!     // Label 1 is rock, label 4 ore; any other label is drawn as rock.
+//!     // Label 1 is rock, label 4 ore. Carves that add or paint any other
+//!     // label are refused; other labels the terrain was built with are
+//!     // drawn as rock.
 //!     commands.entity(*terrain).insert(TerrainMaterials::new([(1, rock.clone()), (4, ore)], rock));
 //! }
 //!
@@ -44,18 +46,22 @@
 
 pub mod triplanar;
 
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::marker::PhantomData;
 
 use bevy::prelude::*;
 use chisel_bsp::tree::Label;
 
 use super::TerrainSystems;
-use super::component::TerrainCell;
+use super::component::{Terrain, TerrainCell};
 use super::debris::DebrisPart;
 
-/// Materials of a terrain's labels: put it on the terrain entity. Labels
-/// without an entry use `fallback`. `M` is any Bevy [`Material`] (with a
+/// Materials of a terrain's labels: put it on the terrain entity. Carves
+/// that add or paint a label without an entry are refused
+/// ([`TerrainError::NoMaterial`](super::TerrainError::NoMaterial)), so the
+/// table decides which materials a game can carve in; labels the terrain
+/// was built with and the table lacks are drawn with `fallback`, with a
+/// warning when the table is inserted or changed. `M` is any Bevy [`Material`] (with a
 /// [`TerrainMaterialPlugin<M>`] in the app; `TerrainPlugin` adds the one
 /// for [`StandardMaterial`]).
 #[derive(Component, Reflect, Clone, Debug)]
@@ -131,6 +137,7 @@ impl<M: Material> Plugin for TerrainMaterialPlugin<M> {
         app.insert_resource(MaterialSystemAdded::<M>(PhantomData))
             .register_type::<TerrainMaterials<M>>()
             .register_type::<HasTerrainMaterials>()
+            .add_systems(PreUpdate, sync_material_labels::<M>)
             .add_systems(
                 Update,
                 assign_materials::<M>.in_set(TerrainSystems::Material),
@@ -139,6 +146,43 @@ impl<M: Material> Plugin for TerrainMaterialPlugin<M> {
 
     fn is_unique(&self) -> bool {
         false
+    }
+}
+
+/// Keeps [`Terrain::material_labels`] of every terrain with a
+/// `TerrainMaterials<M>` equal to the labels of its table, so that carves
+/// that would add or paint a label without a material are refused
+/// ([`TerrainError::NoMaterial`](super::TerrainError::NoMaterial)), and
+/// warns when a new or changed table has no material for a label the
+/// terrain already has (those are drawn with the fallback). Runs in
+/// `PreUpdate`, before the carves of the frame are read.
+pub fn sync_material_labels<M: Material>(
+    mut tables: Query<
+        (Entity, &mut Terrain, Ref<TerrainMaterials<M>>),
+        Or<(Changed<TerrainMaterials<M>>, Added<Terrain>)>,
+    >,
+    mut removed: RemovedComponents<TerrainMaterials<M>>,
+    mut bare: Query<&mut Terrain, Without<TerrainMaterials<M>>>,
+) {
+    for (entity, mut terrain, table) in &mut tables {
+        let drawn: BTreeSet<Label> = table.by_label.keys().copied().collect();
+        if table.is_changed() {
+            let missing: Vec<Label> = terrain.labels().difference(&drawn).copied().collect();
+            if !missing.is_empty() {
+                warn!(
+                    "terrain {entity}: its material table has no material for labels \
+                     {missing:?}; they are drawn with the fallback, and carves that add \
+                     or paint them are refused"
+                );
+            }
+        }
+        // Not a change of the terrain's content.
+        terrain.bypass_change_detection().runtime.material_labels = Some(drawn);
+    }
+    for entity in removed.read() {
+        if let Ok(mut terrain) = bare.get_mut(entity) {
+            terrain.bypass_change_detection().runtime.material_labels = None;
+        }
     }
 }
 

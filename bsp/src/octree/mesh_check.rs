@@ -16,6 +16,17 @@
 //!
 //! Candidate pairs come from a uniform grid over the triangles' bounding
 //! boxes; every decision is exact.
+//!
+//! Nesting: a *shell* is a set of triangles connected through edges, with
+//! `s = sign(6V)` its orientation (+1 outward, −1 a cavity). The winding
+//! number `w(p)` of the other shells around a point `p` of a shell is the
+//! signed count of their triangles crossed by the ray from `p` along +x,
+//! exact under the symbolic perturbation `p + (ε³, ε, ε²)` (simulation of
+//! simplicity), so rays through edges and corners need no special case.
+//! The mesh bounds a solid exactly when every point has winding number 0
+//! or 1: an outward shell must have `w = 0`, a cavity `w = 1`. Shells
+//! nested with the same orientation give 2 inside the inner one, where the
+//! even-odd and nonzero readings of the mesh disagree.
 
 use std::collections::HashMap;
 
@@ -34,7 +45,13 @@ type P = [i64; 3];
 /// [`Error::InsideOut`] or [`Error::SelfIntersecting`].
 pub(crate) fn check_mesh(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error> {
     check_closed(triangles, cube)?;
-    check_orientation(triangles)?;
+    let tris: Vec<[P; 3]> = triangles
+        .iter()
+        .map(|t| t.map(|p| p.coords()))
+        .filter(|c| c[0] != c[1] && c[1] != c[2] && c[2] != c[0])
+        .collect();
+    let shells = shells(&tris);
+    check_orientation(&shells)?;
     if let Some((i, j)) = first_intersection(triangles) {
         return Err(Error::SelfIntersecting {
             triangles: [i, j],
@@ -44,7 +61,70 @@ pub(crate) fn check_mesh(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<
             ]),
         });
     }
-    Ok(())
+    check_nesting(&tris, &shells)
+}
+
+/// Triangles connected through edges, with 6 × their signed volume and
+/// their box.
+struct Shell {
+    six_volume: i128,
+    lo: P,
+    hi: P,
+    triangles: Vec<usize>,
+}
+
+/// The shells of `tris` (each triangle's corners distinct), in the order
+/// of their first triangle.
+fn shells(tris: &[[P; 3]]) -> Vec<Shell> {
+    let six_volume = |t: &[P; 3]| -> i128 {
+        let [a, b, c] = t.map(|p| p.map(i128::from));
+        let bc = [
+            b[1] * c[2] - b[2] * c[1],
+            b[2] * c[0] - b[0] * c[2],
+            b[0] * c[1] - b[1] * c[0],
+        ];
+        a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2]
+    };
+    // Union–find over triangles sharing an edge.
+    let mut parent: Vec<usize> = (0..tris.len()).collect();
+    fn find(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut first_on_edge: HashMap<(P, P), usize> = HashMap::new();
+    for (i, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            let edge = (u.min(v), u.max(v));
+            let j = *first_on_edge.entry(edge).or_insert(i);
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut index: HashMap<usize, usize> = HashMap::new();
+    let mut shells: Vec<Shell> = Vec::new();
+    for (i, t) in tris.iter().enumerate() {
+        let root = find(&mut parent, i);
+        let (lo, hi) = bounds(t);
+        let k = *index.entry(root).or_insert_with(|| {
+            shells.push(Shell {
+                six_volume: 0,
+                lo,
+                hi,
+                triangles: Vec::new(),
+            });
+            shells.len() - 1
+        });
+        let shell = &mut shells[k];
+        shell.six_volume += six_volume(t);
+        shell.lo = [0, 1, 2].map(|a| shell.lo[a].min(lo[a]));
+        shell.hi = [0, 1, 2].map(|a| shell.hi[a].max(hi[a]));
+        shell.triangles.push(i);
+    }
+    shells
 }
 
 fn check_closed(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error> {
@@ -81,55 +161,11 @@ fn check_closed(triangles: &[[IntPoint; 3]], cube: &CellBox) -> Result<(), Error
 /// Checks the orientation of a closed mesh from exact signed volumes
 /// (`6V = Σ a · (b × c)` over its triangles, exact in `i128`: each term is
 /// below `3·2^26·2^53 < 2^81`). The whole mesh must enclose a positive
-/// volume, and each shell (triangles connected through edges) with a
-/// negative volume — a cavity — must lie inside the box of a shell with a
-/// positive one. What this cannot see: a shell nested in another with the
-/// same orientation.
-fn check_orientation(triangles: &[[IntPoint; 3]]) -> Result<(), Error> {
-    let tris: Vec<[P; 3]> = triangles
-        .iter()
-        .map(|t| t.map(|p| p.coords()))
-        .filter(|c| c[0] != c[1] && c[1] != c[2] && c[2] != c[0])
-        .collect();
-    let six_volume = |t: &[P; 3]| -> i128 {
-        let [a, b, c] = t.map(|p| p.map(i128::from));
-        let bc = [
-            b[1] * c[2] - b[2] * c[1],
-            b[2] * c[0] - b[0] * c[2],
-            b[0] * c[1] - b[1] * c[0],
-        ];
-        a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2]
-    };
-    // Shells: union–find over triangles sharing an edge.
-    let mut parent: Vec<usize> = (0..tris.len()).collect();
-    fn find(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    let mut first_on_edge: HashMap<(P, P), usize> = HashMap::new();
-    for (i, t) in tris.iter().enumerate() {
-        for k in 0..3 {
-            let (u, v) = (t[k], t[(k + 1) % 3]);
-            let edge = (u.min(v), u.max(v));
-            let j = *first_on_edge.entry(edge).or_insert(i);
-            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-            parent[a.max(b)] = a.min(b);
-        }
-    }
-    // Per shell root: 6 × volume and box.
-    let mut shells: HashMap<usize, (i128, P, P)> = HashMap::new();
-    for (i, t) in tris.iter().enumerate() {
-        let root = find(&mut parent, i);
-        let (lo, hi) = bounds(t);
-        let e = shells.entry(root).or_insert((0, lo, hi));
-        e.0 += six_volume(t);
-        e.1 = [0, 1, 2].map(|a| e.1[a].min(lo[a]));
-        e.2 = [0, 1, 2].map(|a| e.2[a].max(hi[a]));
-    }
-    let total: i128 = shells.values().map(|s| s.0).sum();
+/// volume, and each shell with a negative volume — a cavity — must lie
+/// inside the box of a shell with a positive one. Exact nesting is decided
+/// later ([`check_nesting`]), once the shells are known not to cross.
+fn check_orientation(shells: &[Shell]) -> Result<(), Error> {
+    let total: i128 = shells.iter().map(|s| s.six_volume).sum();
     let inside_out = |six: i128, shell: &str| Error::InsideOut {
         volume: six as f64 / 6.0,
         shell: shell.to_string(),
@@ -137,7 +173,7 @@ fn check_orientation(triangles: &[[IntPoint; 3]]) -> Result<(), Error> {
     if total < 0 {
         return Err(inside_out(total, "the mesh as a whole"));
     }
-    let mut roots: Vec<&(i128, P, P)> = shells.values().collect();
+    let mut roots: Vec<(i128, P, P)> = shells.iter().map(|s| (s.six_volume, s.lo, s.hi)).collect();
     roots.sort_unstable();
     for (six, lo, hi) in roots.iter().filter(|s| s.0 < 0) {
         let held = roots
@@ -151,6 +187,101 @@ fn check_orientation(triangles: &[[IntPoint; 3]]) -> Result<(), Error> {
         }
     }
     Ok(())
+}
+
+/// Checks that the shells, which cross nowhere, nest as the boundary of a
+/// solid: each outward shell inside no other (winding number 0), each
+/// cavity directly inside an outward shell (winding number 1); see the
+/// module notes. The point tested on a shell is the centroid of one of its
+/// proper triangles, which no other shell meets (triangles sharing an edge
+/// are in one shell, and shells cross nowhere); coordinates are scaled by
+/// 3 to keep it on the grid.
+///
+/// # Errors
+/// [`Error::MisnestedShell`] for the first shell (in triangle order) that
+/// breaks the rule.
+fn check_nesting(tris: &[[P; 3]], shells: &[Shell]) -> Result<(), Error> {
+    if shells.len() < 2 {
+        return Ok(());
+    }
+    let scaled = |p: P| p.map(|c| 3 * i128::from(c));
+    for (j, shell) in shells.iter().enumerate() {
+        if shell.six_volume == 0 {
+            continue;
+        }
+        let Some(t) = shell
+            .triangles
+            .iter()
+            .map(|&i| &tris[i])
+            .find(|t| cross(sub(t[1], t[0]), sub(t[2], t[0])) != [0; 3])
+        else {
+            continue;
+        };
+        let p: [i128; 3] =
+            [0, 1, 2].map(|a| i128::from(t[0][a]) + i128::from(t[1][a]) + i128::from(t[2][a]));
+        let mut winding = 0i64;
+        for (i, other) in shells.iter().enumerate() {
+            let (lo, hi) = (scaled(other.lo), scaled(other.hi));
+            if i == j || !(0..3).all(|a| lo[a] <= p[a] && p[a] <= hi[a]) {
+                continue;
+            }
+            for &k in &other.triangles {
+                winding += i64::from(ray_crossing(p, tris[k].map(scaled)));
+            }
+        }
+        let expected = if shell.six_volume > 0 { 0 } else { 1 };
+        if winding != expected {
+            return Err(Error::MisnestedShell {
+                volume: shell.six_volume as f64 / 6.0,
+                winding,
+                shell: format!("the shell from {:?} to {:?}", shell.lo, shell.hi),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The signed crossing of the ray from `p + (ε³, ε, ε²)` along +x with
+/// triangle `t`: +1 where the ray leaves through its outer side, −1 where
+/// it enters, 0 where it misses. Exact in `i128`: scaled coordinates below
+/// 2^29 give differences below 2^30, normals below 2^61 and the plane
+/// test below 2^93.
+fn ray_crossing(p: [i128; 3], t: [[i128; 3]; 3]) -> i8 {
+    let [a, b, c] = t;
+    let (u, v) = (
+        [0, 1, 2].map(|k| b[k] - a[k]),
+        [0, 1, 2].map(|k| c[k] - a[k]),
+    );
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    // Parallel to the ray: never crossed by the perturbed ray.
+    if n[0] == 0 {
+        return 0;
+    }
+    // First non-zero term of a sign under the perturbation.
+    let sign = |terms: [i128; 3]| terms.into_iter().find(|&x| x != 0).map_or(0, i128::signum);
+    // Orientation of the perturbed point against edge (e, f) in the
+    // y-z plane: (f − e) × (p + (ε, ε²) − e), expanded in ε.
+    let edge = |e: [i128; 3], f: [i128; 3]| {
+        let (dy, dz) = (f[1] - e[1], f[2] - e[2]);
+        sign([dy * (p[2] - e[2]) - dz * (p[1] - e[1]), -dz, dy])
+    };
+    let sides = [edge(a, b), edge(b, c), edge(c, a)];
+    if sides[0] != sides[1] || sides[1] != sides[2] {
+        return 0;
+    }
+    // Which side of the plane the perturbed point lies on; the ray meets
+    // the plane ahead of it when that side is the one −x points to.
+    let d = (0..3).map(|k| n[k] * (p[k] - a[k])).sum::<i128>();
+    let side = sign([d, n[1], n[2]]);
+    let side = if side == 0 { n[0].signum() } else { side };
+    if side == n[0].signum() {
+        return 0;
+    }
+    if n[0] > 0 { 1 } else { -1 }
 }
 
 /// The first pair (by index) of proper triangles that intersect
