@@ -77,9 +77,9 @@ pub fn convex_hull(arena: &mut ConvexArena, points: &[IntPoint]) -> Result<PolyI
 /// the hull's: every point yet to come remembers one face it sees (its
 /// *conflict*); the faces it sees are connected across edges, so a search
 /// through neighbours from the conflict finds all of them. When a point's
-/// conflict dies it is tested against the faces that replace it, and only
-/// if it sees none of them against all living faces (once: a point that
-/// sees none lies inside, and stays inside as the hull grows).
+/// conflict dies it is tested against the faces that replace it; if it
+/// sees none of them it lies inside ([`Incremental::reassign`]), and stays
+/// inside as the hull grows.
 struct Incremental {
     faces: Vec<Triangle>,
     /// Whether each face is still on the hull.
@@ -197,20 +197,29 @@ impl Incremental {
             .collect()
     }
 
-    /// New conflicts for the points after `p` whose conflict died: among
-    /// the faces from `first_new` on, else among all living faces.
+    /// New conflicts for the points after `p` whose conflict died, among
+    /// the new faces (from `first_new` on).
+    ///
+    /// A point `q` that sees a face `f` seen by `p`, but none of the new
+    /// faces, lies in the new hull `H' = conv(H ∪ {p})`: the segment from
+    /// `p` to `q` lies strictly above `f`, hence outside `H`, and below or
+    /// on every new face (they all pass through `p`). Near its vertex `p`,
+    /// `H'` is the cone of the new faces, so the segment starts inside
+    /// `H'`; were `q` outside, it would leave `H'` through a kept face `g`
+    /// with `p` strictly below it (an affine function zero at `p` and at
+    /// the exit would be zero all along), and `H' ∩ plane(g)` lies in `H`.
+    /// So no other face needs testing (checked in debug builds).
     fn reassign(&mut self, pts: &[[i64; 3]], p: usize, first_new: u32) {
         let total = self.faces.len() as u32;
-        for q in p + 1..pts.len() {
-            let c = self.conflict[q];
-            if c == NONE || self.alive[c as usize] {
+        let (faces, alive) = (&self.faces, &self.alive);
+        for (q, c) in pts.iter().zip(self.conflict.iter_mut()).skip(p + 1) {
+            if *c == NONE || alive[*c as usize] {
                 continue;
             }
-            let seen = |f: &u32| self.alive[*f as usize] && self.faces[*f as usize].sees(pts[q]);
-            self.conflict[q] = (first_new..total)
-                .find(seen)
-                .or_else(|| (0..first_new).find(seen))
-                .unwrap_or(NONE);
+            let seen = |f: &u32| alive[*f as usize] && faces[*f as usize].sees(*q);
+            let found = (first_new..total).find(seen);
+            debug_assert!(found.is_some() || !(0..first_new).any(|f| seen(&f)));
+            *c = found.unwrap_or(NONE);
         }
     }
 }
