@@ -5,6 +5,7 @@
 #   benches/peer/compare.sh mill 2000
 #   benches/peer/compare.sh cheese 1000 [--seed 7]
 #   benches/peer/compare.sh sweep 20
+#   benches/peer/compare.sh cutter 2000 --path helix --sides 20
 #   benches/peer/compare.sh replay OPS.jsonl
 #   benches/peer/compare.sh cheese 10000 --chisel-only
 #

@@ -10,6 +10,8 @@
 //!   octree of BSPs; `chisel replay OPS.jsonl` applies a recorded operation
 //!   sequence. All report per-step latency, result size, volume and memory
 //!   (`--json`, `--csv`, `--export`, `--record`).
+//! - `chisel cutter --path helix|spiral|tilt --sides S --steps N` sweeps a
+//!   tapered, tilted cutter in general orientation along a curved path.
 //! - `chisel boolean A B --op union|intersection|difference -o OUT` — the
 //!   exact Boolean of two closed meshes (OBJ, PLY or GLB) or exact octree
 //!   files (`.chisel`).
@@ -135,6 +137,21 @@ enum Command {
         #[command(flatten)]
         run: RunFlags,
     },
+    /// Sweep a tapered, tilted many-sided cutter along a helical, spiral
+    /// or 5-axis path, one subtraction per step (SCENARIOS.md "cutter").
+    Cutter {
+        /// The path.
+        #[arg(long, value_enum, default_value_t = scenario::cutter::PathKind::Helix)]
+        path: scenario::cutter::PathKind,
+        /// Sides of the cutter's polygon (3 to 256).
+        #[arg(long, default_value_t = 20)]
+        sides: usize,
+        /// Number of tool moves (1 to 1,000,000).
+        #[arg(long, default_value_t = 270, value_parser = args::steps)]
+        steps: usize,
+        #[command(flatten)]
+        run: RunFlags,
+    },
     /// Sweep a gear along a Bézier curve by unions of per-triangle sweep
     /// prisms (paper 1 §5).
     Sweep {
@@ -232,6 +249,26 @@ fn main() -> ExitCode {
                     scenario::runner::run(
                         &Scenario {
                             name: "cheese",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Cutter {
+                path,
+                sides,
+                steps,
+                run,
+            } => scenario::cutter::sequence(path, sides, steps)
+                .map_err(failure::Failure::usage)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({
+                        "path": path.name(), "sides": sides, "steps": steps
+                    });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "cutter",
                             parameters,
                             sequence,
                         },

@@ -68,12 +68,28 @@ fn every_step_keeps_the_volume_bookkeeping_and_a_closed_surface() {
         vec!["mill", "--steps", "6"],
         vec!["cheese", "--count", "6", "--seed", "3"],
         vec!["sweep", "--samples", "2", "--max-bsp-nodes", "60"],
+        vec!["cutter", "--path", "helix", "--sides", "24", "--steps", "4"],
+        vec![
+            "cutter", "--path", "spiral", "--sides", "12", "--steps", "4",
+        ],
+        vec![
+            "cutter",
+            "--path",
+            "tilt",
+            "--sides",
+            "30",
+            "--steps",
+            "3",
+            "--max-bsp-nodes",
+            "40",
+        ],
     ] {
         let mut args = args;
         args.push("--check");
         let r = report(&args);
         assert_eq!(r["checked"].as_bool(), Some(true), "{args:?}");
-        // Mill and cheese cut convex holes into a box: no edge contacts.
+        // Mill, cheese and cutter cut convex holes into a box: no edge
+        // contacts.
         if args[0] != "sweep" {
             assert_eq!(r["watertight"].as_bool(), Some(true), "{args:?}");
         }

@@ -62,37 +62,166 @@ pub fn convex_hull(arena: &mut ConvexArena, points: &[IntPoint]) -> Result<PolyI
     } else {
         [[a, c, b], [a, b, d], [b, c, d], [c, a, d]]
     };
-    let mut faces: Vec<Triangle> = first.iter().map(|&f| Triangle::new(f, &pts)).collect();
-    let (mut next_faces, mut visible_edges) = (Vec::new(), Vec::new());
-    for p in 0..pts.len() {
-        if [a, b, c, d].contains(&p) {
-            continue;
-        }
-        // Horizon: directed edges of visible faces whose reverse belongs to
-        // a face that is not visible, i.e. is not an edge of a visible face
-        // (a point sees a handful of faces: a linear scan); new faces follow
-        // the visible faces' order.
-        visible_edges.clear();
-        next_faces.clear();
-        for f in &faces {
-            if f.sees(pts[p]) {
-                let v = f.corners;
-                visible_edges.extend([(v[0], v[1]), (v[1], v[2]), (v[2], v[0])]);
-            } else {
-                next_faces.push(*f);
-            }
-        }
-        if visible_edges.is_empty() {
-            continue;
-        }
-        for &(u, w) in &visible_edges {
-            if !visible_edges.contains(&(w, u)) {
-                next_faces.push(Triangle::new([u, w, p], &pts));
-            }
-        }
-        std::mem::swap(&mut faces, &mut next_faces);
-    }
+    let faces = Incremental::new(&pts, first).run(&pts, [a, b, c, d]);
     Ok(build_polyhedron(arena, &pts, &faces))
+}
+
+/// The triangulated hull under construction (notation as the module's).
+///
+/// Faces live in one list in order of creation; a face seen by a new point
+/// is marked dead rather than removed, so the living faces keep the order
+/// "kept faces in order, then the new ones" of the textbook construction,
+/// and the result does not depend on this bookkeeping.
+///
+/// Finding the faces a point sees takes time of about their number, not
+/// the hull's: every point yet to come remembers one face it sees (its
+/// *conflict*); the faces it sees are connected across edges, so a search
+/// through neighbours from the conflict finds all of them. When a point's
+/// conflict dies it is tested against the faces that replace it; if it
+/// sees none of them it lies inside ([`Incremental::reassign`]), and stays
+/// inside as the hull grows.
+struct Incremental {
+    faces: Vec<Triangle>,
+    /// Whether each face is still on the hull.
+    alive: Vec<bool>,
+    /// `neighbour[f][k]`: the face across edge `k` of `f` (edge `k` runs
+    /// from corner `k` to corner `k + 1`).
+    neighbour: Vec<[u32; 3]>,
+    /// Per point, a living face it sees, or [`NONE`] (inside, or done).
+    conflict: Vec<u32>,
+}
+
+/// No face.
+const NONE: u32 = u32::MAX;
+
+impl Incremental {
+    fn new(pts: &[[i64; 3]], first: [[usize; 3]; 4]) -> Self {
+        let faces: Vec<Triangle> = first.iter().map(|&f| Triangle::new(f, pts)).collect();
+        let mut hull = Self {
+            alive: vec![true; 4],
+            neighbour: vec![[NONE; 3]; 4],
+            conflict: vec![NONE; pts.len()],
+            faces,
+        };
+        for f in 0..4 {
+            for k in 0..3 {
+                let v = hull.faces[f].corners;
+                let (u, w) = (v[k], v[(k + 1) % 3]);
+                hull.neighbour[f][k] = (0..4)
+                    .find(|&g| g != f && hull.edge_slot(g, w, u).is_some())
+                    .map_or(NONE, |g| g as u32);
+            }
+        }
+        for (q, p) in pts.iter().enumerate() {
+            hull.conflict[q] = (0..4u32)
+                .find(|&f| hull.faces[f as usize].sees(*p))
+                .unwrap_or(NONE);
+        }
+        hull
+    }
+
+    /// The slot `k` of face `f` whose edge runs from `u` to `w`.
+    fn edge_slot(&self, f: usize, u: usize, w: usize) -> Option<usize> {
+        let v = self.faces[f].corners;
+        (0..3).find(|&k| v[k] == u && v[(k + 1) % 3] == w)
+    }
+
+    /// Adds the points in order (the tetrahedron's corners `skip` are on
+    /// the hull already) and returns the living faces in order.
+    fn run(mut self, pts: &[[i64; 3]], skip: [usize; 4]) -> Vec<Triangle> {
+        let (mut visible, mut stack, mut starts) = (Vec::new(), Vec::new(), Vec::new());
+        for p in 0..pts.len() {
+            if skip.contains(&p) {
+                continue;
+            }
+            let seed = self.conflict[p];
+            if seed == NONE {
+                continue;
+            }
+            // Every face `p` sees, in list order.
+            visible.clear();
+            stack.clear();
+            stack.push(seed);
+            self.alive[seed as usize] = false;
+            while let Some(f) = stack.pop() {
+                visible.push(f);
+                for g in self.neighbour[f as usize] {
+                    if self.alive[g as usize] && self.faces[g as usize].sees(pts[p]) {
+                        self.alive[g as usize] = false;
+                        stack.push(g);
+                    }
+                }
+            }
+            visible.sort_unstable();
+            // Cone the horizon (edges of visible faces across which the
+            // neighbour is not visible) to `p`, in the visible faces' order.
+            let first_new = self.faces.len() as u32;
+            starts.clear();
+            for &f in &visible {
+                let v = self.faces[f as usize].corners;
+                for k in 0..3 {
+                    let g = self.neighbour[f as usize][k];
+                    if !self.alive[g as usize] {
+                        continue;
+                    }
+                    let (u, w) = (v[k], v[(k + 1) % 3]);
+                    let t = self.faces.len() as u32;
+                    self.faces.push(Triangle::new([u, w, p], pts));
+                    self.alive.push(true);
+                    self.neighbour.push([g, NONE, NONE]);
+                    if let Some(j) = self.edge_slot(g as usize, w, u) {
+                        self.neighbour[g as usize][j] = t;
+                    }
+                    starts.push((u, t));
+                }
+            }
+            // New faces meet along edges to `p`: face `(u, w, p)` has the
+            // face starting at `w` across `(w, p)`.
+            starts.sort_unstable();
+            for i in 0..starts.len() {
+                let (_, t) = starts[i];
+                let w = self.faces[t as usize].corners[1];
+                if let Ok(j) = starts.binary_search_by_key(&w, |&(u, _)| u) {
+                    let s = starts[j].1;
+                    self.neighbour[t as usize][1] = s;
+                    self.neighbour[s as usize][2] = t;
+                }
+            }
+            self.reassign(pts, p, first_new);
+        }
+        self.faces
+            .iter()
+            .zip(&self.alive)
+            .filter(|&(_, &alive)| alive)
+            .map(|(f, _)| *f)
+            .collect()
+    }
+
+    /// New conflicts for the points after `p` whose conflict died, among
+    /// the new faces (from `first_new` on).
+    ///
+    /// A point `q` that sees a face `f` seen by `p`, but none of the new
+    /// faces, lies in the new hull `H' = conv(H ∪ {p})`: the segment from
+    /// `p` to `q` lies strictly above `f`, hence outside `H`, and below or
+    /// on every new face (they all pass through `p`). Near its vertex `p`,
+    /// `H'` is the cone of the new faces, so the segment starts inside
+    /// `H'`; were `q` outside, it would leave `H'` through a kept face `g`
+    /// with `p` strictly below it (an affine function zero at `p` and at
+    /// the exit would be zero all along), and `H' ∩ plane(g)` lies in `H`.
+    /// So no other face needs testing (checked in debug builds).
+    fn reassign(&mut self, pts: &[[i64; 3]], p: usize, first_new: u32) {
+        let total = self.faces.len() as u32;
+        let (faces, alive) = (&self.faces, &self.alive);
+        for (q, c) in pts.iter().zip(self.conflict.iter_mut()).skip(p + 1) {
+            if *c == NONE || alive[*c as usize] {
+                continue;
+            }
+            let seen = |f: &u32| alive[*f as usize] && faces[*f as usize].sees(*q);
+            let found = (first_new..total).find(seen);
+            debug_assert!(found.is_some() || !(0..first_new).any(|f| seen(&f)));
+            *c = found.unwrap_or(NONE);
+        }
+    }
 }
 
 /// A hull triangle with its (unnormalised, exact) outward normal, so that
@@ -290,4 +419,92 @@ fn boundary_loop(
         })
         .map(|k| ring[k])
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The textbook construction the conflict search replaces: every point
+    /// tested against every face, the horizon found by a scan of the
+    /// visible faces' edges.
+    fn by_scanning(pts: &[[i64; 3]], first: [[usize; 3]; 4], skip: [usize; 4]) -> Vec<[usize; 3]> {
+        let mut faces: Vec<Triangle> = first.iter().map(|&f| Triangle::new(f, pts)).collect();
+        for p in 0..pts.len() {
+            if skip.contains(&p) {
+                continue;
+            }
+            let (mut next, mut edges) = (Vec::new(), Vec::new());
+            for f in &faces {
+                if f.sees(pts[p]) {
+                    let v = f.corners;
+                    edges.extend([(v[0], v[1]), (v[1], v[2]), (v[2], v[0])]);
+                } else {
+                    next.push(*f);
+                }
+            }
+            for &(u, w) in &edges {
+                if !edges.contains(&(w, u)) {
+                    next.push(Triangle::new([u, w, p], pts));
+                }
+            }
+            faces = next;
+        }
+        faces.iter().map(|f| f.corners).collect()
+    }
+
+    /// Both constructions on `pts` (sorted, distinct, spanning a volume).
+    fn same_triangles(mut pts: Vec<[i64; 3]>) {
+        pts.sort_unstable();
+        pts.dedup();
+        let (a, b) = (0, 1);
+        let Some(c) =
+            (2..pts.len()).find(|&i| cross(sub(pts[b], pts[a]), sub(pts[i], pts[a])) != [0; 3])
+        else {
+            return;
+        };
+        let Some(d) = (2..pts.len()).find(|&i| orient(pts[a], pts[b], pts[c], pts[i]) != 0) else {
+            return;
+        };
+        let first: [[usize; 3]; 4] = if orient(pts[a], pts[b], pts[c], pts[d]) < 0 {
+            [[a, b, c], [a, d, b], [b, d, c], [c, d, a]]
+        } else {
+            [[a, c, b], [a, b, d], [b, c, d], [c, a, d]]
+        };
+        let fast: Vec<[usize; 3]> = Incremental::new(&pts, first)
+            .run(&pts, [a, b, c, d])
+            .iter()
+            .map(|f| f.corners)
+            .collect();
+        assert_eq!(fast, by_scanning(&pts, first, [a, b, c, d]), "{pts:?}");
+    }
+
+    #[test]
+    fn conflicts_give_the_triangles_of_the_scan_in_its_order() {
+        let mut rng = ChaCha8Rng::seed_from_u64(24);
+        for round in 0..300 {
+            let n = rng.random_range(4..90);
+            // Small grids (many coplanar and collinear points), spheres
+            // and wide random clouds.
+            let pts: Vec<[i64; 3]> = match round % 3 {
+                0 => (0..n)
+                    .map(|_| [0; 3].map(|_| rng.random_range(-3..=3)))
+                    .collect(),
+                1 => (0..n)
+                    .map(|_| {
+                        let (u, v): (f64, f64) = (rng.random(), rng.random());
+                        let (t, z) = (u * std::f64::consts::TAU, 2.0 * v - 1.0);
+                        let r = (1.0 - z * z).sqrt() * 1e6;
+                        [r * t.cos(), r * t.sin(), z * 1e6].map(|x| x.round() as i64)
+                    })
+                    .collect(),
+                _ => (0..n)
+                    .map(|_| [0; 3].map(|_| rng.random_range(-(1 << 26)..=1 << 26)))
+                    .collect(),
+            };
+            same_triangles(pts);
+        }
+    }
 }
