@@ -70,6 +70,9 @@ fn main() {
         set.samples.len() as f64 / cpu[cpu.len() / 2] * 1e-6
     );
     println!("{:?}", set.stats);
+    // The splats' squares, the fragment count's CPU-side proxy.
+    let squares: f64 = set.samples.iter().map(|s| 4.0 * s.radius * s.radius).sum();
+    println!("splat squares sum (2r)^2 = {squares:.1}");
 }
 
 /// CPU time of all threads of this process, seconds (Linux schedstat;

@@ -68,7 +68,7 @@ const CULL_EVERY: u32 = 2;
 const FILL_SPLIT_GAIN: f64 = 0.95;
 
 /// ... and only one of at least this many grid cells.
-const FILL_SPLIT_CELLS: f64 = 16.0;
+const FILL_SPLIT_CELLS: f64 = 64.0;
 
 /// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
 const MAX_DEPTH: u32 = 50;
@@ -281,7 +281,7 @@ impl RegionJob<'_> {
     }
 
     /// The density-aware fill of a rectangle: tiled into `k × k` equal
-    /// tiles (`k` = 1, 2, 4 or 8), each filled with its own bound `δ₊`
+    /// tiles (`k` = 1, 2 or 4), each filled with its own bound `δ₊`
     /// (the smaller of the tile's and the rectangle's, both valid on it),
     /// so the grid spacing `√2·r/δ₊` follows each part's own distortion
     /// instead of the region's worst; `k` minimizes the total cell count
@@ -317,7 +317,7 @@ impl RegionJob<'_> {
             (a, b, d.min(delta))
         };
         let mut best = (1, whole);
-        for k in [2, 4, 8] {
+        for k in [2, 4] {
             let total: f64 = (0..k)
                 .flat_map(|j| (0..k).map(move |i| (i, j)))
                 .map(|(i, j)| {
