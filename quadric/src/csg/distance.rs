@@ -505,4 +505,76 @@ mod tests {
             assert!(d.relative_distance(i, j, DVec3::new(0.2, 0.1, 0.0)) > 0.5);
         }
     }
+
+    #[test]
+    fn culled_terms_stay_conservative() {
+        // A plate with four bores and a boss: planes and cylinders, many
+        // literals per product, some far from any given ball.
+        let mut dag = CsgDag::new();
+        let plate = dag
+            .cuboid(
+                DVec3::new(-6.0, -4.0, 0.0),
+                DVec3::new(6.0, 4.0, 1.0),
+                [1.0; 3],
+            )
+            .unwrap();
+        let mut bores = Vec::new();
+        for (x, y) in [(-4.0, -2.0), (4.0, -2.0), (-4.0, 2.0), (4.0, 2.0)] {
+            let q = Quadric::cylinder(DVec3::new(x, y, 0.0), DVec3::Z, 0.5).unwrap();
+            bores.push(dag.primitive(q, [1.0; 3]));
+        }
+        let boss = dag
+            .cuboid(
+                DVec3::new(-1.0, -1.0, 0.5),
+                DVec3::new(1.0, 1.0, 3.0),
+                [1.0; 3],
+            )
+            .unwrap();
+        let drilled = dag.difference(plate, &bores).unwrap();
+        let root = dag.union(&[drilled, boss]).unwrap();
+        let dnf = Dnf::from_dag(&dag, root).unwrap();
+        let d = CsgDistance::new(&dnf);
+        let mut culled_any = false;
+        for (a, product) in dnf.products().iter().enumerate() {
+            for b in 0..product.len() {
+                let others = d.other_terms(a, b);
+                for (k, centre) in [
+                    DVec3::new(-4.0, -2.0, 1.0),
+                    DVec3::new(0.3, 0.2, 3.0),
+                    DVec3::new(5.5, 3.5, 0.5),
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    let radius = 0.1 + 0.2 * f64::from(u8::try_from(k).unwrap());
+                    let Some(culled) = d.cull(&others, centre, radius) else {
+                        continue;
+                    };
+                    culled_any |= culled.literal_count() < others.literal_count();
+                    // Culling again inside a smaller ball keeps it conservative.
+                    let again = d
+                        .cull(&culled, centre, 0.5 * radius)
+                        .unwrap_or(culled.clone());
+                    for i in 0..200 {
+                        let t = f64::from(i);
+                        let dir = DVec3::new((t * 1.3).sin(), (t * 0.7).cos(), (t * 2.1).sin());
+                        let p = centre + dir.normalize() * 0.5 * radius * ((t * 0.37).sin().abs());
+                        let (mut h1, mut h2, mut h3) = (usize::MAX, usize::MAX, 0);
+                        let full = d.relative_distance_among(p, &others, &mut h1);
+                        assert_eq!(full, d.relative_distance(a, b, p));
+                        for weak in [
+                            d.relative_distance_among(p, &culled, &mut h2),
+                            d.relative_distance_among(p, &again, &mut h3),
+                        ] {
+                            assert!(
+                                weak.signum() == full.signum() && weak.abs() <= full.abs(),
+                                "product {a} literal {b} at {p}: {weak} vs {full}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(culled_any, "some literals were culled");
+    }
 }
