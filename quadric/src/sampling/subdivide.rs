@@ -191,6 +191,10 @@ impl RegionJob<'_> {
                     stats.discarded += 1;
                     return;
                 }
+                if positive && self.centre_is_off_surface(region, delta, others, stats) {
+                    stats.discarded += 1;
+                    return;
+                }
                 if reached && negative {
                     stats.filled += 1;
                     self.fill(region, delta, out);
@@ -260,6 +264,31 @@ impl RegionJob<'_> {
         };
         stats.distance_queries += 1;
         self.classify(centre, others) > radius
+    }
+
+    /// Whether a polygon whose corners are all off the surface is off it as
+    /// a whole, judged from its centroid `c`: every point of the polygon is
+    /// within the straight path `reach` of `c` (the polygon is convex), so
+    /// its surface point within world distance `reach·δ₊` of the one above
+    /// `c`, and eq. 22's positive case holds for all of them when
+    /// `d(c) ≥ reach·δ₊`. Ends the strips of regions just off the surface
+    /// beside an edge earlier than the corner discs can.
+    fn centre_is_off_surface(
+        &self,
+        region: &Region,
+        delta: f64,
+        others: &OtherTerms,
+        stats: &mut SamplingStats,
+    ) -> bool {
+        let Region::Polygon(_) = region else {
+            return false;
+        };
+        let (anchor, reach) = region.anchor();
+        let Some(p) = self.heightfield.point(anchor) else {
+            return false;
+        };
+        stats.distance_queries += 1;
+        self.classify(p, others) >= reach * delta
     }
 
     /// `max(d₂₂(p), |p − C| − R)`.
