@@ -68,7 +68,7 @@ const CULL_EVERY: u32 = 2;
 const FILL_SPLIT_GAIN: f64 = 0.95;
 
 /// ... and only one of at least this many grid cells.
-const FILL_SPLIT_CELLS: f64 = 64.0;
+const FILL_SPLIT_CELLS: f64 = 256.0;
 
 /// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
 const MAX_DEPTH: u32 = 50;
