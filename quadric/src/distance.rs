@@ -16,7 +16,9 @@
 //!
 //! and `t₀ = +∞` when the discriminant is negative or the denominator is
 //! zero (the bound never reaches zero: no surface in that direction at all).
-//! The sign of the result is the sign of `Q₀`: negative inside.
+//! The sign of the result is the sign of `Q₀`: negative inside. For a plane
+//! (`A = 0`) the bound is the exact distance `Q₀ / |∇Q|`, evaluated as
+//! `n·x₀ + c` with the unit normal `n`.
 
 use glam::DVec3;
 
@@ -31,6 +33,9 @@ pub struct QuadricDistance {
     lambda_min: f64,
     /// `λ₊`, padded up by the eigen solver's error bound.
     lambda_max: f64,
+    /// For a plane (`A = 0`): the unit normal `n` and offset `c` with
+    /// `Q(x) / |∇Q| = n·x + c`, the exact signed distance.
+    plane: Option<(DVec3, f64)>,
 }
 
 impl QuadricDistance {
@@ -43,10 +48,18 @@ impl QuadricDistance {
         // so that the bounds of eqs. 10–11 stay bounds.
         let norm = a.to_cols_array().iter().map(|x| x * x).sum::<f64>().sqrt();
         let pad = 16.0 * f64::EPSILON * norm;
+        let k = quadric.coefficients();
+        let linear = DVec3::new(k[3], k[6], k[8]);
+        let plane = (norm == 0.0 && linear.length() > 0.0).then(|| {
+            // Q(x) = 2 l·x + c, ∇Q = 2l.
+            let len = linear.length();
+            (linear / len, k[9] / (2.0 * len))
+        });
         Self {
             quadric: *quadric,
             lambda_min: eig.min_value() - pad,
             lambda_max: eig.max_value() + pad,
+            plane,
         }
     }
 
@@ -64,6 +77,7 @@ impl QuadricDistance {
             quadric: self.quadric.complement(),
             lambda_min: -self.lambda_max,
             lambda_max: -self.lambda_min,
+            plane: self.plane.map(|(n, c)| (-n, -c)),
         }
     }
 
@@ -74,6 +88,9 @@ impl QuadricDistance {
     #[must_use]
     #[inline]
     pub fn distance(&self, x0: DVec3) -> f64 {
+        if let Some((n, c)) = self.plane {
+            return n.dot(x0) + c;
+        }
         // Q(x) = x·(Ax − b) − b·x + c: the value from the half gradient.
         let h = self.quadric.half_gradient(x0);
         let k = self.quadric.coefficients();

@@ -177,6 +177,39 @@ fn degenerate_transforms_and_files() {
 }
 
 #[test]
+fn out_of_range_transforms_name_the_transform_and_value() {
+    let scene = |transform: &str| {
+        format!(
+            "Scene(\n  primitives: [\n    (name: \"A\", shape: Sphere(center: (0, 0, 0), radius: 1),\n     \
+             transform: ({transform})),\n  ],\n  root: Ref(\"A\"),\n)\n"
+        )
+    };
+    for (transform, part, value) in [
+        ("scale: (1e300, 1, 1)", "scale", "1e300"),
+        ("scale: (1, 1e-300, 1)", "scale", "1e-300"),
+        ("scale: (1, 1, inf)", "scale", "inf"),
+        ("translate: (0, -1e300, 0)", "translate", "-1e300"),
+        ("rotate: (0, 0, 1e300)", "rotate", "1e300"),
+        (
+            "matrix: [[1e300, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]",
+            "matrix row",
+            "1e300",
+        ),
+    ] {
+        let (line, message) = parse_error(&scene(transform));
+        assert_eq!(line, 4, "{transform}: {message}");
+        assert!(
+            message.contains(&format!("transform {part} (")) && message.contains(value),
+            "{transform}: {message}"
+        );
+        assert!(message.contains("out of range"), "{transform}: {message}");
+        assert!(!message.contains("singular"), "{transform}: {message}");
+    }
+    // In range, large and small placements still load.
+    assert!(Scene::from_ron(&scene("scale: (1e3, 1e3, 1e3), translate: (1e9, 0, 0)")).is_ok());
+}
+
+#[test]
 fn shipped_scenes_carry_bounds_around_their_solids() {
     for name in ["three_spheres", "classic", "sharp8", "machine80"] {
         let scene = Scene::load(scene_path(&format!("{name}.quadric.ron"))).unwrap();

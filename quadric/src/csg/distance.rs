@@ -33,17 +33,27 @@ pub struct CsgDistance<'a> {
     /// Per quadric: the index of the first quadric with the same surface
     /// (the quadric itself or its exact negation) and whether it is negated.
     canonical: Vec<(usize, bool)>,
+    /// Per literal ([`signed_index`]): the bounds with its side applied,
+    /// `d(L, p)` directly (`d(−Q, p) = −d(Q, p)` for the outside side).
+    signed: Vec<QuadricDistance>,
+}
+
+/// The index of literal `l` in [`CsgDistance::signed`].
+fn signed_index(l: Literal) -> u32 {
+    let q = u32::try_from(l.quadric).unwrap_or(u32::MAX / 2);
+    2 * q + u32::from(l.side == Side::Outside)
 }
 
 impl<'a> CsgDistance<'a> {
     /// Prepares `dnf` (one eigen decomposition per quadric).
     #[must_use]
     pub fn new(dnf: &'a Dnf) -> Self {
-        let quadrics = dnf
+        let quadrics: Vec<QuadricDistance> = dnf
             .quadrics()
             .iter()
             .map(|q| QuadricDistance::new(&q.quadric))
             .collect();
+        let signed = quadrics.iter().flat_map(|q| [*q, q.complement()]).collect();
         let mut first: HashMap<[u64; 10], usize> = HashMap::new();
         let mut canonical = Vec::with_capacity(dnf.quadrics().len());
         for (i, q) in dnf.quadrics().iter().enumerate() {
@@ -61,6 +71,7 @@ impl<'a> CsgDistance<'a> {
             dnf,
             quadrics,
             canonical,
+            signed,
         }
     }
 
@@ -200,87 +211,197 @@ impl<'a> CsgDistance<'a> {
     }
 
     /// The other products as seen from literal `b` of product `a` (see the
-    /// module notes on shared surfaces), for
-    /// [`relative_distance_among`](Self::relative_distance_among).
+    /// module notes on shared surfaces), and that literal's own product,
+    /// for [`relative_distance_among`](Self::relative_distance_among).
     ///
     /// Preconditions as [`relative_distance`](Self::relative_distance).
     #[must_use]
     pub fn other_terms(&self, a: usize, b: usize) -> OtherTerms {
         let on = Some(self.dnf.products()[a][b]);
+        let mut literals = Vec::new();
+        let term = |product: usize, left_out: Option<usize>, literals: &mut Vec<u32>| {
+            let start = index_u32(literals.len());
+            for (j, l) in self.dnf.products()[product].iter().enumerate() {
+                if Some(j) != left_out {
+                    literals.push(signed_index(*l));
+                }
+            }
+            Term {
+                product: index_u32(product),
+                start,
+                end: index_u32(literals.len()),
+                floor: f64::NEG_INFINITY,
+            }
+        };
+        let own = term(a, Some(b), &mut literals);
         let terms = (0..self.dnf.products().len())
             .filter(|&i| i != a)
             .filter_map(|i| self.shared_literal(i, on).map(|left_out| (i, left_out)))
+            .map(|(i, left_out)| term(i, left_out, &mut literals))
             .collect();
         OtherTerms {
+            literals,
             terms,
+            own,
             floor: f64::INFINITY,
         }
     }
 
-    /// Eq. 22 for literal `b` of product `a` with the other products given
-    /// by `others` (from [`other_terms`](Self::other_terms), possibly
-    /// [`cull`](Self::cull)ed). `hint` as in
-    /// [`relative_distance_hinted`](Self::relative_distance_hinted).
-    #[must_use]
-    pub fn relative_distance_among(
-        &self,
-        a: usize,
-        b: usize,
-        p: DVec3,
-        others: &OtherTerms,
-        hint: &mut usize,
-    ) -> f64 {
-        let own = self.product_distance(a, Some(b), p);
-        let mut min = others.floor;
-        let first = others.terms.iter().position(|t| t.0 == *hint);
-        if let Some(k) = first {
-            let (i, left_out) = others.terms[k];
-            min = min.min(self.product_distance(i, left_out, p));
+    /// `max(floor, maxⱼ d(Lⱼ, p))` over the literals of `term`, stopping
+    /// as soon as the running maximum reaches `cap` (the result is then
+    /// `≥ cap`, all that a surrounding minimum needs to know).
+    #[inline]
+    fn term_distance(&self, literals: &[u32], term: &Term, p: DVec3, cap: f64) -> f64 {
+        let mut max = term.floor;
+        if max >= cap {
+            return max;
         }
-        for (k, &(i, left_out)) in others.terms.iter().enumerate() {
+        for &k in &literals[term.start as usize..term.end as usize] {
+            max = max.max(self.signed[k as usize].distance(p));
+            if max >= cap {
+                break;
+            }
+        }
+        max
+    }
+
+    /// Eq. 22 for the literal `others` was made for (by
+    /// [`other_terms`](Self::other_terms), possibly
+    /// [`cull`](Self::cull)ed). `hint` as in
+    /// [`relative_distance_hinted`](Self::relative_distance_hinted): the
+    /// product evaluated first, updated to the nearest one; the result is
+    /// the same for every hint.
+    #[must_use]
+    pub fn relative_distance_among(&self, p: DVec3, others: &OtherTerms, hint: &mut usize) -> f64 {
+        let literals = &others.literals;
+        let mut min = others.floor;
+        let first = others
+            .terms
+            .iter()
+            .position(|t| t.product as usize == *hint);
+        if let Some(k) = first {
+            min = min.min(self.term_distance(literals, &others.terms[k], p, f64::INFINITY));
+        }
+        for (k, term) in others.terms.iter().enumerate() {
             if Some(k) == first {
                 continue;
             }
-            let d = self.product_distance_capped(i, left_out, p, min);
+            let d = self.term_distance(literals, term, p, min);
             if d < min {
                 min = d;
-                *hint = i;
+                *hint = term.product as usize;
             }
         }
+        // The own product only matters where it exceeds `−min`.
+        let own = self.term_distance(literals, &others.own, p, f64::INFINITY);
         (-min).max(own)
     }
 
-    /// `others` for points within distance `radius` of `centre`: products
-    /// whose distance from `centre` exceeds `3·radius` are replaced by the
-    /// constant lower bound `d − radius` of their true distance (valid
-    /// everywhere in the ball). `None` when nothing can be dropped.
+    /// `others` for points within distance `radius` of `centre`. With `D`
+    /// the distance of a product or literal at `centre` (each conservative,
+    /// so the sign holds and `|D| − radius` bounds the true distance
+    /// anywhere in the ball):
+    /// - a product (also the own one) with `D > 3·radius` becomes the
+    ///   constant `D − radius`;
+    /// - a literal of a remaining product with `D < −3·radius` becomes the
+    ///   constant `D + radius`, folded into its product's floor.
+    ///
+    /// Each replacement keeps the sign and shrinks the magnitude of the
+    /// value it replaces, and so does every `min`/`max` of eq. 22 above it:
+    /// the result stays a conservative eq.-22 distance in the ball. `None`
+    /// when nothing can be dropped.
     #[must_use]
     pub fn cull(&self, others: &OtherTerms, centre: DVec3, radius: f64) -> Option<OtherTerms> {
+        let far = 3.0 * radius;
+        let mut literals = Vec::with_capacity(others.literals.len());
+        let mut changed = false;
         let mut floor = others.floor;
+        // The term culled, or `Err(constant)` when it became one.
+        let mut cull_term = |term: &Term, literals: &mut Vec<u32>| -> Result<Term, f64> {
+            let start = literals.len();
+            let mut total = term.floor;
+            let mut term_floor = term.floor;
+            for &k in &others.literals[term.start as usize..term.end as usize] {
+                let d = self.signed[k as usize].distance(centre);
+                total = total.max(d);
+                if d < -far {
+                    term_floor = term_floor.max(d + radius);
+                } else {
+                    literals.push(k);
+                }
+            }
+            if total > far {
+                literals.truncate(start);
+                changed = true;
+                return Err(total - radius);
+            }
+            changed |= literals.len() - start < (term.end - term.start) as usize;
+            Ok(Term {
+                product: term.product,
+                start: index_u32(start),
+                end: index_u32(literals.len()),
+                floor: term_floor,
+            })
+        };
+        let own = match cull_term(&others.own, &mut literals) {
+            Ok(t) => t,
+            Err(constant) => Term {
+                product: others.own.product,
+                start: 0,
+                end: 0,
+                floor: constant,
+            },
+        };
         let mut terms = Vec::with_capacity(others.terms.len());
-        for &(i, left_out) in &others.terms {
-            let d = self.product_distance(i, left_out, centre);
-            if d > 3.0 * radius {
-                floor = floor.min(d - radius);
-            } else {
-                terms.push((i, left_out));
+        for term in &others.terms {
+            match cull_term(term, &mut literals) {
+                Ok(t) => terms.push(t),
+                Err(constant) => floor = floor.min(constant),
             }
         }
-        (terms.len() < others.terms.len()).then_some(OtherTerms { terms, floor })
+        changed.then_some(OtherTerms {
+            literals,
+            terms,
+            own,
+            floor,
+        })
     }
 }
 
-/// The other products of the normal form as seen from one literal: each
-/// with the literal to leave out, plus a constant lower bound for the
+/// Indices into normal forms fit in `u32` (the product limit is far lower).
+fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
+}
+
+/// One product of [`OtherTerms`]: its literals still evaluated (a range of
+/// [`OtherTerms::literals`]) and a constant lower bound standing for those
+/// dropped by [`CsgDistance::cull`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Term {
+    product: u32,
+    start: u32,
+    end: u32,
+    floor: f64,
+}
+
+/// The products of the normal form as seen from one literal `L_ab`: the
+/// other products, each with the literal to leave out (module notes), and
+/// the own product without `L_ab`; plus a constant lower bound for the
 /// products dropped by [`CsgDistance::cull`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct OtherTerms {
-    terms: Vec<(usize, Option<usize>)>,
+    /// Literals still evaluated, as indices of [`CsgDistance`]'s signed bounds.
+    literals: Vec<u32>,
+    /// The other products still evaluated.
+    terms: Vec<Term>,
+    /// The own product without the sampled literal.
+    own: Term,
+    /// `min` over the dropped products' constants (`+∞` if none).
     floor: f64,
 }
 
 impl OtherTerms {
-    /// The number of products still evaluated.
+    /// The number of other products still evaluated.
     #[must_use]
     pub fn len(&self) -> usize {
         self.terms.len()
@@ -290,6 +411,12 @@ impl OtherTerms {
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.terms.is_empty()
+    }
+
+    /// The number of literal distances one query evaluates at most.
+    #[must_use]
+    pub fn literal_count(&self) -> usize {
+        self.literals.len()
     }
 }
 
@@ -377,5 +504,77 @@ mod tests {
             };
             assert!(d.relative_distance(i, j, DVec3::new(0.2, 0.1, 0.0)) > 0.5);
         }
+    }
+
+    #[test]
+    fn culled_terms_stay_conservative() {
+        // A plate with four bores and a boss: planes and cylinders, many
+        // literals per product, some far from any given ball.
+        let mut dag = CsgDag::new();
+        let plate = dag
+            .cuboid(
+                DVec3::new(-6.0, -4.0, 0.0),
+                DVec3::new(6.0, 4.0, 1.0),
+                [1.0; 3],
+            )
+            .unwrap();
+        let mut bores = Vec::new();
+        for (x, y) in [(-4.0, -2.0), (4.0, -2.0), (-4.0, 2.0), (4.0, 2.0)] {
+            let q = Quadric::cylinder(DVec3::new(x, y, 0.0), DVec3::Z, 0.5).unwrap();
+            bores.push(dag.primitive(q, [1.0; 3]));
+        }
+        let boss = dag
+            .cuboid(
+                DVec3::new(-1.0, -1.0, 0.5),
+                DVec3::new(1.0, 1.0, 3.0),
+                [1.0; 3],
+            )
+            .unwrap();
+        let drilled = dag.difference(plate, &bores).unwrap();
+        let root = dag.union(&[drilled, boss]).unwrap();
+        let dnf = Dnf::from_dag(&dag, root).unwrap();
+        let d = CsgDistance::new(&dnf);
+        let mut culled_any = false;
+        for (a, product) in dnf.products().iter().enumerate() {
+            for b in 0..product.len() {
+                let others = d.other_terms(a, b);
+                for (k, centre) in [
+                    DVec3::new(-4.0, -2.0, 1.0),
+                    DVec3::new(0.3, 0.2, 3.0),
+                    DVec3::new(5.5, 3.5, 0.5),
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    let radius = 0.1 + 0.2 * f64::from(u8::try_from(k).unwrap());
+                    let Some(culled) = d.cull(&others, centre, radius) else {
+                        continue;
+                    };
+                    culled_any |= culled.literal_count() < others.literal_count();
+                    // Culling again inside a smaller ball keeps it conservative.
+                    let again = d
+                        .cull(&culled, centre, 0.5 * radius)
+                        .unwrap_or(culled.clone());
+                    for i in 0..200 {
+                        let t = f64::from(i);
+                        let dir = DVec3::new((t * 1.3).sin(), (t * 0.7).cos(), (t * 2.1).sin());
+                        let p = centre + dir.normalize() * 0.5 * radius * ((t * 0.37).sin().abs());
+                        let (mut h1, mut h2, mut h3) = (usize::MAX, usize::MAX, 0);
+                        let full = d.relative_distance_among(p, &others, &mut h1);
+                        assert_eq!(full, d.relative_distance(a, b, p));
+                        for weak in [
+                            d.relative_distance_among(p, &culled, &mut h2),
+                            d.relative_distance_among(p, &again, &mut h3),
+                        ] {
+                            assert!(
+                                weak.signum() == full.signum() && weak.abs() <= full.abs(),
+                                "product {a} literal {b} at {p}: {weak} vs {full}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(culled_any, "some literals were culled");
     }
 }

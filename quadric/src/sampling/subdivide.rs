@@ -19,7 +19,9 @@
 //!    exceeds the ball's radius, else subdivide;
 //! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
 //!    region's cover radius and all signs agree: fill (negative) or drop
-//!    (positive); a polygon is filled with a grid of cells, one sample at
+//!    (positive); a rectangle is first tiled where its distortion varies,
+//!    so that each tile's grid follows its own `δ₊` (a density-aware
+//!    fill); a polygon is filled with a grid of cells, one sample at
 //!    each cell centre moved into the region; a curved triangle with a grid
 //!    of cells, one sample at the centre of each cell inside it, and on
 //!    its border one sample at a point of the region per cell or per
@@ -59,7 +61,14 @@ pub const DISTORTION_CAP: f64 = 2.5;
 
 /// Subdivision levels between two cullings of far products
 /// ([`CsgDistance::cull`]); each level halves a region's area.
-const CULL_EVERY: u32 = 4;
+const CULL_EVERY: u32 = 2;
+
+/// The density-aware fill tiles a rectangle only when that saves at
+/// least this fraction of its samples...
+const FILL_SPLIT_GAIN: f64 = 0.95;
+
+/// ... and only one of at least this many grid cells.
+const FILL_SPLIT_CELLS: f64 = 256.0;
 
 /// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
 const MAX_DEPTH: u32 = 50;
@@ -125,7 +134,7 @@ impl RegionJob<'_> {
         depth: u32,
         others: &OtherTerms,
     ) -> Option<OtherTerms> {
-        if !depth.is_multiple_of(CULL_EVERY) || others.is_empty() || !delta.is_finite() {
+        if !depth.is_multiple_of(CULL_EVERY) || others.literal_count() == 0 || !delta.is_finite() {
             return None;
         }
         let (anchor, reach) = region.anchor();
@@ -153,7 +162,6 @@ impl RegionJob<'_> {
             return;
         }
         let r = self.options.radius;
-        let small = region.diameter() < self.options.min_region_fraction * r;
         let verts = region.vertices();
         let (_, delta) = region.distortion_bounds(hf);
         if delta > DISTORTION_CAP && self.ball_is_off_surface(lo, hi, others, stats) {
@@ -183,6 +191,10 @@ impl RegionJob<'_> {
                     stats.discarded += 1;
                     return;
                 }
+                if positive && self.centre_is_off_surface(region, delta, others, stats) {
+                    stats.discarded += 1;
+                    return;
+                }
                 if reached && negative {
                     stats.filled += 1;
                     self.fill(region, delta, out);
@@ -203,7 +215,7 @@ impl RegionJob<'_> {
                 }
             }
         }
-        if small {
+        if region.diameter() < self.options.min_region_fraction * r {
             stats.dropped_small += 1;
             return;
         }
@@ -254,16 +266,35 @@ impl RegionJob<'_> {
         self.classify(centre, others) > radius
     }
 
+    /// Whether a polygon whose corners are all off the surface is off it as
+    /// a whole, judged from its centroid `c`: every point of the polygon is
+    /// within the straight path `reach` of `c` (the polygon is convex), so
+    /// its surface point within world distance `reach·δ₊` of the one above
+    /// `c`, and eq. 22's positive case holds for all of them when
+    /// `d(c) ≥ reach·δ₊`. Ends the strips of regions just off the surface
+    /// beside an edge earlier than the corner discs can.
+    fn centre_is_off_surface(
+        &self,
+        region: &Region,
+        delta: f64,
+        others: &OtherTerms,
+        stats: &mut SamplingStats,
+    ) -> bool {
+        let Region::Polygon(_) = region else {
+            return false;
+        };
+        let (anchor, reach) = region.anchor();
+        let Some(p) = self.heightfield.point(anchor) else {
+            return false;
+        };
+        stats.distance_queries += 1;
+        self.classify(p, others) >= reach * delta
+    }
+
     /// `max(d₂₂(p), |p − C| − R)`.
     fn classify(&self, p: DVec3, others: &OtherTerms) -> f64 {
         let mut hint = self.hint.get();
-        let d = self.distance.relative_distance_among(
-            self.product as usize,
-            self.literal as usize,
-            p,
-            others,
-            &mut hint,
-        );
+        let d = self.distance.relative_distance_among(p, others, &mut hint);
         self.hint.set(hint);
         d.max(self.sphere.signed_distance(p))
     }
@@ -275,9 +306,64 @@ impl RegionJob<'_> {
 
     /// Covers a region that lies wholly on the CSG surface (step 3).
     fn fill(&self, region: &Region, delta: f64, out: &mut Vec<Sample>) {
-        match region {
-            Region::Polygon(p) => self.fill_polygon(p, delta, out),
-            Region::Curved(c) => self.fill_curved(c, delta, out),
+        self.fill_by_density(region, delta, out);
+    }
+
+    /// The density-aware fill of a rectangle: tiled into `k × k` equal
+    /// tiles (`k` = 1, 2 or 4), each filled with its own bound `δ₊`
+    /// (the smaller of the tile's and the rectangle's, both valid on it),
+    /// so the grid spacing `√2·r/δ₊` follows each part's own distortion
+    /// instead of the region's worst; `k` minimizes the total cell count
+    /// (the tiles' seams cost partial cells). Tiles are axis-aligned, so
+    /// seams add no overlapping cells. Other regions, and rectangles with
+    /// fewer than [`FILL_SPLIT_CELLS`] cells, get one grid.
+    fn fill_by_density(&self, region: &Region, delta: f64, out: &mut Vec<Sample>) {
+        let Region::Polygon(p) = region else {
+            if let Region::Curved(c) = region {
+                self.fill_curved(c, delta, out);
+            }
+            return;
+        };
+        let (lo, hi) = p.bounds();
+        let cells = |lo: DVec2, hi: DVec2, delta: f64| {
+            let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
+            let n = ((hi - lo) / step).ceil().max(DVec2::ONE);
+            n.x * n.y
+        };
+        let whole = cells(lo, hi, delta);
+        if !p.is_rectangle() || !whole.is_finite() || whole < FILL_SPLIT_CELLS {
+            self.fill_polygon(p, delta, out);
+            return;
+        }
+        let tile = |k: u32, i: u32, j: u32| {
+            let size = (hi - lo) / f64::from(k);
+            let a = lo + size * DVec2::new(f64::from(i), f64::from(j));
+            let b = DVec2::new(
+                if i + 1 == k { hi.x } else { a.x + size.x },
+                if j + 1 == k { hi.y } else { a.y + size.y },
+            );
+            let (_, d) = self.heightfield.distortion_bounds(a, b);
+            (a, b, d.min(delta))
+        };
+        let mut best = (1, whole);
+        for k in [2, 4] {
+            let total: f64 = (0..k)
+                .flat_map(|j| (0..k).map(move |i| (i, j)))
+                .map(|(i, j)| {
+                    let (a, b, d) = tile(k, i, j);
+                    cells(a, b, d)
+                })
+                .sum();
+            if total < FILL_SPLIT_GAIN * best.1 {
+                best = (k, total);
+            }
+        }
+        let k = best.0;
+        for j in 0..k {
+            for i in 0..k {
+                let (a, b, d) = tile(k, i, j);
+                self.fill_polygon(&Polygon::rectangle(a, b), d, out);
+            }
         }
     }
 
@@ -317,6 +403,7 @@ impl RegionJob<'_> {
                 if j == ny { hi.y } else { lo.y + cell.y * y },
             )
         };
+        out.reserve(nx * ny);
         let mut inside = vec![false; (nx + 1) * (ny + 1)];
         for j in 0..=ny {
             for i in 0..=nx {
@@ -416,6 +503,9 @@ impl RegionJob<'_> {
         if !self.budget.reserve(cells) {
             return;
         }
+        // Within the budget just reserved, so the cell count fits `usize`.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        out.reserve(cells as usize);
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let half_diagonal = 0.5 * cell.length();
         let radius = (half_diagonal * delta).min(self.options.radius);
@@ -440,17 +530,20 @@ impl RegionJob<'_> {
             .heightfield
             .point(uv)
             .unwrap_or(self.heightfield.centre);
+        // One Newton step onto the quadric; the normal from the same
+        // gradient (the step moves the point by rounding errors only).
         let g = self.quadric.gradient(raw);
         let g2 = g.length_squared();
-        let position = if g2 > 0.0 {
-            raw - g * (self.quadric.value(raw) / g2)
+        let (position, normal) = if g2 > 0.0 && g2.is_finite() {
+            let position = raw - g * (self.quadric.value(raw) / g2);
+            (position, g * (self.outward_sign / g2.sqrt()))
         } else {
-            raw
+            let normal = self
+                .quadric
+                .normal(raw)
+                .map_or(DVec3::ZERO, |n| n * self.outward_sign);
+            (raw, normal)
         };
-        let normal = self
-            .quadric
-            .normal(position)
-            .map_or(DVec3::ZERO, |n| n * self.outward_sign);
         Sample {
             position,
             normal,

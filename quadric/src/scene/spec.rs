@@ -275,6 +275,51 @@ fn shape_quadrics(shape: &ShapeSpec) -> Result<Vec<Quadric>> {
     }
 }
 
+/// The largest `|translate|` component and `matrix` entry a scene transform
+/// takes: a quadric placed there has coefficients up to about its square,
+/// far inside `f64`.
+pub(crate) const MAX_TRANSLATE: f64 = 1e12;
+
+/// The largest scale factor, and the reciprocal of the smallest non-zero
+/// one (a zero factor is a singular transform).
+pub(crate) const MAX_SCALE: f64 = 1e6;
+
+/// The largest `|rotate|` angle in degrees (beyond it the angle's own
+/// rounding exceeds a degree).
+pub(crate) const MAX_ROTATE_DEG: f64 = 1e12;
+
+/// Checks one part of a transform spec: finite, each `|value| ≤ max`, and
+/// each non-zero `|value| ≥ min`. The error names the part and its value.
+fn check_part<const N: usize>(
+    what: &str,
+    part: Option<[f64; N]>,
+    max: f64,
+    min: Option<f64>,
+) -> Result<()> {
+    let Some(values) = part else {
+        return Ok(());
+    };
+    let shown = values.map(|v| format!("{v:e}")).join(", ");
+    let range = match min {
+        Some(min) => format!("a magnitude in [{min:e}, {max:e}] (or 0)"),
+        None => format!("a magnitude of at most {max:e}"),
+    };
+    let bad = values
+        .iter()
+        .any(|v| !v.is_finite() || v.abs() > max || min.is_some_and(|m| *v != 0.0 && v.abs() < m));
+    if bad {
+        return Err(Error::Scene {
+            line: 0,
+            column: 0,
+            message: format!(
+                "transform {what} ({shown}) is out of range: each component needs a finite \
+                 value with {range}"
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// The matrix of a transform spec: `translate · rotate · scale`, or `matrix`.
 fn transform_matrix(t: &TransformSpec) -> Result<DMat4> {
     let m = if let Some(rows) = t.matrix {
@@ -286,8 +331,14 @@ fn transform_matrix(t: &TransformSpec) -> Result<DMat4> {
                     .to_owned(),
             });
         }
+        for row in rows.0 {
+            check_part("matrix row", Some(row), MAX_TRANSLATE, None)?;
+        }
         rows_to_mat4(rows.0)
     } else {
+        check_part("translate", t.translate, MAX_TRANSLATE, None)?;
+        check_part("rotate", t.rotate, MAX_ROTATE_DEG, None)?;
+        check_part("scale", t.scale, MAX_SCALE, Some(1.0 / MAX_SCALE))?;
         let translate = v3(t.translate.unwrap_or([0.0; 3]));
         let [rx, ry, rz] = t.rotate.unwrap_or([0.0; 3]);
         let scale = v3(t.scale.unwrap_or([1.0; 3]));

@@ -1,0 +1,95 @@
+//! Samples one scene repeatedly on one thread, for profilers (callgrind,
+//! `perf stat`): `cargo run --release -p chisel_quadric --example
+//! sample_profile -- SCENE DIVISOR [REPEATS]`, where `SCENE` is a shipped
+//! scene name or `sphere` (radius 50 in a bounding sphere of 60; the
+//! divisor is then the splat radius itself), and the splat radius is the
+//! bounding radius ÷ `DIVISOR`. Prints the counts of paper 2, Table 2.
+
+#![allow(clippy::cast_precision_loss)]
+
+use chisel_quadric::{BoundingSphere, SampleOptions, Scene, sample};
+use glam::DVec3;
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("machine80", String::as_str);
+    let divisor: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(100.0);
+    let repeats: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let (scene, sphere, radius) = if name == "sphere" {
+        let scene = Scene::from_ron(
+            r#"Scene(primitives: [(name: "ball", shape: Sphere(center: (0, 0, 0), radius: 50))], root: Ref("ball"))"#,
+        )
+        .expect("a one-sphere scene");
+        let sphere = BoundingSphere::new(DVec3::ZERO, 60.0).expect("sphere");
+        (scene, sphere, divisor)
+    } else {
+        let path = format!(
+            "{}/../assets/scenes/{name}.quadric.ron",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let scene = Scene::load(&path).expect("shipped scene");
+        let sphere = scene.bounds.expect("shipped scenes give bounds");
+        let radius = sphere.radius / divisor;
+        (scene, sphere, radius)
+    };
+    let dnf = scene.dnf().expect("normal form");
+    let options = SampleOptions::new(radius, sphere).expect("options");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    let mut times = Vec::with_capacity(repeats);
+    let mut cpu = Vec::with_capacity(repeats);
+    let mut last = None;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let before = cpu_seconds();
+        let set = pool.install(|| sample(&dnf, &options)).expect("sampling");
+        cpu.push(cpu_seconds() - before);
+        times.push(start.elapsed().as_secs_f64());
+        last = Some(set);
+    }
+    cpu.sort_by(f64::total_cmp);
+    times.sort_by(f64::total_cmp);
+    let set = last.expect("one run");
+    let median = times[times.len() / 2];
+    let rate = set.samples.len() as f64 / median;
+    println!(
+        "{name} r = {radius:.4}: {} quadrics, {} products, {} samples, {} distance queries, \
+         {} regions, median {:.3} ms of {} (CPU {:.3} ms), {:.3} M samples/s (CPU {:.3} M/s)",
+        dnf.quadrics().len(),
+        dnf.products().len(),
+        set.samples.len(),
+        set.stats.distance_queries,
+        set.stats.regions,
+        median * 1e3,
+        times.len(),
+        cpu[cpu.len() / 2] * 1e3,
+        rate * 1e-6,
+        set.samples.len() as f64 / cpu[cpu.len() / 2] * 1e-6
+    );
+    println!("{:?}", set.stats);
+    // The splats' squares, the fragment count's CPU-side proxy.
+    let squares: f64 = set.samples.iter().map(|s| 4.0 * s.radius * s.radius).sum();
+    println!("splat squares sum (2r)^2 = {squares:.1}");
+}
+
+/// CPU time of all threads of this process, seconds (Linux schedstat;
+/// `0` elsewhere): unlike wall time, it does not count time spent waiting
+/// for a core on a loaded machine.
+fn cpu_seconds() -> f64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return 0.0;
+    };
+    let mut ns = 0u64;
+    for task in tasks.flatten() {
+        let stat = std::fs::read_to_string(task.path().join("schedstat")).unwrap_or_default();
+        ns += stat
+            .split_whitespace()
+            .next()
+            .and_then(|s| s.parse::<u64>().ok())
+            .unwrap_or(0);
+    }
+    ns as f64 * 1e-9
+}
