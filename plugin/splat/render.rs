@@ -10,14 +10,17 @@
 //! camera's [`SplatViewSettings`], else the [`SplatSettings`] resource). The
 //! pass draws each prop with one instanced draw.
 
+use std::any::TypeId;
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use bevy::camera::Exposure;
+use bevy::camera::visibility::VisibleEntities;
 use bevy::light::{DirectionalLight, GlobalAmbientLight};
 use bevy::math::{DMat3, Mat3};
 use bevy::prelude::*;
 use bevy::render::Extract;
+use bevy::render::sync_world::RenderEntity;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
@@ -48,6 +51,23 @@ pub struct ExtractedProp {
 #[derive(Resource, Default)]
 pub struct ExtractedProps(pub Vec<ExtractedProp>);
 
+/// On a view: the main-world props inside its frustum this frame (Bevy's
+/// visibility check with each prop's `Aabb`, class [`PropSplats`]). The
+/// splat pass draws only these.
+#[derive(Component, Default, Debug, Clone)]
+pub struct VisibleProps(pub Vec<Entity>);
+
+pub(crate) fn extract_visible_props(
+    mut commands: Commands,
+    cameras: Extract<Query<(RenderEntity, &VisibleEntities), With<Camera>>>,
+) {
+    for (entity, visible) in &cameras {
+        let mut props: Vec<Entity> = visible.iter(TypeId::of::<PropSplats>()).copied().collect();
+        props.sort_unstable();
+        commands.entity(entity).insert(VisibleProps(props));
+    }
+}
+
 /// The scene's light as the splat shader uses it.
 #[derive(Resource, Clone, Copy, Default)]
 pub struct ExtractedSplatLight {
@@ -61,7 +81,7 @@ pub struct ExtractedSplatLight {
 
 pub(crate) fn extract_props(
     mut extracted: ResMut<ExtractedProps>,
-    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &InheritedVisibility)>>,
+    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &ViewVisibility)>>,
 ) {
     extracted.0.clear();
     for (entity, splats, transform, visibility) in &props {
@@ -313,6 +333,7 @@ pub(crate) fn splat_pass(
         &ViewTarget,
         &ViewDepthTexture,
         &SplatViewState,
+        Option<&VisibleProps>,
     )>,
     props: Res<ExtractedProps>,
     buffers: Res<PropBuffers>,
@@ -320,7 +341,7 @@ pub(crate) fn splat_pass(
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, target, depth, state) = view.into_inner();
+    let (camera, target, depth, state, visible) = view.into_inner();
 
     if props.0.is_empty() {
         return;
@@ -348,6 +369,9 @@ pub(crate) fn splat_pass(
     pass.set_render_pipeline(pipeline);
     pass.set_bind_group(0, view_bind_group, &[state.offset]);
     for prop in &props.0 {
+        if visible.is_some_and(|v| v.0.binary_search(&prop.entity).is_err()) {
+            continue;
+        }
         let Some(gpu) = buffers.0.get(&prop.entity) else {
             continue;
         };
