@@ -177,9 +177,12 @@ fn a_prop_outside_the_frustum_is_culled_and_drawn_once_back_in_view() {
     let world = app.world_mut();
     let front = world.spawn((prop.clone(), scale)).id();
     // 6 m to the side of a camera looking down −z with a 45° field of view:
-    // far outside its frustum, though its bounding sphere is close by.
+    // its Aabb lies wholly outside the frustum.
     let side = world
-        .spawn((prop.clone(), scale.with_translation(Vec3::new(6.0, 0.0, 0.0))))
+        .spawn((
+            prop.clone(),
+            scale.with_translation(Vec3::new(6.0, 0.0, 0.0)),
+        ))
         .id();
     let camera = world
         .spawn((
@@ -195,7 +198,10 @@ fn a_prop_outside_the_frustum_is_culled_and_drawn_once_back_in_view() {
         app.update();
     }
     for entity in [front, side] {
-        let aabb = app.world().get::<Aabb>(entity).expect("splats bring an Aabb");
+        let aabb = app
+            .world()
+            .get::<Aabb>(entity)
+            .expect("splats bring an Aabb");
         assert_eq!(*aabb, prop.0.aabb());
     }
     assert_eq!(
