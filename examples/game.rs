@@ -129,9 +129,14 @@ fn main() -> AppExit {
             1.0 / 20.0,
         )))
         .insert_resource(Time::<Fixed>::from_hz(20.0))
-        // Smaller shadow maps: the CPU renderer spends most of a frame on
-        // them.
+        // Smaller shadow maps.
         .insert_resource(bevy::light::DirectionalLightShadowMap { size: 1024 })
+        // No multisampling: on the CPU renderer 4x MSAA more than doubles
+        // the cost of a frame (the terrain's main pass), while the checks
+        // (physics, debris, screenshot content) do not depend on it.
+        .add_observer(|add: On<Add, Camera3d>, mut commands: Commands| {
+            commands.entity(add.entity).insert(Msaa::Off);
+        })
         .insert_resource(HoldCaptures(true))
         .init_resource::<Script>()
         .add_systems(

@@ -16,7 +16,10 @@
 //! Runs in a window when a display exists; otherwise (or with
 //! `CHISEL_HEADLESS=1`) it renders headless: `screenshots/showcase-0008.png`
 //! once the craters and props are in, then `showcase-0016.png` after one
-//! more crater beside a prop, drawn by global ray tracing.
+//! more crater beside a prop, drawn by global ray tracing. Frame 9 is
+//! captured with the props hidden: the run fails unless the props cover
+//! at least [`MIN_PROP_FRACTION`] of frame 8 (the pixels where frames 8
+//! and 9 differ).
 //!
 //! `cargo run --release --example showcase`
 
@@ -62,10 +65,13 @@ const CRATERS: [[f32; 2]; 5] = [
     [-1.5, 8.0],
 ];
 
+/// Headless: the smallest fraction of frame 8 that the props must cover.
+const MIN_PROP_FRACTION: f32 = 0.01;
+
 fn main() -> AppExit {
     let presentation = match Presentation::detect("showcase") {
         Presentation::Headless(config) => Presentation::Headless(HeadlessConfig {
-            capture_frames: vec![8, 16],
+            capture_frames: vec![8, 9, 16],
             max_frames: 1500,
             ..config
         }),
@@ -73,7 +79,7 @@ fn main() -> AppExit {
     };
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
-    presentation.add_default_plugins(&mut app, "bevy_chisel — showcase");
+    let frames = presentation.add_default_plugins(&mut app, "bevy_chisel — showcase");
     app.add_plugins((TerrainPlugin, ChiselSplatPlugin, ViewerPlugin))
         .add_plugins(TriplanarMaterialPlugin)
         .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
@@ -97,7 +103,42 @@ fn main() -> AppExit {
         app.insert_resource(HoldCaptures(true))
             .add_systems(Update, headless_tour.after(TerrainSystems::Mesh));
     }
-    app.run()
+    let exit = app.run();
+    if !headless || exit != AppExit::Success {
+        return exit;
+    }
+    props_in_view(&frames.images())
+}
+
+/// The fraction of frame 8 (with the props) that differs from frame 9
+/// (without them) must reach [`MIN_PROP_FRACTION`].
+fn props_in_view(images: &[Image]) -> AppExit {
+    let rgb = |image: &Image| image.clone().try_into_dynamic().map(|d| d.to_rgb8()).ok();
+    let (Some(with), Some(without)) = (images.first().and_then(rgb), images.get(1).and_then(rgb))
+    else {
+        eprintln!("showcase: FAILED: frames 8 and 9 were not captured");
+        return AppExit::error();
+    };
+    let differs = with
+        .pixels()
+        .zip(without.pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0).any(|(&x, y)| x.abs_diff(y) > 24))
+        .count();
+    let fraction = differs as f32 / (with.width() * with.height()).max(1) as f32;
+    if fraction >= MIN_PROP_FRACTION {
+        println!(
+            "showcase: ok: the props cover {:.1}% of the frame",
+            100.0 * fraction
+        );
+        AppExit::Success
+    } else {
+        eprintln!(
+            "showcase: FAILED: the props cover {:.2}% of the frame (at least {:.1}% expected)",
+            100.0 * fraction,
+            100.0 * MIN_PROP_FRACTION
+        );
+        AppExit::error()
+    }
 }
 
 /// The terrain, rounded to a 1 mm grid.
@@ -215,25 +256,35 @@ fn splat_keys(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<SplatSetting
 }
 
 /// Headless: hold the captures until the terrain is meshed, the craters
-/// are in and every prop is sampled; after the first capture blast one more
-/// crater beside the machine part and switch to global ray tracing.
+/// are in and every prop is sampled; hide the props for capture 9; after
+/// that blast one more crater beside the machine part and switch to
+/// global ray tracing.
 fn headless_tour(
     mut counted: Local<u32>,
     mut hold: ResMut<HoldCaptures>,
     mut settings: ResMut<SplatSettings>,
     terrains: Query<(Entity, &Terrain)>,
-    props: Query<Has<PropSplats>, With<QuadricProp>>,
+    mut props: Query<(Has<PropSplats>, &mut Visibility), With<QuadricProp>>,
     mut carves: MessageWriter<Carve>,
 ) {
     let carved = terrains
         .iter()
         .all(|(_, t)| t.is_idle() && !t.journal().is_empty());
-    let sampled = !props.is_empty() && props.iter().all(|ready| ready);
+    let sampled = !props.is_empty() && props.iter().all(|(ready, _)| ready);
     hold.0 = !(carved && sampled);
     if hold.0 {
         return;
     }
     *counted += 1;
+    // Counted frames are capture frames (the capture system counts in
+    // `Last`, after this).
+    for (_, mut visibility) in &mut props {
+        *visibility = if *counted == 9 {
+            Visibility::Hidden
+        } else {
+            Visibility::Inherited
+        };
+    }
     if *counted == 10 {
         settings.mode = SplatMode::GlobalRayTrace;
         for (entity, terrain) in &terrains {

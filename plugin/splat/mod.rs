@@ -231,7 +231,11 @@ impl Plugin for ChiselSplatPlugin {
             .init_resource::<render::SplatViewUniforms>()
             .add_systems(
                 ExtractSchedule,
-                (render::extract_props, render::extract_light),
+                (
+                    render::extract_props,
+                    render::extract_visible_props,
+                    render::extract_light,
+                ),
             )
             .add_systems(
                 Render,

@@ -13,6 +13,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use bevy::asset::io::Reader;
 use bevy::asset::{AssetLoader, LoadContext, LoadState};
+use bevy::camera::primitives::Aabb;
+use bevy::camera::visibility::{VisibilityClass, add_visibility_class};
+use bevy::ecs::lifecycle::HookContext;
+use bevy::ecs::world::DeferredWorld;
 use bevy::math::{DVec3, Vec4};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
@@ -160,10 +164,24 @@ impl PropBounds {
 ///
 /// Spawn it directly (with a `Transform`) to draw splats sampled elsewhere,
 /// e.g. synchronously with [`PropSplats::build`].
+///
+/// Props are frustum-culled like meshes: inserting `PropSplats` also
+/// inserts an [`Aabb`] around every splat's proxy ([`PropGpuData::aabb`]),
+/// the entity joins Bevy's visibility check as class `PropSplats`, and the
+/// splat pass draws a prop only in the views whose frustum it meets.
 #[derive(Component, Reflect, Clone, Debug)]
 #[reflect(Component, from_reflect = false)]
-#[require(Transform, Visibility)]
+#[require(Transform, Visibility, VisibilityClass)]
+#[component(on_add = add_visibility_class::<PropSplats>, on_insert = insert_prop_aabb)]
 pub struct PropSplats(#[reflect(ignore)] pub Arc<PropGpuData>);
+
+/// Keeps the prop's `Aabb` in step with its splats.
+fn insert_prop_aabb(mut world: DeferredWorld<'_>, HookContext { entity, .. }: HookContext) {
+    let Some(aabb) = world.get::<PropSplats>(entity).map(|s| s.0.aabb()) else {
+        return;
+    };
+    world.commands().entity(entity).insert(aabb);
+}
 
 /// The buffers of one prop in GPU form.
 #[derive(Debug)]
@@ -226,6 +244,34 @@ impl PropGpuData {
     #[must_use]
     pub fn splat_count(&self) -> usize {
         self.splats.len()
+    }
+
+    /// The local box around every splat's proxy: a splat's box reaches
+    /// `r` along two tangents and `e` along the normal (`r` where the
+    /// normal is undefined), so it lies within `√2·r + e` of the sample in
+    /// every axis; 1% more covers the pass's radius tolerance. Empty
+    /// splats give the bounding sphere's box.
+    #[must_use]
+    pub fn aabb(&self) -> Aabb {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for s in &self.splats {
+            let e = if s.normal.length_squared() < 0.25 {
+                s.radius
+            } else {
+                s.normal_extent.abs()
+            };
+            let reach = Vec3::splat(1.01 * (std::f32::consts::SQRT_2 * s.radius + e));
+            lo = lo.min(s.position - reach);
+            hi = hi.max(s.position + reach);
+        }
+        if lo.cmple(hi).all() && lo.is_finite() && hi.is_finite() {
+            Aabb::from_min_max(lo, hi)
+        } else {
+            let c = self.bounds.truncate();
+            let r = Vec3::splat(self.bounds.w.abs());
+            Aabb::from_min_max(c - r, c + r)
+        }
     }
 }
 

@@ -10,10 +10,12 @@
 //! camera's [`SplatViewSettings`], else the [`SplatSettings`] resource). The
 //! pass draws each prop with one instanced draw.
 
+use std::any::TypeId;
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use bevy::camera::Exposure;
+use bevy::camera::visibility::VisibleEntities;
 use bevy::light::{DirectionalLight, GlobalAmbientLight};
 use bevy::math::{DMat3, Mat3};
 use bevy::prelude::*;
@@ -26,6 +28,7 @@ use bevy::render::render_resource::{
     WgpuFeatures,
 };
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::sync_world::RenderEntity;
 use bevy::render::view::{ExtractedView, Msaa, ViewDepthTexture, ViewTarget};
 
 use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
@@ -48,20 +51,38 @@ pub struct ExtractedProp {
 #[derive(Resource, Default)]
 pub struct ExtractedProps(pub Vec<ExtractedProp>);
 
-/// The scene's light as the splat shader uses it.
+/// On a view: the main-world props inside its frustum this frame (Bevy's
+/// visibility check with each prop's `Aabb`, class [`PropSplats`]). The
+/// splat pass draws only these.
+#[derive(Component, Default, Debug, Clone)]
+pub struct VisibleProps(pub Vec<Entity>);
+
+pub(crate) fn extract_visible_props(
+    mut commands: Commands,
+    cameras: Extract<Query<(RenderEntity, &VisibleEntities), With<Camera>>>,
+) {
+    for (entity, visible) in &cameras {
+        let mut props: Vec<Entity> = visible.iter(TypeId::of::<PropSplats>()).copied().collect();
+        props.sort_unstable();
+        commands.entity(entity).insert(VisibleProps(props));
+    }
+}
+
+/// The scene's light as the splat shader uses it, before the view's
+/// exposure (each view scales it by its camera's [`Exposure`]).
 #[derive(Resource, Clone, Copy, Default)]
 pub struct ExtractedSplatLight {
     /// Unit direction towards the light.
     pub direction: Vec3,
-    /// Colour × illuminance × exposure ÷ π (Lambert).
+    /// Colour × illuminance ÷ π (Lambert).
     pub color: Vec3,
-    /// Ambient colour × brightness × exposure.
+    /// Ambient colour × brightness.
     pub ambient: Vec3,
 }
 
 pub(crate) fn extract_props(
     mut extracted: ResMut<ExtractedProps>,
-    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &InheritedVisibility)>>,
+    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &ViewVisibility)>>,
 ) {
     extracted.0.clear();
     for (entity, splats, transform, visibility) in &props {
@@ -83,22 +104,25 @@ pub(crate) fn extract_light(
     directional: Extract<Query<(&DirectionalLight, &GlobalTransform)>>,
     ambient: Extract<Option<Res<GlobalAmbientLight>>>,
 ) {
-    let exposure = Exposure::default().exposure();
     let (direction, color) = directional
         .iter()
         .next()
         .map_or((Vec3::Z, Vec3::ZERO), |(l, t)| {
             let c = l.color.to_linear();
-            let scale = l.illuminance * exposure / std::f32::consts::PI;
+            let scale = l.illuminance / std::f32::consts::PI;
             (
                 -t.forward().as_vec3(),
                 Vec3::new(c.red, c.green, c.blue) * scale,
             )
         });
-    let ambient = ambient.as_ref().map_or(Vec3::splat(0.05), |a| {
-        let c = a.color.to_linear();
-        Vec3::new(c.red, c.green, c.blue) * a.brightness * exposure
-    });
+    // Without an ambient light resource: 0.05 at the default exposure.
+    let ambient =
+        ambient
+            .as_ref()
+            .map_or(Vec3::splat(0.05 / Exposure::default().exposure()), |a| {
+                let c = a.color.to_linear();
+                Vec3::new(c.red, c.green, c.blue) * a.brightness
+            });
     *light = ExtractedSplatLight {
         direction,
         color,
@@ -243,10 +267,13 @@ pub struct SplatViewState {
 pub(crate) fn prepare_views(
     mut commands: Commands,
     mut uniforms: ResMut<SplatViewUniforms>,
-    views: Query<
-        (Entity, &ExtractedView, &Msaa, Option<&SplatViewSettings>),
-        With<ExtractedCamera>,
-    >,
+    views: Query<(
+        Entity,
+        &ExtractedView,
+        &ExtractedCamera,
+        &Msaa,
+        Option<&SplatViewSettings>,
+    )>,
     light: Res<ExtractedSplatLight>,
     settings: Res<SplatSettings>,
     device: Res<RenderDevice>,
@@ -259,7 +286,7 @@ pub(crate) fn prepare_views(
     let early_depth_test = device
         .features()
         .contains(WgpuFeatures::SHADER_EARLY_DEPTH_TEST);
-    for (entity, view, msaa, view_settings) in &views {
+    for (entity, view, camera, msaa, view_settings) in &views {
         let settings = view_settings.map_or(*settings, |s| s.0);
         let clip_from_world = view
             .clip_from_world
@@ -272,8 +299,9 @@ pub(crate) fn prepare_views(
             camera_position: eye.extend(if orthographic { 0.0 } else { 1.0 }),
             view_forward: forward.extend(0.0),
             light_direction: light.direction.extend(0.0),
-            light_color: light.color.extend(0.0),
-            ambient: light.ambient.extend(0.0),
+            // The camera's exposure, as Bevy's PBR shading applies it.
+            light_color: (light.color * camera.exposure).extend(0.0),
+            ambient: (light.ambient * camera.exposure).extend(0.0),
             flat_ratio: settings.flat_ratio,
             radius_tolerance: settings.radius_tolerance,
             pad: UVec2::ZERO,
@@ -313,6 +341,7 @@ pub(crate) fn splat_pass(
         &ViewTarget,
         &ViewDepthTexture,
         &SplatViewState,
+        Option<&VisibleProps>,
     )>,
     props: Res<ExtractedProps>,
     buffers: Res<PropBuffers>,
@@ -320,7 +349,7 @@ pub(crate) fn splat_pass(
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, target, depth, state) = view.into_inner();
+    let (camera, target, depth, state, visible) = view.into_inner();
 
     if props.0.is_empty() {
         return;
@@ -348,6 +377,9 @@ pub(crate) fn splat_pass(
     pass.set_render_pipeline(pipeline);
     pass.set_bind_group(0, view_bind_group, &[state.offset]);
     for prop in &props.0 {
+        if visible.is_some_and(|v| v.0.binary_search(&prop.entity).is_err()) {
+            continue;
+        }
         let Some(gpu) = buffers.0.get(&prop.entity) else {
             continue;
         };
