@@ -127,6 +127,16 @@ struct ServerLedger {
 /// and `RepliconRenetPlugins` (see [`super::NetProtocolPlugin`]) and put a
 /// [`NetTerrain`] on each terrain to replicate; start listening with
 /// [`super::start_server`].
+///
+/// A dedicated server draws nothing: set [`TerrainSettings::output`] to
+/// [`CellOutput::Nothing`] (or [`CellOutput::Colliders`] where it runs
+/// physics) so that its terrains build no cell meshes. Its octrees and
+/// state hashes stay those of the clients that mesh, and it sustains about
+/// twice the carves (BENCHMARKS.md, "Multiplayer carving").
+///
+/// [`TerrainSettings::output`]: crate::terrain::TerrainSettings::output
+/// [`CellOutput::Nothing`]: crate::terrain::CellOutput::Nothing
+/// [`CellOutput::Colliders`]: crate::terrain::CellOutput::Colliders
 pub struct NetServerPlugin;
 
 impl Plugin for NetServerPlugin {
