@@ -39,3 +39,11 @@ impl Hasher for WordHasher {
         self.0.rotate_left(26)
     }
 }
+
+/// A hash map keyed through [`WordHasher`].
+pub(crate) type WordMap<K, V> =
+    std::collections::HashMap<K, V, core::hash::BuildHasherDefault<WordHasher>>;
+
+/// A hash set keyed through [`WordHasher`].
+pub(crate) type WordSet<T> =
+    std::collections::HashSet<T, core::hash::BuildHasherDefault<WordHasher>>;

@@ -175,6 +175,13 @@ impl Point4 {
     /// comparison `X₁·W₂ = X₂·W₁`, etc., in 384-bit arithmetic).
     #[must_use]
     pub fn same_position(&self, other: &Point4) -> bool {
+        // Each `f64` coordinate is within `2^-51` of its exact value
+        // (relative), so positions apart by more than `2^-40` of their
+        // size are certainly different points.
+        let (p, q) = (self.to_f64(), other.to_f64());
+        if (0..3).any(|i| (p[i] - q[i]).abs() > p[i].abs().max(q[i].abs()) * f64::powi(2.0, -40)) {
+            return false;
+        }
         let cross = |a: &I256, wb: &I192| -> Int<6> { a.wrapping_mul(wb) };
         let (a, b) = (self.xyz(), other.xyz());
         let (wa, wb) = (self.w(), other.w());

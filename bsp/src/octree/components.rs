@@ -17,8 +17,6 @@
 //! where it straddles a plane, so every piece has positive area: the
 //! adjacency is exact, on integers only.
 
-use std::collections::{HashMap, HashSet};
-
 use super::cell::{CellBox, CellKey};
 use super::exact_volume::ExactVolume;
 use super::tree::{Leaf, OctNode, Octree};
@@ -27,6 +25,7 @@ use crate::exact::Plane;
 use crate::tree::boundary::cell_face;
 use crate::tree::polygon::Polygon;
 use crate::tree::{Bsp, EMPTY, Label, Node, NodeId};
+use crate::word_hash::{WordMap, WordSet};
 
 /// One convex solid cell of an octree: BSP leaf `node` of leaf cell `key`
 /// (`0` for a uniform leaf).
@@ -114,7 +113,7 @@ impl Octree {
     #[must_use]
     pub fn solid_components(&self, anchors: &Anchors) -> Vec<Component> {
         let mut graph = SolidGraph::new(self, anchors);
-        let mut seen: HashSet<SolidCell> = HashSet::new();
+        let mut seen: WordSet<SolidCell> = WordSet::default();
         let mut out = Vec::new();
         let mut next = Vec::new();
         for (key, _) in self.leaves() {
@@ -214,9 +213,9 @@ pub(crate) struct SolidGraph<'a> {
     octree: &'a Octree,
     anchors: &'a Anchors,
     root: CellBox,
-    leaves: HashMap<CellKey, LeafCells<'a>>,
+    leaves: WordMap<CellKey, LeafCells<'a>>,
     /// [`Octree::leaves_across`] by leaf and wall.
-    across: HashMap<(CellKey, usize, bool), Vec<CellKey>>,
+    across: WordMap<(CellKey, usize, bool), Vec<CellKey>>,
 }
 
 impl<'a> SolidGraph<'a> {
@@ -225,8 +224,8 @@ impl<'a> SolidGraph<'a> {
             octree,
             anchors,
             root: octree.root_box(),
-            leaves: HashMap::new(),
-            across: HashMap::new(),
+            leaves: WordMap::default(),
+            across: WordMap::default(),
         }
     }
 

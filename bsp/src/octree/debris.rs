@@ -40,7 +40,7 @@
 //! ```
 
 use std::cmp::Reverse;
-use std::collections::{BTreeMap, BinaryHeap, HashSet};
+use std::collections::{BTreeMap, BinaryHeap};
 
 use rayon::prelude::*;
 
@@ -54,6 +54,7 @@ use super::tree::{Leaf, OctNode, Octree};
 use crate::Error;
 use crate::exact::Plane;
 use crate::tree::{EMPTY, Label, NodeId};
+use crate::word_hash::WordSet;
 
 /// What holds terrain in place, and how much one call may detach.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -146,9 +147,9 @@ impl Changes {
     /// exactly when `self` removed an ancestor or a descendant of it.
     #[must_use]
     pub fn then(&self, later: &Changes) -> Changes {
-        let later_removed: HashSet<CellKey> = later.removed.iter().copied().collect();
-        let later_changed: HashSet<CellKey> = later.changed.iter().copied().collect();
-        let first_removed: HashSet<CellKey> = self.removed.iter().copied().collect();
+        let later_removed: WordSet<CellKey> = later.removed.iter().copied().collect();
+        let later_changed: WordSet<CellKey> = later.changed.iter().copied().collect();
+        let first_removed: WordSet<CellKey> = self.removed.iter().copied().collect();
         let related = |key: CellKey| {
             let mut k = key;
             while let Some(parent) = k.parent() {
@@ -161,7 +162,7 @@ impl Changes {
                 .iter()
                 .any(|r| r.depth > key.depth && ancestor_at(*r, key.depth) == key)
         };
-        let first_changed: HashSet<CellKey> = self.changed.iter().copied().collect();
+        let first_changed: WordSet<CellKey> = self.changed.iter().copied().collect();
         let mut changed: Vec<CellKey> = self
             .changed
             .iter()
@@ -363,8 +364,8 @@ fn find_debris(
     seeds: &[SolidCell],
     config: &DebrisConfig,
 ) -> Result<Vec<Found>, Error> {
-    let mut anchored: HashSet<SolidCell> = HashSet::new();
-    let mut debris: HashSet<SolidCell> = HashSet::new();
+    let mut anchored: WordSet<SolidCell> = WordSet::default();
+    let mut debris: WordSet<SolidCell> = WordSet::default();
     let mut out = Vec::new();
     let (mut total_cells, mut total_volume) = (0usize, ExactVolume::zero());
     let mut next = Vec::new();
@@ -372,7 +373,8 @@ fn find_debris(
         if anchored.contains(&seed) || debris.contains(&seed) {
             continue;
         }
-        let mut reached: HashSet<SolidCell> = HashSet::from([seed]);
+        let mut reached: WordSet<SolidCell> = WordSet::default();
+        reached.insert(seed);
         let mut order = vec![seed];
         let mut heap = BinaryHeap::from([Reverse((graph.gap(seed.key), seed))]);
         let mut held = false;

@@ -70,6 +70,46 @@ impl Octree {
         out
     }
 
+    /// [`Octree::leaves_touching`] for many regions in one walk: calls
+    /// `visit` with every leaf whose closed box shares a point with one of
+    /// the closed boxes `regions`, in leaf order, and the indices of those
+    /// regions (ascending).
+    pub fn for_leaves_touching_each(
+        &self,
+        regions: &[CellBox],
+        mut visit: impl FnMut(CellKey, &[usize]),
+    ) {
+        let root = self.root_box();
+        // The region indices of every node on the stack, one run each.
+        let mut runs: Vec<usize> = (0..regions.len())
+            .filter(|&i| root.touches(&regions[i]))
+            .collect();
+        let mut stack = vec![(&self.root, CellKey::ROOT, 0..runs.len())];
+        while let Some((node, key, run)) = stack.pop() {
+            match node {
+                OctNode::Leaf(_) => visit(key, &runs[run.clone()]),
+                OctNode::Inner(children) => {
+                    let cell = self.cell_box(key);
+                    for i in (0..8).rev() {
+                        let child = cell.child(i);
+                        let start = runs.len();
+                        for k in run.clone() {
+                            let r = runs[k];
+                            if child.touches(&regions[r]) {
+                                runs.push(r);
+                            }
+                        }
+                        if runs.len() > start {
+                            stack.push((&children[i], key.child(i), start..runs.len()));
+                        }
+                    }
+                }
+            }
+            // The runs past the one on top of the stack are done with.
+            runs.truncate(stack.last().map_or(0, |(_, _, run)| run.end));
+        }
+    }
+
     /// The sealed mesh of leaf `key` (empty when `key` is not a leaf),
     /// from scratch: the surfaces of all its neighbours are meshed here to
     /// find their wall points. The same mesh as a first
@@ -88,7 +128,7 @@ impl Octree {
                     UnsealedMesh::new(self.cell_surface(other), &walls(&self.cell_box(other)));
                 extra.extend(
                     mesh.wall_vertices()
-                        .filter(|p| may_be_in_box(p, &cell))
+                        .filter(|p| may_be_in_box(p.to_f64(), &cell))
                         .copied(),
                 );
             }
@@ -104,6 +144,8 @@ impl Octree {
 #[derive(Clone, Debug, Default)]
 struct CellBorder {
     wall_points: Vec<Point4>,
+    /// Their `f64` positions ([`Point4::to_f64`]), for cheap filters.
+    wall_f64: Vec<[f64; 3]>,
     edges: Vec<BorderEdge>,
     seams: Vec<Point4>,
     /// The polygons lying in a wall: the wall (`2·axis + upper`) and the
@@ -182,14 +224,19 @@ impl SeamedMesher {
             keys.iter().partition(|&&key| octree.leaf(key).is_some());
         let jobs: Vec<(CellKey, Option<Vec<BoundaryFace>>)> =
             live.iter().map(|&key| (key, fresh.remove(&key))).collect();
-        let mut pending: BTreeMap<CellKey, UnsealedMesh> = jobs
+        // The cells to seal, each with its new unsealed mesh, or `None`
+        // where the kept one is still right.
+        let mut pending: Pending = jobs
             .into_par_iter()
             .map(|(key, faces)| {
                 let faces = match faces {
                     Some(faces) => octree.cell_surface_from(key, faces),
                     None => octree.cell_surface(key),
                 };
-                (key, UnsealedMesh::new(faces, &walls(&octree.cell_box(key))))
+                (
+                    key,
+                    Some(UnsealedMesh::new(faces, &walls(&octree.cell_box(key)))),
+                )
             })
             .collect::<Vec<_>>()
             .into_iter()
@@ -211,7 +258,9 @@ impl SeamedMesher {
             }
         }
         for (key, mesh) in &pending {
-            self.record(*key, mesh, &mut changed);
+            if let Some(mesh) = mesh {
+                self.record(*key, mesh, &mut changed);
+            }
         }
         // Leaves with a face on a wall against an edited cell: the face is
         // clipped against that cell's new tree, the same surface possibly
@@ -237,7 +286,7 @@ impl SeamedMesher {
                 self.unsealed.insert(key, mesh);
             } else {
                 self.record(key, &mesh, &mut changed);
-                pending.insert(key, mesh);
+                pending.insert(key, Some(mesh));
             }
         }
         // The neighbours whose seams the changed wall points change, meshed
@@ -246,23 +295,42 @@ impl SeamedMesher {
         while !changed.is_empty() {
             let this = &*self;
             let candidates = this.touched_by(octree, &changed, &pending);
-            let again: Vec<(CellKey, UnsealedMesh)> = candidates
+            let around = this.extra_points_of(octree, &candidates);
+            let again: Vec<(CellKey, Option<UnsealedMesh>)> = candidates
                 .into_par_iter()
-                .filter_map(|key| this.remesh_if_seams_change(octree, key))
+                .zip(around)
+                .filter_map(|(key, extra)| this.remesh_if_seams_change(octree, key, &extra))
                 .collect();
             changed.clear();
             for (key, mesh) in again {
-                self.record(key, &mesh, &mut changed);
-                pending.insert(key, mesh);
+                match mesh {
+                    Some(mesh) => {
+                        self.record(key, &mesh, &mut changed);
+                        pending.insert(key, Some(mesh));
+                    }
+                    None => {
+                        if let Some(kept) = self.unsealed.remove(&key) {
+                            self.record(key, &kept, &mut changed);
+                            self.unsealed.insert(key, kept);
+                        }
+                        pending.insert(key, None);
+                    }
+                }
             }
         }
         let this = &*self;
-        let pending: Vec<(CellKey, UnsealedMesh)> = pending.into_iter().collect();
-        let sealed: Vec<(CellKey, SurfaceMesh, Vec<Point4>, UnsealedMesh)> = pending
+        let pending: Vec<(CellKey, Option<UnsealedMesh>)> = pending.into_iter().collect();
+        let keys: Vec<CellKey> = pending.iter().map(|(key, _)| *key).collect();
+        let around = this.extra_points_of(octree, &keys);
+        let sealed: Vec<(CellKey, SurfaceMesh, Vec<Point4>, Option<UnsealedMesh>)> = pending
             .into_par_iter()
-            .map(|(key, mesh)| {
-                let extra = this.extra_points(octree, key, &octree.cell_box(key));
-                let (sealed, seams) = mesh.clone().seal(extra);
+            .zip(around)
+            .map(|((key, mesh), extra)| {
+                let unsealed = mesh.as_ref().or_else(|| this.unsealed.get(&key));
+                let (sealed, seams) = unsealed.map_or_else(
+                    || (SurfaceMesh::default(), Vec::new()),
+                    |mesh| mesh.clone().seal(extra),
+                );
                 (key, sealed, seams, mesh)
             })
             .collect();
@@ -272,7 +340,9 @@ impl SeamedMesher {
             if let Some(border) = self.borders.get_mut(&key) {
                 border.seams = seams;
             }
-            self.unsealed.insert(key, unsealed);
+            if let Some(unsealed) = unsealed {
+                self.unsealed.insert(key, unsealed);
+            }
             out.push((key, Some(mesh)));
         }
         out.sort_unstable_by_key(|(key, _)| *key);
@@ -285,6 +355,7 @@ impl SeamedMesher {
     fn record(&mut self, key: CellKey, mesh: &UnsealedMesh, changed: &mut Vec<Point4>) {
         let new = CellBorder {
             wall_points: mesh.wall_vertices().copied().collect(),
+            wall_f64: mesh.wall_vertices().map(Point4::to_f64).collect(),
             edges: mesh.border_edges(),
             seams: Vec::new(),
             exposed: mesh.wall_polygons(),
@@ -310,12 +381,7 @@ impl SeamedMesher {
 
     /// The leaves not in `pending` with a polygon lying in a wall, across
     /// which that polygon shares area with the box of a `replaced` cell.
-    fn facing(
-        &self,
-        octree: &Octree,
-        replaced: &[CellKey],
-        pending: &BTreeMap<CellKey, UnsealedMesh>,
-    ) -> Vec<CellKey> {
+    fn facing(&self, octree: &Octree, replaced: &[CellKey], pending: &Pending) -> Vec<CellKey> {
         let mut out = BTreeSet::new();
         for &edited in replaced {
             let cell = octree.cell_box(edited);
@@ -359,45 +425,47 @@ impl SeamedMesher {
     /// The leaves not in `pending` with a border edge strictly holding one
     /// of the `changed` points that is no wall point of their own, by key:
     /// the only leaves whose seam points may change.
-    fn touched_by(
-        &self,
-        octree: &Octree,
-        changed: &[Point4],
-        pending: &BTreeMap<CellKey, UnsealedMesh>,
-    ) -> Vec<CellKey> {
-        let mut near = BTreeSet::new();
-        for p in changed {
-            let q = p.to_f64();
-            let around = CellBox {
-                min: q.map(|c| c.floor() as i64 - 1),
-                max: q.map(|c| c.ceil() as i64 + 1),
-            };
-            for key in octree.leaves_touching(&around) {
-                if !pending.contains_key(&key)
-                    && let Some(border) = self.borders.get(&key)
-                    && border.edges.iter().any(|e| e.holds_strictly(p))
-                    && !border.wall_points.iter().any(|w| same_point(w, p))
-                {
-                    near.insert(key);
+    fn touched_by(&self, octree: &Octree, changed: &[Point4], pending: &Pending) -> Vec<CellKey> {
+        let around: Vec<CellBox> = changed
+            .iter()
+            .map(|p| {
+                let q = p.to_f64();
+                CellBox {
+                    min: q.map(|c| c.floor() as i64 - 1),
+                    max: q.map(|c| c.ceil() as i64 + 1),
                 }
+            })
+            .collect();
+        let mut near = BTreeSet::new();
+        octree.for_leaves_touching_each(&around, |key, points| {
+            if !pending.contains_key(&key)
+                && let Some(border) = self.borders.get(&key)
+                && points.iter().any(|&i| {
+                    let p = &changed[i];
+                    border.edges.iter().any(|e| e.holds_strictly(p))
+                        && !border.wall_points.iter().any(|w| same_point(w, p))
+                })
+            {
+                near.insert(key);
             }
-        }
+        });
         near.into_iter().collect()
     }
 
-    /// The unsealed mesh of leaf `key` (not edited, with a changed point
-    /// strictly inside one of its border edges) from the octree, if its
-    /// seam points differ from those kept.
+    /// Whether leaf `key` (not edited, with a changed point strictly
+    /// inside one of its border edges) needs sealing again: its seam
+    /// points among the neighbours' wall points `extra` differ from those
+    /// kept. Hands back its unsealed mesh from the octree where none is
+    /// kept (`None`: seal the kept one).
     fn remesh_if_seams_change(
         &self,
         octree: &Octree,
         key: CellKey,
-    ) -> Option<(CellKey, UnsealedMesh)> {
+        extra: &[&Point4],
+    ) -> Option<(CellKey, Option<UnsealedMesh>)> {
         let border = self.borders.get(&key)?;
-        let cell = octree.cell_box(key);
-        let extra = self.extra_points(octree, key, &cell);
         let mut seams: Vec<Point4> = Vec::new();
-        for &p in &extra {
+        for &p in extra {
             if border.edges.iter().any(|e| e.holds_strictly(p))
                 && !border.wall_points.iter().any(|w| same_point(w, p))
                 && !seams.iter().any(|s| same_point(s, p))
@@ -408,28 +476,43 @@ impl SeamedMesher {
         if same_set(&seams, &border.seams) {
             return None;
         }
-        let mesh = match self.unsealed.get(&key) {
-            Some(kept) => kept.clone(),
-            None => UnsealedMesh::new(octree.cell_surface(key), &walls(&cell)),
-        };
-        Some((key, mesh))
+        if self.unsealed.contains_key(&key) {
+            return Some((key, None));
+        }
+        let mesh = UnsealedMesh::new(octree.cell_surface(key), &walls(&octree.cell_box(key)));
+        Some((key, Some(mesh)))
     }
 
-    /// The wall points of the neighbours of leaf `key` (box `cell`) that
-    /// may lie on its closed box, neighbour by neighbour in leaf order.
-    fn extra_points(&self, octree: &Octree, key: CellKey, cell: &CellBox) -> Vec<&Point4> {
-        let mut extra = Vec::new();
-        for other in octree.leaves_touching(cell) {
-            if other == key {
-                continue;
+    /// The wall points of the neighbours of each leaf of `keys` that may
+    /// lie on its closed box, neighbour by neighbour in leaf order: the
+    /// points its border edges are split at.
+    fn extra_points_of(&self, octree: &Octree, keys: &[CellKey]) -> Vec<Vec<&Point4>> {
+        let cells: Vec<CellBox> = keys.iter().map(|&key| octree.cell_box(key)).collect();
+        let mut extra = vec![Vec::new(); keys.len()];
+        octree.for_leaves_touching_each(&cells, |other, near| {
+            let Some(border) = self.borders.get(&other) else {
+                return;
+            };
+            for &i in near {
+                if keys[i] != other {
+                    extra[i].extend(
+                        border
+                            .wall_points
+                            .iter()
+                            .zip(&border.wall_f64)
+                            .filter(|(_, q)| may_be_in_box(**q, &cells[i]))
+                            .map(|(p, _)| p),
+                    );
+                }
             }
-            if let Some(border) = self.borders.get(&other) {
-                extra.extend(border.wall_points.iter().filter(|p| may_be_in_box(p, cell)));
-            }
-        }
+        });
         extra
     }
 }
+
+/// The cells an update seals, by key: each with its new unsealed mesh, or
+/// `None` where the kept one is still right.
+type Pending = BTreeMap<CellKey, Option<UnsealedMesh>>;
 
 /// The six planes of a box's faces, `x = min_x, x = max_x, y = min_y, …`.
 fn walls(cell: &CellBox) -> [Plane; 6] {
@@ -451,12 +534,12 @@ fn axis_plane(axis: usize, at: i64) -> Plane {
     Plane::new(n[0], n[1], n[2], -i128::from(at)).expect("cell coordinates are in range")
 }
 
-/// Whether the exact point `p` may lie in the closed box `cell`: false
-/// only where its `f64` position (within `2^-51` relative) is farther
-/// outside than a margin of `2^-40` of the box's coordinates. A cheap
-/// filter: the exact decisions are made against the edges themselves.
-fn may_be_in_box(p: &Point4, cell: &CellBox) -> bool {
-    let q = p.to_f64();
+/// Whether the exact point at `f64` position `q` ([`Point4::to_f64`],
+/// within `2^-51` relative) may lie in the closed box `cell`: false only
+/// where `q` is farther outside than a margin of `2^-40` of the box's
+/// coordinates. A cheap filter: the exact decisions are made against the
+/// edges themselves.
+fn may_be_in_box(q: [f64; 3], cell: &CellBox) -> bool {
     q.iter().enumerate().all(|(axis, &c)| {
         let (lo, hi) = (cell.min[axis] as f64, cell.max[axis] as f64);
         let margin = (lo.abs().max(hi.abs()) + 1.0) * f64::powi(2.0, -40);
