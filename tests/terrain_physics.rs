@@ -282,6 +282,17 @@ fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume() {
     let pillar = ExactVolume::from_integer(100 * 200 * 100 + 120 * 120);
     assert_eq!(before, after + deck.exact_volume.clone() + pillar);
 
+    // The deck is a box: its cells merge into one convex hull.
+    let collider = app
+        .world()
+        .get::<Collider>(deck.entity)
+        .expect("the deck's collider");
+    let hulls = collider
+        .shape()
+        .as_compound()
+        .map_or(1, |compound| compound.shapes().len());
+    assert_eq!(hulls, 1, "the deck's collider is one hull");
+
     // The deck is a dynamic body: it falls onto the ground.
     let start = position(&app, deck.entity);
     assert!(app.world().get::<RigidBody>(deck.entity) == Some(&RigidBody::Dynamic));

@@ -32,6 +32,7 @@ use super::component::{Job, Runtime, Terrain, TerrainCell};
 use super::debris::{
     BuiltDebris, DEFAULT_DEBRIS_DENSITY, DebrisDetached, DebrisPart, TerrainDebris,
 };
+use super::debris_hulls::DEFAULT_MAX_DEBRIS_HULLS;
 use super::error::TerrainError;
 use super::jobs::{
     BuiltMesh, CellUpdate, JobContext, StepOutcome, Workers, carve_batch, on_pool, remesh,
@@ -162,6 +163,10 @@ pub struct TerrainSettings {
     pub smoothing_degrees: f32,
     /// Mass per cubic world unit of debris bodies.
     pub debris_density: f32,
+    /// Most convex hulls in a debris body's collider: the piece's convex
+    /// cells are merged where that adds no empty space, then where it adds
+    /// the least, until this many are left.
+    pub max_debris_hulls: usize,
     /// What is built for the cells a carve changed: render meshes (a game),
     /// colliders only (a dedicated server running physics) or nothing (a
     /// server or tool that needs the octree and its hash alone).
@@ -196,6 +201,7 @@ impl Default for TerrainSettings {
                 .map_or(1, |n| n.get().saturating_sub(1).max(1)),
             smoothing_degrees: DEFAULT_SMOOTHING_DEGREES,
             debris_density: DEFAULT_DEBRIS_DENSITY,
+            max_debris_hulls: DEFAULT_MAX_DEBRIS_HULLS,
             output: CellOutput::Meshes,
         }
     }
@@ -311,6 +317,7 @@ pub fn start_jobs(
             physics: physics.0.clone(),
             debris: terrain.debris.clone(),
             debris_density: settings.debris_density,
+            max_debris_hulls: settings.max_debris_hulls,
             output: settings.output,
         };
         terrain.runtime.builds_cells = context.builds_cells();

@@ -5,8 +5,9 @@
 //! through shared faces of positive area, found and removed exactly, with
 //! exact volumes). Each piece is meshed on the worker, positioned about its
 //! centre, and, with a physics backend, given a dynamic body whose
-//! collider is a compound of the piece's convex cells — an exact convex
-//! decomposition the BSP already has. The upload spawns it as a
+//! collider is a compound of convex hulls: the piece's convex cells (an
+//! exact convex decomposition the BSP already has), merged into a few
+//! hulls ([`super::debris_hulls`]). The upload spawns it as a
 //! [`TerrainDebris`] entity in the frame the carve's cells change, and
 //! writes a [`DebrisDetached`].
 //!
@@ -21,6 +22,7 @@ use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{DebrisPiece, ExactVolume};
 use chisel_bsp::tree::Label;
 
+use super::debris_hulls::collider_hulls;
 use super::jobs::JobContext;
 use super::mesh::cell_meshes_of;
 use super::physics::{ConvexPiece, PhysicsInsert};
@@ -142,11 +144,10 @@ pub(crate) fn build_debris(piece: &DebrisPiece, context: &JobContext) -> BuiltDe
     let exact_volume = piece.volume();
     let volume = (exact_volume.to_f64() * unit * unit * unit) as f32;
     let body = context.physics.as_ref().and_then(|physics| {
-        let pieces: Vec<ConvexPiece> = piece
-            .cells
-            .iter()
-            .map(|cell| ConvexPiece {
-                corners: cell.vertices.iter().map(|&p| local(p)).collect(),
+        let pieces: Vec<ConvexPiece> = collider_hulls(&piece.cells, context.max_debris_hulls)
+            .into_iter()
+            .map(|corners| ConvexPiece {
+                corners: corners.into_iter().map(local).collect(),
             })
             .collect();
         physics.debris_body(&pieces, volume * context.debris_density)

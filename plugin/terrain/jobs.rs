@@ -36,6 +36,8 @@ pub(crate) struct JobContext {
     /// What anchors the terrain (`None`: no debris detection).
     pub debris: Option<DebrisConfig>,
     pub debris_density: f32,
+    /// Most convex hulls per debris collider.
+    pub max_debris_hulls: usize,
     /// What to build for the changed cells.
     pub output: CellOutput,
 }

@@ -90,6 +90,7 @@ pub mod base;
 pub mod carve;
 pub mod component;
 pub mod debris;
+pub mod debris_hulls;
 pub mod error;
 pub mod events;
 pub mod file;
@@ -118,6 +119,7 @@ pub use carve::{
 };
 pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
+pub use debris_hulls::DEFAULT_MAX_DEBRIS_HULLS;
 pub use error::TerrainError;
 pub use events::{TerrainCarveRejected, TerrainCarved, TerrainCellRebuilt, TerrainDebrisDetached};
 #[cfg(feature = "render")]
