@@ -16,8 +16,9 @@ const CARVES: usize = 1000;
 /// Carves each of the two clients sends per frame.
 const PER_FRAME: usize = 4;
 
-fn journal_len(app: &mut App) -> Option<usize> {
-    terrain_of(app).map(|(_, t)| t.journal().len())
+/// The sequence number of the last carve in the app's terrain.
+fn last_carve(app: &mut App) -> Option<u64> {
+    terrain_of(app).and_then(|(_, t)| t.last_request())
 }
 
 fn idle(app: &mut App) -> bool {
@@ -94,11 +95,11 @@ fn four_peers_end_with_identical_octrees() {
             let [server, a, b, c] = apps else {
                 return false;
             };
-            let want = journal_len(server);
+            let want = last_carve(server);
             answered(a) + answered(b) == CARVES
                 && [&mut **server, &mut **a, &mut **b, &mut **c]
                     .into_iter()
-                    .all(|app| idle(app) && journal_len(app) == want)
+                    .all(|app| idle(app) && last_carve(app) == want)
         },
     );
     // A few more frames: hash checks of the last carves go through.
@@ -147,4 +148,63 @@ fn four_peers_end_with_identical_octrees() {
     assert_eq!(server_stats.accepted as usize, CARVES);
     let c_sync = &c.world().resource::<Seen>().synced;
     assert!(c_sync[0].seq > 0, "the late client joined after carves");
+}
+
+/// A joining client gets the rules a carve depends on, not only the
+/// octree: the server's custom debris anchors and limits and its
+/// materials. Without them the client's next carve could cut loose a
+/// different piece than the server's.
+#[test]
+fn a_late_client_gets_the_debris_rules_and_materials() {
+    use bevy_chisel::bsp::octree::{Anchors, CellBox, CubeSide, DebrisConfig};
+    let rules = DebrisConfig {
+        anchors: Anchors {
+            sides: vec![
+                CubeSide::BOTTOM,
+                CubeSide {
+                    axis: 0,
+                    upper: false,
+                },
+            ],
+            boxes: vec![CellBox {
+                min: [400, 150, 400],
+                max: [600, 200, 600],
+            }],
+        },
+        max_volume: Some(5_000_000_000),
+        max_cells: Some(300),
+    };
+    let terrain = slab().with_labels([7]).with_debris(Some(rules.clone()));
+    let (mut server, addr) = server(terrain, NetLimits::default());
+    let mut a = client(addr, 1, 1);
+    run_until(&mut [&mut server, &mut a], 20_000, |apps| idle(apps[1]));
+    let mut rng = Rng(7);
+    for request_id in 0..20 {
+        let (tool, edit) = random_carve(&mut rng);
+        request(&mut a, request_id, &tool, edit);
+    }
+    run_until(&mut [&mut server, &mut a], 100_000, |apps| {
+        apps[1].world().resource::<Seen>().results.len() == 20 && idle(apps[1])
+    });
+    let want = last_carve(&mut server);
+    assert!(
+        want.is_some_and(|seq| seq > 0),
+        "carves were applied before the join"
+    );
+
+    let mut late = client(addr, 2, 2);
+    run_until(&mut [&mut server, &mut late], 100_000, |apps| {
+        idle(apps[1]) && last_carve(apps[1]) == want
+    });
+    let (_, joined) = terrain_of(&mut late).expect("the late client has the terrain");
+    assert_eq!(joined.debris(), Some(&rules));
+    assert_eq!(
+        joined.labels().iter().copied().collect::<Vec<_>>(),
+        vec![1, 2, 7]
+    );
+    assert!(joined.journal().is_empty(), "a snapshot carries no journal");
+    let (late_hash, late_bytes, _) = snapshot_of(&mut late);
+    let (hash, bytes, _) = snapshot_of(&mut server);
+    assert_eq!(late_hash, hash);
+    assert!(late_bytes == bytes, "the joined octree is the server's");
 }

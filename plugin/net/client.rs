@@ -41,6 +41,10 @@ pub struct NetCarveResult {
     pub outcome: Outcome,
 }
 
+/// Most bytes of one terrain snapshot a client assembles (a server that
+/// announces more is not followed: the snapshot is refused and logged).
+pub const MAX_SNAPSHOT_BYTES: u64 = 4 << 30;
+
 /// A terrain arrived from a snapshot: at join, or after a desync.
 #[derive(Message, Clone, Debug, PartialEq, Eq)]
 pub struct TerrainSynced {
@@ -193,6 +197,15 @@ fn receive_packets(
             }
             ServerPacket::Snapshot(part) => {
                 let follow = ledger.terrains.entry(part.terrain).or_default();
+                if part.total > MAX_SNAPSHOT_BYTES {
+                    error!(
+                        "snapshot of terrain {} refused: {} bytes, more than the {} a client \
+                         accepts",
+                        part.terrain, part.total, MAX_SNAPSHOT_BYTES
+                    );
+                    follow.assembling = None;
+                    continue;
+                }
                 if part.offset == 0 {
                     follow.assembling = Some((part.seq, Vec::new()));
                 }
@@ -211,22 +224,14 @@ fn receive_packets(
                 let Some((seq, bytes)) = follow.assembling.take() else {
                     continue;
                 };
-                let mut terrain = match Terrain::from_bytes(&bytes) {
+                let mut terrain = match Terrain::from_snapshot_bytes(&bytes) {
                     Ok(terrain) => terrain,
                     Err(e) => {
                         error!("snapshot of terrain {} refused: {e}", part.terrain);
                         continue;
                     }
                 };
-                terrain.labels.extend(part.labels.iter().copied());
-                match (&mut terrain.debris, part.debris) {
-                    (Some(config), Some((volume, cells))) => {
-                        config.max_volume = volume;
-                        config.max_cells = cells.map(|c| usize::try_from(c).unwrap_or(usize::MAX));
-                    }
-                    (debris, None) => *debris = None,
-                    _ => {}
-                }
+                terrain.last_request = (seq > 0).then_some(seq);
                 let hash = terrain.state_hash();
                 let pose = Transform::from(&part.pose);
                 let entity = match follow.entity {

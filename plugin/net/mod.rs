@@ -51,7 +51,7 @@ pub use wire::{
 
 /// The netcode protocol id of this wire format: peers with another id do
 /// not connect.
-pub const PROTOCOL_ID: u64 = 0xC415_E100_0000_0001;
+pub const PROTOCOL_ID: u64 = 0xC415_E100_0000_0002;
 
 /// Most bytes a peer keeps in flight on one channel (snapshots and large
 /// hull requests are single messages of a few megabytes at most).

@@ -439,13 +439,9 @@ fn send_snapshots(
     let joining = std::mem::take(&mut ledger.joining);
     let mut snapshots = Vec::new();
     for (id, terrain, placed) in &terrains {
-        let bytes = terrain.to_bytes();
+        let bytes = terrain.to_snapshot_bytes();
         let seq = terrain.last_request().unwrap_or(0);
-        let debris = terrain
-            .debris()
-            .map(|config| (config.max_volume, config.max_cells.map(|c| c as u64)));
         let pose = WirePose::from(&placed.copied().unwrap_or_default());
-        let labels: Vec<u8> = terrain.labels().iter().copied().collect();
         let parts: Vec<SnapshotPart> = bytes
             .chunks(limits.snapshot_part_bytes.max(1))
             .scan(0u64, |offset, chunk| {
@@ -456,8 +452,6 @@ fn send_snapshots(
                     offset: *offset,
                     bytes: chunk.to_vec(),
                     pose,
-                    debris,
-                    labels: labels.clone(),
                 };
                 *offset += chunk.len() as u64;
                 Some(part)

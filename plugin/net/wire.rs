@@ -381,8 +381,9 @@ pub enum Outcome {
     Rejected(RejectReason),
 }
 
-/// One part of a terrain snapshot: the terrain file bytes
-/// ([`crate::terrain::Terrain::to_bytes`]) after carve `seq`, cut into
+/// One part of a terrain snapshot: the snapshot bytes
+/// ([`crate::terrain::Terrain::to_snapshot_bytes`]: octree, grid, base,
+/// materials and debris rules, no journal) after carve `seq`, cut into
 /// parts so that no message is large.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SnapshotPart {
@@ -398,11 +399,6 @@ pub struct SnapshotPart {
     pub bytes: Vec<u8>,
     /// The terrain entity's transform.
     pub pose: WirePose,
-    /// Settings the file does not hold: whether debris is detached, and
-    /// the most volume (grid units) and cells one carve may cut loose.
-    pub debris: Option<(Option<u128>, Option<u64>)>,
-    /// The materials carves may add or paint.
-    pub labels: Vec<u8>,
 }
 
 /// What the server sends.

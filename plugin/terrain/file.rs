@@ -139,38 +139,7 @@ impl Terrain {
     /// [`TerrainError::BadMagic`], [`TerrainError::UnsupportedVersion`],
     /// [`TerrainError::Truncated`] or [`TerrainError::Corrupt`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Terrain, TerrainError> {
-        if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
-            return Err(TerrainError::BadMagic);
-        }
-        let mut r = Reader { bytes, at: 8 };
-        let version = r.u32()?;
-        if version != FORMAT_VERSION {
-            return Err(TerrainError::UnsupportedVersion {
-                found: version,
-                supported: FORMAT_VERSION,
-            });
-        }
-        let body = bytes
-            .len()
-            .checked_sub(8)
-            .ok_or(TerrainError::Truncated { at: bytes.len() })?;
-        if body < r.at {
-            return Err(TerrainError::Truncated { at: bytes.len() });
-        }
-        let stored = u64::from_le_bytes(
-            bytes[body..]
-                .try_into()
-                .map_err(|_| TerrainError::Truncated { at: body })?,
-        );
-        if checksum(&bytes[..body]) != stored {
-            return Err(TerrainError::Corrupt {
-                reason: "checksum mismatch".into(),
-            });
-        }
-        let r = &mut Reader {
-            bytes: &bytes[..body],
-            at: r.at,
-        };
+        let r = &mut open_record(bytes, MAGIC, FORMAT_VERSION)?;
         let unit = r.f64()?;
         let origin = [r.f64()?, r.f64()?, r.f64()?];
         let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
@@ -331,13 +300,56 @@ fn create_temp(folder: &Path, name: &str) -> io::Result<(PathBuf, File)> {
     }
 }
 
-fn corrupt(e: impl ToString) -> TerrainError {
+/// The body of a record `magic, version u32, body, checksum u64`: checks
+/// the magic, the version and the checksum (XXH64 of every byte before
+/// it), and reads on from the body's first byte.
+pub(super) fn open_record(
+    bytes: &[u8],
+    magic: [u8; 8],
+    version: u32,
+) -> Result<Reader<'_>, TerrainError> {
+    if bytes.len() < magic.len() || bytes[..magic.len()] != magic {
+        return Err(TerrainError::BadMagic);
+    }
+    let mut r = Reader {
+        bytes,
+        at: magic.len(),
+    };
+    let found = r.u32()?;
+    if found != version {
+        return Err(TerrainError::UnsupportedVersion {
+            found,
+            supported: version,
+        });
+    }
+    let body = bytes
+        .len()
+        .checked_sub(8)
+        .filter(|&body| body >= r.at)
+        .ok_or(TerrainError::Truncated { at: bytes.len() })?;
+    let stored = u64::from_le_bytes(
+        bytes[body..]
+            .try_into()
+            .map_err(|_| TerrainError::Truncated { at: body })?,
+    );
+    if checksum(&bytes[..body]) != stored {
+        return Err(TerrainError::Corrupt {
+            reason: "checksum mismatch".into(),
+        });
+    }
+    Ok(Reader {
+        bytes: &bytes[..body],
+        at: r.at,
+    })
+}
+
+pub(super) fn corrupt(e: impl ToString) -> TerrainError {
     TerrainError::Corrupt {
         reason: e.to_string(),
     }
 }
 
-fn write_base(w: &mut Writer, base: &TerrainBase) {
+pub(super) fn write_base(w: &mut Writer, base: &TerrainBase) {
     let (origin, size_log2) = base.cube();
     match base {
         TerrainBase::Box { solid, label, .. } => {
@@ -379,7 +391,7 @@ fn write_base(w: &mut Writer, base: &TerrainBase) {
     }
 }
 
-fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
+pub(super) fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
     let tag = r.u8()?;
     let origin = r.point()?;
     let size_log2 = r.u8()?;
@@ -440,31 +452,31 @@ fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
     }
 }
 
-struct Writer(Vec<u8>);
+pub(super) struct Writer(pub(super) Vec<u8>);
 
 impl Writer {
-    fn u8(&mut self, v: u8) {
+    pub(super) fn u8(&mut self, v: u8) {
         self.0.push(v);
     }
-    fn u32(&mut self, v: u32) {
+    pub(super) fn u32(&mut self, v: u32) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn u64(&mut self, v: u64) {
+    pub(super) fn u64(&mut self, v: u64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn i64(&mut self, v: i64) {
+    pub(super) fn i64(&mut self, v: i64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn f64(&mut self, v: f64) {
+    pub(super) fn f64(&mut self, v: f64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn len(&mut self, n: usize) {
+    pub(super) fn len(&mut self, n: usize) {
         self.u32(u32::try_from(n).unwrap_or(u32::MAX));
     }
-    fn point(&mut self, p: [i64; 3]) {
+    pub(super) fn point(&mut self, p: [i64; 3]) {
         p.iter().for_each(|&c| self.i64(c));
     }
-    fn keys(&mut self, keys: &[CellKey]) {
+    pub(super) fn keys(&mut self, keys: &[CellKey]) {
         self.len(keys.len());
         for key in keys {
             self.u8(key.depth);
@@ -473,9 +485,9 @@ impl Writer {
     }
 }
 
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
+pub(super) struct Reader<'a> {
+    pub(super) bytes: &'a [u8],
+    pub(super) at: usize,
 }
 
 impl<'a> Reader<'a> {
@@ -490,16 +502,16 @@ impl<'a> Reader<'a> {
             .try_into()
             .map_err(|_| TerrainError::Truncated { at: self.at })
     }
-    fn u8(&mut self) -> Result<u8, TerrainError> {
+    pub(super) fn u8(&mut self) -> Result<u8, TerrainError> {
         Ok(self.take::<1>()?[0])
     }
-    fn u32(&mut self) -> Result<u32, TerrainError> {
+    pub(super) fn u32(&mut self) -> Result<u32, TerrainError> {
         Ok(u32::from_le_bytes(self.take()?))
     }
-    fn u64(&mut self) -> Result<u64, TerrainError> {
+    pub(super) fn u64(&mut self) -> Result<u64, TerrainError> {
         Ok(u64::from_le_bytes(self.take()?))
     }
-    fn bytes(&mut self, n: usize) -> Result<&'a [u8], TerrainError> {
+    pub(super) fn bytes(&mut self, n: usize) -> Result<&'a [u8], TerrainError> {
         let slice = self
             .at
             .checked_add(n)
@@ -510,7 +522,7 @@ impl<'a> Reader<'a> {
     }
     /// Cell keys; each must name a cell of a cube (position below
     /// `2^depth`, depth at most 27, the largest cube).
-    fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError> {
+    pub(super) fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError> {
         let n = self.len()?;
         let mut keys = Vec::with_capacity(n.min(1 << 16));
         for _ in 0..n {
@@ -525,20 +537,20 @@ impl<'a> Reader<'a> {
         }
         Ok(keys)
     }
-    fn i64(&mut self) -> Result<i64, TerrainError> {
+    pub(super) fn i64(&mut self) -> Result<i64, TerrainError> {
         Ok(i64::from_le_bytes(self.take()?))
     }
-    fn f64(&mut self) -> Result<f64, TerrainError> {
+    pub(super) fn f64(&mut self) -> Result<f64, TerrainError> {
         Ok(f64::from_le_bytes(self.take()?))
     }
-    fn len(&mut self) -> Result<usize, TerrainError> {
+    pub(super) fn len(&mut self) -> Result<usize, TerrainError> {
         let n = self.u32()?;
         if n > MAX_LIST {
             return Err(corrupt(format!("list of {n} entries is implausibly long")));
         }
         Ok(n as usize)
     }
-    fn point(&mut self) -> Result<[i64; 3], TerrainError> {
+    pub(super) fn point(&mut self) -> Result<[i64; 3], TerrainError> {
         Ok([self.i64()?, self.i64()?, self.i64()?])
     }
 }

@@ -100,6 +100,7 @@ pub mod material;
 pub mod mesh;
 pub mod physics;
 pub mod raycast;
+pub mod snapshot;
 pub mod spawn;
 pub mod tool;
 
