@@ -20,7 +20,8 @@ use super::error::TerrainError;
 /// inner BSP nodes per cell rather than the kernel's default of 150 (the
 /// paper's value), because carving many small tools is faster with small
 /// cells (crater carves, apply and re-meshing: median 1.9–2.5 ms at 40
-/// against 2.4–2.7 ms at 150, in alternating runs; BENCHMARKS.md).
+/// against 2.4–2.7 ms at 150, in alternating runs;
+/// `benches/results/2026-11-22-terrain-crater.md`).
 /// [`Terrain::from_base`] takes any settings.
 #[must_use]
 pub fn terrain_octree_config() -> OctreeConfig {
