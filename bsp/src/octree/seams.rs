@@ -400,14 +400,12 @@ impl SeamedMesher {
     /// of the `changed` points that is no wall point of their own, by key:
     /// the only leaves whose seam points may change.
     fn touched_by(&self, octree: &Octree, changed: &[Point4], pending: &Pending) -> Vec<CellKey> {
-        let around: Vec<CellBox> = changed
+        let positions: Vec<[f64; 3]> = changed.iter().map(Point4::to_f64).collect();
+        let around: Vec<CellBox> = positions
             .iter()
-            .map(|p| {
-                let q = p.to_f64();
-                CellBox {
-                    min: q.map(|c| c.floor() as i64 - 1),
-                    max: q.map(|c| c.ceil() as i64 + 1),
-                }
+            .map(|q| CellBox {
+                min: q.map(|c| c.floor() as i64 - 1),
+                max: q.map(|c| c.ceil() as i64 + 1),
             })
             .collect();
         let mut near = BTreeSet::new();
@@ -415,8 +413,12 @@ impl SeamedMesher {
             if !pending.contains_key(&key)
                 && let Some(border) = self.borders.get(&key)
                 && points.iter().any(|&i| {
-                    let p = &changed[i];
-                    border.edges.iter().any(|e| e.holds_strictly(p))
+                    let (p, q) = (&changed[i], positions[i]);
+                    // The `f64` box first: most edges are far.
+                    border
+                        .edges
+                        .iter()
+                        .any(|e| e.may_hold(q) && e.holds_strictly(p))
                         && !border.wall_points.iter().any(|w| same_point(w, p))
                 })
             {
@@ -440,7 +442,11 @@ impl SeamedMesher {
         let border = self.borders.get(&key)?;
         let mut seams: Vec<Point4> = Vec::new();
         for &p in extra {
-            if border.edges.iter().any(|e| e.holds_strictly(p))
+            let q = p.to_f64();
+            if border
+                .edges
+                .iter()
+                .any(|e| e.may_hold(q) && e.holds_strictly(p))
                 && !border.wall_points.iter().any(|w| same_point(w, p))
                 && !seams.iter().any(|s| same_point(s, p))
             {
