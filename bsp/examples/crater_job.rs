@@ -7,21 +7,28 @@
 //! a profiler or an instruction count:
 //!
 //! ```sh
-//! cargo run --release -p chisel_bsp --example crater_job -- 1000 [THREADS]
+//! cargo run --release -p chisel_bsp --example crater_job -- 1000 [THREADS] [check]
 //! perf stat -e task-clock target/release/examples/crater_job 1000
 //! ```
+//!
+//! With `check`, it also prints hashes of every sealed mesh, every debris
+//! piece and the final octree (outside the timings): equal hashes before
+//! and after a change to the kernel mean bit-identical results.
 //!
 //! The terrain is a 256 m × 20 m × 256 m slab on a 1 mm grid in cells of
 //! at most 40 BSP nodes; each crater a dodecahedron of radius 2 m just
 //! under the top face, turned at random about the vertical.
 
+use std::collections::hash_map::DefaultHasher;
 use std::collections::{BTreeMap, BTreeSet};
+use std::hash::{Hash, Hasher};
 use std::time::{Duration, Instant};
 
 use chisel_bsp::exact::IntPoint;
+use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{
-    Anchors, CellBox, CellKey, CubeSide, DebrisConfig, Edit, Octree, OctreeConfig, SeamedMesher,
-    Tool,
+    Anchors, CellBox, CellKey, CubeSide, DebrisConfig, Detached, Edit, Octree, OctreeConfig,
+    SeamedMesher, Tool,
 };
 use chisel_bsp::tools::dodecahedron_corners;
 
@@ -53,6 +60,28 @@ fn crater(next: &mut impl FnMut() -> f64) -> Tool {
     Tool::convex_hull(&points).expect("a solid hull")
 }
 
+/// Feeds a sealed mesh's exact vertices and polygons to `state`.
+fn hash_mesh(mesh: &SurfaceMesh, state: &mut impl Hasher) {
+    for v in mesh.vertices() {
+        v.xyz().hash(state);
+        v.w().hash(state);
+    }
+    for p in mesh.polygons() {
+        (p.plane, &p.edges, &p.corners, &p.originals).hash(state);
+        (p.label, p.outside, p.on_bounds).hash(state);
+    }
+}
+
+/// Feeds the debris pieces' leaves, cells, volumes and solids to `state`.
+fn hash_debris(detached: &Detached, state: &mut impl Hasher) {
+    for piece in &detached.pieces {
+        (&piece.leaves, &piece.volumes, piece.solid.state_hash()).hash(state);
+        for cell in &piece.cells {
+            (cell.cell, cell.label, &cell.planes, &cell.volume).hash(state);
+        }
+    }
+}
+
 fn median(times: &mut [Duration]) -> f64 {
     times.sort_unstable();
     times[times.len() / 2].as_secs_f64() * 1e3
@@ -66,15 +95,16 @@ fn main() {
             .unwrap_or(default)
     };
     let (carves, threads) = (arg(1, 1000), arg(2, 1));
+    let check = std::env::args().nth(3).is_some_and(|a| a == "check");
     // As the plugin's jobs: everything on the worker pool's threads.
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .expect("a thread pool")
-        .install(|| run(carves));
+        .install(|| run(carves, check));
 }
 
-fn run(carves: usize) {
+fn run(carves: usize, check: bool) {
     let solid = CellBox {
         min: [0, -20_000, 0],
         max: [256_000, 0, 256_000],
@@ -106,6 +136,7 @@ fn run(carves: usize) {
     let mut next = uniform(0x9E37_79B9_7F4A_7C15);
     let (mut apply, mut detach, mut meshes, mut total) = (vec![], vec![], vec![], vec![]);
     let mut cells = Vec::new();
+    let (mut mesh_hash, mut debris_hash) = (DefaultHasher::new(), DefaultHasher::new());
     for _ in 0..carves {
         let tool = crater(&mut next);
         let start = Instant::now();
@@ -138,6 +169,15 @@ fn run(carves: usize) {
         let sealed = mesher.update(&octree, keys, fresh);
         let done = start.elapsed();
         drop(before);
+        if check {
+            for (key, mesh) in &sealed {
+                key.hash(&mut mesh_hash);
+                if let Some(mesh) = mesh {
+                    hash_mesh(mesh, &mut mesh_hash);
+                }
+            }
+            hash_debris(&carved.detached, &mut debris_hash);
+        }
         cells.push(sealed.len());
         apply.push(applied);
         detach.push(detached - applied);
@@ -161,4 +201,12 @@ fn run(carves: usize) {
         stats.bsp_nodes,
         mesher.cells()
     );
+    if check {
+        println!(
+            "hashes: meshes {:016x}, debris {:016x}, octree {:016x}",
+            mesh_hash.finish(),
+            debris_hash.finish(),
+            octree.state_hash()
+        );
+    }
 }

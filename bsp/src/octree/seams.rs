@@ -53,20 +53,7 @@ impl Octree {
     #[must_use]
     pub fn leaves_touching(&self, region: &CellBox) -> Vec<CellKey> {
         let mut out = Vec::new();
-        let mut stack = vec![(&self.root, CellKey::ROOT, self.root_box())];
-        while let Some((node, key, cell)) = stack.pop() {
-            if !cell.touches(region) {
-                continue;
-            }
-            match node {
-                OctNode::Leaf(_) => out.push(key),
-                OctNode::Inner(children) => {
-                    for i in (0..8).rev() {
-                        stack.push((&children[i], key.child(i), cell.child(i)));
-                    }
-                }
-            }
-        }
+        self.for_leaves_touching_each(std::slice::from_ref(region), |key, _| out.push(key));
         out
     }
 
@@ -85,18 +72,24 @@ impl Octree {
             .filter(|&i| root.touches(&regions[i]))
             .collect();
         let mut stack = vec![(&self.root, CellKey::ROOT, 0..runs.len())];
+        // Per region of the run on top, the children it touches.
+        let mut children_touched: Vec<u8> = Vec::new();
         while let Some((node, key, run)) = stack.pop() {
             match node {
                 OctNode::Leaf(_) => visit(key, &runs[run.clone()]),
                 OctNode::Inner(children) => {
-                    let cell = self.cell_box(key);
+                    let mid = self.cell_box(key).mid();
+                    children_touched.clear();
+                    children_touched.extend(
+                        runs[run.clone()]
+                            .iter()
+                            .map(|&r| children_touching(&regions[r], mid)),
+                    );
                     for i in (0..8).rev() {
-                        let child = cell.child(i);
                         let start = runs.len();
-                        for k in run.clone() {
-                            let r = runs[k];
-                            if child.touches(&regions[r]) {
-                                runs.push(r);
+                        for (k, &touched) in run.clone().zip(&children_touched) {
+                            if touched & (1 << i) != 0 {
+                                runs.push(runs[k]);
                             }
                         }
                         if runs.len() > start {
@@ -382,58 +375,37 @@ impl SeamedMesher {
     /// The leaves not in `pending` with a polygon lying in a wall, across
     /// which that polygon shares area with the box of a `replaced` cell.
     fn facing(&self, octree: &Octree, replaced: &[CellKey], pending: &Pending) -> Vec<CellKey> {
-        let mut out = BTreeSet::new();
-        for &edited in replaced {
-            let cell = octree.cell_box(edited);
-            for key in octree.leaves_touching(&cell) {
-                if pending.contains_key(&key) || out.contains(&key) {
-                    continue;
-                }
-                let Some(border) = self.borders.get(&key) else {
-                    continue;
-                };
-                let own = octree.cell_box(key);
-                let across = border.exposed.iter().any(|&(wall, lo, hi)| {
-                    let axis = wall / 2;
-                    let at = if wall % 2 == 0 {
-                        own.min[axis]
-                    } else {
-                        own.max[axis]
-                    };
-                    let on_wall = if wall % 2 == 0 {
-                        cell.max[axis] == at
-                    } else {
-                        cell.min[axis] == at
-                    };
-                    // Widened far beyond the rounding of the corners, so
-                    // that no polygon sharing area is missed.
-                    let slack = f64::from(1u32 << 26) * f64::powi(2.0, -40);
-                    on_wall
-                        && (0..3).filter(|&a| a != axis).all(|a| {
-                            lo[a] < cell.max[a] as f64 + slack
-                                && (cell.min[a] as f64) - slack < hi[a]
-                        })
-                });
-                if across {
-                    out.insert(key);
-                }
+        let cells: Vec<CellBox> = replaced.iter().map(|&key| octree.cell_box(key)).collect();
+        let mut out = Vec::new();
+        octree.for_leaves_touching_each(&cells, |key, near| {
+            if pending.contains_key(&key) {
+                return;
             }
-        }
-        out.into_iter().collect()
+            let Some(border) = self.borders.get(&key) else {
+                return;
+            };
+            let own = octree.cell_box(key);
+            let across = near
+                .iter()
+                .any(|&i| faces_across(&border.exposed, &own, &cells[i]));
+            if across {
+                out.push(key);
+            }
+        });
+        out.sort_unstable();
+        out
     }
 
     /// The leaves not in `pending` with a border edge strictly holding one
     /// of the `changed` points that is no wall point of their own, by key:
     /// the only leaves whose seam points may change.
     fn touched_by(&self, octree: &Octree, changed: &[Point4], pending: &Pending) -> Vec<CellKey> {
-        let around: Vec<CellBox> = changed
+        let positions: Vec<[f64; 3]> = changed.iter().map(Point4::to_f64).collect();
+        let around: Vec<CellBox> = positions
             .iter()
-            .map(|p| {
-                let q = p.to_f64();
-                CellBox {
-                    min: q.map(|c| c.floor() as i64 - 1),
-                    max: q.map(|c| c.ceil() as i64 + 1),
-                }
+            .map(|q| CellBox {
+                min: q.map(|c| c.floor() as i64 - 1),
+                max: q.map(|c| c.ceil() as i64 + 1),
             })
             .collect();
         let mut near = BTreeSet::new();
@@ -441,8 +413,12 @@ impl SeamedMesher {
             if !pending.contains_key(&key)
                 && let Some(border) = self.borders.get(&key)
                 && points.iter().any(|&i| {
-                    let p = &changed[i];
-                    border.edges.iter().any(|e| e.holds_strictly(p))
+                    let (p, q) = (&changed[i], positions[i]);
+                    // The `f64` box first: most edges are far.
+                    border
+                        .edges
+                        .iter()
+                        .any(|e| e.may_hold(q) && e.holds_strictly(p))
                         && !border.wall_points.iter().any(|w| same_point(w, p))
                 })
             {
@@ -466,7 +442,11 @@ impl SeamedMesher {
         let border = self.borders.get(&key)?;
         let mut seams: Vec<Point4> = Vec::new();
         for &p in extra {
-            if border.edges.iter().any(|e| e.holds_strictly(p))
+            let q = p.to_f64();
+            if border
+                .edges
+                .iter()
+                .any(|e| e.may_hold(q) && e.holds_strictly(p))
                 && !border.wall_points.iter().any(|w| same_point(w, p))
                 && !seams.iter().any(|s| same_point(s, p))
             {
@@ -508,6 +488,52 @@ impl SeamedMesher {
         });
         extra
     }
+}
+
+/// Whether one of the polygons `exposed` lying in a wall of the leaf box
+/// `own` shares area with the box `cell` across that wall.
+fn faces_across(exposed: &[(usize, [f64; 3], [f64; 3])], own: &CellBox, cell: &CellBox) -> bool {
+    exposed.iter().any(|&(wall, lo, hi)| {
+        let axis = wall / 2;
+        let at = if wall % 2 == 0 {
+            own.min[axis]
+        } else {
+            own.max[axis]
+        };
+        let on_wall = if wall % 2 == 0 {
+            cell.max[axis] == at
+        } else {
+            cell.min[axis] == at
+        };
+        // Widened far beyond the rounding of the corners, so that no
+        // polygon sharing area is missed.
+        let slack = f64::from(1u32 << 26) * f64::powi(2.0, -40);
+        on_wall
+            && (0..3)
+                .filter(|&a| a != axis)
+                .all(|a| lo[a] < cell.max[a] as f64 + slack && (cell.min[a] as f64) - slack < hi[a])
+    })
+}
+
+/// The children (one bit each, as [`CellKey::child`] numbers them) of a
+/// cell with centre `mid` whose closed boxes touch the closed box
+/// `region`, which touches the cell: along each axis, the lower half
+/// `[min, mid]` unless the region starts above `mid`, the upper half
+/// `[mid, max]` unless it ends below (the same answers as
+/// [`CellBox::touches`] with each child's box).
+fn children_touching(region: &CellBox, mid: [i64; 3]) -> u8 {
+    /// Per axis, the children in its upper half.
+    const UPPER: [u8; 3] = [0b1010_1010, 0b1100_1100, 0b1111_0000];
+    let mut touched = u8::MAX;
+    for a in 0..3 {
+        if region.min[a] > mid[a] {
+            touched &= UPPER[a];
+        }
+        if region.max[a] < mid[a] {
+            touched &= !UPPER[a];
+        }
+    }
+    touched
 }
 
 /// The cells an update seals, by key: each with its new unsealed mesh, or
