@@ -329,3 +329,49 @@ fn late_checks_and_causes() {
     assert_eq!(c, Some(3), "{m}");
     assert!(m.contains("vertex 2 has a NaN"), "{m}");
 }
+
+/// A scene of `n` unions of two spheres under one intersection: `2ⁿ`
+/// products in normal form.
+fn crossed_unions(n: usize) -> String {
+    let mut primitives = String::new();
+    let mut factors = Vec::new();
+    for i in 0..n {
+        let offset = 0.1 * (i + 1) as f64;
+        primitives.push_str(&format!(
+            "(name: \"a{i}\", shape: Sphere(center: ({offset}, 0, 0), radius: 50)),\n\
+             (name: \"b{i}\", shape: Sphere(center: (0, {offset}, 0), radius: 50)),\n"
+        ));
+        factors.push(format!("Union([Ref(\"a{i}\"), Ref(\"b{i}\")])"));
+    }
+    format!(
+        "Scene(primitives: [{primitives}], root: Intersection([{}]), bounds: (0, 0, 0, 60))",
+        factors.join(", ")
+    )
+}
+
+#[test]
+fn a_normal_form_too_large_to_sample_is_refused() {
+    // Before: 32,768 products (under the 65,536 limit) grew past 5 GB and
+    // aborted; now refused up front, naming the option that raises the limit.
+    let file = temp("crossed15.quadric.ron");
+    std::fs::write(&file, crossed_unions(15)).unwrap();
+    let out = temp("crossed15.ply");
+    let args = ["sample", path(&file), "--radius", "2", "-o", path(&out)];
+    refused(&args, "--max-memory-mb");
+    let status = chisel().args(args).output().unwrap().status;
+    assert_eq!(status.code(), Some(3));
+    assert!(!out.exists());
+    // The limit applies to any scene, and the option sets it.
+    let classic = scene("classic.quadric.ron");
+    refused(
+        &[
+            "sample",
+            path(&classic),
+            "--radius",
+            "2",
+            "--max-memory-mb",
+            "0",
+        ],
+        "limit of 0 MiB",
+    );
+}
