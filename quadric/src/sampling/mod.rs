@@ -281,7 +281,10 @@ pub struct SampleSet {
 /// `options.radius`, in parallel on the current rayon pool.
 ///
 /// An empty normal form gives no samples. Errors: [`Error::NonPositive`] /
-/// [`Error::NonFinite`] for invalid options.
+/// [`Error::NonFinite`] for invalid options; [`Error::SamplingTooLarge`]
+/// (checked first, before anything per literal is allocated: see
+/// [`sampling_cost`]), [`Error::TooManySamples`] and
+/// [`Error::CoverageNotReached`] for the limits.
 pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
     positive(options.radius, "splat radius")?;
     BoundingSphere::new(options.bounds.centre, options.bounds.radius)?;
