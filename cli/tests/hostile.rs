@@ -180,6 +180,40 @@ fn a_failed_write_leaves_the_existing_file_as_it_was() {
     assert!(left.is_empty(), "{left:?}");
 }
 
+/// `boolean -o` naming one of its inputs, on a full disk: the input is
+/// kept as it was (before: replaced by a partial file).
+#[test]
+fn a_failed_boolean_write_keeps_the_input_it_names() {
+    let folder = temp("small-disk-boolean");
+    std::fs::create_dir_all(&folder).unwrap();
+    let a = folder.join("a.obj");
+    let b = folder.join("b.obj");
+    let a_text = common::box_obj([0.0; 3], [10.0; 3]);
+    std::fs::write(&a, &a_text).unwrap();
+    std::fs::write(&b, common::box_obj([5.0, 3.0, 7.0], [15.0, 13.0, 17.0])).unwrap();
+    let args = [
+        "boolean",
+        path(&a),
+        path(&b),
+        "--op",
+        "union",
+        "-o",
+        path(&a),
+    ];
+    let out = with_small_disk(&args);
+    let message = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(5), "{message}");
+    assert_eq!(std::fs::read_to_string(&a).unwrap(), a_text);
+    // With room to write, the same command replaces it.
+    let out = chisel().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_ne!(std::fs::read_to_string(&a).unwrap(), a_text);
+}
+
 /// An OBJ box with every face reversed, alone or beside an outward box,
 /// is refused as inside out (before: accepted, with a union depending on
 /// the other operand).
