@@ -86,3 +86,25 @@ pub fn check_output(path: &std::path::Path, mesh_or_octree: bool) -> Result<(), 
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{Exit, Failure};
+
+    /// The codes of the README's exit-code table, one per kind of failure
+    /// (a failed `--check` cannot be provoked from outside: the invariants
+    /// hold on every input the commands accept).
+    #[test]
+    fn each_kind_of_failure_has_its_documented_code() {
+        let kinds = [
+            (Failure::usage("u"), Exit::Usage, 2),
+            (Failure::from("d".to_string()), Exit::Data, 3),
+            (Failure::check("c"), Exit::Check, 4),
+            (Failure::write("w"), Exit::Write, 5),
+        ];
+        for (failure, exit, code) in kinds {
+            assert_eq!(failure.exit, exit, "{}", failure.message);
+            assert_eq!(exit as u8, code, "{}", failure.message);
+        }
+    }
+}

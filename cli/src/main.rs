@@ -89,6 +89,11 @@ enum Command {
         /// grid of samples is allocated).
         #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_SAMPLES)]
         max_samples: u64,
+        /// Refuse to sample when the tables built before the first sample
+        /// (heightfields, basic regions, distance tables) would need more
+        /// than this many MiB; estimated from the scene before allocating.
+        #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_MEMORY >> 20)]
+        max_memory_mb: u64,
         /// One line of JSON instead of a report.
         #[arg(long)]
         json: bool,
@@ -203,6 +208,7 @@ fn main() -> ExitCode {
                 bounds,
                 output,
                 max_samples,
+                max_memory_mb,
                 json,
             } => sample::run(&sample::SampleArgs {
                 scene,
@@ -210,6 +216,7 @@ fn main() -> ExitCode {
                 bounds,
                 output,
                 max_samples,
+                max_memory_mb,
                 json,
             }),
             Command::Trace {

@@ -20,6 +20,8 @@ pub struct SampleArgs {
     pub output: Option<PathBuf>,
     /// The most samples to emit.
     pub max_samples: u64,
+    /// The most MiB sampling may allocate for its tables before the first sample.
+    pub max_memory_mb: u64,
     /// One JSON line instead of a report.
     pub json: bool,
 }
@@ -35,6 +37,7 @@ pub fn run(args: &SampleArgs) -> Result<(), Failure> {
     let mut options =
         SampleOptions::new(args.radius, bounds).map_err(|e| Failure::usage(e.to_string()))?;
     options.max_samples = args.max_samples;
+    options.max_memory = args.max_memory_mb.saturating_mul(1 << 20);
     let start = Instant::now();
     let samples = sample(&dnf, &options).map_err(|e| e.to_string())?;
     let seconds = start.elapsed().as_secs_f64();

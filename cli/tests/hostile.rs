@@ -180,6 +180,40 @@ fn a_failed_write_leaves_the_existing_file_as_it_was() {
     assert!(left.is_empty(), "{left:?}");
 }
 
+/// `boolean -o` naming one of its inputs, on a full disk: the input is
+/// kept as it was (before: replaced by a partial file).
+#[test]
+fn a_failed_boolean_write_keeps_the_input_it_names() {
+    let folder = temp("small-disk-boolean");
+    std::fs::create_dir_all(&folder).unwrap();
+    let a = folder.join("a.obj");
+    let b = folder.join("b.obj");
+    let a_text = common::box_obj([0.0; 3], [10.0; 3]);
+    std::fs::write(&a, &a_text).unwrap();
+    std::fs::write(&b, common::box_obj([5.0, 3.0, 7.0], [15.0, 13.0, 17.0])).unwrap();
+    let args = [
+        "boolean",
+        path(&a),
+        path(&b),
+        "--op",
+        "union",
+        "-o",
+        path(&a),
+    ];
+    let out = with_small_disk(&args);
+    let message = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(5), "{message}");
+    assert_eq!(std::fs::read_to_string(&a).unwrap(), a_text);
+    // With room to write, the same command replaces it.
+    let out = chisel().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_ne!(std::fs::read_to_string(&a).unwrap(), a_text);
+}
+
 /// An OBJ box with every face reversed, alone or beside an outward box,
 /// is refused as inside out (before: accepted, with a union depending on
 /// the other operand).
@@ -328,4 +362,50 @@ fn late_checks_and_causes() {
     ]);
     assert_eq!(c, Some(3), "{m}");
     assert!(m.contains("vertex 2 has a NaN"), "{m}");
+}
+
+/// A scene of `n` unions of two spheres under one intersection: `2ⁿ`
+/// products in normal form.
+fn crossed_unions(n: usize) -> String {
+    let mut primitives = String::new();
+    let mut factors = Vec::new();
+    for i in 0..n {
+        let offset = 0.1 * (i + 1) as f64;
+        primitives.push_str(&format!(
+            "(name: \"a{i}\", shape: Sphere(center: ({offset}, 0, 0), radius: 50)),\n\
+             (name: \"b{i}\", shape: Sphere(center: (0, {offset}, 0), radius: 50)),\n"
+        ));
+        factors.push(format!("Union([Ref(\"a{i}\"), Ref(\"b{i}\")])"));
+    }
+    format!(
+        "Scene(primitives: [{primitives}], root: Intersection([{}]), bounds: (0, 0, 0, 60))",
+        factors.join(", ")
+    )
+}
+
+#[test]
+fn a_normal_form_too_large_to_sample_is_refused() {
+    // Before: 32,768 products (under the 65,536 limit) grew past 5 GB and
+    // aborted; now refused up front, naming the option that raises the limit.
+    let file = temp("crossed15.quadric.ron");
+    std::fs::write(&file, crossed_unions(15)).unwrap();
+    let out = temp("crossed15.ply");
+    let args = ["sample", path(&file), "--radius", "2", "-o", path(&out)];
+    refused(&args, "--max-memory-mb");
+    let status = chisel().args(args).output().unwrap().status;
+    assert_eq!(status.code(), Some(3));
+    assert!(!out.exists());
+    // The limit applies to any scene, and the option sets it.
+    let classic = scene("classic.quadric.ron");
+    refused(
+        &[
+            "sample",
+            path(&classic),
+            "--radius",
+            "2",
+            "--max-memory-mb",
+            "0",
+        ],
+        "limit of 0 MiB",
+    );
 }

@@ -71,6 +71,21 @@ pub enum Error {
         /// Samples counted (or reserved for a grid) when it was passed.
         reached: u64,
     },
+    /// Sampling would need more memory for its tables than
+    /// [`SampleOptions::max_memory`](crate::SampleOptions::max_memory)
+    /// ([`sampling_cost`](crate::sampling_cost)); nothing was allocated.
+    SamplingTooLarge {
+        /// Products of the normal form.
+        products: u64,
+        /// Literal instances: the literals of all products together.
+        literals: u64,
+        /// Basic regions to subdivide, one job each.
+        regions: u64,
+        /// Estimated bytes.
+        needed: u64,
+        /// The limit in bytes.
+        limit: u64,
+    },
     /// Sampling cannot keep the coverage guarantee: the bounding sphere is
     /// too large for the splat radius, or regions stayed unclassified at
     /// the subdivision limit.
@@ -127,6 +142,22 @@ impl fmt::Display for Error {
                 "sampling needs more than {limit} samples ({reached} counted when it stopped); \
                  use a larger splat radius or smaller bounds, or raise the limit \
                  (`--max-samples` on the command line, `SampleOptions::max_samples`)"
+            ),
+            Error::SamplingTooLarge {
+                products,
+                literals,
+                regions,
+                needed,
+                limit,
+            } => write!(
+                f,
+                "sampling this scene needs about {} MiB for its tables ({products} products with \
+                 {literals} literals in normal form, {regions} basic regions), more than the \
+                 limit of {} MiB; simplify the scene (fewer unions inside intersections or \
+                 differences), or raise the limit (`--max-memory-mb` on the command line, \
+                 `SampleOptions::max_memory`)",
+                needed.div_ceil(1 << 20),
+                limit / (1 << 20)
             ),
             Error::CoverageNotReached { reason } => {
                 write!(f, "sampling cannot keep its coverage guarantee: {reason}")

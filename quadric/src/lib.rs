@@ -82,7 +82,8 @@ pub use frame::PrincipalFrame;
 pub use quadric::{AFFINE_TOLERANCE, Quadric, affine_inverse, snap_affine};
 pub use ray::{Hit, LineHits, Ray, Span};
 pub use sampling::{
-    BoundingSphere, DEFAULT_MAX_SAMPLES, MAX_BOUNDS_RATIO, Sample, SampleOptions, SampleSet, sample,
+    BoundingSphere, DEFAULT_MAX_MEMORY, DEFAULT_MAX_SAMPLES, MAX_BOUNDS_RATIO, Sample,
+    SampleOptions, SampleSet, SamplingCost, sample, sampling_cost,
 };
 pub use scene::Scene;
 pub use splats::{GpuQuadric, GpuSplat, OUTSIDE_FLAG, QuadricRecord, Splat, SplatSet};

@@ -401,6 +401,22 @@ pub struct OtherTerms {
 }
 
 impl OtherTerms {
+    /// The bytes of the largest `OtherTerms` of `dnf`, the one
+    /// [`CsgDistance::other_terms`] builds when no product is left out:
+    /// an index per literal of the normal form and an entry per product.
+    #[must_use]
+    pub fn bytes_for(dnf: &Dnf) -> u64 {
+        let literals: usize = dnf.products().iter().map(Vec::len).sum();
+        let bytes = literals
+            .saturating_mul(std::mem::size_of::<u32>())
+            .saturating_add(
+                dnf.products()
+                    .len()
+                    .saturating_mul(std::mem::size_of::<Term>()),
+            );
+        u64::try_from(bytes).unwrap_or(u64::MAX)
+    }
+
     /// The number of other products still evaluated.
     #[must_use]
     pub fn len(&self) -> usize {

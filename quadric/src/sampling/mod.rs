@@ -43,6 +43,7 @@
 //! ```
 
 pub mod basic;
+mod cost;
 pub mod curved;
 pub mod heightfield;
 pub mod regions;
@@ -55,9 +56,10 @@ use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
 use crate::error::{Error, Result, positive};
-use basic::basic_regions;
-use heightfield::{Heightfield, LocalForm};
-use regions::{Region, RegionKind};
+pub use cost::{DEFAULT_MAX_MEMORY, SamplingCost, sampling_cost};
+use cost::{Job, cost_of, quadric_regions};
+use heightfield::Heightfield;
+use regions::RegionKind;
 pub use subdivide::DISTORTION_CAP;
 use subdivide::RegionJob;
 
@@ -106,6 +108,11 @@ pub struct SampleOptions {
     /// default); a grid fill that would pass it is not allocated, and the
     /// call fails with [`Error::TooManySamples`].
     pub max_samples: u64,
+    /// The most bytes [`sample`] may allocate for its tables before the
+    /// first sample ([`SamplingCost::bytes`], [`DEFAULT_MAX_MEMORY`] by
+    /// default); a normal form that needs more fails with
+    /// [`Error::SamplingTooLarge`] before anything is allocated.
+    pub max_memory: u64,
 }
 
 /// The default [`SampleOptions::max_samples`]: 10 million samples, about
@@ -129,6 +136,7 @@ impl SampleOptions {
             bounds,
             min_region_fraction: 0.1,
             max_samples: DEFAULT_MAX_SAMPLES,
+            max_memory: DEFAULT_MAX_MEMORY,
         })
     }
 }
@@ -273,7 +281,10 @@ pub struct SampleSet {
 /// `options.radius`, in parallel on the current rayon pool.
 ///
 /// An empty normal form gives no samples. Errors: [`Error::NonPositive`] /
-/// [`Error::NonFinite`] for invalid options.
+/// [`Error::NonFinite`] for invalid options; [`Error::SamplingTooLarge`]
+/// (checked first, before anything per literal is allocated: see
+/// [`sampling_cost`]), [`Error::TooManySamples`] and
+/// [`Error::CoverageNotReached`] for the limits.
 pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
     positive(options.radius, "splat radius")?;
     BoundingSphere::new(options.bounds.centre, options.bounds.radius)?;
@@ -293,48 +304,59 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             ),
         });
     }
+    let sphere = options.bounds;
+    let tables = quadric_regions(dnf, sphere);
+    let cost = cost_of(dnf, &tables);
+    if cost.bytes > options.max_memory {
+        return Err(Error::SamplingTooLarge {
+            products: dnf.products().len() as u64,
+            literals: cost.literals,
+            regions: cost.regions,
+            needed: cost.bytes,
+            limit: options.max_memory,
+        });
+    }
     let budget = SampleBudget::new(options.max_samples);
     let distance = CsgDistance::new(dnf);
-    let sphere = options.bounds;
-    let mut patches = Vec::new();
-    let mut jobs: Vec<(usize, Region, RegionKind)> = Vec::new();
-    let forms: Vec<LocalForm> = dnf
-        .quadrics()
-        .iter()
-        .map(|q| LocalForm::new(&q.quadric))
-        .collect();
+    let capacity = |n: u64| usize::try_from(n).unwrap_or(0);
+    let mut patches = Vec::with_capacity(capacity(cost.patches));
+    let mut jobs: Vec<Job> = Vec::with_capacity(capacity(cost.regions));
     for (a, product) in dnf.products().iter().enumerate() {
         for (b, literal) in product.iter().enumerate() {
-            for hf in forms[literal.quadric].heightfields() {
-                let c = hf.project(sphere.centre);
-                let lo = c - DVec2::splat(sphere.radius);
-                let hi = c + DVec2::splat(sphere.radius);
-                let index = patches.len();
+            for (k, (hf, regions)) in tables[literal.quadric].iter().enumerate() {
+                let patch = index_u32(patches.len());
                 patches.push(Patch {
                     product: index_u32(a),
                     literal: index_u32(b),
                     quadric: index_u32(literal.quadric),
-                    heightfield: hf,
+                    heightfield: *hf,
                 });
-                for (region, kind) in basic_regions(&hf, lo, hi) {
-                    jobs.push((index, region, kind));
-                }
+                jobs.extend((0..regions.len()).map(|r| Job {
+                    patch,
+                    heightfield: index_u32(k),
+                    region: index_u32(r),
+                }));
             }
         }
     }
-    let results: Vec<(Vec<Sample>, SamplingStats)> = jobs
+    // Counters are sums, the same in any order: one shared total keeps the
+    // result slot of a region at one `Vec`.
+    let totals = std::sync::Mutex::new(SamplingStats::default());
+    let results: Vec<Vec<Sample>> = jobs
         .par_iter()
-        .map(|(patch_index, region, kind)| {
-            let patch = &patches[*patch_index];
+        .map(|job| {
+            let patch = &patches[job.patch as usize];
             let literal = dnf.products()[patch.product as usize][patch.literal as usize];
             let quadric = &dnf.quadrics()[literal.quadric].quadric;
+            let (region, kind) =
+                &tables[literal.quadric][job.heightfield as usize].1[job.region as usize];
             let job = RegionJob {
                 distance: &distance,
                 quadric,
                 quadric_index: patch.quadric,
                 product: patch.product,
                 literal: patch.literal,
-                patch: index_u32(*patch_index),
+                patch: job.patch,
                 outward_sign: match literal.side {
                     Side::Inside => 1.0,
                     Side::Outside => -1.0,
@@ -354,17 +376,24 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             let mut out = Vec::new();
             job.run(region, &mut out, &mut stats);
             stats.kind_samples[kind.index()] = out.len() as u64;
-            (out, stats)
+            totals
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .add(&stats);
+            out
         })
         .collect();
-    let total: usize = results.iter().map(|r| r.0.len()).sum();
+    let stats = totals
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let total: usize = results.iter().map(Vec::len).sum();
     if budget.is_over() || total as u64 > options.max_samples {
         return Err(Error::TooManySamples {
             limit: options.max_samples,
             reached: budget.reached().max(total as u64),
         });
     }
-    let depth_limited: u64 = results.iter().map(|r| r.1.depth_limited).sum();
+    let depth_limited = stats.depth_limited;
     if depth_limited > 0 {
         return Err(Error::CoverageNotReached {
             reason: format!(
@@ -373,11 +402,9 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             ),
         });
     }
-    let mut stats = SamplingStats::default();
     let mut samples = Vec::with_capacity(total);
-    for (s, st) in results {
+    for s in results {
         samples.extend(s);
-        stats.add(&st);
     }
     Ok(SampleSet {
         samples,
