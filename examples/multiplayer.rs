@@ -160,8 +160,18 @@ struct Player {
     /// Scripted players send their craters; `None` for a mouse player.
     script: Option<usize>,
     sent: usize,
-    /// In the headless run: the server's octree bytes when all is done.
-    check: Option<Arc<Mutex<Option<(u64, Vec<u8>)>>>>,
+    /// In the headless run: what the server holds when it is idle.
+    check: Option<Arc<Mutex<Option<ServerState>>>>,
+}
+
+/// The server's terrain as the headless run's checking player sees it.
+struct ServerState {
+    /// Carves the server has accepted so far.
+    accepted: u64,
+    /// The terrain's state hash after them.
+    hash: u64,
+    /// The octree's bytes after them.
+    bytes: Vec<u8>,
 }
 
 /// A player: a window (or offscreen target) with the terrain as the
@@ -169,7 +179,7 @@ struct Player {
 fn run_player(
     addr: SocketAddr,
     presentation: Presentation,
-    check: Option<Arc<Mutex<Option<(u64, Vec<u8>)>>>>,
+    check: Option<Arc<Mutex<Option<ServerState>>>>,
 ) -> AppExit {
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
@@ -320,7 +330,7 @@ fn hud(
         |_| "waiting for the server's terrain".to_owned(),
         |t| {
             format!(
-                "{} carves | state hash {:016x} | {} triangles",
+                "{} carves since joining | state hash {:016x} | {} triangles",
                 t.journal().len(),
                 t.state_hash(),
                 t.triangle_count()
@@ -352,19 +362,22 @@ fn release_captures(
         hold.0 = !terrain.is_idle();
         return;
     };
-    // Carves before this player joined came in its snapshot's journal.
-    let expected = 3 * SCRIPTED;
-    if terrain.journal().len() < expected || !terrain.is_idle() {
+    // Carves before this player joined came in its snapshot, which has no
+    // journal: count them on the server, and compare the terrains.
+    let expected = 3 * SCRIPTED as u64;
+    if !terrain.is_idle() {
         return;
     }
     let Ok(server) = check.lock() else {
         return;
     };
-    if let Some((hash, bytes)) = server.as_ref()
-        && *hash == terrain.state_hash()
+    if let Some(state) = server.as_ref()
+        && state.accepted >= expected
+        && state.hash == terrain.state_hash()
     {
+        let hash = state.hash;
         assert!(
-            *bytes == terrain.octree().to_bytes(),
+            state.bytes == terrain.octree().to_bytes(),
             "equal hashes but different octrees"
         );
         println!(
@@ -378,7 +391,7 @@ fn release_captures(
 /// scripted player rendering offscreen in the main thread.
 fn run_headless(config: HeadlessConfig) -> AppExit {
     let stop = Arc::new(AtomicBool::new(false));
-    let server_state: Arc<Mutex<Option<(u64, Vec<u8>)>>> = Arc::default();
+    let server_state: Arc<Mutex<Option<ServerState>>> = Arc::default();
     let (tx, rx) = mpsc::channel();
     let mut threads = Vec::new();
     {
@@ -390,12 +403,18 @@ fn run_headless(config: HeadlessConfig) -> AppExit {
             while !stop.load(Ordering::Relaxed) {
                 app.update();
                 let world = app.world_mut();
+                let accepted = world.resource::<NetServerStats>().accepted;
                 let mut q = world.query_filtered::<&Terrain, With<NetTerrain>>();
                 if let Ok(t) = q.single(world)
                     && t.is_idle()
                     && let Ok(mut s) = state.lock()
+                    && s.as_ref().is_none_or(|s| s.accepted != accepted)
                 {
-                    *s = Some((t.state_hash(), t.octree().to_bytes()));
+                    *s = Some(ServerState {
+                        accepted,
+                        hash: t.state_hash(),
+                        bytes: t.octree().to_bytes(),
+                    });
                 }
                 std::thread::sleep(Duration::from_millis(2));
             }
