@@ -3,20 +3,26 @@
 //! bit budget, NaN, a hull of a million points, a tool too large, an
 //! unknown terrain and a flood of carves. Each is refused with its reason,
 //! the server keeps serving, and an honest client's carves all apply, with
-//! its terrain equal to the server's.
+//! its terrain equal to the server's. A secure server admits only
+//! clients with a connect token signed by its key.
 
 mod net;
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
+use std::time::Duration;
+
 use bevy_chisel::net::{
-    ClientPacket, ClientRequest, NetLimits, Outcome, RejectReason, RequestRejected, WirePiece,
-    WirePose, WireShape, WireTool,
+    ClientPacket, ClientRequest, NetKey, NetLimits, Outcome, RejectReason, RequestRejected,
+    WirePiece, WirePose, WireShape, WireTool, connect_token, start_client, start_secure_client,
 };
 use bevy_chisel::terrain::{CarveTool, GridTool};
 use bevy_replicon::shared::message::registry::RemoteMessageRegistry;
-use bevy_replicon_renet::RenetClient;
-use net::{Rng, Seen, client, random_carve, request, run_until, server, slab, terrain_of};
+use bevy_replicon_renet::{RenetClient, RenetServer};
+use net::{
+    Rng, Seen, client, client_app, random_carve, request, run_until, secure_server, server, slab,
+    terrain_of,
+};
 
 const HONEST: usize = 30;
 const FLOOD: usize = 3000;
@@ -261,4 +267,60 @@ fn hostile_requests_are_refused_with_reasons_and_hurt_no_one() {
         refused.len() >= limited + 9,
         "the server reports every refusal"
     );
+}
+
+/// A secure server admits a client whose token it signed, which then
+/// carves as usual; a client with a token signed by another key, and one
+/// that connects without a token, never get in.
+#[test]
+fn a_secure_server_admits_only_clients_with_its_tokens() {
+    let key = NetKey::generate();
+    let (mut server, addr) = secure_server(slab(), &key);
+    let minute = Duration::from_secs(60);
+
+    let mut admitted = client_app(1);
+    let token = connect_token(&key, 7, &[addr], minute).expect("token");
+    start_secure_client(admitted.world_mut(), &token).expect("client starts");
+    let mut forged = client_app(1);
+    let token = connect_token(&NetKey::generate(), 8, &[addr], minute).expect("token");
+    start_secure_client(forged.world_mut(), &token).expect("client starts");
+    let mut plain = client_app(1);
+    start_client(plain.world_mut(), addr, 9).expect("client starts");
+
+    run_until(
+        &mut [&mut server, &mut admitted, &mut forged, &mut plain],
+        20_000,
+        |apps| terrain_of(apps[1]).is_some_and(|(_, t)| t.is_idle()),
+    );
+    let (tool, edit) = random_carve(&mut Rng(7));
+    request(&mut admitted, 1, &tool, edit);
+    run_until(
+        &mut [&mut server, &mut admitted, &mut forged, &mut plain],
+        20_000,
+        |apps| !apps[1].world().resource::<Seen>().results.is_empty(),
+    );
+    // Give the refused clients time to have been let in, were they.
+    for _ in 0..200 {
+        for app in [&mut server, &mut admitted, &mut forged, &mut plain] {
+            app.update();
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let results = &admitted.world().resource::<Seen>().results;
+    assert!(
+        matches!(results[0].outcome, Outcome::Applied { .. }),
+        "the admitted client carves: {results:?}"
+    );
+    assert_eq!(
+        server.world().resource::<RenetServer>().connected_clients(),
+        1,
+        "only the client with the server's token is connected"
+    );
+    for (name, app) in [("forged token", &mut forged), ("no token", &mut plain)] {
+        assert!(terrain_of(app).is_none(), "{name}: no terrain");
+        assert!(
+            !app.world().resource::<RenetClient>().is_connected(),
+            "{name}: not connected"
+        );
+    }
 }

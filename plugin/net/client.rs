@@ -18,7 +18,8 @@ use super::wire::{
 use crate::terrain::{CarveApplied, GridCarve, Terrain, TerrainCell, TerrainSystems};
 
 /// Ask the server to carve a terrain (on a client).
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct NetCarveRequest {
     /// Chosen by the sender; echoed in [`NetCarveResult`].
     pub request: u64,
@@ -26,18 +27,22 @@ pub struct NetCarveRequest {
     pub terrain: Entity,
     /// The tool: `WireTool::from(&carve_tool)` for a
     /// [`crate::terrain::CarveTool`], or a grid tool.
+    #[reflect(ignore)]
     pub tool: WireTool,
     /// What to do inside it.
+    #[reflect(ignore)]
     pub edit: Edit,
 }
 
 /// The server's answer to a [`NetCarveRequest`] (or to a packet it could
 /// not read: `request` is then `None`).
-#[derive(Message, Clone, Debug, PartialEq, Eq)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
+#[reflect(from_reflect = false)]
 pub struct NetCarveResult {
     /// The request id.
     pub request: Option<u64>,
     /// What became of it.
+    #[reflect(ignore)]
     pub outcome: Outcome,
 }
 
@@ -46,7 +51,7 @@ pub struct NetCarveResult {
 pub const MAX_SNAPSHOT_BYTES: u64 = 4 << 30;
 
 /// A terrain arrived from a snapshot: at join, or after a desync.
-#[derive(Message, Clone, Debug, PartialEq, Eq)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct TerrainSynced {
     /// The local terrain entity.
     pub terrain: Entity,
@@ -60,7 +65,7 @@ pub struct TerrainSynced {
 
 /// The terrain's hash after carve `seq` differs from the server's; the
 /// client asked for a snapshot.
-#[derive(Message, Clone, Debug, PartialEq, Eq)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct Desynced {
     /// The local terrain entity.
     pub terrain: Entity,
@@ -99,7 +104,8 @@ struct ClientLedger {
 }
 
 /// Counters of a client, for reports and tests.
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Reflect, Clone, Debug, Default)]
+#[reflect(Resource, Default)]
 pub struct NetClientStats {
     /// Server carves handed to the terrains.
     pub carves: u64,
@@ -127,6 +133,11 @@ impl Plugin for NetClientPlugin {
             .add_message::<NetCarveResult>()
             .add_message::<TerrainSynced>()
             .add_message::<Desynced>()
+            .register_type::<NetClientStats>()
+            .register_type::<NetCarveRequest>()
+            .register_type::<NetCarveResult>()
+            .register_type::<TerrainSynced>()
+            .register_type::<Desynced>()
             .add_systems(
                 Update,
                 (

@@ -7,23 +7,29 @@
 //! bit budget, a rate limit per client), rounds it to the grid once,
 //! numbers it in its terrain's order and sends the integer carve
 //! ([`NetCarve`]) to every client, which applies the carves strictly in
-//! that order. A client that joins gets each terrain's file bytes
-//! ([`crate::terrain::Terrain::to_bytes`]) and then the carves after them.
+//! that order. A client that joins gets each terrain's snapshot
+//! ([`crate::terrain::Terrain::to_snapshot_bytes`]: the exact octree and
+//! the rules a carve depends on, without the journal) and then the carves
+//! after it.
 //! The server sends its state hash ([`crate::terrain::Terrain::state_hash`])
 //! every [`NetLimits::check_interval`]; a client whose hash after the same
 //! carve differs reports it and gets a fresh snapshot.
 //!
 //! Transport: `bevy_replicon` messages over `bevy_replicon_renet`'s netcode
-//! UDP transport ([`start_server`], [`start_client`]), unsecured (for LAN
-//! and tests; a public server should use netcode's secure tokens).
+//! UDP transport: unsecured ([`start_server`], [`start_client`]) for a LAN,
+//! development and tests, or with signed connect tokens and encrypted
+//! traffic ([`start_secure_server`], [`connect_token`],
+//! [`start_secure_client`]) for a public server.
 //!
 //! - [`wire`] — the messages and their encoding.
 //! - [`server`] — [`NetServerPlugin`]: validation, order, broadcast,
 //!   checks, snapshots.
 //! - [`client`] — [`NetClientPlugin`]: requests, ordered application,
 //!   snapshots, hash comparison.
+//! - [`secure`] — connect tokens and the secure transport.
 
 pub mod client;
+pub mod secure;
 pub mod server;
 pub mod wire;
 
@@ -42,6 +48,10 @@ use bevy_replicon_renet::{RenetChannelsExt, RenetClient, RenetServer, RepliconRe
 
 pub use client::{
     Desynced, NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientStats, TerrainSynced,
+};
+pub use secure::{
+    ConnectTokenError, NetKey, connect_token, read_connect_token, start_secure_client,
+    start_secure_server,
 };
 pub use server::{DesyncReported, NetLimits, NetServerPlugin, NetServerStats, RequestRejected};
 pub use wire::{
@@ -76,6 +86,7 @@ impl Plugin for NetProtocolPlugin {
             app.add_plugins((RepliconPlugins, RepliconRenetPlugins));
         }
         wire::register(app);
+        app.register_type::<NetTerrain>();
     }
 }
 
@@ -138,17 +149,7 @@ pub fn start_client(
     client_id: u64,
 ) -> Result<(), BevyError> {
     let config = connection_config(world.resource::<RepliconChannels>());
-    let local: SocketAddr = if server.is_ipv4() {
-        (Ipv4Addr::UNSPECIFIED, 0).into()
-    } else {
-        (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
-    };
-    let local = if server.ip().is_loopback() && server.is_ipv4() {
-        SocketAddr::from((Ipv4Addr::LOCALHOST, 0))
-    } else {
-        local
-    };
-    let socket = UdpSocket::bind(local)?;
+    let socket = bind_client_socket(server)?;
     let transport = NetcodeClientTransport::new(
         SystemTime::now().duration_since(SystemTime::UNIX_EPOCH)?,
         ClientAuthentication::Unsecure {
@@ -162,4 +163,64 @@ pub fn start_client(
     world.insert_resource(RenetClient::new(config));
     world.insert_resource(transport);
     Ok(())
+}
+
+/// A client's UDP socket on a free port, of the server address's family
+/// (loopback for a loopback server).
+fn bind_client_socket(server: SocketAddr) -> std::io::Result<UdpSocket> {
+    let local: SocketAddr = match server {
+        SocketAddr::V4(v4) if v4.ip().is_loopback() => (Ipv4Addr::LOCALHOST, 0).into(),
+        SocketAddr::V4(_) => (Ipv4Addr::UNSPECIFIED, 0).into(),
+        SocketAddr::V6(_) => (std::net::Ipv6Addr::UNSPECIFIED, 0).into(),
+    };
+    UdpSocket::bind(local)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::any::TypeId;
+
+    use bevy::asset::AssetPlugin;
+
+    use super::*;
+    use crate::terrain::TerrainPlugin;
+
+    /// Every public component, resource and message of the module is in the
+    /// type registry of an app with both plugins (for inspectors and scene
+    /// files).
+    #[test]
+    fn the_public_types_are_reflected_and_registered() {
+        let mut app = App::new();
+        app.add_plugins((
+            MinimalPlugins,
+            AssetPlugin::default(),
+            TerrainPlugin,
+            NetServerPlugin,
+            NetClientPlugin,
+        ));
+        let registry = app.world().resource::<AppTypeRegistry>().read();
+        let types = [
+            (TypeId::of::<NetTerrain>(), "NetTerrain"),
+            (TypeId::of::<NetLimits>(), "NetLimits"),
+            (TypeId::of::<NetServerStats>(), "NetServerStats"),
+            (TypeId::of::<NetClientStats>(), "NetClientStats"),
+            (TypeId::of::<NetCarveRequest>(), "NetCarveRequest"),
+            (TypeId::of::<NetCarveResult>(), "NetCarveResult"),
+            (TypeId::of::<TerrainSynced>(), "TerrainSynced"),
+            (TypeId::of::<Desynced>(), "Desynced"),
+            (TypeId::of::<RequestRejected>(), "RequestRejected"),
+            (TypeId::of::<DesyncReported>(), "DesyncReported"),
+            (TypeId::of::<crate::terrain::GridCarve>(), "GridCarve"),
+        ];
+        let missing: Vec<&str> = types
+            .iter()
+            .filter(|(id, _)| registry.get(*id).is_none())
+            .map(|(_, name)| *name)
+            .collect();
+        assert!(missing.is_empty(), "not registered: {missing:?}");
+        let limits = registry
+            .get(TypeId::of::<NetLimits>())
+            .and_then(|r| r.data::<ReflectResource>());
+        assert!(limits.is_some(), "NetLimits reflects as a resource");
+    }
 }

@@ -24,7 +24,8 @@ use super::wire::{
 use crate::terrain::{CarveApplied, CarveRejected, GridCarve, GridTool, Terrain, TerrainSystems};
 
 /// What the server accepts from one client.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Reflect, Clone, Debug)]
+#[reflect(Resource, Default)]
 pub struct NetLimits {
     /// Most convex pieces in one tool.
     pub max_pieces: usize,
@@ -57,21 +58,26 @@ impl Default for NetLimits {
 }
 
 /// A request the server refused (also sent to the client).
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct RequestRejected {
     /// Who sent it.
+    #[reflect(ignore)]
     pub client: ClientId,
     /// Its request id (`None` for a malformed packet).
     pub request: Option<u64>,
     /// Why.
+    #[reflect(ignore)]
     pub reason: RejectReason,
 }
 
 /// A client reported that its terrain differs from the server's; it gets a
 /// fresh snapshot.
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct DesyncReported {
     /// The client.
+    #[reflect(ignore)]
     pub client: ClientId,
     /// The terrain.
     pub terrain: TerrainId,
@@ -80,7 +86,8 @@ pub struct DesyncReported {
 }
 
 /// Counters of the server, for reports and benchmarks.
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Reflect, Clone, Debug, Default)]
+#[reflect(Resource, Default)]
 pub struct NetServerStats {
     /// Carves accepted and broadcast.
     pub accepted: u64,
@@ -149,6 +156,10 @@ impl Plugin for NetServerPlugin {
             .init_resource::<ServerLedger>()
             .add_message::<RequestRejected>()
             .add_message::<DesyncReported>()
+            .register_type::<NetLimits>()
+            .register_type::<NetServerStats>()
+            .register_type::<RequestRejected>()
+            .register_type::<DesyncReported>()
             .add_observer(on_authorized)
             .add_systems(
                 Update,

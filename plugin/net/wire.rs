@@ -27,7 +27,8 @@ pub type TerrainId = u32;
 
 /// Marks a terrain entity as replicated under this id. Put it on a
 /// server's terrain; clients get their terrains (with it) from snapshots.
-#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[reflect(Component)]
 pub struct NetTerrain(pub TerrainId);
 
 /// A pose in world units: translation, rotation quaternion `[x, y, z, w]`

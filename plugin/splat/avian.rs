@@ -54,6 +54,7 @@ impl Plugin for PropAvianPlugin {
         app.insert_resource(PropColliderSettings {
             resolution: self.resolution.max(2),
         })
+        .register_type::<PropCollider>()
         .add_systems(Update, (start_colliders, finish_colliders).chain());
     }
 }
@@ -66,7 +67,8 @@ struct PropColliderSettings {
 
 /// A prop's collider is in place: how many voxels it has and their edge
 /// length in the prop's local units.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Component)]
 pub struct PropCollider {
     /// Solid voxels.
     pub voxels: usize,

@@ -229,6 +229,10 @@ impl Plugin for ChiselSplatPlugin {
             .init_resource::<render::ExtractedSplatLight>()
             .init_resource::<render::PropBuffers>()
             .init_resource::<render::SplatViewUniforms>()
+            // The render world's own type registry: its public data.
+            .register_type::<render::ExtractedProps>()
+            .register_type::<render::ExtractedSplatLight>()
+            .register_type::<render::VisibleProps>()
             .add_systems(
                 ExtractSchedule,
                 (

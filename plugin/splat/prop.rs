@@ -183,8 +183,9 @@ fn insert_prop_aabb(mut world: DeferredWorld<'_>, HookContext { entity, .. }: Ho
     world.commands().entity(entity).insert(aabb);
 }
 
-/// The buffers of one prop in GPU form.
-#[derive(Debug)]
+/// The buffers of one prop in GPU form (empty by default: nothing to
+/// draw).
+#[derive(Debug, Default)]
 pub struct PropGpuData {
     /// Unique per build: the render world re-uploads when it changes.
     pub generation: u64,

@@ -37,10 +37,12 @@ use super::prop::{PropGpuData, PropSplats};
 use super::{SplatMode, SplatSettings, SplatViewSettings};
 
 /// One prop as seen by the render world this frame.
+#[derive(Reflect, Clone, Debug)]
 pub struct ExtractedProp {
     /// The main-world entity.
     pub entity: Entity,
     /// Its splats.
+    #[reflect(ignore)]
     pub data: Arc<PropGpuData>,
     /// Its local-to-world transform (invertible: props with a singular
     /// transform are not extracted).
@@ -48,13 +50,15 @@ pub struct ExtractedProp {
 }
 
 /// The props to draw this frame.
-#[derive(Resource, Default)]
+#[derive(Resource, Reflect, Default, Debug)]
+#[reflect(Resource, Default)]
 pub struct ExtractedProps(pub Vec<ExtractedProp>);
 
 /// On a view: the main-world props inside its frustum this frame (Bevy's
 /// visibility check with each prop's `Aabb`, class [`PropSplats`]). The
 /// splat pass draws only these.
-#[derive(Component, Default, Debug, Clone)]
+#[derive(Component, Reflect, Default, Debug, Clone)]
+#[reflect(Component, Default)]
 pub struct VisibleProps(pub Vec<Entity>);
 
 pub(crate) fn extract_visible_props(
@@ -70,7 +74,8 @@ pub(crate) fn extract_visible_props(
 
 /// The scene's light as the splat shader uses it, before the view's
 /// exposure (each view scales it by its camera's [`Exposure`]).
-#[derive(Resource, Clone, Copy, Default)]
+#[derive(Resource, Reflect, Clone, Copy, Default, Debug)]
+#[reflect(Resource, Default)]
 pub struct ExtractedSplatLight {
     /// Unit direction towards the light.
     pub direction: Vec3,
@@ -131,7 +136,7 @@ pub(crate) fn extract_light(
 }
 
 /// GPU buffers of one prop.
-pub struct PropGpu {
+pub(crate) struct PropGpu {
     generation: u64,
     quadrics: StorageBuffer<Vec<QuadricRecord>>,
     clip_indices: StorageBuffer<Vec<u32>>,
@@ -144,7 +149,7 @@ pub struct PropGpu {
 
 /// GPU buffers of all props, by main-world entity.
 #[derive(Resource, Default)]
-pub struct PropBuffers(HashMap<Entity, PropGpu>);
+pub(crate) struct PropBuffers(HashMap<Entity, PropGpu>);
 
 fn non_empty<T: Copy + Default>(v: &[T]) -> Vec<T> {
     if v.is_empty() {
@@ -249,14 +254,14 @@ pub(crate) fn prepare_props(
 
 /// The per-view uniforms of all views.
 #[derive(Resource, Default)]
-pub struct SplatViewUniforms {
+pub(crate) struct SplatViewUniforms {
     buffer: DynamicUniformBuffer<SplatViewUniform>,
     bind_group: Option<BindGroup>,
 }
 
 /// What the pass needs per view.
 #[derive(Component)]
-pub struct SplatViewState {
+pub(crate) struct SplatViewState {
     offset: u32,
     pipeline: CachedRenderPipelineId,
     vertex_count: u32,

@@ -59,13 +59,16 @@ pub struct Carve {
 /// [`CarveApplied`] or [`CarveRejected`] echoes: what a replicated carve
 /// is. No floats are involved, so every peer applies the same exact tool.
 /// Grid carves and [`Carve`]s of one frame are queued grid carves first.
-#[derive(Message, Clone, Debug)]
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
 pub struct GridCarve {
     /// The terrain entity.
     pub terrain: Entity,
     /// The tool on the terrain's grid.
+    #[reflect(ignore)]
     pub tool: GridTool,
     /// What to do inside the tool.
+    #[reflect(ignore)]
     pub edit: Edit,
     /// Chosen by the sender; echoed in the result and recorded as
     /// [`Terrain::last_request`] once the carve is in the octree.

@@ -222,6 +222,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<CellOutput>()
         .register_type::<TerrainPhysicsBackend>()
         .register_type::<Carve>()
+        .register_type::<GridCarve>()
         .register_type::<UndoCarve>()
         .register_type::<CarveApplied>()
         .register_type::<CarveRejected>()

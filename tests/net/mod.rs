@@ -10,8 +10,8 @@ use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
-    NetCarveRequest, NetCarveResult, NetClientPlugin, NetLimits, NetServerPlugin, NetTerrain,
-    TerrainSynced, WireTool, start_client, start_server,
+    NetCarveRequest, NetCarveResult, NetClientPlugin, NetKey, NetLimits, NetServerPlugin,
+    NetTerrain, TerrainSynced, WireTool, start_client, start_secure_server, start_server,
 };
 use bevy_chisel::terrain::{
     CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings,
@@ -81,24 +81,49 @@ pub fn server_building(
     limits: NetLimits,
     output: CellOutput,
 ) -> (App, SocketAddr) {
-    let mut app = base_app(1, output);
-    app.add_plugins(NetServerPlugin).insert_resource(limits);
-    app.world_mut().spawn((terrain, NetTerrain(1)));
-    app.finish();
-    app.cleanup();
+    let mut app = server_app(terrain, limits, output);
     let addr =
         start_server(app.world_mut(), (Ipv4Addr::LOCALHOST, 0).into(), 16).expect("server listens");
     (app, addr)
 }
 
-/// A client connecting to `addr` with `threads` worker threads.
-pub fn client(addr: SocketAddr, id: u64, threads: usize) -> App {
+/// A server that admits only clients with a connect token signed by `key`.
+pub fn secure_server(terrain: Terrain, key: &NetKey) -> (App, SocketAddr) {
+    let mut app = server_app(terrain, NetLimits::default(), CellOutput::Nothing);
+    let addr = start_secure_server(
+        app.world_mut(),
+        (Ipv4Addr::LOCALHOST, 0).into(),
+        Vec::new(),
+        16,
+        key,
+    )
+    .expect("secure server listens");
+    (app, addr)
+}
+
+fn server_app(terrain: Terrain, limits: NetLimits, output: CellOutput) -> App {
+    let mut app = base_app(1, output);
+    app.add_plugins(NetServerPlugin).insert_resource(limits);
+    app.world_mut().spawn((terrain, NetTerrain(1)));
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// A client app with `threads` worker threads, not connected yet.
+pub fn client_app(threads: usize) -> App {
     let mut app = base_app(threads, CellOutput::Meshes);
     app.add_plugins(NetClientPlugin)
         .init_resource::<Seen>()
         .add_systems(Last, record);
     app.finish();
     app.cleanup();
+    app
+}
+
+/// A client connecting to `addr` with `threads` worker threads.
+pub fn client(addr: SocketAddr, id: u64, threads: usize) -> App {
+    let mut app = client_app(threads);
     start_client(app.world_mut(), addr, id).expect("client starts");
     app
 }
