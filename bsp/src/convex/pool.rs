@@ -7,16 +7,18 @@
 //!   fresh arena per operation does not regrow its arrays, nor fault in new
 //!   pages, every time.
 
-use std::cell::RefCell;
-
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
 use super::scratch::Scratch;
 use crate::exact::{Plane, Point4};
+use crate::pool::{PerThread, Pool};
 
 thread_local! {
-    static FREE: RefCell<Vec<ConvexArena>> = const { RefCell::new(Vec::new()) };
-    static SPARE: RefCell<Vec<Arrays>> = const { RefCell::new(Vec::new()) };
+    static FREE: Pool<ConvexArena> = const { Pool::new(FREE_ARENAS) };
+    static SPARE: Pool<Arrays> = const { Pool::new(SPARE_ARRAYS) };
 }
+
+/// Arenas kept per thread for [`with_arena`]: more than its calls nest.
+const FREE_ARENAS: usize = 16;
 
 /// Arrays kept per thread for reuse: enough for a few arenas alive at once.
 const SPARE_ARRAYS: usize = 4;
@@ -24,12 +26,10 @@ const SPARE_ARRAYS: usize = 4;
 /// Runs `f` with an empty arena of this thread (nested calls get distinct
 /// arenas), then keeps it for the next call.
 pub fn with_arena<R>(f: impl FnOnce(&mut ConvexArena) -> R) -> R {
-    let mut arena = FREE
-        .with(|free| free.borrow_mut().pop())
-        .unwrap_or_default();
+    let mut arena = FREE.take().unwrap_or_default();
     arena.clear();
     let out = f(&mut arena);
-    FREE.with(|free| free.borrow_mut().push(arena));
+    FREE.keep(arena);
     out
 }
 
@@ -45,10 +45,7 @@ pub(super) struct Arrays {
 
 /// Arrays of an earlier arena of this thread, if any are kept.
 pub(super) fn take_spare() -> Option<Arrays> {
-    SPARE
-        .try_with(|spare| spare.borrow_mut().pop())
-        .ok()
-        .flatten()
+    SPARE.take()
 }
 
 /// Keeps `arrays` for a later arena of this thread (cleared here), unless
@@ -59,11 +56,5 @@ pub(super) fn keep_spare(mut arrays: Arrays) {
     arrays.half_edges.clear();
     arrays.faces.clear();
     arrays.planes.clear();
-    let _ = SPARE.try_with(|spare| {
-        if let Ok(mut spare) = spare.try_borrow_mut()
-            && spare.len() < SPARE_ARRAYS
-        {
-            spare.push(arrays);
-        }
-    });
+    SPARE.keep(arrays);
 }

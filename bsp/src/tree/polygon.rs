@@ -7,7 +7,6 @@
 //! each side and closes each part with `p` (below) or `−p` (above): no new
 //! plane is ever constructed, and every vertex stays exact.
 
-use std::cell::RefCell;
 use std::mem;
 use std::slice;
 
@@ -16,6 +15,7 @@ use crate::exact::{
     IntPoint, Plane, Point4, Sign, classify_vertex_exact, classify_vertex_filtered,
     intersect_3_planes, plane_from_points,
 };
+use crate::pool::{PerThread, Pool};
 
 /// Polygons with at most this many corners are split without allocating
 /// working memory.
@@ -601,21 +601,16 @@ impl Drop for Polygon {
     }
 }
 
-/// Edge and corner buffers handed back, kept apart: a boundary face given
-/// to a mesh keeps its edge planes but hands back its corners.
-struct Spare {
-    edges: Vec<Vec<Plane>>,
-    corners: Vec<Vec<Point4>>,
-}
-
 thread_local! {
-    /// Edge and corner buffers of dropped polygons and consumed boundary
-    /// faces, for the next polygons built on the same thread: clipping and
+    /// Edge buffers of dropped polygons and of boundary faces given to a
+    /// mesh, for the next polygons built on the same thread: clipping and
     /// rebuilding drop about as many pieces as they create, so most splits
     /// allocate nothing.
-    static SPARE: RefCell<Spare> = const {
-        RefCell::new(Spare { edges: Vec::new(), corners: Vec::new() })
-    };
+    static SPARE_EDGES: Pool<Vec<Plane>> = const { Pool::new(MAX_SPARE) };
+    /// Corner buffers of dropped polygons, kept apart from the edge buffers
+    /// (a boundary face given to a mesh keeps its edge planes but hands
+    /// back its corners).
+    static SPARE_CORNERS: Pool<Vec<Point4>> = const { Pool::new(MAX_SPARE) };
 }
 
 /// Spare buffers of each kind kept per thread.
@@ -626,37 +621,24 @@ const MAX_SPARE: usize = 1024;
 /// buffers are simply freed.
 #[inline(never)]
 pub(crate) fn give_back_buffers(mut edges: Vec<Plane>, mut corners: Vec<Point4>) {
-    let _ = SPARE.try_with(|spare| {
-        if let Ok(mut spare) = spare.try_borrow_mut() {
-            if edges.capacity() != 0 && spare.edges.len() < MAX_SPARE {
-                edges.clear();
-                spare.edges.push(edges);
-            }
-            if corners.capacity() != 0 && spare.corners.len() < MAX_SPARE {
-                corners.clear();
-                spare.corners.push(corners);
-            }
-        }
-    });
+    if edges.capacity() != 0 {
+        edges.clear();
+        SPARE_EDGES.keep(edges);
+    }
+    if corners.capacity() != 0 {
+        corners.clear();
+        SPARE_CORNERS.keep(corners);
+    }
 }
 
 /// Hands the edge buffers `buffers` yields to the spare buffers of this
 /// thread while there is room, and stops asking for more when the pool is
 /// full (what is left is the caller's to free).
 pub(crate) fn give_back_edge_buffers(buffers: impl Iterator<Item = Vec<Plane>>) {
-    let _ = SPARE.try_with(|spare| {
-        if let Ok(mut spare) = spare.try_borrow_mut() {
-            for mut edges in buffers {
-                if spare.edges.len() >= MAX_SPARE {
-                    break;
-                }
-                if edges.capacity() != 0 {
-                    edges.clear();
-                    spare.edges.push(edges);
-                }
-            }
-        }
-    });
+    SPARE_EDGES.keep_while_room(buffers.filter(|e| e.capacity() != 0).map(|mut e| {
+        e.clear();
+        e
+    }));
 }
 
 /// Room for corners in new buffers, at least: most polygons have fewer,
@@ -667,20 +649,14 @@ const MIN_CAPACITY: usize = 8;
 /// when they are large enough, else new ones (growing a spare buffer would
 /// copy its stale contents).
 pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
-    let (edges, corners) = SPARE
-        .try_with(|spare| {
-            spare
-                .try_borrow_mut()
-                .map(|mut s| (s.edges.pop(), s.corners.pop()))
-                .unwrap_or_default()
-        })
-        .unwrap_or_default();
     let capacity = m.max(MIN_CAPACITY);
     (
-        edges
+        SPARE_EDGES
+            .take()
             .filter(|e| e.capacity() >= m)
             .unwrap_or_else(|| Vec::with_capacity(capacity)),
-        corners
+        SPARE_CORNERS
+            .take()
             .filter(|c| c.capacity() >= m)
             .unwrap_or_else(|| Vec::with_capacity(capacity)),
     )
@@ -689,10 +665,8 @@ pub(crate) fn spare_buffers(m: usize) -> (Vec<Plane>, Vec<Point4>) {
 /// An empty edge buffer with room for `m` planes: a spare one when it is
 /// large enough, else a new one.
 pub(crate) fn spare_edge_buffer(m: usize) -> Vec<Plane> {
-    SPARE
-        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.edges.pop()))
-        .ok()
-        .flatten()
+    SPARE_EDGES
+        .take()
         .filter(|e| e.capacity() >= m)
         .unwrap_or_else(|| Vec::with_capacity(m.max(MIN_CAPACITY)))
 }
