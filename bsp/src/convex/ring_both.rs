@@ -21,7 +21,7 @@
 //! the two half-edges where the section crosses it and which comes first.
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
-use super::ring::RingFace;
+use super::scratch::RingFace;
 use super::scratch::Scratch;
 use crate::exact::{Plane, Sign};
 
