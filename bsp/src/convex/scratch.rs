@@ -33,7 +33,7 @@ pub(crate) enum FaceInfo {
     },
 }
 
-/// One face of a generic section's ring.
+/// One face of a generic section's ring (notation of `ring`).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct RingFace {
     /// The face `f_i`.
@@ -42,7 +42,7 @@ pub(crate) struct RingFace {
     pub(super) entry: u32,
     /// `y_i`: its half-edge the section leaves it across.
     pub(super) exit: u32,
-    /// Its rank (see the module docs).
+    /// Its rank (see the docs of `ring`).
     pub(super) rank: u32,
     /// Whether the face's stored half-edge is one of those the walk took,
     /// from the one after `x_i` to `y_i` (what decides which of the two

@@ -136,7 +136,6 @@ impl Drop for Polygon {
 }
 
 /// The corner where the support and two edge planes meet.
-#[inline]
 fn meet(support: &Plane, a: &Plane, b: &Plane) -> Point4 {
     intersect_3_planes(support, a, b).expect("edge planes meet the support plane in a point")
 }
