@@ -19,6 +19,7 @@
 //! - [`tree`] — BSP trees with material labels, and their convex cells.
 //! - [`mesh`] — boundary surfaces without T-junctions, and their triangles.
 //! - [`octree`] — the persistent octree of BSPs that edits touch locally.
+//! - `pool` — the per-thread pool that recycles their working memory.
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
 //!
@@ -50,6 +51,7 @@ mod error;
 pub mod exact;
 pub mod mesh;
 pub mod octree;
+mod pool;
 pub mod tools;
 pub mod tree;
 mod word_hash;

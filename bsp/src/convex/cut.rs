@@ -28,7 +28,8 @@
 //! polyhedron once extracted for [`ConvexArena::cut_keeping`].
 
 use super::mesh::{ConvexArena, PolyId};
-use super::scratch::{Scratch, StampMap};
+use super::scratch::Scratch;
+use super::stamp_map::StampMap;
 use super::survey::{FaceSurvey, SectionExit};
 use crate::exact::{FilteredDot, Plane, Sign, classify_vertex, compare_offsets, offset_estimate};
 

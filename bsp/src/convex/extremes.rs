@@ -21,146 +21,8 @@
 
 use super::mesh::{ConvexArena, PolyId};
 use super::scratch::Scratch;
-use crate::exact::{FILTER_EPSILON, Plane, Sign};
-
-/// The number of fixed directions: `±u_i` for the axes of [`projections`].
-const DIRECTIONS: usize = 2 * HALF;
-
-/// The number of directions up to sign.
-const HALF: usize = 3;
-
-/// Every direction known.
-const ALL: u16 = (1 << DIRECTIONS) - 1;
-
-/// The descent steps from which a cut without extremes records some.
-const LONG_DESCENT: u32 = 6;
-
-/// The offsets of the point with homogeneous `f64` coordinates `p` along
-/// the first `HALF` directions (direction `i + HALF` is the opposite of
-/// `i`).
-#[inline]
-fn projections(p: [f64; 4]) -> [f64; HALF] {
-    let [x, y, z, w] = p;
-    [x / w, y / w, z / w]
-}
-
-/// The direction closest to `n`, the normal of `approx`.
-#[inline]
-fn closest_direction(approx: [f64; 4]) -> usize {
-    let [a, b, c, _] = approx;
-    let scores = [a, b, c];
-    let (mut best, mut best_score) = (0, -1.0);
-    for (i, &score) in scores.iter().enumerate() {
-        if score.abs() > best_score {
-            (best, best_score) = (i, score.abs());
-        }
-    }
-    if scores[best] < 0.0 {
-        best + HALF
-    } else {
-        best
-    }
-}
-
-/// The extreme vertices of the polyhedron the current cut splits, or of
-/// the one the last cut split, and which of them each part of that cut
-/// kept.
-#[derive(Clone, Debug)]
-pub(crate) struct Extremes {
-    /// The id of each part of the last cut (`u32::MAX` for none).
-    parts: [u32; 2],
-    /// Which of `vertices` each part has kept (a bit per direction).
-    valid: [u16; 2],
-    /// `e_i`.
-    vertices: [u32; DIRECTIONS],
-    /// The homogeneous `f64` coordinates of the `e_i`, coordinate by
-    /// coordinate (`X`, `Y`, `Z`, `W`), and the largest magnitude of the
-    /// four of each.
-    approx: [[f64; DIRECTIONS]; 5],
-    /// Whether the polyhedron being cut has extremes.
-    has_current: bool,
-}
-
-impl Default for Extremes {
-    fn default() -> Self {
-        Self {
-            parts: [u32::MAX; 2],
-            valid: [0; 2],
-            vertices: [u32::MAX; DIRECTIONS],
-            approx: [[0.0; DIRECTIONS]; 5],
-            has_current: false,
-        }
-    }
-}
-
-impl Extremes {
-    /// Forgets every extreme.
-    #[inline]
-    pub(crate) fn forget(&mut self) {
-        self.parts = [u32::MAX; 2];
-        self.has_current = false;
-    }
-
-    /// Whether the polyhedron being cut has extremes.
-    #[cfg(test)]
-    pub(crate) fn in_use(&self) -> bool {
-        self.has_current
-    }
-
-    /// Whether the cut records extremes for its parts.
-    #[inline]
-    fn worth_keeping(&self, descent_steps: u32) -> bool {
-        self.has_current || descent_steps >= LONG_DESCENT
-    }
-
-    /// The directions whose `e_i` the filter places strictly below and
-    /// strictly above `s` (a bit per direction). The error bound of the
-    /// `f64` value `Σ t_k` of `T` is taken as `2^-50·M·Σ|s_k|`, `M` the
-    /// largest magnitude of the point's coordinates, which bounds the
-    /// `2^-50·Σ|t_k|` of [`FilteredDot`](crate::exact::FilteredDot).
-    #[inline]
-    fn sides(&self, s: &Plane) -> (u16, u16) {
-        let [a, b, c, d] = s.approx;
-        let scale = ((a.abs() + b.abs()) + (c.abs() + d.abs())) * (FILTER_EPSILON * 1.01);
-        let [xs, ys, zs, ws, ms] = &self.approx;
-        let (mut below, mut above) = (0u16, 0u16);
-        for i in 0..DIRECTIONS {
-            let sum = (xs[i] * a + ys[i] * b) + (zs[i] * c + ws[i] * d);
-            let bound = ms[i] * scale;
-            below |= u16::from(sum < -bound) << i;
-            above |= u16::from(sum > bound) << i;
-        }
-        (below, above)
-    }
-
-    /// The directions whose `e_i` the filter places strictly on side
-    /// `side` of `s`: that mask of [`Extremes::sides`] alone, for a cut
-    /// that keeps one part.
-    #[inline]
-    fn strictly_on(&self, s: &Plane, side: Sign) -> u16 {
-        let [a, b, c, d] = s.approx;
-        let scale = ((a.abs() + b.abs()) + (c.abs() + d.abs())) * (FILTER_EPSILON * 1.01);
-        let [xs, ys, zs, ws, ms] = &self.approx;
-        let flip = if side == Sign::Negative { -1.0 } else { 1.0 };
-        let mut mask = 0u16;
-        for i in 0..DIRECTIONS {
-            let sum = (xs[i] * a + ys[i] * b) + (zs[i] * c + ws[i] * d);
-            // `sum < −bound` is `−sum > bound`: negating is exact.
-            mask |= u16::from(flip * sum > ms[i] * scale) << i;
-        }
-        mask
-    }
-
-    /// Records `v`, with homogeneous `f64` coordinates `p`, as `e_i`.
-    #[inline]
-    fn set(&mut self, i: usize, v: u32, p: [f64; 4]) {
-        self.vertices[i] = v;
-        let magnitude = p.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        for (k, &x) in p.iter().chain([magnitude].iter()).enumerate() {
-            self.approx[k][i] = x;
-        }
-    }
-}
+use super::starts::{ALL, DIRECTIONS, EXTREME_DESCENT, HALF, closest_direction, projections};
+use crate::exact::{Plane, Sign};
 
 impl ConvexArena {
     /// Makes the extremes of `poly` current when it is a part of the last
@@ -278,7 +140,7 @@ impl ConvexArena {
         if marks.has_current {
             marks.parts[0] = poly.0;
             marks.valid[0] = ALL;
-        } else if scratch.descent_steps >= LONG_DESCENT {
+        } else if scratch.descent_steps >= EXTREME_DESCENT {
             marks.parts[0] = poly.0;
             marks.valid[0] = 0;
         }

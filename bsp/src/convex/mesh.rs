@@ -15,10 +15,10 @@
 
 use std::collections::{HashMap, HashSet};
 
-use super::pool;
 use super::scratch::Scratch;
 use crate::Error;
 use crate::exact::{IntPoint, Plane, Point4};
+use crate::pool::{PerThread, Pool};
 
 /// The faces of [`ConvexArena::add_box`]: the index of each one's plane
 /// (−x, +x, −y, +y, −z, +z) and its corners counter-clockwise seen from
@@ -125,7 +125,7 @@ impl Drop for ConvexArena {
         if self.vertices.capacity() == 0 && self.half_edges.capacity() == 0 {
             return;
         }
-        pool::keep_spare(pool::Arrays {
+        keep_spare(Arrays {
             vertices: std::mem::take(&mut self.vertices),
             points: std::mem::take(&mut self.points),
             half_edges: std::mem::take(&mut self.half_edges),
@@ -134,6 +134,42 @@ impl Drop for ConvexArena {
             scratch: self.scratch.take(),
         });
     }
+}
+
+thread_local! {
+    /// The arrays of arenas dropped on this thread, for [`ConvexArena::new`]:
+    /// code that builds a fresh arena per operation does not regrow its
+    /// arrays, nor fault in new pages, every time.
+    static SPARE: Pool<Arrays> = const { Pool::new(SPARE_ARRAYS) };
+}
+
+/// Arrays kept per thread for reuse: enough for a few arenas alive at once.
+const SPARE_ARRAYS: usize = 4;
+
+/// The arrays of a dropped arena, emptied, with their capacity.
+struct Arrays {
+    vertices: Vec<Vertex>,
+    points: Vec<Point4>,
+    half_edges: Vec<HalfEdge>,
+    faces: Vec<Face>,
+    planes: Vec<Plane>,
+    scratch: Option<Box<Scratch>>,
+}
+
+/// Arrays of an earlier arena of this thread, if any are kept.
+fn take_spare() -> Option<Arrays> {
+    SPARE.take()
+}
+
+/// Keeps `arrays` for a later arena of this thread (cleared here), unless
+/// enough are kept already or the thread is shutting down.
+fn keep_spare(mut arrays: Arrays) {
+    arrays.vertices.clear();
+    arrays.points.clear();
+    arrays.half_edges.clear();
+    arrays.faces.clear();
+    arrays.planes.clear();
+    SPARE.keep(arrays);
 }
 
 /// The sizes of an arena's arrays at one moment, to discard everything
@@ -167,7 +203,7 @@ impl ConvexArena {
     /// dropped earlier, if there is one.
     #[must_use]
     pub fn new() -> Self {
-        match pool::take_spare() {
+        match take_spare() {
             Some(arrays) => Self {
                 vertices: arrays.vertices,
                 points: arrays.points,

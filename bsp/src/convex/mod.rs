@@ -15,6 +15,8 @@
 //! - `landmarks` — where the descent of the next cut starts.
 //! - `extremes` — vertices farthest in fixed directions, as starts too.
 //! - `survey` — what one walk around a face tells the split.
+//! - `scratch` — the working memory of the cuts and the records it holds
+//!   (`stamp_map`, `starts`).
 //! - `split` — splitting along the section once it is found.
 //! - `ring` — the one-sided cut of a section with no vertex on the plane,
 //!   in one walk and one pass; `ring_both` — the two-sided one.
@@ -30,6 +32,8 @@ mod scratch;
 mod split;
 #[cfg(test)]
 mod split_reference;
+mod stamp_map;
+mod starts;
 mod survey;
 #[cfg(test)]
 mod test_support;

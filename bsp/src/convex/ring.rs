@@ -30,25 +30,9 @@
 //! general split.
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
-use super::scratch::{Scratch, StampMap};
+use super::scratch::{RingFace, Scratch};
+use super::stamp_map::StampMap;
 use crate::exact::{Plane, Sign, intersect_3_planes_with};
-
-/// One face of a generic section's ring.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct RingFace {
-    /// The face `f_i`.
-    pub(super) face: u32,
-    /// `x_i`: its half-edge the section enters it across.
-    pub(super) entry: u32,
-    /// `y_i`: its half-edge the section leaves it across.
-    pub(super) exit: u32,
-    /// Its rank (see the module docs).
-    pub(super) rank: u32,
-    /// Whether the face's stored half-edge is one of those the walk took,
-    /// from the one after `x_i` to `y_i` (what decides which of the two
-    /// comes first in loop order, for the two-sided split).
-    pub(super) stored_walked: bool,
-}
 
 impl ConvexArena {
     /// Walks the section from half-edge `h`, whose ends lie strictly on

@@ -21,7 +21,7 @@
 //! the two half-edges where the section crosses it and which comes first.
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
-use super::ring::RingFace;
+use super::scratch::RingFace;
 use super::scratch::Scratch;
 use crate::exact::{Plane, Sign};
 
@@ -217,6 +217,7 @@ impl ConvexArena {
 /// counted without branches (comparisons of face indices are
 /// unpredictable, and a sort branches on each); more go to the general
 /// sort, through `pairs`.
+#[inline]
 fn rank_by_face(ring: &mut [RingFace], pairs: &mut Vec<(u32, u32)>, order: &mut Vec<u32>) {
     let k = ring.len();
     order.clear();

@@ -1,84 +1,53 @@
-//! Per-operation maps over vertex and face indices, cleared in `O(1)`.
+//! The scratch space of the cutting operations, and the records it holds.
 //!
-//! A cut touches a handful of the arena's elements; hashing them costs more
-//! than the geometry. A [`StampMap`] is a dense array indexed by element id
-//! whose entries count only when their stamp equals the current one, so
-//! starting a new operation is a single increment, and lookups are one
-//! comparison.
+//! One [`Scratch`] lives in each arena: the per-cut maps over vertex and
+//! face indices ([`StampMap`]), the march's queues, what the split needs
+//! to know about each face ([`FaceInfo`], [`RingFace`]) and, kept from
+//! one cut to the next, where the next cut may start (`starts`).
 
-use super::extremes::Extremes;
-use super::landmarks::Landmarks;
-use super::ring::RingFace;
-use super::survey::FaceInfo;
+use super::stamp_map::StampMap;
+use super::starts::{Extremes, Landmarks};
 use crate::exact::Sign;
 
-/// A map from element index to `T`, valid for the current stamp only. Each
-/// entry keeps its stamp beside its value, so a lookup touches one slot.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct StampMap<T: Copy + Default> {
-    stamp: u32,
-    entries: Vec<(u32, T)>,
+/// What the split needs to know about one face that meets the section,
+/// found in a single walk around it before anything changes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum FaceInfo {
+    /// The face has `+` and `−` vertices: it will be split in two.
+    Straddling {
+        /// The half-edges of the face that will enter its two `0`
+        /// vertices once its crossing edges are split, in loop order.
+        enter: [u32; 2],
+        /// The side of the vertices between the first and the second.
+        first_chain: Sign,
+        /// Its half-edge from a `+` to a `−` vertex (a convex face has at
+        /// most one), or `u32::MAX`.
+        crossing: u32,
+    },
+    /// The face lies on one side and has an edge in the cutting plane.
+    Touching {
+        /// The side of its vertices off the plane.
+        side: Sign,
+        /// Its half-edge lying in the plane.
+        edge: u32,
+    },
 }
 
-impl<T: Copy + Default> StampMap<T> {
-    /// Forgets every entry.
-    pub(crate) fn clear(&mut self) {
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            self.entries.fill((0, T::default()));
-            self.stamp = 1;
-        }
-    }
-
-    /// The value at `i`, if set since the last [`StampMap::clear`].
-    #[inline]
-    pub(crate) fn get(&self, i: u32) -> Option<T> {
-        match self.entries.get(i as usize) {
-            Some(&(stamp, value)) if stamp == self.stamp => Some(value),
-            _ => None,
-        }
-    }
-
-    /// The number of entries set since the last [`StampMap::clear`] (a
-    /// scan of every slot: for statistics, not for the cuts).
-    pub(crate) fn count(&self) -> usize {
-        self.entries
-            .iter()
-            .filter(|(stamp, _)| *stamp == self.stamp)
-            .count()
-    }
-
-    /// Makes room for indices below `len` without reallocating later.
-    pub(crate) fn reserve(&mut self, len: usize) {
-        if len > self.entries.len() {
-            self.entries.resize(len, (0, T::default()));
-        }
-    }
-
-    /// Sets the value at `i`; returns true when `i` had no value yet.
-    #[inline]
-    pub(crate) fn insert(&mut self, i: u32, value: T) -> bool {
-        let stamp = self.stamp;
-        match self.entries.get_mut(i as usize) {
-            Some(entry) => {
-                let fresh = entry.0 != stamp;
-                *entry = (stamp, value);
-                fresh
-            }
-            None => self.grow_and_insert(i as usize, value),
-        }
-    }
-
-    /// [`StampMap::insert`] beyond the entries: grows them (at least
-    /// doubling), then inserts.
-    #[cold]
-    #[inline(never)]
-    fn grow_and_insert(&mut self, i: usize, value: T) -> bool {
-        let len = (i + 1).max(2 * self.entries.len());
-        self.entries.resize(len, (0, T::default()));
-        self.entries[i] = (self.stamp, value);
-        true
-    }
+/// One face of a generic section's ring (notation of `ring`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct RingFace {
+    /// The face `f_i`.
+    pub(super) face: u32,
+    /// `x_i`: its half-edge the section enters it across.
+    pub(super) entry: u32,
+    /// `y_i`: its half-edge the section leaves it across.
+    pub(super) exit: u32,
+    /// Its rank (see the docs of `ring`).
+    pub(super) rank: u32,
+    /// Whether the face's stored half-edge is one of those the walk took,
+    /// from the one after `x_i` to `y_i` (what decides which of the two
+    /// comes first in loop order, for the two-sided split).
+    pub(super) stored_walked: bool,
 }
 
 /// The scratch space of the cutting operations, kept in the arena so that

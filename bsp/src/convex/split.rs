@@ -20,9 +20,10 @@
 //! part is built, on the section vertices themselves.
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
+use super::scratch::FaceInfo;
 use super::scratch::Scratch;
-use super::scratch::StampMap;
-use super::survey::{FaceInfo, FaceSurvey};
+use super::stamp_map::StampMap;
+use super::survey::FaceSurvey;
 use crate::exact::{Plane, Sign, intersect_3_planes_with};
 
 impl ConvexArena {

@@ -2,9 +2,9 @@
 //! reference that `split` must reproduce element for element.
 
 use super::mesh::{ConvexArena, Face, HalfEdge, Vertex};
+use super::scratch::FaceInfo;
 use super::scratch::Scratch;
 use super::split::sort_by_face;
-use super::survey::FaceInfo;
 use crate::exact::{Plane, Sign, intersect_3_planes};
 
 impl ConvexArena {

@@ -14,32 +14,9 @@
 //! the same.
 
 use super::mesh::ConvexArena;
-use super::scratch::StampMap;
+use super::scratch::FaceInfo;
+use super::stamp_map::StampMap;
 use crate::exact::{Plane, Sign};
-
-/// What the split needs to know about one face that meets the section,
-/// found in a single walk around it before anything changes.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum FaceInfo {
-    /// The face has `+` and `−` vertices: it will be split in two.
-    Straddling {
-        /// The half-edges of the face that will enter its two `0`
-        /// vertices once its crossing edges are split, in loop order.
-        enter: [u32; 2],
-        /// The side of the vertices between the first and the second.
-        first_chain: Sign,
-        /// Its half-edge from a `+` to a `−` vertex (a convex face has at
-        /// most one), or `u32::MAX`.
-        crossing: u32,
-    },
-    /// The face lies on one side and has an edge in the cutting plane.
-    Touching {
-        /// The side of its vertices off the plane.
-        side: Sign,
-        /// Its half-edge lying in the plane.
-        edge: u32,
-    },
-}
 
 /// The state of one walk around a face: feed in loop order every half-edge
 /// that does not run along one side of the plane (`here ≠ there`, or

@@ -46,13 +46,13 @@
 //! labels agree. A directed edge used by more than one polygon (a solid
 //! touching itself along an edge) is never merged across.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 use std::hash::BuildHasherDefault;
 
 use super::{MeshPolygon, spare};
 use crate::exact::{Plane, Point4, Sign, classify_vertex};
+use crate::pool::{PerThread, Pool};
 use crate::tree::polygon::{give_back_edge_buffers, spare_edge_buffer};
 use crate::word_hash::WordHasher;
 
@@ -71,18 +71,10 @@ fn edge_key(from: u32, to: u32) -> u64 {
 /// them); the merged ones have none either. The order of the remaining
 /// polygons is that of their first pieces.
 pub(crate) fn merge_coplanar(vertices: &[Point4], polygons: &mut Vec<MeshPolygon>) -> bool {
-    let mut scratch = SCRATCH
-        .try_with(|s| s.try_borrow_mut().map(|mut s| std::mem::take(&mut *s)))
-        .ok()
-        .and_then(Result::ok)
-        .unwrap_or_default();
+    let mut scratch = SCRATCH.take().unwrap_or_default();
     let merged_any = merge_in(vertices, polygons, &mut scratch);
     if scratch.owners.capacity() <= KEEP_MAX {
-        let _ = SCRATCH.try_with(|s| {
-            if let Ok(mut s) = s.try_borrow_mut() {
-                *s = scratch;
-            }
-        });
+        SCRATCH.keep(scratch);
     }
     merged_any
 }
@@ -100,7 +92,7 @@ struct Scratch {
 
 thread_local! {
     /// The [`Scratch`] of this thread, between calls.
-    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+    static SCRATCH: Pool<Scratch> = const { Pool::new(1) };
 }
 
 /// Edges above which the working memory is freed rather than kept (after

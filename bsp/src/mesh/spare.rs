@@ -3,11 +3,11 @@
 //! game re-meshes a few cells after every edit, each mesh about as large as
 //! the last), so that most polygons allocate nothing.
 
-use std::cell::RefCell;
+use crate::pool::{PerThread, Pool};
 
 thread_local! {
     /// Emptied index buffers of dropped polygons.
-    static SPARE: RefCell<Vec<Vec<u32>>> = const { RefCell::new(Vec::new()) };
+    static SPARE: Pool<Vec<u32>> = const { Pool::new(MAX_SPARE) };
 }
 
 /// Spare index buffers kept per thread.
@@ -21,9 +21,7 @@ const MIN_CAPACITY: usize = 8;
 /// large enough, else a new one.
 pub(super) fn index_buffer(m: usize) -> Vec<u32> {
     SPARE
-        .try_with(|spare| spare.try_borrow_mut().ok().and_then(|mut s| s.pop()))
-        .ok()
-        .flatten()
+        .take()
         .filter(|b| b.capacity() >= m)
         .unwrap_or_else(|| Vec::with_capacity(m.max(MIN_CAPACITY)))
 }
@@ -32,17 +30,8 @@ pub(super) fn index_buffer(m: usize) -> Vec<u32> {
 /// thread while there is room, and stops asking for more when the pool is
 /// full (what is left is the caller's to free).
 pub(super) fn give_back(buffers: impl Iterator<Item = Vec<u32>>) {
-    let _ = SPARE.try_with(|spare| {
-        if let Ok(mut spare) = spare.try_borrow_mut() {
-            for mut buffer in buffers {
-                if spare.len() >= MAX_SPARE {
-                    break;
-                }
-                if buffer.capacity() != 0 {
-                    buffer.clear();
-                    spare.push(buffer);
-                }
-            }
-        }
-    });
+    SPARE.keep_while_room(buffers.filter(|b| b.capacity() != 0).map(|mut b| {
+        b.clear();
+        b
+    }));
 }

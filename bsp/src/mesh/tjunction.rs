@@ -58,12 +58,12 @@
 //! the same margin. So a vertex exactly on the segment always reaches the
 //! exact test, which decides: both ways find the same vertices.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
 use super::MeshPolygon;
 use crate::exact::{Point4, Sign, classify_vertex, compare_offsets};
+use crate::pool::{PerThread, Pool};
 use crate::word_hash::WordHasher;
 
 /// Directed edge `(from, to)` packed into one word.
@@ -120,7 +120,7 @@ struct Scratch {
 
 thread_local! {
     /// The [`Scratch`] of this thread, between calls.
-    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+    static SCRATCH: Pool<Scratch> = const { Pool::new(1) };
 }
 
 /// Vertices above which the working memory is freed rather than kept
@@ -130,24 +130,15 @@ const KEEP_MAX: usize = 1 << 12;
 impl Scratch {
     /// The working memory of this thread, or a new one when it is in use.
     fn take() -> Self {
-        SCRATCH
-            .try_with(|s| s.try_borrow_mut().map(|mut s| std::mem::take(&mut *s)))
-            .ok()
-            .and_then(Result::ok)
-            .unwrap_or_default()
+        SCRATCH.take().unwrap_or_default()
     }
 
     /// Keeps the working memory for the next call on this thread, unless
     /// it grew large.
     fn give_back(self) {
-        if self.positions.capacity() > KEEP_MAX {
-            return;
+        if self.positions.capacity() <= KEEP_MAX {
+            SCRATCH.keep(self);
         }
-        let _ = SCRATCH.try_with(|s| {
-            if let Ok(mut s) = s.try_borrow_mut() {
-                *s = self;
-            }
-        });
     }
 }
 

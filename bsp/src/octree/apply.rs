@@ -16,7 +16,7 @@
 //! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
 //! without redundancy (§3.7) and, when still over the budget, split into
 //! eight children rebuilt from the pieces of its boundary faces inside
-//! each child box (`split.rs`); a rebuild stops as soon as it is over the
+//! each child box (`leaf.rs`, `split.rs`); a rebuild stops as soon as it is over the
 //! budget, and is not started where the faces lie in more distinct planes
 //! than the budget allows splits. After the
 //! children of an inner cell changed, eight leaf children that fit the
@@ -31,14 +31,16 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
-use super::graft::axis_graft;
-use super::split::{child_bsp_within, split_faces};
+use super::leaf::{
+    CellFaces, build_leaf_faces, cell_poly, combine, may_split, split_leaf, split_limit,
+    splits_certainly,
+};
 use super::tool::{Tool, restricted, solid_at_a_corner};
-use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
+use super::tree::{Leaf, OctNode, Octree, OctreeConfig, collect_leaves};
 use crate::Error;
 use crate::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId, with_arena};
 use crate::tree::boundary::Bounds;
-use crate::tree::{BooleanOp, BoundaryFace, Bsp, EMPTY, Label, Node, NodeId};
+use crate::tree::{BooleanOp, Bsp, EMPTY, Label, Node, NodeId};
 
 /// What an edit does where the tool is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -101,10 +103,6 @@ impl Changes {
         self.removed.extend(other.removed);
     }
 }
-
-/// The boundary faces of leaves whose content an edit replaced, by key
-/// (see [`Octree::apply_with_faces`]).
-pub type CellFaces = Vec<(CellKey, Vec<BoundaryFace>)>;
 
 /// The changes below a node, with the faces of the replaced leaves there.
 #[derive(Default)]
@@ -550,196 +548,4 @@ fn relabel_outside(leaf: &Leaf, op: BooleanOp) -> Option<Leaf> {
             }
         }
     }
-}
-
-/// A leaf for `bsp` inside `cell`, split into children while it is over
-/// the budget; also returns the leaf keys created.
-pub(crate) fn build_leaf(
-    bsp: Bsp,
-    key: CellKey,
-    cell: CellBox,
-    config: &OctreeConfig,
-) -> (OctNode, Vec<CellKey>) {
-    let (node, leaves, _) = build_leaf_faces(bsp, None, key, cell, config, false);
-    (node, leaves)
-}
-
-/// [`build_leaf`] from `bsp`'s exact boundary inside `cell` with the faces
-/// on the cell's box marked (`faces`; found here when `None` and needed),
-/// also returning, when `keep_faces`, the boundary faces of each new leaf
-/// (as [`Octree::apply_with_faces`] hands them back): `faces` when `bsp`
-/// stays one leaf, else each child's pieces of them ([`split_faces`]).
-fn build_leaf_faces(
-    bsp: Bsp,
-    faces: Option<Vec<BoundaryFace>>,
-    key: CellKey,
-    cell: CellBox,
-    config: &OctreeConfig,
-    keep_faces: bool,
-) -> (OctNode, Vec<CellKey>, CellFaces) {
-    let inner = bsp.nodes().len() / 2;
-    let own_faces = |faces: Option<Vec<BoundaryFace>>| {
-        if keep_faces {
-            vec![(key, faces.unwrap_or_default())]
-        } else {
-            Vec::new()
-        }
-    };
-    if inner == 0 {
-        let label = match bsp.nodes()[0] {
-            crate::tree::Node::Leaf(label) => label,
-            crate::tree::Node::Split { .. } => EMPTY,
-        };
-        let node = OctNode::Leaf(Leaf::Uniform(label));
-        return (node, vec![key], own_faces(faces));
-    }
-    if inner <= config.max_bsp_nodes || key.depth >= config.max_depth || cell.min_edge() < 2 {
-        let node = OctNode::Leaf(Leaf::Bsp(Arc::new(bsp)));
-        return (node, vec![key], own_faces(faces));
-    }
-    let faces = faces.unwrap_or_else(|| {
-        with_arena(|arena| {
-            let poly = cell_poly(arena, cell);
-            bsp.boundary(arena, poly)
-        })
-    });
-    split_leaf(&bsp, faces, key, cell, config, keep_faces)
-}
-
-/// Whether a leaf at `key` whose rebuild starts from `faces` (its exact
-/// boundary inside `cell`, faces on the box marked) is certainly split
-/// by [`build_leaf_faces`]: it may be split, and its rebuild would be over
-/// the budget ([`Bsp::rebuild_exceeds`]).
-fn splits_certainly(
-    faces: &[BoundaryFace],
-    key: CellKey,
-    cell: CellBox,
-    config: &OctreeConfig,
-) -> bool {
-    may_split(key, cell, config) && Bsp::rebuild_exceeds(faces, config.max_bsp_nodes)
-}
-
-/// Whether [`build_leaf_faces`] splits a leaf at `key` that is over the
-/// budget.
-fn may_split(key: CellKey, cell: CellBox, config: &OctreeConfig) -> bool {
-    key.depth < config.max_depth && cell.min_edge() >= 2
-}
-
-/// The most splits a leaf at `key` may have without being split: the
-/// budget, or no limit where it is not split.
-fn split_limit(key: CellKey, cell: CellBox, config: &OctreeConfig) -> usize {
-    if may_split(key, cell, config) {
-        config.max_bsp_nodes
-    } else {
-        usize::MAX
-    }
-}
-
-/// The inner node [`build_leaf_faces`] makes of a leaf over the budget
-/// from its exact boundary `faces` inside `cell`: the children rebuilt
-/// from their pieces, split again while over the budget. `regions` has the
-/// leaf's regions inside `cell` (its rebuild, or the tree it was rebuilt
-/// from): it labels the children without surface.
-fn split_leaf(
-    regions: &Bsp,
-    faces: Vec<BoundaryFace>,
-    key: CellKey,
-    cell: CellBox,
-    config: &OctreeConfig,
-    keep_faces: bool,
-) -> (OctNode, Vec<CellKey>, CellFaces) {
-    let pieces = split_faces(faces, &cell);
-    let built: Vec<(OctNode, Vec<CellKey>, CellFaces)> = pieces
-        .into_par_iter()
-        .enumerate()
-        .map(|(i, pieces)| {
-            let (key, child) = (key.child(i), cell.child(i));
-            if splits_certainly(&pieces, key, child, config) {
-                return split_leaf(regions, pieces, key, child, config, keep_faces);
-            }
-            let limit = split_limit(key, child, config);
-            match child_bsp_within(regions, &pieces, &child, limit) {
-                Some(bsp) => build_leaf_faces(bsp, Some(pieces), key, child, config, keep_faces),
-                None => split_leaf(regions, pieces, key, child, config, keep_faces),
-            }
-        })
-        .collect();
-    let mut leaves = Vec::new();
-    let mut faces = Vec::new();
-    let mut children = Vec::with_capacity(8);
-    for (node, keys, below) in built {
-        children.push(node);
-        leaves.extend(keys);
-        faces.extend(below);
-    }
-    let children: [OctNode; 8] = children
-        .try_into()
-        .unwrap_or_else(|_| unreachable!("eight children"));
-    (OctNode::Inner(Arc::new(children)), leaves, faces)
-}
-
-/// One leaf for eight leaf children that fit the budget together, or
-/// `None`; with it, when `keep_faces` and the children were not all one
-/// uniform label, the boundary faces its rebuild extracted inside `cell`.
-pub(crate) fn combine(
-    children: &[OctNode; 8],
-    cell: CellBox,
-    config: &OctreeConfig,
-    keep_faces: bool,
-) -> Option<(Leaf, Option<Vec<BoundaryFace>>)> {
-    let leaves: Vec<&Leaf> = children
-        .iter()
-        .map(|c| match c {
-            OctNode::Leaf(leaf) => Some(leaf),
-            OctNode::Inner(_) => None,
-        })
-        .collect::<Option<_>>()?;
-    if let Leaf::Uniform(first) = leaves[0]
-        && leaves
-            .iter()
-            .all(|l| matches!(l, Leaf::Uniform(x) if x == first))
-    {
-        return Some((Leaf::Uniform(*first), None));
-    }
-    if leaves.iter().map(|l| l.bsp_nodes()).sum::<usize>() > config.max_bsp_nodes {
-        return None;
-    }
-    let bsps: Vec<Bsp> = leaves.iter().map(|l| l.to_bsp()).collect();
-    let grafted = axis_graft(std::array::from_fn(|i| &bsps[i]), cell.mid());
-    let (simplified, faces) = with_arena(|arena| {
-        let poly = cell_poly(arena, cell);
-        if keep_faces {
-            let (simplified, faces) = grafted.simplified_faces(arena, poly);
-            (simplified, Some(faces))
-        } else {
-            (grafted.simplified(arena, poly), None)
-        }
-    });
-    let inner = simplified.nodes().len() / 2;
-    if inner > config.max_bsp_nodes {
-        return None;
-    }
-    let leaf = match simplified.nodes()[0] {
-        crate::tree::Node::Leaf(label) if inner == 0 => Leaf::Uniform(label),
-        _ => Leaf::Bsp(Arc::new(simplified)),
-    };
-    Some((leaf, faces))
-}
-
-pub(crate) fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {
-    match node {
-        OctNode::Leaf(_) => out.push(key),
-        OctNode::Inner(children) => {
-            for (i, child) in children.iter().enumerate() {
-                collect_leaves(child, key.child(i), out);
-            }
-        }
-    }
-}
-
-/// The cell's box in `arena`; cells lie inside the root cube, which was
-/// checked against the coordinate range when the octree was made.
-pub(crate) fn cell_poly(arena: &mut ConvexArena, cell: CellBox) -> PolyId {
-    cell.add_to(arena)
-        .expect("octree cells lie inside the checked root cube")
 }

@@ -300,7 +300,7 @@ impl Octree {
             at = child;
         }
         let mut out = Vec::new();
-        super::apply::collect_leaves(node, at, &mut out);
+        super::tree::collect_leaves(node, at, &mut out);
         out
     }
 

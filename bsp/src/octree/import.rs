@@ -30,8 +30,8 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::apply::build_leaf;
 use super::cell::{CellBox, CellKey};
+use super::leaf::build_leaf;
 use super::mesh_check::check_mesh;
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::Error;

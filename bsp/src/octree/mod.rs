@@ -10,10 +10,11 @@
 //! - [`tree`] — the persistent octree: construction, leaves, statistics.
 //! - [`tool`] — convex tools (and unions of them) with their bounds.
 //! - [`apply`] — applying a tool to the cells it overlaps, in parallel;
-//!   splitting leaves over the budget and combining children under it;
 //!   [`Octree::apply_with_faces`] also hands back the boundary faces the
 //!   rebuild of each replaced leaf extracted, for re-meshing without
 //!   cutting that leaf again ([`Octree::cell_surface_from`]).
+//! - `leaf` — leaves within the budget: splitting those over it and
+//!   combining children under it (also [`Octree::from_bsp`]).
 //! - [`import`] — an octree from a closed triangle mesh (§3.9).
 //! - [`measure`] — material volumes for reports; [`exact_volume`] — the
 //!   same, exactly, as rationals.
@@ -61,6 +62,7 @@ pub mod exact_volume;
 mod graft;
 pub mod hash;
 pub mod import;
+mod leaf;
 pub mod measure;
 mod mesh_check;
 mod relabel;
@@ -71,12 +73,13 @@ pub mod surface;
 pub mod tool;
 pub mod tree;
 
-pub use apply::{CellFaces, Changes, Edit};
+pub use apply::{Changes, Edit};
 pub use cell::{CellBox, CellKey};
 pub use components::{Anchors, Component, CubeSide, SolidCell};
 pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};
 pub use exact_volume::ExactVolume;
 pub use hash::StateHash;
+pub use leaf::CellFaces;
 pub use seams::SeamedMesher;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

@@ -19,8 +19,10 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::apply::{Changes, build_leaf, cell_poly, collect_leaves, combine};
+use super::apply::Changes;
 use super::cell::{CellBox, CellKey};
+use super::leaf::{build_leaf, cell_poly, combine};
+use super::tree::collect_leaves;
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig};
 use crate::convex::with_arena;
 use crate::tree::{Bsp, EMPTY, Node, NodeId};

@@ -6,7 +6,6 @@
 
 use std::sync::Arc;
 
-use super::apply::build_leaf;
 use super::cell::{CellBox, CellKey};
 use crate::Error;
 use crate::convex::ConvexArena;
@@ -141,27 +140,6 @@ impl Octree {
             config,
             root: OctNode::Leaf(Leaf::Uniform(fill)),
         })
-    }
-
-    /// The regions of `bsp` inside the cube, split into cells within the
-    /// budget (§3.8).
-    ///
-    /// # Errors
-    /// As [`Octree::new`].
-    pub fn from_bsp(
-        origin: [i64; 3],
-        size_log2: u8,
-        bsp: &Bsp,
-        config: OctreeConfig,
-    ) -> Result<Self, Error> {
-        let mut octree = Self::new(origin, size_log2, EMPTY, config)?;
-        let root_box = octree.root_box();
-        let mut arena = ConvexArena::new();
-        let bounds = root_box.add_to(&mut arena)?;
-        let bsp = bsp.simplified(&mut arena, bounds);
-        let (root, _) = build_leaf(bsp, CellKey::ROOT, root_box, &config);
-        octree.root = root;
-        Ok(octree)
     }
 
     /// The cube with the box `solid` filled with `label` (clipped to the
@@ -387,4 +365,16 @@ fn assemble(
         .try_into()
         .unwrap_or_else(|_| unreachable!("eight children"));
     Ok(OctNode::Inner(Arc::new(children)))
+}
+
+/// Appends the key of every leaf under `node` (at `key`) to `out`.
+pub(crate) fn collect_leaves(node: &OctNode, key: CellKey, out: &mut Vec<CellKey>) {
+    match node {
+        OctNode::Leaf(_) => out.push(key),
+        OctNode::Inner(children) => {
+            for (i, child) in children.iter().enumerate() {
+                collect_leaves(child, key.child(i), out);
+            }
+        }
+    }
 }

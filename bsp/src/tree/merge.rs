@@ -34,7 +34,6 @@
 //!   back ([`Survey::restore`]): the cell is again exactly as it was before
 //!   the cut, and becomes the leaf's cell.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
@@ -42,6 +41,7 @@ use super::bsp::{Bsp, EMPTY, Label, Node, NodeId};
 use super::cells::{Cell, Reach, Survey};
 use crate::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
 use crate::exact::{Plane, Sign, classify_vertex};
+use crate::pool::{PerThread, Pool};
 use crate::word_hash::WordHasher;
 
 /// How the labels of two overlapping regions combine.
@@ -171,8 +171,11 @@ struct KeptCells {
 thread_local! {
     /// The survey memory of earlier merges on this thread, kept so that a
     /// merge does not regrow it.
-    static SURVEYS: RefCell<Vec<Survey>> = const { RefCell::new(Vec::new()) };
+    static SURVEYS: Pool<Survey> = const { Pool::new(MAX_SURVEYS) };
 }
+
+/// Survey memories kept per thread: more than merges nest.
+const MAX_SURVEYS: usize = 16;
 
 /// Marks a pending tag: the upper child of the split node in the low bits,
 /// numbered once the lower recursion has returned.
@@ -617,11 +620,7 @@ impl Bsp {
         arena: &mut ConvexArena,
         bounds: PolyId,
     ) -> (Bsp, Vec<Cell>) {
-        let survey = SURVEYS
-            .try_with(|s| s.try_borrow_mut().ok().and_then(|mut s| s.pop()))
-            .ok()
-            .flatten()
-            .unwrap_or_default();
+        let survey = SURVEYS.take().unwrap_or_default();
         let kept = KeptCells {
             cells: Vec::new(),
             survey,
@@ -643,12 +642,7 @@ impl Bsp {
         let Some(kept) = cells else {
             unreachable!("cells are kept")
         };
-        let survey = kept.survey;
-        let _ = SURVEYS.try_with(|s| {
-            if let Ok(mut s) = s.try_borrow_mut() {
-                s.push(survey);
-            }
-        });
+        SURVEYS.keep(kept.survey);
         (bsp, kept.cells)
     }
 
