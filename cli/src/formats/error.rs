@@ -13,8 +13,6 @@ pub enum Location {
     Line(usize),
     /// A byte offset into a binary file (binary PLY, GLB).
     Offset(u64),
-    /// A vertex, counting from 0 in the order of the file.
-    Vertex(usize),
     /// A face, counting from 0 in the order of the file.
     Face(usize),
     /// A primitive of a glTF mesh.
@@ -121,7 +119,6 @@ impl fmt::Display for Location {
             Location::File => Ok(()),
             Location::Line(line) => write!(f, "line {line}: "),
             Location::Offset(offset) => write!(f, "byte offset {offset}: "),
-            Location::Vertex(vertex) => write!(f, "vertex {vertex}: "),
             Location::Face(face) => write!(f, "face {face}: "),
             Location::Primitive { mesh, primitive } => {
                 write!(f, "mesh {mesh}, primitive {primitive}: ")

@@ -17,9 +17,6 @@
 //! - [`glb_write`] — binary glTF, one primitive and material per label.
 //! - [`error`] — [`FormatError`], [`Location`], [`Problem`].
 
-// Used by the mesh subcommands, which are wired separately.
-#![allow(dead_code)]
-
 mod error;
 mod glb_read;
 mod glb_write;
@@ -76,14 +73,6 @@ pub struct TriangleSoup {
     pub positions: Vec<[f64; 3]>,
     /// Triangles, in the orientation of the file.
     pub triangles: Vec<[u32; 3]>,
-}
-
-impl TriangleSoup {
-    /// The corners of triangle `t`.
-    #[must_use]
-    pub fn corners(&self, t: usize) -> [[f64; 3]; 3] {
-        self.triangles[t].map(|v| self.positions[v as usize])
-    }
 }
 
 /// Reads the mesh file at `path`, in the format of its extension.

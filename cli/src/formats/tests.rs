@@ -78,7 +78,9 @@ fn mesh_triangles(mesh: &TriangleMesh) -> Vec<Triangle> {
 }
 
 fn soup_triangles(soup: &TriangleSoup) -> Vec<Triangle> {
-    canonical((0..soup.triangles.len()).map(|t| soup.corners(t)))
+    canonical(
+        (0..soup.triangles.len()).map(|t| soup.triangles[t].map(|v| soup.positions[v as usize])),
+    )
 }
 
 fn roundtrip(mesh: &TriangleMesh, format: MeshFormat) -> TriangleSoup {
