@@ -211,6 +211,8 @@ mod tests {
             (TypeId::of::<RequestRejected>(), "RequestRejected"),
             (TypeId::of::<DesyncReported>(), "DesyncReported"),
             (TypeId::of::<crate::terrain::GridCarve>(), "GridCarve"),
+            (TypeId::of::<ClientPacket>(), "ClientPacket"),
+            (TypeId::of::<ServerPacket>(), "ServerPacket"),
         ];
         let missing: Vec<&str> = types
             .iter()

@@ -235,7 +235,9 @@ pub enum ClientRequest {
 }
 
 /// A client packet as the server received it.
-#[derive(Message, Clone, Debug, PartialEq)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq)]
+#[reflect(opaque)]
+#[reflect(Debug, PartialEq, Clone)]
 pub enum ClientPacket {
     /// A well-formed request.
     Request(ClientRequest),
@@ -403,7 +405,9 @@ pub struct SnapshotPart {
 }
 
 /// What the server sends.
-#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[reflect(opaque)]
+#[reflect(Debug, PartialEq, Clone)]
 pub enum ServerPacket {
     /// An accepted carve, to every client.
     Carve(NetCarve),
@@ -432,5 +436,7 @@ pub enum ServerPacket {
 pub(crate) fn register(app: &mut App) {
     app.add_client_message_with(Channel::Ordered, encode_client_packet, decode_client_packet)
         .add_server_message::<ServerPacket>(Channel::Ordered)
-        .make_message_independent::<ServerPacket>();
+        .make_message_independent::<ServerPacket>()
+        .register_type::<ClientPacket>()
+        .register_type::<ServerPacket>();
 }

@@ -56,7 +56,7 @@ pub(crate) fn add_shaders(app: &mut App) {
 
 /// Layouts and shaders of the splat and global pipelines.
 #[derive(Resource)]
-pub struct SplatPipeline {
+pub(crate) struct SplatPipeline {
     /// Group 0: the view uniform (dynamic offset).
     pub view_layout: BindGroupLayoutDescriptor,
     /// Group 1: the prop uniform and its four storage buffers.
