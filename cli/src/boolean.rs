@@ -38,17 +38,22 @@ pub enum BooleanKind {
     Difference,
 }
 
-/// What `chisel boolean` was asked to do.
+/// What `chisel boolean` was asked to do: its command-line arguments.
+#[derive(clap::Args)]
 pub struct BooleanArgs {
-    /// First operand.
+    /// First operand (.obj, .ply, .glb or .chisel).
     pub a: PathBuf,
-    /// Second operand.
+    /// Second operand (.obj, .ply, .glb or .chisel).
     pub b: PathBuf,
     /// The operation.
+    #[arg(long, value_enum)]
     pub op: BooleanKind,
-    /// Output mesh file.
+    /// Output: a mesh (.obj, .ply or .glb) or the exact octree
+    /// (.chisel).
+    #[arg(short, long)]
     pub output: PathBuf,
-    /// One JSON line instead of a report.
+    /// One line of JSON instead of a report.
+    #[arg(long)]
     pub json: bool,
 }
 

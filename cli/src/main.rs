@@ -29,7 +29,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use glam::DVec3;
 
 mod args;
 mod atomic;
@@ -71,57 +70,9 @@ enum Command {
         json: bool,
     },
     /// Sample a quadric CSG scene into splats with the coverage guarantee.
-    Sample {
-        /// Scene file (RON, see quadric/SCENES.md).
-        scene: PathBuf,
-        /// Splat radius in scene units: every surface point is within it of
-        /// a sample on the same quadric.
-        #[arg(long)]
-        radius: f64,
-        /// Bounding sphere `x,y,z,r` that limits sampling (default: the
-        /// scene's `bounds`).
-        #[arg(long, value_parser = args::sphere)]
-        bounds: Option<(DVec3, f64)>,
-        /// Write the samples as a PLY point cloud.
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-        /// Refuse to emit more samples than this (checked before each
-        /// grid of samples is allocated).
-        #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_SAMPLES)]
-        max_samples: u64,
-        /// Refuse to sample when the tables built before the first sample
-        /// (heightfields, basic regions, distance tables) would need more
-        /// than this many MiB; estimated from the scene before allocating.
-        #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_MEMORY >> 20)]
-        max_memory_mb: u64,
-        /// One line of JSON instead of a report.
-        #[arg(long)]
-        json: bool,
-    },
+    Sample(sample::SampleArgs),
     /// Render a quadric CSG scene with the CPU reference ray tracer.
-    Trace {
-        /// Scene file (RON, see quadric/SCENES.md).
-        scene: PathBuf,
-        /// Output PNG.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Bounding sphere `x,y,z,r`; places the default camera (default:
-        /// the scene's `bounds`).
-        #[arg(long, value_parser = args::sphere)]
-        bounds: Option<(DVec3, f64)>,
-        /// Camera position `x,y,z`.
-        #[arg(long, value_parser = args::vec3)]
-        eye: Option<DVec3>,
-        /// Point looked at `x,y,z`.
-        #[arg(long, value_parser = args::vec3)]
-        look_at: Option<DVec3>,
-        /// Vertical field of view, degrees.
-        #[arg(long, default_value_t = 40.0)]
-        fov: f64,
-        /// Image size `WIDTHxHEIGHT` (at most 8192x8192 pixels in all).
-        #[arg(long, value_parser = args::size, default_value = "800x600")]
-        size: (u32, u32),
-    },
+    Trace(trace::TraceArgs),
     /// Mill a block: a flat end mill swept along a zig-zag path, one
     /// subtraction per step (SCENARIOS.md "mill").
     Mill {
@@ -168,22 +119,7 @@ enum Command {
     },
     /// The exact Boolean of two solids: closed meshes (OBJ, PLY or GLB, in
     /// mm) or exact octree files (.chisel, read with no re-import).
-    Boolean {
-        /// First operand (.obj, .ply, .glb or .chisel).
-        a: PathBuf,
-        /// Second operand (.obj, .ply, .glb or .chisel).
-        b: PathBuf,
-        /// The operation.
-        #[arg(long, value_enum)]
-        op: boolean::BooleanKind,
-        /// Output: a mesh (.obj, .ply or .glb) or the exact octree
-        /// (.chisel).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// One line of JSON instead of a report.
-        #[arg(long)]
-        json: bool,
-    },
+    Boolean(boolean::BooleanArgs),
     /// Apply a recorded operation sequence (JSON lines: a base box, mesh or
     /// .chisel octree, then one convex hull per step, millimetres).
     Replay {
@@ -202,40 +138,8 @@ fn main() -> ExitCode {
                 budget::print(json);
                 Ok(())
             }
-            Command::Sample {
-                scene,
-                radius,
-                bounds,
-                output,
-                max_samples,
-                max_memory_mb,
-                json,
-            } => sample::run(&sample::SampleArgs {
-                scene,
-                radius,
-                bounds,
-                output,
-                max_samples,
-                max_memory_mb,
-                json,
-            }),
-            Command::Trace {
-                scene,
-                output,
-                bounds,
-                eye,
-                look_at,
-                fov,
-                size,
-            } => trace::run(&trace::TraceArgs {
-                scene,
-                output,
-                bounds,
-                eye,
-                look_at,
-                fov,
-                size,
-            }),
+            Command::Sample(args) => sample::run(&args),
+            Command::Trace(args) => trace::run(&args),
             Command::Mill { steps, run } => scenario::mill::sequence(steps)
                 .map_err(failure::Failure::usage)
                 .and_then(|sequence| {
@@ -296,19 +200,7 @@ fn main() -> ExitCode {
                         &run,
                     )
                 }),
-            Command::Boolean {
-                a,
-                b,
-                op,
-                output,
-                json,
-            } => boolean::run(&boolean::BooleanArgs {
-                a,
-                b,
-                op,
-                output,
-                json,
-            }),
+            Command::Boolean(args) => boolean::run(&args),
             Command::Replay { ops, run } => scenario::jsonl::read(&ops)
                 .map_err(Into::into)
                 .and_then(|sequence| {

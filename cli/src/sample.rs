@@ -8,21 +8,33 @@ use crate::failure::Failure;
 use chisel_quadric::{OUTSIDE_FLAG, SampleOptions, Scene, SplatSet, sample};
 use glam::DVec3;
 
-/// What `chisel sample` was asked to do.
+/// What `chisel sample` was asked to do: its command-line arguments.
+#[derive(clap::Args)]
 pub struct SampleArgs {
-    /// The scene file (RON).
+    /// Scene file (RON, see quadric/SCENES.md).
     pub scene: PathBuf,
-    /// Splat radius, scene units.
+    /// Splat radius in scene units: every surface point is within it of
+    /// a sample on the same quadric.
+    #[arg(long)]
     pub radius: f64,
-    /// Bounding sphere (centre, radius); `None` for the scene's.
+    /// Bounding sphere `x,y,z,r` that limits sampling (default: the
+    /// scene's `bounds`).
+    #[arg(long, value_parser = crate::args::sphere)]
     pub bounds: Option<(DVec3, f64)>,
-    /// Where to write the samples as PLY, if anywhere.
+    /// Write the samples as a PLY point cloud.
+    #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// The most samples to emit.
+    /// Refuse to emit more samples than this (checked before each
+    /// grid of samples is allocated).
+    #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_SAMPLES)]
     pub max_samples: u64,
-    /// The most MiB sampling may allocate for its tables before the first sample.
+    /// Refuse to sample when the tables built before the first sample
+    /// (heightfields, basic regions, distance tables) would need more
+    /// than this many MiB; estimated from the scene before allocating.
+    #[arg(long, default_value_t = chisel_quadric::DEFAULT_MAX_MEMORY >> 20)]
     pub max_memory_mb: u64,
-    /// One JSON line instead of a report.
+    /// One line of JSON instead of a report.
+    #[arg(long)]
     pub json: bool,
 }
 

@@ -7,21 +7,29 @@ use crate::failure::Failure;
 use chisel_quadric::{Camera, NO_HIT, Scene, trace_image};
 use glam::DVec3;
 
-/// What `chisel trace` was asked to do.
+/// What `chisel trace` was asked to do: its command-line arguments.
+#[derive(clap::Args)]
 pub struct TraceArgs {
-    /// The scene file (RON).
+    /// Scene file (RON, see quadric/SCENES.md).
     pub scene: PathBuf,
     /// Output PNG.
+    #[arg(short, long)]
     pub output: PathBuf,
-    /// Bounding sphere, which places the default camera; `None` for the scene's.
+    /// Bounding sphere `x,y,z,r`; places the default camera (default:
+    /// the scene's `bounds`).
+    #[arg(long, value_parser = crate::args::sphere)]
     pub bounds: Option<(DVec3, f64)>,
-    /// Camera position (default: outside the bounds, looking at the centre).
+    /// Camera position `x,y,z`.
+    #[arg(long, value_parser = crate::args::vec3)]
     pub eye: Option<DVec3>,
-    /// Point looked at (default: the centre of the bounds).
+    /// Point looked at `x,y,z`.
+    #[arg(long, value_parser = crate::args::vec3)]
     pub look_at: Option<DVec3>,
-    /// Vertical field of view in degrees.
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 40.0)]
     pub fov: f64,
-    /// Image size in pixels.
+    /// Image size `WIDTHxHEIGHT` (at most 8192x8192 pixels in all).
+    #[arg(long, value_parser = crate::args::size, default_value = "800x600")]
     pub size: (u32, u32),
 }
 
