@@ -1,19 +1,19 @@
 //! The one error type of `chisel_quadric`.
 
-use core::fmt;
-
 /// Everything that can go wrong when values enter `chisel_quadric`.
 ///
 /// Each variant says what was wrong with the input and how to fix it. None of
 /// them signals an internal bug.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Error {
     /// A number given to a constructor or transform is NaN or infinite.
+    #[error("{what} is NaN or infinite; give a finite number")]
     NonFinite {
         /// Which input held the value (e.g. `"sphere radius"`).
         what: &'static str,
     },
     /// A size that must be strictly positive (radius, semi-axis, angle) is not.
+    #[error("{what} is {value}; it must be strictly positive")]
     NonPositive {
         /// Which input held the value.
         what: &'static str,
@@ -21,11 +21,16 @@ pub enum Error {
         value: f64,
     },
     /// A direction vector (axis, plane normal, ray direction) is zero.
+    #[error("{what} is the zero vector; give a non-zero direction")]
     ZeroDirection {
         /// Which input held the vector.
         what: &'static str,
     },
     /// A raw matrix given as a quadric is not symmetric.
+    #[error(
+        "quadric matrix entry ({row}, {col}) differs from ({col}, {row}); \
+         a quadric matrix must be symmetric"
+    )]
     NotSymmetric {
         /// Row of the first mismatching entry.
         row: usize,
@@ -34,30 +39,44 @@ pub enum Error {
     },
     /// The quadratic and linear coefficients are all zero: the quadric is a
     /// constant and has no surface.
+    #[error(
+        "the quadratic and linear quadric coefficients are all zero, so it is a \
+         constant with no surface"
+    )]
     ZeroQuadric,
     /// A transform matrix cannot be inverted (it flattens space).
+    #[error("the transform is singular (it flattens space); use a non-zero scale")]
     SingularTransform,
     /// A transform matrix is projective; only affine matrices (last row
     /// `0 0 0 1`) keep the inside/outside sign of a quadric.
+    #[error("the transform is projective; its last row must be (0, 0, 0, 1)")]
     NotAffine,
     /// A half-open angle is outside `(0°, 90°)`.
+    #[error("the cone half-angle {degrees}° is outside (0°, 90°)")]
     AngleOutOfRange {
         /// The offending angle in degrees.
         degrees: f64,
     },
     /// A CSG operation was given no operands.
+    #[error("a {op} needs at least one operand")]
     EmptyOperation {
         /// The operation (`"union"`, `"intersection"`, `"difference"`).
         op: &'static str,
     },
     /// A CSG node id does not belong to the DAG it was used with.
+    #[error("node id {id} does not belong to this CSG DAG; use ids it returned")]
     UnknownNode {
         /// The offending id.
         id: usize,
     },
     /// The DAG has no node to use as the root.
+    #[error("the CSG tree is empty: add a primitive first")]
     EmptyTree,
     /// Normalizing to disjunctive normal form would exceed the product budget.
+    #[error(
+        "the disjunctive normal form would have more than {limit} products; \
+         simplify the tree (fewer unions below intersections or differences)"
+    )]
     DnfTooLarge {
         /// The product limit that was hit.
         limit: usize,
@@ -65,6 +84,11 @@ pub enum Error {
     /// Sampling would emit more samples than
     /// [`SampleOptions::max_samples`](crate::SampleOptions::max_samples);
     /// nothing is returned.
+    #[error(
+        "sampling needs more than {limit} samples ({reached} counted when it stopped); \
+         use a larger splat radius or smaller bounds, or raise the limit \
+         (`--max-samples` on the command line, `SampleOptions::max_samples`)"
+    )]
     TooManySamples {
         /// The limit.
         limit: u64,
@@ -74,6 +98,15 @@ pub enum Error {
     /// Sampling would need more memory for its tables than
     /// [`SampleOptions::max_memory`](crate::SampleOptions::max_memory)
     /// ([`sampling_cost`](crate::sampling_cost)); nothing was allocated.
+    #[error(
+        "sampling this scene needs about {} MiB for its tables ({products} products with \
+         {literals} literals in normal form, {regions} basic regions), more than the \
+         limit of {} MiB; simplify the scene (fewer unions inside intersections or \
+         differences), or raise the limit (`--max-memory-mb` on the command line, \
+         `SampleOptions::max_memory`)",
+        .needed.div_ceil(1 << 20),
+        .limit / (1 << 20)
+    )]
     SamplingTooLarge {
         /// Products of the normal form.
         products: u64,
@@ -89,11 +122,13 @@ pub enum Error {
     /// Sampling cannot keep the coverage guarantee: the bounding sphere is
     /// too large for the splat radius, or regions stayed unclassified at
     /// the subdivision limit.
+    #[error("sampling cannot keep its coverage guarantee: {reason}")]
     CoverageNotReached {
         /// Why, and what to change.
         reason: String,
     },
     /// A scene file could not be read, parsed or understood.
+    #[error("{}", scene_message(*.line, *.column, .message))]
     Scene {
         /// 1-based line of the problem (0 when unknown).
         line: usize,
@@ -104,93 +139,15 @@ pub enum Error {
     },
 }
 
-impl fmt::Display for Error {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Error::NonFinite { what } => {
-                write!(f, "{what} is NaN or infinite; give a finite number")
-            }
-            Error::NonPositive { what, value } => {
-                write!(f, "{what} is {value}; it must be strictly positive")
-            }
-            Error::ZeroDirection { what } => {
-                write!(f, "{what} is the zero vector; give a non-zero direction")
-            }
-            Error::NotSymmetric { row, col } => write!(
-                f,
-                "quadric matrix entry ({row}, {col}) differs from ({col}, {row}); \
-                 a quadric matrix must be symmetric"
-            ),
-            Error::ZeroQuadric => write!(
-                f,
-                "the quadratic and linear quadric coefficients are all zero, so it is a \
-                 constant with no surface"
-            ),
-            Error::SingularTransform => write!(
-                f,
-                "the transform is singular (it flattens space); use a non-zero scale"
-            ),
-            Error::NotAffine => write!(
-                f,
-                "the transform is projective; its last row must be (0, 0, 0, 1)"
-            ),
-            Error::AngleOutOfRange { degrees } => {
-                write!(f, "the cone half-angle {degrees}° is outside (0°, 90°)")
-            }
-            Error::TooManySamples { limit, reached } => write!(
-                f,
-                "sampling needs more than {limit} samples ({reached} counted when it stopped); \
-                 use a larger splat radius or smaller bounds, or raise the limit \
-                 (`--max-samples` on the command line, `SampleOptions::max_samples`)"
-            ),
-            Error::SamplingTooLarge {
-                products,
-                literals,
-                regions,
-                needed,
-                limit,
-            } => write!(
-                f,
-                "sampling this scene needs about {} MiB for its tables ({products} products with \
-                 {literals} literals in normal form, {regions} basic regions), more than the \
-                 limit of {} MiB; simplify the scene (fewer unions inside intersections or \
-                 differences), or raise the limit (`--max-memory-mb` on the command line, \
-                 `SampleOptions::max_memory`)",
-                needed.div_ceil(1 << 20),
-                limit / (1 << 20)
-            ),
-            Error::CoverageNotReached { reason } => {
-                write!(f, "sampling cannot keep its coverage guarantee: {reason}")
-            }
-            Error::EmptyOperation { op } => {
-                write!(f, "a {op} needs at least one operand")
-            }
-            Error::UnknownNode { id } => write!(
-                f,
-                "node id {id} does not belong to this CSG DAG; use ids it returned"
-            ),
-            Error::EmptyTree => write!(f, "the CSG tree is empty: add a primitive first"),
-            Error::DnfTooLarge { limit } => write!(
-                f,
-                "the disjunctive normal form would have more than {limit} products; \
-                 simplify the tree (fewer unions below intersections or differences)"
-            ),
-            Error::Scene {
-                line,
-                column,
-                message,
-            } => {
-                if *line == 0 {
-                    write!(f, "scene: {message}")
-                } else {
-                    write!(f, "scene line {line}, column {column}: {message}")
-                }
-            }
-        }
+/// The text of [`Error::Scene`]: the message, after its line and column
+/// when they are known.
+fn scene_message(line: usize, column: usize, message: &str) -> String {
+    if line == 0 {
+        format!("scene: {message}")
+    } else {
+        format!("scene line {line}, column {column}: {message}")
     }
 }
-
-impl std::error::Error for Error {}
 
 /// Shorthand for results of this crate.
 pub type Result<T, E = Error> = core::result::Result<T, E>;

@@ -8,23 +8,15 @@
 //! plane of every other face, and no two neighbouring faces are coplanar —
 //! the polyhedron is strictly convex.
 
-use core::fmt;
 use std::collections::HashSet;
 
 use super::mesh::{ConvexArena, PolyId};
 use crate::exact::{Sign, are_planes_parallel, classify_vertex};
 
 /// A broken invariant: always a bug in the kernel, never bad input.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("convex polyhedron invariant broken: {0}")]
 pub struct InvariantError(pub String);
-
-impl fmt::Display for InvariantError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "convex polyhedron invariant broken: {}", self.0)
-    }
-}
-
-impl std::error::Error for InvariantError {}
 
 macro_rules! ensure {
     ($cond:expr, $($msg:tt)*) => {

@@ -9,7 +9,6 @@
 //! along it.
 
 use core::cmp::Ordering;
-use core::fmt;
 
 use super::SurfaceMesh;
 use super::tjunction::strictly_inside_edge;
@@ -18,16 +17,9 @@ use crate::exact::{Sign, classify_vertex, compare_offsets};
 
 /// A broken invariant of a surface mesh: always a bug in the kernel, never
 /// bad input.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("surface mesh invariant broken: {0}")]
 pub struct MeshInvariantError(pub String);
-
-impl fmt::Display for MeshInvariantError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "surface mesh invariant broken: {}", self.0)
-    }
-}
-
-impl std::error::Error for MeshInvariantError {}
 
 macro_rules! ensure {
     ($cond:expr, $($msg:tt)*) => {

@@ -15,7 +15,6 @@
 //! [`outside`](super::MeshPolygon::outside) turned round), or its outer
 //! surface ([`SurfaceMesh::retain`] with `outside == EMPTY`).
 
-use core::fmt;
 use std::collections::{HashMap, HashSet};
 use std::hash::BuildHasherDefault;
 
@@ -73,7 +72,16 @@ pub struct BadEdge {
 /// Always a kernel bug when the polygons come from
 /// [`Bsp::boundary`](crate::tree::Bsp::boundary) of a single material; for
 /// polygons from elsewhere, the input is not a closed surface.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "surface is not watertight: {open} open, {repeated} repeated and {opposite_repeated} with a \
+     repeated opposite directed edge(s); e.g. edge {} -> {} from {:?} to {:?} is {}",
+    .example.from,
+    .example.to,
+    .example.from_position,
+    .example.to_position,
+    problem_text(.example.problem)
+)]
 pub struct WatertightError {
     /// Directed edges whose opposite no polygon uses.
     pub open: usize,
@@ -86,30 +94,14 @@ pub struct WatertightError {
     pub example: BadEdge,
 }
 
-impl fmt::Display for WatertightError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let e = &self.example;
-        write!(
-            f,
-            "surface is not watertight: {} open, {} repeated and {} with a repeated opposite \
-             directed edge(s); e.g. edge {} -> {} from {:?} to {:?} is {}",
-            self.open,
-            self.repeated,
-            self.opposite_repeated,
-            e.from,
-            e.to,
-            e.from_position,
-            e.to_position,
-            match e.problem {
-                EdgeProblem::Open => "open (no opposite edge)",
-                EdgeProblem::Repeated => "used more than once in this direction",
-                EdgeProblem::OppositeRepeated => "matched by more than one opposite edge",
-            }
-        )
+/// What [`WatertightError`]'s message says of its example edge.
+fn problem_text(problem: EdgeProblem) -> &'static str {
+    match problem {
+        EdgeProblem::Open => "open (no opposite edge)",
+        EdgeProblem::Repeated => "used more than once in this direction",
+        EdgeProblem::OppositeRepeated => "matched by more than one opposite edge",
     }
 }
-
-impl std::error::Error for WatertightError {}
 
 impl SurfaceMesh {
     /// The directed edges `(corner k, corner k + 1)` of every polygon, in

@@ -1,7 +1,5 @@
 //! The BSP structure: a node array over a plane palette.
 
-use core::fmt;
-
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::Plane;
 
@@ -38,16 +36,9 @@ pub struct Bsp {
 }
 
 /// A structural defect found by [`Bsp::validate`]: always a bug.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("BSP invariant broken: {0}")]
 pub struct BspInvariantError(pub String);
-
-impl fmt::Display for BspInvariantError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "BSP invariant broken: {}", self.0)
-    }
-}
-
-impl std::error::Error for BspInvariantError {}
 
 impl Bsp {
     /// All of space with one label.
