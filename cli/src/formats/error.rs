@@ -25,34 +25,40 @@ pub enum Location {
 }
 
 /// What is wrong.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum Problem {
     /// The file could not be read or written (missing, unreadable, disk
     /// full).
+    #[error("{0}")]
     Io(std::io::Error),
     /// The extension names no supported format; use `.obj`, `.ply` or
     /// `.glb`.
+    #[error("{}", unknown_format(.extension.as_deref()))]
     UnknownFormat {
         /// The extension found, if any.
         extension: Option<String>,
     },
     /// A number could not be parsed.
+    #[error("malformed number '{text}'")]
     MalformedNumber {
         /// The offending text.
         text: String,
     },
     /// A statement or record lacks a value.
+    #[error("missing {what}")]
     Missing {
         /// What is missing, e.g. "z coordinate".
         what: &'static str,
     },
     /// A vertex coordinate is NaN or infinite.
+    #[error("vertex {} has a NaN or infinite coordinate", .vertex + 1)]
     NonFinite {
         /// The vertex index, from 0 (shown from 1, as every vertex number
         /// in messages is).
         vertex: usize,
     },
     /// A face names a vertex that does not exist.
+    #[error("vertex index {index} out of range (the file has {count} vertices)")]
     IndexOutOfRange {
         /// The index as written in the file.
         index: i64,
@@ -60,31 +66,38 @@ pub enum Problem {
         count: usize,
     },
     /// A face has fewer than three corners.
+    #[error("face with {corners} corner(s); at least 3 are needed")]
     FaceTooSmall {
         /// Its number of corners.
         corners: usize,
     },
     /// The file ends in the middle of the data.
+    #[error("unexpected end of file")]
     UnexpectedEnd,
     /// The header (PLY) or container (GLB) is malformed.
+    #[error("malformed file: {reason}")]
     Malformed {
         /// What was expected or found.
         reason: String,
     },
     /// Valid, but a feature this reader does not support.
+    #[error("unsupported: {what}")]
     Unsupported {
         /// Which feature, and how to avoid it.
         what: String,
     },
     /// The glTF parser rejected the file.
+    #[error("invalid glTF: {reason}")]
     Gltf {
         /// The parser's message.
         reason: String,
     },
     /// The file holds no triangles at all.
+    #[error("no triangles in the file")]
     NoTriangles,
     /// A mesh to write is inconsistent (an index beyond the positions, a
     /// per-triangle list of the wrong length, a non-finite value).
+    #[error("invalid mesh: {reason}")]
     InvalidMesh {
         /// What is inconsistent.
         reason: String,
@@ -127,36 +140,16 @@ impl fmt::Display for Location {
     }
 }
 
-impl fmt::Display for Problem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Problem::Io(e) => write!(f, "{e}"),
-            Problem::UnknownFormat { extension } => match extension {
-                Some(ext) => write!(f, "unknown mesh format '.{ext}' (use .obj, .ply or .glb)"),
-                None => write!(f, "no file extension (use .obj, .ply or .glb)"),
-            },
-            Problem::MalformedNumber { text } => write!(f, "malformed number '{text}'"),
-            Problem::Missing { what } => write!(f, "missing {what}"),
-            Problem::NonFinite { vertex } => {
-                write!(f, "vertex {} has a NaN or infinite coordinate", vertex + 1)
-            }
-            Problem::IndexOutOfRange { index, count } => write!(
-                f,
-                "vertex index {index} out of range (the file has {count} vertices)"
-            ),
-            Problem::FaceTooSmall { corners } => {
-                write!(f, "face with {corners} corner(s); at least 3 are needed")
-            }
-            Problem::UnexpectedEnd => write!(f, "unexpected end of file"),
-            Problem::Malformed { reason } => write!(f, "malformed file: {reason}"),
-            Problem::Unsupported { what } => write!(f, "unsupported: {what}"),
-            Problem::Gltf { reason } => write!(f, "invalid glTF: {reason}"),
-            Problem::NoTriangles => write!(f, "no triangles in the file"),
-            Problem::InvalidMesh { reason } => write!(f, "invalid mesh: {reason}"),
-        }
+/// The text of [`Problem::UnknownFormat`].
+fn unknown_format(extension: Option<&str>) -> String {
+    match extension {
+        Some(ext) => format!("unknown mesh format '.{ext}' (use .obj, .ply or .glb)"),
+        None => "no file extension (use .obj, .ply or .glb)".into(),
     }
 }
 
+// Written out rather than derived: the source is the I/O error only when
+// the problem is one, which thiserror's `#[source]` cannot say.
 impl fmt::Display for FormatError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
