@@ -64,52 +64,36 @@ impl fmt::Debug for NetKey {
 }
 
 /// Why a connect token could not be made or read.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum ConnectTokenError {
     /// A token must name at least one server address.
+    #[error("a connect token needs a server address")]
     NoServerAddress,
     /// A token names at most [`MAX_TOKEN_ADDRESSES`] server addresses.
+    #[error("a connect token names at most {MAX_TOKEN_ADDRESSES} server addresses, not {0}")]
     TooManyServerAddresses(usize),
     /// The validity is zero or longer than the clock can count.
+    #[error("a connect token must be valid for 1 s to 100 years, not {0:?}")]
     BadValidity(Duration),
     /// The system clock is before 1970.
+    #[error("the system clock is before 1970")]
     Clock,
     /// Encryption failed while signing the token.
+    #[error("cannot sign the connect token: {0}")]
     Generate(TokenGenerationError),
     /// The bytes are no connect token of this netcode version.
+    #[error("not a connect token: {0}")]
     Malformed(NetcodeError),
     /// The token was made for another protocol (another wire format).
+    #[error(
+        "the connect token is for protocol {found:#018x}, this build speaks \
+         {PROTOCOL_ID:#018x}"
+    )]
     WrongProtocol {
         /// The token's protocol id.
         found: u64,
     },
 }
-
-impl fmt::Display for ConnectTokenError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::NoServerAddress => f.write_str("a connect token needs a server address"),
-            Self::TooManyServerAddresses(n) => write!(
-                f,
-                "a connect token names at most {MAX_TOKEN_ADDRESSES} server addresses, not {n}"
-            ),
-            Self::BadValidity(d) => write!(
-                f,
-                "a connect token must be valid for 1 s to 100 years, not {d:?}"
-            ),
-            Self::Clock => f.write_str("the system clock is before 1970"),
-            Self::Generate(e) => write!(f, "cannot sign the connect token: {e}"),
-            Self::Malformed(e) => write!(f, "not a connect token: {e}"),
-            Self::WrongProtocol { found } => write!(
-                f,
-                "the connect token is for protocol {found:#018x}, this build speaks \
-                 {PROTOCOL_ID:#018x}"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for ConnectTokenError {}
 
 fn now() -> Result<Duration, ConnectTokenError> {
     SystemTime::now()

@@ -314,15 +314,19 @@ pub struct NetCarve {
 }
 
 /// Why the server refused a request.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
 pub enum RejectReason {
     /// The packet was no request.
+    #[error("malformed packet: {0}")]
     Malformed(String),
     /// The client sent more carves than its rate allows.
+    #[error("too many carves; slow down")]
     RateLimited,
     /// No terrain has this id.
+    #[error("no terrain has id {0}")]
     UnknownTerrain(TerrainId),
     /// Too many pieces in one tool.
+    #[error("{pieces} tool pieces, at most {limit} allowed")]
     TooManyPieces {
         /// Pieces sent.
         pieces: usize,
@@ -330,6 +334,7 @@ pub enum RejectReason {
         limit: usize,
     },
     /// Too many points in one piece.
+    #[error("{points} points in a tool piece, at most {limit} allowed")]
     TooManyPoints {
         /// Points sent.
         points: usize,
@@ -337,6 +342,7 @@ pub enum RejectReason {
         limit: usize,
     },
     /// The tool spans more of the grid than allowed.
+    #[error("the tool spans {extent} grid units, at most {limit} allowed")]
     TooLarge {
         /// Its largest extent, in grid units.
         extent: i64,
@@ -345,31 +351,8 @@ pub enum RejectReason {
     },
     /// The tool or edit is invalid: non-finite or out-of-budget
     /// coordinates, a degenerate hull, an unknown material, a miss.
+    #[error("{0}")]
     Invalid(String),
-}
-
-impl core::fmt::Display for RejectReason {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            RejectReason::Malformed(why) => write!(f, "malformed packet: {why}"),
-            RejectReason::RateLimited => write!(f, "too many carves; slow down"),
-            RejectReason::UnknownTerrain(id) => write!(f, "no terrain has id {id}"),
-            RejectReason::TooManyPieces { pieces, limit } => {
-                write!(f, "{pieces} tool pieces, at most {limit} allowed")
-            }
-            RejectReason::TooManyPoints { points, limit } => {
-                write!(
-                    f,
-                    "{points} points in a tool piece, at most {limit} allowed"
-                )
-            }
-            RejectReason::TooLarge { extent, limit } => write!(
-                f,
-                "the tool spans {extent} grid units, at most {limit} allowed"
-            ),
-            RejectReason::Invalid(why) => write!(f, "{why}"),
-        }
-    }
 }
 
 /// What became of a request.

@@ -37,27 +37,18 @@ pub struct QuadricScene(pub Scene);
 pub struct QuadricSceneLoader;
 
 /// Why a scene file could not be loaded.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum QuadricSceneLoadError {
     /// The file could not be read.
+    #[error("cannot read the scene file: {0}")]
     Io(std::io::Error),
     /// The text is not valid UTF-8.
+    #[error("the scene file is not UTF-8 text")]
     NotUtf8,
     /// The scene is malformed (line, column and problem inside).
+    #[error("malformed scene: {0}")]
     Scene(chisel_quadric::Error),
 }
-
-impl std::fmt::Display for QuadricSceneLoadError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Io(e) => write!(f, "cannot read the scene file: {e}"),
-            Self::NotUtf8 => write!(f, "the scene file is not UTF-8 text"),
-            Self::Scene(e) => write!(f, "malformed scene: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for QuadricSceneLoadError {}
 
 impl AssetLoader for QuadricSceneLoader {
     type Asset = QuadricScene;
@@ -207,35 +198,20 @@ pub struct PropGpuData {
 }
 
 /// Why a prop could not be sampled ([`PropSplats::build`]).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PropSampleError {
     /// The scene has no valid disjunctive normal form.
-    NormalForm(chisel_quadric::Error),
+    #[error("normal form: {0}")]
+    NormalForm(#[source] chisel_quadric::Error),
     /// The bounding sphere is invalid (not finite, or not positive).
-    Bounds(chisel_quadric::Error),
+    #[error("bounds: {0}")]
+    Bounds(#[source] chisel_quadric::Error),
     /// The splat radius is invalid for these bounds.
-    Radius(chisel_quadric::Error),
+    #[error("radius: {0}")]
+    Radius(#[source] chisel_quadric::Error),
     /// Adaptive sampling failed.
-    Sampling(chisel_quadric::Error),
-}
-
-impl std::fmt::Display for PropSampleError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::NormalForm(e) => write!(f, "normal form: {e}"),
-            Self::Bounds(e) => write!(f, "bounds: {e}"),
-            Self::Radius(e) => write!(f, "radius: {e}"),
-            Self::Sampling(e) => write!(f, "sampling: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for PropSampleError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            Self::NormalForm(e) | Self::Bounds(e) | Self::Radius(e) | Self::Sampling(e) => Some(e),
-        }
-    }
+    #[error("sampling: {0}")]
+    Sampling(#[source] chisel_quadric::Error),
 }
 
 static GENERATION: AtomicU64 = AtomicU64::new(1);

@@ -1,17 +1,20 @@
 //! The one error type of the terrain plugin.
 
-use core::fmt;
-
 /// Everything that can go wrong when building, carving, saving or loading a
 /// terrain. Each variant says what was wrong and how to fix it; none of them
 /// leaves a terrain changed.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TerrainError {
     /// The exact kernel rejected the input (out-of-range or non-finite
     /// coordinates, a degenerate tool, an open mesh, …).
+    #[error("{0}")]
     Kernel(chisel_bsp::Error),
     /// The tool lies entirely outside the terrain's octree cube, so the
     /// carve could not change anything.
+    #[error(
+        "the tool (grid box {tool_min:?} to {tool_max:?}) lies entirely outside the \
+         terrain's cube; move it onto the terrain"
+    )]
     OutsideTerrain {
         /// Lower corner of the tool's bounds, in grid units.
         tool_min: [i64; 3],
@@ -20,12 +23,17 @@ pub enum TerrainError {
     },
     /// A tool description that cannot give a solid: no pieces, a piece with
     /// fewer than four points, or a non-finite size.
+    #[error("invalid tool: {reason}")]
     InvalidTool {
         /// What is wrong with it.
         reason: &'static str,
     },
     /// A carve adds or paints a material the terrain does not know
     /// ([`super::Terrain::with_labels`]).
+    #[error(
+        "material label {label} is not one of the terrain's materials {known:?}; \
+         declare it with Terrain::with_labels"
+    )]
     UnknownLabel {
         /// The label asked for.
         label: chisel_bsp::tree::Label,
@@ -35,6 +43,10 @@ pub enum TerrainError {
     /// A carve adds or paints a material that the terrain knows but its
     /// material table (`TerrainMaterials`) has no entry for, so it would be
     /// drawn with the table's fallback.
+    #[error(
+        "material label {label} has no entry in the terrain's material table \
+         (it has {table:?}); add one to its TerrainMaterials"
+    )]
     NoMaterial {
         /// The label asked for.
         label: chisel_bsp::tree::Label,
@@ -42,28 +54,38 @@ pub enum TerrainError {
         table: Vec<chisel_bsp::tree::Label>,
     },
     /// Undo was asked for, but no carve is left to undo.
+    #[error("there is no carve left to undo")]
     NothingToUndo,
     /// The entity named in a message has no [`super::Terrain`].
+    #[error("the entity has no Terrain component; carve a terrain entity")]
     NoSuchTerrain,
     /// A heightfield that cannot be used.
+    #[error("invalid heightfield: {reason}")]
     InvalidHeightfield {
         /// What is wrong with it.
         reason: String,
     },
     /// A Bevy mesh that cannot be imported (wrong topology, no positions).
+    #[error("cannot import the mesh: {reason}; give a closed triangle list with positions")]
     InvalidMesh {
         /// What is wrong with it.
         reason: &'static str,
     },
     /// Reading or writing a file failed.
+    #[error("terrain file: {message}")]
     Io {
         /// The operating system's message.
         message: String,
     },
     /// The file does not start with the terrain file magic: it is not a
     /// terrain file.
+    #[error("not a bevy_chisel terrain file (bad magic)")]
     BadMagic,
     /// The file was written by a format version this build cannot read.
+    #[error(
+        "terrain file version {found} is not supported (this build reads version \
+         {supported}); re-save it with a matching build"
+    )]
     UnsupportedVersion {
         /// Version found in the file.
         found: u32,
@@ -71,6 +93,7 @@ pub enum TerrainError {
         supported: u32,
     },
     /// The file ends in the middle of a record.
+    #[error("terrain file is truncated: data missing at byte {at}")]
     Truncated {
         /// Byte offset where more data was expected.
         at: usize,
@@ -78,6 +101,7 @@ pub enum TerrainError {
     /// The file's content is inconsistent (bad checksum, unknown tags,
     /// values out of range, or an octree snapshot the kernel's checks
     /// refuse).
+    #[error("terrain file is corrupt: {reason}")]
     Corrupt {
         /// What was found.
         reason: String,
@@ -97,54 +121,3 @@ impl From<std::io::Error> for TerrainError {
         }
     }
 }
-
-impl fmt::Display for TerrainError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            TerrainError::Kernel(e) => write!(f, "{e}"),
-            TerrainError::OutsideTerrain { tool_min, tool_max } => write!(
-                f,
-                "the tool (grid box {tool_min:?} to {tool_max:?}) lies entirely outside the \
-                 terrain's cube; move it onto the terrain"
-            ),
-            TerrainError::InvalidTool { reason } => write!(f, "invalid tool: {reason}"),
-            TerrainError::UnknownLabel { label, known } => write!(
-                f,
-                "material label {label} is not one of the terrain's materials {known:?}; \
-                 declare it with Terrain::with_labels"
-            ),
-            TerrainError::NoMaterial { label, table } => write!(
-                f,
-                "material label {label} has no entry in the terrain's material table \
-                 (it has {table:?}); add one to its TerrainMaterials"
-            ),
-            TerrainError::NothingToUndo => write!(f, "there is no carve left to undo"),
-            TerrainError::NoSuchTerrain => {
-                write!(
-                    f,
-                    "the entity has no Terrain component; carve a terrain entity"
-                )
-            }
-            TerrainError::InvalidHeightfield { reason } => {
-                write!(f, "invalid heightfield: {reason}")
-            }
-            TerrainError::InvalidMesh { reason } => write!(
-                f,
-                "cannot import the mesh: {reason}; give a closed triangle list with positions"
-            ),
-            TerrainError::Io { message } => write!(f, "terrain file: {message}"),
-            TerrainError::BadMagic => write!(f, "not a bevy_chisel terrain file (bad magic)"),
-            TerrainError::UnsupportedVersion { found, supported } => write!(
-                f,
-                "terrain file version {found} is not supported (this build reads version \
-                 {supported}); re-save it with a matching build"
-            ),
-            TerrainError::Truncated { at } => {
-                write!(f, "terrain file is truncated: data missing at byte {at}")
-            }
-            TerrainError::Corrupt { reason } => write!(f, "terrain file is corrupt: {reason}"),
-        }
-    }
-}
-
-impl std::error::Error for TerrainError {}
