@@ -1,10 +1,19 @@
-//! CNC milling (paper 1 §5): a rotating drill bit cuts a pocket and a
-//! circular groove into a block, one swept volume per step.
+//! CNC milling (paper 1 §5): a spinning drill bit cuts a pocket and a
+//! circular groove into a block, one subtraction per step.
 //!
-//! Each step subtracts the volume the bit sweeps from one pose to the next
-//! (the hull of a hexagonal prism at both poses, turned about its axis as
-//! it moves) from an exact octree-BSP block on a 10 µm grid. The on-screen
-//! panel shows the time per step in the kernel and in re-meshing.
+//! Each step subtracts the convex hull of the bit, a hexagonal prism, at
+//! two consecutive poses from an exact octree-BSP block on a 10 µm grid.
+//! The subtraction is exact, and so would the tool be if the bit only
+//! moved: a convex solid moved without turning sweeps exactly the hull of
+//! its start and end poses. But the bit also turns by `SPIN_PER_STEP`
+//! about its axis each step, and a turning prism sweeps curved surfaces,
+//! which no union of convex polyhedra is. The hull of the two poses
+//! stands in for that sweep, neither inside it nor around it: it misses
+//! thin slivers outside the chords of the arcs the corners travel (up to
+//! `BIT_RADIUS · (1 − cos(SPIN_PER_STEP / 2))`, 0.05 mm here) and takes in
+//! material between the corners that the turning prism never reaches (up
+//! to about 0.18 mm here). The on-screen panel shows the time per step
+//! in the kernel and in re-meshing.
 //!
 //! Runs in a window when a display exists; otherwise mills headless and
 //! writes PNG screenshots to `screenshots/`.
@@ -228,7 +237,8 @@ fn update_panel(
     }
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     let mut lines = vec![
-        "bevy_chisel milling: exact swept-volume CNC simulation (10 um grid)".to_owned(),
+        "bevy_chisel milling: exact subtractions of the hull of two bit poses (10 um grid)"
+            .to_owned(),
         format!("{ORBIT_HELP} | Space pause | R restart path"),
         format!(
             "step {} of {}",
