@@ -110,9 +110,11 @@ pub struct ToolPiece {
     /// Where the shape is placed, in the terrain's local frame.
     #[cfg_attr(feature = "serde", serde(with = "crate::serde_transform"))]
     pub pose: Transform,
-    /// When set, the piece is the volume swept from `pose` to this pose
-    /// (the hull of the corners at both: exact for translations, a convex
-    /// cover for small rotations).
+    /// When set, the piece is the convex hull of the shape's corners at
+    /// `pose` and at this pose: exactly the volume the shape sweeps when
+    /// the two poses differ by a translation. Between poses that also
+    /// turn, the hull only approximates that sweep: it misses slivers where
+    /// corners travel along arcs, and takes in some space between them.
     #[cfg_attr(feature = "serde", serde(with = "crate::serde_transform::option"))]
     pub sweep_to: Option<Transform>,
 }
@@ -148,7 +150,10 @@ impl CarveTool {
         )
     }
 
-    /// The volume `shape` sweeps from pose `from` to pose `to`.
+    /// The convex hull of `shape` at pose `from` and at pose `to`: the
+    /// volume it sweeps from one to the other when they differ by a
+    /// translation, an approximation of it when they also turn
+    /// ([`ToolPiece::sweep_to`]).
     #[must_use]
     pub fn swept(shape: CarveShape, from: Transform, to: Transform) -> Self {
         Self {

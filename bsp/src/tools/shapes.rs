@@ -113,8 +113,11 @@ pub fn placed_tool(
     convex_hull(arena, &points)
 }
 
-/// The volume swept by a convex tool moving (by translation, or by a small
-/// rotation) from pose `a` to pose `b`: the hull of its corners at both.
+/// The hull of a convex tool's corners at pose `a` and at pose `b`: exactly
+/// the volume the tool sweeps from one to the other when they differ by a
+/// translation. For poses that also turn it only approximates that volume:
+/// it misses slivers where corners travel along arcs, and takes in some
+/// space between them.
 ///
 /// # Errors
 /// As [`placed_tool`].
