@@ -12,8 +12,11 @@
 // plugin/splat/gpu.rs.
 #define_import_path bevy_chisel::quadric
 
-/// Set in a quadric reference when the literal is the complement (Q ≥ 0).
+/// Set in a literal reference when the literal is the complement (Q ≥ 0)
+/// (mirror: `chisel_quadric::OUTSIDE_FLAG`).
 const OUTSIDE_FLAG: u32 = 0x80000000u;
+/// The quadric index bits of a literal reference (mirror:
+/// `chisel_quadric::INDEX_MASK`).
 const INDEX_MASK: u32 = 0x7fffffffu;
 /// Marks a missing root of the line–quadric equation.
 const NO_ROOT: f32 = 3.0e38;
@@ -57,12 +60,12 @@ struct Prop {
     pad: u32,
 };
 
-/// One quadric record (mirror: `chisel_quadric::GpuQuadric`).
+/// One quadric record (mirror: `QuadricRecord`).
 struct Quadric {
     c: array<vec4<f32>, 4>,
 };
 
-/// One splat (mirror: `chisel_quadric::GpuSplat`).
+/// One splat (mirror: `SplatRecord`).
 struct Splat {
     position: vec3<f32>,
     radius: f32,
@@ -79,8 +82,8 @@ struct Splat {
 @group(1) @binding(1) var<storage, read> quadrics: array<Quadric>;
 @group(1) @binding(2) var<storage, read> clip_indices: array<u32>;
 @group(1) @binding(3) var<storage, read> splats: array<Splat>;
-/// Normal form for the global pass: `(start, count)` per product, then the
-/// flagged quadric references of every product.
+/// Normal form for the global pass (`chisel_quadric::encode_normal_form`):
+/// `(start, count)` per product, then the literal references of every product.
 @group(1) @binding(4) var<storage, read> terms: array<u32>;
 
 fn quadric_a(q: Quadric, x: vec3<f32>) -> vec3<f32> {

@@ -373,34 +373,98 @@ fn listed_defines_are_parsed_from_comments() {
     );
 }
 
-/// `(size, [(member, offset)])` of a `#[repr(C)]` struct: every field, in
-/// declaration order.
-macro_rules! rust_layout {
-    ($t:ty: $($field:ident),+ $(,)?) => {
-        (
-            size_of::<$t>() as u32,
-            vec![$((stringify!($field).to_owned(), std::mem::offset_of!($t, $field) as u32)),+],
-        )
-    };
+/// One Rust GPU struct as its mirror must see it: its `#[repr(C)]` size and
+/// field offsets, the bytes `encase` writes for a value of it (in its
+/// address space) and the bytes it writes for each field alone.
+struct RustMirror {
+    size: u32,
+    /// `(field, repr(C) offset, encase bytes of the field alone)`, in
+    /// declaration order.
+    fields: Vec<(String, u32, Vec<u8>)>,
+    /// The whole value as `encase` writes it.
+    encased: Vec<u8>,
+    /// Two copies as a storage array (for array element types), else empty.
+    encased_pair: Vec<u8>,
+}
+
+/// The [`RustMirror`] of a struct literal with one distinct value per field
+/// (the literal names every field, so a new field fails to compile here).
+/// `uniform` or `storage`: the address space the shaders read it in.
+macro_rules! rust_mirror {
+    ($space:ident, $t:ident { $($field:ident: $value:expr),+ $(,)? }) => {{
+        use bevy::render::render_resource::encase;
+        let value = $t { $($field: $value),+ };
+        let field_bytes = |write: &dyn Fn(&mut encase::StorageBuffer<Vec<u8>>)| {
+            let mut buffer = encase::StorageBuffer::new(Vec::new());
+            write(&mut buffer);
+            buffer.into_inner()
+        };
+        let fields = vec![$((
+            stringify!($field).to_owned(),
+            std::mem::offset_of!($t, $field) as u32,
+            field_bytes(&|b| b.write(&value.$field).expect("encase writes the field")),
+        )),+];
+        let (encased, encased_pair) = rust_mirror!(@encase $space, value);
+        RustMirror { size: size_of::<$t>() as u32, fields, encased, encased_pair }
+    }};
+    (@encase uniform, $value:ident) => {{
+        let mut buffer = encase::UniformBuffer::new(Vec::new());
+        buffer.write(&$value).expect("encase writes the uniform");
+        (buffer.into_inner(), Vec::new())
+    }};
+    (@encase storage, $value:ident) => {{
+        let mut one = encase::StorageBuffer::new(Vec::new());
+        one.write(&$value).expect("encase writes the record");
+        let mut pair = encase::StorageBuffer::new(Vec::new());
+        pair.write(&vec![$value, $value]).expect("encase writes the array");
+        (one.into_inner(), pair.into_inner())
+    }};
+}
+
+/// `[start, start + 1, start + 2, start + 3]`.
+fn vec4_from(start: f32) -> bevy::math::Vec4 {
+    bevy::math::Vec4::new(start, start + 1.0, start + 2.0, start + 3.0)
+}
+
+/// A matrix of 16 consecutive values from `start`.
+fn mat4_from(start: f32) -> bevy::math::Mat4 {
+    bevy::math::Mat4::from_cols_array(&std::array::from_fn(|i| start + i as f32))
+}
+
+/// A struct of a composed naga module: `(span, [(member, offset)])`.
+type WgslLayout = (u32, Vec<(String, u32)>);
+
+/// Whether `name` in a composed module is the item `item` (naga_oil
+/// mangles the names of imported items).
+fn is_item(name: &str, item: &str) -> bool {
+    name == item || name.starts_with(&format!("{item}X_naga_oil_mod_X"))
 }
 
 /// The WGSL mirrors in `shaders/quadric_common.wgsl` have the members,
 /// offsets and sizes of the Rust structs in `plugin/splat/gpu.rs`, as naga
-/// lays them out (uniform and storage rules coincide for these structs).
+/// lays them out: the `#[repr(C)]` offsets agree, and so do the bytes
+/// `encase` uploads (each field's bytes sit at naga's offset of its member,
+/// the whole value fills naga's span, an array element naga's stride). The
+/// flag constants agree with the kernel's.
 #[test]
 fn wgsl_structs_match_the_rust_layouts() {
+    use bevy::math::{UVec2, Vec3};
     use bevy_chisel::splat::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
 
     let mut composer = composer(&wgsl_files());
-    let source = "#import bevy_chisel::quadric::{Prop, Quadric, Splat, SplatView}\n\
+    let source = "#import bevy_chisel::quadric::{\n\
+            INDEX_MASK, OUTSIDE_FLAG, Prop, Quadric, Splat, SplatView,\n\
+        }\n\
         @group(0) @binding(0) var<uniform> layout_view: SplatView;\n\
         @group(0) @binding(1) var<uniform> layout_prop: Prop;\n\
         @group(0) @binding(2) var<storage, read> layout_quadrics: array<Quadric>;\n\
         @group(0) @binding(3) var<storage, read> layout_splats: array<Splat>;\n\
+        @group(0) @binding(4) var<storage, read_write> layout_flags: u32;\n\
         @compute @workgroup_size(1)\n\
         fn main() {\n\
             let x = layout_view.flat_ratio + layout_prop.max_scale\n\
                 + layout_quadrics[0].c[0].x + layout_splats[0].radius;\n\
+            layout_flags = OUTSIDE_FLAG | INDEX_MASK;\n\
         }\n";
     let module = composer
         .make_naga_module(NagaModuleDescriptor {
@@ -410,49 +474,139 @@ fn wgsl_structs_match_the_rust_layouts() {
             ..Default::default()
         })
         .unwrap_or_else(|e| panic!("layout check: {}", e.emit_to_string(&composer)));
-    let wgsl_layout = |name: &str| {
-        let mangled = format!("{name}X_naga_oil_mod_X");
+    let wgsl_struct = |name: &str| -> (naga::Handle<naga::Type>, WgslLayout) {
         module
             .types
             .iter()
-            .find_map(|(_, t)| {
-                let type_name = t.name.as_deref()?;
+            .find_map(|(handle, t)| {
                 let naga::TypeInner::Struct { members, span } = &t.inner else {
                     return None;
                 };
-                (type_name == name || type_name.starts_with(&mangled)).then(|| {
+                is_item(t.name.as_deref()?, name).then(|| {
                     let members = members
                         .iter()
                         .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
-                        .collect::<Vec<_>>();
-                    (*span, members)
+                        .collect();
+                    (handle, (*span, members))
                 })
             })
             .unwrap_or_else(|| panic!("struct {name} is not in the composed module"))
     };
-    let pairs = [
+    let array_stride = |element: naga::Handle<naga::Type>| {
+        module
+            .types
+            .iter()
+            .find_map(|(_, t)| match t.inner {
+                naga::TypeInner::Array { base, stride, .. } if base == element => Some(stride),
+                _ => None,
+            })
+            .expect("the element type has an array in the composed module")
+    };
+    let mirrors = [
         (
             "SplatView",
-            rust_layout!(SplatViewUniform: clip_from_world, camera_position, view_forward,
-                light_direction, light_color, ambient, flat_ratio, radius_tolerance, pad),
+            rust_mirror!(
+                uniform,
+                SplatViewUniform {
+                    clip_from_world: mat4_from(1.0),
+                    camera_position: vec4_from(17.0),
+                    view_forward: vec4_from(21.0),
+                    light_direction: vec4_from(25.0),
+                    light_color: vec4_from(29.0),
+                    ambient: vec4_from(33.0),
+                    flat_ratio: 37.0,
+                    radius_tolerance: 38.0,
+                    pad: UVec2::new(39, 40),
+                }
+            ),
         ),
         (
             "Prop",
-            rust_layout!(PropUniform: world_from_local, local_from_world, normal_from_local,
-                bounds, product_count, max_scale, mirror_sign, pad),
+            rust_mirror!(
+                uniform,
+                PropUniform {
+                    world_from_local: mat4_from(1.0),
+                    local_from_world: mat4_from(17.0),
+                    normal_from_local: mat4_from(33.0),
+                    bounds: vec4_from(49.0),
+                    product_count: 53,
+                    max_scale: 54.0,
+                    mirror_sign: 55.0,
+                    pad: 56,
+                }
+            ),
         ),
-        ("Quadric", rust_layout!(QuadricRecord: c)),
+        (
+            "Quadric",
+            rust_mirror!(
+                storage,
+                QuadricRecord {
+                    c: [
+                        vec4_from(1.0),
+                        vec4_from(5.0),
+                        vec4_from(9.0),
+                        vec4_from(13.0)
+                    ],
+                }
+            ),
+        ),
         (
             "Splat",
-            rust_layout!(SplatRecord: position, radius, normal, normal_extent, quadric,
-                clip_start, clip_count, pad),
+            rust_mirror!(
+                storage,
+                SplatRecord {
+                    position: Vec3::new(1.0, 2.0, 3.0),
+                    radius: 4.0,
+                    normal: Vec3::new(5.0, 6.0, 7.0),
+                    normal_extent: 8.0,
+                    quadric: 9,
+                    clip_start: 10,
+                    clip_count: 11,
+                    pad: 12,
+                }
+            ),
         ),
     ];
-    for (name, rust) in pairs {
+    for (name, rust) in mirrors {
+        let (handle, (span, members)) = wgsl_struct(name);
+        let repr_c: Vec<(String, u32)> = rust
+            .fields
+            .iter()
+            .map(|(field, offset, _)| (field.clone(), *offset))
+            .collect();
         assert_eq!(
-            wgsl_layout(name),
-            rust,
-            "WGSL {name} against its Rust mirror"
+            (span, &members),
+            (rust.size, &repr_c),
+            "WGSL {name} against the #[repr(C)] layout of its Rust mirror"
+        );
+        assert_eq!(rust.encased.len(), span as usize, "encase size of {name}");
+        for ((member, offset), (_, _, bytes)) in members.iter().zip(&rust.fields) {
+            let at = *offset as usize;
+            assert_eq!(
+                rust.encased.get(at..at + bytes.len()),
+                Some(&bytes[..]),
+                "encase bytes of {name}.{member} at naga's offset {offset}"
+            );
+        }
+        if !rust.encased_pair.is_empty() {
+            let stride = array_stride(handle) as usize;
+            assert_eq!(rust.encased_pair.len(), 2 * stride, "array of {name}");
+            assert_eq!(rust.encased_pair[stride..], rust.encased[..], "{name} [1]");
+        }
+    }
+    for (name, kernel) in [
+        ("OUTSIDE_FLAG", chisel_quadric::OUTSIDE_FLAG),
+        ("INDEX_MASK", chisel_quadric::INDEX_MASK),
+    ] {
+        let value = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref().is_some_and(|n| is_item(n, name)))
+            .map(|(_, c)| &module.global_expressions[c.init])
+            .unwrap_or_else(|| panic!("constant {name} is not in the composed module"));
+        assert!(
+            matches!(value, naga::Expression::Literal(naga::Literal::U32(v)) if *v == kernel),
+            "WGSL {name} is {value:?}, the kernel's is {kernel:#x}"
         );
     }
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::failure::Failure;
-use chisel_quadric::{OUTSIDE_FLAG, SampleOptions, Scene, SplatSet, sample};
+use chisel_quadric::{INDEX_MASK, SampleOptions, Scene, SplatSet, sample};
 use glam::DVec3;
 
 /// What `chisel sample` was asked to do: its command-line arguments.
@@ -108,7 +108,7 @@ fn write_ply_to(out: &mut impl Write, splats: &SplatSet) -> std::io::Result<()> 
     )?;
     writeln!(out, "property float radius\nend_header")?;
     for s in &splats.splats {
-        let c = splats.quadrics[(s.quadric & !OUTSIDE_FLAG) as usize].color;
+        let c = splats.quadrics[(s.quadric & INDEX_MASK) as usize].color;
         let byte = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
         writeln!(
             out,

@@ -1,16 +1,23 @@
 //! GPU data layouts of the splat and global passes, declared once here.
 //!
+//! These `ShaderType` structs are the only GPU form of the kernel's plain
+//! records: [`QuadricRecord`] converts from a
+//! [`chisel_quadric::ColoredQuadric`] and [`SplatRecord`] from a
+//! [`chisel_quadric::Splat`]. The other buffers hold `u32`s the kernel
+//! encodes itself (clip lists and [`chisel_quadric::encode_normal_form`],
+//! both of [`chisel_quadric::literal_reference`]s).
+//!
 //! Every struct is `#[repr(C)]` with explicit padding, so its `encase`
 //! (WGSL) layout and its Rust layout coincide; the WGSL mirror is
-//! `shaders/quadric_common.wgsl` (same names, same field order). Tests check
-//! the sizes against the kernel's own GPU records
-//! ([`chisel_quadric::GpuSplat`], [`chisel_quadric::GpuQuadric`]), and
-//! `tests/shaders_validate.rs` checks every WGSL mirror's member names and
-//! offsets, as naga lays them out, against these structs.
+//! `shaders/quadric_common.wgsl` (same names, same field order).
+//! `tests/shaders_validate.rs` checks every WGSL mirror's member names,
+//! offsets and size, as naga lays them out, against these structs and the
+//! bytes `encase` writes for them, and the WGSL flag constants against the
+//! kernel's.
 
 use bevy::math::{Mat4, UVec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
-use chisel_quadric::{GpuQuadric, GpuSplat};
+use chisel_quadric::{ColoredQuadric, Splat};
 
 /// Per-view data (WGSL `SplatView`, group 0, dynamic offset).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
@@ -65,30 +72,34 @@ pub struct PropUniform {
     pub pad: u32,
 }
 
-/// One entry of the quadric buffer (WGSL `Quadric`): the kernel's
-/// [`GpuQuadric`] as four `vec4`.
+/// One entry of the quadric buffer (WGSL `Quadric`): a
+/// [`ColoredQuadric`] as four `vec4`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
 #[repr(C)]
 pub struct QuadricRecord {
-    /// `[q00 q01 q02 q03] [q11 q12 q13 q22] [q23 q33 r g] [b 0 0 0]`.
+    /// `[q00 q01 q02 q03] [q11 q12 q13 q22] [q23 q33 r g] [b 0 0 0]`: the
+    /// coefficients as [`ColoredQuadric::scaled_coefficients`], then the
+    /// colour.
     pub c: [Vec4; 4],
 }
 
-impl From<&GpuQuadric> for QuadricRecord {
-    fn from(q: &GpuQuadric) -> Self {
+impl From<&ColoredQuadric> for QuadricRecord {
+    fn from(q: &ColoredQuadric) -> Self {
+        let k = q.scaled_coefficients();
+        let [r, g, b] = q.color;
         Self {
             c: [
-                Vec4::new(q[0], q[1], q[2], q[3]),
-                Vec4::new(q[4], q[5], q[6], q[7]),
-                Vec4::new(q[8], q[9], q[10], q[11]),
-                Vec4::new(q[12], q[13], q[14], q[15]),
+                Vec4::new(k[0], k[1], k[2], k[3]),
+                Vec4::new(k[4], k[5], k[6], k[7]),
+                Vec4::new(k[8], k[9], r, g),
+                Vec4::new(b, 0.0, 0.0, 0.0),
             ],
         }
     }
 }
 
-/// One entry of the instance buffer (WGSL `Splat`): the kernel's
-/// [`GpuSplat`] field for field.
+/// One entry of the instance buffer (WGSL `Splat`): a kernel [`Splat`] in
+/// `f32`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
 #[repr(C)]
 pub struct SplatRecord {
@@ -100,7 +111,7 @@ pub struct SplatRecord {
     pub normal: Vec3,
     /// Half-extent of the surface-aligned box along the normal.
     pub normal_extent: f32,
-    /// Quadric index with [`chisel_quadric::OUTSIDE_FLAG`].
+    /// The literal the splat lies on ([`chisel_quadric::literal_reference`]).
     pub quadric: u32,
     /// Start of the clip list in the clip-index buffer.
     pub clip_start: u32,
@@ -110,13 +121,15 @@ pub struct SplatRecord {
     pub pad: u32,
 }
 
-impl From<&GpuSplat> for SplatRecord {
-    fn from(s: &GpuSplat) -> Self {
+impl From<&Splat> for SplatRecord {
+    // f64 → f32 is the point of this conversion.
+    #[allow(clippy::cast_possible_truncation)]
+    fn from(s: &Splat) -> Self {
         Self {
-            position: Vec3::from_array(s.position),
-            radius: s.radius,
-            normal: Vec3::from_array(s.normal),
-            normal_extent: s.normal_extent,
+            position: s.position.as_vec3(),
+            radius: s.radius as f32,
+            normal: s.normal.as_vec3(),
+            normal_extent: s.normal_extent as f32,
             quadric: s.quadric,
             clip_start: s.clip_start,
             clip_count: s.clip_count,
@@ -127,21 +140,22 @@ impl From<&GpuSplat> for SplatRecord {
 
 #[cfg(test)]
 mod tests {
+    use bevy::math::DVec3;
+
     use super::*;
 
     #[test]
-    fn wgsl_sizes_match_rust_and_kernel_layouts() {
+    fn rust_sizes_match_the_wgsl_sizes() {
         assert_eq!(SplatRecord::min_size().get(), 48);
-        assert_eq!(size_of::<SplatRecord>(), size_of::<GpuSplat>());
+        assert_eq!(QuadricRecord::min_size().get(), 64);
         assert_eq!(
             SplatRecord::min_size().get() as usize,
-            size_of::<GpuSplat>()
+            size_of::<SplatRecord>()
         );
         assert_eq!(
             QuadricRecord::min_size().get() as usize,
-            size_of::<GpuQuadric>()
+            size_of::<QuadricRecord>()
         );
-        assert_eq!(size_of::<QuadricRecord>(), size_of::<GpuQuadric>());
         assert_eq!(
             PropUniform::min_size().get() as usize,
             size_of::<PropUniform>()
@@ -154,22 +168,28 @@ mod tests {
 
     #[test]
     fn records_copy_the_kernel_fields() {
-        let q: GpuQuadric = std::array::from_fn(|i| i as f32);
-        let r = QuadricRecord::from(&q);
-        assert_eq!(r.c[2], Vec4::new(8.0, 9.0, 10.0, 11.0));
-        let s = GpuSplat {
-            position: [1.0, 2.0, 3.0],
+        let quadric = ColoredQuadric {
+            coefficients: [-4.0, -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 2.0, 1.0],
+            color: [0.1, 0.2, 0.3],
+        };
+        let r = QuadricRecord::from(&quadric);
+        assert_eq!(r.c[0], Vec4::new(-1.0, -0.75, -0.5, -0.25));
+        assert_eq!(r.c[1], Vec4::new(0.0, 0.25, 0.5, 0.75));
+        assert_eq!(r.c[2], Vec4::new(0.5, 0.25, 0.1, 0.2));
+        assert_eq!(r.c[3], Vec4::new(0.3, 0.0, 0.0, 0.0));
+        let s = Splat {
+            position: DVec3::new(1.0, 2.0, 3.0),
+            normal: DVec3::Z,
             radius: 0.5,
-            normal: [0.0, 0.0, 1.0],
             normal_extent: 0.01,
             quadric: 7 | chisel_quadric::OUTSIDE_FLAG,
             clip_start: 4,
             clip_count: 2,
-            pad: 0,
         };
         let r = SplatRecord::from(&s);
         assert_eq!(r.position, Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!((r.radius, r.normal, r.normal_extent), (0.5, Vec3::Z, 0.01));
         assert_eq!(r.quadric, s.quadric);
-        assert_eq!((r.clip_start, r.clip_count), (4, 2));
+        assert_eq!((r.clip_start, r.clip_count, r.pad), (4, 2, 0));
     }
 }

@@ -6,7 +6,8 @@
 //!   [`QuadricScene`] asset and its `.quadric.ron` loader, sampling on the async
 //!   compute pool into [`PropSplats`].
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
-//!   `ShaderType`); their WGSL mirror is `shaders/quadric_common.wgsl`.
+//!   `ShaderType`) and converted from the kernel's plain records; their
+//!   WGSL mirror is `shaders/quadric_common.wgsl`.
 //! - [`pipeline`] — bind group layouts and the pipeline specialized on the
 //!   view's format and MSAA and on its splat settings.
 //! - [`render`] — render world: extraction, buffer upload, and the pass, a

@@ -20,7 +20,7 @@ use bevy::ecs::world::DeferredWorld;
 use bevy::math::{DVec3, Vec4};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
-use chisel_quadric::{BoundingSphere, SampleOptions, Scene, SplatSet, sample};
+use chisel_quadric::{BoundingSphere, SampleOptions, Scene, SplatSet, encode_normal_form, sample};
 
 use super::gpu::{QuadricRecord, SplatRecord};
 
@@ -186,8 +186,8 @@ pub struct PropGpuData {
     pub clip_indices: Vec<u32>,
     /// The instance buffer: one record per splat.
     pub splats: Vec<SplatRecord>,
-    /// The normal form for the global pass: `(start, count)` per product,
-    /// then each product's flagged quadric references.
+    /// The normal form for the global pass ([`encode_normal_form`]):
+    /// `(start, count)` per product, then each product's literal references.
     pub terms: Vec<u32>,
     /// Number of products.
     pub product_count: u32,
@@ -266,30 +266,15 @@ impl PropSplats {
             SampleOptions::new(f64::from(radius), sphere).map_err(PropSampleError::Radius)?;
         let samples = sample(&dnf, &options).map_err(PropSampleError::Sampling)?;
         let set = SplatSet::new(&dnf, &scene.dag, &samples);
-        let products = dnf.products();
-        let mut terms: Vec<u32> = Vec::new();
-        let header = 2 * products.len();
-        let mut literals = Vec::new();
-        for product in products {
-            terms.push(to_u32(header + literals.len()));
-            terms.push(to_u32(product.len()));
-            for l in product {
-                let flag = match l.side {
-                    chisel_quadric::Side::Inside => 0,
-                    chisel_quadric::Side::Outside => chisel_quadric::OUTSIDE_FLAG,
-                };
-                literals.push(to_u32(l.quadric) | flag);
-            }
-        }
-        terms.extend(literals);
+        let terms = encode_normal_form(&dnf);
         let centre: DVec3 = sphere.centre;
         Ok(Self(Arc::new(PropGpuData {
             generation: GENERATION.fetch_add(1, Ordering::Relaxed),
-            quadrics: set.gpu_quadrics().iter().map(QuadricRecord::from).collect(),
-            clip_indices: set.clip_indices.clone(),
-            splats: set.gpu_splats().iter().map(SplatRecord::from).collect(),
+            quadrics: set.quadrics.iter().map(QuadricRecord::from).collect(),
+            clip_indices: set.clip_indices,
+            splats: set.splats.iter().map(SplatRecord::from).collect(),
             terms,
-            product_count: to_u32(products.len()),
+            product_count: to_u32(dnf.products().len()),
             bounds: centre.as_vec3().extend(bounds.radius),
             radius,
         })))

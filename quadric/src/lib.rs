@@ -21,8 +21,9 @@
 //! - [`QuadricDistance`] — conservative signed distance (§3.3, eq. 12).
 //! - [`sampling`] — adaptive sampling with the coverage guarantee (§3.2,
 //!   §3.4, §4): heightfields, basic regions, subdivision; [`sample`].
-//! - [`splats`] — splats, quadric buffer and deduplicated clip lists for
-//!   the renderer (§6); [`SplatSet`].
+//! - [`splats`] — splats, quadric buffer, deduplicated clip lists and the
+//!   encoded normal form: the plain records the renderer reads (§6);
+//!   [`SplatSet`], [`encode_normal_form`].
 //! - [`trace`] — the CPU reference ray tracer ([`Camera`], [`trace_image`]),
 //!   ground truth for the renderer.
 //! - [`Scene`] — the RON scene file format (primitives, operations,
@@ -86,5 +87,8 @@ pub use sampling::{
     SampleOptions, SampleSet, SamplingCost, sample, sampling_cost,
 };
 pub use scene::Scene;
-pub use splats::{GpuQuadric, GpuSplat, OUTSIDE_FLAG, QuadricRecord, Splat, SplatSet};
+pub use splats::{
+    ColoredQuadric, INDEX_MASK, OUTSIDE_FLAG, Splat, SplatSet, encode_normal_form,
+    literal_reference,
+};
 pub use trace::{Camera, NO_HIT, TraceHit, TraceImage, trace_image, trace_ray};

@@ -7,25 +7,37 @@
 //! - Clip list of `s`: the literals `L_aj`, `j ≠ b`, of its own product whose
 //!   surface may come within `r` of `s`, i.e. `|d(Q_aj, s)| < r` (eq. 12).
 //!   A fragment at `p` is kept only if every listed literal holds at `p`.
-//!   Entries are quadric indices, with [`OUTSIDE_FLAG`] set for a literal
-//!   `Q ≥ 0`. Lists are sorted and stored once each in a shared
-//!   clip-index buffer (deduplicated).
+//!   Entries are literal references ([`literal_reference`]: the quadric
+//!   index, with [`OUTSIDE_FLAG`] set for a literal `Q ≥ 0`). Lists are
+//!   sorted and stored once each in a shared clip-index buffer
+//!   (deduplicated).
 //! - Surface-aligned box: tangent half-extent `r`, normal half-extent
 //!   `r · (max δ − min δ)` over the plane box `(x ± r, y ± r)` (eq. 23),
 //!   capped at `r` (the splat's patch always lies within its sphere).
+//! - Term buffer ([`encode_normal_form`]): the whole normal form for the
+//!   global ray-tracing pass, `(start, count)` per product, then the literal
+//!   references of every product.
+//!
+//! These are the plain records of everything the renderer reads; the
+//! plugin's GPU structs (`bevy_chisel::splat::gpu`) convert from them, and
+//! the shaders (`shaders/quadric_common.wgsl`) repeat the two flag constants.
 
 use std::collections::HashMap;
 
 use glam::{DVec2, DVec3};
 
-use crate::csg::{Color, CsgDag, Dnf, Side};
+use crate::csg::{Color, CsgDag, Dnf, Literal, Side};
 use crate::distance::QuadricDistance;
 use crate::sampling::SampleSet;
 use crate::scene::DEFAULT_COLOR;
 
-/// Set in a quadric reference when the solid lies where `Q ≥ 0` (the
+/// Set in a literal reference when the solid lies where `Q ≥ 0` (the
 /// literal is the complement): clipping keeps `Q ≥ 0`, the outward normal is `−∇Q`.
 pub const OUTSIDE_FLAG: u32 = 1 << 31;
+
+/// The quadric index bits of a literal reference: `reference & INDEX_MASK`
+/// indexes [`SplatSet::quadrics`].
+pub const INDEX_MASK: u32 = !OUTSIDE_FLAG;
 
 /// One splat.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,7 +50,8 @@ pub struct Splat {
     pub radius: f64,
     /// Half-extent of the surface-aligned box along the normal (eq. 23).
     pub normal_extent: f64,
-    /// Quadric index, with [`OUTSIDE_FLAG`] for a complemented literal.
+    /// The literal the splat lies on ([`literal_reference`]): quadric
+    /// index, with [`OUTSIDE_FLAG`] for a complemented literal.
     pub quadric: u32,
     /// Start of the clip list in [`SplatSet::clip_indices`].
     pub clip_start: u32,
@@ -46,9 +59,10 @@ pub struct Splat {
     pub clip_count: u32,
 }
 
-/// One entry of the quadric buffer.
+/// One entry of the quadric buffer: a quadric of the normal form and the
+/// colour of the primitive it came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct QuadricRecord {
+pub struct ColoredQuadric {
     /// Packed coefficients `[q00, q01, q02, q03, q11, q12, q13, q22, q23, q33]`.
     pub coefficients: [f64; 10],
     /// Linear RGB colour of the source primitive.
@@ -63,33 +77,7 @@ pub struct SplatSet {
     /// The deduplicated clip lists, concatenated.
     pub clip_indices: Vec<u32>,
     /// One record per quadric of the normal form.
-    pub quadrics: Vec<QuadricRecord>,
-}
-
-/// The GPU form of a [`QuadricRecord`]: 16 `f32` (64 bytes): the ten
-/// coefficients scaled so that the largest is `±1`, then `r, g, b`, then zeros.
-pub type GpuQuadric = [f32; 16];
-
-/// The GPU form of a [`Splat`]: 12 words (48 bytes), `#[repr(C)]`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GpuSplat {
-    /// Position.
-    pub position: [f32; 3],
-    /// Radius.
-    pub radius: f32,
-    /// Outward unit normal.
-    pub normal: [f32; 3],
-    /// Normal half-extent of the box.
-    pub normal_extent: f32,
-    /// Quadric index with [`OUTSIDE_FLAG`].
-    pub quadric: u32,
-    /// Clip list start.
-    pub clip_start: u32,
-    /// Clip list length.
-    pub clip_count: u32,
-    /// Padding to 16-byte alignment.
-    pub pad: u32,
+    pub quadrics: Vec<ColoredQuadric>,
 }
 
 impl SplatSet {
@@ -104,7 +92,7 @@ impl SplatSet {
         let quadrics = dnf
             .quadrics()
             .iter()
-            .map(|q| QuadricRecord {
+            .map(|q| ColoredQuadric {
                 coefficients: q.quadric.coefficients(),
                 color: dag
                     .primitives()
@@ -124,7 +112,7 @@ impl SplatSet {
                     continue;
                 }
                 if distances[l.quadric].distance(s.position).abs() < s.radius {
-                    list.push(flagged(l.quadric, l.side));
+                    list.push(literal_reference(*l));
                 }
             }
             list.sort_unstable();
@@ -149,7 +137,7 @@ impl SplatSet {
                 normal: s.normal,
                 radius: r,
                 normal_extent: if extent.is_finite() { extent.min(r) } else { r },
-                quadric: flagged(own.quadric, own.side),
+                quadric: literal_reference(own),
                 clip_start: start,
                 clip_count: count,
             });
@@ -169,7 +157,7 @@ impl SplatSet {
         self.clip_indices[start..start + splat.clip_count as usize]
             .iter()
             .all(|&c| {
-                let k = self.quadrics[(c & !OUTSIDE_FLAG) as usize].coefficients;
+                let k = self.quadrics[(c & INDEX_MASK) as usize].coefficients;
                 let v = crate::Quadric::from_coefficients(k).map_or(0.0, |q| q.value(p));
                 if c & OUTSIDE_FLAG == 0 {
                     v <= 0.0
@@ -178,68 +166,119 @@ impl SplatSet {
                 }
             })
     }
-
-    /// The quadric buffer in GPU form.
-    #[must_use]
-    pub fn gpu_quadrics(&self) -> Vec<GpuQuadric> {
-        self.quadrics.iter().map(QuadricRecord::to_gpu).collect()
-    }
-
-    /// The splats in GPU form.
-    #[must_use]
-    pub fn gpu_splats(&self) -> Vec<GpuSplat> {
-        self.splats.iter().map(Splat::to_gpu).collect()
-    }
 }
 
-impl QuadricRecord {
-    /// The GPU form: coefficients scaled to a largest magnitude of 1 (the
-    /// surface and the sign are unchanged), as `f32`, then the colour.
+impl ColoredQuadric {
+    /// The coefficients as the renderer reads them: scaled to a largest
+    /// magnitude of 1 (the surface and the sign of `Q` are unchanged), as
+    /// `f32`, in the packed order of [`coefficients`](Self::coefficients).
     #[must_use]
     // f64 → f32 is the point of this conversion.
     #[allow(clippy::cast_possible_truncation)]
-    pub fn to_gpu(&self) -> GpuQuadric {
+    pub fn scaled_coefficients(&self) -> [f32; 10] {
         let scale = self
             .coefficients
             .iter()
             .fold(0.0_f64, |s, c| s.max(c.abs()));
         let inv = if scale > 0.0 { 1.0 / scale } else { 1.0 };
-        let mut out = [0.0_f32; 16];
-        for (o, c) in out.iter_mut().zip(self.coefficients) {
-            *o = (c * inv) as f32;
-        }
-        out[10..13].copy_from_slice(&self.color);
-        out
+        self.coefficients.map(|c| (c * inv) as f32)
     }
 }
 
-impl Splat {
-    /// The GPU form (`f32` positions and sizes).
-    #[must_use]
-    #[allow(clippy::cast_possible_truncation)]
-    pub fn to_gpu(&self) -> GpuSplat {
-        GpuSplat {
-            position: self.position.as_vec3().to_array(),
-            radius: self.radius as f32,
-            normal: self.normal.as_vec3().to_array(),
-            normal_extent: self.normal_extent as f32,
-            quadric: self.quadric,
-            clip_start: self.clip_start,
-            clip_count: self.clip_count,
-            pad: 0,
-        }
-    }
-}
-
-fn flagged(quadric: usize, side: Side) -> u32 {
-    let q = len_u32(quadric);
-    match side {
+/// How the renderer refers to a literal: its quadric index, with
+/// [`OUTSIDE_FLAG`] set when the solid lies where `Q ≥ 0`.
+#[must_use]
+pub fn literal_reference(literal: Literal) -> u32 {
+    let q = len_u32(literal.quadric);
+    match literal.side {
         Side::Inside => q,
         Side::Outside => q | OUTSIDE_FLAG,
     }
 }
 
+/// The normal form `dnf` as the term buffer of the global ray-tracing pass:
+/// for each product `a`, entries `2a` and `2a + 1` hold the start (an index
+/// into this same buffer) and the length of its literal list; the lists
+/// follow, one [`literal_reference`] per literal, in product order.
+#[must_use]
+pub fn encode_normal_form(dnf: &Dnf) -> Vec<u32> {
+    let products = dnf.products();
+    let header = 2 * products.len();
+    let literal_count: usize = products.iter().map(Vec::len).sum();
+    let mut terms = Vec::with_capacity(header + literal_count);
+    let mut start = header;
+    for product in products {
+        terms.push(len_u32(start));
+        terms.push(len_u32(product.len()));
+        start += product.len();
+    }
+    terms.extend(products.iter().flatten().map(|&l| literal_reference(l)));
+    terms
+}
+
 /// Buffer lengths and indices fit in `u32` for any splat set a GPU can hold.
 fn len_u32(n: usize) -> u32 {
     u32::try_from(n).unwrap_or(u32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::Quadric;
+
+    /// A cube with a ball taken out, united with a second ball: two
+    /// products, one of them with a complemented literal.
+    fn two_products() -> Dnf {
+        let mut dag = CsgDag::new();
+        let cube = dag
+            .cuboid(DVec3::ZERO, DVec3::ONE, [0.8, 0.6, 0.3])
+            .unwrap();
+        let bite = Quadric::sphere(DVec3::ONE, 0.5).unwrap();
+        let bite = dag.primitive(bite, [0.3, 0.5, 0.9]);
+        let bitten = dag.difference(cube, &[bite]).unwrap();
+        let ball = Quadric::sphere(DVec3::splat(3.0), 1.0).unwrap();
+        let ball = dag.primitive(ball, [0.9, 0.9, 0.9]);
+        let root = dag.union(&[bitten, ball]).unwrap();
+        Dnf::from_dag(&dag, root).unwrap()
+    }
+
+    #[test]
+    fn normal_form_encodes_every_product_in_order() {
+        let dnf = two_products();
+        let terms = encode_normal_form(&dnf);
+        let products = dnf.products();
+        assert_eq!(products.len(), 2);
+        for (a, product) in products.iter().enumerate() {
+            let start = terms[2 * a] as usize;
+            let count = terms[2 * a + 1] as usize;
+            assert_eq!(count, product.len());
+            for (&reference, literal) in terms[start..start + count].iter().zip(product) {
+                assert_eq!((reference & INDEX_MASK) as usize, literal.quadric);
+                let outside = reference & OUTSIDE_FLAG != 0;
+                assert_eq!(outside, literal.side == Side::Outside);
+            }
+        }
+        let literals: usize = products.iter().map(Vec::len).sum();
+        assert_eq!(terms.len(), 2 * products.len() + literals);
+        assert!(terms.iter().any(|&t| t & OUTSIDE_FLAG != 0));
+    }
+
+    #[test]
+    fn scaled_coefficients_keep_the_sign_with_a_unit_maximum() {
+        let dnf = two_products();
+        for q in dnf.quadrics() {
+            let record = ColoredQuadric {
+                coefficients: q.quadric.coefficients(),
+                color: DEFAULT_COLOR,
+            };
+            let scaled = record.scaled_coefficients();
+            let largest = scaled.iter().fold(0.0_f32, |m, c| m.max(c.abs()));
+            assert!((largest - 1.0).abs() < 1e-6);
+            for (s, c) in scaled.iter().zip(record.coefficients) {
+                assert_eq!(s.signum(), c.signum() as f32);
+            }
+        }
+    }
 }

@@ -7,8 +7,8 @@ mod common;
 use std::collections::HashSet;
 
 use chisel_quadric::{
-    BoundingSphere, NO_HIT, OUTSIDE_FLAG, QuadricDistance, SampleOptions, SplatSet, sample,
-    trace_image,
+    BoundingSphere, INDEX_MASK, NO_HIT, OUTSIDE_FLAG, QuadricDistance, SampleOptions, SplatSet,
+    sample, trace_image,
 };
 use glam::DVec3;
 
@@ -37,7 +37,7 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
             .collect();
         let mut lists = HashSet::new();
         for (splat, s) in splats.splats.iter().zip(&set.samples) {
-            assert_eq!(splat.quadric & !OUTSIDE_FLAG, s.quadric);
+            assert_eq!(splat.quadric & INDEX_MASK, s.quadric);
             assert!(splat.normal_extent >= 0.0 && splat.normal_extent <= splat.radius);
             let start = splat.clip_start as usize;
             let list = &splats.clip_indices[start..start + splat.clip_count as usize];
@@ -72,10 +72,9 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
             .map(|&(s, c)| &splats.clip_indices[s as usize..(s + c) as usize])
             .collect();
         assert_eq!(distinct.len(), lists.len(), "{name}");
-        // GPU forms keep the sign of every quadric at the splats.
-        let gpu = splats.gpu_quadrics();
+        // The scaled f32 coefficients keep the sign of every quadric at the splats.
         for (splat, s) in splats.splats.iter().zip(&set.samples).take(200) {
-            let k = gpu[s.quadric as usize];
+            let k = splats.quadrics[s.quadric as usize].scaled_coefficients();
             let p = splat.position + splat.normal * radius;
             let exact = dnf.quadrics()[s.quadric as usize].quadric.value(p);
             let h = p.as_vec3();
@@ -91,7 +90,6 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
                 + k[9];
             assert!(exact == 0.0 || (v > 0.0) == (exact > 0.0) || v.abs() < 1e-3);
         }
-        assert_eq!(splats.gpu_splats().len(), splats.splats.len());
         // Local clipping keeps traced surface points (pixel-perfect rendering).
         for camera in common::cameras(DVec3::from(centre), 2.5 * bound, 24) {
             let image = trace_image(&dnf, &camera);
@@ -108,7 +106,7 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
                 // every literal strictly, except at edges it lies on.
                 let inner = p - image.normal[i] * 1e-9 * bound;
                 let kept = splats.splats.iter().any(|sp| {
-                    sp.quadric & !OUTSIDE_FLAG == q
+                    sp.quadric & INDEX_MASK == q
                         && sp.position.distance(p) <= sp.radius
                         && splats.keeps(sp, inner)
                 });

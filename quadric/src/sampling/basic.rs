@@ -169,7 +169,7 @@ fn decompose_cell(
             Some((i, k)) if pieces < MAX_PIECES => {
                 let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
                 let triangle = CurvedTriangle::new(*warp, [a, b, k]);
-                out.push((Region::Curved(triangle), triangle.kind()));
+                out.push((Region::Curved(triangle), RegionKind::of_curved(&triangle)));
                 let mid = 0.5 * (a + b);
                 let (with_edge, other) = split_at(&poly, 0, k.x, mid.x);
                 stack.push(other);
@@ -247,7 +247,7 @@ fn emit_fan(warp: &Warp, poly: &[DVec2], out: &mut Vec<(Region, RegionKind)>) {
             continue;
         }
         let triangle = CurvedTriangle::new(*warp, w);
-        match triangle.kind() {
+        match RegionKind::of_curved(&triangle) {
             RegionKind::Triangle => {
                 let [a, b, c] = w.map(|p| warp.from_w(p));
                 out.push((Region::triangle(a, b, c), RegionKind::Triangle));

@@ -46,6 +46,7 @@ pub mod basic;
 mod cost;
 pub mod curved;
 pub mod heightfield;
+pub mod polygon;
 pub mod regions;
 pub mod separable;
 mod subdivide;

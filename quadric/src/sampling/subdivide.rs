@@ -47,7 +47,8 @@ use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
 use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
-use crate::sampling::regions::{Polygon, Region};
+use crate::sampling::polygon::Polygon;
+use crate::sampling::regions::Region;
 use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
