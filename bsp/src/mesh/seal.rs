@@ -219,11 +219,9 @@ impl UnsealedMesh {
             })
             .collect();
         if !extra.is_empty() {
-            let mut welder = Welder::with_capacity(own + extra.len());
-            for (i, v) in mesh.vertices.iter().enumerate() {
-                let index = welder.index(v);
-                debug_assert_eq!(index as usize, i, "welded vertices are distinct");
-            }
+            // The mesh's vertices are welded, so distinct.
+            let vertices = std::mem::take(&mut mesh.vertices);
+            let mut welder = Welder::from_distinct(vertices, extra.len());
             for p in extra {
                 welder.index(p);
             }
