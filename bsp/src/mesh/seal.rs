@@ -205,12 +205,28 @@ impl UnsealedMesh {
         self,
         extra: impl IntoIterator<Item = &'a Point4>,
     ) -> (SurfaceMesh, Vec<Point4>) {
+        let edges = self.border_edges();
+        self.seal_with_edges(extra, &edges)
+    }
+
+    /// [`Self::seal`] with the mesh's border edges `edges` already at
+    /// hand: they must be [`Self::border_edges`] (checked in debug
+    /// builds).
+    #[must_use]
+    pub fn seal_with_edges<'a>(
+        self,
+        extra: impl IntoIterator<Item = &'a Point4>,
+        edges: &[BorderEdge],
+    ) -> (SurfaceMesh, Vec<Point4>) {
+        debug_assert!(
+            edges == self.border_edges().as_slice(),
+            "the border edges handed in are not this mesh's"
+        );
         let Self { mut mesh, walls } = self;
         if mesh.polygons.is_empty() {
             return (mesh, Vec::new());
         }
         let own = mesh.vertices.len();
-        let edges = UnsealedMesh::border_edges_of(&mesh, &walls);
         let extra: Vec<&Point4> = extra
             .into_iter()
             .filter(|p| {
