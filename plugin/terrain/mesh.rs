@@ -22,8 +22,6 @@
 //! Pure functions of the octree, run on the worker threads, which also
 //! build the [`Mesh`]es; the main thread only adds them as assets.
 
-use std::collections::HashMap;
-
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
@@ -143,7 +141,7 @@ pub fn cell_meshes_of(
         .map(|v| quantization.to_world(surface.position(v)))
         .collect();
     let normals: Vec<[f64; 3]> = polygons.iter().map(|p| p.unit_normal()).collect();
-    let around = corners_around(&polygons, &positions);
+    let around = CornersAround::of(&polygons, &positions);
     let cos_limit = f64::from(smoothing_degrees.clamp(0.0, 180.0))
         .to_radians()
         .cos();
@@ -151,6 +149,15 @@ pub fn cell_meshes_of(
     let mut labels: Vec<Label> = polygons.iter().map(|p| p.label).collect();
     labels.sort_unstable();
     labels.dedup();
+    // Per exact vertex, its first render vertex and its collider vertex
+    // in the mesh being built (`NONE`: none yet); per render vertex, the
+    // next one of the same exact vertex.
+    let mut first_render = vec![NONE; positions.len()];
+    let mut welded = vec![NONE; positions.len()];
+    let mut next_render: Vec<u32> = Vec::new();
+    // Per corner of the polygon at hand: its exact vertex and smoothed
+    // normal.
+    let mut corner_normals: Vec<(u32, [f32; 3])> = Vec::new();
     labels
         .into_iter()
         .map(|label| {
@@ -158,35 +165,51 @@ pub fn cell_meshes_of(
                 label,
                 ..CellMesh::default()
             };
-            // Render vertex of (exact vertex, normal bits); collider vertex
-            // of an exact vertex.
-            let mut render: HashMap<(u32, [u32; 3]), u32> = HashMap::new();
-            let mut welded: HashMap<u32, u32> = HashMap::new();
+            first_render.fill(NONE);
+            welded.fill(NONE);
+            next_render.clear();
             for (p, polygon) in polygons.iter().enumerate() {
                 if polygon.label != label {
                     continue;
                 }
                 let n_p = normals[p];
+                corner_normals.clear();
+                corner_normals.extend(polygon.corners.iter().map(|&v| {
+                    (
+                        v,
+                        smooth_normal(n_p, around.of_vertex(v), &normals, cos_limit),
+                    )
+                }));
                 let mut corner = |v: u32| -> (u32, u32) {
-                    let normal = smooth_normal(n_p, &around[v as usize], &normals, cos_limit);
+                    let normal = corner_normals.iter().find(|(w, _)| *w == v).map_or_else(
+                        || smooth_normal(n_p, around.of_vertex(v), &normals, cos_limit),
+                        |(_, n)| *n,
+                    );
                     let bits = normal.map(f32::to_bits);
-                    let next = mesh.positions.len() as u32;
-                    let r = *render.entry((v, bits)).or_insert_with(|| {
+                    // The render vertex of (exact vertex, normal bits).
+                    let mut r = first_render[v as usize];
+                    while r != NONE && mesh.normals[r as usize].map(f32::to_bits) != bits {
+                        r = next_render[r as usize];
+                    }
+                    if r == NONE {
+                        r = mesh.positions.len() as u32;
                         mesh.positions.push(positions[v as usize].map(|c| c as f32));
                         mesh.normals.push(normal);
-                        next
-                    });
-                    let next = mesh.collider.positions.len() as u32;
-                    let w = *welded.entry(v).or_insert_with(|| {
+                        next_render.push(first_render[v as usize]);
+                        first_render[v as usize] = r;
+                    }
+                    // The collider vertex of the exact vertex.
+                    let w = &mut welded[v as usize];
+                    if *w == NONE {
+                        *w = mesh.collider.positions.len() as u32;
                         let p = positions[v as usize];
                         mesh.collider.positions.push(Vec3::new(
                             p[0] as f32,
                             p[1] as f32,
                             p[2] as f32,
                         ));
-                        next
-                    });
-                    (r, w)
+                    }
+                    (r, *w)
                 };
                 for triangle in polygon.triangulate() {
                     let [a, b, c] = triangle.map(&mut corner);
@@ -200,21 +223,50 @@ pub fn cell_meshes_of(
         .collect()
 }
 
+/// No render or collider vertex yet.
+const NONE: u32 = u32::MAX;
+
 /// Per exact vertex, the surface polygons around it with their corner
-/// angle there: `(polygon, angle)`.
-fn corners_around(polygons: &[&MeshPolygon], positions: &[[f64; 3]]) -> Vec<Vec<(u32, f64)>> {
-    let mut around: Vec<Vec<(u32, f64)>> = vec![Vec::new(); positions.len()];
-    for (p, polygon) in polygons.iter().enumerate() {
-        let c = &polygon.corners;
-        let n = c.len();
-        for k in 0..n {
-            let at = positions[c[k] as usize];
-            let prev = positions[c[(k + n - 1) % n] as usize];
-            let next = positions[c[(k + 1) % n] as usize];
-            around[c[k] as usize].push((p as u32, angle(sub(prev, at), sub(next, at))));
+/// angle there, `(polygon, angle)`, in polygon order: one list of all
+/// corners, grouped by vertex.
+struct CornersAround {
+    /// Vertex `v`'s corners are `corners[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    corners: Vec<(u32, f64)>,
+}
+
+impl CornersAround {
+    fn of(polygons: &[&MeshPolygon], positions: &[[f64; 3]]) -> Self {
+        let mut start = vec![0u32; positions.len() + 1];
+        for polygon in polygons {
+            for &c in &polygon.corners {
+                start[c as usize + 1] += 1;
+            }
         }
+        for v in 0..positions.len() {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut corners = vec![(0u32, 0.0f64); start[positions.len()] as usize];
+        for (p, polygon) in polygons.iter().enumerate() {
+            let c = &polygon.corners;
+            let n = c.len();
+            for k in 0..n {
+                let at = positions[c[k] as usize];
+                let prev = positions[c[(k + n - 1) % n] as usize];
+                let next = positions[c[(k + 1) % n] as usize];
+                let slot = &mut fill[c[k] as usize];
+                corners[*slot as usize] = (p as u32, angle(sub(prev, at), sub(next, at)));
+                *slot += 1;
+            }
+        }
+        Self { start, corners }
     }
-    around
+
+    /// The corners at vertex `v`.
+    fn of_vertex(&self, v: u32) -> &[(u32, f64)] {
+        &self.corners[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
 }
 
 /// The unit normal of a corner of a polygon with normal `n_p`: the

@@ -205,12 +205,28 @@ impl UnsealedMesh {
         self,
         extra: impl IntoIterator<Item = &'a Point4>,
     ) -> (SurfaceMesh, Vec<Point4>) {
+        let edges = self.border_edges();
+        self.seal_with_edges(extra, &edges)
+    }
+
+    /// [`Self::seal`] with the mesh's border edges `edges` already at
+    /// hand: they must be [`Self::border_edges`] (checked in debug
+    /// builds).
+    #[must_use]
+    pub fn seal_with_edges<'a>(
+        self,
+        extra: impl IntoIterator<Item = &'a Point4>,
+        edges: &[BorderEdge],
+    ) -> (SurfaceMesh, Vec<Point4>) {
+        debug_assert!(
+            edges == self.border_edges().as_slice(),
+            "the border edges handed in are not this mesh's"
+        );
         let Self { mut mesh, walls } = self;
         if mesh.polygons.is_empty() {
             return (mesh, Vec::new());
         }
         let own = mesh.vertices.len();
-        let edges = UnsealedMesh::border_edges_of(&mesh, &walls);
         let extra: Vec<&Point4> = extra
             .into_iter()
             .filter(|p| {
@@ -219,11 +235,9 @@ impl UnsealedMesh {
             })
             .collect();
         if !extra.is_empty() {
-            let mut welder = Welder::with_capacity(own + extra.len());
-            for (i, v) in mesh.vertices.iter().enumerate() {
-                let index = welder.index(v);
-                debug_assert_eq!(index as usize, i, "welded vertices are distinct");
-            }
+            // The mesh's vertices are welded, so distinct.
+            let vertices = std::mem::take(&mut mesh.vertices);
+            let mut welder = Welder::from_distinct(vertices, extra.len());
             for p in extra {
                 welder.index(p);
             }

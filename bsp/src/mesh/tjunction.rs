@@ -47,8 +47,9 @@
 //! # Candidates
 //!
 //! Up to [`SCAN_MAX`] vertices (the surface of one octree cell), every
-//! vertex near the polygon's plane (a cheap `f64` test with a tolerance
-//! of `2^-40` of the magnitude, found once per polygon); above, a dense uniform grid over the `f64` positions of the
+//! vertex whose `f64` x lies in the edge's box widened by the tolerance
+//! below (the vertices sorted by x once, two binary searches per edge);
+//! above, a dense uniform grid over the `f64` positions of the
 //! vertices, about `2∛V` cells per axis (`8V` cells in all, stored as one
 //! offset array and one index array), where each edge visits the cells
 //! near it in steps of at most one cell, every step's box widened by a
@@ -107,8 +108,12 @@ struct Scratch {
     positions: Vec<[f64; 3]>,
     /// Per vertex, the last edge whose grid candidates included it.
     seen: Vec<u64>,
-    /// Vertices near the edge (grid) or the polygon's plane (scan).
+    /// Vertices near the edge: in the grid's cells, or within the edge's
+    /// box along x (scan).
     candidates: Vec<u32>,
+    /// Without a grid, the vertices by `f64` x, and their x in that order.
+    by_x: Vec<u32>,
+    xs: Vec<f64>,
     /// Vertices strictly inside the edge, in order along it.
     inside: Vec<u32>,
     /// The polygon's original corners, its new corners and the positions
@@ -156,6 +161,8 @@ fn split_in(
         positions,
         seen,
         candidates,
+        by_x,
+        xs,
         inside,
         originals,
         corners,
@@ -170,22 +177,20 @@ fn split_in(
     positions.extend(vertices.iter().map(Point4::to_f64));
     let grid = Grid::new(positions, scan_max);
     seen.clear();
+    by_x.clear();
+    xs.clear();
     if grid.is_dense() {
         seen.resize(positions.len(), u64::MAX);
+    } else {
+        by_x.extend(0..positions.len() as u32);
+        by_x.sort_unstable_by(|&p, &q| {
+            positions[p as usize][0].total_cmp(&positions[q as usize][0])
+        });
+        xs.extend(by_x.iter().map(|&v| positions[v as usize][0]));
     }
     let mut edge_number = 0u64;
     for polygon in polygons.iter_mut() {
         let n = polygon.original_len();
-        let first_edge = edge_index;
-        if !grid.is_dense() && whole[first_edge..first_edge + n].contains(&false) {
-            candidates.clear();
-            let plane = PlaneFilter::of(&polygon.plane);
-            for (w, &p) in positions.iter().enumerate() {
-                if plane.may_hold(p) {
-                    candidates.push(w as u32);
-                }
-            }
-        }
         originals.clear();
         originals.extend(
             polygon
@@ -212,10 +217,16 @@ fn split_in(
                     && strictly_inside_edge(&vertices[w as usize], polygon, k)
             };
             inside.clear();
+            candidates.clear();
             if grid.is_dense() {
-                candidates.clear();
                 grid.near_segment(pa, pb, edge_number, seen, candidates);
                 edge_number += 1;
+            } else {
+                // Every vertex whose x lies in the edge's widened box: the
+                // others fail `Segment::may_hold`.
+                let start = xs.partition_point(|&x| x < segment.lo[0]);
+                let end = start + xs[start..].partition_point(|&x| x <= segment.hi[0]);
+                candidates.extend_from_slice(&by_x[start..end]);
             }
             inside.extend(candidates.iter().copied().filter(on_edge));
             let previous = polygon.edges[(k + n - 1) % n];
@@ -355,41 +366,10 @@ impl Segment {
     }
 }
 
-/// A polygon's support plane `s` in `f64`, for [`PlaneFilter::may_hold`],
-/// computed once per polygon.
-struct PlaneFilter {
-    /// The correctly rounded `[a, b, c, d]`.
-    coefficients: [f64; 4],
-}
-
-impl PlaneFilter {
-    /// The `f64` filter of `plane`.
-    #[inline]
-    fn of(plane: &crate::exact::Plane) -> Self {
-        Self {
-            coefficients: plane.approx(),
-        }
-    }
-
-    /// False only when `p` is certainly off the plane: `|s(p)|` above
-    /// `2^-40` of `|a·x| + |b·y| + |c·z| + |d|`. The coefficients are
-    /// within `2^-53` relative, the position within `2^-51` per coordinate
-    /// (see [`super::weld`]), and the three sums add below `2^-51` of the
-    /// same magnitude, so `s(p)` computed for a point exactly on the plane
-    /// stays below `2^-49` of it, far inside the tolerance.
-    #[inline]
-    fn may_hold(&self, p: [f64; 3]) -> bool {
-        let [a, b, c, d] = self.coefficients;
-        let terms = [a * p[0], b * p[1], c * p[2]];
-        let value = terms[0] + terms[1] + terms[2] + d;
-        let magnitude = terms[0].abs() + terms[1].abs() + terms[2].abs() + d.abs();
-        value.abs() <= magnitude * f64::powi(2.0, -40)
-    }
-}
-
-/// Up to this many vertices, every vertex is a candidate of every edge
-/// (tested with [`Segment::may_hold`]): cheaper than building a grid and
-/// walking its cells, as for the surface of one octree cell.
+/// Up to this many vertices, the candidates of an edge are the vertices
+/// within its widened box along x (tested with [`Segment::may_hold`]):
+/// cheaper than building a grid and walking its cells, as for the surface
+/// of one octree cell.
 const SCAN_MAX: usize = 64;
 
 /// A dense uniform grid of vertex indices by `f64` position: the vertices
@@ -591,44 +571,5 @@ mod tests {
         }
         assert!(inserted > 20, "only {inserted} corners inserted");
         assert!(small > 5, "only {small} meshes of few vertices");
-    }
-
-    /// Meets of random plane triples (coefficients of every size up to the
-    /// kernel's range, far from the origin) pass the `f64` plane filter of
-    /// each of their three planes, and points moved off the plane by a
-    /// visible amount fail it.
-    #[test]
-    fn points_on_a_plane_always_pass_its_filter() {
-        use crate::exact::{Plane, intersect_3_planes};
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let (mut tested, mut rejected) = (0, 0);
-        while tested < 3000 {
-            let bits = rng.random_range(1..=54);
-            let mut plane = || {
-                let n = [0; 3].map(|_| rng.random_range(-(1i64 << bits)..=1i64 << bits));
-                let d = rng.random_range(-(1i128 << (bits + 28))..=1i128 << (bits + 28));
-                Plane::new(n[0], n[1], n[2], d)
-            };
-            let (Ok(p), Ok(q), Ok(r)) = (plane(), plane(), plane()) else {
-                continue;
-            };
-            let Some(v) = intersect_3_planes(&p, &q, &r) else {
-                continue;
-            };
-            tested += 1;
-            let position = v.to_f64();
-            for s in [p, q, r] {
-                assert!(PlaneFilter::of(&s).may_hold(position), "{v:?} on {s:?}");
-            }
-            let scale = position.iter().fold(1.0f64, |m, c| m.max(c.abs()));
-            let n = p.approx();
-            let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            let off = [0, 1, 2].map(|i| position[i] + n[i] / length * scale * 1e-6);
-            rejected += usize::from(!PlaneFilter::of(&p).may_hold(off));
-        }
-        assert!(
-            rejected > 2900,
-            "only {rejected} points off the plane rejected"
-        );
     }
 }

@@ -116,6 +116,35 @@ impl Welder {
         }
     }
 
+    /// A welder holding `vertices` (indices `0..len`), which must be
+    /// distinct points (as [`Self::into_vertices`] gives them), with room
+    /// for about `more` further ones: what indexing them one by one would
+    /// give, without comparing them with each other.
+    #[must_use]
+    pub fn from_distinct(mut vertices: Vec<Point4>, more: usize) -> Self {
+        let n = vertices.len() + more;
+        vertices.reserve(more);
+        let mut ordered = Vec::with_capacity(n);
+        ordered.extend(vertices.iter().map(|v| v.to_f64().map(ordered_bits)));
+        let mut welder = Self {
+            vertices,
+            cells: HashMap::default(),
+            next: Vec::new(),
+            xs: Vec::with_capacity(n.min(SCAN_MAX + 1)),
+            ordered,
+        };
+        if welder.vertices.len() < SCAN_MAX {
+            welder.xs.extend(welder.ordered.iter().map(|o| o[0]));
+        } else {
+            welder.next.reserve(n);
+            for v in 0..welder.vertices.len() {
+                welder.next.push(END);
+                welder.file(v as u32);
+            }
+        }
+        welder
+    }
+
     /// The index of `p`: that of an earlier equal point, or a new one.
     pub fn index(&mut self, p: &Point4) -> u32 {
         let ordered = p.to_f64().map(ordered_bits);
@@ -297,6 +326,19 @@ mod tests {
             }
         }
         assert!(points.len() > 3 * SCAN_MAX);
+        // A welder started from distinct vertices, below, at and above
+        // the scan limit, then indexing the rest: the same indices as one
+        // that indexed them all.
+        let mut whole = Welder::default();
+        let indices: Vec<u32> = points.iter().map(|p| whole.index(p)).collect();
+        let distinct = whole.into_vertices();
+        for split in [SCAN_MAX / 2, SCAN_MAX, 2 * SCAN_MAX] {
+            let mut welder = Welder::from_distinct(distinct[..split].to_vec(), 8);
+            for (p, &index) in points.iter().zip(&indices) {
+                assert_eq!(welder.index(p), index);
+            }
+            assert_eq!(welder.into_vertices().len(), distinct.len());
+        }
     }
 
     /// The point `(1/3, 1/7, 1/11)` as the meet of many different plane

@@ -320,9 +320,15 @@ impl SeamedMesher {
             .zip(around)
             .map(|((key, mesh), extra)| {
                 let unsealed = mesh.as_ref().or_else(|| this.unsealed.get(&key));
+                // Recorded from this very mesh (none where it has no wall
+                // point, so no border edge).
+                let edges = this
+                    .borders
+                    .get(&key)
+                    .map_or(&[][..], |b| b.edges.as_slice());
                 let (sealed, seams) = unsealed.map_or_else(
                     || (SurfaceMesh::default(), Vec::new()),
-                    |mesh| mesh.clone().seal(extra),
+                    |mesh| mesh.clone().seal_with_edges(extra, edges),
                 );
                 (key, sealed, seams, mesh)
             })
