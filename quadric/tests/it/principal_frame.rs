@@ -1,7 +1,7 @@
 //! Principal frames: the eigen basis is orthonormal and right-handed for
 //! singular, repeated and nearly repeated eigenvalues; centres are right.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::{PrincipalFrame, Quadric, SymmetricEigen};
 use glam::{DMat3, DVec2, DVec3};

@@ -2,7 +2,7 @@
 //! no point before the hit is inside the solid, the point just after an
 //! entry is, and a missed ray stays outside.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::{Camera, NO_HIT, Ray, trace_image, trace_ray};
 use glam::DVec3;

@@ -2,7 +2,7 @@
 //! sign sampling along the ray, and degenerate directions (near-zero leading
 //! coefficient, rulings) are handled.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::{Quadric, Ray};
 use glam::{DVec2, DVec3};

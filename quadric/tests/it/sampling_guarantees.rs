@@ -3,7 +3,7 @@
 //! radius), soundness (samples lie on their quadric and on the CSG surface),
 //! and thread-count independence.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::csg::Dnf;
 use chisel_quadric::{SampleOptions, SampleSet, sample, trace_image};

@@ -1,7 +1,5 @@
 //! Seeded random inputs shared by the property tests.
 
-#![allow(dead_code)]
-
 use chisel_quadric::Quadric;
 use glam::{DMat4, DQuat, DVec2, DVec3};
 use rand::{Rng, SeedableRng};

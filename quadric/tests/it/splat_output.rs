@@ -2,7 +2,7 @@
 //! sample's own product, deduplicated; box extents are bounded; local
 //! clipping keeps every traced surface point under some covering splat.
 
-mod common;
+use crate::common;
 
 use std::collections::HashSet;
 

@@ -3,7 +3,7 @@
 //! with the normal form, and a normal form that needs more than
 //! `SampleOptions::max_memory` is refused before anything is allocated.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::{DEFAULT_MAX_MEMORY, Error, SampleOptions, Scene, sample, sampling_cost};
 

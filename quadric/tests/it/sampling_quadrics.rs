@@ -2,7 +2,7 @@
 //! degenerate trees: coverage against the reference tracer, soundness, and
 //! no panics.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::csg::{CsgDag, Dnf};
 use chisel_quadric::{

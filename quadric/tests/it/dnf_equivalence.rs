@@ -2,7 +2,7 @@
 //! the original DAG, for random DAGs with shared nodes, transforms,
 //! complements and differences.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::csg::{CsgDag, Dnf, NodeId};
 use glam::DVec3;

@@ -2,7 +2,7 @@
 //! dense surface samples; and the CSG-relative distance (eq. 22) keeps its
 //! classification within its radius.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::csg::{CsgDistance, Dnf};
 use chisel_quadric::{Quadric, QuadricDistance, Ray, Scene};

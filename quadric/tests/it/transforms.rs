@@ -1,7 +1,7 @@
 //! Transforms: `Q' = M⁻ᵀ Q M⁻¹` keeps values (`Q'(Mx) = Q(x)`), composes,
 //! and maps normals by `M⁻ᵀ`.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::{Error, Quadric};
 use glam::{DMat3, DMat4, DVec3};

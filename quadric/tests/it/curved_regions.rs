@@ -4,7 +4,7 @@
 //! same quadric, traced surface points are covered, and every sample lies
 //! on its quadric and on the CSG surface.
 
-mod common;
+use crate::common;
 
 use chisel_quadric::csg::Dnf;
 use chisel_quadric::sampling::basic::basic_regions;
