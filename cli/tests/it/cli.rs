@@ -1,7 +1,7 @@
 //! The `chisel` binary end to end: real scenes in, summaries and files out,
 //! bad input reported with exit code 3, a wrong command line with 2.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -3,7 +3,7 @@
 //! refused up front with a message naming the cause (and how to go on),
 //! an exit code rather than an abort, and no output file.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

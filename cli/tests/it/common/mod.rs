@@ -1,9 +1,6 @@
 //! Shared by the command-line tests: running `chisel`, its `--json`
 //! reports, scratch files, and a box as OBJ text.
 
-// Each test file uses a part of this module.
-#![allow(dead_code)]
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -14,13 +11,17 @@ pub fn chisel() -> Command {
     Command::new(env!("CARGO_BIN_EXE_chisel"))
 }
 
-/// A scratch path, in a folder of this test binary and process.
+/// A scratch path, in a folder of this process and of the test file that
+/// asks (its caller's file name), so that files of the same name in two
+/// test modules never meet.
+#[track_caller]
 pub fn temp(name: &str) -> PathBuf {
-    let binary = std::env::current_exe()
-        .ok()
-        .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
-        .unwrap_or_else(|| "tests".into());
-    let dir = std::env::temp_dir().join(format!("chisel-{binary}-{}", std::process::id()));
+    let module = Path::new(std::panic::Location::caller().file())
+        .file_stem()
+        .map_or_else(|| "tests".into(), |s| s.to_string_lossy().into_owned());
+    let dir = std::env::temp_dir()
+        .join(format!("chisel-cli-tests-{}", std::process::id()))
+        .join(module);
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }

@@ -5,7 +5,7 @@
 //! do not depend on the thread count, and malformed sequences are errors
 //! naming their line, with exit code 3.
 
-mod common;
+use crate::common;
 
 use common::{box_obj, chisel, f, path, report, temp};
 use serde_json::Value;

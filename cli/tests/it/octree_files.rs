@@ -4,7 +4,7 @@
 //! a stored octree with the identical result, and damaged files reported
 //! with exit code 3.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
