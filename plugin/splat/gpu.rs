@@ -5,7 +5,7 @@
 //! `shaders/quadric_common.wgsl` (same names, same field order). Tests check
 //! the sizes against the kernel's own GPU records
 //! ([`chisel_quadric::GpuSplat`], [`chisel_quadric::GpuQuadric`]), and
-//! `tests/shaders_validate.rs` checks every WGSL mirror's member names and
+//! `tests/it/shaders_validate.rs` checks every WGSL mirror's member names and
 //! offsets, as naga lays them out, against these structs.
 
 use bevy::math::{Mat4, UVec2, Vec3, Vec4};

@@ -13,6 +13,8 @@ use bevy_chisel::presentation::{HeadlessConfig, Presentation};
 use bevy_chisel::quadric::Scene;
 use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropSplats};
 
+use crate::ONE_APP_AT_A_TIME;
+
 const SIZE: u32 = 128;
 
 /// The two cameras' EV100: one stop apart.
@@ -30,6 +32,9 @@ fn linear(c: u8) -> f64 {
 
 #[test]
 fn one_stop_more_exposure_value_halves_the_shaded_colour() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let path = format!(
         "{}/assets/scenes/three_spheres.quadric.ron",
         env!("CARGO_MANIFEST_DIR")

@@ -7,6 +7,8 @@ use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use bevy_chisel::presentation::{HeadlessConfig, Presentation};
 
+use crate::ONE_APP_AT_A_TIME;
+
 const BACKGROUND: [u8; 3] = [0, 0, 255];
 const CUBE: [u8; 3] = [255, 0, 0];
 
@@ -48,6 +50,9 @@ fn close(a: [u8; 3], b: [u8; 3]) -> bool {
 
 #[test]
 fn renders_a_cube_headless_and_reads_back_its_pixels() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let config = HeadlessConfig {
         width: 128,
         height: 96,

@@ -6,7 +6,7 @@
 //! its terrain equal to the server's. A secure server admits only
 //! clients with a connect token signed by its key.
 
-mod net;
+use crate::{ONE_APP_AT_A_TIME, net};
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
@@ -49,6 +49,9 @@ struct Refused(Vec<RequestRejected>);
 
 #[test]
 fn hostile_requests_are_refused_with_reasons_and_hurt_no_one() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let limits = NetLimits::default();
     let burst = limits.burst as usize;
     let (mut server, addr) = server(slab(), limits);
@@ -274,6 +277,9 @@ fn hostile_requests_are_refused_with_reasons_and_hurt_no_one() {
 /// that connects without a token, never get in.
 #[test]
 fn a_secure_server_admits_only_clients_with_its_tokens() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let key = NetKey::generate();
     let (mut server, addr) = secure_server(slab(), &key);
     let minute = Duration::from_secs(60);

@@ -15,8 +15,6 @@
 //! cell seen near the bottom of the last view is hidden, and it does show
 //! background inside the silhouette.
 
-use std::sync::Mutex;
-
 use bevy::camera::Viewport;
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::math::Ray3d;
@@ -26,8 +24,7 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{CarveTool, Terrain, TerrainMaterials, TerrainPlugin};
 
-/// Bevy apps are run one at a time.
-static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
+use crate::ONE_APP_AT_A_TIME;
 
 const TERRAIN: [u8; 3] = [255, 0, 0];
 const BACKGROUND: [u8; 3] = [0, 0, 255];

@@ -25,6 +25,8 @@ use bevy_chisel::quadric::Scene;
 use bevy_chisel::splat::render::{ExtractedProps, VisibleProps};
 use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropSplats};
 
+use crate::ONE_APP_AT_A_TIME;
+
 fn splats(name: &str, centre: [f64; 3], radius: f64) -> PropSplats {
     let path = format!(
         "{}/assets/scenes/{name}.quadric.ron",
@@ -157,6 +159,9 @@ fn seen(app: &mut App, prop: Entity) -> (bool, bool, bool, bool) {
 
 #[test]
 fn a_prop_outside_the_frustum_is_culled_and_drawn_once_back_in_view() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let prop = splats("classic", [0.0; 3], 90.0);
     let mut app = headless_app();
     let size = Extent3d {

@@ -18,8 +18,7 @@ use bevy_chisel::terrain::{
     TerrainSurface, TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
 
-/// Bevy apps are run one at a time.
-static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
+use crate::ONE_APP_AT_A_TIME;
 
 const ROCK: u8 = 1;
 const ORE: u8 = 4;

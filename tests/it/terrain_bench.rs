@@ -5,7 +5,7 @@
 //! carving costs a game running at 60 frames per second. Ignored by default
 //! (they take a while); run
 //!
-//! `cargo test --release -p bevy_chisel --test terrain_bench -- --ignored --nocapture`
+//! `cargo test --release -p bevy_chisel --all-features --test it terrain_bench:: -- --ignored --nocapture`
 //!
 //! The release profile keeps the kernel's overflow checks and debug
 //! assertions (see the root `Cargo.toml`), so these figures are an upper
@@ -168,7 +168,7 @@ fn crater_carves_on_a_large_terrain() {
 /// with radius-2 m dodecahedra at the surface, every tenth carve a heap of
 /// added dirt.
 ///
-/// `cargo test --release -p bevy_chisel --test terrain_bench load -- --ignored --nocapture`
+/// `cargo test --release -p bevy_chisel --all-features --test it terrain_bench::loading -- --ignored --nocapture`
 #[test]
 #[ignore = "benchmark"]
 fn loading_a_saved_terrain_against_replaying_its_carves() {
@@ -339,7 +339,7 @@ fn mark_end(
 /// changed cell's mesh in place). The same span over frames with nothing
 /// to carve is the baseline. Ignored by default; run
 ///
-/// `cargo test --release -p bevy_chisel --test terrain_bench frames -- --ignored --nocapture`
+/// `cargo test --release -p bevy_chisel --all-features --test it terrain_bench::carving_at_sixty_frames -- --ignored --nocapture`
 ///
 /// Environment: `CHISEL_BENCH_CARVES` (default 300), `CHISEL_BENCH_EVERY`
 /// (frames between carves, default 6: ten carves a second).
@@ -484,7 +484,7 @@ fn carving_at_sixty_frames_per_second() {
 /// [`large_terrain`], the app updated as fast as it goes (no frame pacing).
 /// Also how many app updates each carve took to show.
 ///
-/// `cargo test --release --all-features -p bevy_chisel --test terrain_bench latency -- --ignored --nocapture`
+/// `cargo test --release --all-features -p bevy_chisel --test it terrain_bench::crater_latency -- --ignored --nocapture`
 #[test]
 #[ignore = "benchmark"]
 fn crater_latency_to_meshes_and_colliders() {

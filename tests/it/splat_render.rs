@@ -5,10 +5,10 @@
 //! colours, and compared pixel by pixel with `chisel_quadric::trace_image`
 //! from the same camera: the primitive ids must agree on ≥ 99.5 % of the
 //! pixels, and pixels where the reference sees the solid but the pass shows
-//! background (holes) must stay ≤ 0.1 % (`tests/common`). A cube mesh
+//! background (holes) must stay ≤ 0.1 % (`tests/it/common`). A cube mesh
 //! through a prop checks depth compositing both ways.
 
-mod common;
+use crate::common;
 
 use bevy::math::DVec3;
 use bevy::prelude::*;

@@ -7,10 +7,6 @@
 //! ids agree on ≥ 99.5 % of the pixels, holes (reference solid, capture
 //! background) ≤ 0.1 %.
 
-// Each test file uses a part of this module.
-#![allow(dead_code)]
-
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use bevy::camera::{ClearColorConfig, Viewport};
@@ -24,9 +20,19 @@ use bevy_chisel::splat::{
     SplatViewSettings,
 };
 
-/// Bevy apps are run one at a time.
-static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
+use crate::ONE_APP_AT_A_TIME;
+
+/// Captures taken so far, numbering the screenshot files.
 static SHOT: AtomicU32 = AtomicU32::new(0);
+
+/// The file name, without its extension, of the test file that called the
+/// `#[track_caller]` functions leading here.
+#[track_caller]
+fn caller_file_stem() -> String {
+    std::path::Path::new(std::panic::Location::caller().file())
+        .file_stem()
+        .map_or_else(|| "splat".into(), |s| s.to_string_lossy().into_owned())
+}
 
 /// Vertical field of view of every comparison camera.
 pub const FOV_DEGREES: f64 = 30.0;
@@ -123,6 +129,7 @@ pub struct UnlitCube {
 /// [`SplatSettings`] resource `settings`, seen by each of `views` in a
 /// `size`² viewport of its own, left to right in one image
 /// (`size · views.len()` wide); returns the captured image.
+#[track_caller]
 pub fn render_views(
     splats: PropSplats,
     transform: Transform,
@@ -133,7 +140,9 @@ pub fn render_views(
     render_views_with(splats, transform, settings, views, size, None)
 }
 
-/// [`render_views`] with an optional [`UnlitCube`] in the scene.
+/// [`render_views`] with an optional [`UnlitCube`] in the scene. The
+/// capture's file stem starts with the calling test file's name.
+#[track_caller]
 pub fn render_views_with(
     splats: PropSplats,
     transform: Transform,
@@ -156,7 +165,7 @@ pub fn render_views_with(
         output_dir: std::env::var_os("CHISEL_TEST_SCREENSHOTS").map(Into::into),
         stem: format!(
             "{}-{:?}-{}",
-            env!("CARGO_CRATE_NAME"),
+            caller_file_stem(),
             settings.mode,
             SHOT.fetch_add(1, Ordering::Relaxed)
         ),

@@ -4,7 +4,7 @@
 //! client's terrain is damaged locally and resyncs, and at the end all four
 //! octrees are bit-identical with equal state hashes.
 
-mod net;
+use crate::{ONE_APP_AT_A_TIME, net};
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::StateHash;
@@ -37,6 +37,9 @@ fn snapshot_of(app: &mut App) -> (u64, Vec<u8>, u64) {
 
 #[test]
 fn four_peers_end_with_identical_octrees() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let limits = NetLimits {
         carves_per_second: 1e6,
         burst: 1e6,
@@ -156,6 +159,9 @@ fn four_peers_end_with_identical_octrees() {
 /// different piece than the server's.
 #[test]
 fn a_late_client_gets_the_debris_rules_and_materials() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     use bevy_chisel::bsp::octree::{Anchors, CellBox, CubeSide, DebrisConfig};
     let rules = DebrisConfig {
         anchors: Anchors {

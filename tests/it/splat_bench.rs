@@ -4,10 +4,10 @@
 //! Ignored by default (the global pass takes seconds per frame on a CPU
 //! driver); run
 //!
-//! `WGPU_BACKEND=vulkan cargo test --release -p bevy_chisel --test splat_bench -- --ignored --nocapture`
+//! `WGPU_BACKEND=vulkan cargo test --release -p bevy_chisel --all-features --test it splat_bench:: -- --ignored --nocapture`
 //!
 //! Per SCENARIOS scene, one app renders the prop alone (from the view of
-//! `tests/splat_render.rs`: the bounding sphere fills the image height)
+//! `tests/it/splat_render.rs`: the bounding sphere fills the image height)
 //! through a sequence of steps, in turn, in the same run:
 //!
 //! - time: surface-aligned boxes, screen quads, global ray tracing and an
@@ -30,7 +30,7 @@
 //! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
 //! 40 as `SplatRadius::default()`).
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

@@ -1,7 +1,7 @@
 //! Figures of networked carving, printed as one JSON line (ignored by
 //! default; BENCHMARKS.md quotes it):
 //!
-//! `cargo test --release -p bevy_chisel --all-features --test net_bench -- --ignored --nocapture`
+//! `cargo test --release -p bevy_chisel --all-features --test it net_bench:: -- --ignored --nocapture`
 //!
 //! - bytes of one carve on the wire (the encoded [`ServerPacket::Carve`])
 //!   against the bytes of the meshes of the cells it changed (vertex
@@ -12,7 +12,7 @@
 //! - the time a client needs to join a terrain after 10,000 carves:
 //!   snapshot received, terrain loaded and meshed.
 
-mod net;
+use crate::net;
 
 use std::time::Instant;
 

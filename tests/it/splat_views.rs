@@ -1,6 +1,6 @@
 //! The splat pass under mirroring transforms and with per-camera settings,
 //! headless on the machine's Vulkan adapter (lavapipe in CI), against the
-//! CPU reference tracer with the thresholds of `tests/splat_render.rs`
+//! CPU reference tracer with the thresholds of `tests/it/splat_render.rs`
 //! (≥ 99.5 % of the pixels agree, ≤ 0.1 % holes).
 //!
 //! A prop scaled by `(−1, 1, 1)` seen from the mirror image `M·eye` of the
@@ -11,7 +11,7 @@
 //! rotated is compared with the reference tracer of its scene under the
 //! same affine map.
 
-mod common;
+use crate::common;
 
 use bevy::math::DQuat;
 use bevy::math::{DMat4, DVec3};

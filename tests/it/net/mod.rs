@@ -1,8 +1,6 @@
 //! What the networked tests share: a server and clients as Bevy apps in
 //! one process, talking over renet's netcode UDP transport on 127.0.0.1.
 
-#![allow(dead_code)]
-
 use std::net::{Ipv4Addr, SocketAddr};
 
 use bevy::asset::AssetPlugin;
