@@ -9,7 +9,7 @@
 //
 // Only world position and world normal are used: no UVs, no tangents.
 //
-// Validated with Bevy's shader library (tests/shaders_validate.rs) under
+// Validated with Bevy's shader library (tests/it/shaders_validate.rs) under
 // Defines: TONEMAP_IN_SHADER, DEBAND_DITHER, ENVIRONMENT_MAP.
 
 #import bevy_pbr::{

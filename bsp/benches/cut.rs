@@ -12,7 +12,7 @@
 //!   of the finished `N`-face polyhedron (a large section), each applied to
 //!   a fresh, cache-warm copy.
 
-#[path = "../tests/common/fig9.rs"]
+#[path = "../tests/it/common/fig9.rs"]
 mod fig9;
 
 use std::hint::black_box;

@@ -20,7 +20,7 @@
 //! and `grafted` ([`Bsp::merge_grafted`], the paper's merge, which copies
 //! `B` whole into those cells, as the paper's figure counts output nodes).
 
-#[path = "../tests/common/random_bsp.rs"]
+#[path = "../tests/it/common/random_bsp.rs"]
 mod random_bsp;
 
 use std::hint::black_box;

@@ -12,9 +12,12 @@ use chisel_bsp::exact::{
 };
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
-#[path = "../tests/common/bigint_reference.rs"]
+// The benchmark takes a part of the integration tests' shared support.
+#[allow(dead_code)]
+#[path = "../tests/it/common/bigint_reference.rs"]
 mod big;
-#[path = "../tests/common/inputs.rs"]
+#[allow(dead_code)]
+#[path = "../tests/it/common/inputs.rs"]
 mod inputs;
 
 /// Inputs per benchmark (one batch per criterion iteration): small enough

@@ -2,9 +2,9 @@
 //! carve ([`Octree::apply_with_faces`]), the debris search
 //! ([`Octree::detach_after`]) and the sealed meshes of every cell that
 //! changed or whose seams did ([`SeamedMesher::update`]), timed one by one.
-//! It is the kernel's share of the latency the plugin's `terrain_bench
-//! latency` reports, on the same kind of terrain, and a stable target for
-//! a profiler or an instruction count:
+//! It is the kernel's share of the latency the plugin's
+//! `terrain_bench::crater_latency` reports, on the same kind of terrain,
+//! and a stable target for a profiler or an instruction count:
 //!
 //! ```sh
 //! cargo run --release -p chisel_bsp --example crater_job -- 1000 [THREADS] [check]

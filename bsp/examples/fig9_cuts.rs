@@ -18,7 +18,7 @@
 //! takes on average (Figure 9's measures, [`ConvexArena::last_cut_stats`]):
 //! vertices classified, edge-descent steps and exact vertex constructions.
 
-#[path = "../tests/common/fig9.rs"]
+#[path = "../tests/it/common/fig9.rs"]
 mod fig9;
 
 use chisel_bsp::convex::{ConvexArena, CutOutcome, CutStats, KeptOutcome, NO_TAG, Part, PolyId};

@@ -10,7 +10,7 @@
 //! Every struct is `#[repr(C)]` with explicit padding, so its `encase`
 //! (WGSL) layout and its Rust layout coincide; the WGSL mirror is
 //! `shaders/quadric_common.wgsl` (same names, same field order).
-//! `tests/shaders_validate.rs` checks every WGSL mirror's member names,
+//! `tests/it/shaders_validate.rs` checks every WGSL mirror's member names,
 //! offsets and size, as naga lays them out, against these structs and the
 //! bytes `encase` writes for them, and the WGSL flag constants against the
 //! kernel's.

@@ -1,0 +1,113 @@
+//! The sampling guarantees of §4.2 on the shipped scenes: coverage (every
+//! traced surface point has a sample on the same quadric within the splat
+//! radius), soundness (samples lie on their quadric and on the CSG surface),
+//! and thread-count independence.
+
+use crate::common;
+
+use chisel_quadric::csg::Dnf;
+use chisel_quadric::{SampleOptions, SampleSet, sample, trace_image};
+use glam::DVec3;
+
+/// The shipped scenes, sampled inside the bounds their files give.
+const SCENES: [&str; 4] = ["three_spheres", "classic", "sharp8", "machine80"];
+
+/// A scene's bounding sphere as `(centre, radius)`.
+fn bounds(name: &str) -> (DVec3, f64) {
+    let b = common::scene(name)
+        .bounds
+        .expect("shipped scenes give bounds");
+    (b.centre, b.radius)
+}
+
+fn sampled(name: &str, radius: f64) -> (Dnf, SampleSet) {
+    let scene = common::scene(name);
+    let dnf = scene.dnf().unwrap();
+    let sphere = scene.bounds.unwrap();
+    let options = SampleOptions::new(radius, sphere).unwrap();
+    let set = sample(&dnf, &options).unwrap();
+    (dnf, set)
+}
+
+#[test]
+fn traced_surface_is_covered() {
+    for name in SCENES {
+        let (centre, bound) = bounds(name);
+        for radius in [bound / 8.0, bound / 25.0] {
+            let (dnf, set) = sampled(name, radius);
+            assert!(!set.samples.is_empty(), "{name}: no samples");
+            let grid = common::SampleGrid::new(&set, radius);
+            let sphere = set.options.bounds;
+            let (mut checked, mut missed) = (0, 0);
+            for camera in common::cameras(centre, 2.5 * bound, 48) {
+                let image = trace_image(&dnf, &camera);
+                for (i, &q) in image.quadric.iter().enumerate() {
+                    if q == chisel_quadric::NO_HIT {
+                        continue;
+                    }
+                    let ray = camera.ray(i as u32 % camera.width, i as u32 / camera.width);
+                    let p = ray.at(image.depth[i]);
+                    if sphere.signed_distance(p) > -1e-9 * bound {
+                        continue;
+                    }
+                    checked += 1;
+                    if !grid.covered(q, p, 1e-9) {
+                        missed += 1;
+                        eprintln!("{name} r={radius}: uncovered {p} on quadric {q}");
+                    }
+                }
+            }
+            assert!(checked > 1000, "{name}: only {checked} reference points");
+            assert_eq!(
+                missed, 0,
+                "{name} r={radius}: {missed} of {checked} uncovered"
+            );
+        }
+    }
+}
+
+#[test]
+fn samples_lie_on_the_csg_surface() {
+    for name in SCENES {
+        let (_, bound) = bounds(name);
+        let (dnf, set) = sampled(name, bound / 25.0);
+        let eps = 1e-7 * bound;
+        for s in &set.samples {
+            let q = &dnf.quadrics()[s.quadric as usize].quadric;
+            let g = q.gradient(s.position).length();
+            assert!(
+                q.value(s.position).abs() <= 1e-12 * g * bound,
+                "{name}: sample {} off its quadric",
+                s.position
+            );
+            assert!(s.radius > 0.0 && s.radius <= set.options.radius);
+            assert!(set.options.bounds.signed_distance(s.position) <= eps);
+            // On the CSG surface: inside on one side, outside on the other,
+            // unless the normal is degenerate (a cone's apex).
+            if s.normal != DVec3::ZERO {
+                let inside = dnf.contains(s.position - s.normal * eps);
+                let outside = !dnf.contains(s.position + s.normal * eps);
+                assert!(
+                    inside && outside,
+                    "{name}: sample {} not on the surface",
+                    s.position
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn output_is_independent_of_thread_count() {
+    for name in SCENES {
+        let (_, bound) = bounds(name);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| sampled(name, bound / 20.0).1)
+        };
+        assert_eq!(run(1), run(2), "{name}");
+    }
+}

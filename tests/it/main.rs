@@ -1,0 +1,77 @@
+//! The integration tests of `bevy_chisel`, in one test binary: one module
+//! per area, each built under the features it needs, with the shared
+//! support in [`common`] (headless splat renders and their comparison with
+//! the reference tracer) and [`net`] (servers and clients in one process).
+//! One binary links Bevy once instead of once per file.
+//!
+//! Run one area with a filter on its module path, for example
+//! `cargo test --release -p bevy_chisel --all-features --test it terrain_ecs::`.
+//! `tests/terrain_soak.rs` is a binary of its own: it counts the process's
+//! allocations with its own global allocator.
+
+#[cfg(any(feature = "props", feature = "net"))]
+use std::sync::Mutex;
+
+/// The Bevy apps that render, and the networked ones, run one at a time:
+/// each takes this lock for as long as it lives. Bevy's task pools are
+/// global to the process, so in one test binary a render test waiting a
+/// bounded number of frames for its props to be sampled on the async pool
+/// would otherwise wait behind a thousand carves of a networked test, and
+/// the networked test's late client could join before its server applied
+/// a carve (both were seen failing). The short, light ECS tests run beside
+/// them as before.
+#[cfg(any(feature = "props", feature = "net"))]
+static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+#[cfg(feature = "viewer")]
+mod common;
+#[cfg(feature = "net")]
+mod net;
+
+// Shaders: every WGSL file and its Rust mirrors, validated by naga.
+#[cfg(all(feature = "terrain", feature = "props"))]
+mod shaders_validate;
+
+// Headless rendering through Bevy's pipeline.
+#[cfg(feature = "viewer")]
+mod headless_render;
+
+// Quadric props drawn as splats.
+#[cfg(feature = "viewer")]
+mod splat_bench;
+#[cfg(feature = "props")]
+mod splat_culling;
+#[cfg(feature = "viewer")]
+mod splat_exposure;
+#[cfg(feature = "viewer")]
+mod splat_render;
+#[cfg(feature = "viewer")]
+mod splat_views;
+
+// Destructible terrain.
+#[cfg(feature = "terrain")]
+mod terrain_assets;
+#[cfg(feature = "terrain")]
+mod terrain_bench;
+#[cfg(feature = "terrain")]
+mod terrain_data;
+#[cfg(feature = "terrain")]
+mod terrain_ecs;
+#[cfg(all(feature = "terrain", feature = "render"))]
+mod terrain_labels;
+#[cfg(feature = "viewer")]
+mod terrain_material;
+#[cfg(feature = "avian")]
+mod terrain_output;
+#[cfg(feature = "avian")]
+mod terrain_physics;
+#[cfg(feature = "viewer")]
+mod terrain_seams_render;
+
+// Multiplayer over renet's netcode UDP transport on 127.0.0.1.
+#[cfg(feature = "net")]
+mod net_bench;
+#[cfg(feature = "net")]
+mod net_hostile;
+#[cfg(feature = "net")]
+mod net_replication;

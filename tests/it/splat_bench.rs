@@ -1,0 +1,727 @@
+//! Paper 2, §7: the splat pass against the global ray-tracing pass of the
+//! same prop and camera, at 1920×1080 on this machine's Vulkan adapter
+//! (lavapipe where there is no GPU), and the splat pass's overdraw.
+//! Ignored by default (the global pass takes seconds per frame on a CPU
+//! driver); run
+//!
+//! `WGPU_BACKEND=vulkan cargo test --release -p bevy_chisel --all-features --test it splat_bench:: -- --ignored --nocapture`
+//!
+//! Per SCENARIOS scene, one app renders the prop alone (from the view of
+//! `tests/it/splat_render.rs`: the bounding sphere fills the image height)
+//! through a sequence of steps, in turn, in the same run:
+//!
+//! - time: surface-aligned boxes, screen quads, global ray tracing and an
+//!   empty frame (prop hidden), in `ROUNDS` interleaved rounds, each step
+//!   after `WARM_UP` frames. The pass time is the GPU timestamp span of the
+//!   `chisel_splat_pass` (Bevy's `RenderDiagnosticsPlugin`); the frame time
+//!   minus the empty frame's is reported beside it as a check that needs no
+//!   timestamps.
+//! - overdraw: the `Overdraw` output (1/64 per fragment, added up, no depth
+//!   test) into an `Rgba16Float` target, read back: every count up to 2048
+//!   is exact in `f16`. Covered pixels are those where the `QuadricIds`
+//!   output shows the solid. Overdraw = fragments ÷ covered pixels. The
+//!   pipeline-statistics count of fragment invocations is printed beside
+//!   the read-back sum when the adapter has them.
+//!
+//! Environment: `CHISEL_BENCH_FRAMES` (timed frames per splat step,
+//! default 15), `CHISEL_BENCH_GLOBAL_FRAMES` (per global step, default 3;
+//! 0 leaves the global pass out, e.g. for a sweep of splat sizes),
+//! `CHISEL_BENCH_SCENES` (comma-separated names, default all four),
+//! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
+//! 40 as `SplatRadius::default()`).
+
+use crate::common;
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use bevy::app::ScheduleRunnerPlugin;
+use bevy::asset::RenderAssetUsages;
+use bevy::camera::{ClearColorConfig, RenderTarget};
+use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
+use bevy::diagnostic::DiagnosticsStore;
+use bevy::prelude::*;
+use bevy::render::RenderPlugin;
+use bevy::render::diagnostic::RenderDiagnosticsPlugin;
+use bevy::render::gpu_readback::{Readback, ReadbackComplete};
+use bevy::render::render_resource::{
+    Extent3d, TextureDimension, TextureFormat, TextureUsages, WgpuFeatures,
+};
+use bevy::render::renderer::{RenderAdapterInfo, RenderDevice};
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+use bevy_chisel::splat::{
+    ChiselSplatPlugin, PropBounds, PropSplats, SplatMode, SplatOutput, SplatSettings,
+};
+use common::{FOV_DEGREES, SCALE, SCENES, load_scene};
+
+const WIDTH: u32 = 1920;
+const HEIGHT: u32 = 1080;
+/// Frames run after each switch before frame times are recorded (with
+/// pipelined rendering, a frame's time is that of the previous frame's
+/// render). Pass times need none: they are told apart by what they drew.
+const WARM_UP: u32 = 2;
+/// Frames after a switch before a read-back, and before pipeline
+/// statistics are taken for the new output (the diagnostics lag a few
+/// frames and cannot tell outputs of one mode apart).
+const READ_SETTLE: u32 = 5;
+/// Timing rounds, interleaved so that a change of machine load hits every
+/// mode alike.
+const ROUNDS: u32 = 2;
+
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// How the prop is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Variant {
+    /// Surface-aligned boxes (the default splat pass).
+    Boxes,
+    /// Surface-aligned boxes without their `−n` face.
+    OpenBoxes,
+    /// Screen-aligned quads.
+    Quads,
+    /// Global ray tracing of a cube around the prop.
+    Global,
+}
+
+impl Variant {
+    fn mode(self) -> SplatMode {
+        match self {
+            Variant::Boxes | Variant::OpenBoxes => SplatMode::SurfaceBoxes,
+            Variant::Quads => SplatMode::ScreenQuads,
+            Variant::Global => SplatMode::GlobalRayTrace,
+        }
+    }
+
+    /// Vertex shader invocations of one frame with `splats` splats: how a
+    /// late diagnostic is told apart.
+    fn vertices(self, splats: u32) -> f64 {
+        let n = f64::from(splats);
+        match self {
+            Variant::Boxes => 36.0 * n,
+            Variant::OpenBoxes => 30.0 * n,
+            Variant::Quads => 6.0 * n,
+            Variant::Global => 36.0,
+        }
+    }
+}
+
+/// What is drawn in one step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Draw {
+    /// The prop, shaded.
+    Prop(Variant),
+    /// Nothing (the prop hidden): the frame's fixed cost.
+    Empty,
+}
+
+/// One step of the sequence.
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    /// Record `frames` frames.
+    Time { draw: Draw, frames: u32 },
+    /// Read one frame of `output` back.
+    Read {
+        variant: Variant,
+        output: SplatOutput,
+    },
+}
+
+/// What the steps recorded.
+#[derive(Default)]
+struct Log {
+    /// GPU time of the pass (ms) per drawing.
+    pass_ms: HashMap<Draw, Vec<f64>>,
+    /// Frame time (ms) per drawing.
+    frame_ms: HashMap<Draw, Vec<f64>>,
+    /// Fragment shader invocations of the pass (pipeline statistics).
+    invocations: HashMap<(Variant, SplatOutput), Vec<f64>>,
+    /// Each read-back frame (linear RGBA per pixel).
+    images: HashMap<(Variant, SplatOutput), Vec<[f32; 4]>>,
+    /// The adapter and whether it has timestamps inside passes and
+    /// pipeline statistics.
+    adapter: String,
+}
+
+#[derive(Resource, Clone, Default)]
+struct SharedLog(Arc<Mutex<Log>>);
+
+impl SharedLog {
+    fn with<R>(&self, f: impl FnOnce(&mut Log) -> R) -> R {
+        let mut log = self
+            .0
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        f(&mut log)
+    }
+}
+
+#[derive(Resource)]
+struct Driver {
+    steps: Vec<Step>,
+    step: usize,
+    /// Frames since the current step began (1 on its first frame).
+    frame: u32,
+    /// Pass measurements of the current step's drawing taken in this step.
+    taken: u32,
+    target: Handle<Image>,
+    /// Splats of the prop: tells the modes apart by vertex invocations.
+    splat_count: u32,
+    /// Time of the last diagnostics measurement consumed.
+    last_measurement: Option<Instant>,
+    /// Variants measured once: the first frame of each also compiles
+    /// lavapipe's shader variants and is not recorded.
+    seen: Vec<Variant>,
+    /// The read-back of the current step has arrived.
+    read_done: Arc<Mutex<bool>>,
+    reader: Option<Entity>,
+    total_frames: u32,
+}
+
+impl Driver {
+    /// The variant that drew `vertices` vertex invocations: diagnostics
+    /// arrive a few frames late, so they are told apart by what they drew.
+    fn variant_of(&self, vertices: f64) -> Option<Variant> {
+        [
+            Variant::Boxes,
+            Variant::OpenBoxes,
+            Variant::Quads,
+            Variant::Global,
+        ]
+        .into_iter()
+        .find(|v| v.vertices(self.splat_count).total_cmp(&vertices).is_eq())
+    }
+}
+
+fn steps(splat_frames: u32, global_frames: u32) -> Vec<Step> {
+    let mut steps = Vec::new();
+    for _ in 0..ROUNDS {
+        for (draw, frames) in [
+            (Draw::Prop(Variant::Boxes), splat_frames),
+            (Draw::Prop(Variant::OpenBoxes), splat_frames),
+            (Draw::Prop(Variant::Quads), splat_frames),
+            (Draw::Empty, splat_frames),
+            (Draw::Prop(Variant::Global), global_frames),
+        ] {
+            if frames > 0 {
+                steps.push(Step::Time { draw, frames });
+            }
+        }
+    }
+    for (variant, output) in [
+        (Variant::Boxes, SplatOutput::QuadricIds),
+        (Variant::OpenBoxes, SplatOutput::QuadricIds),
+        (Variant::Boxes, SplatOutput::Overdraw),
+        (Variant::OpenBoxes, SplatOutput::Overdraw),
+        (Variant::Quads, SplatOutput::Overdraw),
+        (Variant::Global, SplatOutput::Overdraw),
+    ] {
+        if variant == Variant::Global && global_frames == 0 {
+            continue;
+        }
+        steps.push(Step::Read { variant, output });
+    }
+    steps
+}
+
+/// The latest value of the pass diagnostic ending in `field`.
+fn pass_diagnostic(store: &DiagnosticsStore, field: &str) -> Option<(Instant, f64)> {
+    let suffix = format!("chisel_splat_pass/{field}");
+    store
+        .iter()
+        .find(|d| d.path().as_str().ends_with(&suffix))
+        .and_then(|d| d.measurement())
+        .map(|m| (m.time, m.value))
+}
+
+/// Applies the settings and visibility of `step`.
+fn begin_step(
+    step: Step,
+    settings: &mut SplatSettings,
+    props: &mut Query<&mut Visibility, With<PropSplats>>,
+) {
+    let (variant, output, visible) = match step {
+        Step::Time {
+            draw: Draw::Prop(variant),
+            ..
+        } => (variant, SplatOutput::Shaded, true),
+        Step::Time {
+            draw: Draw::Empty, ..
+        } => (Variant::Boxes, SplatOutput::Shaded, false),
+        Step::Read { variant, output } => (variant, output, true),
+    };
+    settings.mode = variant.mode();
+    settings.open_boxes = variant == Variant::OpenBoxes;
+    settings.output = output;
+    for mut v in props {
+        *v = if visible {
+            Visibility::Inherited
+        } else {
+            Visibility::Hidden
+        };
+    }
+}
+
+/// Reads `target` back once; `done` is set when the image is in the log
+/// under `key`.
+fn read_back(
+    commands: &mut Commands,
+    target: Handle<Image>,
+    key: (Variant, SplatOutput),
+    log: SharedLog,
+    done: Arc<Mutex<bool>>,
+) -> Entity {
+    *done
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner) = false;
+    commands
+        .spawn(Readback::texture(target))
+        .observe(move |read: On<ReadbackComplete>| {
+            let image = Image::new(
+                Extent3d {
+                    width: WIDTH,
+                    height: HEIGHT,
+                    depth_or_array_layers: 1,
+                },
+                TextureDimension::D2,
+                read.data.clone(),
+                TextureFormat::Rgba16Float,
+                RenderAssetUsages::MAIN_WORLD,
+            );
+            let pixels: Vec<[f32; 4]> = (0..HEIGHT)
+                .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
+                .map(|(x, y)| {
+                    image
+                        .get_color_at(x, y)
+                        .map_or([f32::NAN; 4], |c| c.to_linear().to_f32_array())
+                })
+                .collect();
+            log.with(|log| {
+                log.images.entry(key).or_insert(pixels);
+            });
+            *done
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner) = true;
+        })
+        .id()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    mut driver: ResMut<Driver>,
+    mut settings: ResMut<SplatSettings>,
+    mut props: Query<&mut Visibility, With<PropSplats>>,
+    store: Res<DiagnosticsStore>,
+    time: Res<Time<Real>>,
+    log: Res<SharedLog>,
+    mut commands: Commands,
+    mut exit: MessageWriter<AppExit>,
+) {
+    driver.total_frames += 1;
+    if driver.total_frames > 5000 {
+        eprintln!("splat bench: too many frames; giving up");
+        exit.write(AppExit::error());
+        return;
+    }
+    let Some(&step) = driver.steps.get(driver.step) else {
+        exit.write(AppExit::Success);
+        return;
+    };
+    driver.frame += 1;
+    let frame = driver.frame;
+    if frame == 1 {
+        begin_step(step, &mut settings, &mut props);
+    }
+    // A new diagnostics measurement (of a frame a few frames back), and
+    // the mode that drew it.
+    let fresh = pass_diagnostic(&store, "vertex_shader_invocations")
+        .filter(|(t, _)| Some(*t) != driver.last_measurement);
+    let mut measured = fresh.and_then(|(t, vertices)| {
+        driver.last_measurement = Some(t);
+        driver.variant_of(vertices)
+    });
+    if let Some(variant) = measured
+        && !driver.seen.contains(&variant)
+    {
+        driver.seen.push(variant);
+        measured = None;
+    }
+    let next = match step {
+        Step::Time { draw, frames } => {
+            if frame > WARM_UP {
+                log.with(|log| {
+                    let ms = time.delta_secs_f64() * 1e3;
+                    log.frame_ms.entry(draw).or_default().push(ms);
+                });
+            }
+            if let Some(variant) = measured
+                && let Some((_, ms)) = pass_diagnostic(&store, "elapsed_gpu")
+            {
+                log.with(|log| log.pass_ms.entry(Draw::Prop(variant)).or_default().push(ms));
+                if draw == Draw::Prop(variant) {
+                    driver.taken += 1;
+                }
+            }
+            match draw {
+                Draw::Prop(_) => driver.taken >= frames && frame > WARM_UP + 1,
+                Draw::Empty => frame >= WARM_UP + frames,
+            }
+        }
+        Step::Read { variant, output } => {
+            if frame > READ_SETTLE
+                && measured == Some(variant)
+                && let Some((_, v)) = pass_diagnostic(&store, "fragment_shader_invocations")
+            {
+                log.with(|log| {
+                    log.invocations
+                        .entry((variant, output))
+                        .or_default()
+                        .push(v)
+                });
+            }
+            if frame == READ_SETTLE {
+                let reader = read_back(
+                    &mut commands,
+                    driver.target.clone(),
+                    (variant, output),
+                    log.clone(),
+                    driver.read_done.clone(),
+                );
+                driver.reader = Some(reader);
+            }
+            let done = *driver
+                .read_done
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            // A few more frames for the pipeline statistics of this output.
+            let finished = done && frame > READ_SETTLE + 3;
+            if finished && let Some(reader) = driver.reader.take() {
+                commands.entity(reader).despawn();
+            }
+            finished
+        }
+    };
+    if next {
+        driver.step += 1;
+        driver.frame = 0;
+        driver.taken = 0;
+    }
+}
+
+fn report_adapter(
+    device: Option<Res<RenderDevice>>,
+    info: Option<Res<RenderAdapterInfo>>,
+    log: Res<SharedLog>,
+) {
+    let features = device.map(|d| d.features()).unwrap_or_default();
+    let text = format!(
+        "{} ({:?}); timestamps in passes: {}, pipeline statistics: {}",
+        info.as_ref().map_or("?".into(), |i| i.name.clone()),
+        info.as_ref().map(|i| i.backend),
+        features.contains(WgpuFeatures::TIMESTAMP_QUERY_INSIDE_PASSES),
+        features.contains(WgpuFeatures::PIPELINE_STATISTICS_QUERY),
+    );
+    log.with(|log| log.adapter = text);
+}
+
+fn run_scene(splats: PropSplats, centre: Vec3, radius: f32, steps: Vec<Step>) -> Log {
+    let splat_count = u32::try_from(splats.0.splat_count()).expect("splats fit in u32");
+    let log = SharedLog::default();
+    let mut app = App::new();
+    app.add_plugins((
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .disable::<WinitPlugin>(),
+        ScheduleRunnerPlugin::run_loop(Duration::ZERO),
+        RenderDiagnosticsPlugin,
+        ChiselSplatPlugin,
+    ));
+    let mut image = Image::new_uninit(
+        Extent3d {
+            width: WIDTH,
+            height: HEIGHT,
+            depth_or_array_layers: 1,
+        },
+        TextureDimension::D2,
+        TextureFormat::Rgba16Float,
+        RenderAssetUsages::RENDER_WORLD,
+    );
+    image.texture_descriptor.usage |= TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC;
+    let target = app.world_mut().resource_mut::<Assets<Image>>().add(image);
+    let eye = local_eye(centre, radius) * SCALE;
+    let look = centre * SCALE;
+    let camera_target = target.clone();
+    app.insert_resource(log.clone())
+        .insert_resource(Driver {
+            steps,
+            step: 0,
+            frame: 0,
+            taken: 0,
+            target,
+            splat_count,
+            last_measurement: None,
+            seen: Vec::new(),
+            read_done: Arc::default(),
+            reader: None,
+            total_frames: 0,
+        })
+        .add_systems(Startup, report_adapter)
+        .add_systems(Update, drive)
+        .add_systems(Startup, move |mut commands: Commands| {
+            commands.spawn((splats.clone(), Transform::from_scale(Vec3::splat(SCALE))));
+            commands.spawn((
+                DirectionalLight {
+                    illuminance: 8000.0,
+                    ..default()
+                },
+                Transform::from_xyz(2.0, -3.0, 5.0).looking_at(Vec3::ZERO, Vec3::Z),
+            ));
+            commands.spawn((
+                Camera3d::default(),
+                Camera {
+                    clear_color: ClearColorConfig::Custom(Color::BLACK),
+                    ..default()
+                },
+                RenderTarget::Image(camera_target.clone().into()),
+                Projection::Perspective(PerspectiveProjection {
+                    fov: (FOV_DEGREES as f32).to_radians(),
+                    near: 0.01,
+                    ..default()
+                }),
+                Tonemapping::None,
+                DebandDither::Disabled,
+                Msaa::Off,
+                Transform::from_translation(eye).looking_at(look, Vec3::Z),
+            ));
+        });
+    assert_eq!(app.run(), AppExit::Success, "headless run failed");
+    drop(app);
+    Arc::try_unwrap(log.0)
+        .map(|m| {
+            m.into_inner()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        })
+        .unwrap_or_else(|shared| std::mem::take(&mut *shared.lock().expect("log")))
+}
+
+/// The eye of the benchmark view in the prop's local (scene) coordinates:
+/// the render tests' comparison eye.
+fn local_eye(centre: Vec3, radius: f32) -> Vec3 {
+    common::eye(centre.as_dvec3(), f64::from(radius)).as_vec3()
+}
+
+/// Of the splats drawn: the fraction whose normal faces away from `eye`
+/// (their boxes' `−n` faces are drawn), the mean radius over `requested`,
+/// and the area of their squares, `Σ (2 r)²` (scene units).
+fn splat_stats(splats: &PropSplats, eye: Vec3, requested: f32) -> (f64, f64, f64) {
+    let records = &splats.0.splats;
+    let n = records.len().max(1) as f64;
+    let away = records
+        .iter()
+        .filter(|s| s.normal.dot(eye - s.position) < 0.0)
+        .count();
+    let radii = records.iter().map(|s| f64::from(s.radius));
+    let squares = radii.clone().map(|r| 4.0 * r * r).sum::<f64>();
+    (
+        away as f64 / n,
+        radii.sum::<f64>() / n / f64::from(requested),
+        squares,
+    )
+}
+
+fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// `(fragments, pixels with at least one, largest count)` of an overdraw
+/// read-back.
+fn fragment_counts(pixels: &[[f32; 4]]) -> (u64, u64, u64) {
+    let mut total = 0;
+    let mut touched = 0;
+    let mut max = 0;
+    for p in pixels {
+        let k = (f64::from(p[0]) * 64.0).round() as u64;
+        total += k;
+        touched += u64::from(k > 0);
+        max = max.max(k);
+    }
+    (total, touched, max)
+}
+
+/// Whether a `QuadricIds` pixel shows the solid (the background is black).
+fn shows_solid(p: &[f32; 4]) -> bool {
+    p[..3].iter().any(|&c| c > 0.0)
+}
+
+/// Medians and overdraw of one scene.
+struct SceneFigures {
+    pass_ms: HashMap<Variant, f64>,
+    frame_minus_empty_ms: HashMap<Variant, f64>,
+    /// Fragments per covered pixel (exact) and the adapter's fragment
+    /// shader invocations per covered pixel.
+    overdraw: HashMap<Variant, (f64, f64)>,
+    covered: u64,
+}
+
+fn figures(log: &Log) -> SceneFigures {
+    let median_of = |values: Option<&Vec<f64>>| median(values.map_or(&[][..], Vec::as_slice));
+    let empty = median_of(log.frame_ms.get(&Draw::Empty));
+    let all = [
+        Variant::Boxes,
+        Variant::OpenBoxes,
+        Variant::Quads,
+        Variant::Global,
+    ];
+    for draw in all.map(Draw::Prop).into_iter().chain([Draw::Empty]) {
+        let pass = log.pass_ms.get(&draw).cloned().unwrap_or_default();
+        let frame = log.frame_ms.get(&draw).cloned().unwrap_or_default();
+        println!(
+            "  {draw:?}: pass median {:.2} ms of {:.1?}; frame median {:.1} ms of {:.0?}",
+            median(&pass),
+            pass,
+            median(&frame),
+            frame,
+        );
+    }
+    let ids = |variant| log.images.get(&(variant, SplatOutput::QuadricIds));
+    let covered = ids(Variant::Boxes).map_or(0, |image| {
+        image.iter().filter(|p| shows_solid(p)).count() as u64
+    });
+    if let (Some(closed), Some(open)) = (ids(Variant::Boxes), ids(Variant::OpenBoxes)) {
+        let differ = closed.iter().zip(open).filter(|(a, b)| a != b).count();
+        let holes = closed
+            .iter()
+            .zip(open)
+            .filter(|(a, b)| shows_solid(a) && !shows_solid(b))
+            .count();
+        println!("  open boxes against closed, quadric ids: {differ} pixels differ, {holes} holes");
+    }
+    let mut overdraw = HashMap::new();
+    for variant in all {
+        let key = (variant, SplatOutput::Overdraw);
+        let Some(image) = log.images.get(&key) else {
+            continue;
+        };
+        let (total, touched, max) = fragment_counts(image);
+        let invocations = median_of(log.invocations.get(&key));
+        println!(
+            "  {variant:?} overdraw: {total} fragments on {touched} pixels (max {max}), \
+             {covered} covered pixels: {:.2} per covered pixel; \
+             {invocations} fragment shader invocations (pipeline statistics)",
+            total as f64 / covered as f64,
+        );
+        overdraw.insert(
+            variant,
+            (total as f64 / covered as f64, invocations / covered as f64),
+        );
+    }
+    SceneFigures {
+        pass_ms: all
+            .into_iter()
+            .map(|v| (v, median_of(log.pass_ms.get(&Draw::Prop(v)))))
+            .collect(),
+        frame_minus_empty_ms: all
+            .into_iter()
+            .map(|v| (v, median_of(log.frame_ms.get(&Draw::Prop(v))) - empty))
+            .collect(),
+        overdraw,
+        covered,
+    }
+}
+
+#[test]
+#[ignore = "benchmark"]
+fn splat_pass_against_global_ray_tracing_at_full_hd() {
+    let splat_frames = env_or("CHISEL_BENCH_FRAMES", 15);
+    let global_frames = env_or("CHISEL_BENCH_GLOBAL_FRAMES", 3);
+    let divisor: f32 = env_or("CHISEL_BENCH_SPLAT_DIVISOR", 40.0);
+    let only: Option<Vec<String>> = std::env::var("CHISEL_BENCH_SCENES")
+        .ok()
+        .map(|s| s.split(',').map(str::to_owned).collect());
+    let mut times = Vec::new();
+    let mut overdraws = Vec::new();
+    // The SCENARIOS scenes; each is sampled and viewed in its file's
+    // `bounds`.
+    for (name, _, _) in SCENES {
+        if only.as_ref().is_some_and(|o| !o.iter().any(|n| n == name)) {
+            continue;
+        }
+        let scene = load_scene(name);
+        let bounds = PropBounds::resolve(None, &scene).expect("shipped scenes give their bounds");
+        let PropBounds { centre, radius } = bounds;
+        let splats = PropSplats::build(&scene, bounds, radius / divisor).expect("sampling");
+        let (quadrics, splat_count) = (splats.0.quadrics.len(), splats.0.splat_count());
+        let (away, mean_radius, squares) =
+            splat_stats(&splats, local_eye(centre, radius), radius / divisor);
+        let log = run_scene(splats, centre, radius, steps(splat_frames, global_frames));
+        println!(
+            "\n{name}: {quadrics} quadrics, {splat_count} splats (radius {:.3}, mean {:.3} of it; \
+             squares Σ(2r)² = {squares:.0}; {:.1} % face away from the eye); {}",
+            radius / divisor,
+            mean_radius,
+            100.0 * away,
+            log.adapter
+        );
+        let f = figures(&log);
+        let pass = |v| f.pass_ms.get(&v).copied().unwrap_or(f64::NAN);
+        let check = |v| f.frame_minus_empty_ms.get(&v).copied().unwrap_or(f64::NAN);
+        let od = |v| f.overdraw.get(&v).copied().unwrap_or((f64::NAN, f64::NAN));
+        times.push(format!(
+            "| {name} | {quadrics} | {splat_count} | {:.2} | {:.2} | {:.1}× | {:.1}× | {:.2} | {:.2} |",
+            pass(Variant::Boxes),
+            pass(Variant::Global),
+            pass(Variant::Global) / pass(Variant::Boxes),
+            check(Variant::Global) / check(Variant::Boxes),
+            pass(Variant::OpenBoxes),
+            pass(Variant::Quads),
+        ));
+        overdraws.push(format!(
+            "| {name} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            f.covered,
+            od(Variant::Boxes).0,
+            od(Variant::Boxes).1,
+            od(Variant::OpenBoxes).0,
+            od(Variant::Quads).0,
+        ));
+    }
+    println!(
+        "\n| scene | quadrics | splats | splat pass ms | global pass ms | global ÷ splat | \
+         same, frame − empty | open boxes ms | screen quads ms |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for row in times {
+        println!("{row}");
+    }
+    println!(
+        "\n| scene | covered px | overdraw | invocations per covered px | \
+         open boxes overdraw | screen quads overdraw |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|");
+    for row in overdraws {
+        println!("{row}");
+    }
+}
