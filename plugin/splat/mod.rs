@@ -62,11 +62,12 @@ pub mod render;
 
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::pbr::MeshPipelineSystems;
 use bevy::prelude::*;
 use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::SpecializedRenderPipelines;
-use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
 
 pub use prop::{
     PropBounds, PropGpuData, PropSampleError, PropSplats, QuadricProp, QuadricScene, SplatRadius,
@@ -91,7 +92,8 @@ pub enum SplatMode {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SplatOutput {
-    /// Shaded with the scene's first directional light and ambient light.
+    /// Lit by Bevy's PBR functions as a `StandardMaterial` mesh is: every
+    /// light, received shadows, the camera's exposure, fog and tonemapping.
     #[default]
     Shaded,
     /// The quadric index, unlit (tests): in an 8-bit sRGB target the bytes
@@ -223,27 +225,26 @@ impl Plugin for ChiselSplatPlugin {
             return;
         };
         render_app
-            .init_resource::<pipeline::SplatPipeline>()
             .init_resource::<SpecializedRenderPipelines<pipeline::SplatPipeline>>()
             .init_resource::<render::ExtractedProps>()
-            .init_resource::<render::ExtractedSplatLight>()
             .init_resource::<render::PropBuffers>()
             .init_resource::<render::SplatViewUniforms>()
             // The render world's own type registry: its public data.
             .register_type::<render::ExtractedProps>()
-            .register_type::<render::ExtractedSplatLight>()
             .register_type::<render::VisibleProps>()
             .add_systems(
                 ExtractSchedule,
-                (
-                    render::extract_props,
-                    render::extract_visible_props,
-                    render::extract_light,
-                ),
+                (render::extract_props, render::extract_visible_props),
+            )
+            .add_systems(
+                RenderStartup,
+                pipeline::init_splat_pipeline.after(MeshPipelineSystems),
             )
             .add_systems(
                 Render,
-                (render::prepare_props, render::prepare_views).in_set(RenderSystems::Prepare),
+                (render::prepare_props, render::prepare_views)
+                    .in_set(RenderSystems::Prepare)
+                    .run_if(resource_exists::<pipeline::SplatPipeline>),
             )
             .add_systems(
                 Core3d,
