@@ -48,7 +48,11 @@ struct Prop {
     /// −1 when `world_from_local` mirrors (negative determinant), +1
     /// otherwise: see `box_corner`.
     mirror_sign: f32,
-    pad: u32,
+    /// PBR material of the whole prop (`PropMaterial`).
+    metallic: f32,
+    perceptual_roughness: f32,
+    reflectance: f32,
+    pad: vec2<u32>,
 };
 
 /// One quadric record (mirror: `chisel_quadric::GpuQuadric`).

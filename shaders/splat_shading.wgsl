@@ -7,9 +7,9 @@
 // 1), bound by the pass; the pipeline carries the mesh pipeline's shader
 // defines for that view.
 //
-// The material: base colour from the quadric (linear RGB), metallic and
-// perceptual roughness from the prop, the rest `StandardMaterial`'s
-// defaults (reflectance 0.5, no emission, opaque, fog enabled).
+// The material: base colour from the quadric (linear RGB), metallic,
+// perceptual roughness and reflectance from the prop (`PropMaterial`), the
+// rest `StandardMaterial`'s defaults (no emission, opaque, fog enabled).
 //
 // Debug outputs (OUTPUT_IDS, OUTPUT_NORMALS) are unlit and skip the
 // post-lighting step, so their bytes stay exact.
@@ -41,6 +41,9 @@ fn surface_color(
 #else
     var pbr_input = pbr_types::pbr_input_new();
     pbr_input.material.base_color = vec4<f32>(quadric_color(quadrics[index]), 1.0);
+    pbr_input.material.metallic = prop.metallic;
+    pbr_input.material.perceptual_roughness = prop.perceptual_roughness;
+    pbr_input.material.reflectance = vec3<f32>(prop.reflectance);
     pbr_input.material.flags |= pbr_types::STANDARD_MATERIAL_FLAGS_FOG_ENABLED_BIT;
     pbr_input.flags = MESH_FLAGS_SHADOW_RECEIVER_BIT;
     pbr_input.frag_coord = frag_coord;

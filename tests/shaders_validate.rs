@@ -510,7 +510,8 @@ fn wgsl_structs_match_the_rust_layouts() {
         (
             "Prop",
             rust_layout!(PropUniform: world_from_local, local_from_world, normal_from_local,
-                bounds, product_count, max_scale, mirror_sign, pad),
+                bounds, product_count, max_scale, mirror_sign, metallic, perceptual_roughness,
+                reflectance, pad),
         ),
         ("Quadric", rust_layout!(QuadricRecord: c)),
         (

@@ -57,8 +57,14 @@ pub struct PropUniform {
     /// by it, which reverses the boxes' winding in local space so that it
     /// comes out counter-clockwise (front-facing) again in clip space.
     pub mirror_sign: f32,
+    /// The prop's [`PropMaterial::metallic`](super::PropMaterial::metallic).
+    pub metallic: f32,
+    /// The prop's [`PropMaterial::perceptual_roughness`](super::PropMaterial::perceptual_roughness).
+    pub perceptual_roughness: f32,
+    /// The prop's [`PropMaterial::reflectance`](super::PropMaterial::reflectance).
+    pub reflectance: f32,
     /// Padding to 16 bytes.
-    pub pad: u32,
+    pub pad: UVec2,
 }
 
 /// One entry of the quadric buffer (WGSL `Quadric`): the kernel's

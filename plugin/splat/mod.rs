@@ -5,6 +5,8 @@
 //! - [`prop`] — main world: the [`QuadricProp`] component, the
 //!   [`QuadricScene`] asset and its `.quadric.ron` loader, sampling on the async
 //!   compute pool into [`PropSplats`].
+//! - [`material`] — [`PropMaterial`], a prop's metallic, roughness and
+//!   reflectance for Bevy's PBR lighting (base colours are the quadrics').
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
 //!   `ShaderType`); their WGSL mirror is `shaders/quadric_common.wgsl`.
 //! - [`pipeline`] — bind group layouts and the pipeline specialized on the
@@ -56,6 +58,7 @@
 #[cfg(feature = "avian")]
 pub mod avian;
 pub mod gpu;
+pub mod material;
 pub mod pipeline;
 pub mod prop;
 pub mod render;
@@ -69,6 +72,7 @@ use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::SpecializedRenderPipelines;
 use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
 
+pub use material::PropMaterial;
 pub use prop::{
     PropBounds, PropGpuData, PropSampleError, PropSplats, QuadricProp, QuadricScene, SplatRadius,
 };
@@ -200,6 +204,7 @@ impl Plugin for ChiselSplatPlugin {
             .register_type::<SplatSettings>()
             .register_type::<SplatViewSettings>()
             .register_type::<QuadricProp>()
+            .register_type::<PropMaterial>()
             .register_type::<PropSplats>()
             .register_type::<prop::PropSampling>()
             .configure_sets(

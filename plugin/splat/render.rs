@@ -34,6 +34,7 @@ use bevy::render::sync_world::RenderEntity;
 use bevy::render::view::{ExtractedView, Msaa, ViewDepthTexture, ViewTarget};
 
 use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
+use super::material::PropMaterial;
 use super::pipeline::{PROP_GROUP, SPLAT_VIEW_GROUP, SplatPipeline, SplatPipelineKey};
 use super::prop::{PropGpuData, PropSplats};
 use super::{SplatMode, SplatSettings, SplatViewSettings};
@@ -49,6 +50,9 @@ pub struct ExtractedProp {
     /// Its local-to-world transform (invertible: props with a singular
     /// transform are not extracted).
     pub world_from_local: Mat4,
+    /// Its PBR material (validated; the default where it has none or an
+    /// invalid one).
+    pub material: PropMaterial,
 }
 
 /// The props to draw this frame.
@@ -76,10 +80,18 @@ pub(crate) fn extract_visible_props(
 
 pub(crate) fn extract_props(
     mut extracted: ResMut<ExtractedProps>,
-    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &ViewVisibility)>>,
+    props: Extract<
+        Query<(
+            Entity,
+            &PropSplats,
+            &GlobalTransform,
+            &ViewVisibility,
+            Option<&PropMaterial>,
+        )>,
+    >,
 ) {
     extracted.0.clear();
-    for (entity, splats, transform, visibility) in &props {
+    for (entity, splats, transform, visibility, material) in &props {
         // A transform without an inverse (a zero scale) has no local rays
         // to trace: the prop is flat or a point, and is not drawn.
         let det = transform.affine().matrix3.determinant();
@@ -88,6 +100,9 @@ pub(crate) fn extract_props(
                 entity,
                 data: splats.0.clone(),
                 world_from_local: transform.to_matrix(),
+                material: material
+                    .and_then(PropMaterial::validated)
+                    .unwrap_or_default(),
             });
         }
     }
@@ -147,7 +162,10 @@ fn prop_uniform(prop: &ExtractedProp) -> PropUniform {
         } else {
             1.0
         },
-        pad: 0,
+        metallic: prop.material.metallic,
+        perceptual_roughness: prop.material.perceptual_roughness,
+        reflectance: prop.material.reflectance,
+        pad: UVec2::ZERO,
     }
 }
 
