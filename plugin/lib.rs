@@ -134,8 +134,8 @@ pub mod prelude {
     pub use crate::ChiselPlugins;
     #[cfg(feature = "props")]
     pub use crate::splat::{
-        ChiselSplatPlugin, PropBounds, QuadricProp, QuadricScene, SplatMode, SplatRadius,
-        SplatSettings, SplatViewSettings,
+        ChiselSplatPlugin, PropBounds, PropMaterial, QuadricProp, QuadricScene, SplatMode,
+        SplatRadius, SplatSettings, SplatViewSettings,
     };
     #[cfg(feature = "avian")]
     pub use crate::terrain::avian::TerrainAvianPlugin;

@@ -13,8 +13,9 @@
 #import bevy_chisel::quadric::{
     INDEX_MASK, NO_ROOT, OUTSIDE_FLAG, SurfaceOutput, box_corner, intersect_line,
     literal_holds, local_eye, local_ray_direction, prop, quadric_half_gradient, quadrics,
-    surface_color, surface_depth, terms, view, world_normal,
+    surface_depth, terms, view, world_normal,
 }
+#import bevy_chisel::shading::surface_color
 
 struct ProxyVarying {
     @builtin(position) clip: vec4<f32>,
@@ -109,7 +110,8 @@ fn fragment(in: ProxyVarying) -> SurfaceOutput {
         discard;
     }
     var out: SurfaceOutput;
-    out.color = surface_color(best_lit, world_normal(best_lit, p));
+    let frag_coord = vec4<f32>(in.clip.xy, depth, in.clip.w);
+    out.color = surface_color(best_lit, p, world_normal(best_lit, p), frag_coord);
     out.depth = depth;
     return out;
 }

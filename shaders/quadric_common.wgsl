@@ -1,6 +1,6 @@
 // Shared declarations of the splat pass (splat.wgsl) and the global
-// ray-tracing pass (global.wgsl): bindings, quadric evaluation, the stable
-// line–quadric intersection, shading and the debug outputs.
+// ray-tracing pass (global.wgsl): bindings, quadric evaluation and the
+// stable line–quadric intersection. Shading is `splat_shading.wgsl`'s.
 //
 // Notation (paper 2, §3, §6): a quadric Q is the symmetric 4×4
 // [[A, -b], [-bᵀ, c]]; Q(x) = xᵀAx − 2xᵀb + c, inside where Q(x) < 0; the
@@ -28,12 +28,6 @@ struct SplatView {
     camera_position: vec4<f32>,
     /// xyz: unit view direction (for orthographic views).
     view_forward: vec4<f32>,
-    /// xyz: unit direction towards the light.
-    light_direction: vec4<f32>,
-    /// rgb: directional light colour × intensity.
-    light_color: vec4<f32>,
-    /// rgb: ambient light.
-    ambient: vec4<f32>,
     /// Splats whose normal extent is below `flat_ratio · radius` are drawn
     /// as a single surface-aligned quad.
     flat_ratio: f32,
@@ -57,7 +51,11 @@ struct Prop {
     /// −1 when `world_from_local` mirrors (negative determinant), +1
     /// otherwise: see `box_corner`.
     mirror_sign: f32,
-    pad: u32,
+    /// PBR material of the whole prop (`PropMaterial`).
+    metallic: f32,
+    perceptual_roughness: f32,
+    reflectance: f32,
+    pad: vec2<u32>,
 };
 
 /// One quadric record (mirror: `QuadricRecord`).
@@ -77,14 +75,16 @@ struct Splat {
     pad: u32,
 };
 
-@group(0) @binding(0) var<uniform> view: SplatView;
-@group(1) @binding(0) var<uniform> prop: Prop;
-@group(1) @binding(1) var<storage, read> quadrics: array<Quadric>;
-@group(1) @binding(2) var<storage, read> clip_indices: array<u32>;
-@group(1) @binding(3) var<storage, read> splats: array<Splat>;
+// Groups 0 and 1 are Bevy's mesh view bindings (lights, shadow maps,
+// clusters, exposure), which the shading reads.
+@group(2) @binding(0) var<uniform> view: SplatView;
+@group(3) @binding(0) var<uniform> prop: Prop;
+@group(3) @binding(1) var<storage, read> quadrics: array<Quadric>;
+@group(3) @binding(2) var<storage, read> clip_indices: array<u32>;
+@group(3) @binding(3) var<storage, read> splats: array<Splat>;
 /// Normal form for the global pass (`chisel_quadric::encode_normal_form`):
 /// `(start, count)` per product, then the literal references of every product.
-@group(1) @binding(4) var<storage, read> terms: array<u32>;
+@group(3) @binding(4) var<storage, read> terms: array<u32>;
 
 fn quadric_a(q: Quadric, x: vec3<f32>) -> vec3<f32> {
     let k0 = q.c[0];
@@ -195,25 +195,13 @@ fn srgb_to_linear(c: f32) -> f32 {
     return pow((c + 0.055) / 1.055, 2.4);
 }
 
-/// The colour of a surface point: lit (default), the quadric id (OUTPUT_IDS:
-/// bytes r = 16·(i mod 16) + 8, g = 16·(i div 16 mod 16) + 8, b = 200 in an
-/// sRGB target) or the normal (OUTPUT_NORMALS).
-fn surface_color(lit: u32, normal: vec3<f32>) -> vec4<f32> {
-    let index = lit & INDEX_MASK;
-#ifdef OUTPUT_IDS
+/// The debug colour of quadric `index` (OUTPUT_IDS): bytes
+/// r = 16·(i mod 16) + 8, g = 16·(i div 16 mod 16) + 8, b = 200 in an sRGB
+/// target.
+fn id_color(index: u32) -> vec4<f32> {
     let r = f32((index % 16u) * 16u + 8u) / 255.0;
     let g = f32(((index / 16u) % 16u) * 16u + 8u) / 255.0;
     return vec4<f32>(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(200.0 / 255.0), 1.0);
-#else
-#ifdef OUTPUT_NORMALS
-    return vec4<f32>(normal * 0.5 + 0.5, 1.0);
-#else
-    let base = quadric_color(quadrics[index]);
-    let diffuse = max(dot(normal, view.light_direction.xyz), 0.0);
-    let light = view.ambient.rgb + view.light_color.rgb * diffuse;
-    return vec4<f32>(base * light, 1.0);
-#endif
-#endif
 }
 
 /// Depth (reverse-Z) of the local point x, or a negative value when it lies

@@ -11,8 +11,8 @@
 //
 // Fragment stage: local ray tracing of the splat's quadric, keeping the
 // root nearest the sample and only within its radius; local clipping
-// against the splat's clip list; exact normal from the gradient; depth
-// written (reverse-Z). Every proxy lies in front of the patch it bounds, so
+// against the splat's clip list; exact normal from the gradient, shaded
+// by Bevy's PBR (`splat_shading.wgsl`); depth written (reverse-Z). Every proxy lies in front of the patch it bounds, so
 // the written depth never exceeds the rasterized one:
 // `@early_depth_test(less_equal)` where the device supports it.
 //
@@ -22,9 +22,10 @@
 // SPLAT_OPEN_BOX (30 vertices per box: the −n face left out).
 #import bevy_chisel::quadric::{
     INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, intersect_line, literal_holds,
-    local_ray_direction, prop, quadrics, clip_indices, splats, surface_color, surface_depth,
-    view, world_normal,
+    local_ray_direction, prop, quadrics, clip_indices, splats, surface_depth, view,
+    world_normal,
 }
+#import bevy_chisel::shading::surface_color
 
 struct SplatVarying {
     @builtin(position) clip: vec4<f32>,
@@ -186,7 +187,8 @@ fn fragment(in: SplatVarying) -> SurfaceOutput {
         discard;
     }
     var out: SurfaceOutput;
-    out.color = surface_color(s.quadric, world_normal(s.quadric, p));
+    let frag_coord = vec4<f32>(in.clip.xy, depth, in.clip.w);
+    out.color = surface_color(s.quadric, p, world_normal(s.quadric, p), frag_coord);
     out.depth = depth;
     return out;
 }

@@ -19,7 +19,9 @@ use bevy::math::{Mat4, UVec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
 use chisel_quadric::{ColoredQuadric, Splat};
 
-/// Per-view data (WGSL `SplatView`, group 0, dynamic offset).
+/// Per-view data of the splat pass (WGSL `SplatView`, group 2, dynamic
+/// offset); lights, exposure and the rest of the view come from Bevy's mesh
+/// view bindings (groups 0 and 1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
 #[repr(C)]
 pub struct SplatViewUniform {
@@ -29,12 +31,6 @@ pub struct SplatViewUniform {
     pub camera_position: Vec4,
     /// Unit view direction (`w` unused).
     pub view_forward: Vec4,
-    /// Unit direction towards the directional light (`w` unused).
-    pub light_direction: Vec4,
-    /// Directional light colour × intensity, exposure applied (`w` unused).
-    pub light_color: Vec4,
-    /// Ambient light, exposure applied (`w` unused).
-    pub ambient: Vec4,
     /// Splats with a normal extent below `flat_ratio · radius` are drawn as
     /// one quad ([`SplatSettings::flat_ratio`](super::SplatSettings::flat_ratio)).
     pub flat_ratio: f32,
@@ -45,7 +41,7 @@ pub struct SplatViewUniform {
     pub pad: UVec2,
 }
 
-/// Per-prop data (WGSL `Prop`, group 1 binding 0).
+/// Per-prop data (WGSL `Prop`, group 3 binding 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
 #[repr(C)]
 pub struct PropUniform {
@@ -68,8 +64,14 @@ pub struct PropUniform {
     /// by it, which reverses the boxes' winding in local space so that it
     /// comes out counter-clockwise (front-facing) again in clip space.
     pub mirror_sign: f32,
+    /// The prop's [`PropMaterial::metallic`](super::PropMaterial::metallic).
+    pub metallic: f32,
+    /// The prop's [`PropMaterial::perceptual_roughness`](super::PropMaterial::perceptual_roughness).
+    pub perceptual_roughness: f32,
+    /// The prop's [`PropMaterial::reflectance`](super::PropMaterial::reflectance).
+    pub reflectance: f32,
     /// Padding to 16 bytes.
-    pub pad: u32,
+    pub pad: UVec2,
 }
 
 /// One entry of the quadric buffer (WGSL `Quadric`): a

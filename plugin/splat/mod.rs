@@ -5,6 +5,8 @@
 //! - [`prop`] — main world: the [`QuadricProp`] component, the
 //!   [`QuadricScene`] asset and its `.quadric.ron` loader, sampling on the async
 //!   compute pool into [`PropSplats`].
+//! - [`material`] — [`PropMaterial`], a prop's metallic, roughness and
+//!   reflectance for Bevy's PBR lighting (base colours are the quadrics').
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
 //!   `ShaderType`) and converted from the kernel's plain records; their
 //!   WGSL mirror is `shaders/quadric_common.wgsl`.
@@ -57,18 +59,21 @@
 #[cfg(feature = "avian")]
 pub mod avian;
 pub mod gpu;
+pub mod material;
 pub mod pipeline;
 pub mod prop;
 pub mod render;
 
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::pbr::MeshPipelineSystems;
 use bevy::prelude::*;
 use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::SpecializedRenderPipelines;
-use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
 
+pub use material::PropMaterial;
 pub use prop::{
     PropBounds, PropGpuData, PropSampleError, PropSplats, QuadricProp, QuadricScene, SplatRadius,
 };
@@ -92,7 +97,8 @@ pub enum SplatMode {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SplatOutput {
-    /// Shaded with the scene's first directional light and ambient light.
+    /// Lit by Bevy's PBR functions as a `StandardMaterial` mesh is: every
+    /// light, received shadows, the camera's exposure, fog and tonemapping.
     #[default]
     Shaded,
     /// The quadric index, unlit (tests): in an 8-bit sRGB target the bytes
@@ -199,6 +205,7 @@ impl Plugin for ChiselSplatPlugin {
             .register_type::<SplatSettings>()
             .register_type::<SplatViewSettings>()
             .register_type::<QuadricProp>()
+            .register_type::<PropMaterial>()
             .register_type::<PropSplats>()
             .register_type::<prop::PropSampling>()
             .configure_sets(
@@ -224,27 +231,26 @@ impl Plugin for ChiselSplatPlugin {
             return;
         };
         render_app
-            .init_resource::<pipeline::SplatPipeline>()
             .init_resource::<SpecializedRenderPipelines<pipeline::SplatPipeline>>()
             .init_resource::<render::ExtractedProps>()
-            .init_resource::<render::ExtractedSplatLight>()
             .init_resource::<render::PropBuffers>()
             .init_resource::<render::SplatViewUniforms>()
             // The render world's own type registry: its public data.
             .register_type::<render::ExtractedProps>()
-            .register_type::<render::ExtractedSplatLight>()
             .register_type::<render::VisibleProps>()
             .add_systems(
                 ExtractSchedule,
-                (
-                    render::extract_props,
-                    render::extract_visible_props,
-                    render::extract_light,
-                ),
+                (render::extract_props, render::extract_visible_props),
+            )
+            .add_systems(
+                RenderStartup,
+                pipeline::init_splat_pipeline.after(MeshPipelineSystems),
             )
             .add_systems(
                 Render,
-                (render::prepare_props, render::prepare_views).in_set(RenderSystems::Prepare),
+                (render::prepare_props, render::prepare_views)
+                    .in_set(RenderSystems::Prepare)
+                    .run_if(resource_exists::<pipeline::SplatPipeline>),
             )
             .add_systems(
                 Core3d,

@@ -1,15 +1,27 @@
 //! The render pipelines of the splat and global passes: bind group layouts
-//! and specialization on the view (format, MSAA) and the pass settings.
+//! and specialization on the view (format, MSAA, and the mesh pipeline's
+//! view key) and the pass settings.
+//!
+//! Bind groups: 0 and 1 are Bevy's mesh view bind groups (the view's
+//! `MeshViewBindGroup`: view uniform, lights, shadow maps, clusters, light
+//! probes), laid out as `MeshPipeline::get_view_layout` lays them out for
+//! the view's key, so the fragment shader can call Bevy's PBR functions;
+//! 2 is the splat pass's own view uniform; 3 is the prop.
+
+use std::sync::Arc;
 
 use bevy::asset::uuid_handle;
 use bevy::core_pipeline::core_3d::CORE_3D_DEPTH_FORMAT;
+use bevy::mesh::{MeshVertexBufferLayout, MeshVertexBufferLayoutRef, VertexBufferLayout};
+use bevy::pbr::{MeshPipeline, MeshPipelineKey};
 use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{storage_buffer_read_only, uniform_buffer};
 use bevy::render::render_resource::{
     BindGroupLayoutDescriptor, BindGroupLayoutEntries, BlendComponent, BlendFactor, BlendOperation,
     BlendState, ColorTargetState, ColorWrites, CompareFunction, DepthStencilState, Face,
     FragmentState, MultisampleState, PrimitiveState, RenderPipelineDescriptor, ShaderStages,
-    SpecializedRenderPipeline, TextureFormat, VertexState,
+    SpecializedMeshPipeline, SpecializedRenderPipeline, TextureFormat, VertexFormat, VertexState,
+    VertexStepMode,
 };
 use bevy::shader::{Shader, ShaderDefVal};
 
@@ -19,12 +31,15 @@ use super::{SplatMode, SplatOutput};
 /// The shared quadric module (`shaders/quadric_common.wgsl`).
 pub const QUADRIC_COMMON_SHADER: Handle<Shader> =
     uuid_handle!("5f0c7c4e-2b8e-4d61-9a57-0d6f0f5a1c11");
+/// The shading module (`shaders/splat_shading.wgsl`): Bevy's PBR lighting.
+pub const SPLAT_SHADING_SHADER: Handle<Shader> =
+    uuid_handle!("2d8f6a3b-91c4-4e7d-a0b5-6c3e8f1d2a44");
 /// The splat pass (`shaders/splat.wgsl`).
 pub const SPLAT_SHADER: Handle<Shader> = uuid_handle!("7a3e9b1d-46c2-4f0e-8d5b-2c9a6e4f7b22");
 /// The global ray-tracing pass (`shaders/global.wgsl`).
 pub const GLOBAL_SHADER: Handle<Shader> = uuid_handle!("9c4d2e6f-8a1b-4c3d-b5e7-f1a2b3c4d533");
 
-/// Adds the three shaders to `Assets<Shader>` (compiled into the crate).
+/// Adds the four shaders to `Assets<Shader>` (compiled into the crate).
 pub(crate) fn add_shaders(app: &mut App) {
     let Some(mut shaders) = app.world_mut().get_resource_mut::<Assets<Shader>>() else {
         warn!("bevy_chisel: no shader assets (is the RenderPlugin added?); splats are not drawn");
@@ -35,6 +50,11 @@ pub(crate) fn add_shaders(app: &mut App) {
             &QUADRIC_COMMON_SHADER,
             include_str!("../../shaders/quadric_common.wgsl"),
             "shaders/quadric_common.wgsl",
+        ),
+        (
+            &SPLAT_SHADING_SHADER,
+            include_str!("../../shaders/splat_shading.wgsl"),
+            "shaders/splat_shading.wgsl",
         ),
         (
             &SPLAT_SHADER,
@@ -54,17 +74,37 @@ pub(crate) fn add_shaders(app: &mut App) {
     }
 }
 
+/// Bind group of the splat pass's view uniform.
+pub(crate) const SPLAT_VIEW_GROUP: u32 = 2;
+/// Bind group of the prop; Bevy's PBR library declares its (unused)
+/// material bindings at `MATERIAL_BIND_GROUP`, set to the same group, as the
+/// material pipeline does.
+pub(crate) const PROP_GROUP: u32 = 3;
+
 /// Layouts and shaders of the splat and global pipelines.
 #[derive(Resource)]
 pub(crate) struct SplatPipeline {
-    /// Group 0: the view uniform (dynamic offset).
+    /// Group 2: the splat view uniform (dynamic offset).
     pub view_layout: BindGroupLayoutDescriptor,
-    /// Group 1: the prop uniform and its four storage buffers.
+    /// Group 3: the prop uniform and its four storage buffers.
     pub prop_layout: BindGroupLayoutDescriptor,
+    /// Bevy's mesh pipeline: its view layouts (groups 0 and 1) and the
+    /// shader defines it sets for a view.
+    mesh_pipeline: MeshPipeline,
+    /// Positions and normals: the vertex layout under which the mesh
+    /// pipeline is asked for its defines.
+    mesh_vertex_layout: MeshVertexBufferLayoutRef,
 }
 
-impl Default for SplatPipeline {
-    fn default() -> Self {
+impl SplatPipeline {
+    fn new(mesh_pipeline: MeshPipeline) -> Self {
+        let mesh_vertex_layout = MeshVertexBufferLayoutRef(Arc::new(MeshVertexBufferLayout::new(
+            vec![Mesh::ATTRIBUTE_POSITION.id, Mesh::ATTRIBUTE_NORMAL.id],
+            VertexBufferLayout::from_vertex_formats(
+                VertexStepMode::Vertex,
+                [VertexFormat::Float32x3, VertexFormat::Float32x3],
+            ),
+        )));
         Self {
             view_layout: BindGroupLayoutDescriptor::new(
                 "chisel_splat_view_layout",
@@ -86,8 +126,44 @@ impl Default for SplatPipeline {
                     ),
                 ),
             ),
+            mesh_pipeline,
+            mesh_vertex_layout,
         }
     }
+
+    /// The mesh view layouts (groups 0 and 1) and the shader defines of
+    /// Bevy's mesh pipeline for an opaque mesh with positions and normals
+    /// in a view of key `view_key`: exactly what its PBR functions need.
+    fn mesh_view_layouts_and_defs(
+        &self,
+        view_key: MeshPipelineKey,
+    ) -> (Vec<BindGroupLayoutDescriptor>, Vec<ShaderDefVal>) {
+        match self
+            .mesh_pipeline
+            .specialize(view_key, &self.mesh_vertex_layout)
+        {
+            Ok(mut mesh) => {
+                mesh.layout.truncate(2);
+                let defs = mesh.fragment.map(|f| f.shader_defs).unwrap_or_default();
+                (mesh.layout, defs)
+            }
+            Err(e) => {
+                // Not expected for positions and normals; the shader then
+                // fails to compile and the pipeline cache reports it.
+                error!("bevy_chisel: no mesh pipeline defines for the splat pass: {e}");
+                let layout = self.mesh_pipeline.get_view_layout(view_key.into());
+                (
+                    vec![layout.main_layout, layout.binding_array_layout],
+                    Vec::new(),
+                )
+            }
+        }
+    }
+}
+
+/// Creates the [`SplatPipeline`] once Bevy's mesh pipeline exists.
+pub(crate) fn init_splat_pipeline(mut commands: Commands, mesh_pipeline: Res<MeshPipeline>) {
+    commands.insert_resource(SplatPipeline::new(mesh_pipeline.clone()));
 }
 
 /// What a pipeline variant depends on.
@@ -105,6 +181,10 @@ pub struct SplatPipelineKey {
     pub early_depth_test: bool,
     /// Surface-aligned boxes without their `−n` face.
     pub open_boxes: bool,
+    /// Bevy's mesh pipeline key of the view (MSAA, prepasses, tonemapping,
+    /// fog, shadow filtering, projection…): the layout of its mesh view
+    /// bind groups and the defines of its PBR shading.
+    pub view_key: MeshPipelineKey,
 }
 
 impl SplatPipelineKey {
@@ -123,7 +203,10 @@ impl SpecializedRenderPipeline for SplatPipeline {
     type Key = SplatPipelineKey;
 
     fn specialize(&self, key: Self::Key) -> RenderPipelineDescriptor {
-        let mut defs: Vec<ShaderDefVal> = Vec::new();
+        let (mut layout, mut defs) = self.mesh_view_layouts_and_defs(key.view_key);
+        defs.push(ShaderDefVal::UInt("MATERIAL_BIND_GROUP".into(), PROP_GROUP));
+        layout.push(self.view_layout.clone());
+        layout.push(self.prop_layout.clone());
         match key.output {
             SplatOutput::Shaded => {}
             SplatOutput::QuadricIds => defs.push("OUTPUT_IDS".into()),
@@ -156,7 +239,7 @@ impl SpecializedRenderPipeline for SplatPipeline {
         };
         RenderPipelineDescriptor {
             label: Some("chisel_splat_pipeline".into()),
-            layout: vec![self.view_layout.clone(), self.prop_layout.clone()],
+            layout,
             vertex: VertexState {
                 shader: shader.clone(),
                 shader_defs: defs.clone(),

@@ -5,19 +5,21 @@
 //! Per prop: a quadric buffer, a clip-index buffer, an instance buffer (one
 //! record per splat) and the normal form for the global pass, uploaded when
 //! the prop's splats change; a uniform with its transform, every frame. Per
-//! view: a uniform (view-projection, eye, light, settings) at a dynamic
-//! offset and the pipeline specialized for the view's settings (its
-//! camera's [`SplatViewSettings`], else the [`SplatSettings`] resource). The
-//! pass draws each prop with one instanced draw.
+//! view: a uniform (view-projection, eye, settings) at a dynamic offset and
+//! the pipeline specialized for the view's settings (its camera's
+//! [`SplatViewSettings`], else the [`SplatSettings`] resource) and for
+//! Bevy's mesh pipeline key of the view. The pass binds the view's Bevy
+//! mesh view bind groups (lights, shadow maps, exposure: the fragment
+//! shader lights with Bevy's PBR functions) and draws each prop with one
+//! instanced draw.
 
 use std::any::TypeId;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use bevy::camera::Exposure;
 use bevy::camera::visibility::VisibleEntities;
-use bevy::light::{DirectionalLight, GlobalAmbientLight};
 use bevy::math::{DMat3, Mat3};
+use bevy::pbr::{MeshPipelineKey, MeshViewBindGroup, ViewKeyCache};
 use bevy::prelude::*;
 use bevy::render::Extract;
 use bevy::render::camera::ExtractedCamera;
@@ -32,7 +34,8 @@ use bevy::render::sync_world::RenderEntity;
 use bevy::render::view::{ExtractedView, Msaa, ViewDepthTexture, ViewTarget};
 
 use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
-use super::pipeline::{SplatPipeline, SplatPipelineKey};
+use super::material::PropMaterial;
+use super::pipeline::{PROP_GROUP, SPLAT_VIEW_GROUP, SplatPipeline, SplatPipelineKey};
 use super::prop::{PropGpuData, PropSplats};
 use super::{SplatMode, SplatSettings, SplatViewSettings};
 
@@ -47,6 +50,9 @@ pub struct ExtractedProp {
     /// Its local-to-world transform (invertible: props with a singular
     /// transform are not extracted).
     pub world_from_local: Mat4,
+    /// Its PBR material (validated; the default where it has none or an
+    /// invalid one).
+    pub material: PropMaterial,
 }
 
 /// The props to draw this frame.
@@ -72,25 +78,20 @@ pub(crate) fn extract_visible_props(
     }
 }
 
-/// The scene's light as the splat shader uses it, before the view's
-/// exposure (each view scales it by its camera's [`Exposure`]).
-#[derive(Resource, Reflect, Clone, Copy, Default, Debug)]
-#[reflect(Resource, Default)]
-pub struct ExtractedSplatLight {
-    /// Unit direction towards the light.
-    pub direction: Vec3,
-    /// Colour × illuminance ÷ π (Lambert).
-    pub color: Vec3,
-    /// Ambient colour × brightness.
-    pub ambient: Vec3,
-}
-
 pub(crate) fn extract_props(
     mut extracted: ResMut<ExtractedProps>,
-    props: Extract<Query<(Entity, &PropSplats, &GlobalTransform, &ViewVisibility)>>,
+    props: Extract<
+        Query<(
+            Entity,
+            &PropSplats,
+            &GlobalTransform,
+            &ViewVisibility,
+            Option<&PropMaterial>,
+        )>,
+    >,
 ) {
     extracted.0.clear();
-    for (entity, splats, transform, visibility) in &props {
+    for (entity, splats, transform, visibility, material) in &props {
         // A transform without an inverse (a zero scale) has no local rays
         // to trace: the prop is flat or a point, and is not drawn.
         let det = transform.affine().matrix3.determinant();
@@ -99,40 +100,12 @@ pub(crate) fn extract_props(
                 entity,
                 data: splats.0.clone(),
                 world_from_local: transform.to_matrix(),
+                material: material
+                    .and_then(PropMaterial::validated)
+                    .unwrap_or_default(),
             });
         }
     }
-}
-
-pub(crate) fn extract_light(
-    mut light: ResMut<ExtractedSplatLight>,
-    directional: Extract<Query<(&DirectionalLight, &GlobalTransform)>>,
-    ambient: Extract<Option<Res<GlobalAmbientLight>>>,
-) {
-    let (direction, color) = directional
-        .iter()
-        .next()
-        .map_or((Vec3::Z, Vec3::ZERO), |(l, t)| {
-            let c = l.color.to_linear();
-            let scale = l.illuminance / std::f32::consts::PI;
-            (
-                -t.forward().as_vec3(),
-                Vec3::new(c.red, c.green, c.blue) * scale,
-            )
-        });
-    // Without an ambient light resource: 0.05 at the default exposure.
-    let ambient =
-        ambient
-            .as_ref()
-            .map_or(Vec3::splat(0.05 / Exposure::default().exposure()), |a| {
-                let c = a.color.to_linear();
-                Vec3::new(c.red, c.green, c.blue) * a.brightness
-            });
-    *light = ExtractedSplatLight {
-        direction,
-        color,
-        ambient,
-    };
 }
 
 /// GPU buffers of one prop.
@@ -189,7 +162,10 @@ fn prop_uniform(prop: &ExtractedProp) -> PropUniform {
         } else {
             1.0
         },
-        pad: 0,
+        metallic: prop.material.metallic,
+        perceptual_roughness: prop.material.perceptual_roughness,
+        reflectance: prop.material.reflectance,
+        pad: UVec2::ZERO,
     }
 }
 
@@ -272,14 +248,8 @@ pub(crate) struct SplatViewState {
 pub(crate) fn prepare_views(
     mut commands: Commands,
     mut uniforms: ResMut<SplatViewUniforms>,
-    views: Query<(
-        Entity,
-        &ExtractedView,
-        &ExtractedCamera,
-        &Msaa,
-        Option<&SplatViewSettings>,
-    )>,
-    light: Res<ExtractedSplatLight>,
+    views: Query<(Entity, &ExtractedView, &Msaa, Option<&SplatViewSettings>)>,
+    view_keys: Res<ViewKeyCache>,
     settings: Res<SplatSettings>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -291,7 +261,7 @@ pub(crate) fn prepare_views(
     let early_depth_test = device
         .features()
         .contains(WgpuFeatures::SHADER_EARLY_DEPTH_TEST);
-    for (entity, view, camera, msaa, view_settings) in &views {
+    for (entity, view, msaa, view_settings) in &views {
         let settings = view_settings.map_or(*settings, |s| s.0);
         let clip_from_world = view
             .clip_from_world
@@ -303,10 +273,6 @@ pub(crate) fn prepare_views(
             clip_from_world,
             camera_position: eye.extend(if orthographic { 0.0 } else { 1.0 }),
             view_forward: forward.extend(0.0),
-            light_direction: light.direction.extend(0.0),
-            // The camera's exposure, as Bevy's PBR shading applies it.
-            light_color: (light.color * camera.exposure).extend(0.0),
-            ambient: (light.ambient * camera.exposure).extend(0.0),
             flat_ratio: settings.flat_ratio,
             radius_tolerance: settings.radius_tolerance,
             pad: UVec2::ZERO,
@@ -318,6 +284,16 @@ pub(crate) fn prepare_views(
             output: settings.output,
             early_depth_test,
             open_boxes: settings.open_boxes,
+            // Bevy fills the cache for every view before this system runs
+            // (`RenderSystems::PrepareAssets`); the fallback is its key for
+            // a plain view.
+            view_key: view_keys
+                .get(&view.retained_view_entity)
+                .copied()
+                .unwrap_or_else(|| {
+                    MeshPipelineKey::from_msaa_samples(msaa.samples())
+                        | MeshPipelineKey::from_target_format(view.target_format)
+                }),
         };
         let id = pipelines.specialize(&pipeline_cache, &pipeline, key);
         commands.entity(entity).insert(SplatViewState {
@@ -346,6 +322,7 @@ pub(crate) fn splat_pass(
         &ViewTarget,
         &ViewDepthTexture,
         &SplatViewState,
+        &MeshViewBindGroup,
         Option<&VisibleProps>,
     )>,
     props: Res<ExtractedProps>,
@@ -354,7 +331,7 @@ pub(crate) fn splat_pass(
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, target, depth, state, visible) = view.into_inner();
+    let (camera, target, depth, state, mesh_view, visible) = view.into_inner();
 
     if props.0.is_empty() {
         return;
@@ -380,7 +357,9 @@ pub(crate) fn splat_pass(
         pass.set_camera_viewport(viewport);
     }
     pass.set_render_pipeline(pipeline);
-    pass.set_bind_group(0, view_bind_group, &[state.offset]);
+    pass.set_bind_group(0, &mesh_view.main, &mesh_view.main_offsets);
+    pass.set_bind_group(1, &mesh_view.binding_array, &[]);
+    pass.set_bind_group(SPLAT_VIEW_GROUP as usize, view_bind_group, &[state.offset]);
     for prop in &props.0 {
         if visible.is_some_and(|v| v.0.binary_search(&prop.entity).is_err()) {
             continue;
@@ -391,7 +370,7 @@ pub(crate) fn splat_pass(
         let Some(bind_group) = gpu.bind_group.as_ref() else {
             continue;
         };
-        pass.set_bind_group(1, bind_group, &[]);
+        pass.set_bind_group(PROP_GROUP as usize, bind_group, &[]);
         let instances = if state.global { 1 } else { gpu.splat_count };
         pass.draw(0..state.vertex_count, 0..instances);
     }
