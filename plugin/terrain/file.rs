@@ -56,8 +56,9 @@ use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree};
 use chisel_bsp::tools::Quantization;
 
 use super::base::{GridHeightfield, TerrainBase};
-use super::component::{JournalEntry, Runtime, Terrain, UndoStep};
+use super::component::{JournalEntry, Terrain, UndoStep};
 use super::error::TerrainError;
+use super::jobs::Runtime;
 use super::tool::GridTool;
 
 /// The first bytes of every terrain file.

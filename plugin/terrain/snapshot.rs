@@ -34,9 +34,10 @@ use chisel_bsp::octree::store::{snapshots_from_bytes, snapshots_to_bytes};
 use chisel_bsp::octree::{Anchors, CellBox, CubeSide, DebrisConfig};
 use chisel_bsp::tools::Quantization;
 
-use super::component::{Runtime, Terrain};
+use super::component::Terrain;
 use super::error::TerrainError;
 use super::file::{Reader, Writer, corrupt, open_record, read_base, write_base};
+use super::jobs::Runtime;
 
 /// The first bytes of every terrain snapshot.
 pub const SNAPSHOT_MAGIC: [u8; 8] = *b"CHISELNS";
