@@ -41,8 +41,9 @@ use bevy::prelude::*;
 use chisel_bsp::tree::Label;
 use serde::{Deserialize, Serialize};
 
-use super::component::{Runtime, Terrain, TerrainCell};
+use super::component::{Terrain, TerrainCell};
 use super::error::TerrainError;
+use super::jobs::Runtime;
 use super::spawn::{HeightLayer, Heightfield};
 
 /// The file extension of terrain files loaded as [`TerrainAsset`]s.

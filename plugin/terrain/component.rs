@@ -1,23 +1,25 @@
-//! The [`Terrain`] component: an octree with its grid, its history and the
-//! record of what it was built from; and the components of its cells.
+//! The [`Terrain`] component and the components of its cells: data only.
+//!
+//! A terrain holds its octree with its grid, the record of what it was
+//! built from, the journal of carves and the undo history; its work in
+//! progress (queued requests, the running job, cells waiting to be shown)
+//! is the job runtime's (module `jobs`), kept in the component so that
+//! it travels with the terrain entity. Carving runs from the messages in
+//! [`super::carve`] through the systems of [`super::queue`] and
+//! [`super::upload`]; [`Terrain::apply_now`] is the synchronous twin for
+//! code outside the ECS.
 
-use std::collections::{BTreeSet, HashMap, VecDeque};
+use std::collections::{BTreeSet, VecDeque};
 use std::sync::Arc;
-use std::time::Instant;
 
 use bevy::prelude::*;
-use bevy::tasks::Task;
-use chisel_bsp::octree::{
-    CellFaces, CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, SeamedMesher, StateHash,
-    Tool,
-};
+use chisel_bsp::octree::{CellKey, Changes, DebrisConfig, Edit, Octree, OctreeConfig, StateHash};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::Label;
 
 use super::base::TerrainBase;
-use super::carve::Upload;
 use super::error::TerrainError;
-use super::jobs::JobOutput;
+use super::jobs::{Runtime, apply_carve};
 use super::tool::GridTool;
 
 /// One carve in a terrain's record: the exact tool and the edit.
@@ -74,55 +76,6 @@ pub struct Terrain {
     pub(crate) last_request: Option<u64>,
     #[reflect(ignore)]
     pub(crate) runtime: Runtime,
-}
-
-/// Work in progress of a terrain (main-world only).
-pub(crate) struct Runtime {
-    pub(crate) queue: VecDeque<Job>,
-    pub(crate) task: Option<Task<JobOutput>>,
-    pub(crate) uploads: VecDeque<Upload>,
-    pub(crate) cells: HashMap<CellKey, Vec<(Label, Entity, usize)>>,
-    pub(crate) triangles: usize,
-    pub(crate) needs_full_mesh: bool,
-    /// Whether the settings ask for cells ([`super::CellOutput`]): when
-    /// not, a pending full build does not keep the terrain busy.
-    pub(crate) builds_cells: bool,
-    /// The border vertices of the cells shown (in the running job while
-    /// there is one).
-    pub(crate) mesher: SeamedMesher,
-    /// The labels the terrain's material table has materials for, kept up
-    /// to date from its `TerrainMaterials` (feature `render`); `None`
-    /// without a table.
-    pub(crate) material_labels: Option<BTreeSet<Label>>,
-}
-
-/// A request waiting for its turn.
-pub(crate) enum Job {
-    Carve {
-        tool: GridTool,
-        edit: Edit,
-        requested: Instant,
-        request: Option<u64>,
-    },
-    Undo {
-        requested: Instant,
-    },
-}
-
-impl Default for Runtime {
-    fn default() -> Self {
-        Self {
-            queue: VecDeque::new(),
-            task: None,
-            uploads: VecDeque::new(),
-            cells: HashMap::new(),
-            triangles: 0,
-            needs_full_mesh: true,
-            builds_cells: true,
-            mesher: SeamedMesher::new(),
-            material_labels: None,
-        }
-    }
 }
 
 /// Undo steps kept by default.
@@ -363,7 +316,7 @@ impl Terrain {
     /// anything), so the octree is the one the app would have.
     ///
     /// # Errors
-    /// As [`apply_carve`], [`Terrain::check_edit`], and
+    /// As [`super::apply_carve`], [`Terrain::check_edit`], and
     /// [`chisel_bsp::Error::TooMuchDebris`]; the terrain is then unchanged.
     pub fn apply_now(&mut self, tool: &GridTool, edit: Edit) -> Result<Changes, TerrainError> {
         self.check_edit(edit)?;
@@ -406,51 +359,6 @@ impl Terrain {
             }
         }
     }
-}
-
-/// Applies `tool` with `edit` to `octree`: builds the exact tool, checks
-/// that it reaches into the octree's cube, then applies it.
-///
-/// # Errors
-/// [`TerrainError::Kernel`] for a degenerate or out-of-range tool or an
-/// invalid edit, [`TerrainError::OutsideTerrain`] for a tool that misses
-/// the cube. The octree is unchanged on error.
-pub fn apply_carve(
-    octree: &mut Octree,
-    tool: &GridTool,
-    edit: Edit,
-) -> Result<Changes, TerrainError> {
-    let built = built_inside(octree, tool)?;
-    Ok(octree.apply(&built, edit)?)
-}
-
-/// [`apply_carve`], also handing back the boundary faces of the cells whose
-/// content the carve replaced ([`Octree::apply_with_faces`]), from which
-/// [`super::mesh::cell_meshes_from`] meshes those cells without cutting
-/// their BSPs again.
-///
-/// # Errors
-/// As [`apply_carve`]; the octree is unchanged on error.
-pub fn apply_carve_with_faces(
-    octree: &mut Octree,
-    tool: &GridTool,
-    edit: Edit,
-) -> Result<(Changes, CellFaces), TerrainError> {
-    let built = built_inside(octree, tool)?;
-    Ok(octree.apply_with_faces(&built, edit)?)
-}
-
-/// The exact tool, checked to reach into the octree's cube.
-fn built_inside(octree: &Octree, tool: &GridTool) -> Result<Tool, TerrainError> {
-    let built = tool.build()?;
-    let bounds = built.bounds();
-    if !bounds.overlaps(&octree.root_box()) {
-        return Err(TerrainError::OutsideTerrain {
-            tool_min: bounds.min,
-            tool_max: bounds.max,
-        });
-    }
-    Ok(built)
 }
 
 /// One entity showing the surface of one material in one leaf cell; a

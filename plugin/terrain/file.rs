@@ -45,19 +45,25 @@
 //! record; the octree snapshots are checked by the kernel (bit budgets of
 //! every plane, every BSP a tree, the cells tiling the cube), and must
 //! agree with the base's cube and the undo steps.
+//!
+//! Records go through the kernel's byte writer and bounds-checked reader
+//! ([`chisel_bsp::octree::store::bytes`]), which the octree files use too:
+//! a file cut short is [`TerrainError::Truncated`], never a panic.
 
 use std::collections::VecDeque;
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use chisel_bsp::octree::store::bytes::{ReadError, Reader, Writer};
 use chisel_bsp::octree::store::{checksum, snapshots_from_bytes, snapshots_to_bytes};
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree};
 use chisel_bsp::tools::Quantization;
 
 use super::base::{GridHeightfield, TerrainBase};
-use super::component::{JournalEntry, Runtime, Terrain, UndoStep};
+use super::component::{JournalEntry, Terrain, UndoStep};
 use super::error::TerrainError;
+use super::jobs::Runtime;
 use super::tool::GridTool;
 
 /// The first bytes of every terrain file.
@@ -74,15 +80,15 @@ impl Terrain {
     /// The terrain as file bytes.
     #[must_use]
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut w = Writer(Vec::new());
-        w.0.extend_from_slice(&MAGIC);
+        let mut w = Writer::new();
+        w.bytes(&MAGIC);
         w.u32(FORMAT_VERSION);
         w.f64(self.quantization.unit());
         for o in self.quantization.origin() {
             w.f64(o);
         }
         write_base(&mut w, &self.base);
-        w.len(self.journal.len());
+        w.count(self.journal.len());
         for entry in &self.journal {
             let (tag, label) = match entry.edit {
                 Edit::Subtract => (0, 0),
@@ -92,14 +98,14 @@ impl Terrain {
             };
             w.u8(tag);
             w.u8(label);
-            w.len(entry.tool.pieces.len());
+            w.count(entry.tool.pieces.len());
             for piece in &entry.tool.pieces {
-                w.len(piece.len());
+                w.count(piece.len());
                 piece.iter().for_each(|&p| w.point(p));
             }
         }
         w.u64(self.max_undo as u64);
-        w.len(self.history.len());
+        w.count(self.history.len());
         for step in &self.history {
             w.keys(&step.changes.changed);
             w.keys(&step.changes.removed);
@@ -108,10 +114,10 @@ impl Terrain {
         octrees.push(&self.octree);
         let snapshots = snapshots_to_bytes(&octrees);
         w.u64(snapshots.len() as u64);
-        w.0.extend_from_slice(&snapshots);
-        let sum = checksum(&w.0);
+        w.bytes(&snapshots);
+        let sum = checksum(w.as_bytes());
         w.u64(sum);
-        w.0
+        w.into_bytes()
     }
 
     /// Writes the terrain to a file, whole or not at all: the bytes go to
@@ -144,7 +150,7 @@ impl Terrain {
         let origin = [r.f64()?, r.f64()?, r.f64()?];
         let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
         let base = read_base(r)?;
-        let carves = r.len()?;
+        let carves = r.list_len()?;
         let mut journal = Vec::with_capacity(carves.min(1 << 16));
         for _ in 0..carves {
             let tag = r.u8()?;
@@ -156,12 +162,12 @@ impl Terrain {
                 3 => Edit::Intersect,
                 _ => return Err(corrupt(format!("unknown edit tag {tag}"))),
             };
-            let pieces = r.len()?;
+            let pieces = r.list_len()?;
             let mut tool = GridTool {
                 pieces: Vec::with_capacity(pieces.min(1 << 10)),
             };
             for _ in 0..pieces {
-                let points = r.len()?;
+                let points = r.list_len()?;
                 let mut piece = Vec::with_capacity(points.min(1 << 12));
                 for _ in 0..points {
                     piece.push(r.point()?);
@@ -172,7 +178,7 @@ impl Terrain {
         }
         let max_undo = usize::try_from(r.u64()?)
             .map_err(|_| corrupt("the undo depth limit is beyond this machine's range"))?;
-        let steps = r.len()?;
+        let steps = r.list_len()?;
         let mut changes = Vec::with_capacity(steps.min(1 << 10));
         for _ in 0..steps {
             changes.push(Changes {
@@ -182,10 +188,10 @@ impl Terrain {
         }
         let length = usize::try_from(r.u64()?).unwrap_or(usize::MAX);
         let snapshot_bytes = r.bytes(length)?;
-        if r.at != r.bytes.len() {
+        if r.remaining() != 0 {
             return Err(corrupt(format!(
                 "{} unexpected bytes after the octrees",
-                r.bytes.len() - r.at
+                r.remaining()
             )));
         }
         let mut octrees = snapshots_from_bytes(snapshot_bytes)
@@ -311,10 +317,7 @@ pub(super) fn open_record(
     if bytes.len() < magic.len() || bytes[..magic.len()] != magic {
         return Err(TerrainError::BadMagic);
     }
-    let mut r = Reader {
-        bytes,
-        at: magic.len(),
-    };
+    let mut r = Reader::new(bytes, magic.len());
     let found = r.u32()?;
     if found != version {
         return Err(TerrainError::UnsupportedVersion {
@@ -325,7 +328,7 @@ pub(super) fn open_record(
     let body = bytes
         .len()
         .checked_sub(8)
-        .filter(|&body| body >= r.at)
+        .filter(|&body| body >= r.at())
         .ok_or(TerrainError::Truncated { at: bytes.len() })?;
     let stored = u64::from_le_bytes(
         bytes[body..]
@@ -337,10 +340,7 @@ pub(super) fn open_record(
             reason: "checksum mismatch".into(),
         });
     }
-    Ok(Reader {
-        bytes: &bytes[..body],
-        at: r.at,
-    })
+    Ok(Reader::new(&bytes[..body], r.at()))
 }
 
 pub(super) fn corrupt(e: impl ToString) -> TerrainError {
@@ -368,11 +368,11 @@ pub(super) fn write_base(w: &mut Writer, base: &TerrainBase) {
             w.u32(field.samples[0]);
             w.u32(field.samples[1]);
             w.i64(field.spacing);
-            w.len(field.heights.len());
+            w.count(field.heights.len());
             field.heights.iter().for_each(|&h| w.i64(h));
             w.i64(field.bottom);
             w.u8(field.label);
-            w.len(field.layers.len());
+            w.count(field.layers.len());
             for &(depth, label) in &field.layers {
                 w.i64(depth);
                 w.u8(label);
@@ -384,7 +384,7 @@ pub(super) fn write_base(w: &mut Writer, base: &TerrainBase) {
             w.u8(2);
             w.point(origin);
             w.u8(size_log2);
-            w.len(triangles.len());
+            w.count(triangles.len());
             triangles.iter().flatten().for_each(|&p| w.point(p));
             w.u8(*label);
         }
@@ -409,14 +409,14 @@ pub(super) fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
             let corner = r.point()?;
             let samples = [r.u32()?, r.u32()?];
             let spacing = r.i64()?;
-            let n = r.len()?;
+            let n = r.list_len()?;
             let mut heights = Vec::with_capacity(n.min(1 << 20));
             for _ in 0..n {
                 heights.push(r.i64()?);
             }
             let bottom = r.i64()?;
             let label = r.u8()?;
-            let layers_len = r.len()?;
+            let layers_len = r.list_len()?;
             let mut layers = Vec::with_capacity(layers_len.min(256));
             for _ in 0..layers_len {
                 layers.push((r.i64()?, r.u8()?));
@@ -436,7 +436,7 @@ pub(super) fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
             })
         }
         2 => {
-            let n = r.len()?;
+            let n = r.list_len()?;
             let mut triangles = Vec::with_capacity(n.min(1 << 20));
             for _ in 0..n {
                 triangles.push([r.point()?, r.point()?, r.point()?]);
@@ -452,32 +452,36 @@ pub(super) fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
     }
 }
 
-pub(super) struct Writer(pub(super) Vec<u8>);
+/// A read of the shared byte reader that failed, as a terrain error: a
+/// value past the end is [`TerrainError::Truncated`] at the value's offset.
+impl From<ReadError> for TerrainError {
+    fn from(e: ReadError) -> Self {
+        match e {
+            ReadError::Truncated { at, .. } => TerrainError::Truncated { at },
+            ReadError::CountTooLarge { .. } => corrupt(e),
+        }
+    }
+}
 
-impl Writer {
-    pub(super) fn u8(&mut self, v: u8) {
-        self.0.push(v);
+/// The terrain files' values on top of the kernel's byte writer.
+pub(super) trait WriteTerrain {
+    /// An `f64` as its bits.
+    fn f64(&mut self, v: f64);
+    /// A grid point.
+    fn point(&mut self, p: [i64; 3]);
+    /// A list of cell keys, counted.
+    fn keys(&mut self, keys: &[CellKey]);
+}
+
+impl WriteTerrain for Writer {
+    fn f64(&mut self, v: f64) {
+        self.u64(v.to_bits());
     }
-    pub(super) fn u32(&mut self, v: u32) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(super) fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(super) fn i64(&mut self, v: i64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(super) fn f64(&mut self, v: f64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(super) fn len(&mut self, n: usize) {
-        self.u32(u32::try_from(n).unwrap_or(u32::MAX));
-    }
-    pub(super) fn point(&mut self, p: [i64; 3]) {
+    fn point(&mut self, p: [i64; 3]) {
         p.iter().for_each(|&c| self.i64(c));
     }
-    pub(super) fn keys(&mut self, keys: &[CellKey]) {
-        self.len(keys.len());
+    fn keys(&mut self, keys: &[CellKey]) {
+        self.count(keys.len());
         for key in keys {
             self.u8(key.depth);
             key.pos.iter().for_each(|&p| self.u32(p));
@@ -485,45 +489,35 @@ impl Writer {
     }
 }
 
-pub(super) struct Reader<'a> {
-    pub(super) bytes: &'a [u8],
-    pub(super) at: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take<const N: usize>(&mut self) -> Result<[u8; N], TerrainError> {
-        let end = self.at + N;
-        let slice = self
-            .bytes
-            .get(self.at..end)
-            .ok_or(TerrainError::Truncated { at: self.at })?;
-        self.at = end;
-        slice
-            .try_into()
-            .map_err(|_| TerrainError::Truncated { at: self.at })
-    }
-    pub(super) fn u8(&mut self) -> Result<u8, TerrainError> {
-        Ok(self.take::<1>()?[0])
-    }
-    pub(super) fn u32(&mut self) -> Result<u32, TerrainError> {
-        Ok(u32::from_le_bytes(self.take()?))
-    }
-    pub(super) fn u64(&mut self) -> Result<u64, TerrainError> {
-        Ok(u64::from_le_bytes(self.take()?))
-    }
-    pub(super) fn bytes(&mut self, n: usize) -> Result<&'a [u8], TerrainError> {
-        let slice = self
-            .at
-            .checked_add(n)
-            .and_then(|end| self.bytes.get(self.at..end))
-            .ok_or(TerrainError::Truncated { at: self.at })?;
-        self.at += n;
-        Ok(slice)
-    }
+/// The terrain files' values on top of the kernel's byte reader.
+pub(super) trait ReadTerrain {
+    /// An `f64` from its bits.
+    fn f64(&mut self) -> Result<f64, TerrainError>;
+    /// The length of a list, at most [`MAX_LIST`].
+    fn list_len(&mut self) -> Result<usize, TerrainError>;
+    /// A grid point.
+    fn point(&mut self) -> Result<[i64; 3], TerrainError>;
     /// Cell keys; each must name a cell of a cube (position below
     /// `2^depth`, depth at most 27, the largest cube).
-    pub(super) fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError> {
-        let n = self.len()?;
+    fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError>;
+}
+
+impl ReadTerrain for Reader<'_> {
+    fn f64(&mut self) -> Result<f64, TerrainError> {
+        Ok(f64::from_bits(self.u64()?))
+    }
+    fn list_len(&mut self) -> Result<usize, TerrainError> {
+        let n = self.u32()?;
+        if n > MAX_LIST {
+            return Err(corrupt(format!("list of {n} entries is implausibly long")));
+        }
+        Ok(n as usize)
+    }
+    fn point(&mut self) -> Result<[i64; 3], TerrainError> {
+        Ok([self.i64()?, self.i64()?, self.i64()?])
+    }
+    fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError> {
+        let n = self.list_len()?;
         let mut keys = Vec::with_capacity(n.min(1 << 16));
         for _ in 0..n {
             let key = CellKey {
@@ -536,22 +530,6 @@ impl<'a> Reader<'a> {
             keys.push(key);
         }
         Ok(keys)
-    }
-    pub(super) fn i64(&mut self) -> Result<i64, TerrainError> {
-        Ok(i64::from_le_bytes(self.take()?))
-    }
-    pub(super) fn f64(&mut self) -> Result<f64, TerrainError> {
-        Ok(f64::from_le_bytes(self.take()?))
-    }
-    pub(super) fn len(&mut self) -> Result<usize, TerrainError> {
-        let n = self.u32()?;
-        if n > MAX_LIST {
-            return Err(corrupt(format!("list of {n} entries is implausibly long")));
-        }
-        Ok(n as usize)
-    }
-    pub(super) fn point(&mut self) -> Result<[i64; 3], TerrainError> {
-        Ok([self.i64()?, self.i64()?, self.i64()?])
     }
 }
 

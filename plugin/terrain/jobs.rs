@@ -1,30 +1,153 @@
-//! The background side of carving: what a job does on the worker threads.
+//! The carve job runtime: a terrain's work in progress, and what a job
+//! does on the worker threads.
 //!
-//! A job owns a snapshot of the octree (a cheap persistent clone). It
-//! applies a batch of carves in order ([`carve_batch`]) or takes the
-//! octree an undo restored, then builds everything the main thread will
-//! show for every cell that changed ([`remesh`]): the cell meshes and, with
-//! a physics backend, their colliders. The main thread only swaps the
-//! octree in and adds the finished assets and components
-//! ([`super::carve::upload_meshes`]).
+//! A carve goes through the terrain modules in this order, each once:
+//!
+//! 1. [`super::carve`] — the [`Carve`](super::Carve),
+//!    [`GridCarve`](super::GridCarve) and [`UndoCarve`](super::UndoCarve)
+//!    messages.
+//! 2. [`super::queue`] — reads them into the terrain's queue of [`Job`]s
+//!    (in its [`Runtime`]) and starts the next job on a snapshot of the
+//!    octree (a cheap persistent clone).
+//! 3. This module — the job itself, off the main thread: it applies a
+//!    batch of carves in order ([`carve_batch`], each through
+//!    [`apply_carve_with_faces`]) or takes the octree an undo restored,
+//!    then builds everything the main thread will show for every cell
+//!    that changed ([`remesh`]): the cell meshes and, with a physics
+//!    backend, their colliders. It hands back a [`JobOutput`].
+//! 4. [`super::upload`] — swaps the job's octree in, records undo steps,
+//!    queues the cells as an [`Upload`] and adds them as assets and
+//!    entities, then writes the reports.
+//!
+//! [`apply_carve`] is the same exact step for code outside the ECS.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
-use chisel_bsp::octree::{CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, SeamedMesher};
+use bevy::tasks::Task;
+use chisel_bsp::octree::{
+    CellFaces, CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, SeamedMesher, Tool,
+};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, Label};
 use rayon::prelude::*;
 
-use super::component::apply_carve_with_faces;
+use super::carve::{CarveApplied, CellOutput};
 use super::debris::{BuiltDebris, build_debris};
 use super::error::TerrainError;
 use super::mesh::{ColliderMesh, cell_meshes_of};
 use super::physics::{PhysicsInsert, TerrainPhysics};
 use super::tool::GridTool;
-use crate::terrain::CellOutput;
+
+/// Work in progress of a terrain (main-world only).
+pub(crate) struct Runtime {
+    pub(crate) queue: VecDeque<Job>,
+    pub(crate) task: Option<Task<JobOutput>>,
+    pub(crate) uploads: VecDeque<Upload>,
+    pub(crate) cells: HashMap<CellKey, Vec<(Label, Entity, usize)>>,
+    pub(crate) triangles: usize,
+    pub(crate) needs_full_mesh: bool,
+    /// Whether the settings ask for cells ([`CellOutput`]): when
+    /// not, a pending full build does not keep the terrain busy.
+    pub(crate) builds_cells: bool,
+    /// The border vertices of the cells shown (in the running job while
+    /// there is one).
+    pub(crate) mesher: SeamedMesher,
+    /// The labels the terrain's material table has materials for, kept up
+    /// to date from its `TerrainMaterials` (feature `render`); `None`
+    /// without a table.
+    pub(crate) material_labels: Option<BTreeSet<Label>>,
+}
+
+/// A request waiting for its turn.
+pub(crate) enum Job {
+    Carve {
+        tool: GridTool,
+        edit: Edit,
+        requested: Instant,
+        request: Option<u64>,
+    },
+    Undo {
+        requested: Instant,
+    },
+}
+
+impl Default for Runtime {
+    fn default() -> Self {
+        Self {
+            queue: VecDeque::new(),
+            task: None,
+            uploads: VecDeque::new(),
+            cells: HashMap::new(),
+            triangles: 0,
+            needs_full_mesh: true,
+            builds_cells: true,
+            mesher: SeamedMesher::new(),
+            material_labels: None,
+        }
+    }
+}
+
+/// A finished job's cells and reports, waiting for the upload
+/// ([`super::upload::upload_meshes`]), or cells to take away when a
+/// terrain stops building cells.
+pub(crate) struct Upload {
+    /// Cells still to add, in key order.
+    pub(crate) cells: VecDeque<CellUpdate>,
+    /// Whether the cells may be spread over frames (a first full build).
+    pub(crate) spread: bool,
+    /// The reports to write once every cell is in place.
+    pub(crate) reports: Vec<(CarveApplied, Instant)>,
+    /// The pieces to spawn then.
+    pub(crate) debris: Vec<BuiltDebris>,
+}
+
+/// Applies `tool` with `edit` to `octree`: builds the exact tool, checks
+/// that it reaches into the octree's cube, then applies it.
+///
+/// # Errors
+/// [`TerrainError::Kernel`] for a degenerate or out-of-range tool or an
+/// invalid edit, [`TerrainError::OutsideTerrain`] for a tool that misses
+/// the cube. The octree is unchanged on error.
+pub fn apply_carve(
+    octree: &mut Octree,
+    tool: &GridTool,
+    edit: Edit,
+) -> Result<Changes, TerrainError> {
+    let built = built_inside(octree, tool)?;
+    Ok(octree.apply(&built, edit)?)
+}
+
+/// [`apply_carve`], also handing back the boundary faces of the cells whose
+/// content the carve replaced ([`Octree::apply_with_faces`]), from which
+/// [`super::mesh::cell_meshes_from`] meshes those cells without cutting
+/// their BSPs again.
+///
+/// # Errors
+/// As [`apply_carve`]; the octree is unchanged on error.
+pub fn apply_carve_with_faces(
+    octree: &mut Octree,
+    tool: &GridTool,
+    edit: Edit,
+) -> Result<(Changes, CellFaces), TerrainError> {
+    let built = built_inside(octree, tool)?;
+    Ok(octree.apply_with_faces(&built, edit)?)
+}
+
+/// The exact tool, checked to reach into the octree's cube.
+fn built_inside(octree: &Octree, tool: &GridTool) -> Result<Tool, TerrainError> {
+    let built = tool.build()?;
+    let bounds = built.bounds();
+    if !bounds.overlaps(&octree.root_box()) {
+        return Err(TerrainError::OutsideTerrain {
+            tool_min: bounds.min,
+            tool_max: bounds.max,
+        });
+    }
+    Ok(built)
+}
 
 /// What a job needs besides its octree: the grid, the shading and the
 /// physics backend.

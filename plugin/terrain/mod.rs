@@ -18,15 +18,11 @@
 //!   depth) or a Bevy mesh.
 //! - [`base`] — what a terrain starts from, on the grid.
 //! - [`tool`] — [`CarveTool`] in world units, [`GridTool`] on the grid.
-//! - [`carve`] — the messages and the systems: [`Carve`] / [`UndoCarve`]
-//!   in ([`GridCarve`]: a carve already on the grid, with a request id), exact edits on the async compute pool, meshes of the changed cells
-//!   within a per-frame budget, [`TerrainCellChanged`] and [`CarveApplied`]
-//!   out.
-//! - `jobs` — what a carve job does on the worker threads.
 //! - [`mesh`] — the surface of one cell as indexed triangles with smooth
 //!   normals, and welded triangles for its collider.
 //! - [`physics`] — [`TerrainPhysics`], the trait a physics engine
 //!   implements; `avian` implements it (feature `avian`).
+//! - [`debris`] — pieces a carve cut loose, spawned as bodies of their own.
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
 //! - [`file`] — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
 //! - [`asset`] — terrain files (`*.chiselterrain`) and heightfields through
@@ -35,6 +31,20 @@
 //!   ([`TerrainCarved`], [`TerrainCarveRejected`], [`TerrainCellRebuilt`],
 //!   [`TerrainDebrisDetached`]), for observers.
 //! - [`error`] — [`TerrainError`].
+//!
+//! A carve runs through four modules in order, each once:
+//!
+//! 1. [`carve`] — the messages and settings: [`Carve`] / [`UndoCarve`] in
+//!    ([`GridCarve`]: a carve already on the grid, with a request id),
+//!    [`TerrainCellChanged`] and [`CarveApplied`] out, [`TerrainSettings`].
+//! 2. [`queue`] — the messages onto each terrain's queue, and the next job
+//!    started on the async compute pool.
+//! 3. `jobs` — the carve job runtime: a terrain's work in progress, and
+//!    the job that applies the exact carves and builds the meshes and
+//!    colliders of the changed cells on the worker threads
+//!    ([`apply_carve`] is its exact step, for code outside the ECS).
+//! 4. [`upload`] — the finished job's octree swapped in and its cells
+//!    shown, within a per-frame budget for a first full build.
 //!
 //! ## Example
 //!
@@ -99,10 +109,12 @@ mod jobs;
 pub mod material;
 pub mod mesh;
 pub mod physics;
+pub mod queue;
 pub mod raycast;
 pub mod snapshot;
 pub mod spawn;
 pub mod tool;
+pub mod upload;
 
 use bevy::asset::AssetPlugin;
 use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleLabel};
@@ -118,11 +130,12 @@ pub use carve::{
     Carve, CarveApplied, CarveRejected, CellOutput, GridCarve, TerrainCellChanged, TerrainSettings,
     UndoCarve,
 };
-pub use component::{JournalEntry, Terrain, TerrainCell, apply_carve, apply_carve_with_faces};
+pub use component::{JournalEntry, Terrain, TerrainCell};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
 pub use debris_hulls::DEFAULT_MAX_DEBRIS_HULLS;
 pub use error::TerrainError;
 pub use events::{TerrainCarveRejected, TerrainCarved, TerrainCellRebuilt, TerrainDebrisDetached};
+pub use jobs::{apply_carve, apply_carve_with_faces};
 #[cfg(feature = "render")]
 pub use material::triplanar::{
     TerrainSurface, TriplanarExtension, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
@@ -242,10 +255,10 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_systems(
             schedule,
             (
-                (carve::read_requests, carve::finish_jobs, carve::start_jobs)
+                (queue::read_requests, upload::finish_jobs, queue::start_jobs)
                     .chain()
                     .in_set(TerrainSystems::Carve),
-                carve::upload_meshes.in_set(TerrainSystems::Mesh),
+                upload::upload_meshes.in_set(TerrainSystems::Mesh),
                 events::trigger_events.after(TerrainSystems::Mesh),
                 asset::spawn_from_assets.before(TerrainSystems::Carve),
             ),

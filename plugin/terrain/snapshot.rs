@@ -30,13 +30,15 @@
 
 use std::collections::VecDeque;
 
+use chisel_bsp::octree::store::bytes::{Reader, Writer};
 use chisel_bsp::octree::store::{snapshots_from_bytes, snapshots_to_bytes};
 use chisel_bsp::octree::{Anchors, CellBox, CubeSide, DebrisConfig};
 use chisel_bsp::tools::Quantization;
 
-use super::component::{Runtime, Terrain};
+use super::component::Terrain;
 use super::error::TerrainError;
-use super::file::{Reader, Writer, corrupt, open_record, read_base, write_base};
+use super::file::{ReadTerrain, WriteTerrain, corrupt, open_record, read_base, write_base};
+use super::jobs::Runtime;
 
 /// The first bytes of every terrain snapshot.
 pub const SNAPSHOT_MAGIC: [u8; 8] = *b"CHISELNS";
@@ -50,15 +52,15 @@ impl Terrain {
     /// queued carves are not in it.
     #[must_use]
     pub fn to_snapshot_bytes(&self) -> Vec<u8> {
-        let mut w = Writer(Vec::new());
-        w.0.extend_from_slice(&SNAPSHOT_MAGIC);
+        let mut w = Writer::new();
+        w.bytes(&SNAPSHOT_MAGIC);
         w.u32(SNAPSHOT_VERSION);
         w.f64(self.quantization.unit());
         for o in self.quantization.origin() {
             w.f64(o);
         }
         write_base(&mut w, &self.base);
-        w.len(self.labels.len());
+        w.count(self.labels.len());
         self.labels.iter().for_each(|&l| w.u8(l));
         match &self.debris {
             None => w.u8(0),
@@ -70,10 +72,10 @@ impl Terrain {
         w.u64(self.max_undo as u64);
         let octree = snapshots_to_bytes(&[&self.octree]);
         w.u64(octree.len() as u64);
-        w.0.extend_from_slice(&octree);
-        let sum = chisel_bsp::octree::store::checksum(&w.0);
+        w.bytes(&octree);
+        let sum = chisel_bsp::octree::store::checksum(w.as_bytes());
         w.u64(sum);
-        w.0
+        w.into_bytes()
     }
 
     /// A terrain from snapshot bytes: checks magic, version and checksum,
@@ -90,7 +92,9 @@ impl Terrain {
         let origin = [r.f64()?, r.f64()?, r.f64()?];
         let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
         let base = read_base(r)?;
-        let labels = (0..r.len()?).map(|_| r.u8()).collect::<Result<_, _>>()?;
+        let labels = (0..r.list_len()?)
+            .map(|_| r.u8())
+            .collect::<Result<_, _>>()?;
         let debris = match r.u8()? {
             0 => None,
             1 => Some(read_debris(r)?),
@@ -100,10 +104,10 @@ impl Terrain {
             .map_err(|_| corrupt("the undo depth limit is beyond this machine's range"))?;
         let length = usize::try_from(r.u64()?).unwrap_or(usize::MAX);
         let octree_bytes = r.bytes(length)?;
-        if r.at != r.bytes.len() {
+        if r.remaining() != 0 {
             return Err(corrupt(format!(
                 "{} unexpected bytes after the octree",
-                r.bytes.len() - r.at
+                r.remaining()
             )));
         }
         let mut octrees = snapshots_from_bytes(octree_bytes)
@@ -136,7 +140,7 @@ fn write_debris(w: &mut Writer, config: &DebrisConfig) {
         None => w.u8(0),
         Some(volume) => {
             w.u8(1);
-            w.0.extend_from_slice(&volume.to_le_bytes());
+            w.bytes(&volume.to_le_bytes());
         }
     }
     match config.max_cells {
@@ -146,12 +150,12 @@ fn write_debris(w: &mut Writer, config: &DebrisConfig) {
             w.u64(cells as u64);
         }
     }
-    w.len(config.anchors.sides.len());
+    w.count(config.anchors.sides.len());
     for side in &config.anchors.sides {
         w.u8(side.axis as u8);
         w.u8(u8::from(side.upper));
     }
-    w.len(config.anchors.boxes.len());
+    w.count(config.anchors.boxes.len());
     for b in &config.anchors.boxes {
         w.point(b.min);
         w.point(b.max);
@@ -170,7 +174,7 @@ fn read_debris(r: &mut Reader) -> Result<DebrisConfig, TerrainError> {
         tag => return Err(corrupt(format!("unknown debris cell tag {tag}"))),
     };
     let mut sides = Vec::new();
-    for _ in 0..r.len()? {
+    for _ in 0..r.list_len()? {
         let (axis, upper) = (r.u8()?, r.u8()?);
         if axis > 2 || upper > 1 {
             return Err(corrupt(format!(
@@ -183,7 +187,7 @@ fn read_debris(r: &mut Reader) -> Result<DebrisConfig, TerrainError> {
         });
     }
     let mut boxes = Vec::new();
-    for _ in 0..r.len()? {
+    for _ in 0..r.list_len()? {
         let b = CellBox {
             min: r.point()?,
             max: r.point()?,

@@ -81,7 +81,7 @@
 //! # Ok::<(), chisel_bsp::Error>(())
 //! ```
 
-mod bytes;
+pub mod bytes;
 mod xxh64;
 
 use std::collections::HashMap;
@@ -187,8 +187,8 @@ impl NodeTable<'_> {
 /// once.
 #[must_use]
 pub fn snapshots_to_bytes(octrees: &[&Octree]) -> Vec<u8> {
-    let mut w = Writer(Vec::new());
-    w.0.extend_from_slice(&MAGIC);
+    let mut w = Writer::new();
+    w.bytes(&MAGIC);
     w.u32(FORMAT_VERSION);
     w.u64(0); // length, filled in below
     w.u32(0); // node count, filled in below
@@ -199,8 +199,8 @@ pub fn snapshots_to_bytes(octrees: &[&Octree]) -> Vec<u8> {
     };
     let roots: Vec<u32> = octrees.iter().map(|o| table.add(&o.root)).collect();
     let count = table.count;
-    w.0[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&count.to_le_bytes());
-    w.index(octrees.len());
+    w.overwrite(HEADER_BYTES, &count.to_le_bytes());
+    w.count(octrees.len());
     for (octree, root) in octrees.iter().zip(roots) {
         for o in octree.origin() {
             w.i64(o);
@@ -211,11 +211,11 @@ pub fn snapshots_to_bytes(octrees: &[&Octree]) -> Vec<u8> {
         w.u8(config.max_depth);
         w.u32(root);
     }
-    let length = (w.0.len() + CHECKSUM_BYTES) as u64;
-    w.0[12..HEADER_BYTES].copy_from_slice(&length.to_le_bytes());
-    let sum = checksum(&w.0);
+    let length = (w.as_bytes().len() + CHECKSUM_BYTES) as u64;
+    w.overwrite(12, &length.to_le_bytes());
+    let sum = checksum(w.as_bytes());
     w.u64(sum);
-    w.0
+    w.into_bytes()
 }
 
 /// The octrees of a file written by [`snapshots_to_bytes`], checked (see
@@ -434,7 +434,7 @@ fn check_envelope(bytes: &[u8]) -> Result<usize, Error> {
 /// One leaf's record as an octree file stores it (tag, then the label or
 /// the BSP's planes and nodes): the bytes [`super::hash`] hashes.
 pub(crate) fn leaf_record(leaf: &Leaf) -> Vec<u8> {
-    let mut w = Writer(Vec::new());
+    let mut w = Writer::new();
     match leaf {
         Leaf::Uniform(label) => {
             w.u8(NODE_UNIFORM);
@@ -445,12 +445,12 @@ pub(crate) fn leaf_record(leaf: &Leaf) -> Vec<u8> {
             write_bsp(&mut w, bsp);
         }
     }
-    w.0
+    w.into_bytes()
 }
 
 fn write_bsp(w: &mut Writer, bsp: &Bsp) {
-    w.index(bsp.planes().len());
-    w.index(bsp.nodes().len());
+    w.count(bsp.planes().len());
+    w.count(bsp.nodes().len());
     for plane in bsp.planes() {
         let [a, b, c] = plane.normal();
         w.i64(a);

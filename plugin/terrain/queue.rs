@@ -1,0 +1,226 @@
+//! Requests in: carve and undo messages onto each terrain's queue, and
+//! the next job started.
+//!
+//! The second step of a carve (see [`super::carve`] for the whole path):
+//! [`read_requests`] turns [`Carve`], [`GridCarve`] and [`UndoCarve`]
+//! messages into jobs, and [`start_jobs`] runs the next one on the async
+//! compute pool, where the job runtime (module `jobs`) applies it and
+//! builds the changed cells. [`super::upload`] collects the result.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use bevy::prelude::*;
+use bevy::tasks::AsyncComputeTaskPool;
+use chisel_bsp::octree::{CellKey, SeamedMesher};
+
+use super::carve::{Carve, CarveRejected, GridCarve, TerrainSettings, UndoCarve};
+use super::component::Terrain;
+use super::error::TerrainError;
+use super::jobs::{
+    CellUpdate, Job, JobContext, StepOutcome, Upload, Workers, carve_batch, on_pool, remesh,
+};
+use super::physics::TerrainPhysicsBackend;
+
+/// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
+/// queues.
+pub fn read_requests(
+    mut grid_carves: MessageReader<GridCarve>,
+    mut carves: MessageReader<Carve>,
+    mut undos: MessageReader<UndoCarve>,
+    mut terrains: Query<&mut Terrain>,
+    mut rejected: MessageWriter<CarveRejected>,
+) {
+    let now = Instant::now();
+    for carve in grid_carves.read() {
+        let request = Some(carve.request);
+        let queued = terrains
+            .get_mut(carve.terrain)
+            .map_err(|_| TerrainError::NoSuchTerrain)
+            .and_then(|mut terrain| {
+                terrain.check_label(carve.edit)?;
+                terrain.runtime.queue.push_back(Job::Carve {
+                    tool: carve.tool.clone(),
+                    edit: carve.edit,
+                    requested: now,
+                    request,
+                });
+                Ok(())
+            });
+        if let Err(error) = queued {
+            rejected.write(CarveRejected {
+                terrain: carve.terrain,
+                request,
+                error,
+            });
+        }
+    }
+    for carve in carves.read() {
+        let Ok(mut terrain) = terrains.get_mut(carve.terrain) else {
+            rejected.write(CarveRejected {
+                terrain: carve.terrain,
+                request: None,
+                error: TerrainError::NoSuchTerrain,
+            });
+            continue;
+        };
+        let tool = terrain
+            .check_edit(carve.edit)
+            .and_then(|()| carve.tool.to_grid(&terrain.quantization));
+        match tool {
+            Ok(tool) => terrain.runtime.queue.push_back(Job::Carve {
+                tool,
+                edit: carve.edit,
+                requested: now,
+                request: None,
+            }),
+            Err(error) => {
+                rejected.write(CarveRejected {
+                    terrain: carve.terrain,
+                    request: None,
+                    error,
+                });
+            }
+        }
+    }
+    for undo in undos.read() {
+        match terrains.get_mut(undo.terrain) {
+            Ok(mut terrain) => terrain
+                .runtime
+                .queue
+                .push_back(Job::Undo { requested: now }),
+            Err(_) => {
+                rejected.write(CarveRejected {
+                    terrain: undo.terrain,
+                    request: None,
+                    error: TerrainError::NoSuchTerrain,
+                });
+            }
+        }
+    }
+}
+
+/// Starts the next job of every terrain that has none running.
+pub fn start_jobs(
+    settings: Res<TerrainSettings>,
+    physics: Res<TerrainPhysicsBackend>,
+    mut workers: Local<Workers>,
+    mut terrains: Query<(Entity, &mut Terrain)>,
+    mut rejected: MessageWriter<CarveRejected>,
+) {
+    for (entity, mut terrain) in &mut terrains {
+        let pool = workers.pool(settings.worker_threads);
+        let terrain = &mut *terrain;
+        if terrain.runtime.task.is_some() {
+            continue;
+        }
+        let context = JobContext {
+            quantization: terrain.quantization,
+            smoothing_degrees: settings.smoothing_degrees,
+            physics: physics.0.clone(),
+            debris: terrain.debris.clone(),
+            debris_density: settings.debris_density,
+            max_debris_hulls: settings.max_debris_hulls,
+            output: settings.output,
+        };
+        terrain.runtime.builds_cells = context.builds_cells();
+        if !terrain.runtime.builds_cells {
+            // Cells shown before the output changed are taken away, and
+            // every cell is built again once cells are asked for again.
+            if !terrain.runtime.cells.is_empty() && terrain.runtime.uploads.is_empty() {
+                let cells = terrain
+                    .runtime
+                    .cells
+                    .keys()
+                    .map(|&key| CellUpdate { key, meshes: None })
+                    .collect();
+                terrain.runtime.uploads.push_back(Upload {
+                    cells,
+                    spread: false,
+                    reports: Vec::new(),
+                    debris: Vec::new(),
+                });
+            }
+            terrain.runtime.needs_full_mesh = true;
+        } else if terrain.runtime.needs_full_mesh {
+            terrain.runtime.needs_full_mesh = false;
+            let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
+            let octree = terrain.octree.clone();
+            // A first build starts the border vertices afresh.
+            let mesher = SeamedMesher::new();
+            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                on_pool(pool, || {
+                    remesh(
+                        octree,
+                        &context,
+                        Vec::new(),
+                        keys,
+                        BTreeMap::new(),
+                        mesher,
+                        true,
+                    )
+                })
+            }));
+            continue;
+        }
+        match terrain.runtime.queue.pop_front() {
+            None => {}
+            Some(Job::Undo { requested }) => match terrain.undo_now() {
+                Ok(keys) => {
+                    let octree = terrain.octree.clone();
+                    let steps = vec![StepOutcome::Undone {
+                        cells: keys.len(),
+                        requested,
+                    }];
+                    let mesher = std::mem::take(&mut terrain.runtime.mesher);
+                    terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                        on_pool(pool, || {
+                            remesh(
+                                octree,
+                                &context,
+                                steps,
+                                keys,
+                                BTreeMap::new(),
+                                mesher,
+                                false,
+                            )
+                        })
+                    }));
+                }
+                Err(error) => {
+                    rejected.write(CarveRejected {
+                        terrain: entity,
+                        request: None,
+                        error,
+                    });
+                }
+            },
+            Some(Job::Carve {
+                tool,
+                edit,
+                requested,
+                request,
+            }) => {
+                let mut batch = vec![(tool, edit, requested, request)];
+                while batch.len() < settings.max_batch.max(1)
+                    && matches!(terrain.runtime.queue.front(), Some(Job::Carve { .. }))
+                {
+                    if let Some(Job::Carve {
+                        tool,
+                        edit,
+                        requested,
+                        request,
+                    }) = terrain.runtime.queue.pop_front()
+                    {
+                        batch.push((tool, edit, requested, request));
+                    }
+                }
+                let octree = terrain.octree.clone();
+                let mesher = std::mem::take(&mut terrain.runtime.mesher);
+                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                    on_pool(pool, || carve_batch(octree, mesher, &context, batch))
+                }));
+            }
+        }
+    }
+}

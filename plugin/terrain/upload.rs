@@ -1,0 +1,315 @@
+//! Results out: finished jobs swapped in, their cells shown.
+//!
+//! The last step of a carve (see [`super::carve`] for the whole path):
+//! [`finish_jobs`] takes a finished job's octree, records its undo steps
+//! and queues its cells; [`upload_meshes`] adds the cells as assets and
+//! entities with their colliders, spawns the debris the carves cut loose,
+//! and writes [`TerrainCellChanged`], [`DebrisDetached`] and
+//! [`CarveApplied`].
+
+use std::time::{Duration, Instant};
+
+use bevy::prelude::*;
+use bevy::tasks::futures::check_ready;
+use chisel_bsp::octree::{CellKey, Octree};
+
+use super::carve::{CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings};
+use super::component::{Terrain, TerrainCell};
+use super::debris::{BuiltDebris, DebrisDetached, DebrisPart, TerrainDebris};
+use super::jobs::{BuiltMesh, CellUpdate, Runtime, StepOutcome, Upload};
+use super::physics::TerrainPhysicsBackend;
+
+/// Collects finished jobs: swaps the new octree in, records undo steps and
+/// queues the cells.
+pub fn finish_jobs(
+    mut terrains: Query<(Entity, &mut Terrain)>,
+    mut rejected: MessageWriter<CarveRejected>,
+) {
+    for (entity, mut terrain) in &mut terrains {
+        let terrain = &mut *terrain;
+        let Some(task) = terrain.runtime.task.as_mut() else {
+            continue;
+        };
+        let Some(output) = check_ready(task) else {
+            continue;
+        };
+        terrain.runtime.task = None;
+        let mut reports = Vec::new();
+        let mut debris = Vec::new();
+        let report = |edit, request, hash, cells, apply_time| CarveApplied {
+            terrain: entity,
+            edit,
+            request,
+            hash,
+            cells,
+            apply_time,
+            mesh_time: output.mesh_time,
+            collider_time: output.collider_time,
+            latency: Duration::ZERO,
+        };
+        // The octree after each applied step: the next applied step's
+        // `before`, or the job's octree after the last.
+        let afters: Vec<Octree> = {
+            let mut next = output.octree.clone();
+            let mut out: Vec<Octree> = output
+                .steps
+                .iter()
+                .rev()
+                .map(|step| match step {
+                    StepOutcome::Applied { before, .. } => {
+                        std::mem::replace(&mut next, before.clone())
+                    }
+                    _ => next.clone(),
+                })
+                .collect();
+            out.reverse();
+            out
+        };
+        for (step, after) in output.steps.into_iter().zip(afters) {
+            match step {
+                StepOutcome::Applied {
+                    before,
+                    changes,
+                    tool,
+                    edit,
+                    apply_time,
+                    requested,
+                    request,
+                    debris: pieces,
+                } => {
+                    debris.extend(pieces);
+                    let cells = changes.changed.len() + changes.removed.len();
+                    terrain
+                        .hash
+                        .update(&after, changes.changed.iter().chain(&changes.removed));
+                    if request.is_some() {
+                        terrain.last_request = request;
+                    }
+                    let hash = terrain.hash.value();
+                    reports.push((
+                        report(Some(edit), request, hash, cells, apply_time),
+                        requested,
+                    ));
+                    terrain.record(before, changes, tool, edit);
+                }
+                StepOutcome::Undone { cells, requested } => {
+                    let hash = terrain.hash.value();
+                    reports.push((report(None, None, hash, cells, Duration::ZERO), requested));
+                }
+                StepOutcome::Rejected { error, request } => {
+                    if request.is_some() {
+                        terrain.last_request = request;
+                    }
+                    rejected.write(CarveRejected {
+                        terrain: entity,
+                        request,
+                        error,
+                    });
+                }
+            }
+        }
+        terrain.runtime.uploads.push_back(Upload {
+            cells: output.cells.into(),
+            spread: output.full,
+            reports,
+            debris,
+        });
+        // For an undo or a full build this is the octree already in place.
+        terrain.octree = output.octree;
+        terrain.runtime.mesher = output.mesher;
+    }
+}
+
+/// Adds queued cells as assets and entities, with their colliders, and
+/// writes the reports of the carves whose cells are all in place.
+///
+/// Every terrain gets its turn each frame: a terrain whose first full
+/// build is still being added does not hold the others back.
+#[allow(clippy::too_many_arguments)]
+pub fn upload_meshes(
+    settings: Res<TerrainSettings>,
+    physics: Res<TerrainPhysicsBackend>,
+    mut terrains: Query<(Entity, &mut Terrain, Option<&GlobalTransform>)>,
+    mut cells: Query<Option<&mut Mesh3d>, With<TerrainCell>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut commands: Commands,
+    mut changed: MessageWriter<TerrainCellChanged>,
+    mut applied: MessageWriter<CarveApplied>,
+    mut detached: MessageWriter<DebrisDetached>,
+) {
+    let start = Instant::now();
+    let over_budget = |added: usize| added > 0 && start.elapsed() >= settings.mesh_budget;
+    for (entity, mut terrain, placed) in &mut terrains {
+        let placed = placed.copied().unwrap_or_default();
+        let runtime = &mut terrain.runtime;
+        let mut added = 0usize;
+        while let Some(mut upload) = runtime.uploads.pop_front() {
+            if !upload.spread && over_budget(added) {
+                runtime.uploads.push_front(upload);
+                break;
+            }
+            while !(upload.spread && over_budget(added)) {
+                let Some(cell) = upload.cells.pop_front() else {
+                    break;
+                };
+                added += 1;
+                let mut place = CellPlacement {
+                    terrain: entity,
+                    physics: &physics,
+                    commands: &mut commands,
+                };
+                let entities = place.show(runtime, &mut cells, &mut meshes, cell);
+                changed.write(TerrainCellChanged {
+                    terrain: entity,
+                    key: entities.0,
+                    entities: entities.1,
+                });
+            }
+            if !upload.cells.is_empty() {
+                runtime.uploads.push_front(upload);
+                break;
+            }
+            for piece in upload.debris {
+                detached.write(spawn_debris(
+                    &mut commands,
+                    &mut meshes,
+                    entity,
+                    &placed,
+                    piece,
+                ));
+            }
+            for (mut report, requested) in upload.reports {
+                report.latency = requested.elapsed();
+                applied.write(report);
+            }
+        }
+    }
+}
+
+/// Spawns a piece cut loose from `terrain` (placed at `placed`) where it
+/// was, as a [`TerrainDebris`] with one [`DebrisPart`] child per material.
+fn spawn_debris(
+    commands: &mut Commands,
+    meshes: &mut Assets<Mesh>,
+    terrain: Entity,
+    placed: &GlobalTransform,
+    piece: BuiltDebris,
+) -> DebrisDetached {
+    let main_label = piece.main_label();
+    let at = placed.compute_transform() * Transform::from_translation(piece.centre);
+    let mut body = commands.spawn((
+        TerrainDebris {
+            terrain,
+            exact_volume: piece.exact_volume.clone(),
+            volumes: piece.volumes,
+            volume: piece.volume,
+        },
+        at,
+    ));
+    #[cfg(feature = "render")]
+    body.insert(Visibility::default());
+    if let Some(insert) = piece.body {
+        insert.apply(&mut body);
+    }
+    let entity = body.id();
+    let mut handles = Vec::new();
+    for (label, mesh) in piece.meshes {
+        let handle = meshes.add(mesh);
+        handles.push((label, handle.clone()));
+        commands.spawn((
+            DebrisPart { terrain, label },
+            Mesh3d(handle),
+            Transform::IDENTITY,
+            ChildOf(entity),
+        ));
+    }
+    DebrisDetached {
+        terrain,
+        entity,
+        meshes: handles,
+        centre: piece.centre,
+        volume: piece.volume,
+        exact_volume: piece.exact_volume,
+        main_label,
+    }
+}
+
+/// What adding a cell needs besides the queries and assets.
+struct CellPlacement<'a, 'w, 's> {
+    terrain: Entity,
+    physics: &'a TerrainPhysicsBackend,
+    commands: &'a mut Commands<'w, 's>,
+}
+
+impl CellPlacement<'_, '_, '_> {
+    /// Shows a cell's new meshes: reuses the cell's entities per material,
+    /// despawns those of materials it no longer has, spawns the others;
+    /// returns the cell and its entities now.
+    fn show(
+        &mut self,
+        runtime: &mut Runtime,
+        cells: &mut Query<Option<&mut Mesh3d>, With<TerrainCell>>,
+        meshes: &mut Assets<Mesh>,
+        update: CellUpdate,
+    ) -> (CellKey, Vec<Entity>) {
+        let key = update.key;
+        let old = runtime.cells.remove(&key).unwrap_or_default();
+        let mut new = update.meshes.unwrap_or_default();
+        let mut kept = Vec::new();
+        for (label, cell_entity, triangles) in old {
+            runtime.triangles -= triangles;
+            let reused = new.iter().position(|m| m.label == label);
+            match (reused, cells.get_mut(cell_entity)) {
+                (Some(i), Ok(handle)) => {
+                    let mesh: BuiltMesh = new.swap_remove(i);
+                    let mut cell = self.commands.entity(cell_entity);
+                    match (mesh.mesh, handle) {
+                        (Some(built), Some(mut handle)) => handle.0 = meshes.add(built),
+                        (Some(built), None) => {
+                            cell.insert(Mesh3d(meshes.add(built)));
+                        }
+                        (None, Some(_)) => {
+                            cell.remove::<Mesh3d>();
+                        }
+                        (None, None) => {}
+                    }
+                    match mesh.collider {
+                        Some(collider) => collider.apply(&mut cell),
+                        None => {
+                            if let Some(physics) = &self.physics.0 {
+                                physics.remove_cell_collider(&mut cell);
+                            }
+                        }
+                    }
+                    kept.push((label, cell_entity, mesh.triangles));
+                }
+                _ => self.commands.entity(cell_entity).despawn(),
+            }
+        }
+        for mesh in new {
+            let mut cell = self.commands.spawn((
+                TerrainCell {
+                    terrain: self.terrain,
+                    key,
+                    label: mesh.label,
+                },
+                Transform::IDENTITY,
+                ChildOf(self.terrain),
+            ));
+            if let Some(built) = mesh.mesh {
+                cell.insert(Mesh3d(meshes.add(built)));
+            }
+            if let Some(collider) = mesh.collider {
+                collider.apply(&mut cell);
+            }
+            kept.push((mesh.label, cell.id(), mesh.triangles));
+        }
+        kept.sort_by_key(|&(l, _, _)| l);
+        runtime.triangles += kept.iter().map(|&(_, _, t)| t).sum::<usize>();
+        let entities = kept.iter().map(|&(_, e, _)| e).collect();
+        if !kept.is_empty() {
+            runtime.cells.insert(key, kept);
+        }
+        (key, entities)
+    }
+}
