@@ -5,8 +5,10 @@
 //! From one sample of the path to the next, every triangle of the gear's
 //! mesh sweeps a prism — the hull of the triangle at both poses — and the
 //! union of those prisms (with the gear's convex wedges at the start) is
-//! the swept volume ([`bevy_chisel::bsp::tools::sweep`], the same geometry
-//! as `chisel sweep`). Each prism is one `Carve` of a block of stone: added
+//! the swept volume of the sampled motion
+//! ([`bevy_chisel::bsp::tools::sweep`], the same geometry as `chisel
+//! sweep`): each union is exact, and the prisms follow the turning gear
+//! to within each step's sagitta (corners move along chords, not arcs). Each prism is one `Carve` of a block of stone: added
 //! as brass, the swept solid grows out of the block; subtracted, the gear
 //! cuts its slot through it. The panel shows the time of every step in the
 //! kernel and in all (re-meshing included).

@@ -8,7 +8,14 @@
 //! The swept volume is the solid at `P_0` (the union of its wedges there)
 //! and, for every `k` and every triangle `T` of `M`, the *sweep prism*
 //! `hull(P_k T ∪ P_{k+1} T)`: every point the moving solid covers was
-//! either inside it at the start or crossed by its boundary. A triangle
+//! either inside it at the start or crossed by its boundary. Between two
+//! samples the motion is taken as each corner moving straight from one
+//! pose to the next; the prism holds every placement of the triangle on
+//! that motion. For a translation this is the true sweep; for a turning
+//! solid it differs from the true sweep by each step's sagitta (the gap
+//! between the arc of a corner and its chord), which shrinks with the
+//! square of the step, so dense samples approach the true volume. The
+//! unions themselves are exact. A triangle
 //! that moves within its own plane sweeps no volume: its prism is flat
 //! once rounded to the grid and is left out ([`spans_volume`]).
 //!
