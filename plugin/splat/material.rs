@@ -49,7 +49,7 @@ impl Default for PropMaterial {
 impl PropMaterial {
     /// The material with every field clamped to `[0, 1]`, or `None` if a
     /// field is not finite (such a prop is drawn with the default
-    /// material).
+    /// material, and the plugin logs a warning when the component changes).
     #[must_use]
     pub fn validated(&self) -> Option<Self> {
         let fields = [self.metallic, self.perceptual_roughness, self.reflectance];
@@ -58,6 +58,21 @@ impl PropMaterial {
             perceptual_roughness: self.perceptual_roughness.clamp(0.0, 1.0),
             reflectance: self.reflectance.clamp(0.0, 1.0),
         })
+    }
+}
+
+/// Warns, once per change, about a [`PropMaterial`] with a field that is
+/// not finite: the render world draws that prop with the default material.
+pub(crate) fn warn_on_unusable_materials(
+    materials: Query<(Entity, &PropMaterial), Changed<PropMaterial>>,
+) {
+    for (entity, material) in &materials {
+        if material.validated().is_none() {
+            warn!(
+                "prop {entity}: {material:?} has a field that is not a finite number; \
+                 the prop is drawn with PropMaterial::default()"
+            );
+        }
     }
 }
 

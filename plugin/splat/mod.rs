@@ -219,6 +219,7 @@ impl Plugin for ChiselSplatPlugin {
                     (prop::start_sampling, prop::finish_sampling)
                         .chain()
                         .in_set(SplatSystems::Sample),
+                    material::warn_on_unusable_materials,
                 ),
             )
             .add_plugins((
