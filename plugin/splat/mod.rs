@@ -136,7 +136,7 @@ pub struct SplatSettings {
     /// splats facing away. Off by default: near a silhouette a splat whose
     /// sample normal faces slightly away from the eye can hold a visible
     /// hit whose ray enters the splat's box only through the `−n` face, so
-    /// open boxes can miss silhouette pixels. `tests/it/splat_bench.rs`
+    /// open boxes can miss silhouette pixels. `benches/splat.rs`
     /// compares both pixel for pixel: on an NVIDIA H100 at 1920×1080 open
     /// boxes left 1–2 silhouette pixels uncovered on three of the four
     /// SCENARIOS scenes (none with lavapipe). Turn it on where a few

@@ -6,7 +6,7 @@
 //! use, the debris rules (anchors and limits) and the undo depth limit.
 //! Unlike a terrain file ([`super::file`]) it holds no journal and no undo
 //! history, so its size follows the terrain's detail, not the number of
-//! carves so far (after 10,000 carves in `net_bench`, 7.9 MB against the
+//! carves so far (after 10,000 carves in the `net` bench, 7.9 MB against the
 //! file's 12.8 MB). The receiver's journal and undo history start empty;
 //! its octree and state hash equal the sender's.
 //!

@@ -7,7 +7,8 @@
 //! Run one area with a filter on its module path, for example
 //! `cargo test --release -p bevy_chisel --all-features --test it terrain_ecs::`.
 //! `tests/terrain_soak.rs` is a binary of its own: it counts the process's
-//! allocations with its own global allocator.
+//! allocations with its own global allocator. The timed runs are benches
+//! (`benches/`), not tests.
 
 #[cfg(any(feature = "props", feature = "net"))]
 use std::sync::Mutex;
@@ -37,8 +38,6 @@ mod shaders_validate;
 mod headless_render;
 
 // Quadric props drawn as splats.
-#[cfg(feature = "viewer")]
-mod splat_bench;
 #[cfg(feature = "props")]
 mod splat_culling;
 #[cfg(feature = "viewer")]
@@ -51,8 +50,6 @@ mod splat_views;
 // Destructible terrain.
 #[cfg(feature = "terrain")]
 mod terrain_assets;
-#[cfg(feature = "terrain")]
-mod terrain_bench;
 #[cfg(feature = "terrain")]
 mod terrain_data;
 #[cfg(feature = "terrain")]
@@ -69,8 +66,6 @@ mod terrain_physics;
 mod terrain_seams_render;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
-#[cfg(feature = "net")]
-mod net_bench;
 #[cfg(feature = "net")]
 mod net_hostile;
 #[cfg(feature = "net")]

@@ -22,6 +22,9 @@ use bevy_chisel::splat::{
 
 use crate::ONE_APP_AT_A_TIME;
 
+mod scenes;
+pub use scenes::{FOV_DEGREES, SCALE, SCENES, eye, load_scene};
+
 /// Captures taken so far, numbering the screenshot files.
 static SHOT: AtomicU32 = AtomicU32::new(0);
 
@@ -34,23 +37,10 @@ fn caller_file_stem() -> String {
         .map_or_else(|| "splat".into(), |s| s.to_string_lossy().into_owned())
 }
 
-/// Vertical field of view of every comparison camera.
-pub const FOV_DEGREES: f64 = 30.0;
-/// World units per scene unit (millimetres to decimetres): exercises the
-/// prop's `Transform`.
-pub const SCALE: f32 = 0.01;
 /// Smallest fraction of agreeing pixels.
 pub const MIN_AGREE: f64 = 0.995;
 /// Largest fraction of holes.
 pub const MAX_HOLES: f64 = 0.001;
-
-/// `(scene, bounding centre, bounding radius)` as in the sampling benchmark.
-pub const SCENES: [(&str, [f64; 3], f64); 4] = [
-    ("three_spheres", [0.0, 0.0, 10.0], 75.0),
-    ("classic", [0.0, 0.0, 0.0], 90.0),
-    ("sharp8", [0.0, 0.0, 0.0], 60.0),
-    ("machine80", [0.0, 0.0, 35.0], 100.0),
-];
 
 /// The entry of [`SCENES`] named `name`.
 pub fn scene_entry(name: &str) -> (&'static str, DVec3, f64) {
@@ -59,20 +49,6 @@ pub fn scene_entry(name: &str) -> (&'static str, DVec3, f64) {
         .find(|(n, _, _)| *n == name)
         .expect("a SCENARIOS scene");
     (name, DVec3::from(centre), radius)
-}
-
-/// A shipped scene file.
-pub fn load_scene(name: &str) -> Scene {
-    let path = format!(
-        "{}/assets/scenes/{name}.quadric.ron",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    Scene::load(&path).expect("shipped scene")
-}
-
-/// The eye of the comparison views, in scene units.
-pub fn eye(centre: DVec3, radius: f64) -> DVec3 {
-    centre + DVec3::new(1.8, -2.4, 1.5) * radius * 0.85
 }
 
 /// The splats of `name` sampled as the tests sample them (splat radius a

@@ -2,14 +2,19 @@
 //! terrain: time to apply a radius-2 m dodecahedron and re-mesh the cells
 //! it changed, as the plugin does off the main thread. Terrain files: time
 //! to load a carved quarry against replaying its carves. Frames: what
-//! carving costs a game running at 60 frames per second. Ignored by default
-//! (they take a while); run
+//! carving costs a game running at 60 frames per second. Latency: from a
+//! `Carve` message to meshes and colliders in place. Run all four, or those
+//! whose names contain a filter, with
 //!
-//! `cargo test --release -p bevy_chisel --all-features --test it terrain_bench:: -- --ignored --nocapture`
+//! `cargo bench -p bevy_chisel --all-features --bench terrain [-- FILTER]`
 //!
-//! The release profile keeps the kernel's overflow checks and debug
-//! assertions (see the root `Cargo.toml`), so these figures are an upper
-//! bound of the bench profile's.
+//! (measurements: `crater_carves_on_a_large_terrain`,
+//! `loading_a_saved_terrain_against_replaying_its_carves`,
+//! `carving_at_sixty_frames_per_second`,
+//! `crater_latency_to_meshes_and_colliders`). Each prints its figures, then
+//! one JSON line of them. `cargo test` runs this binary without `--bench`:
+//! it then measures nothing (see `support`).
+//!
 
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -24,19 +29,39 @@ use bevy_chisel::terrain::{
     TerrainSettings, TerrainSystems, apply_carve_with_faces, terrain_octree_config,
 };
 use rayon::prelude::*;
+use serde_json::json;
 
-/// The `p` quantile of sorted durations, in milliseconds.
-fn percentile(sorted: &[Duration], p: f64) -> f64 {
-    let k = ((sorted.len() as f64 - 1.0) * p).round() as usize;
-    sorted[k].as_secs_f64() * 1e3
-}
+mod support;
+use support::{Args, env_or, json_line, percentile};
 
-/// `name` from the environment, else `default`.
-fn env_or(name: &str, default: usize) -> usize {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
+fn main() {
+    let Some(args) = Args::parse("terrain") else {
+        return;
+    };
+    let all: [(&str, fn()); 4] = [
+        (
+            "crater_carves_on_a_large_terrain",
+            crater_carves_on_a_large_terrain,
+        ),
+        (
+            "loading_a_saved_terrain_against_replaying_its_carves",
+            loading_a_saved_terrain_against_replaying_its_carves,
+        ),
+        (
+            "carving_at_sixty_frames_per_second",
+            carving_at_sixty_frames_per_second,
+        ),
+        (
+            "crater_latency_to_meshes_and_colliders",
+            crater_latency_to_meshes_and_colliders,
+        ),
+    ];
+    for (name, measure) in all {
+        if args.wants(name) {
+            println!("\n== terrain::{name}");
+            measure();
+        }
+    }
 }
 
 /// A deterministic stream of numbers in `[0, 1)` (xorshift64).
@@ -77,10 +102,8 @@ fn crater(next: &mut impl FnMut() -> f64) -> CarveTool {
     )
 }
 
-#[test]
-#[ignore = "benchmark"]
 fn crater_carves_on_a_large_terrain() {
-    let carves = env_or("CHISEL_BENCH_CARVES", 1000);
+    let carves: usize = env_or("CHISEL_BENCH_CARVES", 1000);
     // CHISEL_BENCH_BUDGET: the octree's BSP node budget per cell (default:
     // the terrains' own).
     let config = OctreeConfig {
@@ -145,8 +168,10 @@ fn crater_carves_on_a_large_terrain() {
         percentile(&total, 0.5),
         percentile(&total, 0.99)
     );
+    let mut decile_medians = Vec::new();
     for (d, mut times) in by_decile.into_iter().enumerate() {
         times.sort();
+        decile_medians.push(percentile(&times, 0.5));
         println!(
             "  carves {:>5}..: median {:.2} ms",
             d * carves / 10,
@@ -159,6 +184,22 @@ fn crater_carves_on_a_large_terrain() {
         stats.bsp_nodes,
         stats.bsp_bytes / 1024
     );
+    json_line(
+        "terrain::crater_carves_on_a_large_terrain",
+        json!({
+            "carves": carves,
+            "threads": rayon::current_num_threads(),
+            "budget": budget,
+            "apply_median_ms": percentile(&apply, 0.5),
+            "apply_p99_ms": percentile(&apply, 0.99),
+            "apply_meshes_median_ms": percentile(&total, 0.5),
+            "apply_meshes_p99_ms": percentile(&total, 0.99),
+            "decile_median_ms": decile_medians,
+            "leaves": stats.leaves,
+            "bsp_nodes": stats.bsp_nodes,
+            "bsp_kib": stats.bsp_bytes / 1024,
+        }),
+    );
 }
 
 /// Loading a saved terrain (the octree snapshot and undo history) against
@@ -168,15 +209,13 @@ fn crater_carves_on_a_large_terrain() {
 /// with radius-2 m dodecahedra at the surface, every tenth carve a heap of
 /// added dirt.
 ///
-/// `cargo test --release -p bevy_chisel --all-features --test it terrain_bench::loading -- --ignored --nocapture`
-#[test]
-#[ignore = "benchmark"]
+/// `cargo bench -p bevy_chisel --all-features --bench terrain -- loading`
 fn loading_a_saved_terrain_against_replaying_its_carves() {
     use bevy::math::Ray3d;
     use bevy_chisel::bsp::octree::Octree;
     use bevy_chisel::terrain::{HeightLayer, Heightfield};
 
-    let carves = env_or("CHISEL_BENCH_CARVES", 1000);
+    let carves: usize = env_or("CHISEL_BENCH_CARVES", 1000);
     let grid = Quantization::new(0.001, [0.0; 3]).expect("valid unit");
     let field = Heightfield::load_image("assets/terrain/quarry_height.png", 1.0, 0.0, 5.0, 8.0, 1)
         .expect("the quarry heightfield")
@@ -278,6 +317,24 @@ fn loading_a_saved_terrain_against_replaying_its_carves() {
         rebuilding.as_secs_f64() * 1e3,
         (replaying - rebuilding).as_secs_f64() * 1e3,
     );
+    json_line(
+        "terrain::loading_a_saved_terrain_against_replaying_its_carves",
+        json!({
+            "carves": terrain.journal().len(),
+            "carving_s": carving.as_secs_f64(),
+            "threads": rayon::current_num_threads(),
+            "leaves": stats.leaves,
+            "bsp_nodes": stats.bsp_nodes,
+            "file_bytes": bytes.len(),
+            "undo_steps": terrain.undo_depth(),
+            "octree_bytes": current.len(),
+            "octree_load_ms": loading_alone.as_secs_f64() * 1e3,
+            "save_ms": saving.as_secs_f64() * 1e3,
+            "load_ms": loading.as_secs_f64() * 1e3,
+            "replay_load_ms": replaying.as_secs_f64() * 1e3,
+            "rebuild_ms": rebuilding.as_secs_f64() * 1e3,
+        }),
+    );
 }
 
 const FRAME: Duration = Duration::from_nanos(16_666_667);
@@ -337,20 +394,18 @@ fn mark_end(
 /// [`TerrainSystems::Carve`] to after [`TerrainSystems::Mesh`]), and per
 /// carve, the frames from the `Carve` message to its `CarveApplied` (every
 /// changed cell's mesh in place). The same span over frames with nothing
-/// to carve is the baseline. Ignored by default; run
+/// to carve is the baseline. Run
 ///
-/// `cargo test --release -p bevy_chisel --all-features --test it terrain_bench::carving_at_sixty_frames -- --ignored --nocapture`
+/// `cargo bench -p bevy_chisel --all-features --bench terrain -- carving_at_sixty_frames`
 ///
 /// Environment: `CHISEL_BENCH_CARVES` (default 300), `CHISEL_BENCH_EVERY`
 /// (frames between carves, default 6: ten carves a second).
 ///
 /// The span covers the plugin's systems only: a renderer adds the upload of
 /// the new meshes to the GPU, on the render thread.
-#[test]
-#[ignore = "benchmark"]
 fn carving_at_sixty_frames_per_second() {
-    let carves = env_or("CHISEL_BENCH_CARVES", 300);
-    let every = env_or("CHISEL_BENCH_EVERY", 6).max(1) as u64;
+    let carves: usize = env_or("CHISEL_BENCH_CARVES", 300);
+    let every = env_or::<u64>("CHISEL_BENCH_EVERY", 6).max(1);
     let terrain = large_terrain();
 
     let mut app = App::new();
@@ -476,6 +531,31 @@ fn carving_at_sixty_frames_per_second() {
         100.0 * within(1),
         100.0 * within(2)
     );
+    let ms = |sorted: &[Duration]| {
+        json!({
+            "median": percentile(sorted, 0.5),
+            "p99": percentile(sorted, 0.99),
+            "max": percentile(sorted, 1.0),
+        })
+    };
+    json_line(
+        "terrain::carving_at_sixty_frames_per_second",
+        json!({
+            "carves": carves,
+            "every_frames": every,
+            "frames": spans.len(),
+            "span_ms": ms(&spans),
+            "baseline_span_ms": ms(&baseline),
+            "idle_span_ms": ms(&idle),
+            "work_median_ms": percentile(&work, 0.5),
+            "work_p99_ms": percentile(&work, 0.99),
+            "lag_frames_median": lag[lag.len() / 2],
+            "lag_frames_p99": lag[((lag.len() - 1) as f64 * 0.99).round() as usize],
+            "lag_frames_max": lag[lag.len() - 1],
+            "within_1_frame": within(1),
+            "within_2_frames": within(2),
+        }),
+    );
 }
 
 /// The latency a game sees: from a crater carve sent as a [`Carve`]
@@ -484,11 +564,9 @@ fn carving_at_sixty_frames_per_second() {
 /// [`large_terrain`], the app updated as fast as it goes (no frame pacing).
 /// Also how many app updates each carve took to show.
 ///
-/// `cargo test --release --all-features -p bevy_chisel --test it terrain_bench::crater_latency -- --ignored --nocapture`
-#[test]
-#[ignore = "benchmark"]
+/// `cargo bench -p bevy_chisel --all-features --bench terrain -- crater_latency`
 fn crater_latency_to_meshes_and_colliders() {
-    let carves = env_or("CHISEL_BENCH_CARVES", 1000);
+    let carves: usize = env_or("CHISEL_BENCH_CARVES", 1000);
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, AssetPlugin::default(), TerrainPlugin))
         .init_asset::<Mesh>()
@@ -565,22 +643,37 @@ fn crater_latency_to_meshes_and_colliders() {
         threads,
         config.max_bsp_nodes
     );
+    let mut figures = json!({
+        "carves": carves,
+        "colliders": colliders,
+        "worker_threads": threads,
+        "budget": config.max_bsp_nodes,
+        "updates_median": updates[updates.len() / 2],
+        "updates_max": updates.last().copied().unwrap_or(0),
+    });
     for (name, times) in [
         ("latency", &latency),
         ("apply", &apply),
         ("meshes", &mesh),
         ("colliders", &collider),
     ] {
+        let max = times.last().map_or(0.0, |t| t.as_secs_f64() * 1e3);
         println!(
             "{name:>10}: median {:.2} ms, p99 {:.2} ms, max {:.2} ms",
             percentile(times, 0.5),
             percentile(times, 0.99),
-            times.last().map_or(0.0, |t| t.as_secs_f64() * 1e3)
+            max
         );
+        figures[format!("{name}_ms")] = json!({
+            "median": percentile(times, 0.5),
+            "p99": percentile(times, 0.99),
+            "max": max,
+        });
     }
     println!(
         "app updates until shown: median {}, max {}",
         updates[updates.len() / 2],
         updates.last().copied().unwrap_or(0)
     );
+    json_line("terrain::crater_latency_to_meshes_and_colliders", figures);
 }

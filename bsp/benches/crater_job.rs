@@ -2,14 +2,21 @@
 //! carve ([`Octree::apply_with_faces`]), the debris search
 //! ([`Octree::detach_after`]) and the sealed meshes of every cell that
 //! changed or whose seams did ([`SeamedMesher::update`]), timed one by one.
-//! It is the kernel's share of the latency the plugin's
-//! `terrain_bench::crater_latency` reports, on the same kind of terrain,
-//! and a stable target for a profiler or an instruction count:
+//! It is the kernel's share of the latency the plugin's terrain bench
+//! (`crater_latency`) reports, on the same kind of terrain, and a stable
+//! target for a profiler or an instruction count:
 //!
 //! ```sh
-//! cargo run --release -p chisel_bsp --example crater_job -- 1000 [THREADS] [check]
-//! perf stat -e task-clock target/release/examples/crater_job 1000
+//! cargo bench -p chisel_bsp --bench crater_job -- 1000 [THREADS] [check]
+//! cargo bench -p chisel_bsp --bench crater_job --no-run   # prints the binary's path
+//! perf stat -e task-clock target/release/deps/crater_job-HASH --bench 1000
+//! valgrind --tool=callgrind target/release/deps/crater_job-HASH --bench 200 1 check
 //! ```
+//!
+//! It measures only with `--bench` among its arguments (`cargo bench`
+//! passes it): `cargo test --all-targets` runs it without, and it then
+//! prints one line and exits. The other arguments are positional:
+//! carves (default 1000), threads (default 1), `check`.
 //!
 //! With `check`, it also prints hashes of every sealed mesh, every debris
 //! piece and the final octree (outside the timings): equal hashes before
@@ -88,14 +95,17 @@ fn median(times: &mut [Duration]) -> f64 {
 }
 
 fn main() {
-    let arg = |i: usize, default: usize| {
-        std::env::args()
-            .nth(i)
-            .and_then(|n| n.parse().ok())
-            .unwrap_or(default)
-    };
-    let (carves, threads) = (arg(1, 1000), arg(2, 1));
-    let check = std::env::args().nth(3).is_some_and(|a| a == "check");
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if !args.iter().any(|a| a == "--bench") {
+        println!("crater_job: not run as a benchmark (no --bench argument); skipped");
+        return;
+    }
+    // The positional arguments, after cargo's flags are set aside.
+    let args: Vec<&String> = args.iter().filter(|a| !a.starts_with('-')).collect();
+    let arg =
+        |i: usize, default: usize| args.get(i).and_then(|n| n.parse().ok()).unwrap_or(default);
+    let (carves, threads) = (arg(0, 1000), arg(1, 1));
+    let check = args.get(2).is_some_and(|a| *a == "check");
     // As the plugin's jobs: everything on the worker pool's threads.
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

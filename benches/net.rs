@@ -1,7 +1,11 @@
-//! Figures of networked carving, printed as one JSON line (ignored by
-//! default; BENCHMARKS.md quotes it):
+//! Figures of networked carving, printed as one JSON line (BENCHMARKS.md
+//! quotes it):
 //!
-//! `cargo test --release -p bevy_chisel --all-features --test it net_bench:: -- --ignored --nocapture`
+//! `cargo bench -p bevy_chisel --all-features --bench net`
+//!
+//! `cargo test` runs this binary without `--bench`: it then measures
+//! nothing (see `support`). The servers and clients are those of the
+//! networked tests (`tests/it/net`, included by path).
 //!
 //! - bytes of one carve on the wire (the encoded [`ServerPacket::Carve`])
 //!   against the bytes of the meshes of the cells it changed (vertex
@@ -12,7 +16,10 @@
 //! - the time a client needs to join a terrain after 10,000 carves:
 //!   snapshot received, terrain loaded and meshed.
 
-use crate::net;
+#[path = "../tests/it/net/mod.rs"]
+#[allow(dead_code, reason = "the tests' helpers, not all used here")]
+mod net;
+mod support;
 
 use std::time::Instant;
 
@@ -215,21 +222,34 @@ fn join_after(carves: usize) -> (f64, f64, usize) {
     (median(times), median(meshed), bytes)
 }
 
-#[test]
-#[ignore = "benchmark: run with --ignored --nocapture"]
+fn main() {
+    let Some(args) = support::Args::parse("net") else {
+        return;
+    };
+    if args.wants("net_figures") {
+        net_figures();
+    }
+}
+
 fn net_figures() {
     let (wire, mesh, carves) = wire_against_meshes();
     let (rate, applied) = eight_clients(CellOutput::Nothing);
     let (meshing_rate, _) = eight_clients(CellOutput::Meshes);
     let (join, join_meshed, snapshot) = join_after(10_000);
-    println!(
-        "{{\"carves\": {carves}, \"wire_bytes_per_carve\": {wire:.1}, \
-         \"mesh_bytes_per_carve\": {mesh:.0}, \"ratio\": {:.0}, \
-         \"eight_clients_carves_per_s\": {rate:.1}, \"eight_clients_applied\": {applied}, \
-         \"eight_clients_meshing_server_carves_per_s\": {meshing_rate:.1}, \
-         \"join_after_10000_s\": {join:.3}, \"join_meshed_s\": {join_meshed:.3}, \
-         \"snapshot_bytes\": {snapshot}}}",
-        mesh / wire
+    support::json_line(
+        "net::net_figures",
+        serde_json::json!({
+            "carves": carves,
+            "wire_bytes_per_carve": wire,
+            "mesh_bytes_per_carve": mesh,
+            "ratio": mesh / wire,
+            "eight_clients_carves_per_s": rate,
+            "eight_clients_applied": applied,
+            "eight_clients_meshing_server_carves_per_s": meshing_rate,
+            "join_after_10000_s": join,
+            "join_meshed_s": join_meshed,
+            "snapshot_bytes": snapshot,
+        }),
     );
     assert!(
         mesh / wire >= 100.0,

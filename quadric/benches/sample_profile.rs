@@ -1,9 +1,15 @@
 //! Samples one scene repeatedly on one thread, for profilers (callgrind,
-//! `perf stat`): `cargo run --release -p chisel_quadric --example
-//! sample_profile -- SCENE DIVISOR [REPEATS]`, where `SCENE` is a shipped
-//! scene name or `sphere` (radius 50 in a bounding sphere of 60; the
-//! divisor is then the splat radius itself), and the splat radius is the
-//! bounding radius ÷ `DIVISOR`. Prints the counts of paper 2, Table 2.
+//! `perf stat`): `cargo bench -p chisel_quadric --bench sample_profile --
+//! SCENE DIVISOR [REPEATS]`, where `SCENE` is a shipped scene name or
+//! `sphere` (radius 50 in a bounding sphere of 60; the divisor is then the
+//! splat radius itself), and the splat radius is the bounding radius ÷
+//! `DIVISOR`. Prints the counts of paper 2, Table 2. Under a profiler, run
+//! the binary that `cargo bench -p chisel_quadric --bench sample_profile
+//! --no-run` builds, with `--bench SCENE DIVISOR [REPEATS]`.
+//!
+//! It measures only with `--bench` among its arguments (`cargo bench`
+//! passes it): `cargo test --all-targets` runs it without, and it then
+//! prints one line and exits.
 
 #![allow(clippy::cast_precision_loss)]
 
@@ -12,10 +18,20 @@ use glam::DVec3;
 use std::time::Instant;
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let name = args.get(1).map_or("machine80", String::as_str);
-    let divisor: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(100.0);
-    let repeats: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if !args.iter().any(|a| a == "--bench") {
+        println!("sample_profile: not run as a benchmark (no --bench argument); skipped");
+        return;
+    }
+    // The positional arguments, after cargo's flags are set aside.
+    let args: Vec<&str> = args
+        .iter()
+        .map(String::as_str)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let name = args.first().copied().unwrap_or("machine80");
+    let divisor: f64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(100.0);
+    let repeats: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1);
     let (scene, sphere, radius) = if name == "sphere" {
         let scene = Scene::from_ron(
             r#"Scene(primitives: [(name: "ball", shape: Sphere(center: (0, 0, 0), radius: 50))], root: Ref("ball"))"#,

@@ -1,13 +1,17 @@
 //! Paper 2, §7: the splat pass against the global ray-tracing pass of the
 //! same prop and camera, at 1920×1080 on this machine's Vulkan adapter
 //! (lavapipe where there is no GPU), and the splat pass's overdraw.
-//! Ignored by default (the global pass takes seconds per frame on a CPU
-//! driver); run
+//! Run (the global pass takes seconds per frame on a CPU driver)
 //!
-//! `WGPU_BACKEND=vulkan cargo test --release -p bevy_chisel --all-features --test it splat_bench:: -- --ignored --nocapture`
+//! `WGPU_BACKEND=vulkan cargo bench -p bevy_chisel --all-features --bench splat`
+//!
+//! It prints the figures of each scene, two Markdown tables, then one JSON
+//! line of the figures. `cargo test` runs this binary without `--bench`:
+//! it then measures nothing (see `support`).
 //!
 //! Per SCENARIOS scene, one app renders the prop alone (from the view of
-//! `tests/it/splat_render.rs`: the bounding sphere fills the image height)
+//! `tests/it/splat_render.rs`, whose scenes and eye `tests/it/common/scenes.rs`
+//! gives both: the bounding sphere fills the image height)
 //! through a sequence of steps, in turn, in the same run:
 //!
 //! - time: surface-aligned boxes, screen quads, global ray tracing and an
@@ -30,7 +34,9 @@
 //! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
 //! 40 as `SplatRadius::default()`).
 
-use crate::common;
+#[path = "../tests/it/common/scenes.rs"]
+mod common;
+mod support;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -70,12 +76,7 @@ const READ_SETTLE: u32 = 5;
 /// mode alike.
 const ROUNDS: u32 = 2;
 
-fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
+use support::env_or;
 
 /// How the prop is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -653,8 +654,16 @@ fn figures(log: &Log) -> SceneFigures {
     }
 }
 
-#[test]
-#[ignore = "benchmark"]
+fn main() {
+    let Some(args) = support::Args::parse("splat") else {
+        return;
+    };
+    let name = "splat_pass_against_global_ray_tracing_at_full_hd";
+    if args.wants(name) {
+        splat_pass_against_global_ray_tracing_at_full_hd();
+    }
+}
+
 fn splat_pass_against_global_ray_tracing_at_full_hd() {
     let splat_frames = env_or("CHISEL_BENCH_FRAMES", 15);
     let global_frames = env_or("CHISEL_BENCH_GLOBAL_FRAMES", 3);
@@ -664,6 +673,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         .map(|s| s.split(',').map(str::to_owned).collect());
     let mut times = Vec::new();
     let mut overdraws = Vec::new();
+    let mut json_scenes = Vec::new();
     // The SCENARIOS scenes; each is sampled and viewed in its file's
     // `bounds`.
     for (name, _, _) in SCENES {
@@ -699,6 +709,28 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             pass(Variant::OpenBoxes),
             pass(Variant::Quads),
         ));
+        let by_variant = |value: &dyn Fn(Variant) -> f64| {
+            serde_json::Map::from_iter(
+                [
+                    Variant::Boxes,
+                    Variant::OpenBoxes,
+                    Variant::Quads,
+                    Variant::Global,
+                ]
+                .map(|v| (format!("{v:?}"), serde_json::json!(value(v)))),
+            )
+        };
+        json_scenes.push(serde_json::json!({
+            "scene": name,
+            "quadrics": quadrics,
+            "splats": splat_count,
+            "adapter": log.adapter,
+            "pass_ms": by_variant(&pass),
+            "frame_minus_empty_ms": by_variant(&check),
+            "overdraw": by_variant(&|v| od(v).0),
+            "invocations_per_covered_px": by_variant(&|v| od(v).1),
+            "covered_px": f.covered,
+        }));
         overdraws.push(format!(
             "| {name} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
             f.covered,
@@ -724,4 +756,13 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
     for row in overdraws {
         println!("{row}");
     }
+    support::json_line(
+        "splat::splat_pass_against_global_ray_tracing_at_full_hd",
+        serde_json::json!({
+            "splat_frames": splat_frames,
+            "global_frames": global_frames,
+            "splat_divisor": divisor,
+            "scenes": json_scenes,
+        }),
+    );
 }
