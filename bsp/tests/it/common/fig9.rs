@@ -1,5 +1,5 @@
 //! The planes of paper 1's Figure 9 setting, shared by the `cut` benchmark
-//! and the `fig9_cuts` instruction-count driver: planes tangent to the
+//! and the `fig9_cuts` instruction-count bench: planes tangent to the
 //! sphere of radius `0.95 R` inscribed in the box `[-R, R]³`, with integer
 //! normals of length about 2^10 in random directions, outward.
 

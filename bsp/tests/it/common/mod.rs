@@ -1,7 +1,7 @@
 //! Shared test support: the bigint reference, the backends, the inputs, shapes,
 //! random BSPs, exact volumes and octrees checked against one big BSP.
 //!
-//! The benchmarks and the `fig9_cuts` example include some of these files
+//! The benchmarks (`fig9_cuts` among them) include some of these files
 //! by path; `fig9.rs` (the planes of paper 1's Figure 9) is theirs alone.
 
 pub mod backends;

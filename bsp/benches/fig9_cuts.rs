@@ -4,11 +4,14 @@
 //! planes as `benches/cut.rs`, repeated `R` times in one reused arena.
 //!
 //! ```sh
-//! cargo build --profile bench -p chisel_bsp --example fig9_cuts
-//! valgrind --tool=callgrind target/release/examples/fig9_cuts two 250 10
+//! cargo bench -p chisel_bsp --bench fig9_cuts -- two 250 10
+//! cargo bench -p chisel_bsp --bench fig9_cuts --no-run   # prints the binary's path
+//! valgrind --tool=callgrind target/release/deps/fig9_cuts-HASH --bench two 250 10
 //! ```
 //!
-//! Arguments: `two` (both parts built, [`ConvexArena::cut`]), `one`
+//! It runs only with `--bench` among its arguments (`cargo bench` passes
+//! it; `cargo test --all-targets` does not, and then it prints one line
+//! and exits). Arguments after the flags: `two` (both parts built, [`ConvexArena::cut`]), `one`
 //! ([`ConvexArena::cut_keeping`]) or `naive` (both parts, every vertex
 //! classified, [`ConvexArena::cut_naive`]), the number of planes `N` (250)
 //! and the repetitions `R` (10; at least 1). Instructions per cut are the difference between
@@ -82,14 +85,24 @@ fn extract_cell(
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let mode = match args.get(1).map(String::as_str) {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if !args.iter().any(|a| a == "--bench") {
+        println!("fig9_cuts: not run as a benchmark (no --bench argument); skipped");
+        return;
+    }
+    // The positional arguments, after cargo's flags are set aside.
+    let args: Vec<&str> = args
+        .iter()
+        .map(String::as_str)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let mode = match args.first().copied() {
         Some("one") => Mode::OneSided,
         Some("naive") => Mode::Naive,
         _ => Mode::TwoSided,
     };
-    let count = args.get(2).and_then(|n| n.parse().ok()).unwrap_or(250);
-    let repeats: usize = args.get(3).and_then(|n| n.parse().ok()).unwrap_or(10);
+    let count = args.get(1).and_then(|n| n.parse().ok()).unwrap_or(250);
+    let repeats: usize = args.get(2).and_then(|n| n.parse().ok()).unwrap_or(10);
     // Seeded by the count, as in `benches/cut.rs`.
     let planes = tangent_planes(count, count as u64);
     let mut arena = ConvexArena::new();
