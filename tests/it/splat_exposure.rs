@@ -58,11 +58,12 @@ fn one_stop_more_exposure_value_halves_the_shaded_colour() {
         capture_frames: vec![8, 10],
         output_dir: std::env::var_os("CHISEL_TEST_SCREENSHOTS").map(Into::into),
         stem: "splat_exposure".into(),
-        max_frames: 60,
+        max_frames: 240,
         min_foreground: 0.0,
     };
     let mut app = App::new();
     let frames = Presentation::Headless(config).add_default_plugins(&mut app, "exposure test");
+    crate::common::hold_captures_until_pipelines_ready(&mut app);
     app.add_plugins(ChiselSplatPlugin)
         .insert_resource(ClearColor(Color::BLACK))
         .insert_resource(GlobalAmbientLight {
@@ -251,11 +252,12 @@ fn a_prop_sphere_matches_a_standard_material_sphere() {
         capture_frames: vec![8, 10],
         output_dir: std::env::var_os("CHISEL_TEST_SCREENSHOTS").map(Into::into),
         stem: "splat_pbr".into(),
-        max_frames: 60,
+        max_frames: 240,
         min_foreground: 0.0,
     };
     let mut app = App::new();
     let frames = Presentation::Headless(config).add_default_plugins(&mut app, "pbr test");
+    crate::common::hold_captures_until_pipelines_ready(&mut app);
     app.add_plugins(ChiselSplatPlugin)
         .insert_resource(ClearColor(Color::BLACK));
     // Top row: the default material; bottom row: a rough metal.

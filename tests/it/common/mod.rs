@@ -7,13 +7,16 @@
 //! ids agree on ≥ 99.5 % of the pixels, holes (reference solid, capture
 //! background) ≤ 0.1 %.
 
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use bevy::camera::{ClearColorConfig, Viewport};
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::math::DVec3;
 use bevy::prelude::*;
-use bevy_chisel::presentation::{HeadlessConfig, Presentation};
+use bevy::render::render_resource::PipelineCache;
+use bevy::render::{Render, RenderApp, RenderSystems};
+use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::quadric::{Camera as RefCamera, NO_HIT, Scene, TraceImage, trace_image};
 use bevy_chisel::splat::{
     ChiselSplatPlugin, PropBounds, PropSplats, SplatMode, SplatOutput, SplatSettings,
@@ -24,6 +27,39 @@ use crate::ONE_APP_AT_A_TIME;
 
 mod scenes;
 pub use scenes::{FOV_DEGREES, SCALE, SCENES, eye, load_scene};
+
+/// Set by the render world while its pipeline cache still waits on a
+/// pipeline (a shader, or one of Bevy's shader libraries it imports, still
+/// loading).
+#[derive(Resource, Clone, Default)]
+struct PipelinesWaiting(Arc<AtomicBool>);
+
+/// Holds the headless captures while any render pipeline is still waiting,
+/// so that a capture never shows a frame whose passes were skipped for want
+/// of a compiled pipeline. Bevy loads its shader libraries through the asset
+/// server, off the main thread, so how many frames that takes depends on
+/// what else the process is doing (the other tests of this binary).
+pub fn hold_captures_until_pipelines_ready(app: &mut App) {
+    let waiting = PipelinesWaiting::default();
+    app.insert_resource(waiting.clone())
+        .insert_resource(HoldCaptures(false))
+        .add_systems(
+            Update,
+            |waiting: Res<PipelinesWaiting>, mut hold: ResMut<HoldCaptures>| {
+                hold.0 = waiting.0.load(Ordering::Relaxed);
+            },
+        );
+    if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
+        render_app.insert_resource(waiting).add_systems(
+            Render,
+            (|cache: Res<PipelineCache>, waiting: Res<PipelinesWaiting>| {
+                let busy = cache.waiting_pipelines().next().is_some();
+                waiting.0.store(busy, Ordering::Relaxed);
+            })
+            .in_set(RenderSystems::Cleanup),
+        );
+    }
+}
 
 /// Captures taken so far, numbering the screenshot files.
 static SHOT: AtomicU32 = AtomicU32::new(0);
@@ -145,12 +181,13 @@ pub fn render_views_with(
             settings.mode,
             SHOT.fetch_add(1, Ordering::Relaxed)
         ),
-        max_frames: 60,
+        max_frames: 240,
         // The pixels are checked one by one.
         min_foreground: 0.0,
     };
     let mut app = App::new();
     let frames = Presentation::Headless(config).add_default_plugins(&mut app, "splat test");
+    hold_captures_until_pipelines_ready(&mut app);
     app.add_plugins(ChiselSplatPlugin)
         .insert_resource(settings)
         .insert_resource(ClearColor(Color::BLACK));
