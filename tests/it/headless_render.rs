@@ -61,12 +61,13 @@ fn renders_a_cube_headless_and_reads_back_its_pixels() {
         capture_frames: vec![8, 12],
         output_dir: None,
         stem: "headless_render".into(),
-        max_frames: 60,
+        max_frames: 240,
         // The pixels are checked one by one below.
         min_foreground: 0.0,
     };
     let mut app = App::new();
     let frames = Presentation::Headless(config).add_default_plugins(&mut app, "headless test");
+    crate::common::hold_captures_until_pipelines_ready(&mut app);
     app.insert_resource(ClearColor(Color::srgb_u8(
         BACKGROUND[0],
         BACKGROUND[1],
