@@ -205,7 +205,19 @@ pub(crate) struct BuiltMesh {
     pub label: Label,
     pub triangles: usize,
     pub mesh: Option<Mesh>,
-    pub collider: Option<PhysicsInsert>,
+    pub collider: CellCollider,
+}
+
+/// The collider side of a [`BuiltMesh`].
+pub(crate) enum CellCollider {
+    /// Built from the new mesh: `None` where the mesh gives none (or no
+    /// physics backend is set), and any old collider goes.
+    Built(Option<PhysicsInsert>),
+    /// The cell's surface is the one its collider was built from; only its
+    /// seams moved (new vertices on its border edges, where a neighbour
+    /// changed), which a collider does not need. The cell's entity keeps
+    /// its collider; the triangles serve an entity that has none yet.
+    Unchanged(ColliderMesh),
 }
 
 /// What a cell shows now: `None` when it is no longer a leaf.
@@ -366,6 +378,9 @@ pub(crate) fn remesh(
         };
     }
     let render = context.output == CellOutput::Meshes;
+    // Cells outside the change keep their surface (`Changes::changed`);
+    // the mesher re-seals some of them, and only their meshes change.
+    let edited: BTreeSet<CellKey> = keys.iter().chain(fresh.keys()).copied().collect();
     let keys: BTreeSet<CellKey> = keys.into_iter().collect();
     let sealed = mesher.update(&octree, keys, fresh);
     // Meshes first (the collider triangles kept aside), then colliders,
@@ -382,7 +397,7 @@ pub(crate) fn remesh(
                             label: mesh.label,
                             triangles: mesh.triangle_count(),
                             mesh: render.then(|| mesh.into_mesh()),
-                            collider: None,
+                            collider: CellCollider::Built(None),
                         };
                         (built, collider)
                     })
@@ -395,20 +410,26 @@ pub(crate) fn remesh(
     let start = Instant::now();
     let cells = meshed
         .into_par_iter()
-        .map(|(key, meshes)| CellUpdate {
-            key,
-            meshes: meshes.map(|meshes| {
-                meshes
-                    .into_iter()
-                    .map(|(mut built, collider)| {
-                        built.collider = context
-                            .physics
-                            .as_ref()
-                            .and_then(|physics| physics.cell_collider(&collider));
-                        built
-                    })
-                    .collect()
-            }),
+        .map(|(key, meshes)| {
+            let unchanged = !edited.contains(&key);
+            CellUpdate {
+                key,
+                meshes: meshes.map(|meshes| {
+                    meshes
+                        .into_iter()
+                        .map(|(mut built, collider)| {
+                            built.collider = match &context.physics {
+                                Some(_) if unchanged => CellCollider::Unchanged(collider),
+                                Some(physics) => {
+                                    CellCollider::Built(physics.cell_collider(&collider))
+                                }
+                                None => CellCollider::Built(None),
+                            };
+                            built
+                        })
+                        .collect()
+                }),
+            }
         })
         .collect();
     JobOutput {

@@ -16,7 +16,7 @@ use chisel_bsp::octree::{CellKey, Octree};
 use super::carve::{CarveApplied, CarveRejected, TerrainCellChanged, TerrainSettings};
 use super::component::{Terrain, TerrainCell};
 use super::debris::{BuiltDebris, DebrisDetached, DebrisPart, TerrainDebris};
-use super::jobs::{BuiltMesh, CellUpdate, Runtime, StepOutcome, Upload};
+use super::jobs::{BuiltMesh, CellCollider, CellUpdate, Runtime, StepOutcome, Upload};
 use super::physics::TerrainPhysicsBackend;
 
 /// Collects finished jobs: swaps the new octree in, records undo steps and
@@ -274,12 +274,13 @@ impl CellPlacement<'_, '_, '_> {
                         (None, None) => {}
                     }
                     match mesh.collider {
-                        Some(collider) => collider.apply(&mut cell),
-                        None => {
+                        CellCollider::Built(Some(collider)) => collider.apply(&mut cell),
+                        CellCollider::Built(None) => {
                             if let Some(physics) = &self.physics.0 {
                                 physics.remove_cell_collider(&mut cell);
                             }
                         }
+                        CellCollider::Unchanged(_) => {}
                     }
                     kept.push((label, cell_entity, mesh.triangles));
                 }
@@ -299,7 +300,17 @@ impl CellPlacement<'_, '_, '_> {
             if let Some(built) = mesh.mesh {
                 cell.insert(Mesh3d(meshes.add(built)));
             }
-            if let Some(collider) = mesh.collider {
+            let collider = match mesh.collider {
+                CellCollider::Built(collider) => collider,
+                // Rare: the same surface under a new entity (its old one
+                // was despawned), so built here, on the main thread.
+                CellCollider::Unchanged(triangles) => self
+                    .physics
+                    .0
+                    .as_ref()
+                    .and_then(|physics| physics.cell_collider(&triangles)),
+            };
+            if let Some(collider) = collider {
                 collider.apply(&mut cell);
             }
             kept.push((mesh.label, cell.id(), mesh.triangles));

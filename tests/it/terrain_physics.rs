@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use avian3d::prelude::*;
 use bevy::asset::AssetPlugin;
+use bevy::math::DVec3;
 use bevy::mesh::MeshPlugin;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
@@ -301,5 +302,87 @@ fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume() {
     assert!(
         end.y < start.y - 1.5 && end.y > 0.0,
         "the deck should fall from {start} onto the ground, it is at {end}"
+    );
+}
+
+/// Per cell entity: its mesh handle, its collider's shape (pointer) and
+/// the areas of its mesh and of its collider's triangles.
+fn cell_meshes_and_colliders(app: &mut App) -> Vec<(Entity, AssetId<Mesh>, usize, f64, f64)> {
+    let mut cells = app
+        .world_mut()
+        .query_filtered::<(Entity, &Mesh3d, &Collider), With<TerrainCell>>();
+    let found: Vec<(Entity, Handle<Mesh>, Collider)> = cells
+        .iter(app.world())
+        .map(|(e, m, c)| (e, m.0.clone(), c.clone()))
+        .collect();
+    let meshes = app.world().resource::<Assets<Mesh>>();
+    let area = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+        let (u, v) = (
+            DVec3::from(b) - DVec3::from(a),
+            DVec3::from(c) - DVec3::from(a),
+        );
+        u.cross(v).length() / 2.0
+    };
+    found
+        .into_iter()
+        .map(|(entity, handle, collider)| {
+            let mesh = meshes.get(&handle).expect("the cell's mesh is an asset");
+            let Some(bevy::mesh::VertexAttributeValues::Float32x3(positions)) =
+                mesh.attribute(Mesh::ATTRIBUTE_POSITION)
+            else {
+                panic!("cell mesh without positions");
+            };
+            let at = |i: usize| positions[i].map(f64::from);
+            let indices: Vec<usize> = mesh.indices().expect("indexed").iter().collect();
+            let mesh_area: f64 = indices
+                .chunks_exact(3)
+                .map(|t| area(at(t[0]), at(t[1]), at(t[2])))
+                .sum();
+            let trimesh = collider.shape().as_trimesh().expect("a trimesh collider");
+            let vertex = |i: u32| {
+                let p = trimesh.vertices()[i as usize];
+                [f64::from(p.x), f64::from(p.y), f64::from(p.z)]
+            };
+            let collider_area: f64 = trimesh
+                .indices()
+                .iter()
+                .map(|t| area(vertex(t[0]), vertex(t[1]), vertex(t[2])))
+                .sum();
+            let shape = std::sync::Arc::as_ptr(&collider.shape().0).cast::<()>() as usize;
+            (entity, handle.id(), shape, mesh_area, collider_area)
+        })
+        .collect()
+}
+
+#[test]
+fn cells_only_resealed_keep_their_colliders_which_match_their_meshes() {
+    let (mut app, terrain) = app_with_slab();
+    let before = cell_meshes_and_colliders(&mut app);
+    app.world_mut().write_message(Carve {
+        terrain,
+        tool: CarveTool::dodecahedron(0.9, Vec3::new(0.3, 0.3, 0.2)),
+        edit: Edit::Subtract,
+    });
+    settle(&mut app, terrain);
+    let after = cell_meshes_and_colliders(&mut app);
+    let (mut remeshed, mut kept) = (0, 0);
+    for &(entity, mesh, shape, mesh_area, collider_area) in &after {
+        // Welded f32 triangles against the mesh's own: the same surface.
+        assert!(
+            (mesh_area - collider_area).abs() <= 1e-5 * mesh_area.max(1.0),
+            "cell entity {entity}: mesh area {mesh_area} m², collider {collider_area} m²"
+        );
+        if let Some(old) = before.iter().find(|c| c.0 == entity)
+            && old.1 != mesh
+        {
+            remeshed += 1;
+            kept += usize::from(old.2 == shape);
+        }
+    }
+    assert!(remeshed > 0, "the carve re-meshed no cell entity");
+    assert!(
+        kept > 0 && kept < remeshed,
+        "of {remeshed} re-meshed cells, {kept} kept their colliders: \
+         the carved ones need new colliders, the re-sealed ones not"
     );
 }
