@@ -4,7 +4,9 @@
 //! it in the [`TerrainPhysicsBackend`] resource. The carve jobs then build
 //! each cell's collider on the worker thread that built its mesh, and the
 //! upload inserts both in the same frame, so the ground a body stands on
-//! and the ground it sees never disagree. With the `avian` feature,
+//! and the ground it sees never disagree. A neighbour that a carve only
+//! re-seals (new vertices on its border edges, the same surface) keeps its
+//! collider. With the `avian` feature,
 //! [`super::avian::TerrainAvianPlugin`] is such a backend for avian3d;
 //! another engine (bevy_rapier3d, say) needs only another implementation.
 
