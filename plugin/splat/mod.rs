@@ -75,7 +75,8 @@ use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSyst
 
 pub use material::PropMaterial;
 pub use prop::{
-    PropBounds, PropGpuData, PropSampleError, PropSplats, QuadricProp, QuadricScene, SplatRadius,
+    PropBounds, PropGpuData, PropSampleError, PropSampling, PropSplats, QuadricProp, QuadricScene,
+    SplatRadius,
 };
 
 /// How props are drawn.
@@ -215,7 +216,8 @@ impl Plugin for ChiselSplatPlugin {
             .add_systems(
                 Update,
                 (
-                    prop::request_sampling.in_set(SplatSystems::Request),
+                    (prop::report_failed_edits, prop::request_sampling)
+                        .in_set(SplatSystems::Request),
                     (prop::start_sampling, prop::finish_sampling)
                         .chain()
                         .in_set(SplatSystems::Sample),

@@ -1,0 +1,298 @@
+//! The level-design workflow for quadric props, in an app without rendering
+//! (`MinimalPlugins`): an edited scene file re-samples its props in the
+//! background and swaps the new splats in (only the regions the edit can
+//! change are sampled again), a malformed edit keeps the previous prop, and
+//! moving or scaling a prop samples nothing.
+//!
+//! Edits reach the app through `AssetServer::reload`, the call Bevy's
+//! `file_watcher` makes when a file changes on disk.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use bevy::asset::{AssetPlugin, LoadState};
+use bevy::prelude::*;
+use bevy::transform::TransformPlugin;
+use bevy_chisel::quadric::Scene;
+use bevy_chisel::splat::{
+    ChiselSplatPlugin, PropBounds, PropSampling, PropSplats, QuadricProp, QuadricScene, SplatRadius,
+};
+
+use crate::ONE_APP_AT_A_TIME;
+
+/// machine80 with one bolt head made wider: an edit of one quadric.
+const BOLT: (&str, &str) = (
+    "Cylinder(point: (-45, -25, 0), axis: (0, 0, 1), radius: 8)",
+    "Cylinder(point: (-45, -25, 0), axis: (0, 0, 1), radius: 9)",
+);
+
+fn shipped(name: &str) -> String {
+    let path = format!(
+        "{}/assets/scenes/{name}.quadric.ron",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    std::fs::read_to_string(path).expect("shipped scene")
+}
+
+/// A directory of its own for this test's asset files.
+fn asset_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("chisel-props-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn app_in(dir: &Path) -> App {
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins,
+        AssetPlugin {
+            file_path: dir.to_string_lossy().into_owned(),
+            ..default()
+        },
+        TransformPlugin,
+        ChiselSplatPlugin,
+    ));
+    app
+}
+
+/// Runs frames until `done` holds (or fails after a generous limit).
+fn run_until(app: &mut App, what: &str, mut done: impl FnMut(&mut App) -> bool) {
+    for _ in 0..20_000 {
+        app.update();
+        if done(app) {
+            return;
+        }
+        std::thread::sleep(Duration::from_micros(300));
+    }
+    panic!("timed out waiting for {what}");
+}
+
+fn generation(app: &App, prop: Entity) -> Option<u64> {
+    app.world().get::<PropSplats>(prop).map(|s| s.0.generation)
+}
+
+fn runs(app: &App, prop: Entity) -> u64 {
+    app.world()
+        .get::<PropSampling>(prop)
+        .map_or(0, PropSampling::sampling_runs)
+}
+
+/// Spawns a prop of the scene file `file` and waits for its first splats.
+fn spawn_prop(app: &mut App, file: &str) -> (Entity, Handle<QuadricScene>) {
+    let scene: Handle<QuadricScene> = app.world().resource::<AssetServer>().load(file.to_owned());
+    let prop = app
+        .world_mut()
+        .spawn(QuadricProp {
+            scene: scene.clone(),
+            bounds: None,
+            radius: SplatRadius::Auto(40.0),
+        })
+        .id();
+    run_until(app, "the first splats", |app| {
+        generation(app, prop).is_some()
+    });
+    (prop, scene)
+}
+
+fn edit(app: &mut App, dir: &Path, file: &str, text: &str) {
+    std::fs::write(dir.join(file), text).expect("write the scene file");
+    app.world()
+        .resource::<AssetServer>()
+        .reload(file.to_owned());
+}
+
+#[test]
+fn an_edited_scene_file_is_resampled_in_the_background() {
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let dir = asset_dir("edit");
+    let text = shipped("machine80");
+    std::fs::write(dir.join("part.quadric.ron"), &text).expect("write");
+    let mut app = app_in(&dir);
+    let (prop, _) = spawn_prop(&mut app, "part.quadric.ron");
+    let first = generation(&app, prop).expect("splats");
+    assert_eq!(runs(&app, prop), 1);
+
+    let edited = text.replacen(BOLT.0, BOLT.1, 1);
+    assert_ne!(edited, text);
+    edit(&mut app, &dir, "part.quadric.ron", &edited);
+    // Every frame until the new splats land draws the old ones; time each
+    // frame on the main thread, and the one that swaps the splats in.
+    let mut waiting = Vec::new();
+    let mut swap = None;
+    for _ in 0..20_000 {
+        let start = Instant::now();
+        app.update();
+        let took = start.elapsed();
+        match generation(&app, prop) {
+            Some(g) if g == first => waiting.push(took),
+            Some(_) => {
+                swap = Some(took);
+                break;
+            }
+            None => panic!("the prop lost its splats while re-sampling"),
+        }
+        std::thread::sleep(Duration::from_micros(300));
+    }
+    let swap = swap.expect("the edited scene was re-sampled");
+    assert_eq!(runs(&app, prop), 2);
+    waiting.sort();
+    let median = waiting.get(waiting.len() / 2).copied().unwrap_or_default();
+    let splats = app
+        .world()
+        .get::<PropSplats>(prop)
+        .expect("splats")
+        .0
+        .clone();
+    eprintln!(
+        "machine80 edit: {} splats swapped in; main-thread frame time {:.3} ms in the swap frame, \
+         median {:.3} ms over the {} frames while sampling ran",
+        splats.splat_count(),
+        swap.as_secs_f64() * 1e3,
+        median.as_secs_f64() * 1e3,
+        waiting.len()
+    );
+    // A frame at 60 Hz: the swap must not be a hitch.
+    assert!(swap < Duration::from_millis(16), "swap frame took {swap:?}");
+
+    // The new splats are the partial re-sample of the edit, exactly.
+    let before = Scene::from_ron(&text).expect("scene");
+    let after = Scene::from_ron(&edited).expect("scene");
+    let bounds = PropBounds::resolve(None, &before).expect("bounds");
+    let radius = bounds.splat_radius(SplatRadius::Auto(40.0));
+    let (_, regions) = PropSplats::rebuild(&before, bounds, radius, None).expect("sampling before");
+    let (expected, _) =
+        PropSplats::rebuild(&after, bounds, radius, Some(&regions)).expect("partial re-sample");
+    assert_eq!(splats.splats, expected.0.splats);
+    assert_eq!(splats.quadrics, expected.0.quadrics);
+}
+
+#[test]
+fn a_malformed_edit_keeps_the_previous_prop() {
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let dir = asset_dir("malformed");
+    let text = shipped("three_spheres");
+    std::fs::write(dir.join("spheres.quadric.ron"), &text).expect("write");
+    let mut app = app_in(&dir);
+    let (prop, scene) = spawn_prop(&mut app, "spheres.quadric.ron");
+    let first = generation(&app, prop).expect("splats");
+    let count = app
+        .world()
+        .get::<PropSplats>(prop)
+        .expect("splats")
+        .0
+        .splat_count();
+
+    // A reference to a primitive that does not exist.
+    edit(
+        &mut app,
+        &dir,
+        "spheres.quadric.ron",
+        &text.replacen("Ref(\"C\")", "Ref(\"D\")", 1),
+    );
+    run_until(&mut app, "the failed reload", |app| {
+        matches!(
+            app.world().resource::<AssetServer>().get_load_state(&scene),
+            Some(LoadState::Failed(_))
+        )
+    });
+    for _ in 0..20 {
+        app.update();
+    }
+    assert_eq!(
+        generation(&app, prop),
+        Some(first),
+        "the splats were replaced"
+    );
+    assert_eq!(
+        app.world()
+            .get::<PropSplats>(prop)
+            .expect("splats")
+            .0
+            .splat_count(),
+        count
+    );
+    assert_eq!(runs(&app, prop), 1, "a failed edit started a sampling");
+    let kept = app
+        .world()
+        .resource::<Assets<QuadricScene>>()
+        .get(&scene)
+        .expect("the previous scene is kept");
+    assert_eq!(kept.0.dag.primitives().len(), 3);
+
+    // Fixing the file brings the edit in.
+    edit(
+        &mut app,
+        &dir,
+        "spheres.quadric.ron",
+        &text.replacen("radius: 25", "radius: 20", 1),
+    );
+    run_until(&mut app, "the fixed edit", |app| {
+        generation(app, prop).is_some_and(|g| g != first)
+    });
+    assert_eq!(runs(&app, prop), 2);
+}
+
+#[test]
+fn moving_or_scaling_a_prop_does_not_resample_it() {
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut app = app_in(&asset_dir("move"));
+    let scene = Scene::from_ron(&shipped("classic")).expect("scene");
+    let handle = app
+        .world_mut()
+        .resource_mut::<Assets<QuadricScene>>()
+        .add(QuadricScene(scene));
+    let prop = app
+        .world_mut()
+        .spawn(QuadricProp {
+            scene: handle,
+            bounds: None,
+            radius: SplatRadius::Auto(30.0),
+        })
+        .id();
+    run_until(&mut app, "the first splats", |app| {
+        generation(app, prop).is_some()
+    });
+    let first = generation(&app, prop);
+    assert_eq!(runs(&app, prop), 1);
+
+    for i in 0..30 {
+        let t = i as f32;
+        let transform = Transform {
+            translation: Vec3::new(t, -2.0 * t, 0.5 * t),
+            rotation: Quat::from_rotation_y(0.1 * t),
+            // Non-uniform, and mirrored on odd frames.
+            scale: Vec3::new(1.0 + 0.1 * t, if i % 2 == 0 { 0.5 } else { -0.5 }, 2.0),
+        };
+        app.world_mut().entity_mut(prop).insert(transform);
+        app.update();
+        let global = app
+            .world()
+            .get::<GlobalTransform>(prop)
+            .expect("global transform");
+        assert!(
+            global
+                .translation()
+                .abs_diff_eq(transform.translation, 1e-4)
+        );
+        assert_eq!(runs(&app, prop), 1, "frame {i}: the prop was re-sampled");
+        assert_eq!(generation(&app, prop), first);
+        let state = app.world().get::<PropSampling>(prop).expect("state");
+        assert!(!state.is_busy());
+    }
+
+    // A change of the prop itself does re-sample it: the count can move.
+    app.world_mut()
+        .get_mut::<QuadricProp>(prop)
+        .expect("prop")
+        .radius = SplatRadius::Auto(20.0);
+    run_until(&mut app, "the re-sampled prop", |app| {
+        generation(app, prop) != first
+    });
+    assert_eq!(runs(&app, prop), 2);
+}
