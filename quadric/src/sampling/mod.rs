@@ -20,6 +20,8 @@
 //!
 //! Basic regions run in parallel (rayon); the output order is the order of
 //! the basic regions, so it does not depend on the number of threads.
+//! [`partial`] keeps the samples per basic region, so that after an edit
+//! only the regions it can change are sampled again.
 //!
 //! ```
 //! use chisel_quadric::{BoundingSphere, CsgDag, Dnf, Quadric, SampleOptions, sample};

@@ -4,53 +4,61 @@
 //!
 //! Notation: a job is one basic region `R` of heightfield `k` of literal
 //! `L_ab` ([`sample`](crate::sample) runs one per region); `B(c, ρ)` the
-//! ball around the surface over `R` ([`Heightfield::patch_ball`]); `Q → Q'`
+//! ball around the surface over `R` (`Heightfield::patch_ball`); `Q → Q'`
 //! a quadric of the normal form before and after the edit; `d` the
 //! conservative distance of eq. 12, `|d(Q, x)| ≤` the true distance from
 //! `x` to the surface `Q = 0`, with the sign of `Q(x)`.
 //!
 //! Invalidation rule. An edit that keeps the normal form's products and
 //! changes the coefficients of some quadrics re-runs a job when its literal
-//! is on a changed quadric, or when for some changed `Q → Q'`
+//! is on a changed quadric, or when the surface over `R` cannot be shown
+//! clear of the edit: the ball `B` of `R`'s bounding box is clear, or each
+//! of the box's four quarters is (recursively, a few times). A ball is
+//! clear when for every changed `Q → Q'`
 //!
-//! `|d(Q, c)| ≤ ρ  or  |d(Q', c)| ≤ ρ  or  sign Q(c) ≠ sign Q'(c)`.
+//! `|d(Q, c)| > ρ  and  |d(Q', c)| > ρ  and  sign Q(c) = sign Q'(c)`,
 //!
-//! unless every product holding `Q` is false on all of `B` for another
-//! reason: one of its literals on an unchanged quadric has `d(L, c) > ρ`
-//! (with `d(L, ·) = ±d(Q_L, ·)` by the literal's side, positive where it is
-//! false), so the product is false on `B` before and after, whatever `Q`.
+//! (neither surface meets `B`, and every point of `B` is on the same side
+//! of both), or every product holding `Q` has a literal `L` on an unchanged
+//! quadric with `d(L, c) > ρ` (`d(L, ·) = ±d(Q_L, ·)` by the literal's side,
+//! positive where it is false): the product is false on all of `B` before
+//! and after, whatever `Q`.
 //!
-//! Otherwise every point of `B` is on the same side of `Q` and of `Q'`, or
-//! `Q` only takes part in products that are false on `B`: the solid, and
-//! with it the CSG surface, is the same inside `B` before and after. The job's old samples lie in `B` and cover the surface
-//! over `R` (§4.2 covers each basic region by its own samples), so they are
-//! kept as they are. Jobs of unchanged literals have the same heightfields
-//! and basic regions before and after (they depend only on the quadric and
-//! the bounding sphere), so jobs are matched by `(a, b, k, region index)`.
+//! In a clear ball the solid, and with it the CSG surface, is the same
+//! before and after. A kept job's old samples lie on the surface over `R`,
+//! inside the clear balls, and cover it (§4.2 covers each basic region by
+//! its own samples), so they stay valid and complete. Jobs of unchanged
+//! literals have the same heightfields and basic regions before and after
+//! (they depend only on the quadric and the bounding sphere), so jobs are
+//! matched by `(a, b, k, region index)`.
 //!
 //! Edits that change the products, the options, or make a changed quadric
 //! coincide with another one (a shared surface, eq. 22's notes) fall back
 //! to a full sampling.
 
-//! [`Heightfield::patch_ball`]: crate::sampling::heightfield::Heightfield::patch_ball
-
 use std::collections::HashMap;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use crate::csg::{Dnf, Literal, Side};
 use crate::distance::QuadricDistance;
 use crate::error::Result;
 use crate::quadric::Quadric;
+use crate::sampling::heightfield::Heightfield;
 use crate::sampling::regions::Region;
 use crate::sampling::{
     Job, Patch, Sample, SampleOptions, SampleSet, SamplingStats, sample_regions,
 };
 
 /// Relative padding of a job's ball radius `ρ` against rounding in
-/// [`Heightfield::patch_ball`](crate::sampling::heightfield::Heightfield::patch_ball)
+/// `Heightfield::patch_ball`
 /// and in the distance bound.
 const BALL_PADDING: f64 = 1e-6;
+
+/// How often [`is_clear`] quarters a basic region's box at most (up to
+/// `4⁴ = 256` balls per region, each a few distance bounds: far less than
+/// sampling the region).
+const MAX_QUARTERINGS: u32 = 4;
 
 /// A sampling kept per basic region, so that a later edit re-samples only
 /// the regions the edit can change ([`RegionSamples::resample`]).
@@ -58,7 +66,7 @@ const BALL_PADDING: f64 = 1e-6;
 /// ```
 /// use chisel_quadric::sampling::partial::RegionSamples;
 /// use chisel_quadric::{BoundingSphere, SampleOptions, Scene, sample};
-/// use glam::DVec3;
+/// use glam::{DVec2, DVec3};
 ///
 /// let scene = |x: f64| {
 ///     Scene::from_ron(&format!(
@@ -141,6 +149,40 @@ impl Change {
         };
         !(clear || switched_off())
     }
+}
+
+/// Whether no change can alter the solid near the surface over the plane
+/// box `[lo, hi]` of `heightfield`: the box's ball passes the invalidation
+/// rule, or else each of its four quarters does (recursively, down to
+/// [`MAX_QUARTERINGS`]). The surface over a box lies in the union of its
+/// quarters' balls, which hug a curved or tilted patch far closer than the
+/// one ball around a large basic region.
+fn is_clear(
+    heightfield: &Heightfield,
+    changes: &[Change],
+    lo: DVec2,
+    hi: DVec2,
+    depth: u32,
+) -> bool {
+    // No ball: no surface point over the box at all.
+    let Some((centre, radius)) = heightfield.patch_ball(lo, hi) else {
+        return true;
+    };
+    if !changes.iter().any(|c| c.may_differ_in(centre, radius)) {
+        return true;
+    }
+    if depth >= MAX_QUARTERINGS {
+        return false;
+    }
+    let mid = 0.5 * (lo + hi);
+    [
+        (lo, mid),
+        (DVec2::new(mid.x, lo.y), DVec2::new(hi.x, mid.y)),
+        (DVec2::new(lo.x, mid.y), DVec2::new(mid.x, hi.y)),
+        (mid, hi),
+    ]
+    .into_iter()
+    .all(|(a, b)| is_clear(heightfield, changes, a, b, depth + 1))
 }
 
 impl RegionSamples {
@@ -226,10 +268,7 @@ impl RegionSamples {
                 return true;
             }
             let (lo, hi) = region.bounds();
-            let Some((centre, radius)) = patch.heightfield.patch_ball(lo, hi) else {
-                return true;
-            };
-            changes.iter().any(|c| c.may_differ_in(centre, radius))
+            !is_clear(&patch.heightfield, &changes, lo, hi, 0)
         };
         let mut runs = sample_regions(dnf, &self.options, &select)?;
         let slots = std::mem::take(&mut runs.samples);
