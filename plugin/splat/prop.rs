@@ -6,7 +6,11 @@
 //! ([`PropSampling`]) → [`PropSplats`] (what the render world draws). An edit
 //! while a task runs re-samples when it ends; the old splats stay on screen
 //! until the new ones are in, so an edit never causes a frame without the
-//! prop nor a frame hitch.
+//! prop nor a frame hitch. [`PropSampling`] keeps the samples per basic
+//! region of the splats drawn: an edit of the scene's shapes re-samples only
+//! the regions it can change ([`RegionSamples::resample`]). A scene file
+//! that fails to load after an edit is reported, and Bevy keeps the
+//! previous scene, so the prop keeps its splats.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
