@@ -366,15 +366,23 @@ pub(crate) fn request_sampling(
     changed: Query<Entity, (With<QuadricProp>, Changed<QuadricProp>)>,
     mut props: Query<(Entity, &QuadricProp, Option<&mut PropSampling>)>,
 ) {
-    let modified: Vec<AssetId<QuadricScene>> = events
-        .read()
-        .filter_map(|e| match e {
-            AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => Some(*id),
-            _ => None,
-        })
-        .collect();
+    // A reload sends `Modified` and then, maybe frames later,
+    // `LoadedWithDependencies`: only the first re-samples, or a second task
+    // would sample the same scene again. `LoadedWithDependencies` matters
+    // to a prop whose scene had failed to load (it has no `Modified`).
+    let (mut modified, mut loaded) = (Vec::new(), Vec::new());
+    for event in events.read() {
+        match event {
+            AssetEvent::Modified { id } => modified.push(*id),
+            AssetEvent::LoadedWithDependencies { id } => loaded.push(*id),
+            _ => {}
+        }
+    }
     for (entity, prop, state) in &mut props {
-        let wanted = changed.contains(entity) || modified.contains(&prop.scene.id());
+        let id = prop.scene.id();
+        let wanted = changed.contains(entity)
+            || modified.contains(&id)
+            || (loaded.contains(&id) && state.as_ref().is_some_and(|s| s.reported));
         match state {
             Some(mut state) if wanted => {
                 state.pending = true;
