@@ -342,3 +342,139 @@ fn moving_or_scaling_a_prop_does_not_resample_it() {
     });
     assert_eq!(runs(&app, prop), 2);
 }
+
+/// The swap in an app that draws the prop (headless, on the machine's
+/// Vulkan adapter, lavapipe in CI), with pipelined rendering off so that
+/// each update also runs the render world, which uploads the new buffers:
+/// the new splats are drawn in the frame they land, and that frame is
+/// timed against the frames before it (on lavapipe, drawing the splats on
+/// the CPU dominates every frame).
+#[test]
+fn the_swap_frame_of_a_drawn_prop() {
+    use bevy::asset::RenderAssetUsages;
+    use bevy::camera::RenderTarget;
+    use bevy::render::RenderPlugin;
+    use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
+    use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
+    use bevy::window::ExitCondition;
+    use bevy::winit::WinitPlugin;
+
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut app = App::new();
+    app.add_plugins((
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .disable::<WinitPlugin>()
+            .disable::<PipelinedRenderingPlugin>(),
+        ChiselSplatPlugin,
+    ));
+    let size = Extent3d {
+        width: 64,
+        height: 64,
+        depth_or_array_layers: 1,
+    };
+    let mut image = Image::new_uninit(
+        size,
+        TextureDimension::D2,
+        TextureFormat::Rgba8UnormSrgb,
+        RenderAssetUsages::RENDER_WORLD,
+    );
+    image.texture_descriptor.usage |= TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC;
+    let target = app.world_mut().resource_mut::<Assets<Image>>().add(image);
+    let text = shipped("machine80");
+    let scene = |text: &str| QuadricScene(Scene::from_ron(text).expect("scene"));
+    let handle = app
+        .world_mut()
+        .resource_mut::<Assets<QuadricScene>>()
+        .add(scene(&text));
+    let world = app.world_mut();
+    let prop = world
+        .spawn((
+            QuadricProp {
+                scene: handle.clone(),
+                bounds: None,
+                radius: SplatRadius::Auto(40.0),
+            },
+            Transform::from_scale(Vec3::splat(0.01)),
+        ))
+        .id();
+    world.spawn((
+        Camera3d::default(),
+        RenderTarget::Image(target.into()),
+        Transform::from_xyz(0.0, 0.5, 3.0).looking_at(Vec3::new(0.0, 0.0, 0.3), Vec3::Y),
+    ));
+    app.finish();
+    app.cleanup();
+    run_until(&mut app, "the first splats", |app| {
+        generation(app, prop).is_some()
+    });
+    for _ in 0..10 {
+        app.update();
+    }
+
+    let mut swaps = Vec::new();
+    let mut waiting = Vec::new();
+    for radius in ["9", "10", "8.5"] {
+        let edited = text.replacen(
+            BOLT.0,
+            &BOLT.1.replace("radius: 9", &format!("radius: {radius}")),
+            1,
+        );
+        let previous = generation(&app, prop).expect("splats");
+        *app.world_mut()
+            .resource_mut::<Assets<QuadricScene>>()
+            .get_mut(&handle)
+            .expect("scene") = scene(&edited);
+        let mut swapped = false;
+        for _ in 0..2_000 {
+            let start = Instant::now();
+            app.update();
+            let took = start.elapsed();
+            if generation(&app, prop) == Some(previous) {
+                waiting.push(took);
+                continue;
+            }
+            swaps.push(took);
+            swapped = true;
+            // The render world drew the new splats in the same frame.
+            let extracted = app
+                .sub_app(bevy::render::RenderApp)
+                .world()
+                .resource::<bevy_chisel::splat::render::ExtractedProps>()
+                .0
+                .iter()
+                .find(|p| p.entity == prop)
+                .map(|p| p.data.generation);
+            assert_eq!(extracted, generation(&app, prop));
+            break;
+        }
+        assert!(swapped, "the edit to radius {radius} was not re-sampled");
+    }
+    let ms = |d: &Duration| (d.as_secs_f64() * 1e6).round() / 1e3;
+    waiting.sort();
+    let splats = app
+        .world()
+        .get::<PropSplats>(prop)
+        .expect("splats")
+        .0
+        .splat_count();
+    eprintln!(
+        "machine80 drawn, {splats} splats: frame time of the swap frames {:?} ms; median {} ms, \
+         max {} ms over the {} frames while sampling ran",
+        swaps.iter().map(ms).collect::<Vec<_>>(),
+        ms(&waiting[waiting.len() / 2]),
+        ms(&waiting[waiting.len() - 1]),
+        waiting.len()
+    );
+    assert_eq!(runs(&app, prop), 4);
+}
