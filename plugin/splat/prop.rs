@@ -336,7 +336,9 @@ pub struct PropSampling {
     /// Sampling tasks started so far.
     runs: u64,
     /// The samples per basic region of the splats drawn now: an edit of
-    /// the scene re-samples only the regions it can change.
+    /// the scene re-samples only the regions it can change. They cost
+    /// about 90 bytes per sample beside the splats (7 MB for `machine80`
+    /// at 80,000 splats).
     #[reflect(ignore)]
     regions: Option<Arc<RegionSamples>>,
 }
