@@ -283,6 +283,54 @@ fn a_malformed_edit_keeps_the_previous_prop() {
 }
 
 #[test]
+fn a_scene_that_failed_to_load_is_sampled_once_fixed() {
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let dir = asset_dir("fixed");
+    let text = shipped("three_spheres");
+    std::fs::write(
+        dir.join("late.quadric.ron"),
+        text.replacen("Ref(\"C\")", "Ref(\"D\")", 1),
+    )
+    .expect("write");
+    let mut app = app_in(&dir);
+    let scene: Handle<QuadricScene> = app
+        .world()
+        .resource::<AssetServer>()
+        .load("late.quadric.ron");
+    let prop = app
+        .world_mut()
+        .spawn(QuadricProp {
+            scene: scene.clone(),
+            bounds: None,
+            radius: SplatRadius::Auto(40.0),
+        })
+        .id();
+    run_until(&mut app, "the failed load", |app| {
+        matches!(
+            app.world().resource::<AssetServer>().get_load_state(&scene),
+            Some(LoadState::Failed(_))
+        )
+    });
+    for _ in 0..20 {
+        app.update();
+    }
+    assert_eq!(generation(&app, prop), None);
+    assert_eq!(runs(&app, prop), 0);
+
+    edit(&mut app, &dir, "late.quadric.ron", &text);
+    run_until(&mut app, "the splats of the fixed file", |app| {
+        generation(app, prop).is_some()
+    });
+    for _ in 0..50 {
+        app.update();
+        std::thread::sleep(Duration::from_micros(300));
+    }
+    assert_eq!(runs(&app, prop), 1);
+}
+
+#[test]
 fn moving_or_scaling_a_prop_does_not_resample_it() {
     let _one = ONE_APP_AT_A_TIME
         .lock()
