@@ -4,7 +4,8 @@
 //!
 //! - [`prop`] — main world: the [`QuadricProp`] component, the
 //!   [`QuadricScene`] asset and its `.quadric.ron` loader, sampling on the async
-//!   compute pool into [`PropSplats`].
+//!   compute pool into [`PropSplats`]; an edited scene re-samples only the
+//!   regions the edit can change (`chisel_quadric::sampling::partial`).
 //! - [`material`] — [`PropMaterial`], a prop's metallic, roughness and
 //!   reflectance for Bevy's PBR lighting (base colours are the quadrics').
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
@@ -27,7 +28,9 @@
 //! negative determinant: the prop is drawn as the mirror image of its
 //! scene, boxes wound the other way round so that culling keeps the faces
 //! towards the eye). A prop whose transform has no inverse (a zero scale)
-//! is not drawn.
+//! is not drawn. A transform never re-samples a prop: the splats are in
+//! its local frame and every fragment ray traces in local coordinates, so
+//! any invertible map is drawn exactly (the splats stretch with it).
 //!
 //! Shaders: `shaders/splat.wgsl` (surface-aligned boxes with back-face
 //! culling, §6.1, or screen-aligned quads; local ray tracing, clipping and
@@ -75,7 +78,8 @@ use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSyst
 
 pub use material::PropMaterial;
 pub use prop::{
-    PropBounds, PropGpuData, PropSampleError, PropSplats, QuadricProp, QuadricScene, SplatRadius,
+    PropBounds, PropGpuData, PropSampleError, PropSampling, PropSplats, QuadricProp, QuadricScene,
+    SplatRadius,
 };
 
 /// How props are drawn.
@@ -215,7 +219,8 @@ impl Plugin for ChiselSplatPlugin {
             .add_systems(
                 Update,
                 (
-                    prop::request_sampling.in_set(SplatSystems::Request),
+                    (prop::report_failed_edits, prop::request_sampling)
+                        .in_set(SplatSystems::Request),
                     (prop::start_sampling, prop::finish_sampling)
                         .chain()
                         .in_set(SplatSystems::Sample),

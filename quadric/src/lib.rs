@@ -20,7 +20,8 @@
 //!   the CSG distances of eqs. 19 and 22 ([`CsgDistance`]).
 //! - [`QuadricDistance`] — conservative signed distance (§3.3, eq. 12).
 //! - [`sampling`] — adaptive sampling with the coverage guarantee (§3.2,
-//!   §3.4, §4): heightfields, basic regions, subdivision; [`sample`].
+//!   §3.4, §4): heightfields, basic regions, subdivision; [`sample`];
+//!   partial re-sampling after an edit (`sampling::partial`).
 //! - [`splats`] — splats, quadric buffer, deduplicated clip lists and the
 //!   encoded normal form: the plain records the renderer reads (§6);
 //!   [`SplatSet`], [`encode_normal_form`].

@@ -20,6 +20,8 @@
 //!
 //! Basic regions run in parallel (rayon); the output order is the order of
 //! the basic regions, so it does not depend on the number of threads.
+//! [`partial`] keeps the samples per basic region, so that after an edit
+//! only the regions it can change are sampled again.
 //!
 //! ```
 //! use chisel_quadric::{BoundingSphere, CsgDag, Dnf, Quadric, SampleOptions, sample};
@@ -46,6 +48,7 @@ pub mod basic;
 mod cost;
 pub mod curved;
 pub mod heightfield;
+pub mod partial;
 pub mod polygon;
 pub mod regions;
 pub mod separable;
@@ -57,8 +60,9 @@ use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
 use crate::error::{Error, Result, positive};
+pub(crate) use cost::Job;
 pub use cost::{DEFAULT_MAX_MEMORY, SamplingCost, sampling_cost};
-use cost::{Job, cost_of, quadric_regions};
+use cost::{cost_of, quadric_regions};
 use heightfield::Heightfield;
 use regions::RegionKind;
 pub use subdivide::DISTORTION_CAP;
@@ -287,6 +291,77 @@ pub struct SampleSet {
 /// [`sampling_cost`]), [`Error::TooManySamples`] and
 /// [`Error::CoverageNotReached`] for the limits.
 pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
+    let runs = sample_regions(dnf, options, &|_, _, _| true)?;
+    let total = runs.sample_count();
+    runs.check_limits(options, total)?;
+    let mut samples = Vec::with_capacity(total);
+    for s in runs.samples.into_iter().flatten() {
+        samples.extend(s);
+    }
+    Ok(SampleSet {
+        samples,
+        patches: runs.patches,
+        stats: runs.stats,
+        options: *options,
+    })
+}
+
+/// Which basic-region jobs [`sample_regions`] runs: called with each job's
+/// patch, job and basic region, `true` to run it.
+pub(crate) type JobSelection<'a> = dyn Fn(&Patch, &Job, &regions::Region) -> bool + Sync + 'a;
+
+/// The basic-region jobs of one sampling run, in output order (the hook of
+/// [`partial`], which keeps samples per region).
+pub(crate) struct RegionRuns {
+    /// The heightfields of the literals, as [`SampleSet::patches`].
+    pub patches: Vec<Patch>,
+    /// One job per basic region of every patch.
+    pub jobs: Vec<Job>,
+    /// Per job: its samples, or `None` where the selection left it out.
+    pub samples: Vec<Option<Vec<Sample>>>,
+    /// Counters of the jobs that ran.
+    pub stats: SamplingStats,
+    budget_over: bool,
+    budget_reached: u64,
+}
+
+impl RegionRuns {
+    /// Samples of the jobs that ran.
+    pub(crate) fn sample_count(&self) -> usize {
+        self.samples.iter().flatten().map(Vec::len).sum()
+    }
+
+    /// [`Error::TooManySamples`] when the budget was passed or `total`
+    /// exceeds it, [`Error::CoverageNotReached`] when a region stayed
+    /// unclassified.
+    pub(crate) fn check_limits(&self, options: &SampleOptions, total: usize) -> Result<()> {
+        if self.budget_over || total as u64 > options.max_samples {
+            return Err(Error::TooManySamples {
+                limit: options.max_samples,
+                reached: self.budget_reached.max(total as u64),
+            });
+        }
+        let depth_limited = self.stats.depth_limited;
+        if depth_limited > 0 {
+            return Err(Error::CoverageNotReached {
+                reason: format!(
+                    "{depth_limited} region(s) were still unclassified after the subdivision \
+                     limit; give bounds closer around the solid or a larger radius"
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The jobs of [`sample`] for `dnf`, running those `select` picks (in
+/// parallel); the limits are left to the caller
+/// ([`RegionRuns::check_limits`]).
+pub(crate) fn sample_regions(
+    dnf: &Dnf,
+    options: &SampleOptions,
+    select: &JobSelection<'_>,
+) -> Result<RegionRuns> {
     positive(options.radius, "splat radius")?;
     BoundingSphere::new(options.bounds.centre, options.bounds.radius)?;
     if !options.min_region_fraction.is_finite() || options.min_region_fraction < 0.0 {
@@ -343,7 +418,7 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
     // Counters are sums, the same in any order: one shared total keeps the
     // result slot of a region at one `Vec`.
     let totals = std::sync::Mutex::new(SamplingStats::default());
-    let results: Vec<Vec<Sample>> = jobs
+    let results: Vec<Option<Vec<Sample>>> = jobs
         .par_iter()
         .map(|job| {
             let patch = &patches[job.patch as usize];
@@ -351,6 +426,9 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             let quadric = &dnf.quadrics()[literal.quadric].quadric;
             let (region, kind) =
                 &tables[literal.quadric][job.heightfield as usize].1[job.region as usize];
+            if !select(patch, job, region) {
+                return None;
+            }
             let job = RegionJob {
                 distance: &distance,
                 quadric,
@@ -381,37 +459,19 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
                 .add(&stats);
-            out
+            Some(out)
         })
         .collect();
     let stats = totals
         .into_inner()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let total: usize = results.iter().map(Vec::len).sum();
-    if budget.is_over() || total as u64 > options.max_samples {
-        return Err(Error::TooManySamples {
-            limit: options.max_samples,
-            reached: budget.reached().max(total as u64),
-        });
-    }
-    let depth_limited = stats.depth_limited;
-    if depth_limited > 0 {
-        return Err(Error::CoverageNotReached {
-            reason: format!(
-                "{depth_limited} region(s) were still unclassified after the subdivision limit; \
-                 give bounds closer around the solid or a larger radius"
-            ),
-        });
-    }
-    let mut samples = Vec::with_capacity(total);
-    for s in results {
-        samples.extend(s);
-    }
-    Ok(SampleSet {
-        samples,
+    Ok(RegionRuns {
         patches,
+        jobs,
+        samples: results,
         stats,
-        options: *options,
+        budget_over: budget.is_over(),
+        budget_reached: budget.reached(),
     })
 }
 

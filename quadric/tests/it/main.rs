@@ -19,6 +19,7 @@ mod reference_tracer;
 
 // Sampling into splats.
 mod curved_regions;
+mod partial_resampling;
 mod sampling_guarantees;
 mod sampling_limits;
 mod sampling_quadrics;
