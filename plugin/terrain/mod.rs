@@ -146,7 +146,10 @@ pub use mesh::{CellMesh, ColliderMesh};
 pub use physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBackend};
 pub use raycast::TerrainHit;
 pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
-pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
+pub use tool::{
+    CarveShape, CarveTool, DEFAULT_ROUND_TOLERANCE, GridTool, MAX_ROUND_CORNERS,
+    MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
+};
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
 /// runs them in (`Update` unless [`TerrainPlugin::in_schedule`] picks

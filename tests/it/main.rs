@@ -62,6 +62,8 @@ mod terrain_material;
 mod terrain_output;
 #[cfg(feature = "avian")]
 mod terrain_physics;
+#[cfg(feature = "terrain")]
+mod terrain_round_tools;
 #[cfg(feature = "viewer")]
 mod terrain_seams_render;
 
