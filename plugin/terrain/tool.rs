@@ -266,7 +266,7 @@ impl CarveShape {
                 half_height,
                 tolerance,
             } => {
-                if !positive(*radius) || !(half_height.is_finite() && *half_height >= 0.0) {
+                if !(positive(*radius) && half_height.is_finite() && *half_height >= 0.0) {
                     return Err(TerrainError::InvalidTool {
                         reason: "a capsule's radius must be positive and its half height \
                                  not negative, both finite",

@@ -131,9 +131,9 @@ pub fn geodesic_sphere(frequency: usize) -> GeodesicSphere {
     for [a, b, c] in faces {
         // Grid point (i, j): weight f − i − j on a, i on b, j on c.
         let mut grid = vec![vec![0usize; f + 1]; f + 1];
-        for i in 0..=f {
-            for j in 0..=f - i {
-                grid[i][j] = point([(a, f - i - j), (b, i), (c, j)]);
+        for (i, row) in grid.iter_mut().enumerate() {
+            for (j, slot) in row.iter_mut().enumerate().take(f + 1 - i) {
+                *slot = point([(a, f - i - j), (b, i), (c, j)]);
             }
         }
         for i in 0..f {
