@@ -16,7 +16,10 @@
 //! for ([`chisel_bsp::tools::round`]). The tolerance is in world units; by
 //! default it is [`DEFAULT_ROUND_TOLERANCE`] of the radius as placed, but
 //! at least [`MIN_DEFAULT_TOLERANCE_STEPS`] grid steps. The polyhedron has
-//! the fewest corners that meet it, at most [`MAX_ROUND_CORNERS`].
+//! the fewest corners that meet it, at most [`MAX_ROUND_CORNERS`]. A pose
+//! that scales the shape is allowed (the corners leave room for its least
+//! and largest scale); a sweep between two poses that differ by a
+//! translation keeps the guarantee for the swept volume.
 
 use bevy::prelude::*;
 use chisel_bsp::exact::IntPoint;

@@ -195,3 +195,122 @@ fn bad_round_tools_are_typed_errors_and_change_nothing() {
     carve(&mut terrain, &CarveTool::sphere(1.0, at.translation)).expect("a good sphere");
     assert_ne!(terrain.state_hash(), hash);
 }
+
+/// Signed distance to a cylinder (`capsule: false`) or capsule of radius
+/// `r` along `y` from `−h` to `h`.
+fn round_distance(p: Vec3, r: f64, h: f64, capsule: bool) -> f64 {
+    let p = p.as_dvec3();
+    if capsule {
+        return (p - bevy::math::DVec3::Y * p.y.clamp(-h, h)).length() - r;
+    }
+    let radial = p.x.hypot(p.z) - r;
+    let axial = p.y.abs() - h;
+    if radial > 0.0 && axial > 0.0 {
+        radial.hypot(axial)
+    } else {
+        radial.max(axial)
+    }
+}
+
+#[test]
+fn scaled_and_turned_round_tools_follow_the_true_surface() {
+    use bevy_chisel::bsp::convex::ConvexArena;
+    use bevy_chisel::bsp::exact::IntPoint;
+    use bevy_chisel::bsp::tools::convex_hull;
+
+    let terrain = block();
+    let q = *terrain.quantization();
+    let (r, h, t, scale) = (0.3f64, 0.5f64, 0.006f64, 1.5f32);
+    let pose = turned(Vec3::new(2.0, 0.0, 2.0)).with_scale(Vec3::splat(scale));
+    let to_shape = pose.to_matrix().inverse();
+    for capsule in [false, true] {
+        let shape = if capsule {
+            CarveShape::Capsule {
+                radius: r as f32,
+                half_height: h as f32,
+                tolerance: Some(t as f32),
+            }
+        } else {
+            CarveShape::Cylinder {
+                radius: r as f32,
+                half_height: h as f32,
+                tolerance: Some(t as f32),
+            }
+        };
+        let grid = CarveTool::new(shape, pose).to_grid(&q).unwrap();
+        let points: Vec<IntPoint> = grid.pieces[0]
+            .iter()
+            .map(|&p| IntPoint::from_array(p).unwrap())
+            .collect();
+        let mut arena = ConvexArena::new();
+        let hull = convex_hull(&mut arena, &points).unwrap();
+        let world = |g: [f64; 3]| Vec3::from_array(q.to_world(g).map(|v| v as f32));
+        // Every corner of the hull is outside the true shape and within
+        // the tolerance (world units: the pose scales distances by 1.5).
+        for v in arena.vertices_of(hull) {
+            let d = f64::from(scale)
+                * round_distance(
+                    to_shape.transform_point3(world(arena.position(v))),
+                    r,
+                    h,
+                    capsule,
+                );
+            assert!(d >= -1e-4 && d <= t, "capsule {capsule}: corner at {d} m");
+        }
+        // Every point of the true surface is inside the hull, within the
+        // tolerance of its surface.
+        let planes: Vec<[f64; 4]> = arena
+            .face_polygons(hull)
+            .iter()
+            .map(|(plane, _)| {
+                let [a, b, c, d] = plane.approx();
+                let l = (a * a + b * b + c * c).sqrt();
+                [a / l, b / l, c / l, d / l]
+            })
+            .collect();
+        let n = 64;
+        for i in 0..=n {
+            for k in 0..n {
+                let angle = (k as f64 + 0.5) * std::f64::consts::TAU / n as f64;
+                let s = i as f64 / n as f64;
+                let mut surface = vec![bevy::math::DVec3::new(
+                    r * angle.cos(),
+                    -h + 2.0 * h * s,
+                    r * angle.sin(),
+                )];
+                if capsule {
+                    let polar = s * std::f64::consts::FRAC_PI_2;
+                    let (ring, up) = (r * polar.cos(), r * polar.sin());
+                    for end in [-1.0, 1.0] {
+                        surface.push(bevy::math::DVec3::new(
+                            ring * angle.cos(),
+                            end * (h + up),
+                            ring * angle.sin(),
+                        ));
+                    }
+                } else {
+                    for end in [-1.0, 1.0] {
+                        surface.push(bevy::math::DVec3::new(
+                            r * s * angle.cos(),
+                            end * h,
+                            r * s * angle.sin(),
+                        ));
+                    }
+                }
+                for p in surface {
+                    let w = pose.to_matrix().as_dmat4().transform_point3(p);
+                    let g = (w - bevy::math::DVec3::from_array(q.origin())) / q.unit();
+                    let inside = planes
+                        .iter()
+                        .map(|[a, b, c, d]| -(a * g.x + b * g.y + c * g.z + d))
+                        .fold(f64::INFINITY, f64::min)
+                        * q.unit();
+                    assert!(
+                        inside >= -1e-6 && inside <= t,
+                        "capsule {capsule}: surface point {p} at {inside} m inside"
+                    );
+                }
+            }
+        }
+    }
+}
