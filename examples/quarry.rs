@@ -241,7 +241,7 @@ fn scripted_carves(
         if let Some(hit) = down(-2.0, 9.0) {
             carves.write(Carve {
                 terrain: entity,
-                tool: CarveTool::dodecahedron(HEAP_RADIUS, hit.point),
+                tool: CarveTool::sphere(HEAP_RADIUS, hit.point),
                 edit: Edit::Add(DIRT),
             });
         }

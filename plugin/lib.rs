@@ -20,7 +20,11 @@
 //!   with undo, ray casts, versioned files through the asset server
 //!   (`*.chiselterrain`), entity events for observers, and physics
 //!   colliders with avian3d (feature `avian`). With `render`, terrain cells
-//!   get materials (`TerrainMaterials`, `TriplanarMaterial`).
+//!   get materials (`TerrainMaterials`, `TriplanarMaterial`). Carve tools
+//!   (`CarveTool`) are unions of dodecahedra, boxes, prisms, hulls of
+//!   points, and spheres, cylinders and capsules carved as exact polyhedra
+//!   within a stated tolerance of the true surface; with `props`,
+//!   `CarveTool::from_prop` carves with a convex quadric prop's shape.
 //! - `splat` (feature `props`) draws quadric CSG props: a `QuadricProp`
 //!   component (a `*.quadric.ron` scene file or an in-memory scene),
 //!   sampled on the async compute pool, rendered by a splat pass with

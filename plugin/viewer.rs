@@ -226,8 +226,8 @@ pub fn blast(centre: Vec3, radius: f32, count: usize) -> CarveTool {
 pub struct ClickCarving {
     /// Circumradius of a crater.
     pub blast_radius: f32,
-    /// Circumradius of a heap (a dodecahedron sunk a little into the
-    /// surface).
+    /// Radius of a heap (a sphere, `CarveTool::sphere`, sunk a little into
+    /// the surface).
     pub heap_radius: f32,
     /// The material of heaps.
     pub heap_label: Label,
@@ -273,7 +273,7 @@ fn click_carving(
     } else {
         let centre = hit.point + hit.normal * (0.6 * settings.heap_radius);
         (
-            CarveTool::dodecahedron(settings.heap_radius, centre),
+            CarveTool::sphere(settings.heap_radius, centre),
             Edit::Add(settings.heap_label),
         )
     };

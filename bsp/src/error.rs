@@ -80,6 +80,29 @@ pub enum Error {
         /// The limit.
         limit: usize,
     },
+    /// A round tool (sphere, cylinder, capsule) with a size, tolerance or
+    /// rounding allowance that means nothing.
+    #[error("invalid round tool: {reason}")]
+    InvalidRoundTool {
+        /// Which number is wrong, and how.
+        reason: &'static str,
+    },
+    /// No polyhedron of at most `max_points` corners brings a round tool
+    /// within the tolerance asked for.
+    #[error(
+        "a round tool within {tolerance} of its surface needs more than {max_points} corners \
+         (the closest fit allowed is {best}); ask for a larger tolerance (more than twice \
+         the grid rounding, √3 grid steps) or allow more corners"
+    )]
+    ToleranceUnreachable {
+        /// The tolerance asked for.
+        tolerance: f64,
+        /// The deviation of the finest polyhedron within the limit
+        /// (infinite when not even the coarsest one fits).
+        best: f64,
+        /// The most corners allowed.
+        max_points: usize,
+    },
     /// A box needs `min < max` on every axis.
     #[error(
         "box from {min:?} to {max:?} has no volume; every coordinate of min must be \

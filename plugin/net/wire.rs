@@ -20,7 +20,7 @@ use bevy_replicon::shared::message::ctx::{ClientSendCtx, ServerReceiveCtx};
 use chisel_bsp::octree::Edit;
 use serde::{Deserialize, Serialize};
 
-use crate::terrain::{CarveShape, CarveTool, GridTool, ToolPiece};
+use crate::terrain::{CarveShape, CarveTool, GridTool, MAX_ROUND_CORNERS, ToolPiece};
 
 /// A terrain's name on the network: the same on every peer.
 pub type TerrainId = u32;
@@ -87,6 +87,32 @@ pub enum WireShape {
     },
     /// [`CarveShape::Hull`].
     Hull(Vec<[f32; 3]>),
+    /// [`CarveShape::Sphere`] (variants are only ever appended, so older
+    /// encodings keep their meaning).
+    Sphere {
+        /// Radius.
+        radius: f32,
+        /// Tolerance in world units; `None` for the default.
+        tolerance: Option<f32>,
+    },
+    /// [`CarveShape::Cylinder`].
+    Cylinder {
+        /// Radius.
+        radius: f32,
+        /// Half of the length along `y`.
+        half_height: f32,
+        /// Tolerance in world units; `None` for the default.
+        tolerance: Option<f32>,
+    },
+    /// [`CarveShape::Capsule`].
+    Capsule {
+        /// Radius.
+        radius: f32,
+        /// Half of the segment's length along `y`.
+        half_height: f32,
+        /// Tolerance in world units; `None` for the default.
+        tolerance: Option<f32>,
+    },
 }
 
 /// One [`ToolPiece`] on the wire.
@@ -134,6 +160,28 @@ impl From<&CarveTool> for WireTool {
                         CarveShape::Hull(points) => {
                             WireShape::Hull(points.iter().map(|p| p.to_array()).collect())
                         }
+                        CarveShape::Sphere { radius, tolerance } => WireShape::Sphere {
+                            radius: *radius,
+                            tolerance: *tolerance,
+                        },
+                        CarveShape::Cylinder {
+                            radius,
+                            half_height,
+                            tolerance,
+                        } => WireShape::Cylinder {
+                            radius: *radius,
+                            half_height: *half_height,
+                            tolerance: *tolerance,
+                        },
+                        CarveShape::Capsule {
+                            radius,
+                            half_height,
+                            tolerance,
+                        } => WireShape::Capsule {
+                            radius: *radius,
+                            half_height: *half_height,
+                            tolerance: *tolerance,
+                        },
                     },
                     pose: WirePose::from(&piece.pose),
                     sweep_to: piece.sweep_to.as_ref().map(WirePose::from),
@@ -157,7 +205,12 @@ impl WireTool {
                     .map(|p| match &p.shape {
                         WireShape::Hull(points) => points.len(),
                         WireShape::Prism { sides, .. } => 2 * *sides as usize,
-                        _ => 20,
+                        // The most a round shape may take: its corners
+                        // depend on the grid, known only to the server.
+                        WireShape::Sphere { .. }
+                        | WireShape::Cylinder { .. }
+                        | WireShape::Capsule { .. } => MAX_ROUND_CORNERS,
+                        WireShape::Dodecahedron { .. } | WireShape::Cuboid { .. } => 20,
                     })
                     .max()
                     .unwrap_or(0),
@@ -198,6 +251,28 @@ impl WireTool {
                         WireShape::Hull(points) => {
                             CarveShape::Hull(points.iter().map(|&p| Vec3::from_array(p)).collect())
                         }
+                        WireShape::Sphere { radius, tolerance } => CarveShape::Sphere {
+                            radius: *radius,
+                            tolerance: *tolerance,
+                        },
+                        WireShape::Cylinder {
+                            radius,
+                            half_height,
+                            tolerance,
+                        } => CarveShape::Cylinder {
+                            radius: *radius,
+                            half_height: *half_height,
+                            tolerance: *tolerance,
+                        },
+                        WireShape::Capsule {
+                            radius,
+                            half_height,
+                            tolerance,
+                        } => CarveShape::Capsule {
+                            radius: *radius,
+                            half_height: *half_height,
+                            tolerance: *tolerance,
+                        },
                     },
                     pose: Transform::from(&piece.pose),
                     sweep_to: piece.sweep_to.as_ref().map(Transform::from),
@@ -422,4 +497,93 @@ pub(crate) fn register(app: &mut App) {
         .make_message_independent::<ServerPacket>()
         .register_type::<ClientPacket>()
         .register_type::<ServerPacket>();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One tool of every shape, in the order of [`CarveShape`].
+    fn every_shape() -> CarveTool {
+        let pose = Transform::from_xyz(1.0, 2.0, 3.0).with_rotation(Quat::from_rotation_x(0.5));
+        CarveTool::union([
+            CarveTool::dodecahedron(1.5, Vec3::ONE),
+            CarveTool::new(
+                CarveShape::Cuboid {
+                    half_size: Vec3::new(1.0, 2.0, 3.0),
+                },
+                pose,
+            ),
+            CarveTool::new(
+                CarveShape::Prism {
+                    sides: 7,
+                    radius: 0.5,
+                    length: 4.0,
+                },
+                pose,
+            ),
+            CarveTool::new(CarveShape::Hull(vec![Vec3::ZERO, Vec3::X, Vec3::Y]), pose),
+            CarveTool::sphere(2.0, Vec3::NEG_ONE),
+            CarveTool::new(
+                CarveShape::Sphere {
+                    radius: 2.0,
+                    tolerance: Some(0.01),
+                },
+                pose,
+            ),
+            CarveTool::cylinder(0.5, 3.0, pose),
+            CarveTool::swept(
+                CarveShape::Capsule {
+                    radius: 0.25,
+                    half_height: 1.0,
+                    tolerance: Some(0.005),
+                },
+                pose,
+                Transform::from_xyz(4.0, 0.0, 0.0),
+            ),
+        ])
+    }
+
+    #[test]
+    fn every_shape_survives_the_wire() {
+        let tool = every_shape();
+        let wire = WireTool::from(&tool);
+        let bytes = postcard::to_allocvec(&wire).unwrap();
+        let back: WireTool = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(back, wire);
+        assert_eq!(back.to_carve_tool(), Some(tool));
+    }
+
+    #[test]
+    fn older_encodings_keep_their_meaning() {
+        // The shapes that existed before the round ones keep their variant
+        // index (postcard writes it as the first byte) and their fields.
+        let radius = 1.5f32.to_le_bytes();
+        let shape = WireShape::Dodecahedron { radius: 1.5 };
+        let bytes = postcard::to_allocvec(&shape).unwrap();
+        assert_eq!(bytes, [&[0u8][..], &radius].concat());
+        assert_eq!(postcard::from_bytes::<WireShape>(&bytes).unwrap(), shape);
+        let hull = postcard::to_allocvec(&WireShape::Hull(vec![[0.0; 3]])).unwrap();
+        assert_eq!(hull[..2], [3, 1]);
+        // The round shapes come after them.
+        let sphere = WireShape::Sphere {
+            radius: 1.5,
+            tolerance: None,
+        };
+        let bytes = postcard::to_allocvec(&sphere).unwrap();
+        assert_eq!(bytes, [&[4u8][..], &radius, &[0]].concat());
+        let capsule = postcard::to_allocvec(&WireShape::Capsule {
+            radius: 1.0,
+            half_height: 1.0,
+            tolerance: Some(0.1),
+        })
+        .unwrap();
+        assert_eq!(capsule[0], 6);
+    }
+
+    #[test]
+    fn a_round_shape_counts_its_most_corners() {
+        let wire = WireTool::from(&CarveTool::capsule(1.0, 1.0, Transform::IDENTITY));
+        assert_eq!(wire.size(), (1, MAX_ROUND_CORNERS));
+    }
 }

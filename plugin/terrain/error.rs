@@ -53,6 +53,25 @@ pub enum TerrainError {
         /// The labels the table has materials for, in order.
         table: Vec<chisel_bsp::tree::Label>,
     },
+    /// A quadric prop whose solid cannot be told convex, so no convex tool
+    /// can follow it ([`super::CarveTool::from_prop`]).
+    #[error(
+        "the prop cannot be carved with: {reason}; a prop tool must be one intersection \
+         of convex quadric solids (ellipsoids, elliptic cylinders and paraboloids) and \
+         half-spaces; carve with its convex parts one by one instead"
+    )]
+    PropNotConvex {
+        /// Which part of the prop is not convex, and why.
+        reason: String,
+    },
+    /// A quadric prop that gives no tool for another reason: its scene
+    /// does not normalize, its solid is empty or unbounded, or no point
+    /// inside it was found.
+    #[error("the prop cannot be carved with: {reason}")]
+    InvalidProp {
+        /// What is wrong with it.
+        reason: String,
+    },
     /// Undo was asked for, but no carve is left to undo.
     #[error("there is no carve left to undo")]
     NothingToUndo,

@@ -18,6 +18,8 @@
 //!   depth) or a Bevy mesh.
 //! - [`base`] — what a terrain starts from, on the grid.
 //! - [`tool`] — [`CarveTool`] in world units, [`GridTool`] on the grid.
+//! - `prop_tool` — [`CarveTool::from_prop`]: a tool of a convex quadric
+//!   prop's shape (feature `props`).
 //! - [`mesh`] — the surface of one cell as indexed triangles with smooth
 //!   normals, and welded triangles for its collider.
 //! - [`physics`] — [`TerrainPhysics`], the trait a physics engine
@@ -109,6 +111,8 @@ mod jobs;
 pub mod material;
 pub mod mesh;
 pub mod physics;
+#[cfg(feature = "props")]
+pub mod prop_tool;
 pub mod queue;
 pub mod raycast;
 pub mod snapshot;
@@ -146,7 +150,10 @@ pub use mesh::{CellMesh, ColliderMesh};
 pub use physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBackend};
 pub use raycast::TerrainHit;
 pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
-pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
+pub use tool::{
+    CarveShape, CarveTool, DEFAULT_ROUND_TOLERANCE, GridTool, MAX_ROUND_CORNERS,
+    MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
+};
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
 /// runs them in (`Update` unless [`TerrainPlugin::in_schedule`] picks

@@ -64,6 +64,10 @@ mod terrain_material;
 mod terrain_output;
 #[cfg(feature = "avian")]
 mod terrain_physics;
+#[cfg(all(feature = "terrain", feature = "props"))]
+mod terrain_prop_tools;
+#[cfg(feature = "terrain")]
+mod terrain_round_tools;
 #[cfg(feature = "viewer")]
 mod terrain_seams_render;
 

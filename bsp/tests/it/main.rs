@@ -15,6 +15,7 @@ mod wide_int;
 // Convex polyhedra and tool shapes.
 mod convex_cut;
 mod convex_hull;
+mod tool_round;
 mod tool_shapes;
 mod tool_touch;
 
