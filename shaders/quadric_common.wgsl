@@ -204,15 +204,21 @@ fn id_color(index: u32) -> vec4<f32> {
     return vec4<f32>(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(200.0 / 255.0), 1.0);
 }
 
-/// Depth (reverse-Z) of the local point x, or a negative value when it lies
-/// outside the depth range.
-fn surface_depth(x: vec3<f32>) -> f32 {
+/// Depth (reverse-Z) of the local point x, above 1 in front of the near
+/// plane, or −1 where the point is not in front of a perspective eye.
+fn clip_depth(x: vec3<f32>) -> f32 {
     let world = prop.world_from_local * vec4<f32>(x, 1.0);
     let clip = view.clip_from_world * world;
     if clip.w <= 0.0 {
         return -1.0;
     }
-    let depth = clip.z / clip.w;
+    return clip.z / clip.w;
+}
+
+/// Depth (reverse-Z) of the local point x, or a negative value when it lies
+/// outside the depth range.
+fn surface_depth(x: vec3<f32>) -> f32 {
+    let depth = clip_depth(x);
     if depth > 1.0 {
         return -1.0;
     }

@@ -17,7 +17,10 @@
 
 use bevy::math::{Mat4, UVec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
+use bevy::render::view::ExtractedView;
 use chisel_quadric::{ColoredQuadric, Splat};
+
+use super::SplatSettings;
 
 /// Per-view data of the splat pass (WGSL `SplatView`, group 2, dynamic
 /// offset); lights, exposure and the rest of the view come from Bevy's mesh
@@ -39,6 +42,34 @@ pub struct SplatViewUniform {
     pub radius_tolerance: f32,
     /// Padding to 16 bytes.
     pub pad: UVec2,
+}
+
+impl SplatViewUniform {
+    /// The uniform of `view` (a camera's or a light's shadow view) drawn
+    /// with `settings`.
+    #[must_use]
+    pub fn new(view: &ExtractedView, settings: &SplatSettings) -> Self {
+        let clip_from_world = view
+            .clip_from_world
+            .unwrap_or_else(|| view.clip_from_view * view.world_from_view.to_matrix().inverse());
+        let orthographic = view.clip_from_view.w_axis.w == 1.0;
+        let eye = view.world_from_view.translation();
+        let forward = view.world_from_view.forward().as_vec3();
+        Self {
+            clip_from_world,
+            camera_position: eye.extend(if orthographic { 0.0 } else { 1.0 }),
+            view_forward: forward.extend(0.0),
+            flat_ratio: settings.flat_ratio,
+            radius_tolerance: settings.radius_tolerance,
+            pad: UVec2::ZERO,
+        }
+    }
+
+    /// Whether the view is orthographic (`camera_position.w` is 0).
+    #[must_use]
+    pub fn is_orthographic(&self) -> bool {
+        self.camera_position.w == 0.0
+    }
 }
 
 /// Per-prop data (WGSL `Prop`, group 3 binding 0).

@@ -45,6 +45,8 @@ mod splat_exposure;
 #[cfg(feature = "viewer")]
 mod splat_render;
 #[cfg(feature = "viewer")]
+mod splat_shadows;
+#[cfg(feature = "viewer")]
 mod splat_views;
 
 // Destructible terrain.
