@@ -43,6 +43,8 @@ mod splat_culling;
 #[cfg(feature = "viewer")]
 mod splat_exposure;
 #[cfg(feature = "viewer")]
+mod splat_materials;
+#[cfg(feature = "viewer")]
 mod splat_render;
 #[cfg(feature = "viewer")]
 mod splat_shadows;

@@ -24,6 +24,7 @@ use bevy_chisel::quadric::Scene;
 use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropSplats};
 
 use crate::ONE_APP_AT_A_TIME;
+use crate::common::pbr::linear;
 
 /// One sphere of radius 50 scene units.
 const SPHERE_SCENE: &str = "Scene(
@@ -45,16 +46,6 @@ const HEIGHT: f32 = 1.2;
 const LIGHT_FROM: Vec3 = Vec3::new(0.0, 1.0, 2.0);
 /// Camera height, straight above the origin.
 const CAMERA_HEIGHT: f32 = 6.0;
-
-/// sRGB byte to linear.
-fn linear(c: u8) -> f64 {
-    let c = f64::from(c) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 /// Renders the plane, the two spheres and their shadows; the prop sphere
 /// with `NotShadowCaster` when `prop_casts` is false.
