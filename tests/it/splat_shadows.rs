@@ -4,7 +4,9 @@
 //!   darkens the plane under it by a clear margin, and with
 //!   `NotShadowCaster` it does not;
 //! - its shadow has the footprint of a `StandardMaterial` sphere's of the
-//!   same size, beside it in the same light.
+//!   same size, beside it in the same light;
+//! - the same holds for a point light's shadow (the six cube-face shadow
+//!   maps, drawn by the shared shadow pass).
 //!
 //! The scene is mirror symmetric about x = 0: the prop sphere at −x, the
 //! mesh sphere at +x, the light and the camera in the plane x = 0, the
@@ -47,9 +49,22 @@ const LIGHT_FROM: Vec3 = Vec3::new(0.0, 1.0, 2.0);
 /// Camera height, straight above the origin.
 const CAMERA_HEIGHT: f32 = 6.0;
 
-/// Renders the plane, the two spheres and their shadows; the prop sphere
-/// with `NotShadowCaster` when `prop_casts` is false.
-fn render(prop_casts: bool) -> Image {
+/// Where the point light of the point-light test is.
+const POINT_LIGHT_AT: Vec3 = Vec3::new(0.0, 1.0, 3.5);
+
+/// The light of a render.
+#[derive(Clone, Copy, Debug)]
+enum Light {
+    /// Directional, from [`LIGHT_FROM`], one cascade.
+    Directional,
+    /// A point light at [`POINT_LIGHT_AT`] (a cube of six shadow maps).
+    Point,
+}
+
+/// Renders the plane, the two spheres and their shadows in `light`; the
+/// prop sphere (`casters[0]`) and the mesh sphere (`casters[1]`) with
+/// `NotShadowCaster` where false.
+fn render(light: Light, casters: [bool; 2]) -> Image {
     let scene = Scene::from_ron(SPHERE_SCENE).expect("sphere scene");
     let bounds = PropBounds {
         centre: Vec3::ZERO,
@@ -62,7 +77,11 @@ fn render(prop_casts: bool) -> Image {
         height,
         capture_frames: vec![8, 10],
         output_dir: std::env::var_os("CHISEL_TEST_SCREENSHOTS").map(Into::into),
-        stem: format!("splat_shadows_{}", if prop_casts { "cast" } else { "none" }),
+        stem: format!(
+            "splat_shadows_{light:?}_{}_{}",
+            u8::from(casters[0]),
+            u8::from(casters[1])
+        ),
         max_frames: 240,
         min_foreground: 0.0,
     };
@@ -80,25 +99,29 @@ fn render(prop_casts: bool) -> Image {
         move |mut commands: Commands,
               mut meshes: ResMut<Assets<Mesh>>,
               mut standard: ResMut<Assets<StandardMaterial>>| {
-            let casters = RenderLayers::layer(1);
+            let layer = RenderLayers::layer(1);
             let prop = commands
                 .spawn((
                     splats.clone(),
                     Transform::from_xyz(-X, 0.0, HEIGHT).with_scale(Vec3::splat(RADIUS / 50.0)),
-                    casters.clone(),
+                    layer.clone(),
                 ))
                 .id();
-            if !prop_casts {
-                commands.entity(prop).insert(NotShadowCaster);
+            let mesh = commands
+                .spawn((
+                    Mesh3d(meshes.add(Sphere::new(RADIUS).mesh().ico(30).expect("ico sphere"))),
+                    MeshMaterial3d(
+                        standard.add(StandardMaterial::from(Color::linear_rgb(0.8, 0.3, 0.2))),
+                    ),
+                    Transform::from_xyz(X, 0.0, HEIGHT),
+                    layer,
+                ))
+                .id();
+            for (entity, casts) in [prop, mesh].into_iter().zip(casters) {
+                if !casts {
+                    commands.entity(entity).insert(NotShadowCaster);
+                }
             }
-            commands.spawn((
-                Mesh3d(meshes.add(Sphere::new(RADIUS).mesh().ico(30).expect("ico sphere"))),
-                MeshMaterial3d(
-                    standard.add(StandardMaterial::from(Color::linear_rgb(0.8, 0.3, 0.2))),
-                ),
-                Transform::from_xyz(X, 0.0, HEIGHT),
-                casters,
-            ));
             commands.spawn((
                 Mesh3d(meshes.add(Plane3d::new(Vec3::Z, Vec2::new(6.0, 3.0)))),
                 MeshMaterial3d(standard.add(StandardMaterial {
@@ -107,24 +130,41 @@ fn render(prop_casts: bool) -> Image {
                     ..default()
                 })),
             ));
-            commands.spawn((
-                DirectionalLight {
-                    illuminance: 3000.0,
-                    shadow_maps_enabled: true,
-                    ..default()
-                },
-                // One cascade over everything the camera sees: one shadow
-                // map resolution for both spheres.
-                CascadeShadowConfigBuilder {
-                    num_cascades: 1,
-                    minimum_distance: 0.1,
-                    maximum_distance: 12.0,
-                    ..default()
+            let light_layers = RenderLayers::from_layers(&[0, 1]);
+            match light {
+                Light::Directional => {
+                    commands.spawn((
+                        DirectionalLight {
+                            illuminance: 3000.0,
+                            shadow_maps_enabled: true,
+                            ..default()
+                        },
+                        // One cascade over everything the camera sees: one
+                        // shadow map resolution for both spheres.
+                        CascadeShadowConfigBuilder {
+                            num_cascades: 1,
+                            minimum_distance: 0.1,
+                            maximum_distance: 12.0,
+                            ..default()
+                        }
+                        .build(),
+                        Transform::from_translation(LIGHT_FROM).looking_at(Vec3::ZERO, Vec3::Z),
+                        light_layers,
+                    ));
                 }
-                .build(),
-                Transform::from_translation(LIGHT_FROM).looking_at(Vec3::ZERO, Vec3::Z),
-                RenderLayers::from_layers(&[0, 1]),
-            ));
+                Light::Point => {
+                    commands.spawn((
+                        PointLight {
+                            intensity: 300_000.0,
+                            range: 30.0,
+                            shadow_maps_enabled: true,
+                            ..default()
+                        },
+                        Transform::from_translation(POINT_LIGHT_AT),
+                        light_layers,
+                    ));
+                }
+            }
             commands.spawn((
                 Camera3d::default(),
                 Tonemapping::None,
@@ -241,8 +281,8 @@ fn a_prop_casts_the_shadow_of_a_mesh_of_its_shape_unless_told_not_to() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let casting = measure(&render(true));
-    let silent = measure(&render(false));
+    let casting = measure(&render(Light::Directional, [true, true]));
+    let silent = measure(&render(Light::Directional, [false, true]));
     println!("prop casting: {casting:?}\nprop with NotShadowCaster: {silent:?}");
 
     // The mesh's shadow is there in both renders, and the image is lit.
@@ -304,3 +344,60 @@ fn a_prop_casts_the_shadow_of_a_mesh_of_its_shape_unless_told_not_to() {
 /// Measured with lavapipe: prop 3343 px, mesh 3341 px, ellipse 3354 px,
 /// 2 px mismatched.
 const MAX_FOOTPRINT_RELATIVE: f64 = 0.02;
+
+/// From a point light (its six shadow maps drawn by the shared shadow
+/// pass), the prop's shadow is the mesh's mirror image too. The light
+/// falls off across the plane, so a pixel counts as shadowed where it is
+/// darker than half its own brightness in a render without casters.
+#[test]
+fn a_prop_casts_the_shadow_of_a_mesh_of_its_shape_from_a_point_light() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let casting = luminance(&render(Light::Point, [true, true]));
+    let reference = luminance(&render(Light::Point, [false, false]));
+    let (width, height) = SIZE;
+    let dark = |x: u32, y: u32| {
+        let i = (y * width + x) as usize;
+        casting[i] < 0.5 * reference[i]
+    };
+    let (mut shadowed, mut mismatched) = ([0_usize; 2], 0_usize);
+    for y in 0..height {
+        for x in 0..width {
+            if dark(x, y) {
+                shadowed[usize::from(x >= width / 2)] += 1;
+            }
+            if x < width / 2 && dark(x, y) != dark(width - 1 - x, y) {
+                mismatched += 1;
+            }
+        }
+    }
+    // The shadow of each sphere's centre: the point light projects it.
+    let centre = |x: f32| {
+        let c = Vec3::new(x, 0.0, HEIGHT);
+        let s = POINT_LIGHT_AT.z / (POINT_LIGHT_AT.z - c.z);
+        let on_plane = POINT_LIGHT_AT + s * (c - POINT_LIGHT_AT);
+        pixel_of(on_plane.x, on_plane.y)
+    };
+    let core =
+        [-X, X].map(|x| disc_mean(&casting, centre(x), 8) / disc_mean(&reference, centre(x), 8));
+    let [prop, mesh] = shadowed.map(|n| n as f64);
+    let relative = (prop - mesh).abs() / mesh;
+    println!(
+        "point light: shadow footprints prop {prop} px, mesh {mesh} px (relative difference \
+         {relative:.4}), {mismatched} px mismatched; core brightness over unshadowed {core:.3?}"
+    );
+    assert!(mesh > 2000.0, "the mesh casts a large shadow: {mesh} px");
+    assert!(
+        core.iter().all(|&c| c < 0.3),
+        "both cores are dark: {core:?}"
+    );
+    assert!(
+        relative < MAX_FOOTPRINT_RELATIVE,
+        "footprints differ by {relative}"
+    );
+    assert!(
+        (mismatched as f64) < MAX_FOOTPRINT_RELATIVE * mesh,
+        "the footprints differ in shape: {mismatched} px"
+    );
+}
