@@ -13,19 +13,26 @@
 //! `3` global per-fragment ray tracing; arrow keys or a middle-button drag
 //! orbit, the wheel zooms, WASD and Q/E move the camera's focus.
 //!
+//! The props cast shadows on the terrain (and on each other) from the
+//! directional light, drawn into its shadow maps by the splat pass.
+//!
 //! Runs in a window when a display exists; otherwise (or with
 //! `CHISEL_HEADLESS=1`) it renders headless: `screenshots/showcase-0008.png`
-//! once the craters and props are in, then `showcase-0016.png` after one
-//! more crater beside a prop, drawn by global ray tracing. Frame 9 is
-//! captured with the props hidden: the run fails unless the props cover
-//! at least [`MIN_PROP_FRACTION`] of frame 8 (the pixels where frames 8
-//! and 9 differ).
+//! once the craters and props are in, then `showcase-0017.png` after one
+//! more crater beside a prop, drawn by global ray tracing. Frames 9 and
+//! 10 are checks: frame 9 with the props hidden, frame 10 with the props
+//! shown but casting no shadows (`NotShadowCaster`). The run fails unless
+//! the props themselves (the pixels where frames 9 and 10 differ) cover at
+//! least [`MIN_PROP_FRACTION`] of the frame, and their shadows on the
+//! terrain (pixels outside the props darker in frame 8 than in frame 10)
+//! at least [`MIN_SHADOW_FRACTION`].
 //!
 //! `cargo run --release --example showcase`
 
 use std::f32::consts::FRAC_PI_2;
 use std::time::Duration;
 
+use bevy::light::NotShadowCaster;
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
@@ -65,13 +72,21 @@ const CRATERS: [[f32; 2]; 5] = [
     [-1.5, 8.0],
 ];
 
-/// Headless: the smallest fraction of frame 8 that the props must cover.
+/// Headless: the smallest fraction of the frame that the props must cover.
 const MIN_PROP_FRACTION: f32 = 0.01;
+
+/// Headless: the smallest fraction of the frame that the props' shadows on
+/// the terrain must cover (measured: 0.84 % with lavapipe).
+const MIN_SHADOW_FRACTION: f32 = 0.004;
+
+/// Headless: a channel that changes by more than this many sRGB steps
+/// between two captures counts as changed.
+const CHANGED: u8 = 24;
 
 fn main() -> AppExit {
     let presentation = match Presentation::detect("showcase") {
         Presentation::Headless(config) => Presentation::Headless(HeadlessConfig {
-            capture_frames: vec![8, 9, 16],
+            capture_frames: vec![8, 9, 10, 17],
             max_frames: 1500,
             ..config
         }),
@@ -110,32 +125,53 @@ fn main() -> AppExit {
     props_in_view(&frames.images())
 }
 
-/// The fraction of frame 8 (with the props) that differs from frame 9
-/// (without them) must reach [`MIN_PROP_FRACTION`].
+/// The props are in frame 8 and cast shadows on the terrain: the pixels
+/// where frame 9 (no props) and frame 10 (props casting no shadow) differ
+/// are the props' and must reach [`MIN_PROP_FRACTION`]; the other pixels
+/// darker in frame 8 (props casting) than in frame 10 are their shadows
+/// and must reach [`MIN_SHADOW_FRACTION`].
 fn props_in_view(images: &[Image]) -> AppExit {
-    let rgb = |image: &Image| image.clone().try_into_dynamic().map(|d| d.to_rgb8()).ok();
-    let (Some(with), Some(without)) = (images.first().and_then(rgb), images.get(1).and_then(rgb))
-    else {
-        eprintln!("showcase: FAILED: frames 8 and 9 were not captured");
+    let rgb = |i: usize| {
+        images
+            .get(i)
+            .and_then(|image| image.clone().try_into_dynamic().ok())
+            .map(|d| d.to_rgb8())
+    };
+    let (Some(casting), Some(without), Some(no_shadows)) = (rgb(0), rgb(1), rgb(2)) else {
+        eprintln!("showcase: FAILED: frames 8, 9 and 10 were not captured");
         return AppExit::error();
     };
-    let differs = with
+    let changed = |a: &image::Rgb<u8>, b: &image::Rgb<u8>| {
+        a.0.iter().zip(b.0).any(|(&x, y)| x.abs_diff(y) > CHANGED)
+    };
+    let luma = |p: &image::Rgb<u8>| p.0.iter().map(|&c| u32::from(c)).sum::<u32>();
+    let (mut prop_pixels, mut shadow_pixels) = (0, 0);
+    for ((lit, bare), unshadowed) in casting
         .pixels()
         .zip(without.pixels())
-        .filter(|(a, b)| a.0.iter().zip(b.0).any(|(&x, y)| x.abs_diff(y) > 24))
-        .count();
-    let fraction = differs as f32 / (with.width() * with.height()).max(1) as f32;
-    if fraction >= MIN_PROP_FRACTION {
-        println!(
-            "showcase: ok: the props cover {:.1}% of the frame",
-            100.0 * fraction
-        );
+        .zip(no_shadows.pixels())
+    {
+        if changed(bare, unshadowed) {
+            prop_pixels += 1;
+        } else if changed(lit, unshadowed) && luma(lit) < luma(unshadowed) {
+            shadow_pixels += 1;
+        }
+    }
+    let total = (casting.width() * casting.height()).max(1) as f32;
+    let (props, shadows) = (prop_pixels as f32 / total, shadow_pixels as f32 / total);
+    println!(
+        "showcase: the props cover {:.2}% of the frame, their shadows on the terrain {:.2}%",
+        100.0 * props,
+        100.0 * shadows
+    );
+    if props >= MIN_PROP_FRACTION && shadows >= MIN_SHADOW_FRACTION {
+        println!("showcase: ok");
         AppExit::Success
     } else {
         eprintln!(
-            "showcase: FAILED: the props cover {:.2}% of the frame (at least {:.1}% expected)",
-            100.0 * fraction,
-            100.0 * MIN_PROP_FRACTION
+            "showcase: FAILED: at least {:.1}% props and {:.1}% shadows expected",
+            100.0 * MIN_PROP_FRACTION,
+            100.0 * MIN_SHADOW_FRACTION
         );
         AppExit::error()
     }
@@ -206,7 +242,8 @@ fn spawn_scene(
             shadow_maps_enabled: true,
             ..default()
         },
-        Transform::from_xyz(12.0, 25.0, 8.0).looking_at(Vec3::ZERO, Vec3::Y),
+        // Low enough (30° up) for the props' shadows to reach past their feet.
+        Transform::from_xyz(14.0, 10.0, 9.0).looking_at(Vec3::ZERO, Vec3::Y),
     ));
     commands.insert_resource(GlobalAmbientLight {
         brightness: 150.0,
@@ -256,21 +293,22 @@ fn splat_keys(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<SplatSetting
 }
 
 /// Headless: hold the captures until the terrain is meshed, the craters
-/// are in and every prop is sampled; hide the props for capture 9; after
-/// that blast one more crater beside the machine part and switch to
-/// global ray tracing.
+/// are in and every prop is sampled; hide the props for capture 9, take
+/// their shadows away for capture 10; after that blast one more crater
+/// beside the machine part and switch to global ray tracing.
 fn headless_tour(
+    mut commands: Commands,
     mut counted: Local<u32>,
     mut hold: ResMut<HoldCaptures>,
     mut settings: ResMut<SplatSettings>,
     terrains: Query<(Entity, &Terrain)>,
-    mut props: Query<(Has<PropSplats>, &mut Visibility), With<QuadricProp>>,
+    mut props: Query<(Entity, Has<PropSplats>, &mut Visibility), With<QuadricProp>>,
     mut carves: MessageWriter<Carve>,
 ) {
     let carved = terrains
         .iter()
         .all(|(_, t)| t.is_idle() && !t.journal().is_empty());
-    let sampled = !props.is_empty() && props.iter().all(|(ready, _)| ready);
+    let sampled = !props.is_empty() && props.iter().all(|(_, ready, _)| ready);
     hold.0 = !(carved && sampled);
     if hold.0 {
         return;
@@ -278,14 +316,23 @@ fn headless_tour(
     *counted += 1;
     // Counted frames are capture frames (the capture system counts in
     // `Last`, after this).
-    for (_, mut visibility) in &mut props {
+    for (entity, _, mut visibility) in &mut props {
         *visibility = if *counted == 9 {
             Visibility::Hidden
         } else {
             Visibility::Inherited
         };
+        match *counted {
+            10 => {
+                commands.entity(entity).insert(NotShadowCaster);
+            }
+            11 => {
+                commands.entity(entity).remove::<NotShadowCaster>();
+            }
+            _ => {}
+        }
     }
-    if *counted == 10 {
+    if *counted == 11 {
         settings.mode = SplatMode::GlobalRayTrace;
         for (entity, terrain) in &terrains {
             let [x, z] = PROPS[0].2;

@@ -5,8 +5,10 @@
 // Notation (paper 2, §3, §6): a quadric Q is the symmetric 4×4
 // [[A, -b], [-bᵀ, c]]; Q(x) = xᵀAx − 2xᵀb + c, inside where Q(x) < 0; the
 // half gradient is Ax − b. Quadric coefficients are packed
-// [q00 q01 q02 q03 | q11 q12 q13 q22 | q23 q33 r g | b 0 0 0] (so −b is
-// (q03, q13, q23)), scaled to a largest magnitude of 1 on the CPU.
+// [q00 q01 q02 q03 | q11 q12 q13 q22 | q23 q33 r g | b m ρ 0] (so −b is
+// (q03, q13, q23)), scaled to a largest magnitude of 1 on the CPU; m and
+// ρ are the primitive's metallic and perceptual roughness, negative where
+// it takes the prop's.
 //
 // Rust mirror (the single source of truth for every layout here):
 // plugin/splat/gpu.rs.
@@ -114,6 +116,16 @@ fn quadric_color(q: Quadric) -> vec3<f32> {
     return vec3<f32>(q.c[2].z, q.c[2].w, q.c[3].x);
 }
 
+/// The primitive's metallic, or the prop's where it sets none.
+fn quadric_metallic(q: Quadric) -> f32 {
+    return select(prop.metallic, q.c[3].y, q.c[3].y >= 0.0);
+}
+
+/// The primitive's perceptual roughness, or the prop's where it sets none.
+fn quadric_roughness(q: Quadric) -> f32 {
+    return select(prop.perceptual_roughness, q.c[3].z, q.c[3].z >= 0.0);
+}
+
 /// Whether the literal `lit` (a flagged quadric index) holds at x.
 fn literal_holds(lit: u32, x: vec3<f32>) -> bool {
     let v = quadric_value(quadrics[lit & INDEX_MASK], x);
@@ -204,15 +216,21 @@ fn id_color(index: u32) -> vec4<f32> {
     return vec4<f32>(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(200.0 / 255.0), 1.0);
 }
 
-/// Depth (reverse-Z) of the local point x, or a negative value when it lies
-/// outside the depth range.
-fn surface_depth(x: vec3<f32>) -> f32 {
+/// Depth (reverse-Z) of the local point x, above 1 in front of the near
+/// plane, or −1 where the point is not in front of a perspective eye.
+fn clip_depth(x: vec3<f32>) -> f32 {
     let world = prop.world_from_local * vec4<f32>(x, 1.0);
     let clip = view.clip_from_world * world;
     if clip.w <= 0.0 {
         return -1.0;
     }
-    let depth = clip.z / clip.w;
+    return clip.z / clip.w;
+}
+
+/// Depth (reverse-Z) of the local point x, or a negative value when it lies
+/// outside the depth range.
+fn surface_depth(x: vec3<f32>) -> f32 {
+    let depth = clip_depth(x);
     if depth > 1.0 {
         return -1.0;
     }

@@ -16,16 +16,30 @@
 // the written depth never exceeds the rasterized one:
 // `@early_depth_test(less_equal)` where the device supports it.
 //
+//
+// Shadow maps (SHADOW_DEPTH): the same boxes and the same per-fragment ray
+// tracing and clipping, seen from a light's shadow view (the pass's view
+// uniform holds the light's projection, a directional cascade being
+// orthographic), writing depth only, so a prop's shadow has its exact
+// silhouette. Bevy's mesh view bindings (groups 0 and 1) are not used. In
+// an orthographic (directional) shadow view a caster between the light and
+// the cascade's near plane is flattened onto that plane, as Bevy does for
+// meshes ("unclipped depth"): proxy vertices and written depths are clamped
+// to the near plane's depth 1 instead of being clipped.
+//
 // Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, OUTPUT_IDS, OUTPUT_NORMALS,
 // OUTPUT_OVERDRAW (a constant per fragment, for additive blending),
 // OUTPUT_BOUNDS (the proxies themselves, flat-coloured per splat),
-// SPLAT_OPEN_BOX (30 vertices per box: the −n face left out).
+// SPLAT_OPEN_BOX (30 vertices per box: the −n face left out), SHADOW_DEPTH
+// (depth only, into a shadow map).
 #import bevy_chisel::quadric::{
-    INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, intersect_line, literal_holds,
-    local_ray_direction, prop, quadrics, clip_indices, splats, surface_depth, view,
-    world_normal,
+    INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, clip_depth, intersect_line,
+    literal_holds, local_ray_direction, prop, quadrics, clip_indices, splats,
+    surface_depth, view, world_normal,
 }
+#ifndef SHADOW_DEPTH
 #import bevy_chisel::shading::surface_color
+#endif
 
 struct SplatVarying {
     @builtin(position) clip: vec4<f32>,
@@ -43,11 +57,23 @@ const QUAD_CORNERS: array<vec2<f32>, 6> = array<vec2<f32>, 6>(
     vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
 );
 
+/// The clip position of a world point; in an orthographic shadow view,
+/// clamped to the near plane rather than clipped by it.
+fn clip_position(world: vec4<f32>) -> vec4<f32> {
+    var clip = view.clip_from_world * world;
+#ifdef SHADOW_DEPTH
+    if view.camera_position.w < 0.5 {
+        clip.z = min(clip.z, clip.w);
+    }
+#endif
+    return clip;
+}
+
 fn varying_at(local: vec3<f32>, splat: u32) -> SplatVarying {
     var out: SplatVarying;
     out.local = local;
     out.splat = splat;
-    out.clip = view.clip_from_world * (prop.world_from_local * vec4<f32>(local, 1.0));
+    out.clip = clip_position(prop.world_from_local * vec4<f32>(local, 1.0));
     return out;
 }
 
@@ -85,7 +111,7 @@ fn vertex(
     // (its angular radius asin(r/d) is below atan(r/(d − r))).
     let world = centre - dir * rw + (right * c.x + up * c.y) * rw;
     out.local = (prop.local_from_world * vec4<f32>(world, 1.0)).xyz;
-    out.clip = view.clip_from_world * vec4<f32>(world, 1.0);
+    out.clip = clip_position(vec4<f32>(world, 1.0));
     return out;
 #else
     var n = s.normal;
@@ -152,17 +178,17 @@ fn hash_color(i: u32) -> vec3<f32> {
     return 0.25 + 0.75 * c;
 }
 #else
-#ifdef EARLY_DEPTH_TEST
-@early_depth_test(less_equal)
-#endif
-@fragment
-fn fragment(in: SplatVarying) -> SurfaceOutput {
-    let s = splats[in.splat];
+/// The local point of splat `splat`'s surface patch seen through the
+/// proxy point `local`: the root of the splat's quadric along the view ray
+/// nearest the sample, within its radius and inside its clip list (the
+/// fragment is discarded otherwise).
+fn splat_hit(local: vec3<f32>, splat: u32) -> vec3<f32> {
+    let s = splats[splat];
     let q = quadrics[s.quadric & INDEX_MASK];
-    let dir = local_ray_direction(in.local);
+    let dir = local_ray_direction(local);
     // Solve from the point of the ray closest to the sample: the root of
     // smallest |u| is then the hit nearest the sample.
-    let p0 = in.local + dot(s.position - in.local, dir) * dir;
+    let p0 = local + dot(s.position - local, dir) * dir;
     let roots = intersect_line(q, p0, dir);
     var u = roots.x;
     if abs(roots.y) < abs(u) {
@@ -182,15 +208,42 @@ fn fragment(in: SplatVarying) -> SurfaceOutput {
             discard;
         }
     }
+    return p;
+}
+
+#ifdef SHADOW_DEPTH
+/// Depth only, into a shadow map: the hit's depth in the light's view,
+/// clamped to the near plane in an orthographic (directional) view.
+@fragment
+fn fragment(in: SplatVarying) -> @builtin(frag_depth) f32 {
+    let p = splat_hit(in.local, in.splat);
+    var depth = clip_depth(p);
+    if view.camera_position.w < 0.5 {
+        depth = min(depth, 1.0);
+    }
+    if depth < 0.0 || depth > 1.0 {
+        discard;
+    }
+    return depth;
+}
+#else
+#ifdef EARLY_DEPTH_TEST
+@early_depth_test(less_equal)
+#endif
+@fragment
+fn fragment(in: SplatVarying) -> SurfaceOutput {
+    let p = splat_hit(in.local, in.splat);
     let depth = surface_depth(p);
     if depth < 0.0 {
         discard;
     }
+    let s = splats[in.splat];
     var out: SurfaceOutput;
     let frag_coord = vec4<f32>(in.clip.xy, depth, in.clip.w);
     out.color = surface_color(s.quadric, p, world_normal(s.quadric, p), frag_coord);
     out.depth = depth;
     return out;
 }
+#endif
 #endif
 #endif

@@ -7,9 +7,11 @@
 // 1), bound by the pass; the pipeline carries the mesh pipeline's shader
 // defines for that view.
 //
-// The material: base colour from the quadric (linear RGB), metallic,
-// perceptual roughness and reflectance from the prop (`PropMaterial`), the
-// rest `StandardMaterial`'s defaults (no emission, opaque, fog enabled).
+// The material: base colour from the quadric (linear RGB), metallic and
+// perceptual roughness from the quadric where its primitive sets them
+// (the scene file's `metallic`, `roughness`), else from the prop
+// (`PropMaterial`), reflectance from the prop, the rest
+// `StandardMaterial`'s defaults (no emission, opaque, fog enabled).
 //
 // Debug outputs (OUTPUT_IDS, OUTPUT_NORMALS) are unlit and skip the
 // post-lighting step, so their bytes stay exact.
@@ -21,7 +23,9 @@
     pbr_functions,
     pbr_types,
 }
-#import bevy_chisel::quadric::{INDEX_MASK, id_color, prop, quadric_color, quadrics}
+#import bevy_chisel::quadric::{
+    INDEX_MASK, id_color, prop, quadric_color, quadric_metallic, quadric_roughness, quadrics,
+}
 
 /// The colour of the surface point at local position `local` of literal
 /// `lit`, with world-space unit `normal` (zero at a singular point), seen
@@ -40,9 +44,10 @@ fn surface_color(
     return vec4<f32>(normal * 0.5 + 0.5, 1.0);
 #else
     var pbr_input = pbr_types::pbr_input_new();
-    pbr_input.material.base_color = vec4<f32>(quadric_color(quadrics[index]), 1.0);
-    pbr_input.material.metallic = prop.metallic;
-    pbr_input.material.perceptual_roughness = prop.perceptual_roughness;
+    let q = quadrics[index];
+    pbr_input.material.base_color = vec4<f32>(quadric_color(q), 1.0);
+    pbr_input.material.metallic = quadric_metallic(q);
+    pbr_input.material.perceptual_roughness = quadric_roughness(q);
     pbr_input.material.reflectance = vec3<f32>(prop.reflectance);
     pbr_input.material.flags |= pbr_types::STANDARD_MATERIAL_FLAGS_FOG_ENABLED_BIT;
     pbr_input.flags = MESH_FLAGS_SHADOW_RECEIVER_BIT;

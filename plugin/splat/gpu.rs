@@ -17,7 +17,10 @@
 
 use bevy::math::{Mat4, UVec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
+use bevy::render::view::ExtractedView;
 use chisel_quadric::{ColoredQuadric, Splat};
+
+use super::SplatSettings;
 
 /// Per-view data of the splat pass (WGSL `SplatView`, group 2, dynamic
 /// offset); lights, exposure and the rest of the view come from Bevy's mesh
@@ -39,6 +42,34 @@ pub struct SplatViewUniform {
     pub radius_tolerance: f32,
     /// Padding to 16 bytes.
     pub pad: UVec2,
+}
+
+impl SplatViewUniform {
+    /// The uniform of `view` (a camera's or a light's shadow view) drawn
+    /// with `settings`.
+    #[must_use]
+    pub fn new(view: &ExtractedView, settings: &SplatSettings) -> Self {
+        let clip_from_world = view
+            .clip_from_world
+            .unwrap_or_else(|| view.clip_from_view * view.world_from_view.to_matrix().inverse());
+        let orthographic = view.clip_from_view.w_axis.w == 1.0;
+        let eye = view.world_from_view.translation();
+        let forward = view.world_from_view.forward().as_vec3();
+        Self {
+            clip_from_world,
+            camera_position: eye.extend(if orthographic { 0.0 } else { 1.0 }),
+            view_forward: forward.extend(0.0),
+            flat_ratio: settings.flat_ratio,
+            radius_tolerance: settings.radius_tolerance,
+            pad: UVec2::ZERO,
+        }
+    }
+
+    /// Whether the view is orthographic (`camera_position.w` is 0).
+    #[must_use]
+    pub fn is_orthographic(&self) -> bool {
+        self.camera_position.w == 0.0
+    }
 }
 
 /// Per-prop data (WGSL `Prop`, group 3 binding 0).
@@ -79,22 +110,40 @@ pub struct PropUniform {
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
 #[repr(C)]
 pub struct QuadricRecord {
-    /// `[q00 q01 q02 q03] [q11 q12 q13 q22] [q23 q33 r g] [b 0 0 0]`: the
-    /// coefficients as [`ColoredQuadric::scaled_coefficients`], then the
-    /// colour.
+    /// `[q00 q01 q02 q03] [q11 q12 q13 q22] [q23 q33 r g] [b m ρ 0]`: the
+    /// coefficients as [`ColoredQuadric::scaled_coefficients`], the
+    /// colour, then the primitive's metallic `m` and perceptual roughness
+    /// `ρ`, each [`PROP_MATERIAL`] where the primitive leaves it to the
+    /// prop's [`PropMaterial`](super::PropMaterial).
     pub c: [Vec4; 4],
 }
+
+/// A metallic or roughness slot of a [`QuadricRecord`] that takes the
+/// prop's value (WGSL: any negative value).
+pub const PROP_MATERIAL: f32 = -1.0;
 
 impl From<&ColoredQuadric> for QuadricRecord {
     fn from(q: &ColoredQuadric) -> Self {
         let k = q.scaled_coefficients();
         let [r, g, b] = q.color;
+        // The scene loader refuses values outside [0, 1]; a DAG built in
+        // code may hold any: a non-finite one takes the prop's, the rest
+        // are clamped as `PropMaterial::validated` clamps.
+        let slot = |v: Option<f32>| {
+            v.filter(|v| v.is_finite())
+                .map_or(PROP_MATERIAL, |v| v.clamp(0.0, 1.0))
+        };
         Self {
             c: [
                 Vec4::new(k[0], k[1], k[2], k[3]),
                 Vec4::new(k[4], k[5], k[6], k[7]),
                 Vec4::new(k[8], k[9], r, g),
-                Vec4::new(b, 0.0, 0.0, 0.0),
+                Vec4::new(
+                    b,
+                    slot(q.material.metallic),
+                    slot(q.material.perceptual_roughness),
+                    0.0,
+                ),
             ],
         }
     }
@@ -143,6 +192,7 @@ impl From<&Splat> for SplatRecord {
 #[cfg(test)]
 mod tests {
     use bevy::math::DVec3;
+    use chisel_quadric::SurfaceMaterial;
 
     use super::*;
 
@@ -170,15 +220,29 @@ mod tests {
 
     #[test]
     fn records_copy_the_kernel_fields() {
-        let quadric = ColoredQuadric {
+        let mut quadric = ColoredQuadric {
             coefficients: [-4.0, -3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 2.0, 1.0],
             color: [0.1, 0.2, 0.3],
+            material: SurfaceMaterial::default(),
         };
         let r = QuadricRecord::from(&quadric);
         assert_eq!(r.c[0], Vec4::new(-1.0, -0.75, -0.5, -0.25));
         assert_eq!(r.c[1], Vec4::new(0.0, 0.25, 0.5, 0.75));
         assert_eq!(r.c[2], Vec4::new(0.5, 0.25, 0.1, 0.2));
-        assert_eq!(r.c[3], Vec4::new(0.3, 0.0, 0.0, 0.0));
+        assert_eq!(r.c[3], Vec4::new(0.3, PROP_MATERIAL, PROP_MATERIAL, 0.0));
+        quadric.material = SurfaceMaterial {
+            metallic: Some(0.75),
+            perceptual_roughness: Some(0.125),
+        };
+        let r = QuadricRecord::from(&quadric);
+        assert_eq!(r.c[3], Vec4::new(0.3, 0.75, 0.125, 0.0));
+        // Built in code without the loader's check: clamped, or the prop's.
+        quadric.material = SurfaceMaterial {
+            metallic: Some(1.5),
+            perceptual_roughness: Some(f32::NAN),
+        };
+        let r = QuadricRecord::from(&quadric);
+        assert_eq!(r.c[3], Vec4::new(0.3, 1.0, PROP_MATERIAL, 0.0));
         let s = Splat {
             position: DVec3::new(1.0, 2.0, 3.0),
             normal: DVec3::Z,

@@ -1,5 +1,6 @@
 //! The PBR material of a prop: what Bevy's lighting needs beyond the
-//! quadrics' own base colours.
+//! quadrics' own base colours (and their own metallic and roughness, where
+//! the scene file gives them).
 
 use bevy::prelude::*;
 
@@ -7,7 +8,9 @@ use bevy::prelude::*;
 /// [`PropSplats`](super::PropSplats)): the metallic, perceptual roughness
 /// and reflectance with which Bevy's PBR lights every quadric of the prop,
 /// as the same fields of a `StandardMaterial` do; the base colour is each
-/// quadric's own (linear RGB, from the scene file). A prop without one is
+/// quadric's own (linear RGB, from the scene file), and a primitive with
+/// its own `metallic` or `roughness` in the scene file keeps those in
+/// place of this component's. A prop without one is
 /// drawn with [`PropMaterial::default`], which matches
 /// `StandardMaterial::default()`.
 ///

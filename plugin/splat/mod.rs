@@ -15,6 +15,12 @@
 //!   view's format and MSAA and on its splat settings.
 //! - [`render`] — render world: extraction, buffer upload, and the pass, a
 //!   `Core3d` system between the opaque and transparent passes.
+//! - [`shadow`] — render world: props cast shadows, their splats drawn
+//!   depth-only into Bevy's shadow maps (directional cascades, point and
+//!   spot lights) by two `Core3d` systems after Bevy's shadow passes.
+//!   `NotShadowCaster` on a prop turns its shadow off.
+//! - `light_visibility` — main world: props in a shadow-casting light's
+//!   frusta are visible (extracted) even outside every camera, as meshes are.
 //! - `avian` (feature `avian`) — static voxel colliders for props, from the
 //!   exact inside test of their solid.
 //!
@@ -62,14 +68,18 @@
 #[cfg(feature = "avian")]
 pub mod avian;
 pub mod gpu;
+mod light_visibility;
 pub mod material;
 pub mod pipeline;
 pub mod prop;
 pub mod render;
+pub mod shadow;
 
+use bevy::camera::visibility::VisibilitySystems;
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
-use bevy::pbr::MeshPipelineSystems;
+use bevy::light::SimulationLightSystems;
+use bevy::pbr::{LATE_SHADOW_PASS, MeshPipelineSystems, per_view_shadow_pass, shared_shadow_pass};
 use bevy::prelude::*;
 use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
@@ -227,6 +237,15 @@ impl Plugin for ChiselSplatPlugin {
                     material::warn_on_unusable_materials,
                 ),
             )
+            .add_systems(
+                PostUpdate,
+                light_visibility::mark_props_seen_by_lights
+                    .in_set(SimulationLightSystems::CheckLightVisibility)
+                    .after(VisibilitySystems::CalculateBounds)
+                    .after(SimulationLightSystems::UpdateLightFrusta)
+                    .after(VisibilitySystems::CheckVisibility)
+                    .before(VisibilitySystems::MarkNewlyHiddenEntitiesInvisible),
+            )
             .add_plugins((
                 ExtractResourcePlugin::<SplatSettings>::default(),
                 ExtractComponentPlugin::<SplatViewSettings>::default(),
@@ -241,9 +260,11 @@ impl Plugin for ChiselSplatPlugin {
             .init_resource::<render::ExtractedProps>()
             .init_resource::<render::PropBuffers>()
             .init_resource::<render::SplatViewUniforms>()
+            .init_resource::<shadow::EmptyBindGroup>()
             // The render world's own type registry: its public data.
             .register_type::<render::ExtractedProps>()
             .register_type::<render::VisibleProps>()
+            .register_type::<shadow::SplatShadowCasters>()
             .add_systems(
                 ExtractSchedule,
                 (render::extract_props, render::extract_visible_props),
@@ -254,16 +275,32 @@ impl Plugin for ChiselSplatPlugin {
             )
             .add_systems(
                 Render,
-                (render::prepare_props, render::prepare_views)
+                (
+                    render::prepare_props,
+                    (
+                        render::prepare_views,
+                        shadow::prepare_shadow_views,
+                        render::write_view_uniforms,
+                    )
+                        .chain(),
+                )
                     .in_set(RenderSystems::Prepare)
                     .run_if(resource_exists::<pipeline::SplatPipeline>),
             )
             .add_systems(
                 Core3d,
-                render::splat_pass
-                    .after(main_opaque_pass_3d)
-                    .before(main_transparent_pass_3d)
-                    .in_set(Core3dSystems::MainPass),
+                (
+                    render::splat_pass
+                        .after(main_opaque_pass_3d)
+                        .before(main_transparent_pass_3d)
+                        .in_set(Core3dSystems::MainPass),
+                    shadow::per_view_splat_shadow_pass
+                        .after(per_view_shadow_pass::<LATE_SHADOW_PASS>)
+                        .before(Core3dSystems::MainPass),
+                    shadow::shared_splat_shadow_pass
+                        .after(shared_shadow_pass::<LATE_SHADOW_PASS>)
+                        .before(Core3dSystems::MainPass),
+                ),
             );
     }
 }

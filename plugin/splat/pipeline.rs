@@ -7,6 +7,10 @@
 //! probes), laid out as `MeshPipeline::get_view_layout` lays them out for
 //! the view's key, so the fragment shader can call Bevy's PBR functions;
 //! 2 is the splat pass's own view uniform; 3 is the prop.
+//!
+//! The shadow pipeline ([`SplatShadowPipeline`]) draws the same splats
+//! depth-only into Bevy's shadow maps: groups 2 and 3 as above (group 2
+//! holding the light's shadow view), 0 and 1 empty.
 
 use std::sync::Arc;
 
@@ -18,10 +22,10 @@ use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{storage_buffer_read_only, uniform_buffer};
 use bevy::render::render_resource::{
     BindGroupLayoutDescriptor, BindGroupLayoutEntries, BlendComponent, BlendFactor, BlendOperation,
-    BlendState, ColorTargetState, ColorWrites, CompareFunction, DepthStencilState, Face,
-    FragmentState, MultisampleState, PrimitiveState, RenderPipelineDescriptor, ShaderStages,
-    SpecializedMeshPipeline, SpecializedRenderPipeline, TextureFormat, VertexFormat, VertexState,
-    VertexStepMode,
+    BlendState, CachedRenderPipelineId, ColorTargetState, ColorWrites, CompareFunction,
+    DepthStencilState, Face, FragmentState, MultisampleState, PipelineCache, PrimitiveState,
+    RenderPipelineDescriptor, ShaderStages, SpecializedMeshPipeline, SpecializedRenderPipeline,
+    TextureFormat, VertexFormat, VertexState, VertexStepMode,
 };
 use bevy::shader::{Shader, ShaderDefVal};
 
@@ -161,9 +165,76 @@ impl SplatPipeline {
     }
 }
 
-/// Creates the [`SplatPipeline`] once Bevy's mesh pipeline exists.
-pub(crate) fn init_splat_pipeline(mut commands: Commands, mesh_pipeline: Res<MeshPipeline>) {
-    commands.insert_resource(SplatPipeline::new(mesh_pipeline.clone()));
+/// The depth-only pipeline of the splats in Bevy's shadow maps: surface
+/// boxes (whatever the views' [`SplatMode`]: every mode gives the same
+/// pixels), back faces culled as seen from the light, the fragment stage
+/// ray tracing and clipping as the main pass does and writing the hit's
+/// depth, compared and stored as Bevy's shadow passes do (reverse-Z,
+/// `GreaterEqual`, no bias: Bevy applies the light's biases where shadows
+/// are received).
+#[derive(Resource)]
+pub(crate) struct SplatShadowPipeline {
+    /// The queued pipeline.
+    pub id: CachedRenderPipelineId,
+    /// Groups 0 and 1: empty.
+    pub empty_layout: BindGroupLayoutDescriptor,
+}
+
+impl SplatShadowPipeline {
+    fn descriptor(
+        splat: &SplatPipeline,
+        empty_layout: &BindGroupLayoutDescriptor,
+    ) -> RenderPipelineDescriptor {
+        let defs: Vec<ShaderDefVal> = vec!["SHADOW_DEPTH".into()];
+        RenderPipelineDescriptor {
+            label: Some("chisel_splat_shadow_pipeline".into()),
+            layout: vec![
+                empty_layout.clone(),
+                empty_layout.clone(),
+                splat.view_layout.clone(),
+                splat.prop_layout.clone(),
+            ],
+            vertex: VertexState {
+                shader: SPLAT_SHADER,
+                shader_defs: defs.clone(),
+                ..default()
+            },
+            primitive: PrimitiveState {
+                cull_mode: Some(Face::Back),
+                ..default()
+            },
+            depth_stencil: Some(DepthStencilState {
+                format: CORE_3D_DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(CompareFunction::GreaterEqual),
+                stencil: default(),
+                bias: default(),
+            }),
+            multisample: MultisampleState::default(),
+            fragment: Some(FragmentState {
+                shader: SPLAT_SHADER,
+                shader_defs: defs,
+                targets: Vec::new(),
+                ..default()
+            }),
+            ..default()
+        }
+    }
+}
+
+/// Creates the [`SplatPipeline`] once Bevy's mesh pipeline exists, and
+/// queues the [`SplatShadowPipeline`].
+pub(crate) fn init_splat_pipeline(
+    mut commands: Commands,
+    mesh_pipeline: Res<MeshPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+) {
+    let splat = SplatPipeline::new(mesh_pipeline.clone());
+    let empty_layout = BindGroupLayoutDescriptor::new("chisel_splat_empty_layout", &[]);
+    let id = pipeline_cache
+        .queue_render_pipeline(SplatShadowPipeline::descriptor(&splat, &empty_layout));
+    commands.insert_resource(SplatShadowPipeline { id, empty_layout });
+    commands.insert_resource(splat);
 }
 
 /// What a pipeline variant depends on.

@@ -17,7 +17,9 @@ use std::any::TypeId;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use bevy::camera::visibility::VisibleEntities;
+use bevy::camera::primitives::Aabb;
+use bevy::camera::visibility::{RenderLayers, VisibleEntities};
+use bevy::light::NotShadowCaster;
 use bevy::math::{DMat3, Mat3};
 use bevy::pbr::{MeshPipelineKey, MeshViewBindGroup, ViewKeyCache};
 use bevy::prelude::*;
@@ -53,9 +55,19 @@ pub struct ExtractedProp {
     /// Its PBR material (validated; the default where it has none or an
     /// invalid one).
     pub material: PropMaterial,
+    /// Its local box around every splat proxy (the prop's `Aabb`).
+    #[reflect(ignore)]
+    pub aabb: Aabb,
+    /// It casts shadows (it has no `NotShadowCaster`).
+    pub casts_shadows: bool,
+    /// Its render layers (the default layer where it has none).
+    #[reflect(ignore)]
+    pub render_layers: RenderLayers,
 }
 
-/// The props to draw this frame.
+/// The props to draw this frame: those a camera sees, and those in the
+/// shadow frusta of a light that casts shadows (their `ViewVisibility`,
+/// Bevy's and [`mark_props_seen_by_lights`](super::light_visibility)'s).
 #[derive(Resource, Reflect, Default, Debug)]
 #[reflect(Resource, Default)]
 pub struct ExtractedProps(pub Vec<ExtractedProp>);
@@ -87,11 +99,14 @@ pub(crate) fn extract_props(
             &GlobalTransform,
             &ViewVisibility,
             Option<&PropMaterial>,
+            Option<&Aabb>,
+            Has<NotShadowCaster>,
+            Option<&RenderLayers>,
         )>,
     >,
 ) {
     extracted.0.clear();
-    for (entity, splats, transform, visibility, material) in &props {
+    for (entity, splats, transform, visibility, material, aabb, not_caster, layers) in &props {
         // A transform without an inverse (a zero scale) has no local rays
         // to trace: the prop is flat or a point, and is not drawn.
         let det = transform.affine().matrix3.determinant();
@@ -103,6 +118,15 @@ pub(crate) fn extract_props(
                 material: material
                     .and_then(PropMaterial::validated)
                     .unwrap_or_default(),
+                // Inserted with the splats, by command: the bounding
+                // sphere's box until then.
+                aabb: aabb.copied().unwrap_or_else(|| {
+                    let c = splats.0.bounds.truncate();
+                    let r = Vec3::splat(splats.0.bounds.w.abs());
+                    Aabb::from_min_max(c - r, c + r)
+                }),
+                casts_shadows: !not_caster,
+                render_layers: layers.cloned().unwrap_or_default(),
             });
         }
     }
@@ -116,13 +140,20 @@ pub(crate) struct PropGpu {
     splats: StorageBuffer<Vec<SplatRecord>>,
     terms: StorageBuffer<Vec<u32>>,
     uniform: UniformBuffer<PropUniform>,
-    bind_group: Option<BindGroup>,
-    splat_count: u32,
+    pub(crate) bind_group: Option<BindGroup>,
+    pub(crate) splat_count: u32,
 }
 
 /// GPU buffers of all props, by main-world entity.
 #[derive(Resource, Default)]
 pub(crate) struct PropBuffers(HashMap<Entity, PropGpu>);
+
+impl PropBuffers {
+    /// The buffers of the prop `entity` (main world).
+    pub(crate) fn get(&self, entity: &Entity) -> Option<&PropGpu> {
+        self.0.get(entity)
+    }
+}
 
 fn non_empty<T: Copy + Default>(v: &[T]) -> Vec<T> {
     if v.is_empty() {
@@ -228,11 +259,11 @@ pub(crate) fn prepare_props(
     }
 }
 
-/// The per-view uniforms of all views.
+/// The per-view uniforms of all views: cameras, then shadow views.
 #[derive(Resource, Default)]
 pub(crate) struct SplatViewUniforms {
-    buffer: DynamicUniformBuffer<SplatViewUniform>,
-    bind_group: Option<BindGroup>,
+    pub(crate) buffer: DynamicUniformBuffer<SplatViewUniform>,
+    pub(crate) bind_group: Option<BindGroup>,
 }
 
 /// What the pass needs per view.
@@ -252,7 +283,6 @@ pub(crate) fn prepare_views(
     view_keys: Res<ViewKeyCache>,
     settings: Res<SplatSettings>,
     device: Res<RenderDevice>,
-    queue: Res<RenderQueue>,
     pipeline: Res<SplatPipeline>,
     pipeline_cache: Res<PipelineCache>,
     mut pipelines: ResMut<SpecializedRenderPipelines<SplatPipeline>>,
@@ -263,20 +293,9 @@ pub(crate) fn prepare_views(
         .contains(WgpuFeatures::SHADER_EARLY_DEPTH_TEST);
     for (entity, view, msaa, view_settings) in &views {
         let settings = view_settings.map_or(*settings, |s| s.0);
-        let clip_from_world = view
-            .clip_from_world
-            .unwrap_or_else(|| view.clip_from_view * view.world_from_view.to_matrix().inverse());
-        let orthographic = view.clip_from_view.w_axis.w == 1.0;
-        let eye = view.world_from_view.translation();
-        let forward = view.world_from_view.forward().as_vec3();
-        let offset = uniforms.buffer.push(&SplatViewUniform {
-            clip_from_world,
-            camera_position: eye.extend(if orthographic { 0.0 } else { 1.0 }),
-            view_forward: forward.extend(0.0),
-            flat_ratio: settings.flat_ratio,
-            radius_tolerance: settings.radius_tolerance,
-            pad: UVec2::ZERO,
-        });
+        let offset = uniforms
+            .buffer
+            .push(&SplatViewUniform::new(view, &settings));
         let key = SplatPipelineKey {
             format: view.target_format,
             samples: msaa.samples(),
@@ -303,6 +322,18 @@ pub(crate) fn prepare_views(
             global: settings.mode == SplatMode::GlobalRayTrace,
         });
     }
+}
+
+/// Uploads the view uniforms of the cameras and the shadow views (after
+/// [`prepare_views`] and [`prepare_shadow_views`](super::shadow::prepare_shadow_views)
+/// pushed them) and binds the buffer.
+pub(crate) fn write_view_uniforms(
+    mut uniforms: ResMut<SplatViewUniforms>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    pipeline: Res<SplatPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+) {
     uniforms.buffer.write_buffer(&device, &queue);
     let layout = pipeline_cache.get_bind_group_layout(&pipeline.view_layout);
     uniforms.bind_group = uniforms.buffer.binding().map(|binding| {

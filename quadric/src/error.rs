@@ -127,6 +127,33 @@ pub enum Error {
         /// Why, and what to change.
         reason: String,
     },
+    /// A primitive's metallic or roughness is not a finite number in
+    /// `[0, 1]`.
+    #[error(
+        "{}",
+        scene_message(
+            *.line,
+            *.column,
+            &format!(
+                "primitive \"{primitive}\": {field} {value} is out of range; give a finite \
+                 number from 0 to 1 (or leave it out to take the prop's)"
+            )
+        )
+    )]
+    MaterialOutOfRange {
+        /// The primitive's name in the scene file (`#n`, its index, for a
+        /// primitive added in code).
+        primitive: String,
+        /// `"metallic"` or `"roughness"`.
+        field: &'static str,
+        /// The value given.
+        value: f32,
+        /// 1-based line of the primitive's name in the scene file (0 when
+        /// unknown).
+        line: usize,
+        /// 1-based column of the primitive's name (0 when unknown).
+        column: usize,
+    },
     /// A scene file could not be read, parsed or understood.
     #[error("{}", scene_message(*.line, *.column, .message))]
     Scene {

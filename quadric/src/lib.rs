@@ -76,7 +76,7 @@ mod shapes;
 pub mod splats;
 pub mod trace;
 
-pub use csg::{CsgDag, CsgDistance, Dnf, Literal, NodeId, Side};
+pub use csg::{CsgDag, CsgDistance, Dnf, Literal, NodeId, Side, SurfaceMaterial};
 pub use distance::{QuadricDistance, conservative_distance};
 pub use eigen::SymmetricEigen;
 pub use error::{Error, Result};

@@ -26,7 +26,7 @@ use std::collections::HashMap;
 
 use glam::{DVec2, DVec3};
 
-use crate::csg::{Color, CsgDag, Dnf, Literal, Side};
+use crate::csg::{Color, CsgDag, Dnf, Literal, Side, SurfaceMaterial};
 use crate::distance::QuadricDistance;
 use crate::sampling::SampleSet;
 use crate::scene::DEFAULT_COLOR;
@@ -60,13 +60,15 @@ pub struct Splat {
 }
 
 /// One entry of the quadric buffer: a quadric of the normal form and the
-/// colour of the primitive it came from.
+/// colour and surface parameters of the primitive it came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ColoredQuadric {
     /// Packed coefficients `[q00, q01, q02, q03, q11, q12, q13, q22, q23, q33]`.
     pub coefficients: [f64; 10],
     /// Linear RGB colour of the source primitive.
     pub color: Color,
+    /// Metallic and roughness of the source primitive, where it sets them.
+    pub material: SurfaceMaterial,
 }
 
 /// Splats with their quadric and clip-index buffers.
@@ -92,12 +94,13 @@ impl SplatSet {
         let quadrics = dnf
             .quadrics()
             .iter()
-            .map(|q| ColoredQuadric {
-                coefficients: q.quadric.coefficients(),
-                color: dag
-                    .primitives()
-                    .get(q.primitive)
-                    .map_or(DEFAULT_COLOR, |p| p.color),
+            .map(|q| {
+                let primitive = dag.primitives().get(q.primitive);
+                ColoredQuadric {
+                    coefficients: q.quadric.coefficients(),
+                    color: primitive.map_or(DEFAULT_COLOR, |p| p.color),
+                    material: primitive.map(|p| p.material).unwrap_or_default(),
+                }
             })
             .collect();
         let mut lists: HashMap<Vec<u32>, u32> = HashMap::new();
@@ -272,6 +275,7 @@ mod tests {
             let record = ColoredQuadric {
                 coefficients: q.quadric.coefficients(),
                 color: DEFAULT_COLOR,
+                material: SurfaceMaterial::default(),
             };
             let scaled = record.scaled_coefficients();
             let largest = scaled.iter().fold(0.0_f32, |m, c| m.max(c.abs()));

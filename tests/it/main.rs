@@ -45,7 +45,11 @@ mod splat_culling;
 #[cfg(feature = "viewer")]
 mod splat_exposure;
 #[cfg(feature = "viewer")]
+mod splat_materials;
+#[cfg(feature = "viewer")]
 mod splat_render;
+#[cfg(feature = "viewer")]
+mod splat_shadows;
 #[cfg(feature = "viewer")]
 mod splat_views;
 

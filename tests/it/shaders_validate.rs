@@ -435,6 +435,65 @@ fn check_triplanar_uniform(module: &naga::Module) {
     assert_eq!(wgsl, rust, "WGSL Triplanar against TriplanarExtension");
 }
 
+/// The shadow-map variant of the splat pass (`SHADOW_DEPTH`, the shadow
+/// pipeline's only define) needs none of Bevy's shader library and binds
+/// nothing in groups 0 and 1, which the shadow pipeline leaves empty: it
+/// composes from our own modules alone, its fragment stage writes depth
+/// and no colour, and every global it uses is in group 2 or 3.
+#[test]
+fn the_shadow_variant_needs_no_bevy_bindings() {
+    let files = wgsl_files();
+    let mut composer = composer(&files);
+    let (path, source) = files
+        .iter()
+        .find(|(p, _)| p.ends_with("splat.wgsl"))
+        .expect("splat.wgsl");
+    let module = composer
+        .make_naga_module(NagaModuleDescriptor {
+            source,
+            file_path: path,
+            shader_type: ShaderType::Wgsl,
+            shader_defs: HashMap::from([("SHADOW_DEPTH".to_owned(), ShaderDefValue::Bool(true))]),
+            ..Default::default()
+        })
+        .unwrap_or_else(|e| panic!("shadow variant: {}", e.emit_to_string(&composer)));
+    let info =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), Capabilities::default())
+            .validate(&module)
+            .expect("the shadow variant validates");
+    let fragment = module
+        .entry_points
+        .iter()
+        .position(|e| e.stage == naga::ShaderStage::Fragment)
+        .expect("a fragment stage");
+    let result = module.entry_points[fragment]
+        .function
+        .result
+        .as_ref()
+        .expect("the fragment stage returns its depth");
+    assert_eq!(
+        result.binding,
+        Some(naga::Binding::BuiltIn(naga::BuiltIn::FragDepth)),
+        "depth only"
+    );
+    for (index, entry) in module.entry_points.iter().enumerate() {
+        let used = info.get_entry_point(index);
+        for (handle, global) in module.global_variables.iter() {
+            if let Some(binding) = &global.binding
+                && !used[handle].is_empty()
+            {
+                assert!(
+                    binding.group >= 2,
+                    "{} uses {:?} at group {}",
+                    entry.name,
+                    global.name,
+                    binding.group
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn listed_defines_are_parsed_from_comments() {
     let source = "// Defines: A_B, EARLY_DEPTH_TEST,\n// OUTPUT_IDS (ids).\nfn f() {}\n";

@@ -19,21 +19,14 @@ use bevy_chisel::quadric::Scene;
 use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropMaterial, PropSplats};
 
 use crate::ONE_APP_AT_A_TIME;
+use crate::common::pbr::{
+    MAX_MEAN_BYTES, MAX_MEAN_RELATIVE, MAX_P99_BYTES, compare_mirrored, linear,
+};
 
 const SIZE: u32 = 128;
 
 /// The two cameras' EV100: one stop apart.
 const EV100: [f32; 2] = [9.7, 10.7];
-
-/// sRGB byte to linear.
-fn linear(c: u8) -> f64 {
-    let c = f64::from(c) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 #[test]
 fn one_stop_more_exposure_value_halves_the_shaded_colour() {
@@ -168,72 +161,6 @@ const SPHERE_RGB: [f32; 3] = [0.8, 0.3, 0.2];
 /// Size of the PBR comparison image.
 const PBR_SIZE: (u32, u32) = (320, 256);
 
-/// Byte differences of one pair of spheres over the pixels both cover
-/// away from their silhouettes.
-#[derive(Debug)]
-struct SphereDifference {
-    pixels: usize,
-    /// Mean linear colour of the prop and of the mesh.
-    means: [[f64; 3]; 2],
-    /// Mean and 99th percentile of the largest channel difference per
-    /// pixel, in sRGB bytes.
-    mean_bytes: f64,
-    p99_bytes: u8,
-}
-
-/// Compares the prop in rows `rows` of the left half with the mirror
-/// image of the mesh in the right half.
-fn compare_mirrored(image: &Image, rows: std::ops::Range<u32>) -> SphereDifference {
-    let (width, _) = PBR_SIZE;
-    let bytes = |x: u32, y: u32| {
-        image
-            .get_color_at(x, y)
-            .expect("pixel inside the image")
-            .to_srgba()
-            .to_u8_array()
-    };
-    let covered = |x: u32, y: u32| bytes(x, y)[..3].iter().any(|&v| v > 3);
-    // Covered with all eight neighbours: away from the silhouette, where
-    // the mesh's polygon edge and the exact sphere differ by a pixel.
-    let inside = |x: u32, y: u32| {
-        (x.saturating_sub(1)..=x + 1).all(|i| {
-            (y.saturating_sub(1)..=y + 1).all(|j| i < width && rows.contains(&j) && covered(i, j))
-        })
-    };
-    let (mut pixels, mut sums, mut diffs) = (0, [[0.0_f64; 3]; 2], Vec::new());
-    for y in rows.clone() {
-        for x in 0..width / 2 {
-            let mirrored = width - 1 - x;
-            if !inside(x, y) || !inside(mirrored, y) {
-                continue;
-            }
-            let (prop, mesh) = (bytes(x, y), bytes(mirrored, y));
-            pixels += 1;
-            for ch in 0..3 {
-                sums[0][ch] += linear(prop[ch]);
-                sums[1][ch] += linear(mesh[ch]);
-            }
-            diffs.push(
-                (0..3)
-                    .map(|ch| prop[ch].abs_diff(mesh[ch]))
-                    .max()
-                    .unwrap_or(0),
-            );
-        }
-    }
-    diffs.sort_unstable();
-    let n = pixels.max(1) as f64;
-    SphereDifference {
-        pixels,
-        means: sums.map(|s| s.map(|v| v / n)),
-        mean_bytes: diffs.iter().map(|&d| f64::from(d)).sum::<f64>() / n,
-        p99_bytes: diffs
-            .get(diffs.len() * 99 / 100)
-            .copied()
-            .unwrap_or(u8::MAX),
-    }
-}
-
 #[test]
 fn a_prop_sphere_matches_a_standard_material_sphere() {
     let _guard = ONE_APP_AT_A_TIME
@@ -327,7 +254,7 @@ fn a_prop_sphere_matches_a_standard_material_sphere() {
     assert_eq!(app.run(), AppExit::Success, "headless run failed");
     let image = frames.images().pop().expect("captured frames");
     for (name, rows) in [("default", 0..height / 2), ("metal", height / 2..height)] {
-        let d = compare_mirrored(&image, rows);
+        let d = compare_mirrored(&image, width, rows);
         let relative: Vec<f64> = (0..3)
             .map(|ch| (d.means[0][ch] - d.means[1][ch]).abs() / d.means[1][ch].max(1e-3))
             .collect();
@@ -345,15 +272,3 @@ fn a_prop_sphere_matches_a_standard_material_sphere() {
         assert!(d.p99_bytes <= MAX_P99_BYTES, "{name}: {d:?}");
     }
 }
-
-// Tolerances of the PBR comparison. Measured with lavapipe (320×256,
-// 8529 px per sphere): mean colours 0.44–0.65 % apart, per-pixel
-// difference 0.6–0.7 B on average, 2 B at the 99th percentile; what is
-// left is the mesh's interpolated vertex normals against the exact ones.
-
-/// Largest relative difference of the two spheres' mean linear colours.
-const MAX_MEAN_RELATIVE: f64 = 0.015;
-/// Largest mean per-pixel difference (sRGB bytes, largest channel).
-const MAX_MEAN_BYTES: f64 = 1.5;
-/// Largest 99th percentile of the per-pixel difference (sRGB bytes).
-const MAX_P99_BYTES: u8 = 4;

@@ -29,13 +29,49 @@ impl NodeId {
     }
 }
 
-/// A leaf of the DAG: a quadric and its display colour.
+/// The physically based surface parameters a primitive may set for its
+/// part of the surface; a field left `None` takes the value of the whole
+/// prop's material (in the plugin, its `PropMaterial`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SurfaceMaterial {
+    /// Metallic, 0 (dielectric) to 1 (metal).
+    pub metallic: Option<f32>,
+    /// Perceptual roughness, 0 (mirror) to 1 (fully rough), as Bevy's
+    /// `StandardMaterial::perceptual_roughness`.
+    pub perceptual_roughness: Option<f32>,
+}
+
+impl SurfaceMaterial {
+    /// The fields by name, as a scene file writes them.
+    #[must_use]
+    pub fn fields(&self) -> [(&'static str, Option<f32>); 2] {
+        [
+            ("metallic", self.metallic),
+            ("roughness", self.perceptual_roughness),
+        ]
+    }
+
+    /// The first field that is given but not a finite number in `[0, 1]`,
+    /// with its value.
+    #[must_use]
+    pub fn out_of_range(&self) -> Option<(&'static str, f32)> {
+        self.fields().into_iter().find_map(|(field, value)| {
+            value
+                .filter(|v| !(v.is_finite() && (0.0..=1.0).contains(v)))
+                .map(|v| (field, v))
+        })
+    }
+}
+
+/// A leaf of the DAG: a quadric, its display colour and its surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Primitive {
     /// The quadric, inside where `Q < 0`.
     pub quadric: Quadric,
     /// Its colour.
     pub color: Color,
+    /// Its metallic and roughness, where it sets them.
+    pub material: SurfaceMaterial,
 }
 
 /// One node of a [`CsgDag`].
@@ -131,9 +167,44 @@ impl CsgDag {
         ids.iter().map(|&id| self.check(id)).collect()
     }
 
-    /// Adds a primitive leaf.
+    /// Adds a primitive leaf with the prop's material.
     pub fn primitive(&mut self, quadric: Quadric, color: Color) -> NodeId {
-        self.primitives.push(Primitive { quadric, color });
+        self.primitive_with_material(quadric, color, SurfaceMaterial::default())
+    }
+
+    /// Adds a primitive leaf with its own surface parameters.
+    ///
+    /// Errors: [`Error::MaterialOutOfRange`] (naming primitive number
+    /// `primitives().len()`) when a field is not a finite number in `[0, 1]`.
+    pub fn try_primitive_with_material(
+        &mut self,
+        quadric: Quadric,
+        color: Color,
+        material: SurfaceMaterial,
+    ) -> Result<NodeId> {
+        if let Some((field, value)) = material.out_of_range() {
+            return Err(Error::MaterialOutOfRange {
+                primitive: format!("#{}", self.primitives.len()),
+                field,
+                value,
+                line: 0,
+                column: 0,
+            });
+        }
+        Ok(self.primitive_with_material(quadric, color, material))
+    }
+
+    fn primitive_with_material(
+        &mut self,
+        quadric: Quadric,
+        color: Color,
+        material: SurfaceMaterial,
+    ) -> NodeId {
+        self.primitives.push(Primitive {
+            quadric,
+            color,
+            material,
+        });
         self.push(Node::Primitive(self.primitives.len() - 1))
     }
 

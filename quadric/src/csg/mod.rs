@@ -10,6 +10,6 @@ mod dag;
 mod distance;
 mod dnf;
 
-pub use dag::{Affine, Color, CsgDag, Node, NodeId, Primitive};
+pub use dag::{Affine, Color, CsgDag, Node, NodeId, Primitive, SurfaceMaterial};
 pub use distance::{CsgDistance, OtherTerms};
 pub use dnf::{Dnf, DnfQuadric, Literal, MAX_PRODUCTS, Side};

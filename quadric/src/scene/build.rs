@@ -2,7 +2,7 @@
 
 use std::collections::HashMap;
 
-use crate::csg::{Color, CsgDag, NodeId};
+use crate::csg::{Color, CsgDag, NodeId, SurfaceMaterial};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::scene::spec::{NodeSpec, PrimitiveSpec, RawNode, SceneSpec};
@@ -82,6 +82,20 @@ impl<'a> Builder<'a> {
             return Err(self.duplicate(&p.name));
         }
         let color = p.color.map_or(DEFAULT_COLOR, |c| c.0);
+        let material = SurfaceMaterial {
+            metallic: p.metallic,
+            perceptual_roughness: p.roughness,
+        };
+        if let Some((field, value)) = material.out_of_range() {
+            let (line, column) = locate(self.source, &p.name);
+            return Err(Error::MaterialOutOfRange {
+                primitive: p.name.clone(),
+                field,
+                value,
+                line,
+                column,
+            });
+        }
         let mut ids = Vec::with_capacity(p.shape.0.len());
         for (k, q) in p.shape.0.iter().enumerate() {
             let q = match &p.transform {
@@ -90,7 +104,7 @@ impl<'a> Builder<'a> {
                     .map_err(|e| self.err(&p.name, format!("primitive \"{}\": {e}", p.name)))?,
                 None => *q,
             };
-            ids.push(self.dag.primitive(q, color));
+            ids.push(self.dag.try_primitive_with_material(q, color, material)?);
             self.names.push(if p.shape.0.len() == 1 {
                 p.name.clone()
             } else {

@@ -6,7 +6,8 @@
 //! the primitives: half-spaces, cylinders and other infinite quadrics leave
 //! most trees without a finite bound, so the file states it). Lengths are in scene units
 //! (millimetres by convention), angles in degrees, colours linear RGB in
-//! `[0, 1]`. Comments (`//`, `/* */`) are allowed. The full reference is
+//! `[0, 1]`; a primitive may also set its `metallic` and (perceptual)
+//! `roughness`, in `[0, 1]`. Comments (`//`, `/* */`) are allowed. The full reference is
 //! `quadric/SCENES.md`; in short:
 //!
 //! ```ron
@@ -14,7 +15,7 @@
 //! Scene(
 //!     primitives: [
 //!         (name: "A", shape: Sphere(center: (0, 0, 0), radius: 30), color: (0.9, 0.3, 0.2)),
-//!         (name: "B", shape: Sphere(center: (25, 0, 0), radius: 30)),
+//!         (name: "B", shape: Sphere(center: (25, 0, 0), radius: 30), metallic: 1, roughness: 0.3),
 //!         (name: "C", shape: Box(min: (-5, -5, -5), max: (5, 5, 5)),
 //!          transform: (translate: (0, 40, 0), rotate: (0, 0, 45))),
 //!     ],

@@ -45,7 +45,9 @@ impl TryFrom<[f64; 4]> for Bounds {
     }
 }
 
-/// A named primitive: a shape, an optional colour and an optional placement.
+/// A named primitive: a shape, an optional colour, optional metallic and
+/// roughness (checked when the scene is built, so that the error names the
+/// primitive) and an optional placement.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct PrimitiveSpec {
@@ -53,6 +55,10 @@ pub(crate) struct PrimitiveSpec {
     pub shape: Shape,
     #[serde(default)]
     pub color: Option<Rgb>,
+    #[serde(default)]
+    pub metallic: Option<f32>,
+    #[serde(default)]
+    pub roughness: Option<f32>,
     #[serde(default)]
     pub transform: Option<Transform>,
 }

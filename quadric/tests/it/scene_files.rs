@@ -1,7 +1,7 @@
 //! Scene files: the shipped scenes parse into the expected solids, and bad
 //! files give errors that name the line and the problem.
 
-use chisel_quadric::{Error, Scene};
+use chisel_quadric::{Error, SampleOptions, Scene, SplatSet, SurfaceMaterial, sample};
 use glam::DVec3;
 
 fn scene_path(name: &str) -> std::path::PathBuf {
@@ -258,4 +258,81 @@ fn bounds_parse_and_bad_bounds_name_line() {
         assert_eq!(line, 4, "{bad}: {message}");
         assert!(message.contains(what), "{bad}: {message}");
     }
+}
+
+#[test]
+fn metallic_and_roughness_are_per_primitive_and_optional() {
+    let text = "Scene(\n  primitives: [\n    (name: \"A\", shape: Sphere(center: (0, 0, 0), radius: 10), metallic: 1, roughness: 0.25),\n    (name: \"B\", shape: Box(min: (0, 0, 0), max: (5, 5, 5)), roughness: 0.9),\n    (name: \"C\", shape: Sphere(center: (9, 0, 0), radius: 3)),\n  ],\n  root: Union([Ref(\"A\"), Ref(\"B\"), Ref(\"C\")]),\n  bounds: (0, 0, 0, 20),\n)\n";
+    let scene = Scene::from_ron(text).unwrap();
+    let materials: Vec<_> = scene.dag.primitives().iter().map(|p| p.material).collect();
+    let a = SurfaceMaterial {
+        metallic: Some(1.0),
+        perceptual_roughness: Some(0.25),
+    };
+    let b = SurfaceMaterial {
+        metallic: None,
+        perceptual_roughness: Some(0.9),
+    };
+    // A, the six planes of B, C.
+    assert_eq!(materials.len(), 8);
+    assert_eq!(materials[0], a);
+    assert!(materials[1..7].iter().all(|m| *m == b));
+    assert_eq!(materials[7], SurfaceMaterial::default());
+    // The splat set's quadric records carry them.
+    let dnf = scene.dnf().unwrap();
+    let options = SampleOptions::new(1.0, scene.bounds.unwrap()).unwrap();
+    let samples = sample(&dnf, &options).unwrap();
+    let set = SplatSet::new(&dnf, &scene.dag, &samples);
+    for (record, q) in set.quadrics.iter().zip(dnf.quadrics()) {
+        assert_eq!(record.material, materials[q.primitive]);
+    }
+    assert!(set.quadrics.iter().any(|q| q.material == a));
+    assert!(set.quadrics.iter().any(|q| q.material == b));
+}
+
+#[test]
+fn out_of_range_materials_are_typed_errors_naming_the_primitive() {
+    for (field, value, shown) in [
+        ("roughness", "1.5", "1.5"),
+        ("roughness", "-0.25", "-0.25"),
+        ("metallic", "NaN", "NaN"),
+        ("metallic", "inf", "inf"),
+    ] {
+        let text = format!(
+            "Scene(\n  primitives: [\n    (name: \"A\", shape: Sphere(center: (0, 0, 0), radius: 1)),\n    (name: \"shiny\", shape: Sphere(center: (1, 0, 0), radius: 1), {field}: {value}),\n  ],\n  root: Union([Ref(\"A\"), Ref(\"shiny\")]),\n)\n"
+        );
+        let error = Scene::from_ron(&text).expect_err("out of range");
+        let Error::MaterialOutOfRange {
+            primitive,
+            field: f,
+            line,
+            ..
+        } = &error
+        else {
+            panic!("{field}: {value}: expected MaterialOutOfRange, got {error:?}");
+        };
+        assert_eq!(primitive, "shiny");
+        assert_eq!(*f, field);
+        assert_eq!(*line, 4);
+        let message = error.to_string();
+        assert!(
+            message.contains("\"shiny\"") && message.contains(field) && message.contains(shown),
+            "{message}"
+        );
+    }
+    // The same check guards DAGs built in code.
+    let mut dag = chisel_quadric::CsgDag::new();
+    let sphere = chisel_quadric::Quadric::sphere(DVec3::ZERO, 1.0).unwrap();
+    let bad = SurfaceMaterial {
+        metallic: Some(2.0),
+        perceptual_roughness: None,
+    };
+    assert!(matches!(
+        dag.try_primitive_with_material(sphere, [1.0; 3], bad),
+        Err(Error::MaterialOutOfRange {
+            field: "metallic",
+            ..
+        })
+    ));
+    assert!(dag.primitives().is_empty(), "nothing added");
 }

@@ -25,6 +25,7 @@ use bevy_chisel::splat::{
 
 use crate::ONE_APP_AT_A_TIME;
 
+pub mod pbr;
 mod scenes;
 pub use scenes::{FOV_DEGREES, SCALE, SCENES, eye, load_scene};
 
