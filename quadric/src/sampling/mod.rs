@@ -340,12 +340,16 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             }
         }
     }
-    // Counters are sums, the same in any order: one shared total keeps the
-    // result slot of a region at one `Vec`.
+    // Counters are sums, the same in any order: one shared total per run.
+    // Each fold accumulator takes the samples of a contiguous run of jobs
+    // in job order, and the accumulators are collected in order, so their
+    // concatenation is the sequential order for any thread count; one
+    // thread gives one accumulator, which becomes the result without a
+    // copy.
     let totals = std::sync::Mutex::new(SamplingStats::default());
     let results: Vec<Vec<Sample>> = jobs
         .par_iter()
-        .map(|job| {
+        .fold(Vec::new, |mut out: Vec<Sample>, job| {
             let patch = &patches[job.patch as usize];
             let literal = dnf.products()[patch.product as usize][patch.literal as usize];
             let quadric = &dnf.quadrics()[literal.quadric].quadric;
@@ -374,9 +378,9 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
                 ..SamplingStats::default()
             };
             stats.kinds[kind.index()] = 1;
-            let mut out = Vec::new();
+            let before = out.len();
             job.run(region, &mut out, &mut stats);
-            stats.kind_samples[kind.index()] = out.len() as u64;
+            stats.kind_samples[kind.index()] = (out.len() - before) as u64;
             totals
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
@@ -403,7 +407,11 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
             ),
         });
     }
-    let mut samples = Vec::with_capacity(total);
+    // The first run's buffer grows in place (a large block is remapped,
+    // not copied); only the others are copied.
+    let mut results = results.into_iter();
+    let mut samples = results.next().unwrap_or_default();
+    samples.reserve_exact(total - samples.len());
     for s in results {
         samples.extend(s);
     }
