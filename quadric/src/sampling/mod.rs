@@ -43,6 +43,7 @@
 //! ```
 
 pub mod basic;
+pub mod cell;
 mod cost;
 pub mod curved;
 pub mod heightfield;
