@@ -19,7 +19,7 @@
 //!    exceeds the ball's radius, else subdivide;
 //! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
 //!    region's cover radius and all signs agree: fill (negative) or drop
-//!    (positive); a region whose distortion varies is first split, so
+//!    (positive); a polygon whose distortion varies is first split, so
 //!    that each part's grid follows its own `δ₊` (a density-aware fill),
 //!    and grid cells are stretched along the axis the surface tilts least
 //!    along ([`cell`]); a polygon is filled with a grid of cells, one
@@ -405,17 +405,19 @@ impl RegionJob<'_> {
     }
 
     /// Covers a region that lies wholly on the CSG surface (step 3), with
-    /// the density-aware fill: while the region's own distortion bound
-    /// `δ₊` (the smaller of its own and the one handed down, both valid
-    /// on it) exceeds its minimum by more than [`FILL_SPREAD`] and its grid
-    /// would have at least [`FILL_SPLIT_CELLS`] cells, it is split as in
+    /// the density-aware fill: while a polygon's own distortion bound `δ₊`
+    /// (the smaller of its own and the one handed down, both valid on it)
+    /// exceeds its minimum by more than [`FILL_SPREAD`] and its grid would
+    /// have at least [`FILL_SPLIT_CELLS`] cells, it is split as in
     /// subdivision and each part filled with its own bound; then one grid
-    /// whose cells follow the slopes ([`cell`]).
+    /// whose cells follow the slopes ([`cell`]). Curved triangles are not
+    /// split: their parts' border cells cost more than the bound saves.
     fn fill(&self, region: &Region, delta: f64, depth: u32, out: &mut Vec<Sample>) {
         let (low, own) = region.distortion_bounds(self.heightfield);
         let delta = own.min(delta);
         let slopes = self.slopes(region);
         if depth < MAX_FILL_SPLITS
+            && matches!(region, Region::Polygon(_))
             && low.is_finite()
             && delta > FILL_SPREAD * low
             && self.grid_cells(region, delta, slopes) >= FILL_SPLIT_CELLS
