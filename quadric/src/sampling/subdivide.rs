@@ -21,13 +21,14 @@
 //!    region's cover radius and all signs agree: fill (negative) or drop
 //!    (positive); a polygon whose distortion varies is first split, so
 //!    that each part's grid follows its own `δ₊` (a density-aware fill),
-//!    and grid cells are stretched along the axis the surface tilts least
-//!    along ([`cell`]); a polygon is filled with a grid of cells, one
-//!    sample at each cell centre moved into the region; a curved triangle
-//!    with a grid of cells, one sample at the centre of each cell inside
-//!    it, and on its border one sample at a point of the region per cell or
-//!    per quarter of a cell, with radii from the cell's own distortion
-//!    bound or from path lengths inside the region;
+//!    and the cells of rectangles and curved triangles are stretched along
+//!    the axis the surface tilts least along ([`cell`]); a polygon is
+//!    filled with a grid of cells, one sample at each cell centre moved
+//!    into the region; a curved triangle with a grid of cells, one sample
+//!    at the centre of each cell inside it, and on its border one sample
+//!    at a point of the region per cell or per quarter of a cell, with
+//!    radii from the cell's own distortion bound or from path lengths
+//!    inside the region;
 //! 4. if a corner is on the CSG surface and the region lies within plane
 //!    distance `r/δ₊` of a point on the surface (a polygon's centroid,
 //!    evaluated then, or else the corner of least reach), emit that one
@@ -38,11 +39,11 @@
 //! The bounding sphere's term `|x − C| − R` is left out of `d(v)` in regions
 //! whose surface lies inside the sphere (so a lone solid well inside its
 //! bounds is filled whole). Corner classifications are handed down to the
-//! children (a split adds
-//! one or two new corners), and every [`CULL_EVERY`] levels the products
-//! farther than three times the region's world radius are replaced by a
-//! constant lower bound of their distance ([`CsgDistance::cull`]), so deep
-//! regions only evaluate the products near them.
+//! children (a split adds one or two new corners), and every
+//! [`CULL_EVERY`] levels the products farther than three times the
+//! region's world radius are replaced by a constant lower bound of their
+//! distance ([`CsgDistance::cull`]), so deep regions only evaluate the
+//! products near them.
 
 use std::cell::Cell;
 
@@ -70,7 +71,7 @@ pub const DISTORTION_CAP: f64 = 2.5;
 /// ([`CsgDistance::cull`]); each level halves a region's area.
 const CULL_EVERY: u32 = 2;
 
-/// The density-aware fill splits a region whose distortion bound exceeds
+/// The density-aware fill splits a polygon whose distortion bound exceeds
 /// its minimum by more than this factor...
 const FILL_SPREAD: f64 = 1.1;
 
