@@ -343,6 +343,64 @@ impl Heightfield {
             .fold((f64::INFINITY, 0.0), |(lo, hi), d| (lo.min(d), hi.max(d)))
     }
 
+    /// The slopes `(|∂t/∂x|, |∂t/∂y|)` at `p`; `+∞` on the domain's rim
+    /// and outside the domain.
+    #[must_use]
+    pub fn slopes(&self, p: DVec2) -> DVec2 {
+        let s = DVec2::new(self.value.x.slope(p.x), self.value.y.slope(p.y)).abs();
+        match self.kind {
+            HeightKind::Polynomial => s,
+            HeightKind::Root { .. } => {
+                let r = self.value.value(p);
+                if r > 0.0 {
+                    s / (2.0 * r.sqrt())
+                } else {
+                    DVec2::INFINITY
+                }
+            }
+        }
+    }
+
+    /// Bounds `(Sₓ, S_y)` of the slopes `|∂t/∂x|` and `|∂t/∂y|` over the
+    /// box `[lo, hi]`, taken as [`distortion_bounds`](Self::distortion_bounds)
+    /// takes `δ₊`: exact for polynomial heightfields; at the corners for a
+    /// root heightfield on a box inside one cell of the warp (each squared
+    /// slope `r_x²/4r` is linear-fractional in `w` there); else the interval
+    /// bound `r_x²/4r ≤ max r_x² / 4 r₋`. `+∞` where the box reaches the
+    /// domain's rim.
+    #[must_use]
+    pub fn slope_bounds(&self, lo: DVec2, hi: DVec2) -> DVec2 {
+        let (_, ax) = self.value.x.slope_squared_range(lo.x, hi.x);
+        let (_, ay) = self.value.y.slope_squared_range(lo.y, hi.y);
+        match self.kind {
+            HeightKind::Polynomial => DVec2::new(ax, ay).map(f64::sqrt),
+            HeightKind::Root { .. } => {
+                let (r0, _) = self.value.range(lo, hi);
+                if r0 <= 0.0 {
+                    return DVec2::INFINITY;
+                }
+                if self.warp(lo, hi).is_some() {
+                    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+                    return self.slope_bounds_at(&corners);
+                }
+                (DVec2::new(ax, ay) / (4.0 * r0)).map(f64::sqrt)
+            }
+        }
+    }
+
+    /// Bounds `(Sₓ, S_y)` of the slopes over a set whose image in the
+    /// warped plane is convex with the extreme points `vertices` (as for
+    /// [`distortion_bounds_at`](Self::distortion_bounds_at)): each squared
+    /// slope is affine (polynomial) or linear-fractional (root) in `w`, so
+    /// its maximum is at a vertex.
+    #[must_use]
+    pub fn slope_bounds_at(&self, vertices: &[DVec2]) -> DVec2 {
+        vertices
+            .iter()
+            .map(|v| self.slopes(*v))
+            .fold(DVec2::ZERO, DVec2::max)
+    }
+
     /// The warp of the cell containing the box `[lo, hi]` (see
     /// [`warp`](crate::sampling::warp)), or `None` when the box straddles
     /// `0` on a quadratic axis or a separable part is not affine in the

@@ -45,6 +45,7 @@
 //! ```
 
 pub mod basic;
+pub mod cell;
 mod cost;
 pub mod curved;
 pub mod heightfield;
@@ -291,11 +292,29 @@ pub struct SampleSet {
 /// [`sampling_cost`]), [`Error::TooManySamples`] and
 /// [`Error::CoverageNotReached`] for the limits.
 pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
-    let runs = sample_regions(dnf, options, &|_, _, _| true)?;
-    let total = runs.sample_count();
+    let run = SamplingRun::new(dnf, options)?;
+    // Each fold accumulator takes the samples of a contiguous run of jobs
+    // in job order, and the accumulators are collected in order, so their
+    // concatenation is the sequential order for any thread count; one
+    // thread gives one accumulator, which becomes the result without a
+    // copy.
+    let results: Vec<Vec<Sample>> = run
+        .jobs
+        .par_iter()
+        .fold(Vec::new, |mut out: Vec<Sample>, job| {
+            run.run(job, &|_, _, _| true, &mut out);
+            out
+        })
+        .collect();
+    let total: usize = results.iter().map(Vec::len).sum();
+    let runs = run.finish(Vec::new());
     runs.check_limits(options, total)?;
-    let mut samples = Vec::with_capacity(total);
-    for s in runs.samples.into_iter().flatten() {
+    // The first run's buffer grows in place (a large block is remapped,
+    // not copied); only the others are copied.
+    let mut results = results.into_iter();
+    let mut samples = results.next().unwrap_or_default();
+    samples.reserve_exact(total - samples.len());
+    for s in results {
         samples.extend(s);
     }
     Ok(SampleSet {
@@ -355,124 +374,171 @@ impl RegionRuns {
 }
 
 /// The jobs of [`sample`] for `dnf`, running those `select` picks (in
-/// parallel); the limits are left to the caller
-/// ([`RegionRuns::check_limits`]).
+/// parallel), each region's samples apart; the limits are left to the
+/// caller ([`RegionRuns::check_limits`]).
 pub(crate) fn sample_regions(
     dnf: &Dnf,
     options: &SampleOptions,
     select: &JobSelection<'_>,
 ) -> Result<RegionRuns> {
-    positive(options.radius, "splat radius")?;
-    BoundingSphere::new(options.bounds.centre, options.bounds.radius)?;
-    if !options.min_region_fraction.is_finite() || options.min_region_fraction < 0.0 {
-        return Err(Error::NonPositive {
-            what: "minimum region fraction",
-            value: options.min_region_fraction,
-        });
-    }
-    let ratio = options.bounds.radius / options.radius;
-    if ratio > MAX_BOUNDS_RATIO {
-        return Err(Error::CoverageNotReached {
-            reason: format!(
-                "the bounding sphere's radius {:e} is {ratio:.3e} splat radii ({:e}), more than \
-                 2^24; give bounds closer around the solid or a larger radius",
-                options.bounds.radius, options.radius
-            ),
-        });
-    }
-    let sphere = options.bounds;
-    let tables = quadric_regions(dnf, sphere);
-    let cost = cost_of(dnf, &tables);
-    if cost.bytes > options.max_memory {
-        return Err(Error::SamplingTooLarge {
-            products: dnf.products().len() as u64,
-            literals: cost.literals,
-            regions: cost.regions,
-            needed: cost.bytes,
-            limit: options.max_memory,
-        });
-    }
-    let budget = SampleBudget::new(options.max_samples);
-    let distance = CsgDistance::new(dnf);
-    let capacity = |n: u64| usize::try_from(n).unwrap_or(0);
-    let mut patches = Vec::with_capacity(capacity(cost.patches));
-    let mut jobs: Vec<Job> = Vec::with_capacity(capacity(cost.regions));
-    for (a, product) in dnf.products().iter().enumerate() {
-        for (b, literal) in product.iter().enumerate() {
-            for (k, (hf, regions)) in tables[literal.quadric].iter().enumerate() {
-                let patch = index_u32(patches.len());
-                patches.push(Patch {
-                    product: index_u32(a),
-                    literal: index_u32(b),
-                    quadric: index_u32(literal.quadric),
-                    heightfield: *hf,
-                });
-                jobs.extend((0..regions.len()).map(|r| Job {
-                    patch,
-                    heightfield: index_u32(k),
-                    region: index_u32(r),
-                }));
-            }
-        }
-    }
-    // Counters are sums, the same in any order: one shared total keeps the
-    // result slot of a region at one `Vec`.
-    let totals = std::sync::Mutex::new(SamplingStats::default());
-    let results: Vec<Option<Vec<Sample>>> = jobs
+    let run = SamplingRun::new(dnf, options)?;
+    let samples: Vec<Option<Vec<Sample>>> = run
+        .jobs
         .par_iter()
         .map(|job| {
-            let patch = &patches[job.patch as usize];
-            let literal = dnf.products()[patch.product as usize][patch.literal as usize];
-            let quadric = &dnf.quadrics()[literal.quadric].quadric;
-            let (region, kind) =
-                &tables[literal.quadric][job.heightfield as usize].1[job.region as usize];
-            if !select(patch, job, region) {
-                return None;
-            }
-            let job = RegionJob {
-                distance: &distance,
-                quadric,
-                quadric_index: patch.quadric,
-                product: patch.product,
-                literal: patch.literal,
-                patch: job.patch,
-                outward_sign: match literal.side {
-                    Side::Inside => 1.0,
-                    Side::Outside => -1.0,
-                },
-                heightfield: &patch.heightfield,
-                sphere,
-                options,
-                budget: &budget,
-                hint: std::cell::Cell::new(usize::MAX),
-                others: distance.other_terms(patch.product as usize, patch.literal as usize),
-            };
-            let mut stats = SamplingStats {
-                basic_regions: 1,
-                ..SamplingStats::default()
-            };
-            stats.kinds[kind.index()] = 1;
             let mut out = Vec::new();
-            job.run(region, &mut out, &mut stats);
-            stats.kind_samples[kind.index()] = out.len() as u64;
-            totals
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner)
-                .add(&stats);
-            Some(out)
+            run.run(job, select, &mut out).then_some(out)
         })
         .collect();
-    let stats = totals
-        .into_inner()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
-    Ok(RegionRuns {
-        patches,
-        jobs,
-        samples: results,
-        stats,
-        budget_over: budget.is_over(),
-        budget_reached: budget.reached(),
-    })
+    Ok(run.finish(samples))
+}
+
+/// One sampling run of a normal form: its checked options, region tables,
+/// patches and jobs, shared by the jobs while they run.
+struct SamplingRun<'a> {
+    dnf: &'a Dnf,
+    options: &'a SampleOptions,
+    sphere: BoundingSphere,
+    tables: Vec<cost::QuadricRegions>,
+    distance: CsgDistance<'a>,
+    budget: SampleBudget,
+    patches: Vec<Patch>,
+    jobs: Vec<Job>,
+    /// Counters are sums, the same in any order: one shared total.
+    totals: std::sync::Mutex<SamplingStats>,
+}
+
+impl<'a> SamplingRun<'a> {
+    /// Checks the options and the memory the run needs, and lays out its
+    /// jobs: one per basic region of every literal's heightfields.
+    fn new(dnf: &'a Dnf, options: &'a SampleOptions) -> Result<Self> {
+        positive(options.radius, "splat radius")?;
+        BoundingSphere::new(options.bounds.centre, options.bounds.radius)?;
+        if !options.min_region_fraction.is_finite() || options.min_region_fraction < 0.0 {
+            return Err(Error::NonPositive {
+                what: "minimum region fraction",
+                value: options.min_region_fraction,
+            });
+        }
+        let ratio = options.bounds.radius / options.radius;
+        if ratio > MAX_BOUNDS_RATIO {
+            return Err(Error::CoverageNotReached {
+                reason: format!(
+                    "the bounding sphere's radius {:e} is {ratio:.3e} splat radii ({:e}), more than \
+                     2^24; give bounds closer around the solid or a larger radius",
+                    options.bounds.radius, options.radius
+                ),
+            });
+        }
+        let sphere = options.bounds;
+        let tables = quadric_regions(dnf, sphere);
+        let cost = cost_of(dnf, &tables);
+        if cost.bytes > options.max_memory {
+            return Err(Error::SamplingTooLarge {
+                products: dnf.products().len() as u64,
+                literals: cost.literals,
+                regions: cost.regions,
+                needed: cost.bytes,
+                limit: options.max_memory,
+            });
+        }
+        let budget = SampleBudget::new(options.max_samples);
+        let distance = CsgDistance::new(dnf);
+        let capacity = |n: u64| usize::try_from(n).unwrap_or(0);
+        let mut patches = Vec::with_capacity(capacity(cost.patches));
+        let mut jobs: Vec<Job> = Vec::with_capacity(capacity(cost.regions));
+        for (a, product) in dnf.products().iter().enumerate() {
+            for (b, literal) in product.iter().enumerate() {
+                for (k, (hf, regions)) in tables[literal.quadric].iter().enumerate() {
+                    let patch = index_u32(patches.len());
+                    patches.push(Patch {
+                        product: index_u32(a),
+                        literal: index_u32(b),
+                        quadric: index_u32(literal.quadric),
+                        heightfield: *hf,
+                    });
+                    jobs.extend((0..regions.len()).map(|r| Job {
+                        patch,
+                        heightfield: index_u32(k),
+                        region: index_u32(r),
+                    }));
+                }
+            }
+        }
+        Ok(Self {
+            dnf,
+            options,
+            sphere,
+            tables,
+            distance,
+            budget,
+            patches,
+            jobs,
+            totals: std::sync::Mutex::new(SamplingStats::default()),
+        })
+    }
+
+    /// Runs `job` when `select` picks it, appending its samples to `out`;
+    /// tells whether it ran.
+    fn run(&self, job: &Job, select: &JobSelection<'_>, out: &mut Vec<Sample>) -> bool {
+        let patch = &self.patches[job.patch as usize];
+        let literal = self.dnf.products()[patch.product as usize][patch.literal as usize];
+        let quadric = &self.dnf.quadrics()[literal.quadric].quadric;
+        let (region, kind) =
+            &self.tables[literal.quadric][job.heightfield as usize].1[job.region as usize];
+        if !select(patch, job, region) {
+            return false;
+        }
+        let region_job = RegionJob {
+            distance: &self.distance,
+            quadric,
+            quadric_index: patch.quadric,
+            product: patch.product,
+            literal: patch.literal,
+            patch: job.patch,
+            outward_sign: match literal.side {
+                Side::Inside => 1.0,
+                Side::Outside => -1.0,
+            },
+            heightfield: &patch.heightfield,
+            sphere: self.sphere,
+            options: self.options,
+            budget: &self.budget,
+            hint: std::cell::Cell::new(usize::MAX),
+            others: self
+                .distance
+                .other_terms(patch.product as usize, patch.literal as usize),
+        };
+        let mut stats = SamplingStats {
+            basic_regions: 1,
+            ..SamplingStats::default()
+        };
+        stats.kinds[kind.index()] = 1;
+        let before = out.len();
+        region_job.run(region, out, &mut stats);
+        stats.kind_samples[kind.index()] = (out.len() - before) as u64;
+        self.totals
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .add(&stats);
+        true
+    }
+
+    /// The run's patches, jobs and counters with `samples` (per job, or
+    /// none for [`sample`], which keeps them in runs).
+    fn finish(self, samples: Vec<Option<Vec<Sample>>>) -> RegionRuns {
+        RegionRuns {
+            patches: self.patches,
+            jobs: self.jobs,
+            samples,
+            stats: self
+                .totals
+                .into_inner()
+                .unwrap_or_else(std::sync::PoisonError::into_inner),
+            budget_over: self.budget.is_over(),
+            budget_reached: self.budget.reached(),
+        }
+    }
 }
 
 /// Indices into normal forms fit in `u32` (the product limit is far lower).

@@ -19,25 +19,31 @@
 //!    exceeds the ball's radius, else subdivide;
 //! 3. if every corner's disc of plane radius `|d(v)|/δ₊` reaches the
 //!    region's cover radius and all signs agree: fill (negative) or drop
-//!    (positive); a rectangle is first tiled where its distortion varies,
-//!    so that each tile's grid follows its own `δ₊` (a density-aware
-//!    fill); a polygon is filled with a grid of cells, one sample at
-//!    each cell centre moved into the region; a curved triangle with a grid
-//!    of cells, one sample at the centre of each cell inside it, and on
-//!    its border one sample at a point of the region per cell or per
-//!    quarter of a cell, with radii from the cell's own distortion bound
-//!    or from path lengths inside the region;
+//!    (positive); a polygon whose distortion varies is first split, so
+//!    that each part's grid follows its own `δ₊` (a density-aware fill),
+//!    and the cells of rectangles and curved triangles are stretched along
+//!    the axis the surface tilts least along ([`cell`]); a polygon is
+//!    filled with a grid of cells, one sample at each cell centre moved
+//!    into the region; a curved triangle with a grid of cells, one sample
+//!    at the centre of each cell inside it, and on its border one sample
+//!    at a point of the region per cell or per quarter of a cell, with
+//!    radii from the cell's own distortion bound or from path lengths
+//!    inside the region;
 //! 4. if a corner is on the CSG surface and the region lies within plane
-//!    distance `r/δ₊` of it, emit that one sample with the reduced radius
-//!    `reach·δ₊` (§6.1);
+//!    distance `r/δ₊` of a point on the surface (a polygon's centroid,
+//!    evaluated then, or else the corner of least reach), emit that one
+//!    sample with the reduced radius `reach·δ₊` (§6.1);
 //! 5. else halve the longest edge and recurse; unclassified regions smaller
 //!    than `min_region_fraction·r` are dropped (the paper's threshold).
 //!
-//! Corner classifications are handed down to the children (a split adds
-//! one or two new corners), and every [`CULL_EVERY`] levels the products
-//! farther than three times the region's world radius are replaced by a
-//! constant lower bound of their distance ([`CsgDistance::cull`]), so deep
-//! regions only evaluate the products near them.
+//! The bounding sphere's term `|x − C| − R` is left out of `d(v)` in regions
+//! whose surface lies inside the sphere (so a lone solid well inside its
+//! bounds is filled whole). Corner classifications are handed down to the
+//! children (a split adds one or two new corners), and every
+//! [`CULL_EVERY`] levels the products farther than three times the
+//! region's world radius are replaced by a constant lower bound of their
+//! distance ([`CsgDistance::cull`]), so deep regions only evaluate the
+//! products near them.
 
 use std::cell::Cell;
 
@@ -45,6 +51,7 @@ use glam::{DVec2, DVec3};
 
 use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
+use crate::sampling::cell;
 use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::polygon::Polygon;
@@ -64,12 +71,16 @@ pub const DISTORTION_CAP: f64 = 2.5;
 /// ([`CsgDistance::cull`]); each level halves a region's area.
 const CULL_EVERY: u32 = 2;
 
-/// The density-aware fill tiles a rectangle only when that saves at
-/// least this fraction of its samples...
-const FILL_SPLIT_GAIN: f64 = 0.95;
+/// The density-aware fill splits a polygon whose distortion bound exceeds
+/// its minimum by more than this factor...
+const FILL_SPREAD: f64 = 1.1;
 
-/// ... and only one of at least this many grid cells.
-const FILL_SPLIT_CELLS: f64 = 256.0;
+/// ... and whose grid has at least this many cells (the parts' seams cost
+/// partial cells)...
+const FILL_SPLIT_CELLS: f64 = 64.0;
+
+/// ... at most this many times (halvings of its area).
+const MAX_FILL_SPLITS: u32 = 8;
 
 /// Recursion depth limit (a region then is `2⁻²⁵` of its basic region).
 const MAX_DEPTH: u32 = 50;
@@ -102,8 +113,16 @@ pub(crate) struct RegionJob<'a> {
     pub others: OtherTerms,
 }
 
+/// Where a region lies: its subdivision depth, and whether its surface is
+/// known to lie inside the bounding sphere.
+#[derive(Clone, Copy, Debug)]
+struct Within {
+    depth: u32,
+    sphere: bool,
+}
+
 /// A region corner: not yet evaluated, outside the heightfield's domain, or
-/// its surface point with the classification `d`.
+/// its surface point with the eq.-22 distance `d₂₂` (unclipped).
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Corner {
     Unknown,
@@ -114,14 +133,25 @@ enum Corner {
 impl RegionJob<'_> {
     /// Subdivides `region`, appending samples to `out`.
     pub(crate) fn run(&self, region: &Region, out: &mut Vec<Sample>, stats: &mut SamplingStats) {
-        self.visit(region, [Corner::Unknown; 4], &self.others, 0, out, stats);
+        let within = Within {
+            depth: 0,
+            sphere: false,
+        };
+        self.visit(
+            region,
+            [Corner::Unknown; 4],
+            &self.others,
+            within,
+            out,
+            stats,
+        );
     }
 
     fn evaluate(&self, v: DVec2, others: &OtherTerms, stats: &mut SamplingStats) -> Corner {
         match self.heightfield.point(v) {
             Some(p) => {
                 stats.distance_queries += 1;
-                Corner::Known(p, self.classify(p, others))
+                Corner::Known(p, self.relative_distance(p, others))
             }
             None => Corner::OutsideDomain,
         }
@@ -148,16 +178,18 @@ impl RegionJob<'_> {
         region: &Region,
         mut corners: [Corner; 4],
         others: &OtherTerms,
-        depth: u32,
+        mut within: Within,
         out: &mut Vec<Sample>,
         stats: &mut SamplingStats,
     ) {
         stats.regions += 1;
+        let depth = within.depth;
         let hf = self.heightfield;
         let (lo, hi) = region.bounds();
         if self.budget.is_over() || hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
             return;
         }
+        within.sphere = within.sphere || self.inside_sphere(lo, hi);
         if depth >= MAX_DEPTH {
             stats.depth_limited += 1;
             return;
@@ -178,8 +210,8 @@ impl RegionJob<'_> {
             // Corner classifications; NaN where a corner is outside the domain.
             let mut ds = [f64::NAN; 4];
             for (d, c) in ds.iter_mut().zip(&corners[..verts.len()]) {
-                if let Corner::Known(_, v) = c {
-                    *d = *v;
+                if let Corner::Known(p, v) = c {
+                    *d = self.clipped(*p, *v, within.sphere);
                 }
             }
             let ds = &ds[..verts.len()];
@@ -198,22 +230,18 @@ impl RegionJob<'_> {
                 }
                 if reached && negative {
                     stats.filled += 1;
-                    self.fill(region, delta, out);
+                    self.fill(region, delta, 0, out);
                     return;
                 }
             }
-            // One sample at a surface corner covers a small enough region.
-            for (i, c) in corners[..verts.len()].iter().enumerate() {
-                if let Corner::Known(_, d) = c {
-                    let reach = region.reach(i) * delta;
-                    if *d < 0.0 && reach <= r {
-                        if !self.budget.reserve(1.0) {
-                            return;
-                        }
-                        out.push(self.sample(verts[i], reach.max(f64::MIN_POSITIVE)));
-                        return;
-                    }
+            // One sample covers a small enough region.
+            if let Some((uv, reach)) =
+                self.single_sample(region, delta, ds, others, within.sphere, stats)
+            {
+                if self.budget.reserve(1.0) {
+                    out.push(self.sample(uv, reach.max(f64::MIN_POSITIVE)));
                 }
+                return;
             }
         }
         if region.diameter() < self.options.min_region_fraction * r {
@@ -245,8 +273,52 @@ impl RegionJob<'_> {
                     *slot = c;
                 }
             }
-            self.visit(&child, inherited, others, depth + 1, out, stats);
+            let within = Within {
+                depth: depth + 1,
+                ..within
+            };
+            self.visit(&child, inherited, others, within, out, stats);
         }
+    }
+
+    /// Step 4: a point of the region on the CSG surface whose straight
+    /// paths reach the whole region within `r` (world `reach·δ₊`), and that
+    /// reach. A polygon's centroid reaches it in about half the path of a
+    /// corner, so it is tried first (one distance query) where it would
+    /// cover the region; else the surface corner of least reach.
+    fn single_sample(
+        &self,
+        region: &Region,
+        delta: f64,
+        ds: &[f64],
+        others: &OtherTerms,
+        inside_sphere: bool,
+        stats: &mut SamplingStats,
+    ) -> Option<(DVec2, f64)> {
+        let r = self.options.radius;
+        let corner = ds
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| **d < 0.0)
+            .map(|(i, _)| (region.vertices()[i], region.reach(i) * delta))
+            .filter(|(_, reach)| *reach <= r)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Region::Polygon(_) = region {
+            let (anchor, reach) = region.anchor();
+            let reach = reach * delta;
+            let worth = corner.map_or(ds.iter().any(|d| *d < 0.0), |(_, c)| reach < 0.75 * c);
+            if reach <= r
+                && worth
+                && let Some(p) = self.heightfield.point(anchor)
+            {
+                stats.distance_queries += 1;
+                let d = self.relative_distance(p, others);
+                if self.clipped(p, d, inside_sphere) < 0.0 {
+                    return Some((anchor, reach));
+                }
+            }
+        }
+        corner
     }
 
     /// Whether the surface over the box `[lo, hi]` is off the CSG surface as
@@ -294,10 +366,38 @@ impl RegionJob<'_> {
 
     /// `max(d₂₂(p), |p − C| − R)`.
     fn classify(&self, p: DVec3, others: &OtherTerms) -> f64 {
+        let d = self.relative_distance(p, others);
+        self.clipped(p, d, false)
+    }
+
+    /// `d₂₂(p)` (eq. 22).
+    fn relative_distance(&self, p: DVec3, others: &OtherTerms) -> f64 {
         let mut hint = self.hint.get();
         let d = self.distance.relative_distance_among(p, others, &mut hint);
         self.hint.set(hint);
-        d.max(self.sphere.signed_distance(p))
+        d
+    }
+
+    /// The distance `d` at `p` for the solid clipped to the bounding sphere,
+    /// `max(d, |p − C| − R)`, or `d` itself in a region whose surface lies
+    /// inside the sphere (there the clipping changes nothing, and `d` alone
+    /// lets regions far from the solid's edges be filled whole).
+    fn clipped(&self, p: DVec3, d: f64, inside_sphere: bool) -> f64 {
+        if inside_sphere {
+            d
+        } else {
+            d.max(self.sphere.signed_distance(p))
+        }
+    }
+
+    /// Whether the surface over the box `[lo, hi]` lies inside the bounding
+    /// sphere (its [`patch_ball`](Heightfield::patch_ball) does).
+    fn inside_sphere(&self, lo: DVec2, hi: DVec2) -> bool {
+        self.heightfield
+            .patch_ball(lo, hi)
+            .is_some_and(|(centre, radius)| {
+                centre.distance(self.sphere.centre) + radius <= self.sphere.radius
+            })
     }
 
     fn outside_sphere(&self, lo: DVec2, hi: DVec2) -> bool {
@@ -305,81 +405,76 @@ impl RegionJob<'_> {
         c.clamp(lo, hi).distance(c) > self.sphere.radius
     }
 
-    /// Covers a region that lies wholly on the CSG surface (step 3).
-    fn fill(&self, region: &Region, delta: f64, out: &mut Vec<Sample>) {
-        self.fill_by_density(region, delta, out);
-    }
-
-    /// The density-aware fill of a rectangle: tiled into `k × k` equal
-    /// tiles (`k` = 1, 2 or 4), each filled with its own bound `δ₊`
-    /// (the smaller of the tile's and the rectangle's, both valid on it),
-    /// so the grid spacing `√2·r/δ₊` follows each part's own distortion
-    /// instead of the region's worst; `k` minimizes the total cell count
-    /// (the tiles' seams cost partial cells). Tiles are axis-aligned, so
-    /// seams add no overlapping cells. Other regions, and rectangles with
-    /// fewer than [`FILL_SPLIT_CELLS`] cells, get one grid.
-    fn fill_by_density(&self, region: &Region, delta: f64, out: &mut Vec<Sample>) {
-        let Region::Polygon(p) = region else {
-            if let Region::Curved(c) = region {
-                self.fill_curved(c, delta, out);
+    /// Covers a region that lies wholly on the CSG surface (step 3), with
+    /// the density-aware fill: while a polygon's own distortion bound `δ₊`
+    /// (the smaller of its own and the one handed down, both valid on it)
+    /// exceeds its minimum by more than [`FILL_SPREAD`] and its grid would
+    /// have at least [`FILL_SPLIT_CELLS`] cells, it is split as in
+    /// subdivision and each part filled with its own bound; then one grid
+    /// whose cells follow the slopes ([`cell`]). Curved triangles are not
+    /// split: their parts' border cells cost more than the bound saves.
+    fn fill(&self, region: &Region, delta: f64, depth: u32, out: &mut Vec<Sample>) {
+        let (low, own) = region.distortion_bounds(self.heightfield);
+        let delta = own.min(delta);
+        let slopes = self.slopes(region);
+        if depth < MAX_FILL_SPLITS
+            && matches!(region, Region::Polygon(_))
+            && low.is_finite()
+            && delta > FILL_SPREAD * low
+            && self.grid_cells(region, delta, slopes) >= FILL_SPLIT_CELLS
+        {
+            for child in region.split() {
+                self.fill(&child, delta, depth + 1, out);
             }
             return;
-        };
-        let (lo, hi) = p.bounds();
-        let cells = |lo: DVec2, hi: DVec2, delta: f64| {
-            let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
-            let n = ((hi - lo) / step).ceil().max(DVec2::ONE);
-            n.x * n.y
-        };
-        let whole = cells(lo, hi, delta);
-        if !p.is_rectangle() || !whole.is_finite() || whole < FILL_SPLIT_CELLS {
-            self.fill_polygon(p, delta, out);
-            return;
         }
-        let tile = |k: u32, i: u32, j: u32| {
-            let size = (hi - lo) / f64::from(k);
-            let a = lo + size * DVec2::new(f64::from(i), f64::from(j));
-            let b = DVec2::new(
-                if i + 1 == k { hi.x } else { a.x + size.x },
-                if j + 1 == k { hi.y } else { a.y + size.y },
-            );
-            let (_, d) = self.heightfield.distortion_bounds(a, b);
-            (a, b, d.min(delta))
-        };
-        let mut best = (1, whole);
-        for k in [2, 4] {
-            let total: f64 = (0..k)
-                .flat_map(|j| (0..k).map(move |i| (i, j)))
-                .map(|(i, j)| {
-                    let (a, b, d) = tile(k, i, j);
-                    cells(a, b, d)
-                })
-                .sum();
-            if total < FILL_SPLIT_GAIN * best.1 {
-                best = (k, total);
-            }
-        }
-        let k = best.0;
-        for j in 0..k {
-            for i in 0..k {
-                let (a, b, d) = tile(k, i, j);
-                self.fill_polygon(&Polygon::rectangle(a, b), d, out);
-            }
+        match region {
+            Region::Polygon(p) => self.fill_polygon(p, delta, slopes, out),
+            Region::Curved(c) => self.fill_curved(c, delta, slopes, out),
         }
     }
 
-    /// Covers a curved triangle: a grid of cells with half-diagonal `h` at
-    /// most `r/δ₊`. A cell inside the region (its four corners are: the
+    /// Slope bounds for the shaped cells of a fill: over a rectangle, or at
+    /// a curved triangle's vertices. A triangle's cells are square (its
+    /// nearest-point samples are bounded by plane distance only).
+    fn slopes(&self, region: &Region) -> DVec2 {
+        match region {
+            Region::Polygon(p) if p.is_rectangle() => {
+                let (lo, hi) = p.bounds();
+                self.heightfield.slope_bounds(lo, hi)
+            }
+            Region::Polygon(_) => DVec2::INFINITY,
+            Region::Curved(c) => self.heightfield.slope_bounds_at(c.vertices()),
+        }
+    }
+
+    /// The cells of the bounding-box grid of `region`.
+    fn grid_cells(&self, region: &Region, delta: f64, slopes: DVec2) -> f64 {
+        let (lo, hi) = region.bounds();
+        let step = 2.0 * cell::half_size(self.options.radius, delta, slopes);
+        let n = ((hi - lo) / step).ceil().max(DVec2::ONE);
+        n.x * n.y
+    }
+
+    /// Covers a curved triangle: a grid of cells whose centre reaches the
+    /// cell within `r` ([`cell`], slopes and `δ₊` bounded at the region's
+    /// vertices). A cell inside the region (its four corners are: the
     /// region is convex in `w`, a cell is a box there) gets one sample at
-    /// its centre, within `h` of the cell along straight paths inside the
+    /// its centre, reaching the cell along straight paths inside the
     /// region. A cell on the region's border is handed to
     /// [`cover_box`](Self::cover_box).
-    fn fill_curved(&self, region: &CurvedTriangle, delta: f64, out: &mut Vec<Sample>) {
+    fn fill_curved(
+        &self,
+        region: &CurvedTriangle,
+        delta: f64,
+        slopes: DVec2,
+        out: &mut Vec<Sample>,
+    ) {
         let (lo, hi) = region.bounds();
         let size = hi - lo;
-        let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
-        let nx = (size.x / step).ceil().max(1.0);
-        let ny = (size.y / step).ceil().max(1.0);
+        let step = 2.0 * cell::half_size(self.options.radius, delta, slopes);
+        let nx = (size.x / step.x).ceil().max(1.0);
+        let ny = (size.y / step.y).ceil().max(1.0);
         // One sample per cell inside, up to 16 per border cell (two
         // quarterings): reserved before the grid is allocated.
         if !self
@@ -389,8 +484,7 @@ impl RegionJob<'_> {
             return;
         }
         let cell = DVec2::new(size.x / nx, size.y / ny);
-        let half_diagonal = 0.5 * cell.length();
-        let radius = (half_diagonal * delta).min(self.options.radius);
+        let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -486,16 +580,19 @@ impl RegionJob<'_> {
         }
     }
 
-    /// Covers a polygon: a grid of cells with half-diagonal at most `r/δ₊`,
-    /// one sample per cell at its centre moved into the polygon (its
-    /// nearest point, within the half-diagonal of every point of the cell
-    /// in the polygon, the polygon being convex).
-    fn fill_polygon(&self, region: &Polygon, delta: f64, out: &mut Vec<Sample>) {
+    /// Covers a polygon: a grid of cells whose centre reaches the cell
+    /// within `r` ([`cell`]), one sample per cell at its centre moved into
+    /// the polygon (its nearest point, the polygon being convex). In a
+    /// rectangle the nearest point is the clamp, nearer along each axis to
+    /// every point of the cell in the rectangle, so the shaped cell's reach
+    /// holds; a triangle's cells are square (`slopes` infinite), whose reach
+    /// needs only the plane distance, no farther than the half-diagonal.
+    fn fill_polygon(&self, region: &Polygon, delta: f64, slopes: DVec2, out: &mut Vec<Sample>) {
         let (lo, hi) = region.bounds();
         let size = hi - lo;
-        let step = std::f64::consts::SQRT_2 * self.options.radius / delta;
-        let nx = (size.x / step).ceil().max(1.0);
-        let ny = (size.y / step).ceil().max(1.0);
+        let step = 2.0 * cell::half_size(self.options.radius, delta, slopes);
+        let nx = (size.x / step.x).ceil().max(1.0);
+        let ny = (size.y / step.y).ceil().max(1.0);
         let cells = if nx.max(ny) > f64::from(u32::MAX) {
             f64::INFINITY
         } else {
@@ -509,7 +606,7 @@ impl RegionJob<'_> {
         out.reserve(cells as usize);
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let half_diagonal = 0.5 * cell.length();
-        let radius = (half_diagonal * delta).min(self.options.radius);
+        let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved, each below 2^32.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
