@@ -13,7 +13,11 @@
 //! separating axes, [`Tool::shares_volume`]; where a piece is off the
 //! integer grid, a corner of `C` strictly inside `T`, else cutting `C` by
 //! the tool's planes) decides whether `T` has volume in `C`;
-//! if so, the leaf's BSP is merged with `T` inside `C` (§3.5), rebuilt
+//! if so, a convex `T` with many faces is cut down to the planes of the
+//! facets of `T ∩ C` (`tool/facets.rs`: the same regions in `C`, far fewer
+//! planes for a many-faced tool crossing a small cell), and the leaf's BSP
+//! is merged
+//! with `T` inside `C` (§3.5), rebuilt
 //! without redundancy (§3.7) and, when still over the budget, split into
 //! eight children rebuilt from the pieces of its boundary faces inside
 //! each child box (`leaf.rs`, `split.rs`); a rebuild stops as soon as it is over the
@@ -35,7 +39,7 @@ use super::leaf::{
     CellFaces, build_leaf_faces, cell_poly, combine, may_split, split_leaf, split_limit,
     splits_certainly,
 };
-use super::tool::{Tool, restricted, solid_at_a_corner};
+use super::tool::{Tool, facet_chain, restricted, solid_at_a_corner};
 use super::tree::{Leaf, OctNode, Octree, OctreeConfig, collect_leaves};
 use crate::Error;
 use crate::convex::{ConvexArena, CutOutcome, KeptOutcome, NO_TAG, Part, PolyId, with_arena};
@@ -325,6 +329,19 @@ impl Walk<'_> {
             return (relabeled.map(OctNode::Leaf), changes.into());
         }
         let tool = tool.expect("the tool meets the cell");
+        // A many-faced convex tool keeps only the planes of its facets in
+        // the cell. Not in a uniform leaf: the merge cuts its one region by
+        // the tool's planes once, as the pruning would.
+        let tool = match leaf {
+            Leaf::Bsp(_) if self.tool.planes().len() >= FACET_MIN_TOOL_PLANES => {
+                with_arena(|arena| {
+                    let poly = cell_poly(arena, cell);
+                    facet_chain(&tool, arena, poly)
+                })
+                .unwrap_or(tool)
+            }
+            _ => tool,
+        };
         // A tool with many planes across the cell (a hull of thousands of
         // points) is not merged into it whole: each cell of that merge
         // would hold up to as many faces, on a stack as deep, so memory
@@ -466,6 +483,15 @@ fn presplit_planes(config: &OctreeConfig) -> usize {
 
 /// The least value of [`presplit_planes`].
 const PRESPLIT_MIN_PLANES: usize = 64;
+
+/// The least planes of a tool that is cut down to its facets in each cell
+/// ([`facet_chain`]) before the merge. The long faces of a many-faced
+/// swept cutter cross many cells with their planes, which the pruning
+/// drops (`cutter`, 108 planes: 4.7% fewer instructions); the planes of a
+/// small tool (`crater_job`, 36-faced hulls) mostly carry facets of each
+/// cell's part, and cutting the box by them cost 2.9% more instructions
+/// than the merge saved.
+const FACET_MIN_TOOL_PLANES: usize = 64;
 
 /// Whether `tool`'s solid has volume in `cell` (a polyhedron of
 /// `arena`, cut up in place): whether [`Bsp::cells`] of the tool there

@@ -7,9 +7,11 @@
 //! the closed solid meets ([`Tool::touches`]).
 
 mod contact;
+mod facets;
 mod restrict;
 
 use contact::ConvexPiece;
+pub(crate) use facets::facet_chain;
 pub(crate) use restrict::{restricted, solid_at_a_corner};
 
 use super::cell::CellBox;
