@@ -31,6 +31,9 @@
 //!   ([`TerrainCarved`], [`TerrainCarveRejected`], [`TerrainCellRebuilt`],
 //!   [`TerrainDebrisDetached`]), for observers.
 //! - [`error`] — [`TerrainError`].
+//! - [`world`] — [`TerrainWorld`]: large worlds as a grid of terrain
+//!   chunks from a procedural [`WorldSource`], streamed around
+//!   [`TerrainFocus`] entities, with only edited chunks stored.
 //!
 //! A carve runs through four modules in order, each once:
 //!
@@ -115,6 +118,7 @@ pub mod snapshot;
 pub mod spawn;
 pub mod tool;
 pub mod upload;
+pub mod world;
 
 use bevy::asset::AssetPlugin;
 use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleLabel};
@@ -147,6 +151,10 @@ pub use physics::{ConvexPiece, PhysicsInsert, TerrainPhysics, TerrainPhysicsBack
 pub use raycast::TerrainHit;
 pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
 pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
+pub use world::{
+    ChunkCoord, HeightArray, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk,
+    WorldLayout, WorldSource, WorldStats,
+};
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
 /// runs them in (`Update` unless [`TerrainPlugin::in_schedule`] picks
@@ -227,6 +235,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_message::<CarveRejected>()
         .add_message::<DebrisDetached>()
         .add_message::<TerrainCellChanged>()
+        .add_message::<WorldCarve>()
         .register_type::<Terrain>()
         .register_type::<TerrainCell>()
         .register_type::<TerrainDebris>()
@@ -241,6 +250,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<CarveRejected>()
         .register_type::<TerrainCellChanged>()
         .register_type::<DebrisDetached>()
+        .register_type::<TerrainFocus>()
+        .register_type::<WorldChunk>()
+        .register_type::<WorldCarve>()
         .register_type::<CarveTool>()
         .register_type::<Heightfield>()
         .register_type::<TerrainSource>()
@@ -261,6 +273,12 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
                 upload::upload_meshes.in_set(TerrainSystems::Mesh),
                 events::trigger_events.after(TerrainSystems::Mesh),
                 asset::spawn_from_assets.before(TerrainSystems::Carve),
+                (
+                    world::stream::route_world_carves,
+                    world::stream::stream_chunks,
+                )
+                    .chain()
+                    .before(TerrainSystems::Carve),
             ),
         );
     if schedule == Update.intern() {

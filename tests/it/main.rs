@@ -64,6 +64,8 @@ mod terrain_output;
 mod terrain_physics;
 #[cfg(feature = "viewer")]
 mod terrain_seams_render;
+#[cfg(feature = "terrain")]
+mod terrain_world;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]

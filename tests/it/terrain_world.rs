@@ -1,0 +1,413 @@
+//! Streamed terrain worlds in an app without rendering (`MinimalPlugins`):
+//! only chunks near the focus exist, with hysteresis; an edit survives its
+//! chunk streaming out and back in bit-identically; a carve across a chunk
+//! border removes exactly what one terrain over both chunks loses; saving
+//! writes only the edited chunks and loading is exact.
+
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+use bevy::asset::AssetPlugin;
+use bevy::prelude::*;
+use bevy::transform::TransformPlugin;
+use bevy_chisel::bsp::octree::{Edit, StateHash};
+use bevy_chisel::bsp::tools::Quantization;
+use bevy_chisel::terrain::{
+    CarveApplied, CarveTool, ChunkCoord, GridHeightfield, StreamSettings, Terrain, TerrainBase,
+    TerrainFocus, TerrainPlugin, TerrainWorld, WorldCarve, WorldLayout, terrain_octree_config,
+};
+
+/// Grid unit = 1 world unit; chunks of 32, samples 4 apart (8 squares a
+/// side); heights 8..=20 above the floor at 0.
+fn layout() -> WorldLayout {
+    WorldLayout {
+        quantization: Quantization::new(1.0, [0.0; 3]).expect("valid unit"),
+        chunk_log2: 5,
+        spacing_log2: 2,
+        floor: 0,
+        label: 1,
+        layers: Vec::new(),
+    }
+}
+
+fn height(i: i64, j: i64) -> i64 {
+    8 + (i * 7 + j * 13).rem_euclid(9) + (i * j).rem_euclid(5)
+}
+
+fn world() -> TerrainWorld {
+    TerrainWorld::new(layout(), height)
+        .expect("valid layout")
+        .with_streaming(StreamSettings {
+            load_radius: 40.0,
+            unload_radius: 72.0,
+            max_building: 4,
+        })
+        .expect("valid settings")
+}
+
+#[derive(Resource, Default)]
+struct Applied(Vec<CarveApplied>);
+
+fn record(mut applied: MessageReader<CarveApplied>, mut seen: ResMut<Applied>) {
+    seen.0.extend(applied.read().cloned());
+}
+
+fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins,
+        TransformPlugin,
+        AssetPlugin::default(),
+        TerrainPlugin,
+    ))
+    .init_asset::<Mesh>()
+    .init_asset::<StandardMaterial>()
+    .init_resource::<Applied>()
+    .add_systems(
+        Update,
+        record.after(bevy_chisel::terrain::TerrainSystems::Mesh),
+    );
+    let world = app.world_mut().spawn(world).id();
+    let focus = app
+        .world_mut()
+        .spawn((TerrainFocus, Transform::from_translation(focus)))
+        .id();
+    settle(&mut app, world);
+    (app, world, focus)
+}
+
+fn the_world(app: &App, world: Entity) -> &TerrainWorld {
+    app.world()
+        .get::<TerrainWorld>(world)
+        .expect("world entity")
+}
+
+fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
+    let entity = the_world(app, world)
+        .chunk_entity(coord)
+        .unwrap_or_else(|| panic!("chunk {coord:?} is not live"));
+    app.world().get::<Terrain>(entity).expect("chunk terrain")
+}
+
+/// Runs frames until nothing builds, no carve waits, every live chunk is
+/// idle and the set of live chunks stayed the same for a few frames.
+fn settle(app: &mut App, world: Entity) {
+    let mut calm = 0;
+    let mut last = Vec::new();
+    for _ in 0..20_000 {
+        app.update();
+        let w = the_world(app, world);
+        let live: Vec<_> = w.live_chunks().collect();
+        let idle = w.is_settled()
+            && live
+                .iter()
+                .all(|&(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle));
+        calm = if idle && live == last { calm + 1 } else { 0 };
+        last = live;
+        if calm == 5 {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    panic!("the world did not settle");
+}
+
+fn move_focus(app: &mut App, world: Entity, focus: Entity, to: Vec3) {
+    app.world_mut()
+        .get_mut::<Transform>(focus)
+        .expect("focus")
+        .translation = to;
+    settle(app, world);
+}
+
+fn live(app: &App, world: Entity) -> BTreeSet<ChunkCoord> {
+    the_world(app, world)
+        .live_chunks()
+        .map(|(c, _)| c)
+        .collect()
+}
+
+fn square(
+    xs: std::ops::RangeInclusive<i64>,
+    zs: std::ops::RangeInclusive<i64>,
+) -> BTreeSet<ChunkCoord> {
+    xs.flat_map(|x| zs.clone().map(move |z| ChunkCoord { x, z }))
+        .collect()
+}
+
+/// The exact volume under the world's surface over chunk `coord`: every
+/// triangle's prism, area × mean height (in sixths, as integers).
+fn prism_volume(coord: ChunkCoord) -> f64 {
+    let (n, s) = (8i64, 4i64);
+    let mut sixths = 0i128;
+    for j in coord.z * n..(coord.z + 1) * n {
+        for i in coord.x * n..(coord.x + 1) * n {
+            let (h00, h10) = (height(i, j), height(i + 1, j));
+            let (h01, h11) = (height(i, j + 1), height(i + 1, j + 1));
+            // Each triangle: (s²/2) · (sum of heights / 3).
+            sixths += i128::from(s * s) * i128::from(h00 + h01 + h10 + h10 + h01 + h11);
+        }
+    }
+    sixths as f64 / 6.0
+}
+
+fn dodecahedron(radius: f32, centre: Vec3) -> CarveTool {
+    CarveTool::dodecahedron(radius, centre)
+}
+
+fn carve(app: &mut App, world: Entity, tool: CarveTool) {
+    app.world_mut().write_message(WorldCarve {
+        world,
+        tool,
+        edit: Edit::Subtract,
+    });
+}
+
+/// Chunk `coord` as generated, with `tools` applied synchronously: the
+/// reference of what the app's chunk must hold.
+fn reference(world: &TerrainWorld, coord: ChunkCoord, tools: &[CarveTool]) -> Terrain {
+    let mut terrain = world.generate_chunk(coord).expect("chunk builds");
+    for tool in tools {
+        let grid = tool.to_grid(&layout().quantization).expect("tool on grid");
+        terrain
+            .apply_now(&grid, Edit::Subtract)
+            .expect("carve applies");
+    }
+    terrain
+}
+
+#[test]
+fn only_chunks_within_the_radius_exist_with_hysteresis() {
+    let (mut app, world, focus) = app_with(world(), Vec3::new(16.0, 30.0, 16.0));
+    // Squares within 40 of (16, 16): x and z in -1..=1 (the next ones are
+    // 48 away).
+    assert_eq!(live(&app, world), square(-1..=1, -1..=1));
+    let stats = the_world(&app, world).stats().clone();
+    assert_eq!((stats.live, stats.building, stats.stored), (9, 0, 0));
+    assert_eq!(stats.generated, 9);
+    // Every chunk is the exact solid under the source's surface.
+    for (coord, entity) in the_world(&app, world).live_chunks() {
+        let t = app.world().get::<Terrain>(entity).expect("terrain");
+        let (got, want) = (t.octree().solid_volume(), prism_volume(coord));
+        assert!(
+            (got - want).abs() <= 1e-9 * want,
+            "{coord:?}: {got} != {want}"
+        );
+        assert!(t.cells().count() > 0, "{coord:?} has no cells shown");
+    }
+
+    // 20 to the right: column 2 comes within 40 (28 away), column -1 is
+    // 36 away and stays.
+    move_focus(&mut app, world, focus, Vec3::new(36.0, 30.0, 16.0));
+    assert_eq!(live(&app, world), square(-1..=2, -1..=1));
+
+    // 64 further: column -1 is 100 away (beyond 72) and goes; column 0 is
+    // 68 away, beyond the load radius but within the unload radius, and
+    // stays; columns 3 and 4 come in (0 and 28 away), 5 does not (60).
+    let before = the_world(&app, world).chunk_entity(ChunkCoord { x: -1, z: 0 });
+    let kept = the_world(&app, world).chunk_entity(ChunkCoord { x: 0, z: 0 });
+    move_focus(&mut app, world, focus, Vec3::new(100.0, 30.0, 16.0));
+    assert_eq!(live(&app, world), square(0..=4, -1..=1));
+    assert!(app.world().get_entity(before.expect("was live")).is_err());
+    assert_eq!(
+        the_world(&app, world).chunk_entity(ChunkCoord { x: 0, z: 0 }),
+        kept,
+        "a chunk between the radii is kept as it was"
+    );
+    let stats = the_world(&app, world).stats();
+    assert_eq!(stats.released, 3);
+    assert_eq!(stats.stored, 0, "unedited chunks are never stored");
+
+    // Back to the start: column 0 is wanted again, -1 is regenerated.
+    move_focus(&mut app, world, focus, Vec3::new(16.0, 30.0, 16.0));
+    assert_eq!(live(&app, world), square(-1..=2, -1..=1));
+}
+
+#[test]
+fn an_edit_far_from_the_focus_survives_streaming_out_and_in() {
+    let (mut app, world, focus) = app_with(world(), Vec3::new(16.0, 30.0, 16.0));
+    // Chunk (6, 0) is 176 away: the carve builds it, applies, and it
+    // streams out again, its state kept.
+    let far = ChunkCoord { x: 6, z: 0 };
+    let tool = dodecahedron(5.0, Vec3::new(6.0 * 32.0 + 12.0, 14.0, 16.0));
+    carve(&mut app, world, tool.clone());
+    settle(&mut app, world);
+    let w = the_world(&app, world);
+    assert_eq!(w.stored_chunks().collect::<Vec<_>>(), vec![far]);
+    assert!(w.chunk_entity(far).is_none());
+    assert_eq!(app.world().resource::<Applied>().0.len(), 1);
+    let want = reference(w, far, std::slice::from_ref(&tool));
+    let unedited = w.generate_chunk(far).expect("chunk builds");
+    assert_ne!(want.state_hash(), unedited.state_hash());
+
+    // Stream it in: restored bit-identically, journal and undo included.
+    for round in 0..2 {
+        move_focus(
+            &mut app,
+            world,
+            focus,
+            Vec3::new(6.0 * 32.0 + 16.0, 30.0, 16.0),
+        );
+        let got = terrain(&app, world, far);
+        assert_eq!(got.state_hash(), want.state_hash(), "round {round}");
+        assert_eq!(
+            StateHash::of(got.octree()).value(),
+            want.state_hash(),
+            "round {round}: the octree itself"
+        );
+        assert_eq!(got.journal(), want.journal());
+        assert_eq!(got.undo_depth(), 1);
+        assert!(the_world(&app, world).stored_chunks().next().is_none());
+        // An unedited neighbour is rebuilt from the source, not stored.
+        let next = ChunkCoord { x: 7, z: 0 };
+        assert_eq!(
+            terrain(&app, world, next).state_hash(),
+            w_generate(&app, world, next)
+        );
+        move_focus(&mut app, world, focus, Vec3::new(16.0, 30.0, 16.0));
+        assert_eq!(
+            the_world(&app, world).stored_chunks().collect::<Vec<_>>(),
+            vec![far]
+        );
+    }
+    assert!(the_world(&app, world).stats().restored >= 2);
+}
+
+fn w_generate(app: &App, world: Entity, coord: ChunkCoord) -> u64 {
+    the_world(app, world)
+        .generate_chunk(coord)
+        .expect("chunk builds")
+        .state_hash()
+}
+
+#[test]
+fn a_carve_across_a_chunk_border_edits_both_and_the_volumes_add_up() {
+    let (mut app, world, _) = app_with(world(), Vec3::new(32.0, 30.0, 16.0));
+    let (left, right) = (ChunkCoord { x: 0, z: 0 }, ChunkCoord { x: 1, z: 0 });
+    let volume = |app: &App, c| terrain(app, world, c).octree().solid_volume();
+    let before = [volume(&app, left), volume(&app, right)];
+    let tool = dodecahedron(6.0, Vec3::new(32.0, 13.0, 16.0));
+    carve(&mut app, world, tool.clone());
+    settle(&mut app, world);
+    let after = [volume(&app, left), volume(&app, right)];
+    let removed = [before[0] - after[0], before[1] - after[1]];
+    assert!(
+        removed.iter().all(|&r| r > 1.0),
+        "both chunks lose: {removed:?}"
+    );
+    for c in [left, right] {
+        assert_eq!(terrain(&app, world, c).journal().len(), 1);
+        let want = reference(the_world(&app, world), c, std::slice::from_ref(&tool));
+        assert_eq!(terrain(&app, world, c).state_hash(), want.state_hash());
+    }
+    assert_eq!(app.world().resource::<Applied>().0.len(), 2);
+
+    // One terrain over both chunks, built from the same samples.
+    let mut heights = Vec::new();
+    for j in 0..=8 {
+        for i in 0..=16 {
+            heights.push(height(i, j));
+        }
+    }
+    let base = TerrainBase::Heightfield {
+        origin: [0; 3],
+        size_log2: 6,
+        field: GridHeightfield {
+            corner: [0; 3],
+            samples: [17, 9],
+            spacing: 4,
+            heights,
+            bottom: 0,
+            label: 1,
+            layers: Vec::new(),
+        },
+    };
+    let mut whole = Terrain::from_base(layout().quantization, base, terrain_octree_config())
+        .expect("whole builds")
+        .with_debris(None);
+    let whole_before = whole.octree().solid_volume();
+    let sum_before = before[0] + before[1];
+    assert!((whole_before - sum_before).abs() <= 1e-9 * whole_before);
+    let grid = tool.to_grid(&layout().quantization).expect("tool on grid");
+    whole
+        .apply_now(&grid, Edit::Subtract)
+        .expect("carve applies");
+    let whole_removed = whole_before - whole.octree().solid_volume();
+    let sum = removed[0] + removed[1];
+    assert!(
+        (whole_removed - sum).abs() <= 1e-9 * whole_removed,
+        "one terrain loses {whole_removed}, the chunks {sum}"
+    );
+}
+
+fn temp_folder(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bevy_chisel-world-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn saving_writes_only_edited_chunks_and_loading_is_exact() {
+    let (mut app, world, focus) = app_with(world(), Vec3::new(16.0, 30.0, 16.0));
+    let near = ChunkCoord { x: 0, z: 0 };
+    let far = ChunkCoord { x: -5, z: 3 };
+    carve(
+        &mut app,
+        world,
+        dodecahedron(4.0, Vec3::new(10.0, 14.0, 20.0)),
+    );
+    carve(
+        &mut app,
+        world,
+        dodecahedron(4.0, Vec3::new(-5.0 * 32.0 + 16.0, 15.0, 3.0 * 32.0 + 16.0)),
+    );
+    settle(&mut app, world);
+    let w = the_world(&app, world);
+    assert_eq!(w.stored_chunks().collect::<Vec<_>>(), vec![far]);
+    let dir = temp_folder("save");
+    let written = w
+        .save(&dir, |e| app.world().get::<Terrain>(e))
+        .expect("saves");
+    assert_eq!(written, vec![far, near]);
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .expect("folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        vec!["chunk_-5_3.chiselterrain", "chunk_0_0.chiselterrain"]
+    );
+    let near_hash = terrain(&app, world, near).state_hash();
+    let far_bytes = std::fs::read(dir.join("chunk_-5_3.chiselterrain")).expect("file");
+    let far_hash = Terrain::from_bytes(&far_bytes).expect("loads").state_hash();
+
+    // A new app with the loaded world: the edited chunks come back exact.
+    let loaded = world_loaded(&dir);
+    let (mut app2, world2, focus2) = app_with(loaded, Vec3::new(16.0, 30.0, 16.0));
+    assert_eq!(terrain(&app2, world2, near).state_hash(), near_hash);
+    assert_eq!(terrain(&app2, world2, near).journal().len(), 1);
+    move_focus(
+        &mut app2,
+        world2,
+        focus2,
+        Vec3::new(-5.0 * 32.0 + 16.0, 30.0, 3.0 * 32.0 + 16.0),
+    );
+    assert_eq!(terrain(&app2, world2, far).state_hash(), far_hash);
+    move_focus(
+        &mut app,
+        world,
+        focus,
+        Vec3::new(-5.0 * 32.0 + 16.0, 30.0, 3.0 * 32.0 + 16.0),
+    );
+    assert_eq!(terrain(&app, world, far).state_hash(), far_hash);
+
+    // A chunk file of another world is refused.
+    let other = TerrainWorld::new(layout(), |i: i64, j: i64| height(i, j) + 1).expect("valid");
+    assert!(other.load_edits(&dir).is_err());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn world_loaded(dir: &std::path::Path) -> TerrainWorld {
+    world().load_edits(dir).expect("loads")
+}
