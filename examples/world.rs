@@ -19,9 +19,9 @@ use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
-    StreamSettings, Terrain, TerrainFocus, TerrainMaterials, TerrainPlugin, TerrainSurface,
-    TerrainSystems, TerrainWorld, TriplanarMaterial, TriplanarMaterialPlugin, WorldCarve,
-    WorldChunk, WorldLayout, surface_table,
+    NoiseOctave, StreamSettings, Terrain, TerrainFocus, TerrainMaterials, TerrainPlugin,
+    TerrainSurface, TerrainSystems, TerrainWorld, TriplanarMaterial, TriplanarMaterialPlugin,
+    ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldSource, surface_table,
 };
 use bevy_chisel::viewer::{Overlay, blast, overlay_text};
 
@@ -76,37 +76,31 @@ fn main() -> AppExit {
     app.run()
 }
 
-/// Exact, deterministic hash of a lattice point.
-fn hash(i: i64, j: i64, seed: u64) -> u64 {
-    let mut z = (i as u64)
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        .wrapping_add((j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
-        .wrapping_add(seed);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+/// The landscape: integer value noise, 1 m to about 9.2 m high, hills
+/// about 30 m across with bumps of 8 m.
+fn landscape() -> ValueNoise {
+    ValueNoise {
+        base: 100,
+        octaves: vec![
+            NoiseOctave {
+                cell: 24,
+                amplitude: 650,
+                seed: 1,
+            },
+            NoiseOctave {
+                cell: 6,
+                amplitude: 180,
+                seed: 2,
+            },
+        ],
+    }
 }
 
-/// Value noise in grid units: random values on a lattice `cell` samples
-/// apart, `0..amplitude`, interpolated bilinearly in integers.
-fn value_noise(i: i64, j: i64, cell: i64, amplitude: i64, seed: u64) -> i64 {
-    let (ci, cj) = (i.div_euclid(cell), j.div_euclid(cell));
-    let (fi, fj) = (i.rem_euclid(cell), j.rem_euclid(cell));
-    let v = |a: i64, b: i64| (hash(a, b, seed) % amplitude as u64) as i64;
-    let top = v(ci, cj) * (cell - fi) + v(ci + 1, cj) * fi;
-    let bottom = v(ci, cj + 1) * (cell - fi) + v(ci + 1, cj + 1) * fi;
-    (top * (cell - fj) + bottom * fj) / (cell * cell)
-}
-
-/// The landscape: grid height of sample `(i, j)`, 1 m to about 9.5 m.
-fn landscape(i: i64, j: i64) -> i64 {
-    100 + value_noise(i, j, 24, 650, 1) + value_noise(i, j, 6, 180, 2)
-}
-
+/// The ground's height (m) at the sample nearest `(x, z)`.
 fn ground(x: f32, z: f32) -> f32 {
     let spacing = (1i64 << SPACING_LOG2) as f32 * UNIT as f32;
     let (i, j) = ((x / spacing).round() as i64, (z / spacing).round() as i64);
-    landscape(i, j) as f32 * UNIT as f32
+    landscape().height(i, j) as f32 * UNIT as f32
 }
 
 fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<TriplanarMaterial>>) -> Result {
@@ -129,7 +123,7 @@ fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<TriplanarMat
         // Grass 25 cm deep over 1.2 m of dirt, in grid units.
         layers: vec![(120, DIRT), (25, GRASS)],
     };
-    let world = TerrainWorld::new(layout, landscape)?.with_streaming(StreamSettings {
+    let world = TerrainWorld::new(layout, landscape())?.with_streaming(StreamSettings {
         load_radius: 30.0,
         unload_radius: 45.0,
         max_building: 4,

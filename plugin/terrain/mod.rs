@@ -152,8 +152,8 @@ pub use raycast::TerrainHit;
 pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
 pub use tool::{CarveShape, CarveTool, GridTool, ToolPiece};
 pub use world::{
-    ChunkCoord, HeightArray, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk,
-    WorldLayout, WorldSource, WorldStats,
+    ChunkCoord, HeightArray, NoiseOctave, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise,
+    WorldCarve, WorldChunk, WorldLayout, WorldSource, WorldStats,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]

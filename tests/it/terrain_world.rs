@@ -13,8 +13,9 @@ use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{Edit, StateHash};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::{
-    CarveApplied, CarveTool, ChunkCoord, GridHeightfield, StreamSettings, Terrain, TerrainBase,
-    TerrainFocus, TerrainPlugin, TerrainWorld, WorldCarve, WorldLayout, terrain_octree_config,
+    CarveApplied, CarveRejected, CarveTool, ChunkCoord, GridHeightfield, HeightArray, Heightfield,
+    NoiseOctave, StreamSettings, Terrain, TerrainBase, TerrainError, TerrainFocus, TerrainPlugin,
+    TerrainWorld, ValueNoise, WorldCarve, WorldLayout, WorldSource, terrain_octree_config,
 };
 
 /// Grid unit = 1 world unit; chunks of 32, samples 4 apart (8 squares a
@@ -48,8 +49,17 @@ fn world() -> TerrainWorld {
 #[derive(Resource, Default)]
 struct Applied(Vec<CarveApplied>);
 
-fn record(mut applied: MessageReader<CarveApplied>, mut seen: ResMut<Applied>) {
+#[derive(Resource, Default)]
+struct Rejected(Vec<CarveRejected>);
+
+fn record(
+    mut applied: MessageReader<CarveApplied>,
+    mut rejected: MessageReader<CarveRejected>,
+    mut seen: ResMut<Applied>,
+    mut refused: ResMut<Rejected>,
+) {
     seen.0.extend(applied.read().cloned());
+    refused.0.extend(rejected.read().cloned());
 }
 
 fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
@@ -63,6 +73,7 @@ fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>()
     .init_resource::<Applied>()
+    .init_resource::<Rejected>()
     .add_systems(
         Update,
         record.after(bevy_chisel::terrain::TerrainSystems::Mesh),
@@ -410,4 +421,172 @@ fn saving_writes_only_edited_chunks_and_loading_is_exact() {
 
 fn world_loaded(dir: &std::path::Path) -> TerrainWorld {
     world().load_edits(dir).expect("loads")
+}
+
+#[test]
+fn a_height_array_and_value_noise_give_exact_chunks_that_meet() {
+    // The test surface sampled into a world-unit heightfield over chunks
+    // (0, 0) and (1, 0) gives the same chunks as the function.
+    let (nx, nz) = (17u32, 9u32);
+    let heights: Vec<f32> = (0..nz)
+        .flat_map(|j| (0..nx).map(move |i| height(i64::from(i), i64::from(j)) as f32))
+        .collect();
+    let field = Heightfield {
+        size: UVec2::new(nx, nz),
+        heights,
+        spacing: 4.0,
+        corner: Vec3::ZERO,
+        bottom: 0.0,
+        label: 1,
+        layers: Vec::new(),
+    };
+    let array = HeightArray::from_heightfield(&field, &layout()).expect("on the lattice");
+    let from_array = TerrainWorld::new(layout(), array.clone()).expect("valid");
+    for coord in [ChunkCoord { x: 0, z: 0 }, ChunkCoord { x: 1, z: 0 }] {
+        let (a, f) = (
+            from_array.generate_chunk(coord).expect("builds"),
+            world().generate_chunk(coord).expect("builds"),
+        );
+        assert_eq!(a.base(), f.base());
+        assert_eq!(a.state_hash(), f.state_hash());
+    }
+    // Beyond the array the edge samples repeat.
+    assert_eq!(array.height(20, 3), height(16, 3));
+    assert_eq!(array.height(-4, -2), height(0, 0));
+    // A heightfield off the lattice, or with another spacing, is refused.
+    for (corner, spacing) in [(Vec3::new(1.0, 0.0, 0.0), 4.0), (Vec3::ZERO, 2.0)] {
+        let off = Heightfield {
+            corner,
+            spacing,
+            ..field.clone()
+        };
+        assert!(matches!(
+            HeightArray::from_heightfield(&off, &layout()),
+            Err(TerrainError::InvalidHeightfield { .. })
+        ));
+    }
+
+    // Value noise stays in its range, and neighbouring chunks read the
+    // same heights on their shared side.
+    let noise = noisy_source();
+    let (low, high) = noise.range();
+    assert_eq!((low, high), (3, 3 + 19 + 5));
+    let mut seen = BTreeSet::new();
+    for j in -20..20 {
+        for i in -20..20 {
+            let h = noise.height(i, j);
+            assert!((low..=high).contains(&h), "{h} at ({i}, {j})");
+            assert_eq!(h, noise.height(i, j));
+            seen.insert(h);
+        }
+    }
+    assert!(seen.len() > 10, "the noise varies: {seen:?}");
+    let noisy = TerrainWorld::new(layout(), noise).expect("valid");
+    let column =
+        |coord: ChunkCoord, i: usize| match noisy.layout().chunk_base(&noisy_source(), coord) {
+            Ok(TerrainBase::Heightfield { field, .. }) => {
+                (0..9).map(|j| field.heights[i + 9 * j]).collect::<Vec<_>>()
+            }
+            other => panic!("{other:?}"),
+        };
+    assert_eq!(
+        column(ChunkCoord { x: -1, z: 2 }, 8),
+        column(ChunkCoord { x: 0, z: 2 }, 0)
+    );
+    let (a, b) = (
+        noisy
+            .generate_chunk(ChunkCoord { x: -1, z: 2 })
+            .expect("builds"),
+        noisy
+            .generate_chunk(ChunkCoord { x: 0, z: 2 })
+            .expect("builds"),
+    );
+    assert!(a.octree().solid_volume() > 0.0 && b.octree().solid_volume() > 0.0);
+}
+
+fn noisy_source() -> ValueNoise {
+    ValueNoise {
+        base: 3,
+        octaves: vec![
+            NoiseOctave {
+                cell: 5,
+                amplitude: 20,
+                seed: 7,
+            },
+            NoiseOctave {
+                cell: 2,
+                amplitude: 6,
+                seed: 8,
+            },
+        ],
+    }
+}
+
+#[test]
+fn bad_worlds_and_carves_are_typed_errors_that_change_nothing() {
+    let bad = WorldLayout {
+        spacing_log2: 5,
+        ..layout()
+    };
+    assert!(matches!(
+        TerrainWorld::new(bad, height),
+        Err(TerrainError::InvalidWorld { .. })
+    ));
+    let settings = StreamSettings {
+        load_radius: 50.0,
+        unload_radius: 40.0,
+        max_building: 1,
+    };
+    assert!(matches!(
+        world().with_streaming(settings),
+        Err(TerrainError::InvalidWorld { .. })
+    ));
+    // A source above the chunk's top: the chunk fails to build, typed.
+    let too_high = TerrainWorld::new(layout(), |_: i64, _: i64| 33)
+        .expect("valid")
+        .with_streaming(world().streaming().clone())
+        .expect("valid settings");
+    assert!(matches!(
+        too_high.generate_chunk(ChunkCoord { x: 0, z: 0 }),
+        Err(TerrainError::InvalidWorld { .. })
+    ));
+
+    let (mut app, world, _) = app_with(world(), Vec3::new(16.0, 30.0, 16.0));
+    let hashes = |app: &App| {
+        the_world(app, world)
+            .live_chunks()
+            .map(|(_, e)| app.world().get::<Terrain>(e).expect("terrain").state_hash())
+            .collect::<Vec<_>>()
+    };
+    let before = hashes(&app);
+    // Above every chunk's cube, and a material the world does not know.
+    carve(
+        &mut app,
+        world,
+        dodecahedron(3.0, Vec3::new(16.0, 40.0, 16.0)),
+    );
+    app.world_mut().write_message(WorldCarve {
+        world,
+        tool: dodecahedron(3.0, Vec3::new(16.0, 14.0, 16.0)),
+        edit: Edit::Add(9),
+    });
+    settle(&mut app, world);
+    let rejected = &app.world().resource::<Rejected>().0;
+    assert_eq!(rejected.len(), 2);
+    assert!(rejected.iter().all(|r| r.terrain == world));
+    assert!(matches!(
+        rejected[0].error,
+        TerrainError::OutsideTerrain { .. }
+    ));
+    assert!(matches!(
+        rejected[1].error,
+        TerrainError::UnknownLabel { label: 9, .. }
+    ));
+    assert_eq!(hashes(&app), before);
+    assert!(app.world().resource::<Applied>().0.is_empty());
+
+    // Chunks whose build fails are counted, not retried, and not live.
+    let (app, world, _) = app_with(too_high, Vec3::new(16.0, 30.0, 16.0));
+    let stats = the_world(&app, world).stats();
+    assert_eq!((stats.live, stats.failed), (0, 9));
 }

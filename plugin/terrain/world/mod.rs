@@ -17,8 +17,8 @@
 //! every chunk's state hash, file and journal exact on its own.
 //!
 //! 1. **Source** ([`source`]): a [`WorldSource`] gives the exact grid
-//!    height of every lattice sample (a closure, or a [`HeightArray`] from
-//!    a heightfield image). A chunk's base is the heightfield of the
+//!    height of every lattice sample (a closure, integer [`ValueNoise`],
+//!    or a [`HeightArray`] from a heightfield image). A chunk's base is the heightfield of the
 //!    samples on and inside its square, its walls on the cube's sides.
 //! 2. **Streaming** ([`stream`]): chunks whose square comes within
 //!    [`StreamSettings::load_radius`] of a [`TerrainFocus`] are built on
@@ -78,7 +78,7 @@ use super::component::Terrain;
 use super::error::TerrainError;
 use super::tool::{CarveTool, GridTool};
 
-pub use source::{HeightArray, SharedSource, WorldLayout, WorldSource};
+pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 
 /// A chunk's position in its world's grid of chunks (x and z).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Reflect)]

@@ -104,6 +104,76 @@ impl WorldSource for HeightArray {
     }
 }
 
+/// One octave of [`ValueNoise`]: random heights `0..amplitude` on a
+/// lattice every `cell` samples, interpolated bilinearly between them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoiseOctave {
+    /// Samples between the octave's lattice points (at least 1; smaller
+    /// values count as 1).
+    pub cell: i64,
+    /// Heights are `0..amplitude` grid units (at least 1; smaller values
+    /// count as 1).
+    pub amplitude: i64,
+    /// Chooses the random values.
+    pub seed: u64,
+}
+
+/// A noise-function source: `base` plus the sum of the octaves, each
+/// integer value noise (a hash of the lattice point, interpolated
+/// bilinearly with integer arithmetic and rounded down), so every sample
+/// is exact and the same on every machine.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ValueNoise {
+    /// Grid height added to every sample.
+    pub base: i64,
+    /// The octaves, summed.
+    pub octaves: Vec<NoiseOctave>,
+}
+
+impl ValueNoise {
+    /// The lowest and highest heights the noise can give:
+    /// `base ..= base + Σ (amplitude - 1)`.
+    #[must_use]
+    pub fn range(&self) -> (i64, i64) {
+        let spread: i64 = self.octaves.iter().map(|o| o.amplitude.max(1) - 1).sum();
+        (self.base, self.base + spread)
+    }
+}
+
+/// A well-mixed 64-bit hash of a lattice point (SplitMix64's finaliser).
+fn lattice_hash(i: i64, j: i64, seed: u64) -> u64 {
+    let mut z = (i as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add((j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
+        .wrapping_add(seed);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl WorldSource for ValueNoise {
+    fn height(&self, i: i64, j: i64) -> i64 {
+        let mut h = i128::from(self.base);
+        for octave in &self.octaves {
+            let (cell, amplitude) = (octave.cell.max(1), octave.amplitude.max(1));
+            let (ci, cj) = (i.div_euclid(cell), j.div_euclid(cell));
+            let (fi, fj) = (
+                i128::from(i.rem_euclid(cell)),
+                i128::from(j.rem_euclid(cell)),
+            );
+            let c = i128::from(cell);
+            let v = |a: i64, b: i64| {
+                i128::from(lattice_hash(a, b, octave.seed) % amplitude.unsigned_abs())
+            };
+            let near = v(ci, cj) * (c - fi) + v(ci.wrapping_add(1), cj) * fi;
+            let far = v(ci, cj.wrapping_add(1)) * (c - fi)
+                + v(ci.wrapping_add(1), cj.wrapping_add(1)) * fi;
+            h += (near * (c - fj) + far * fj).div_euclid(c * c);
+        }
+        i64::try_from(h).unwrap_or(if h < 0 { i64::MIN } else { i64::MAX })
+    }
+}
+
 /// How a world is cut into chunks, and what its solid is made of.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldLayout {
