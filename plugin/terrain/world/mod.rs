@@ -46,20 +46,31 @@
 //! Neighbouring chunks see the same samples and the same diagonals on
 //! their shared side, so their solids meet there exactly and a carve
 //! across the border removes exactly the tool's volume from the two
-//! together. Each chunk still closes its own solid with a wall on the
-//! shared side; the two walls coincide and face into solid on both sides,
-//! so nothing is visible there until a carve opens the border, which cuts
-//! both walls with the same exact tool. What is not stitched: the smooth
-//! normals of the two chunks' vertices on the border are computed per
-//! chunk, so shading may show a faint line there; the mesh vertices
-//! themselves coincide (both are exact plane intersections rounded once).
-//! Debris detection runs per chunk, with the chunk's sides as anchors: a
-//! piece cut loose across a border is not detached (it stays, anchored by
-//! the border), never wrongly detached. To measure the border, compare the
-//! boundary vertices of the two chunks' cell meshes on the shared plane
-//! (they should be equal as sets) — a test does this for the solids'
-//! volumes. Level of detail and seam skirts between levels are not part of
-//! this module yet.
+//! together (tested against one terrain over both chunks). Each chunk
+//! closes its own solid with a wall on the shared side; the two walls
+//! coincide, face into the neighbour's solid and stay hidden under the
+//! surface, and a carve that opens the border cuts both with the same
+//! exact tool.
+//!
+//! What is not stitched yet (left for the level-of-detail work):
+//! - **T-junctions.** Within a terrain the seamed mesher splits every
+//!   cell's border edges at its neighbours' wall points
+//!   ([`chisel_bsp::octree::SeamedMesher`]); across a chunk border it has
+//!   no neighbours, so where the border cells of two chunks differ in size
+//!   one side's edge may pass a vertex of the other without one. The exact
+//!   surfaces meet, but rasterised triangles may leave pixel-wide gaps
+//!   along such edges; the chunks' side walls behind them are what shows
+//!   through, not the sky. To measure: take both chunks' cell meshes, keep
+//!   the vertices and edges lying in the shared plane, and count the
+//!   vertices of either side strictly inside an edge of the other.
+//! - **Normals.** Smooth normals are averaged per chunk, so shading can
+//!   show a faint line along a border.
+//! - **Debris.** Detection runs per chunk with the chunk's sides as
+//!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
+//!   in place, anchored by the border; nothing is wrongly detached.
+//!
+//! Level of detail and seams between levels are not part of this module
+//! yet.
 
 pub mod source;
 pub mod store;
