@@ -61,8 +61,11 @@
 //!   surfaces meet, but rasterised triangles may leave pixel-wide gaps
 //!   along such edges; the chunks' side walls behind them are what shows
 //!   through, not the sky. To measure: take both chunks' cell meshes, keep
-//!   the vertices and edges lying in the shared plane, and count the
-//!   vertices of either side strictly inside an edge of the other.
+//!   the edges lying in the shared plane (leaving out the walls), and
+//!   count the vertices of either side strictly inside an edge of the
+//!   other. The test of a carve across a border does this: every border
+//!   vertex lies on the neighbour's border edges, and after its crater 2
+//!   of them are T-junctions.
 //! - **Normals.** Smooth normals are averaged per chunk, so shading can
 //!   show a faint line along a border.
 //! - **Debris.** Detection runs per chunk with the chunk's sides as
