@@ -11,7 +11,10 @@
 //! (measurements: `crater_carves_on_a_large_terrain`,
 //! `loading_a_saved_terrain_against_replaying_its_carves`,
 //! `carving_at_sixty_frames_per_second`,
-//! `crater_latency_to_meshes_and_colliders`). Each prints its figures, then
+//! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`). World:
+//! chunks of the `world` example's landscape built one at a time, their
+//! size, and an app streaming them around a focus flying at 1 m per frame.
+//! Each prints its figures, then
 //! one JSON line of them. `cargo test` runs this binary without `--bench`:
 //! it then measures nothing (see `support`).
 //!
@@ -38,7 +41,7 @@ fn main() {
     let Some(args) = Args::parse("terrain") else {
         return;
     };
-    let all: [(&str, fn()); 4] = [
+    let all: [(&str, fn()); 5] = [
         (
             "crater_carves_on_a_large_terrain",
             crater_carves_on_a_large_terrain,
@@ -55,6 +58,7 @@ fn main() {
             "crater_latency_to_meshes_and_colliders",
             crater_latency_to_meshes_and_colliders,
         ),
+        ("streaming_a_world", streaming_a_world),
     ];
     for (name, measure) in all {
         if args.wants(name) {
@@ -676,4 +680,220 @@ fn crater_latency_to_meshes_and_colliders() {
         updates.last().copied().unwrap_or(0)
     );
     json_line("terrain::crater_latency_to_meshes_and_colliders", figures);
+}
+
+/// The `world` example's landscape and layout: a 1 cm grid, 20.48 m
+/// chunks, samples 1.28 m apart, with (or without) grass and dirt bands.
+fn world_of_the_example(layers: bool) -> bevy_chisel::terrain::TerrainWorld {
+    use bevy_chisel::terrain::{TerrainWorld, WorldLayout};
+    let layout = WorldLayout {
+        quantization: Quantization::new(0.01, [0.0; 3]).expect("valid unit"),
+        chunk_log2: 11,
+        spacing_log2: 7,
+        floor: 0,
+        label: 1,
+        layers: if layers {
+            vec![(120, 2), (25, 3)]
+        } else {
+            Vec::new()
+        },
+    };
+    TerrainWorld::new(layout, example_noise()).expect("valid layout")
+}
+
+/// The `world` example's landscape.
+fn example_noise() -> bevy_chisel::terrain::ValueNoise {
+    use bevy_chisel::terrain::{NoiseOctave, ValueNoise};
+    let octave = |cell, amplitude, seed| NoiseOctave {
+        cell,
+        amplitude,
+        seed,
+    };
+    ValueNoise {
+        base: 100,
+        octaves: vec![octave(24, 650, 1), octave(6, 180, 2)],
+    }
+}
+
+fn streaming_a_world() {
+    use bevy::transform::TransformPlugin;
+    use bevy_chisel::terrain::{
+        ChunkCoord, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve, WorldSource,
+    };
+
+    let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
+    let side = (chunks as f64).sqrt().ceil() as i64;
+    let mut figures = serde_json::Map::new();
+    for layers in [false, true] {
+        let world = world_of_the_example(layers);
+        let mut times = Vec::new();
+        let (mut bsp_bytes, mut leaves, mut file_bytes) = (0usize, 0usize, 0usize);
+        for k in 0..chunks {
+            let coord = ChunkCoord {
+                x: k % side,
+                z: k / side,
+            };
+            let start = Instant::now();
+            let terrain = world.generate_chunk(coord).expect("chunk builds");
+            times.push(start.elapsed());
+            let stats = terrain.octree().stats();
+            bsp_bytes += stats.bsp_bytes;
+            leaves += stats.leaves;
+            file_bytes += terrain.to_bytes().len();
+        }
+        times.sort_unstable();
+        let n = chunks as usize;
+        let tag = if layers { "with_bands" } else { "no_bands" };
+        println!(
+            "chunk build ({tag}), one thread, {chunks} chunks: median {:.1} ms, p90 {:.1} ms; \
+             per chunk {} leaves, {} BSP bytes, {} file bytes",
+            percentile(&times, 0.5),
+            percentile(&times, 0.9),
+            leaves / n,
+            bsp_bytes / n,
+            file_bytes / n
+        );
+        figures.insert(
+            format!("build_median_ms_{tag}"),
+            percentile(&times, 0.5).into(),
+        );
+        figures.insert(
+            format!("build_p90_ms_{tag}"),
+            percentile(&times, 0.9).into(),
+        );
+        figures.insert(format!("bsp_bytes_per_chunk_{tag}"), (bsp_bytes / n).into());
+        figures.insert(
+            format!("file_bytes_per_chunk_{tag}"),
+            (file_bytes / n).into(),
+        );
+    }
+
+    // An app streaming the banded world around a focus flying along x at
+    // CHISEL_BENCH_SPEED m/s (default 50), frames paced at 60 per second,
+    // blasting a crater every CHISEL_BENCH_CRATER_EVERY metres (default 6;
+    // 0 for none), with render meshes built (no renderer).
+    let frames: usize = env_or("CHISEL_BENCH_FRAMES", 600);
+    let speed: f32 = env_or("CHISEL_BENCH_SPEED", 50.0);
+    let crater_every: f32 = env_or("CHISEL_BENCH_CRATER_EVERY", 6.0);
+    let world = world_of_the_example(true)
+        .with_streaming(StreamSettings {
+            load_radius: 30.0,
+            unload_radius: 45.0,
+            max_building: 4,
+        })
+        .expect("valid settings");
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins,
+        TransformPlugin,
+        AssetPlugin::default(),
+        TerrainPlugin,
+    ))
+    .init_asset::<Mesh>()
+    .init_asset::<StandardMaterial>();
+    let world = app.world_mut().spawn(world).id();
+    let focus = app
+        .world_mut()
+        .spawn((TerrainFocus, Transform::from_xyz(0.0, 20.0, 10.0)))
+        .id();
+    let settled = |app: &App| {
+        let w = app.world().get::<TerrainWorld>(world).expect("world");
+        w.is_settled()
+            && w.live_chunks().count() > 0
+            && w.live_chunks()
+                .all(|(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle))
+    };
+    let start = Instant::now();
+    while !settled(&app) && start.elapsed() < Duration::from_secs(600) {
+        app.update();
+    }
+    let first = start.elapsed();
+    let live = app
+        .world()
+        .get::<TerrainWorld>(world)
+        .expect("world")
+        .stats()
+        .live;
+    println!(
+        "first fill: {live} chunks built and meshed in {:.0} ms ({:.1} chunks/s)",
+        first.as_secs_f64() * 1e3,
+        live as f64 / first.as_secs_f64()
+    );
+    let noise = example_noise();
+    let mut frame_times = Vec::with_capacity(frames);
+    let frame = Duration::from_secs_f64(1.0 / 60.0);
+    let built_before = {
+        let s = app
+            .world()
+            .get::<TerrainWorld>(world)
+            .expect("world")
+            .stats();
+        s.generated + s.restored
+    };
+    let mut next_crater = 0.0;
+    let start = Instant::now();
+    for k in 0..frames {
+        let due = start + frame * k as u32;
+        if let Some(wait) = due.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        let x = speed * k as f32 / 60.0;
+        app.world_mut()
+            .get_mut::<Transform>(focus)
+            .expect("focus")
+            .translation
+            .x = x;
+        if crater_every > 0.0 && x >= next_crater {
+            next_crater = x + crater_every;
+            // On the ground 14 m ahead (the nearest sample's height).
+            let ground = noise.height(((x + 14.0) / 1.28).round() as i64, 8) as f32 * 0.01;
+            app.world_mut().write_message(WorldCarve {
+                world,
+                tool: CarveTool::dodecahedron(1.6, Vec3::new(x + 14.0, ground, 10.24)),
+                edit: Edit::Subtract,
+            });
+        }
+        let t = Instant::now();
+        app.update();
+        frame_times.push(t.elapsed());
+    }
+    let flown = start.elapsed();
+    let stats = app
+        .world()
+        .get::<TerrainWorld>(world)
+        .expect("world")
+        .stats()
+        .clone();
+    frame_times.sort_unstable();
+    let built = stats.generated + stats.restored - built_before;
+    println!(
+        "flying {:.0} m at {speed} m/s, {frames} frames at 60/s: main-thread update median \
+         {:.2} ms, p99 {:.2} ms, max {:.2} ms; {built} chunks built ({:.1} chunks/s, {:.1} ms \
+         each on the pool); {} live, {} building, {} edited chunks stored in {} bytes",
+        speed * frames as f32 / 60.0,
+        percentile(&frame_times, 0.5),
+        percentile(&frame_times, 0.99),
+        percentile(&frame_times, 1.0),
+        built as f64 / flown.as_secs_f64(),
+        stats.build_time.as_secs_f64() * 1e3 / (stats.generated + stats.restored).max(1) as f64,
+        stats.live,
+        stats.building,
+        stats.stored,
+        stats.stored_bytes
+    );
+    figures.insert("first_fill_ms".into(), (first.as_secs_f64() * 1e3).into());
+    figures.insert("first_fill_chunks".into(), live.into());
+    figures.insert(
+        "frame_median_ms".into(),
+        percentile(&frame_times, 0.5).into(),
+    );
+    figures.insert("frame_p99_ms".into(), percentile(&frame_times, 0.99).into());
+    figures.insert("chunks_built".into(), built.into());
+    figures.insert(
+        "chunks_per_s".into(),
+        (built as f64 / flown.as_secs_f64()).into(),
+    );
+    figures.insert("stored_chunks".into(), stats.stored.into());
+    figures.insert("stored_bytes".into(), stats.stored_bytes.into());
+    json_line("streaming_a_world", serde_json::Value::Object(figures));
 }

@@ -125,6 +125,20 @@ pub enum TerrainError {
         /// What was found.
         reason: String,
     },
+    /// A terrain world's layout, streaming settings or source is unusable,
+    /// or a chunk file belongs to another world.
+    #[error("invalid terrain world: {reason}")]
+    InvalidWorld {
+        /// What is wrong.
+        reason: String,
+    },
+    /// A terrain world cannot be saved now: a carve waits for a chunk or
+    /// an edited chunk has work in progress; save once it is settled.
+    #[error("terrain world chunk {chunk:?} has carves in progress; save when the world is settled")]
+    WorldNotIdle {
+        /// The chunk (x, z).
+        chunk: [i64; 2],
+    },
 }
 
 impl From<chisel_bsp::Error> for TerrainError {

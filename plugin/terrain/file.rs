@@ -259,7 +259,10 @@ impl Terrain {
 /// sync of the folder (so the rename itself survives a crash). On any
 /// error before the rename the temporary file is removed and `path` is
 /// untouched.
-fn write_atomic(path: &Path, fill: impl FnOnce(&mut File) -> io::Result<()>) -> io::Result<()> {
+pub(super) fn write_atomic(
+    path: &Path,
+    fill: impl FnOnce(&mut File) -> io::Result<()>,
+) -> io::Result<()> {
     let name = path
         .file_name()
         .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?

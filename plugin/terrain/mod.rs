@@ -33,6 +33,9 @@
 //!   ([`TerrainCarved`], [`TerrainCarveRejected`], [`TerrainCellRebuilt`],
 //!   [`TerrainDebrisDetached`]), for observers.
 //! - [`error`] — [`TerrainError`].
+//! - [`world`] — [`TerrainWorld`]: large worlds as a grid of terrain
+//!   chunks from a procedural [`WorldSource`], streamed around
+//!   [`TerrainFocus`] entities, with only edited chunks stored.
 //!
 //! A carve runs through four modules in order, each once:
 //!
@@ -119,6 +122,7 @@ pub mod snapshot;
 pub mod spawn;
 pub mod tool;
 pub mod upload;
+pub mod world;
 
 use bevy::asset::AssetPlugin;
 use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleLabel};
@@ -153,6 +157,10 @@ pub use spawn::{HeightLayer, Heightfield, terrain_octree_config};
 pub use tool::{
     CarveShape, CarveTool, DEFAULT_ROUND_TOLERANCE, GridTool, MAX_ROUND_CORNERS,
     MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
+};
+pub use world::{
+    ChunkCoord, HeightArray, NoiseOctave, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise,
+    WorldCarve, WorldChunk, WorldLayout, WorldSource, WorldStats,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
@@ -234,6 +242,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_message::<CarveRejected>()
         .add_message::<DebrisDetached>()
         .add_message::<TerrainCellChanged>()
+        .add_message::<WorldCarve>()
         .register_type::<Terrain>()
         .register_type::<TerrainCell>()
         .register_type::<TerrainDebris>()
@@ -248,6 +257,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<CarveRejected>()
         .register_type::<TerrainCellChanged>()
         .register_type::<DebrisDetached>()
+        .register_type::<TerrainFocus>()
+        .register_type::<WorldChunk>()
+        .register_type::<WorldCarve>()
         .register_type::<CarveTool>()
         .register_type::<Heightfield>()
         .register_type::<TerrainSource>()
@@ -268,6 +280,12 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
                 upload::upload_meshes.in_set(TerrainSystems::Mesh),
                 events::trigger_events.after(TerrainSystems::Mesh),
                 asset::spawn_from_assets.before(TerrainSystems::Carve),
+                (
+                    world::stream::route_world_carves,
+                    world::stream::stream_chunks,
+                )
+                    .chain()
+                    .before(TerrainSystems::Carve),
             ),
         );
     if schedule == Update.intern() {

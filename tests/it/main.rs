@@ -74,6 +74,8 @@ mod terrain_prop_tools;
 mod terrain_round_tools;
 #[cfg(feature = "viewer")]
 mod terrain_seams_render;
+#[cfg(feature = "terrain")]
+mod terrain_world;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]

@@ -1,0 +1,289 @@
+//! A streamed world: a camera flies over a procedural landscape at 10 m/s,
+//! blasting a crater every few metres; terrain chunks stream in ahead of
+//! it (built on the async compute pool, nearest first) and out behind it,
+//! and the chunks it carved are kept and come back exactly as left.
+//!
+//! The landscape is integer value noise on a 1 cm grid (exact and the
+//! same on every machine); the chunks are 20.48 m cubes, each an ordinary
+//! destructible terrain. The HUD shows the chunk counts and build times.
+//!
+//! Runs in a window when a display exists; otherwise renders headless,
+//! flies a fixed path and writes PNG screenshots to `screenshots/`.
+//!
+//! `cargo run --release --example world`
+
+use std::time::Duration;
+
+use bevy::prelude::*;
+use bevy_chisel::bsp::octree::Edit;
+use bevy_chisel::bsp::tools::Quantization;
+use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
+use bevy_chisel::terrain::{
+    NoiseOctave, StreamSettings, Terrain, TerrainFocus, TerrainMaterials, TerrainPlugin,
+    TerrainSurface, TerrainSystems, TerrainWorld, TriplanarMaterial, TriplanarMaterialPlugin,
+    ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldSource, surface_table,
+};
+use bevy_chisel::viewer::{Overlay, blast, overlay_text};
+
+const ROCK: u8 = 1;
+const DIRT: u8 = 2;
+const GRASS: u8 = 3;
+
+/// Grid unit (m).
+const UNIT: f64 = 0.01;
+/// Chunk edge 2^11 cm = 20.48 m; samples 2^7 cm = 1.28 m apart.
+const CHUNK_LOG2: u8 = 11;
+const SPACING_LOG2: u8 = 7;
+/// Flying speed (m/s) and height above the ground (m).
+const SPEED: f32 = 10.0;
+const ALTITUDE: f32 = 14.0;
+/// A crater every this many metres flown.
+const CRATER_EVERY: f32 = 6.0;
+const CRATER_RADIUS: f32 = 1.6;
+/// Headless: the camera moves this far per counted frame.
+const HEADLESS_STEP: f32 = 1.0;
+
+fn main() -> AppExit {
+    let presentation = match Presentation::detect("world") {
+        Presentation::Headless(config) => Presentation::Headless(HeadlessConfig {
+            capture_frames: vec![4, 36],
+            max_frames: 3000,
+            ..config
+        }),
+        window => window,
+    };
+    let headless = matches!(presentation, Presentation::Headless(_));
+    let mut app = App::new();
+    presentation.add_default_plugins(&mut app, "bevy_chisel — world");
+    app.add_plugins((TerrainPlugin, TriplanarMaterialPlugin))
+        .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+        .insert_resource(Flight {
+            headless,
+            ..default()
+        })
+        .add_systems(Startup, spawn_scene)
+        .add_systems(
+            Update,
+            (
+                fly.before(TerrainSystems::Carve),
+                update_hud.after(TerrainSystems::Mesh),
+            ),
+        )
+        .add_observer(give_chunks_materials);
+    if headless {
+        app.insert_resource(HoldCaptures(true));
+    }
+    app.run()
+}
+
+/// The landscape: integer value noise, 1 m to about 9.2 m high, hills
+/// about 30 m across with bumps of 8 m.
+fn landscape() -> ValueNoise {
+    ValueNoise {
+        base: 100,
+        octaves: vec![
+            NoiseOctave {
+                cell: 24,
+                amplitude: 650,
+                seed: 1,
+            },
+            NoiseOctave {
+                cell: 6,
+                amplitude: 180,
+                seed: 2,
+            },
+        ],
+    }
+}
+
+/// The ground's height (m) at the sample nearest `(x, z)`.
+fn ground(x: f32, z: f32) -> f32 {
+    let spacing = (1i64 << SPACING_LOG2) as f32 * UNIT as f32;
+    let (i, j) = ((x / spacing).round() as i64, (z / spacing).round() as i64);
+    landscape().height(i, j) as f32 * UNIT as f32
+}
+
+fn spawn_scene(mut commands: Commands, mut materials: ResMut<Assets<TriplanarMaterial>>) -> Result {
+    let table = surface_table(
+        &mut materials,
+        [
+            (ROCK, TerrainSurface::Rock),
+            (DIRT, TerrainSurface::Dirt),
+            (GRASS, TerrainSurface::Grass),
+        ],
+        TerrainSurface::Rock,
+    );
+    commands.insert_resource(Palette(table));
+    let layout = WorldLayout {
+        quantization: Quantization::new(UNIT, [0.0; 3])?,
+        chunk_log2: CHUNK_LOG2,
+        spacing_log2: SPACING_LOG2,
+        floor: 0,
+        label: ROCK,
+        // Grass 25 cm deep over 1.2 m of dirt, in grid units.
+        layers: vec![(120, DIRT), (25, GRASS)],
+    };
+    let world = TerrainWorld::new(layout, landscape())?.with_streaming(StreamSettings {
+        load_radius: 30.0,
+        unload_radius: 45.0,
+        max_building: 4,
+    })?;
+    commands.spawn((world, Name::new("world")));
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 11_000.0,
+            shadow_maps_enabled: true,
+            ..default()
+        },
+        Transform::from_xyz(12.0, 25.0, 8.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    commands.insert_resource(GlobalAmbientLight {
+        brightness: 400.0,
+        ..default()
+    });
+    commands.spawn((
+        Camera3d::default(),
+        TerrainFocus,
+        camera_at(0.0),
+        Name::new("flying camera"),
+    ));
+    commands.spawn(overlay_text());
+    Ok(())
+}
+
+/// The camera `distance` metres along its path (+x), looking ahead and
+/// down.
+fn camera_at(distance: f32) -> Transform {
+    let (x, z) = (distance, 10.0);
+    let eye = Vec3::new(x, ground(x, z) + ALTITUDE, z);
+    Transform::from_translation(eye)
+        .looking_at(Vec3::new(x + 18.0, ground(x + 18.0, z), z), Vec3::Y)
+}
+
+/// The chunks' look: the world's material table on every chunk.
+#[derive(Resource)]
+struct Palette(TerrainMaterials<TriplanarMaterial>);
+
+fn give_chunks_materials(add: On<Add, WorldChunk>, palette: Res<Palette>, mut commands: Commands) {
+    commands.entity(add.entity).insert(palette.0.clone());
+}
+
+#[derive(Resource, Default)]
+struct Flight {
+    headless: bool,
+    distance: f32,
+    next_crater: f32,
+    craters: usize,
+    /// Headless: frames counted towards the captures.
+    counted: u32,
+}
+
+/// Flies the camera and blasts a crater ahead of it every few metres. In
+/// a headless run the camera moves a fixed step per frame, and only once
+/// every chunk in reach is built and meshed (the captures wait as well).
+fn fly(
+    time: Res<Time>,
+    mut flight: ResMut<Flight>,
+    mut hold: Option<ResMut<HoldCaptures>>,
+    worlds: Query<(Entity, &TerrainWorld)>,
+    terrains: Query<&Terrain>,
+    mut camera: Query<&mut Transform, With<TerrainFocus>>,
+    mut carves: MessageWriter<WorldCarve>,
+) {
+    let Ok((world_entity, world)) = worlds.single() else {
+        return;
+    };
+    let step = if flight.headless {
+        let settled = world.is_settled()
+            && world.live_chunks().count() > 0
+            && world
+                .live_chunks()
+                .all(|(_, e)| terrains.get(e).is_ok_and(Terrain::is_idle));
+        if let Some(hold) = hold.as_mut() {
+            hold.0 = !settled;
+        }
+        if !settled {
+            return;
+        }
+        flight.counted += 1;
+        if flight.counted == 36 {
+            report(world);
+        }
+        HEADLESS_STEP
+    } else {
+        SPEED * time.delta_secs()
+    };
+    flight.distance += step;
+    if let Ok(mut transform) = camera.single_mut() {
+        *transform = camera_at(flight.distance);
+    }
+    if flight.distance >= flight.next_crater {
+        flight.next_crater = flight.distance + CRATER_EVERY;
+        let (x, z) = (
+            flight.distance + 14.0,
+            10.0 + 3.0 * (flight.craters % 3) as f32 - 3.0,
+        );
+        carves.write(WorldCarve {
+            world: world_entity,
+            tool: blast(Vec3::new(x, ground(x, z), z), CRATER_RADIUS, flight.craters),
+            edit: Edit::Subtract,
+        });
+        flight.craters += 1;
+    }
+}
+
+fn report(world: &TerrainWorld) {
+    let s = world.stats();
+    let built = s.generated + s.restored;
+    info!(
+        "world: {} chunks built ({} generated, {} restored), {:.1} ms each on the pool; \
+         {} live, {} released, {} edited chunks stored in {} bytes",
+        built,
+        s.generated,
+        s.restored,
+        s.build_time.as_secs_f64() * 1e3 / built.max(1) as f64,
+        s.live,
+        s.released,
+        s.stored,
+        s.stored_bytes,
+    );
+}
+
+fn update_hud(
+    flight: Res<Flight>,
+    worlds: Query<&TerrainWorld>,
+    terrains: Query<&Terrain>,
+    mut hud: Query<&mut Text, With<Overlay>>,
+) {
+    let Ok(world) = worlds.single() else {
+        return;
+    };
+    let s = world.stats();
+    let built = (s.generated + s.restored).max(1);
+    let triangles: usize = world
+        .live_chunks()
+        .filter_map(|(_, e)| terrains.get(e).ok())
+        .map(Terrain::triangle_count)
+        .sum();
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let lines = [
+        "bevy_chisel world: streamed exact terrain chunks".to_owned(),
+        format!(
+            "flown {:.0} m | craters {} | triangles {triangles}",
+            flight.distance, flight.craters
+        ),
+        format!(
+            "chunks: {} live, {} building, {} edited stored ({} kB) | built {} ({} restored), {:.1} ms each",
+            s.live,
+            s.building,
+            s.stored,
+            s.stored_bytes / 1024,
+            s.generated + s.restored,
+            s.restored,
+            ms(s.build_time) / built as f64
+        ),
+    ];
+    for mut text in &mut hud {
+        text.0 = lines.join("\n");
+    }
+}

@@ -1,0 +1,381 @@
+//! Large worlds: a grid of terrain chunks streamed around focus entities,
+//! built from a procedural source, with only the edited chunks stored.
+//!
+//! ## Design
+//!
+//! A [`TerrainWorld`] entity covers an unbounded area in x and z with a
+//! grid of chunks ([`WorldLayout`]). Each chunk is an ordinary [`Terrain`]
+//! entity, a child of the world: its own octree over one cube of edge
+//! `2^chunk_log2` grid units, with its own cell meshes, colliders, carve
+//! jobs and undo. Everything the single-terrain code does (exact carves,
+//! seamed meshes, debris, physics, files) is reused per chunk unchanged;
+//! the world only decides which chunks exist and routes carves to them.
+//!
+//! The alternative — one octree whose unedited leaves are regenerated on
+//! demand — would save the per-chunk roots but needs the kernel to hold
+//! "virtual" leaves; chunks as terrains need no kernel change and keep
+//! every chunk's state hash, file and journal exact on its own.
+//!
+//! 1. **Source** ([`source`]): a [`WorldSource`] gives the exact grid
+//!    height of every lattice sample (a closure, integer [`ValueNoise`],
+//!    or a [`HeightArray`] from a heightfield image). A chunk's base is the heightfield of the
+//!    samples on and inside its square, its walls on the cube's sides.
+//! 2. **Streaming** ([`stream`]): chunks whose square comes within
+//!    [`StreamSettings::load_radius`] of a [`TerrainFocus`] are built on
+//!    the async compute pool, nearest first, at most
+//!    [`StreamSettings::max_building`] at a time; chunks farther than
+//!    [`StreamSettings::unload_radius`] from every focus are despawned
+//!    (hysteresis between the two radii). [`TerrainWorld::stats`] counts
+//!    what is live, building and stored.
+//! 3. **Sparse edits**: a chunk nobody carved is never stored; it is
+//!    rebuilt from the source when it streams in again. An edited chunk is
+//!    kept as its terrain file bytes ([`Terrain::to_bytes`]: octree, undo
+//!    history and journal, exact) when it streams out, and restored from
+//!    them bit-identically when it streams back in. A [`WorldCarve`] is
+//!    rounded to the grid once and sent to every chunk its tool overlaps
+//!    (as a [`GridCarve`](super::GridCarve)); a chunk that is not live
+//!    then is built at once, whatever its distance, and holds the carve
+//!    until it is.
+//! 4. **Files** ([`store`]): [`TerrainWorld::save`] writes one terrain
+//!    file per edited chunk (`chunk_X_Z.chiselterrain`, atomically, as
+//!    [`Terrain::save`]); [`TerrainWorld::load_edits`] reads them back,
+//!    checking that each belongs to this world (same grid, same base).
+//!
+//! ## Chunk borders
+//!
+//! Neighbouring chunks see the same samples and the same diagonals on
+//! their shared side, so their solids meet there exactly and a carve
+//! across the border removes exactly the tool's volume from the two
+//! together (tested against one terrain over both chunks). Each chunk
+//! closes its own solid with a wall on the shared side; the two walls
+//! coincide, face into the neighbour's solid and stay hidden under the
+//! surface, and a carve that opens the border cuts both with the same
+//! exact tool.
+//!
+//! What is not stitched yet (left for the level-of-detail work):
+//! - **T-junctions.** Within a terrain the seamed mesher splits every
+//!   cell's border edges at its neighbours' wall points
+//!   ([`chisel_bsp::octree::SeamedMesher`]); across a chunk border it has
+//!   no neighbours, so where the border cells of two chunks differ in size
+//!   one side's edge may pass a vertex of the other without one. The exact
+//!   surfaces meet, but rasterised triangles may leave pixel-wide gaps
+//!   along such edges; the chunks' side walls behind them are what shows
+//!   through, not the sky. To measure: take both chunks' cell meshes, keep
+//!   the edges lying in the shared plane (leaving out the walls), and
+//!   count the vertices of either side strictly inside an edge of the
+//!   other. The test of a carve across a border does this: every border
+//!   vertex lies on the neighbour's border edges, and after its crater 2
+//!   of them are T-junctions.
+//! - **Normals.** Smooth normals are averaged per chunk, so shading can
+//!   show a faint line along a border.
+//! - **Debris.** Detection runs per chunk with the chunk's sides as
+//!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
+//!   in place, anchored by the border; nothing is wrongly detached.
+//!
+//! Level of detail and seams between levels are not part of this module
+//! yet.
+
+pub mod source;
+pub mod store;
+pub mod stream;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Duration;
+
+use bevy::prelude::*;
+use bevy::tasks::Task;
+use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig, Edit};
+use chisel_bsp::tree::Label;
+
+use super::component::Terrain;
+use super::error::TerrainError;
+use super::tool::{CarveTool, GridTool};
+
+pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
+
+/// A chunk's position in its world's grid of chunks (x and z).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Reflect)]
+pub struct ChunkCoord {
+    /// Chunk index along x.
+    pub x: i64,
+    /// Chunk index along z.
+    pub z: i64,
+}
+
+/// Marks an entity (camera, player) around which a world's chunks are
+/// streamed in.
+#[derive(Component, Reflect, Clone, Copy, Debug, Default)]
+#[reflect(Component, Default)]
+pub struct TerrainFocus;
+
+/// A chunk entity of a [`TerrainWorld`] (it also has its [`Terrain`]).
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq)]
+#[reflect(Component)]
+pub struct WorldChunk {
+    /// The world entity.
+    pub world: Entity,
+    /// Its place in the world.
+    pub coord: ChunkCoord,
+}
+
+/// How far around the foci chunks are kept, and how many build at once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamSettings {
+    /// Chunks whose square comes this close (world units, horizontally)
+    /// to a focus are streamed in.
+    pub load_radius: f32,
+    /// Chunks farther than this from every focus are streamed out (at
+    /// least `load_radius`; the gap is the hysteresis).
+    pub unload_radius: f32,
+    /// Most chunk builds on the async compute pool at once.
+    pub max_building: usize,
+}
+
+impl Default for StreamSettings {
+    fn default() -> Self {
+        Self {
+            load_radius: 64.0,
+            unload_radius: 96.0,
+            max_building: 4,
+        }
+    }
+}
+
+/// Counts of a world's chunks and its streaming work so far.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WorldStats {
+    /// Chunks with a terrain entity now.
+    pub live: usize,
+    /// Chunks being built or restored now.
+    pub building: usize,
+    /// Edited chunks kept while streamed out.
+    pub stored: usize,
+    /// Bytes of the stored chunks.
+    pub stored_bytes: usize,
+    /// Chunks built from the source so far.
+    pub generated: u64,
+    /// Chunks restored from their stored state so far.
+    pub restored: u64,
+    /// Chunks streamed out so far.
+    pub released: u64,
+    /// Chunk builds that failed (a bad source sample); see the log.
+    pub failed: u64,
+    /// Time spent building chunks on the pool (generated and restored).
+    pub build_time: Duration,
+}
+
+/// The state of one chunk the world knows.
+pub(crate) enum Chunk {
+    /// Being built or restored on the async compute pool.
+    Building(Task<Built>),
+    /// A terrain entity.
+    Live(Entity),
+    /// The build failed; not retried.
+    Failed,
+}
+
+/// A chunk build's result, from the async compute pool.
+pub(crate) struct Built {
+    pub(crate) terrain: Result<Terrain, TerrainError>,
+    pub(crate) time: Duration,
+    /// Restored from stored bytes rather than generated.
+    pub(crate) restored: bool,
+}
+
+/// A streamed world of terrain chunks. Spawn it with a
+/// [`WorldLayout`] and a [`WorldSource`]; put [`TerrainFocus`] on the
+/// entities chunks should stream around, and carve it with [`WorldCarve`].
+#[derive(Component)]
+#[require(Transform)]
+#[cfg_attr(feature = "render", require(Visibility))]
+pub struct TerrainWorld {
+    pub(crate) layout: WorldLayout,
+    pub(crate) source: SharedSource,
+    pub(crate) settings: StreamSettings,
+    /// Labels carves may add or paint besides the layout's.
+    pub(crate) labels: Vec<Label>,
+    pub(crate) chunks: BTreeMap<ChunkCoord, Chunk>,
+    /// Terrain file bytes of edited chunks that are not live.
+    pub(crate) stored: BTreeMap<ChunkCoord, Arc<Vec<u8>>>,
+    /// Carves for chunks that are not live yet, in order.
+    pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit)>>,
+    pub(crate) stats: WorldStats,
+    pub(crate) next_request: u64,
+}
+
+impl TerrainWorld {
+    /// A world cut as `layout`, its surface from `source`.
+    ///
+    /// # Errors
+    /// [`TerrainError::InvalidWorld`] for bad sizes ([`WorldLayout::check`]).
+    pub fn new(layout: WorldLayout, source: impl WorldSource) -> Result<Self, TerrainError> {
+        layout.check()?;
+        Ok(Self {
+            layout,
+            source: Arc::new(source),
+            settings: StreamSettings::default(),
+            labels: Vec::new(),
+            chunks: BTreeMap::new(),
+            stored: BTreeMap::new(),
+            pending: BTreeMap::new(),
+            stats: WorldStats::default(),
+            next_request: 0,
+        })
+    }
+
+    /// With these streaming radii and build limit.
+    ///
+    /// # Errors
+    /// [`TerrainError::InvalidWorld`] for a non-finite or negative radius,
+    /// an unload radius below the load radius, or no builds allowed.
+    pub fn with_streaming(mut self, settings: StreamSettings) -> Result<Self, TerrainError> {
+        let ok = settings.load_radius.is_finite()
+            && settings.load_radius >= 0.0
+            && settings.unload_radius.is_finite()
+            && settings.unload_radius >= settings.load_radius
+            && settings.max_building > 0;
+        if !ok {
+            return Err(TerrainError::InvalidWorld {
+                reason: format!(
+                    "streaming needs 0 <= load_radius <= unload_radius and max_building > 0, \
+                     got {settings:?}"
+                ),
+            });
+        }
+        self.settings = settings;
+        Ok(self)
+    }
+
+    /// Declares materials that carves may add or paint in every chunk
+    /// ([`Terrain::with_labels`]).
+    #[must_use]
+    pub fn with_labels(mut self, labels: impl IntoIterator<Item = Label>) -> Self {
+        self.labels.extend(labels);
+        self
+    }
+
+    /// The layout.
+    #[must_use]
+    pub fn layout(&self) -> &WorldLayout {
+        &self.layout
+    }
+
+    /// The streaming settings.
+    #[must_use]
+    pub fn streaming(&self) -> &StreamSettings {
+        &self.settings
+    }
+
+    /// Counts of chunks and streaming work.
+    #[must_use]
+    pub fn stats(&self) -> &WorldStats {
+        &self.stats
+    }
+
+    /// The terrain entity of chunk `coord`, when it is live.
+    #[must_use]
+    pub fn chunk_entity(&self, coord: ChunkCoord) -> Option<Entity> {
+        match self.chunks.get(&coord) {
+            Some(Chunk::Live(entity)) => Some(*entity),
+            _ => None,
+        }
+    }
+
+    /// Every live chunk with its terrain entity, in coordinate order.
+    pub fn live_chunks(&self) -> impl Iterator<Item = (ChunkCoord, Entity)> + '_ {
+        self.chunks.iter().filter_map(|(c, s)| match s {
+            Chunk::Live(e) => Some((*c, *e)),
+            _ => None,
+        })
+    }
+
+    /// The edited chunks kept while streamed out.
+    pub fn stored_chunks(&self) -> impl Iterator<Item = ChunkCoord> + '_ {
+        self.stored.keys().copied()
+    }
+
+    /// Whether no chunk is building and no carve waits for a chunk.
+    #[must_use]
+    pub fn is_settled(&self) -> bool {
+        self.pending.is_empty()
+            && !self
+                .chunks
+                .values()
+                .any(|c| matches!(c, Chunk::Building(_)))
+    }
+
+    /// The terrain of chunk `coord` as generated from the source, without
+    /// any edit (what an unedited chunk streams in as).
+    ///
+    /// # Errors
+    /// As [`WorldLayout::chunk_base`] and [`Terrain::from_base`].
+    pub fn generate_chunk(&self, coord: ChunkCoord) -> Result<Terrain, TerrainError> {
+        generate(&self.layout, &*self.source, &self.labels, coord)
+    }
+}
+
+/// The debris settings of a chunk: anchored by the cube's bottom and its
+/// four sides (solid on a side continues into the neighbouring chunk), and
+/// by the base's floor.
+#[must_use]
+pub fn chunk_debris(floor: chisel_bsp::octree::CellBox) -> DebrisConfig {
+    let side = |axis, upper| CubeSide { axis, upper };
+    DebrisConfig {
+        anchors: Anchors {
+            sides: vec![
+                CubeSide::BOTTOM,
+                side(0, false),
+                side(0, true),
+                side(2, false),
+                side(2, true),
+            ],
+            boxes: vec![floor],
+        },
+        max_volume: None,
+        max_cells: None,
+    }
+}
+
+pub(crate) fn generate(
+    layout: &WorldLayout,
+    source: &dyn WorldSource,
+    labels: &[Label],
+    coord: ChunkCoord,
+) -> Result<Terrain, TerrainError> {
+    let base = layout.chunk_base(source, coord)?;
+    let floor = base.floor();
+    Ok(
+        Terrain::from_base(layout.quantization, base, super::terrain_octree_config())?
+            .with_labels(labels.iter().copied())
+            .with_debris(Some(chunk_debris(floor))),
+    )
+}
+
+pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, TerrainError> {
+    let terrain = Terrain::from_bytes(bytes)?;
+    let floor = terrain.base().floor();
+    Ok(terrain
+        .with_labels(labels.iter().copied())
+        .with_debris(Some(chunk_debris(floor))))
+}
+
+/// Carve a world: the tool (in the world entity's local frame) is rounded
+/// to the grid once and applied to every chunk it overlaps, each reporting
+/// its own [`CarveApplied`](super::CarveApplied) or
+/// [`CarveRejected`](super::CarveRejected) for its terrain entity. A tool
+/// that reaches no chunk's cube, or adds or paints a material the world
+/// does not know, is rejected for the world entity. A chunk that is not
+/// live is built for the carve; if its build fails (a bad source sample)
+/// its waiting carves are dropped with a warning in the log.
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
+pub struct WorldCarve {
+    /// The world entity.
+    pub world: Entity,
+    /// The tool, in the world's local frame.
+    pub tool: CarveTool,
+    /// What to do inside the tool.
+    #[reflect(ignore)]
+    pub edit: Edit,
+}

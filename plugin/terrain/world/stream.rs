@@ -1,0 +1,351 @@
+//! The world's systems: carves routed to the chunks their tools overlap,
+//! and chunks streamed in and out around the [`TerrainFocus`] entities.
+//!
+//! Distances are horizontal (x and z), in grid units, from a focus to the
+//! nearest point of a chunk's square; a chunk is wanted when one focus is
+//! within [`StreamSettings::load_radius`](super::StreamSettings) of it,
+//! and released once every focus is beyond `unload_radius` and the chunk
+//! is idle with no carve waiting for it.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use bevy::prelude::*;
+use bevy::tasks::AsyncComputeTaskPool;
+use bevy::tasks::futures::check_ready;
+
+use super::super::carve::{CarveRejected, GridCarve};
+use super::super::component::Terrain;
+use super::super::error::TerrainError;
+use super::{Built, Chunk, ChunkCoord, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk};
+use super::{generate, restore};
+
+/// Splits every [`WorldCarve`] into grid carves of the chunks its tool
+/// overlaps (the grid boxes of its pieces, open: a piece that only
+/// touches a chunk's side does not reach it). Chunks that are not live
+/// keep the carve until they are ([`stream_chunks`] builds them).
+pub fn route_world_carves(
+    mut carves: MessageReader<WorldCarve>,
+    mut worlds: Query<&mut TerrainWorld>,
+    mut rejected: MessageWriter<CarveRejected>,
+) {
+    for carve in carves.read() {
+        let Ok(mut world) = worlds.get_mut(carve.world) else {
+            rejected.write(CarveRejected {
+                terrain: carve.world,
+                request: None,
+                error: TerrainError::NoSuchTerrain,
+            });
+            continue;
+        };
+        match chunks_of(&world, carve) {
+            Ok((tool, coords)) => {
+                for coord in coords {
+                    world
+                        .pending
+                        .entry(coord)
+                        .or_default()
+                        .push((tool.clone(), carve.edit));
+                }
+            }
+            Err(error) => {
+                rejected.write(CarveRejected {
+                    terrain: carve.world,
+                    request: None,
+                    error,
+                });
+            }
+        }
+    }
+}
+
+/// The carve's grid tool and the chunks it reaches, in order.
+fn chunks_of(
+    world: &TerrainWorld,
+    carve: &WorldCarve,
+) -> Result<(super::super::tool::GridTool, Vec<ChunkCoord>), TerrainError> {
+    let layout = &world.layout;
+    if let chisel_bsp::octree::Edit::Add(label) | chisel_bsp::octree::Edit::Paint(label) =
+        carve.edit
+    {
+        let known = std::iter::once(layout.label)
+            .chain(layout.layers.iter().map(|&(_, l)| l))
+            .chain(world.labels.iter().copied())
+            .collect::<std::collections::BTreeSet<_>>();
+        if label != chisel_bsp::tree::EMPTY && !known.contains(&label) {
+            return Err(TerrainError::UnknownLabel {
+                label,
+                known: known.into_iter().collect(),
+            });
+        }
+    }
+    let tool = carve.tool.to_grid(&layout.quantization)?;
+    let edge = layout.chunk_edge();
+    let (bottom, top) = (layout.floor, layout.floor + edge);
+    let mut coords = std::collections::BTreeSet::new();
+    let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
+    for piece in &tool.pieces {
+        let (mut min, mut max) = ([i64::MAX; 3], [i64::MIN; 3]);
+        for p in piece {
+            for a in 0..3 {
+                min[a] = min[a].min(p[a]);
+                max[a] = max[a].max(p[a]);
+            }
+        }
+        for a in 0..3 {
+            lo[a] = lo[a].min(min[a]);
+            hi[a] = hi[a].max(max[a]);
+        }
+        if max[1] <= bottom || min[1] >= top || max[0] <= min[0] || max[2] <= min[2] {
+            continue;
+        }
+        for x in min[0].div_euclid(edge)..=(max[0] - 1).div_euclid(edge) {
+            for z in min[2].div_euclid(edge)..=(max[2] - 1).div_euclid(edge) {
+                coords.insert(ChunkCoord { x, z });
+            }
+        }
+    }
+    if coords.is_empty() {
+        return Err(TerrainError::OutsideTerrain {
+            tool_min: lo,
+            tool_max: hi,
+        });
+    }
+    Ok((tool, coords.into_iter().collect()))
+}
+
+/// Streams every world's chunks: collects finished builds as terrain
+/// entities, hands waiting carves to live chunks, starts builds of the
+/// wanted chunks nearest first (chunks with waiting carves before all),
+/// and releases chunks beyond the unload radius, keeping the state of
+/// edited ones.
+pub fn stream_chunks(
+    mut commands: Commands,
+    mut worlds: Query<(Entity, &mut TerrainWorld, &GlobalTransform)>,
+    foci: Query<&GlobalTransform, With<TerrainFocus>>,
+    terrains: Query<&Terrain>,
+    mut grid_carves: MessageWriter<GridCarve>,
+) {
+    for (world_entity, mut world, world_transform) in &mut worlds {
+        let world = &mut *world;
+        collect_builds(&mut commands, world_entity, world);
+        // Chunks that were just sent carves are not idle yet, though their
+        // queues fill only when the terrain systems read the messages.
+        let just_carved = send_pending(world, &terrains, &mut grid_carves);
+
+        let layout = &world.layout;
+        let unit = layout.quantization.unit();
+        let origin = layout.quantization.origin();
+        let to_local = world_transform.affine().inverse();
+        let focus: Vec<[f64; 2]> = foci
+            .iter()
+            .map(|f| {
+                let p = to_local.transform_point3(f.translation()).as_dvec3();
+                [(p.x - origin[0]) / unit, (p.z - origin[2]) / unit]
+            })
+            .collect();
+        let edge = layout.chunk_edge();
+        let distance = |coord: ChunkCoord| {
+            focus
+                .iter()
+                .map(|f| square_distance(*f, coord, edge))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let load = f64::from(world.settings.load_radius) / unit;
+        let unload = f64::from(world.settings.unload_radius) / unit;
+
+        // Wanted chunks, nearest first; those with waiting carves first.
+        let mut wanted: Vec<(f64, ChunkCoord)> = world
+            .pending
+            .keys()
+            .map(|&c| (f64::NEG_INFINITY, c))
+            .collect();
+        let span = load.ceil() as i64 + 1;
+        for f in &focus {
+            let (fx, fz) = (f[0].floor() as i64, f[1].floor() as i64);
+            let (x0, x1) = ((fx - span).div_euclid(edge), (fx + span).div_euclid(edge));
+            let (z0, z1) = ((fz - span).div_euclid(edge), (fz + span).div_euclid(edge));
+            for x in x0..=x1 {
+                for z in z0..=z1 {
+                    let coord = ChunkCoord { x, z };
+                    let d = distance(coord);
+                    if d <= load {
+                        wanted.push((d, coord));
+                    }
+                }
+            }
+        }
+        wanted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        wanted.dedup_by_key(|w| w.1);
+        let mut building = world
+            .chunks
+            .values()
+            .filter(|c| matches!(c, Chunk::Building(_)))
+            .count();
+        for (_, coord) in wanted {
+            if building >= world.settings.max_building {
+                break;
+            }
+            if world.chunks.contains_key(&coord) {
+                continue;
+            }
+            start_build(world, coord);
+            building += 1;
+        }
+
+        // Release chunks beyond the unload radius.
+        let far: Vec<(ChunkCoord, Option<Entity>)> = world
+            .chunks
+            .iter()
+            .filter(|(c, _)| {
+                distance(**c) > unload && !world.pending.contains_key(c) && !just_carved.contains(c)
+            })
+            .filter_map(|(c, state)| match state {
+                Chunk::Live(e) => Some((*c, Some(*e))),
+                Chunk::Failed => Some((*c, None)),
+                Chunk::Building(_) => None,
+            })
+            .collect();
+        for (coord, entity) in far {
+            let Some(entity) = entity else {
+                world.chunks.remove(&coord);
+                continue;
+            };
+            match terrains.get(entity) {
+                Ok(terrain) if !terrain.is_idle() => continue,
+                Ok(terrain) if !terrain.journal().is_empty() || terrain.undo_depth() > 0 => {
+                    world.stored.insert(coord, Arc::new(terrain.to_bytes()));
+                }
+                _ => {}
+            }
+            commands.entity(entity).try_despawn();
+            world.chunks.remove(&coord);
+            world.stats.released += 1;
+        }
+        update_counts(world);
+    }
+}
+
+/// Horizontal distance from `f` (grid units) to chunk `coord`'s square.
+fn square_distance(f: [f64; 2], coord: ChunkCoord, edge: i64) -> f64 {
+    let gap = |p: f64, c: i64| {
+        let (lo, hi) = ((c * edge) as f64, ((c + 1) * edge) as f64);
+        (lo - p).max(p - hi).max(0.0)
+    };
+    gap(f[0], coord.x).hypot(gap(f[1], coord.z))
+}
+
+fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
+    let labels = world.labels.clone();
+    let task = if let Some(bytes) = world.stored.get(&coord).cloned() {
+        AsyncComputeTaskPool::get().spawn(async move {
+            let start = Instant::now();
+            let terrain = restore(&bytes, &labels);
+            Built {
+                terrain,
+                time: start.elapsed(),
+                restored: true,
+            }
+        })
+    } else {
+        let (layout, source) = (world.layout.clone(), world.source.clone());
+        AsyncComputeTaskPool::get().spawn(async move {
+            let start = Instant::now();
+            let terrain = generate(&layout, &*source, &labels, coord);
+            Built {
+                terrain,
+                time: start.elapsed(),
+                restored: false,
+            }
+        })
+    };
+    world.chunks.insert(coord, Chunk::Building(task));
+}
+
+fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut TerrainWorld) {
+    let mut done = Vec::new();
+    for (coord, state) in &mut world.chunks {
+        if let Chunk::Building(task) = state
+            && let Some(built) = check_ready(task)
+        {
+            done.push((*coord, built));
+        }
+    }
+    for (coord, built) in done {
+        world.stats.build_time += built.time;
+        match built.terrain {
+            Ok(terrain) => {
+                if built.restored {
+                    world.stats.restored += 1;
+                    world.stored.remove(&coord);
+                } else {
+                    world.stats.generated += 1;
+                }
+                let entity = commands
+                    .spawn((
+                        terrain,
+                        WorldChunk {
+                            world: world_entity,
+                            coord,
+                        },
+                        ChildOf(world_entity),
+                        Name::new(format!("chunk {} {}", coord.x, coord.z)),
+                    ))
+                    .id();
+                world.chunks.insert(coord, Chunk::Live(entity));
+            }
+            Err(error) => {
+                warn!("terrain world chunk ({}, {}): {error}", coord.x, coord.z);
+                world.stats.failed += 1;
+                world.chunks.insert(coord, Chunk::Failed);
+                if let Some(dropped) = world.pending.remove(&coord) {
+                    warn!("{} carves of that chunk are dropped", dropped.len());
+                }
+            }
+        }
+    }
+}
+
+/// Sends the waiting carves of chunks whose terrain entity exists;
+/// returns those chunks.
+fn send_pending(
+    world: &mut TerrainWorld,
+    terrains: &Query<&Terrain>,
+    grid_carves: &mut MessageWriter<GridCarve>,
+) -> Vec<ChunkCoord> {
+    let ready: Vec<(ChunkCoord, Entity)> = world
+        .pending
+        .keys()
+        .filter_map(|c| match world.chunks.get(c) {
+            Some(Chunk::Live(e)) if terrains.contains(*e) => Some((*c, *e)),
+            _ => None,
+        })
+        .collect();
+    for &(coord, entity) in &ready {
+        for (tool, edit) in world.pending.remove(&coord).unwrap_or_default() {
+            grid_carves.write(GridCarve {
+                terrain: entity,
+                tool,
+                edit,
+                request: world.next_request,
+            });
+            world.next_request += 1;
+        }
+    }
+    ready.into_iter().map(|(c, _)| c).collect()
+}
+
+fn update_counts(world: &mut TerrainWorld) {
+    let stats = &mut world.stats;
+    stats.live = 0;
+    stats.building = 0;
+    for state in world.chunks.values() {
+        match state {
+            Chunk::Live(_) => stats.live += 1,
+            Chunk::Building(_) => stats.building += 1,
+            Chunk::Failed => {}
+        }
+    }
+    stats.stored = world.stored.len();
+    stats.stored_bytes = world.stored.values().map(|b| b.len()).sum();
+}
