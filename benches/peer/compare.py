@@ -4,7 +4,7 @@
     python3 benches/peer/compare.py CHISEL_BINARY SCENARIO N [chisel flags...]
         [--chisel-only] [--json] [--keep DIR]
 
-SCENARIO is mill or cutter (N steps), cheese (N carves), sweep (N samples) or replay (N is
+SCENARIO is mill, cutter or fluted (N steps), cheese (N carves), sweep (N samples) or replay (N is
 the JSON-lines file). chisel runs first with `--json --record OPS.jsonl`; the
 recorded sequence (the exact 1 um grid points chisel used, in mm) is then
 replayed with Manifold by manifold_replay.py in this process. Ratios are
@@ -20,7 +20,13 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import manifold_replay  # noqa: E402
 
-SIZE_FLAG = {"mill": "--steps", "cutter": "--steps", "cheese": "--count", "sweep": "--samples"}
+SIZE_FLAG = {
+    "mill": "--steps",
+    "cutter": "--steps",
+    "fluted": "--steps",
+    "cheese": "--count",
+    "sweep": "--samples",
+}
 
 
 def chisel_command(binary, scenario, n, extra, ops):
@@ -29,7 +35,7 @@ def chisel_command(binary, scenario, n, extra, ops):
     elif scenario in SIZE_FLAG:
         command = [binary, scenario, SIZE_FLAG[scenario], n]
     else:
-        sys.exit(f"compare: unknown scenario {scenario}; use mill, cheese, cutter, sweep or replay")
+        sys.exit(f"compare: unknown scenario {scenario}; use mill, cheese, cutter, fluted, sweep or replay")
     return command + extra + ["--json", "--record", ops]
 
 

@@ -6,6 +6,7 @@
 #   benches/peer/compare.sh cheese 1000 [--seed 7]
 #   benches/peer/compare.sh sweep 20
 #   benches/peer/compare.sh cutter 2000 --path helix --sides 20
+#   benches/peer/compare.sh fluted 1500 --flutes 3
 #   benches/peer/compare.sh replay OPS.jsonl
 #   benches/peer/compare.sh cheese 10000 --chisel-only
 #

@@ -12,6 +12,9 @@
 //!   (`--json`, `--csv`, `--export`, `--record`).
 //! - `chisel cutter --path helix|spiral|tilt --sides S --steps N` sweeps a
 //!   tapered, tilted cutter in general orientation along a curved path.
+//! - `chisel fluted --steps N [--flutes F] [--substeps S]` mills with the
+//!   paper's skewed fluted bit, its rotation swept as a union of convex
+//!   pieces (paper 1 §5, Fig. 13–14).
 //! - `chisel boolean A B --op union|intersection|difference -o OUT` — the
 //!   exact Boolean of two closed meshes (OBJ, PLY or GLB) or exact octree
 //!   files (`.chisel`).
@@ -108,6 +111,23 @@ enum Command {
         #[command(flatten)]
         run: RunFlags,
     },
+    /// Mill with a skewed fluted bit turning 4° a step, each step's swept
+    /// volume subtracted as a union of convex hulls, one per piece of the
+    /// bit and sub-step (paper 1 §5, Fig. 13–14).
+    Fluted {
+        /// Rotation steps of 4° (1 to 1,000,000); each is (flutes + 1) ×
+        /// substeps subtractions.
+        #[arg(long, default_value_t = 270, value_parser = args::steps)]
+        steps: usize,
+        /// Flutes of the bit (1 to 8).
+        #[arg(long, default_value_t = 3)]
+        flutes: usize,
+        /// Sub-steps each rotation step is swept in (1 to 16).
+        #[arg(long, default_value_t = 1)]
+        substeps: usize,
+        #[command(flatten)]
+        run: RunFlags,
+    },
     /// Sweep a gear along a Bézier curve by unions of per-triangle sweep
     /// prisms (paper 1 §5).
     Sweep {
@@ -180,6 +200,27 @@ fn main() -> ExitCode {
                     scenario::runner::run(
                         &Scenario {
                             name: "cutter",
+                            parameters,
+                            sequence,
+                        },
+                        &run,
+                    )
+                }),
+            Command::Fluted {
+                steps,
+                flutes,
+                substeps,
+                run,
+            } => scenario::fluted::sequence(steps, flutes, substeps)
+                .map_err(failure::Failure::usage)
+                .and_then(|sequence| {
+                    let parameters = serde_json::json!({
+                        "steps": steps, "flutes": flutes, "substeps": substeps,
+                        "subtractions_per_step": (flutes + 1) * substeps
+                    });
+                    scenario::runner::run(
+                        &Scenario {
+                            name: "fluted",
                             parameters,
                             sequence,
                         },

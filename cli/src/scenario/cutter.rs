@@ -94,11 +94,12 @@ impl PathKind {
 }
 
 /// `a · b` of row-major 3×3 matrices.
-fn mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+pub(super) fn mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
 }
 
-fn rot_z(a: f64) -> [[f64; 3]; 3] {
+/// The rotation by `a` radians about +z.
+pub(super) fn rot_z(a: f64) -> [[f64; 3]; 3] {
     let (s, c) = a.sin_cos();
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 }
@@ -106,6 +107,12 @@ fn rot_z(a: f64) -> [[f64; 3]; 3] {
 fn rot_y(a: f64) -> [[f64; 3]; 3] {
     let (s, c) = a.sin_cos();
     [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
+}
+
+/// The rotation by `a` radians about +x.
+pub(super) fn rot_x(a: f64) -> [[f64; 3]; 3] {
+    let (s, c) = a.sin_cos();
+    [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
 }
 
 /// The tool's pose: spin `σ`, then tilt by `α` towards azimuth `φ`, then

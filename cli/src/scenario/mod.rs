@@ -8,7 +8,8 @@
 //!
 //! - [`sequence`] — the operation sequence, units and the root cube.
 //! - [`jsonl`] — the replay format (one JSON object per line, millimetres).
-//! - [`mill`], [`cheese`], [`cutter`], [`sweep`] — the generated scenarios.
+//! - [`mill`], [`cheese`], [`cutter`], [`fluted`], [`sweep`] — the generated
+//!   scenarios.
 //! - [`runner`] — applies the steps, timing each with its re-extraction.
 //! - [`extract`] — per-cell re-extraction and the whole surface.
 //! - [`report`] — the figures: text, one JSON line, per-step CSV.
@@ -18,6 +19,7 @@ pub mod check;
 pub mod cheese;
 pub mod cutter;
 pub mod extract;
+pub mod fluted;
 pub mod jsonl;
 pub mod mill;
 pub mod report;

@@ -53,7 +53,7 @@ pub struct RunFlags {
 
 /// A named sequence ready to run.
 pub struct Scenario {
-    /// `mill`, `cheese`, `sweep` or `replay`.
+    /// `mill`, `cheese`, `cutter`, `fluted`, `sweep` or `replay`.
     pub name: &'static str,
     /// Sizes, seed or file, as reported.
     pub parameters: serde_json::Value,
