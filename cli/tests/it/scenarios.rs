@@ -83,13 +83,25 @@ fn every_step_keeps_the_volume_bookkeeping_and_a_closed_surface() {
             "--max-bsp-nodes",
             "40",
         ],
+        vec!["fluted", "--steps", "3"],
+        vec![
+            "fluted",
+            "--steps",
+            "2",
+            "--flutes",
+            "4",
+            "--substeps",
+            "2",
+            "--max-bsp-nodes",
+            "40",
+        ],
     ] {
         let mut args = args;
         args.push("--check");
         let r = report(&args);
         assert_eq!(r["checked"].as_bool(), Some(true), "{args:?}");
-        // Mill, cheese and cutter cut convex holes into a box: no edge
-        // contacts.
+        // Mill, cheese, cutter and fluted subtract from a box, which at
+        // these sizes leaves no edge contacts.
         if args[0] != "sweep" {
             assert_eq!(r["watertight"].as_bool(), Some(true), "{args:?}");
         }
