@@ -101,7 +101,11 @@ fn tip(t: f64) -> [f64; 3] {
     let s = FEED_MM * t / STEPS_PER_TURN as f64;
     let pass = (s / PASS_MM).floor();
     let u = s - pass * PASS_MM;
-    let along = if pass as u64 % 2 == 0 { u } else { PASS_MM - u };
+    let along = if (pass as u64).is_multiple_of(2) {
+        u
+    } else {
+        PASS_MM - u
+    };
     let z = (START_MM[2] - pass * PASS_DEPTH_MM).max(FLOOR_MM);
     [START_MM[0] + along, START_MM[1], z]
 }
