@@ -35,9 +35,9 @@
 // point faces away from the eye is dropped in the vertex stage; main views
 // only, the shadow pass keeps every splat for the silhouette).
 #import bevy_chisel::quadric::{
-    INDEX_MASK, NO_ROOT, OUTSIDE_FLAG, SurfaceOutput, Splat, box_corner, clip_depth, intersect_line,
-    literal_holds, local_ray_direction, local_eye, prop, quadric_half_gradient,
-    quadric_linear, quadrics, clip_indices, splats, surface_depth, view, world_normal,
+    INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, clip_depth, intersect_line,
+    literal_holds, local_ray_direction, local_eye, prop, quadrics, clip_indices,
+    splats, surface_depth, view, world_normal,
 }
 #ifndef SHADOW_DEPTH
 #import bevy_chisel::shading::surface_color
@@ -99,48 +99,30 @@ fn prop_beyond_near_plane() -> bool {
 /// sample) faces away from the eye: a conservative bound, never true for a
 /// splat that holds a point facing the eye.
 ///
-/// With g = σ(As − b) the outward half gradient at the sample s (σ = −1
-/// for a complemented literal), w = s − eye (perspective) or the view
-/// direction (orthographic) and δ = p − s, |δ| ≤ r, a point p faces away
-/// where f(p) = σ(A p − b) · (p − eye) > 0, and exactly
-/// f(p) = g·w + g·δ' + σ(Aδ)·w + σ(Aδ)·δ' with δ' = δ (perspective) or 0.
-/// So f(p) ≥ g·w − |g| r' − ‖A‖ r (|w| + r'), r' = r or 0, with ‖A‖
-/// bounded by its Frobenius norm: how far the normal can turn over the
-/// splat against how far it faces away. The test is in local coordinates,
-/// where the sign of f is the world's (n = M⁻ᵀg, p − eye = M(p_l − eye_l)).
-/// A relative margin of 10⁻⁴ covers the `f32` rounding of g and w, and r
-/// is widened by 1 % beyond the fragment stage's radius test.
-fn faces_away(s: Splat, r: f32) -> bool {
-    if !prop_beyond_near_plane() {
-        return false;
-    }
-    let q = quadrics[s.quadric & INDEX_MASK];
-    var g = quadric_half_gradient(q, s.position);
-    if (s.quadric & OUTSIDE_FLAG) != 0u {
-        g = -g;
-    }
-    let k0 = q.c[0];
-    let k1 = q.c[1];
-    let a_norm = sqrt(
-        k0.x * k0.x + k1.x * k1.x + k1.w * k1.w
-            + 2.0 * (k0.y * k0.y + k0.z * k0.z + k1.y * k1.y),
-    );
+/// With n = g/|g| the outward unit normal at the sample s (g = σ(As − b),
+/// σ = −1 for a complemented literal), κ = ‖A‖_F/|g| (`normal_turn`),
+/// w = s − eye (perspective) or the view direction (orthographic) and
+/// δ = p − s, |δ| ≤ r, a point p faces away where
+/// f(p) = σ(Ap − b)·(p − eye) > 0, and exactly
+/// f(p)/|g| = n·w + n·δ' + σ(Aδ)·w/|g| + σ(Aδ)·δ'/|g|, δ' = δ
+/// (perspective) or 0. So f(p)/|g| ≥ n·w − r' − κ r (|w| + r'), r' = r or
+/// 0: how far the splat faces away against how far its normal can turn.
+/// The test is in local coordinates, where the sign of f is the world's
+/// (n_world ∝ M⁻ᵀg, p − eye = M(p_l − eye_l)). A relative margin of 10⁻⁴
+/// covers the `f32` rounding of n and w, and r is widened by 1 % beyond
+/// the fragment stage's radius test.
+fn faces_away(position: vec3<f32>, normal: vec3<f32>, normal_turn: f32, r: f32) -> bool {
     let rr = r * 1.01;
-    var w: vec3<f32>;
+    var w = (prop.local_from_world * vec4<f32>(view.view_forward.xyz, 0.0)).xyz;
     var w_turn = 0.0;
     if view.camera_position.w > 0.5 {
-        w = s.position - local_eye();
+        w = position - local_eye();
         w_turn = rr;
-    } else {
-        w = (prop.local_from_world * vec4<f32>(view.view_forward.xyz, 0.0)).xyz;
     }
-    let g_len = length(g);
     let w_len = length(w);
-    let s_len = length(s.position);
-    let turn = g_len * w_turn + a_norm * rr * (w_len + w_turn);
-    let rounding = 1e-4 * (g_len + a_norm * (s_len + rr) + length(quadric_linear(q)))
-        * (w_len + w_turn + 2.0 * s_len);
-    return dot(g, w) > turn + rounding;
+    let bound = w_turn + normal_turn * rr * (w_len + w_turn)
+        + 1e-4 * (w_len + w_turn + 2.0 * length(position));
+    return dot(normal, w) > bound && prop_beyond_near_plane();
 }
 #endif
 
@@ -152,7 +134,7 @@ fn vertex(
     let s = splats[instance];
     let r = s.radius * view.radius_tolerance;
 #ifdef CULL_FACING_AWAY
-    if faces_away(s, r) {
+    if faces_away(s.position, s.normal, s.normal_turn, r) {
         var culled: SplatVarying;
         culled.clip = DISCARDED_VERTEX;
         culled.local = s.position;

@@ -692,7 +692,7 @@ fn wgsl_structs_match_the_rust_layouts() {
                     quadric: 9,
                     clip_start: 10,
                     clip_count: 11,
-                    pad: 12,
+                    normal_turn: 12.0,
                 }
             ),
         ),
