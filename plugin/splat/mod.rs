@@ -160,8 +160,7 @@ pub struct SplatSettings {
     /// Drop, in the vertex stage, every splat whose surface points all face
     /// away from the eye (a conservative bound from the quadric's gradient
     /// at the sample and how far its normal can turn over the splat's
-    /// radius): they are hidden behind the front of the solid, and on the
-    /// SCENARIOS scenes they are about half the splats. Only where the whole
+    /// radius): they are hidden behind the front of the solid. Only where the whole
     /// prop (its bounding sphere) lies beyond the near plane, so with the
     /// eye or the near plane inside a prop every splat is still drawn. It
     /// assumes the prop is a closed solid inside its bounds, as sampling
