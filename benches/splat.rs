@@ -26,6 +26,11 @@
 //!   output shows the solid. Overdraw = fragments ÷ covered pixels. The
 //!   pipeline-statistics count of fragment invocations is printed beside
 //!   the read-back sum when the adapter has them.
+//! - culling: the boxes are also read back with
+//!   `SplatSettings::cull_facing_away` off (`UnculledBoxes`), overdraw and
+//!   quadric ids; the ids must agree pixel for pixel. Beside the
+//!   no-depth-test counts, the pipeline statistics of the depth-tested
+//!   `QuadricIds` pass are reported (the paper's "invocations").
 //!
 //! Environment: `CHISEL_BENCH_FRAMES` (timed frames per splat step,
 //! default 15), `CHISEL_BENCH_GLOBAL_FRAMES` (per global step, default 3;
@@ -85,6 +90,9 @@ enum Variant {
     Boxes,
     /// Surface-aligned boxes without their `−n` face.
     OpenBoxes,
+    /// Surface-aligned boxes, every splat drawn (no culling of the splats
+    /// facing away): the default before that culling; read back only.
+    UnculledBoxes,
     /// Screen-aligned quads.
     Quads,
     /// Global ray tracing of a cube around the prop.
@@ -94,7 +102,7 @@ enum Variant {
 impl Variant {
     fn mode(self) -> SplatMode {
         match self {
-            Variant::Boxes | Variant::OpenBoxes => SplatMode::SurfaceBoxes,
+            Variant::Boxes | Variant::OpenBoxes | Variant::UnculledBoxes => SplatMode::SurfaceBoxes,
             Variant::Quads => SplatMode::ScreenQuads,
             Variant::Global => SplatMode::GlobalRayTrace,
         }
@@ -105,7 +113,7 @@ impl Variant {
     fn vertices(self, splats: u32) -> f64 {
         let n = f64::from(splats);
         match self {
-            Variant::Boxes => 36.0 * n,
+            Variant::Boxes | Variant::UnculledBoxes => 36.0 * n,
             Variant::OpenBoxes => 30.0 * n,
             Variant::Quads => 6.0 * n,
             Variant::Global => 36.0,
@@ -218,7 +226,9 @@ fn steps(splat_frames: u32, global_frames: u32) -> Vec<Step> {
     for (variant, output) in [
         (Variant::Boxes, SplatOutput::QuadricIds),
         (Variant::OpenBoxes, SplatOutput::QuadricIds),
+        (Variant::UnculledBoxes, SplatOutput::QuadricIds),
         (Variant::Boxes, SplatOutput::Overdraw),
+        (Variant::UnculledBoxes, SplatOutput::Overdraw),
         (Variant::OpenBoxes, SplatOutput::Overdraw),
         (Variant::Quads, SplatOutput::Overdraw),
         (Variant::Global, SplatOutput::Overdraw),
@@ -259,6 +269,7 @@ fn begin_step(
     };
     settings.mode = variant.mode();
     settings.open_boxes = variant == Variant::OpenBoxes;
+    settings.cull_facing_away = variant != Variant::UnculledBoxes;
     settings.output = output;
     for mut v in props {
         *v = if visible {
@@ -375,8 +386,11 @@ fn drive(
             }
         }
         Step::Read { variant, output } => {
+            // Culled and unculled boxes draw as many vertices: told apart
+            // by the step, not by the measurement.
+            let n = driver.splat_count;
             if frame > READ_SETTLE
-                && measured == Some(variant)
+                && measured.is_some_and(|m| m.vertices(n).total_cmp(&variant.vertices(n)).is_eq())
                 && let Some((_, v)) = pass_diagnostic(&store, "fragment_shader_invocations")
             {
                 log.with(|log| {
@@ -585,6 +599,9 @@ struct SceneFigures {
     /// Fragments per covered pixel (exact) and the adapter's fragment
     /// shader invocations per covered pixel.
     overdraw: HashMap<Variant, (f64, f64)>,
+    /// The adapter's fragment shader invocations per covered pixel of the
+    /// depth-tested `QuadricIds` pass.
+    depth_tested: HashMap<Variant, f64>,
     covered: u64,
 }
 
@@ -621,8 +638,20 @@ fn figures(log: &Log) -> SceneFigures {
             .count();
         println!("  open boxes against closed, quadric ids: {differ} pixels differ, {holes} holes");
     }
+    if let (Some(culled), Some(unculled)) = (ids(Variant::Boxes), ids(Variant::UnculledBoxes)) {
+        let differ = culled.iter().zip(unculled).filter(|(a, b)| a != b).count();
+        println!("  culled against unculled boxes, quadric ids: {differ} pixels differ");
+    }
     let mut overdraw = HashMap::new();
-    for variant in all {
+    let mut depth_tested = HashMap::new();
+    for variant in [Variant::Boxes, Variant::UnculledBoxes] {
+        let invocations = median_of(log.invocations.get(&(variant, SplatOutput::QuadricIds)));
+        println!(
+            "  {variant:?} quadric ids (depth-tested): {invocations} fragment shader invocations"
+        );
+        depth_tested.insert(variant, invocations / covered as f64);
+    }
+    for variant in all.into_iter().chain([Variant::UnculledBoxes]) {
         let key = (variant, SplatOutput::Overdraw);
         let Some(image) = log.images.get(&key) else {
             continue;
@@ -650,6 +679,7 @@ fn figures(log: &Log) -> SceneFigures {
             .map(|v| (v, median_of(log.frame_ms.get(&Draw::Prop(v))) - empty))
             .collect(),
         overdraw,
+        depth_tested,
         covered,
     }
 }
@@ -700,6 +730,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         let pass = |v| f.pass_ms.get(&v).copied().unwrap_or(f64::NAN);
         let check = |v| f.frame_minus_empty_ms.get(&v).copied().unwrap_or(f64::NAN);
         let od = |v| f.overdraw.get(&v).copied().unwrap_or((f64::NAN, f64::NAN));
+        let tested = |v| f.depth_tested.get(&v).copied().unwrap_or(f64::NAN);
         times.push(format!(
             "| {name} | {quadrics} | {splat_count} | {:.2} | {:.2} | {:.1}× | {:.1}× | {:.2} | {:.2} |",
             pass(Variant::Boxes),
@@ -729,13 +760,20 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             "frame_minus_empty_ms": by_variant(&check),
             "overdraw": by_variant(&|v| od(v).0),
             "invocations_per_covered_px": by_variant(&|v| od(v).1),
+            "unculled_overdraw": od(Variant::UnculledBoxes).0,
+            "depth_tested_invocations_per_covered_px": tested(Variant::Boxes),
+            "unculled_depth_tested_invocations_per_covered_px": tested(Variant::UnculledBoxes),
             "covered_px": f.covered,
         }));
         overdraws.push(format!(
-            "| {name} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            "| {name} | {} | {:.2} → {:.2} | {:.2} → {:.2} | {:.2} → {:.2} | {:.2} | {:.2} |",
             f.covered,
+            od(Variant::UnculledBoxes).0,
             od(Variant::Boxes).0,
+            od(Variant::UnculledBoxes).1,
             od(Variant::Boxes).1,
+            tested(Variant::UnculledBoxes),
+            tested(Variant::Boxes),
             od(Variant::OpenBoxes).0,
             od(Variant::Quads).0,
         ));
@@ -749,10 +787,11 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         println!("{row}");
     }
     println!(
-        "\n| scene | covered px | overdraw | invocations per covered px | \
-         open boxes overdraw | screen quads overdraw |"
+        "\n| scene | covered px | overdraw, unculled → culled | invocations per covered px, \
+         unculled → culled | same, depth-tested (quadric ids) | open boxes overdraw | \
+         screen quads overdraw |"
     );
-    println!("|---|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
     for row in overdraws {
         println!("{row}");
     }

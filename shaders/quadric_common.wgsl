@@ -74,7 +74,8 @@ struct Splat {
     quadric: u32,
     clip_start: u32,
     clip_count: u32,
-    pad: u32,
+    /// ‖A‖_F / |As − b| at the sample: how fast the normal can turn.
+    normal_turn: f32,
 };
 
 // Groups 0 and 1 are Bevy's mesh view bindings (lights, shadow maps,

@@ -31,11 +31,13 @@
 // OUTPUT_OVERDRAW (a constant per fragment, for additive blending),
 // OUTPUT_BOUNDS (the proxies themselves, flat-coloured per splat),
 // SPLAT_OPEN_BOX (30 vertices per box: the −n face left out), SHADOW_DEPTH
-// (depth only, into a shadow map).
+// (depth only, into a shadow map), CULL_FACING_AWAY (a splat whose every
+// point faces away from the eye is dropped in the vertex stage; main views
+// only, the shadow pass keeps every splat for the silhouette).
 #import bevy_chisel::quadric::{
     INDEX_MASK, NO_ROOT, SurfaceOutput, box_corner, clip_depth, intersect_line,
-    literal_holds, local_ray_direction, prop, quadrics, clip_indices, splats,
-    surface_depth, view, world_normal,
+    literal_holds, local_ray_direction, local_eye, prop, quadrics, clip_indices,
+    splats, surface_depth, view, world_normal,
 }
 #ifndef SHADOW_DEPTH
 #import bevy_chisel::shading::surface_color
@@ -77,6 +79,53 @@ fn varying_at(local: vec3<f32>, splat: u32) -> SplatVarying {
     return out;
 }
 
+#ifdef CULL_FACING_AWAY
+/// Whether the whole prop lies beyond the view's near plane: its bounding
+/// sphere (which holds every splat's patch) is on the far side of the
+/// plane `clip.w − clip.z = 0` (reverse-Z depth 1). Then every view ray
+/// enters the solid from outside before it can leave it, so a surface
+/// point facing away from the eye is hidden behind one facing it.
+fn prop_beyond_near_plane() -> bool {
+    let m = view.clip_from_world;
+    let plane = vec4<f32>(
+        m[0].w - m[0].z, m[1].w - m[1].z, m[2].w - m[2].z, m[3].w - m[3].z,
+    );
+    let centre = prop.world_from_local * vec4<f32>(prop.bounds.xyz, 1.0);
+    let radius = abs(prop.bounds.w) * prop.max_scale * 1.01;
+    return dot(plane, centre) > radius * length(plane.xyz);
+}
+
+/// Whether every surface point splat `s` can draw (those within `r` of its
+/// sample) faces away from the eye: a conservative bound, never true for a
+/// splat that holds a point facing the eye.
+///
+/// With n = g/|g| the outward unit normal at the sample s (g = σ(As − b),
+/// σ = −1 for a complemented literal), κ = ‖A‖_F/|g| (`normal_turn`),
+/// w = s − eye (perspective) or the view direction (orthographic) and
+/// δ = p − s, |δ| ≤ r, a point p faces away where
+/// f(p) = σ(Ap − b)·(p − eye) > 0, and exactly
+/// f(p)/|g| = n·w + n·δ' + σ(Aδ)·w/|g| + σ(Aδ)·δ'/|g|, δ' = δ
+/// (perspective) or 0. So f(p)/|g| ≥ n·w − r' − κ r (|w| + r'), r' = r or
+/// 0: how far the splat faces away against how far its normal can turn.
+/// The test is in local coordinates, where the sign of f is the world's
+/// (n_world ∝ M⁻ᵀg, p − eye = M(p_l − eye_l)). A relative margin of 10⁻⁴
+/// covers the `f32` rounding of n and w, and r is widened by 1 % beyond
+/// the fragment stage's radius test.
+fn faces_away(position: vec3<f32>, normal: vec3<f32>, normal_turn: f32, r: f32) -> bool {
+    let rr = r * 1.01;
+    var w = (prop.local_from_world * vec4<f32>(view.view_forward.xyz, 0.0)).xyz;
+    var w_turn = 0.0;
+    if view.camera_position.w > 0.5 {
+        w = position - local_eye();
+        w_turn = rr;
+    }
+    let w_len = length(w);
+    let bound = w_turn + normal_turn * rr * (w_len + w_turn)
+        + 1e-4 * (w_len + w_turn + 2.0 * length(position));
+    return dot(normal, w) > bound && prop_beyond_near_plane();
+}
+#endif
+
 @vertex
 fn vertex(
     @builtin(vertex_index) vertex: u32,
@@ -84,6 +133,15 @@ fn vertex(
 ) -> SplatVarying {
     let s = splats[instance];
     let r = s.radius * view.radius_tolerance;
+#ifdef CULL_FACING_AWAY
+    if faces_away(s.position, s.normal, s.normal_turn, r) {
+        var culled: SplatVarying;
+        culled.clip = DISCARDED_VERTEX;
+        culled.local = s.position;
+        culled.splat = instance;
+        return culled;
+    }
+#endif
 #ifdef SPLAT_SCREEN_QUAD
     var out: SplatVarying;
     out.splat = instance;

@@ -15,7 +15,7 @@
 //! bytes `encase` writes for them, and the WGSL flag constants against the
 //! kernel's.
 
-use bevy::math::{Mat4, UVec2, Vec3, Vec4};
+use bevy::math::{DVec3, Mat4, UVec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
 use bevy::render::view::ExtractedView;
 use chisel_quadric::{ColoredQuadric, Splat};
@@ -168,14 +168,49 @@ pub struct SplatRecord {
     pub clip_start: u32,
     /// Length of the clip list.
     pub clip_count: u32,
-    /// Padding to 16 bytes.
-    pub pad: u32,
+    /// How fast the outward normal can turn, per unit of distance from
+    /// the sample: `‖A‖_F / |As − b|` of the splat's quadric (Frobenius
+    /// norm of its quadratic part against its half gradient at the
+    /// sample), `f32::MAX` where unknown. The splat pass drops a splat
+    /// facing away from the eye by more than this turn over its radius
+    /// (`SplatSettings::cull_facing_away`).
+    pub normal_turn: f32,
 }
 
-impl From<&Splat> for SplatRecord {
+impl SplatRecord {
+    /// The record of kernel splat `s`, whose literal indexes `quadrics`.
+    /// Where the quadric is missing, the gradient vanishes at the sample or
+    /// `s.normal` is not the literal's outward unit gradient direction,
+    /// `normal_turn` is `f32::MAX` (never culled).
     // f64 → f32 is the point of this conversion.
     #[allow(clippy::cast_possible_truncation)]
-    fn from(s: &Splat) -> Self {
+    #[must_use]
+    pub fn new(s: &Splat, quadrics: &[ColoredQuadric]) -> Self {
+        let index = (s.quadric & chisel_quadric::INDEX_MASK) as usize;
+        let normal_turn = quadrics.get(index).map_or(f32::MAX, |q| {
+            let [q00, q01, q02, q03, q11, q12, q13, q22, q23, _] = q.coefficients;
+            let p = s.position;
+            let mut g = DVec3::new(
+                q00 * p.x + q01 * p.y + q02 * p.z + q03,
+                q01 * p.x + q11 * p.y + q12 * p.z + q13,
+                q02 * p.x + q12 * p.y + q22 * p.z + q23,
+            );
+            if s.quadric & chisel_quadric::OUTSIDE_FLAG != 0 {
+                g = -g;
+            }
+            let a_norm =
+                (q00 * q00 + q11 * q11 + q22 * q22 + 2.0 * (q01 * q01 + q02 * q02 + q12 * q12))
+                    .sqrt();
+            let len = g.length();
+            let turn = a_norm / len;
+            let aligned = len > 0.0 && g.dot(s.normal) >= len * (1.0 - 1e-6);
+            if aligned && turn.is_finite() && turn < f64::from(f32::MAX) {
+                // Rounded up, so the bound stays conservative in f32.
+                (turn * (1.0 + 1e-6)) as f32
+            } else {
+                f32::MAX
+            }
+        });
         Self {
             position: s.position.as_vec3(),
             radius: s.radius as f32,
@@ -184,14 +219,13 @@ impl From<&Splat> for SplatRecord {
             quadric: s.quadric,
             clip_start: s.clip_start,
             clip_count: s.clip_count,
-            pad: 0,
+            normal_turn,
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use bevy::math::DVec3;
     use chisel_quadric::SurfaceMaterial;
 
     use super::*;
@@ -252,10 +286,31 @@ mod tests {
             clip_start: 4,
             clip_count: 2,
         };
-        let r = SplatRecord::from(&s);
+        let r = SplatRecord::new(&s, &[]);
         assert_eq!(r.position, Vec3::new(1.0, 2.0, 3.0));
         assert_eq!((r.radius, r.normal, r.normal_extent), (0.5, Vec3::Z, 0.01));
         assert_eq!(r.quadric, s.quadric);
-        assert_eq!((r.clip_start, r.clip_count, r.pad), (4, 2, 0));
+        assert_eq!((r.clip_start, r.clip_count), (4, 2));
+        assert_eq!(r.normal_turn, f32::MAX, "no quadric: never culled");
+        // The unit sphere, outside it (complement): at (0, 0, 2) the outward
+        // normal is −z, |As − b| = 2, ‖A‖_F = √3.
+        let sphere = ColoredQuadric {
+            coefficients: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, -1.0],
+            ..quadric
+        };
+        let outside = Splat {
+            position: DVec3::new(0.0, 0.0, 2.0),
+            normal: DVec3::NEG_Z,
+            quadric: chisel_quadric::OUTSIDE_FLAG,
+            ..s
+        };
+        let r = SplatRecord::new(&outside, &[sphere]);
+        assert!((r.normal_turn - 3f32.sqrt() / 2.0).abs() < 1e-5);
+        let inverted = Splat {
+            normal: DVec3::Z,
+            ..outside
+        };
+        let r = SplatRecord::new(&inverted, &[sphere]);
+        assert_eq!(r.normal_turn, f32::MAX, "normal against the gradient");
     }
 }

@@ -157,6 +157,15 @@ pub struct SplatSettings {
     /// missing silhouette pixels are acceptable; never with the camera or
     /// near plane inside a prop (open boxes leave out its inner surfaces).
     pub open_boxes: bool,
+    /// Drop, in the vertex stage, every splat whose surface points all face
+    /// away from the eye (a conservative bound from the quadric's gradient
+    /// at the sample and how far its normal can turn over the splat's
+    /// radius): they are hidden behind the front of the solid. Only where the whole
+    /// prop (its bounding sphere) lies beyond the near plane, so with the
+    /// eye or the near plane inside a prop every splat is still drawn. It
+    /// assumes the prop is a closed solid inside its bounds, as sampling
+    /// does. Shadow maps always draw every splat. On by default.
+    pub cull_facing_away: bool,
 }
 
 impl Default for SplatSettings {
@@ -167,6 +176,7 @@ impl Default for SplatSettings {
             flat_ratio: 1e-3,
             radius_tolerance: 1.001,
             open_boxes: false,
+            cull_facing_away: true,
         }
     }
 }
@@ -174,7 +184,7 @@ impl Default for SplatSettings {
 /// On a camera: the splat settings of that view, in place of the
 /// [`SplatSettings`] resource (which the cameras without one keep using).
 /// Every field applies per view — mode, output, flat ratio, radius
-/// tolerance, open boxes — and the pipeline is specialized per view, so
+/// tolerance, open boxes, culling — and the pipeline is specialized per view, so
 /// two cameras may draw the same props in different modes in one frame.
 /// Removing the component returns the camera to the resource.
 ///

@@ -252,6 +252,9 @@ pub struct SplatPipelineKey {
     pub early_depth_test: bool,
     /// Surface-aligned boxes without their `−n` face.
     pub open_boxes: bool,
+    /// Splats facing away from the eye are dropped in the vertex stage
+    /// ([`SplatSettings::cull_facing_away`](super::SplatSettings)).
+    pub cull_facing_away: bool,
     /// Bevy's mesh pipeline key of the view (MSAA, prepasses, tonemapping,
     /// fog, shadow filtering, projection…): the layout of its mesh view
     /// bind groups and the defines of its PBR shading.
@@ -299,6 +302,9 @@ impl SpecializedRenderPipeline for SplatPipeline {
             // Back faces of the proxy cube: one fragment per pixel, eye inside or not.
             SplatMode::GlobalRayTrace => (GLOBAL_SHADER, Some(Face::Front)),
         };
+        if key.cull_facing_away && key.mode != SplatMode::GlobalRayTrace {
+            defs.push("CULL_FACING_AWAY".into());
+        }
         if key.early_depth_test && key.mode != SplatMode::GlobalRayTrace {
             defs.push("EARLY_DEPTH_TEST".into());
         }

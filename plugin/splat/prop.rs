@@ -306,7 +306,11 @@ impl PropSplats {
             generation: GENERATION.fetch_add(1, Ordering::Relaxed),
             quadrics: set.quadrics.iter().map(QuadricRecord::from).collect(),
             clip_indices: set.clip_indices,
-            splats: set.splats.iter().map(SplatRecord::from).collect(),
+            splats: set
+                .splats
+                .iter()
+                .map(|s| SplatRecord::new(s, &set.quadrics))
+                .collect(),
             terms,
             product_count: to_u32(dnf.products().len()),
             bounds: centre.as_vec3().extend(bounds.radius),

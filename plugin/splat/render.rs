@@ -303,6 +303,7 @@ pub(crate) fn prepare_views(
             output: settings.output,
             early_depth_test,
             open_boxes: settings.open_boxes,
+            cull_facing_away: settings.cull_facing_away,
             // Bevy fills the cache for every view before this system runs
             // (`RenderSystems::PrepareAssets`); the fallback is its key for
             // a plain view.
