@@ -21,6 +21,7 @@ use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropMaterial, PropSplats
 use crate::ONE_APP_AT_A_TIME;
 use crate::common::pbr::{
     MAX_MEAN_BYTES, MAX_MEAN_RELATIVE, MAX_P99_BYTES, compare_mirrored, linear,
+    spawn_comparison_lights_and_camera, sphere_splats,
 };
 
 const SIZE: u32 = 128;
@@ -145,16 +146,6 @@ fn one_stop_more_exposure_value_halves_the_shaded_colour() {
     assert!(worst < 0.03, "worst ratio deviation {worst}");
 }
 
-/// The scene of [`a_prop_sphere_matches_a_standard_material_sphere`]: one
-/// sphere of radius 50 (scene units) in the PBR comparison colour.
-const SPHERE_SCENE: &str = "Scene(
-    primitives: [
-        (name: \"S\", shape: Sphere(center: (0, 0, 0), radius: 50), color: (0.8, 0.3, 0.2)),
-    ],
-    root: Ref(\"S\"),
-    bounds: (0, 0, 0, 60),
-)";
-
 /// The comparison's base colour (linear RGB), the scene file's.
 const SPHERE_RGB: [f32; 3] = [0.8, 0.3, 0.2];
 
@@ -166,12 +157,7 @@ fn a_prop_sphere_matches_a_standard_material_sphere() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let scene = Scene::from_ron(SPHERE_SCENE).expect("sphere scene");
-    let bounds = PropBounds {
-        centre: Vec3::ZERO,
-        radius: 60.0,
-    };
-    let splats = PropSplats::build(&scene, bounds, 2.0).expect("sampling");
+    let splats = sphere_splats();
     let (width, height) = PBR_SIZE;
     let config = HeadlessConfig {
         width,
@@ -226,38 +212,14 @@ fn a_prop_sphere_matches_a_standard_material_sphere() {
                     Transform::from_xyz(1.5, 0.0, z),
                 ));
             }
-            commands.spawn((
-                DirectionalLight {
-                    illuminance: 2000.0,
-                    shadow_maps_enabled: false,
-                    ..default()
-                },
-                Transform::from_xyz(0.0, -1.0, 1.5).looking_at(Vec3::ZERO, Vec3::Z),
-            ));
-            commands.spawn((
-                PointLight {
-                    intensity: 200_000.0,
-                    range: 50.0,
-                    shadow_maps_enabled: false,
-                    ..default()
-                },
-                Transform::from_xyz(0.0, -3.0, -0.5),
-            ));
-            commands.spawn((
-                Camera3d::default(),
-                DebandDither::Disabled,
-                Msaa::Off,
-                Transform::from_xyz(0.0, -6.0, 0.0).looking_at(Vec3::ZERO, Vec3::Z),
-            ));
+            spawn_comparison_lights_and_camera(&mut commands);
         },
     );
     assert_eq!(app.run(), AppExit::Success, "headless run failed");
     let image = frames.images().pop().expect("captured frames");
     for (name, rows) in [("default", 0..height / 2), ("metal", height / 2..height)] {
         let d = compare_mirrored(&image, width, rows);
-        let relative: Vec<f64> = (0..3)
-            .map(|ch| (d.means[0][ch] - d.means[1][ch]).abs() / d.means[1][ch].max(1e-3))
-            .collect();
+        let relative = d.mean_relative();
         println!(
             "{name}: {} px; mean linear colour prop {:.4?} mesh {:.4?} (relative {:.4?}); \
              per-pixel difference mean {:.3} B, 99th percentile {} B",

@@ -9,7 +9,6 @@
 //!
 //! Headless on the machine's Vulkan adapter (lavapipe in CI).
 
-use bevy::core_pipeline::tonemapping::DebandDither;
 use bevy::prelude::*;
 use bevy_chisel::presentation::{HeadlessConfig, Presentation};
 use bevy_chisel::quadric::Scene;
@@ -18,6 +17,7 @@ use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropMaterial, PropSplats
 use crate::ONE_APP_AT_A_TIME;
 use crate::common::pbr::{
     MAX_MEAN_BYTES, MAX_MEAN_RELATIVE, MAX_P99_BYTES, SphereDifference, compare_mirrored,
+    spawn_comparison_lights_and_camera,
 };
 
 /// Two spheres of radius 50, 125 apart along z (scene units), each with
@@ -86,29 +86,7 @@ fn render_rows(scene_text: &str, stem: &str) -> [SphereDifference; 2] {
                     Transform::from_xyz(1.5, 0.0, z),
                 ));
             }
-            commands.spawn((
-                DirectionalLight {
-                    illuminance: 2000.0,
-                    shadow_maps_enabled: false,
-                    ..default()
-                },
-                Transform::from_xyz(0.0, -1.0, 1.5).looking_at(Vec3::ZERO, Vec3::Z),
-            ));
-            commands.spawn((
-                PointLight {
-                    intensity: 200_000.0,
-                    range: 50.0,
-                    shadow_maps_enabled: false,
-                    ..default()
-                },
-                Transform::from_xyz(0.0, -3.0, -0.5),
-            ));
-            commands.spawn((
-                Camera3d::default(),
-                DebandDither::Disabled,
-                Msaa::Off,
-                Transform::from_xyz(0.0, -6.0, 0.0).looking_at(Vec3::ZERO, Vec3::Z),
-            ));
+            spawn_comparison_lights_and_camera(&mut commands);
         },
     );
     assert_eq!(app.run(), AppExit::Success, "headless run failed");
@@ -118,9 +96,7 @@ fn render_rows(scene_text: &str, stem: &str) -> [SphereDifference; 2] {
 
 /// Largest relative difference of the mean linear colours.
 fn mean_relative(d: &SphereDifference) -> f64 {
-    (0..3)
-        .map(|ch| (d.means[0][ch] - d.means[1][ch]).abs() / d.means[1][ch].max(1e-3))
-        .fold(0.0, f64::max)
+    d.mean_relative().into_iter().fold(0.0, f64::max)
 }
 
 #[test]

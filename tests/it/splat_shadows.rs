@@ -22,20 +22,10 @@ use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::light::{CascadeShadowConfigBuilder, NotShadowCaster};
 use bevy::prelude::*;
 use bevy_chisel::presentation::{HeadlessConfig, Presentation};
-use bevy_chisel::quadric::Scene;
-use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, PropSplats};
+use bevy_chisel::splat::ChiselSplatPlugin;
 
 use crate::ONE_APP_AT_A_TIME;
-use crate::common::pbr::linear;
-
-/// One sphere of radius 50 scene units.
-const SPHERE_SCENE: &str = "Scene(
-    primitives: [
-        (name: \"S\", shape: Sphere(center: (0, 0, 0), radius: 50), color: (0.8, 0.3, 0.2)),
-    ],
-    root: Ref(\"S\"),
-    bounds: (0, 0, 0, 60),
-)";
+use crate::common::pbr::{linear, sphere_splats};
 
 /// Image size: the plane from x = −5 to 5, y = −2.5 to 2.5 or so.
 const SIZE: (u32, u32) = (512, 256);
@@ -65,12 +55,7 @@ enum Light {
 /// prop sphere (`casters[0]`) and the mesh sphere (`casters[1]`) with
 /// `NotShadowCaster` where false.
 fn render(light: Light, casters: [bool; 2]) -> Image {
-    let scene = Scene::from_ron(SPHERE_SCENE).expect("sphere scene");
-    let bounds = PropBounds {
-        centre: Vec3::ZERO,
-        radius: 60.0,
-    };
-    let splats = PropSplats::build(&scene, bounds, 2.0).expect("sampling");
+    let splats = sphere_splats();
     let (width, height) = SIZE;
     let config = HeadlessConfig {
         width,

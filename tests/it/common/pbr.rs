@@ -3,7 +3,58 @@
 //! (the scene mirror symmetric about the image's centre column), over the
 //! pixels both cover away from their silhouettes.
 
+use bevy::core_pipeline::tonemapping::DebandDither;
 use bevy::prelude::*;
+use bevy_chisel::quadric::Scene;
+use bevy_chisel::splat::{PropBounds, PropSplats};
+
+/// One sphere of radius 50 scene units, in the comparison colour.
+pub const SPHERE_SCENE: &str = "Scene(
+    primitives: [
+        (name: \"S\", shape: Sphere(center: (0, 0, 0), radius: 50), color: (0.8, 0.3, 0.2)),
+    ],
+    root: Ref(\"S\"),
+    bounds: (0, 0, 0, 60),
+)";
+
+/// The splats of [`SPHERE_SCENE`] at radius 2 scene units.
+pub fn sphere_splats() -> PropSplats {
+    let scene = Scene::from_ron(SPHERE_SCENE).expect("sphere scene");
+    let bounds = PropBounds {
+        centre: Vec3::ZERO,
+        radius: 60.0,
+    };
+    PropSplats::build(&scene, bounds, 2.0).expect("sampling")
+}
+
+/// The lights and camera of a mirrored comparison: a directional and a
+/// point light without shadows, symmetric about the image's centre
+/// column, and a camera on −y looking at the origin with +z up.
+pub fn spawn_comparison_lights_and_camera(commands: &mut Commands) {
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 2000.0,
+            shadow_maps_enabled: false,
+            ..default()
+        },
+        Transform::from_xyz(0.0, -1.0, 1.5).looking_at(Vec3::ZERO, Vec3::Z),
+    ));
+    commands.spawn((
+        PointLight {
+            intensity: 200_000.0,
+            range: 50.0,
+            shadow_maps_enabled: false,
+            ..default()
+        },
+        Transform::from_xyz(0.0, -3.0, -0.5),
+    ));
+    commands.spawn((
+        Camera3d::default(),
+        DebandDither::Disabled,
+        Msaa::Off,
+        Transform::from_xyz(0.0, -6.0, 0.0).looking_at(Vec3::ZERO, Vec3::Z),
+    ));
+}
 
 /// sRGB byte to linear.
 pub fn linear(c: u8) -> f64 {
@@ -27,6 +78,16 @@ pub struct SphereDifference {
     pub mean_bytes: f64,
     /// 99th percentile of the same, in sRGB bytes.
     pub p99_bytes: u8,
+}
+
+impl SphereDifference {
+    /// Per channel, how far the prop's mean linear colour is from the
+    /// mesh's, relative to the mesh's.
+    pub fn mean_relative(&self) -> [f64; 3] {
+        std::array::from_fn(|ch| {
+            (self.means[0][ch] - self.means[1][ch]).abs() / self.means[1][ch].max(1e-3)
+        })
+    }
 }
 
 /// Compares the prop in rows `rows` of the left half of an image `width`
