@@ -177,3 +177,26 @@ impl Tool {
         self.bsp.relabeled(|l| if l == 0 { 0 } else { label })
     }
 }
+
+/// The hull of `points` random integer points within `radius` of
+/// `centre` on every axis, drawn again until they span a solid (tests).
+#[cfg(test)]
+pub(crate) fn random_hull(
+    rng: &mut rand_chacha::ChaCha8Rng,
+    centre: i64,
+    radius: i64,
+    points: usize,
+) -> Tool {
+    use rand::Rng;
+    loop {
+        let points: Vec<IntPoint> = (0..points)
+            .map(|_| {
+                let c = [0; 3].map(|_: i64| centre + rng.random_range(-radius..=radius));
+                IntPoint::from_array(c).expect("small coordinates")
+            })
+            .collect();
+        if let Ok(tool) = Tool::convex_hull(&points) {
+            return tool;
+        }
+    }
+}

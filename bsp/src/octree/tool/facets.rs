@@ -153,25 +153,11 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::exact::IntPoint;
     use crate::octree::exact_volume::ExactVolume;
+    use crate::octree::tool::random_hull;
     use crate::octree::tool::restricted;
     use crate::octree::{CellBox, Tool};
     use crate::tree::BooleanOp;
-
-    fn random_hull(rng: &mut ChaCha8Rng, centre: i64, radius: i64, points: usize) -> Tool {
-        loop {
-            let points: Vec<IntPoint> = (0..points)
-                .map(|_| {
-                    let c = [0; 3].map(|_: i64| centre + rng.random_range(-radius..=radius));
-                    IntPoint::from_array(c).unwrap()
-                })
-                .collect();
-            if let Ok(tool) = Tool::convex_hull(&points) {
-                return tool;
-            }
-        }
-    }
 
     fn random_box(rng: &mut ChaCha8Rng) -> CellBox {
         let edge = 1 << rng.random_range(1..7);

@@ -153,23 +153,8 @@ mod tests {
 
     use super::*;
     use crate::convex::ConvexArena;
-    use crate::exact::IntPoint;
-    use crate::octree::Tool;
+    use crate::octree::tool::random_hull;
     use crate::tree::BooleanOp;
-
-    fn random_hull(rng: &mut ChaCha8Rng, centre: i64, radius: i64) -> Tool {
-        loop {
-            let points: Vec<IntPoint> = (0..12)
-                .map(|_| {
-                    let c = [0; 3].map(|_: i64| centre + rng.random_range(-radius..=radius));
-                    IntPoint::from_array(c).unwrap()
-                })
-                .collect();
-            if let Ok(tool) = Tool::convex_hull(&points) {
-                return tool;
-            }
-        }
-    }
 
     /// A point's exact homogeneous coordinates, for comparisons.
     fn exact(p: &crate::exact::Point4) -> ([crate::exact::I256; 3], crate::exact::I192) {
@@ -195,8 +180,8 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(17);
         let (mut one_region, mut cut) = (0, 0);
         for _ in 0..300 {
-            let tool = random_hull(&mut rng, 0, 60);
-            let a = random_hull(&mut rng, 20, 60).bsp().clone();
+            let tool = random_hull(&mut rng, 0, 60, 12);
+            let a = random_hull(&mut rng, 20, 60, 12).bsp().clone();
             let cell = random_box(&mut rng);
             let small = restricted(tool.bsp(), &cell);
             small.validate().unwrap();
