@@ -117,10 +117,20 @@ impl ConvexPiece {
                 .collect();
             axes.sort_unstable();
             axes.dedup();
+            // `u = e × x̂_a` has `u_a = 0`, so `u·v` depends only on `v`
+            // projected along `x̂_a`, and a linear function on a point set
+            // takes its extremes at vertices of the set's convex hull: the
+            // vertices whose projections are the corners of that outline
+            // give the same `[u]_P` as all of them (hundreds of axes, each
+            // scanned over a few outline vertices instead of every one).
+            let outlines = [0, 1, 2].map(|a| outline(&self.vertices, a));
             axes.into_iter()
                 .map(|u| {
+                    let a = (0..3)
+                        .find(|&a| u[a] == 0)
+                        .unwrap_or_else(|| unreachable!("an axis e × x̂_a has a zero component"));
                     let (mut min, mut max) = (i128::MAX, i128::MIN);
-                    for v in &self.vertices {
+                    for v in &outlines[a] {
                         let p = dot(u, *v);
                         min = min.min(p);
                         max = max.max(p);
@@ -217,6 +227,48 @@ impl ConvexPiece {
             max <= axis.min || axis.max <= min
         })
     }
+}
+
+/// The points of `vertices` whose projections along axis `a` (onto the
+/// other two coordinates) are the corners of the projections' convex hull,
+/// each once (Andrew's monotone chain; points on an edge of the hull or
+/// repeated are left out). Every linear function of the other two
+/// coordinates takes the same least and greatest value on them as on all
+/// of `vertices`. Exact: cross products of differences of in-budget
+/// coordinates (`< 2^28`) fit `i128` with room to spare.
+fn outline(vertices: &[[i64; 3]], a: usize) -> Vec<[i64; 3]> {
+    let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+    let mut points: Vec<[i64; 3]> = vertices.to_vec();
+    points.sort_unstable_by_key(|v| (v[b], v[c]));
+    points.dedup_by_key(|v| (v[b], v[c]));
+    if points.len() < 3 {
+        return points;
+    }
+    // Whether `r` lies strictly left of the ray from `p` through `q`.
+    let left = |p: &[i64; 3], q: &[i64; 3], r: &[i64; 3]| {
+        let (ux, uy) = (i128::from(q[b] - p[b]), i128::from(q[c] - p[c]));
+        let (vx, vy) = (i128::from(r[b] - p[b]), i128::from(r[c] - p[c]));
+        ux * vy - uy * vx > 0
+    };
+    // The lower chain left to right and the upper one right to left, each
+    // turning left at every corner; each chain's last point starts the
+    // other.
+    let chain = |ordered: &mut dyn Iterator<Item = &[i64; 3]>| {
+        let mut chain: Vec<[i64; 3]> = Vec::new();
+        for p in ordered {
+            while let [.., o, q] = chain[..]
+                && !left(&o, &q, p)
+            {
+                chain.pop();
+            }
+            chain.push(*p);
+        }
+        chain.pop();
+        chain
+    };
+    let mut hull = chain(&mut points.iter());
+    hull.extend(chain(&mut points.iter().rev()));
+    hull
 }
 
 /// Vertex `v` of `arena` as an integer point within `±v⁺`, if it is one.
@@ -407,5 +459,45 @@ mod tests {
         let mut arena = ConvexArena::new();
         let poly = arena.add_box(lo, hi).unwrap();
         assert!(ConvexPiece::of(&arena, poly).is_some());
+    }
+
+    /// The outline along each axis gives every direction with a zero
+    /// component there the same extremes as all the points, on random
+    /// point sets with repeated, collinear and coplanar projections, and
+    /// keeps only points of the set, each once.
+    #[test]
+    fn outlines_keep_the_extremes() {
+        use rand::{Rng, SeedableRng};
+        use rand_chacha::ChaCha8Rng;
+
+        let mut rng = ChaCha8Rng::seed_from_u64(31);
+        let mut dropped = 0;
+        for round in 0..300 {
+            let range = 1 + round % 12;
+            let n = 1 + round % 40;
+            let points: Vec<[i64; 3]> = (0..n)
+                .map(|_| [0; 3].map(|_: i64| rng.random_range(-range..=range) << (round % 20)))
+                .collect();
+            for a in 0..3 {
+                let kept = outline(&points, a);
+                assert!(kept.iter().all(|k| points.contains(k)));
+                let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+                let mut keys: Vec<_> = kept.iter().map(|v| (v[b], v[c])).collect();
+                keys.sort_unstable();
+                keys.dedup();
+                assert_eq!(keys.len(), kept.len(), "a projection kept twice");
+                dropped += points.len() - kept.len();
+                for _ in 0..20 {
+                    let mut u = [0; 3].map(|_: i64| rng.random_range(-1000..=1000));
+                    u[a] = 0;
+                    let range = |set: &[[i64; 3]]| {
+                        let values = set.iter().map(|v| dot(u, *v));
+                        (values.clone().min(), values.max())
+                    };
+                    assert_eq!(range(&kept), range(&points), "{points:?} along {a}, {u:?}");
+                }
+            }
+        }
+        assert!(dropped > 1000, "only {dropped} points left out");
     }
 }
