@@ -89,6 +89,32 @@ fn main() {
     // The splats' squares, the fragment count's CPU-side proxy.
     let squares: f64 = set.samples.iter().map(|s| 4.0 * s.radius * s.radius).sum();
     println!("splat squares sum (2r)^2 = {squares:.1}");
+    println!("sample set hash {:016x}", sample_hash(&set.samples));
+}
+
+/// FNV-1a over every field of every sample, in order: equal hashes mean
+/// bit-identical sample sets.
+fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325_u64;
+    let mut eat = |bits: u64| {
+        for byte in bits.to_le_bytes() {
+            h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for s in samples {
+        for v in [s.position, s.normal] {
+            for c in v.to_array() {
+                eat(c.to_bits());
+            }
+        }
+        eat(s.uv.x.to_bits());
+        eat(s.uv.y.to_bits());
+        eat(s.radius.to_bits());
+        for k in [s.quadric, s.product, s.literal, s.patch] {
+            eat(u64::from(k));
+        }
+    }
+    h
 }
 
 /// CPU time of all threads of this process, seconds (Linux schedstat;

@@ -277,6 +277,7 @@ impl Heightfield {
 
     /// The distortion `δ(x, y) = |n| / |nₖ|` (eq. 13); `+∞` on the domain's rim.
     #[must_use]
+    #[inline]
     pub fn distortion(&self, p: DVec2) -> f64 {
         let sx = self.value.x.slope(p.x);
         let sy = self.value.y.slope(p.y);
@@ -312,12 +313,23 @@ impl Heightfield {
                 if r1 <= 0.0 {
                     return (f64::INFINITY, f64::INFINITY);
                 }
-                if self.warp(lo, hi).is_some() && r0 > 0.0 {
-                    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
-                    let d = corners.map(|c| self.distortion(c));
-                    let min = d.iter().copied().fold(f64::INFINITY, f64::min);
-                    let max = d.iter().copied().fold(0.0, f64::max);
-                    return (min, max);
+                if r0 > 0.0 && self.warp(lo, hi).is_some() {
+                    // `δ²` at the four corners from the two values and slopes
+                    // per axis (as `distortion` computes them), one square
+                    // root for each extreme (`√` is monotone).
+                    let (fx, fy) = (&self.value.x, &self.value.y);
+                    let vx = [fx.value(lo.x), fx.value(hi.x)];
+                    let vy = [fy.value(lo.y), fy.value(hi.y)];
+                    let sx = [fx.slope(lo.x), fx.slope(hi.x)].map(|s| s * s);
+                    let sy = [fy.slope(lo.y), fy.slope(hi.y)].map(|s| s * s);
+                    let mut min = f64::INFINITY;
+                    let mut max = 0.0_f64;
+                    for (i, j) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
+                        let d2 = 1.0 + (sx[i] + sy[j]) / (4.0 * (vx[i] + vy[j]));
+                        min = min.min(d2);
+                        max = max.max(d2);
+                    }
+                    return (min.sqrt(), max.sqrt());
                 }
                 let min = (1.0 + (ax0 + ay0) / (4.0 * r1)).sqrt();
                 let max = if r0 > 0.0 {
