@@ -45,7 +45,7 @@
 //! distance ([`CsgDistance::cull`]), so deep regions only evaluate the
 //! products near them.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 use glam::{DVec2, DVec3};
 
@@ -111,6 +111,8 @@ pub(crate) struct RegionJob<'a> {
     pub hint: Cell<usize>,
     /// The other products of the normal form as seen from this literal.
     pub others: OtherTerms,
+    /// Buffers of culled terms no longer in use ([`CsgDistance::cull_into`]).
+    pub spare: RefCell<Vec<OtherTerms>>,
 }
 
 /// Where a region lies: its subdivision depth, and whether its surface is
@@ -170,7 +172,20 @@ impl RegionJob<'_> {
         }
         let (anchor, reach) = region.anchor();
         let centre = self.heightfield.point(anchor)?;
-        self.distance.cull(others, centre, reach * delta)
+        let mut out = self
+            .spare
+            .borrow_mut()
+            .pop()
+            .unwrap_or_else(OtherTerms::empty);
+        if self
+            .distance
+            .cull_into(others, centre, reach * delta, &mut out)
+        {
+            Some(out)
+        } else {
+            self.spare.borrow_mut().push(out);
+            None
+        }
     }
 
     fn visit(
@@ -221,6 +236,10 @@ impl RegionJob<'_> {
                 let positive = ds.iter().all(|d| *d > 0.0);
                 let reached = ds.iter().all(|d| d.abs() / delta >= cover);
                 if reached && positive {
+                    stats.discarded += 1;
+                    return;
+                }
+                if self.corner_is_off_surface(region, delta, ds) {
                     stats.discarded += 1;
                     return;
                 }
@@ -278,6 +297,9 @@ impl RegionJob<'_> {
                 ..within
             };
             self.visit(&child, inherited, others, within, out, stats);
+        }
+        if let Some(buffer) = culled {
+            self.spare.borrow_mut().push(buffer);
         }
     }
 
@@ -337,6 +359,18 @@ impl RegionJob<'_> {
         };
         stats.distance_queries += 1;
         self.classify(centre, others) > radius
+    }
+
+    /// Whether one corner alone proves the region off the CSG surface:
+    /// every point of the region is within the path `reach(i)` of corner
+    /// `i`, so its surface point within world distance `reach(i)·δ₊` of the
+    /// corner's, and eq. 22's positive case holds for all of them when
+    /// `d(vᵢ) ≥ reach(i)·δ₊` (as for the centroid). Needs no query: the
+    /// corners are known.
+    fn corner_is_off_surface(&self, region: &Region, delta: f64, ds: &[f64]) -> bool {
+        ds.iter()
+            .enumerate()
+            .any(|(i, d)| *d > 0.0 && *d >= region.reach(i) * delta)
     }
 
     /// Whether a polygon whose corners are all off the surface is off it as
