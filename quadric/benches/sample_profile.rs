@@ -7,6 +7,7 @@
 //! the binary that `cargo bench -p chisel_quadric --bench sample_profile
 //! --no-run` builds, with `--bench SCENE DIVISOR [REPEATS]`.
 //!
+//! `SAMPLE_THREADS=N` runs it on `N` threads (CPU time then sums them).
 //! With the environment variable `SAMPLE_HASH` set it also prints a hash
 //! of the sample set (every field of every sample), to check that a change
 //! keeps the samples bit-identical.
@@ -55,8 +56,12 @@ fn main() {
     };
     let dnf = scene.dnf().expect("normal form");
     let options = SampleOptions::new(radius, sphere).expect("options");
+    let threads: usize = std::env::var("SAMPLE_THREADS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .expect("thread pool");
     let mut times = Vec::with_capacity(repeats);

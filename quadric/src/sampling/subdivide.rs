@@ -239,10 +239,6 @@ impl RegionJob<'_> {
                     stats.discarded += 1;
                     return;
                 }
-                if self.corner_is_off_surface(region, delta, ds) {
-                    stats.discarded += 1;
-                    return;
-                }
                 if positive && self.centre_is_off_surface(region, delta, others, stats) {
                     stats.discarded += 1;
                     return;
@@ -359,18 +355,6 @@ impl RegionJob<'_> {
         };
         stats.distance_queries += 1;
         self.classify(centre, others) > radius
-    }
-
-    /// Whether one corner alone proves the region off the CSG surface:
-    /// every point of the region is within the path `reach(i)` of corner
-    /// `i`, so its surface point within world distance `reach(i)·δ₊` of the
-    /// corner's, and eq. 22's positive case holds for all of them when
-    /// `d(vᵢ) ≥ reach(i)·δ₊` (as for the centroid). Needs no query: the
-    /// corners are known.
-    fn corner_is_off_surface(&self, region: &Region, delta: f64, ds: &[f64]) -> bool {
-        ds.iter()
-            .enumerate()
-            .any(|(i, d)| *d > 0.0 && *d >= region.reach(i) * delta)
     }
 
     /// Whether a polygon whose corners are all off the surface is off it as
