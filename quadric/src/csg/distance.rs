@@ -305,15 +305,19 @@ impl<'a> CsgDistance<'a> {
     /// the distance of a product or literal at `centre` (each conservative,
     /// so the sign holds and `|D| − radius` bounds the true distance
     /// anywhere in the ball):
-    /// - a product (also the own one) with `D > 3·radius` becomes the
+    /// - a product (also the own one) with `D > 2·radius` becomes the
     ///   constant `D − radius`;
-    /// - a literal of a remaining product with `D < −3·radius` becomes the
+    /// - a literal of a remaining product with `D < −2·radius` becomes the
     ///   constant `D + radius`, folded into its product's floor.
     ///
     /// Each replacement keeps the sign and shrinks the magnitude of the
     /// value it replaces, and so does every `min`/`max` of eq. 22 above it:
-    /// the result stays a conservative eq.-22 distance in the ball. `None`
-    /// when nothing can be dropped.
+    /// the result stays a conservative eq.-22 distance in the ball. Each
+    /// constant also keeps a magnitude above `radius`, so where the exact
+    /// value would reach `radius` in magnitude the culled one does too: a
+    /// caller that only compares the sign, and magnitudes with thresholds
+    /// up to `radius`, decides as without culling. `None` when nothing can
+    /// be dropped.
     #[must_use]
     pub fn cull(&self, others: &OtherTerms, centre: DVec3, radius: f64) -> Option<OtherTerms> {
         let mut out = OtherTerms::empty();
@@ -332,7 +336,7 @@ impl<'a> CsgDistance<'a> {
         radius: f64,
         out: &mut OtherTerms,
     ) -> bool {
-        let far = 3.0 * radius;
+        let far = 2.0 * radius;
         let mut literals = std::mem::take(&mut out.literals);
         literals.clear();
         let mut changed = false;

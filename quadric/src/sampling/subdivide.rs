@@ -40,10 +40,13 @@
 //! whose surface lies inside the sphere (so a lone solid well inside its
 //! bounds is filled whole). Corner classifications are handed down to the
 //! children (a split adds one or two new corners), and every
-//! [`CULL_EVERY`] levels the products farther than three times the
-//! region's world radius are replaced by a constant lower bound of their
-//! distance ([`CsgDistance::cull`]), so deep regions only evaluate the
-//! products near them.
+//! [`CULL_EVERY`] levels the products farther than twice the region's
+//! world radius are replaced by a constant lower bound of their distance
+//! ([`CsgDistance::cull`]), so deep regions only evaluate the products
+//! near them. The constants stay above the world radius, the largest
+//! threshold the region's own tests compare a distance with (its cover
+//! radius and its centroid's reach, times `δ₊`), so culling changes no
+//! decision there.
 
 use std::cell::{Cell, RefCell};
 
