@@ -447,6 +447,31 @@ impl Heightfield {
         self.owns_x.range(lo, hi).1 < 0.0 || self.owns_y.range(lo, hi).1 < 0.0
     }
 
+    /// `(foreign, owned)` for the box `[lo, hi]`: whether it is foreign as
+    /// for [`box_is_foreign`](Self::box_is_foreign), and whether it lies
+    /// wholly in the domain and in this plane's low-distortion region (as
+    /// for [`box_is_owned`](Self::box_is_owned)), so that no box inside it
+    /// is foreign. One range per function.
+    #[must_use]
+    pub fn box_ownership(&self, lo: DVec2, hi: DVec2) -> (bool, bool) {
+        let root = matches!(self.kind, HeightKind::Root { .. });
+        let domain = if root {
+            let (v0, v1) = self.value.range(lo, hi);
+            if v1 < 0.0 {
+                return (true, false);
+            }
+            v0 >= 0.0
+        } else {
+            true
+        };
+        let (x0, x1) = self.owns_x.range(lo, hi);
+        let (y0, y1) = self.owns_y.range(lo, hi);
+        if x1 < 0.0 || y1 < 0.0 {
+            return (true, false);
+        }
+        (false, domain && x0 >= 0.0 && y0 >= 0.0)
+    }
+
     /// A world ball `(centre, radius)` containing the surface over the box
     /// `[lo, hi]`: the circumscribed ball of the local box spanned by the
     /// plane box and the range of heights over it. `None` where the box has

@@ -118,12 +118,15 @@ pub(crate) struct RegionJob<'a> {
     pub spare: RefCell<Vec<OtherTerms>>,
 }
 
-/// Where a region lies: its subdivision depth, and whether its surface is
-/// known to lie inside the bounding sphere.
+/// Where a region lies: its subdivision depth, whether its surface is
+/// known to lie inside the bounding sphere, and whether it is a polygon
+/// known to lie in the heightfield's domain and low-distortion region
+/// (then so do the polygons it splits into, and they skip the test).
 #[derive(Clone, Copy, Debug)]
 struct Within {
     depth: u32,
     sphere: bool,
+    owned: bool,
 }
 
 /// A region corner: not yet evaluated, outside the heightfield's domain, or
@@ -141,6 +144,7 @@ impl RegionJob<'_> {
         let within = Within {
             depth: 0,
             sphere: false,
+            owned: false,
         };
         self.visit(
             region,
@@ -204,7 +208,20 @@ impl RegionJob<'_> {
         let depth = within.depth;
         let hf = self.heightfield;
         let (lo, hi) = region.bounds();
-        if self.budget.is_over() || hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
+        if self.budget.is_over() {
+            return;
+        }
+        if !within.owned {
+            let (foreign, owned) = hf.box_ownership(lo, hi);
+            if foreign {
+                return;
+            }
+            within.owned = owned && matches!(region, Region::Polygon(_));
+        }
+        // A box under a patch inside the sphere is not outside it (its
+        // domain points are under that patch, and it has some: it is not
+        // foreign).
+        if !within.sphere && self.outside_sphere(lo, hi) {
             return;
         }
         within.sphere = within.sphere || self.inside_sphere(lo, hi);
