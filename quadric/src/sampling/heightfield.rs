@@ -304,10 +304,16 @@ impl Heightfield {
     /// The maximum is `+∞` when the box reaches the domain's rim.
     #[must_use]
     pub fn distortion_bounds(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
-        let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
-        let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
+        let slopes = || {
+            let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
+            let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
+            (ax0, ax1, ay0, ay1)
+        };
         match self.kind {
-            HeightKind::Polynomial => ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt()),
+            HeightKind::Polynomial => {
+                let (ax0, ax1, ay0, ay1) = slopes();
+                ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt())
+            }
             HeightKind::Root { .. } => {
                 let (r0, r1) = self.value.range(lo, hi);
                 if r1 <= 0.0 {
@@ -331,6 +337,7 @@ impl Heightfield {
                     }
                     return (min.sqrt(), max.sqrt());
                 }
+                let (ax0, ax1, ay0, ay1) = slopes();
                 let min = (1.0 + (ax0 + ay0) / (4.0 * r1)).sqrt();
                 let max = if r0 > 0.0 {
                     (1.0 + (ax1 + ay1) / (4.0 * r0)).sqrt()

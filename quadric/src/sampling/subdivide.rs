@@ -333,6 +333,10 @@ impl RegionJob<'_> {
         inside_sphere: bool,
         stats: &mut SamplingStats,
     ) -> Option<(DVec2, f64)> {
+        // Both candidates need a corner on the surface.
+        if !ds.iter().any(|d| *d < 0.0) {
+            return None;
+        }
         let r = self.options.radius;
         let corner = ds
             .iter()
