@@ -7,6 +7,11 @@
 //! the binary that `cargo bench -p chisel_quadric --bench sample_profile
 //! --no-run` builds, with `--bench SCENE DIVISOR [REPEATS]`.
 //!
+//! `SAMPLE_THREADS=N` runs it on `N` threads (CPU time then sums them).
+//! With the environment variable `SAMPLE_HASH` set it also prints a hash
+//! of the sample set (every field of every sample), to check that a change
+//! keeps the samples bit-identical.
+//!
 //! It measures only with `--bench` among its arguments (`cargo bench`
 //! passes it): `cargo test --all-targets` runs it without, and it then
 //! prints one line and exits.
@@ -51,8 +56,12 @@ fn main() {
     };
     let dnf = scene.dnf().expect("normal form");
     let options = SampleOptions::new(radius, sphere).expect("options");
+    let threads: usize = std::env::var("SAMPLE_THREADS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .expect("thread pool");
     let mut times = Vec::with_capacity(repeats);
@@ -89,6 +98,34 @@ fn main() {
     // The splats' squares, the fragment count's CPU-side proxy.
     let squares: f64 = set.samples.iter().map(|s| 4.0 * s.radius * s.radius).sum();
     println!("splat squares sum (2r)^2 = {squares:.1}");
+    // Off by default: the hash would add to a profiler's instruction count.
+    if std::env::var_os("SAMPLE_HASH").is_some() {
+        println!("sample set hash {:016x}", sample_hash(&set.samples));
+    }
+}
+
+/// A hash of every field of every sample, in order (FNV-1a over 64-bit
+/// words): equal hashes mean bit-identical sample sets, in practice.
+/// Printed when the environment variable `SAMPLE_HASH` is set.
+fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325_u64;
+    let mut eat = |bits: u64| {
+        h = (h ^ bits).wrapping_mul(0x0100_0000_01b3);
+    };
+    for s in samples {
+        for v in [s.position, s.normal] {
+            for c in v.to_array() {
+                eat(c.to_bits());
+            }
+        }
+        eat(s.uv.x.to_bits());
+        eat(s.uv.y.to_bits());
+        eat(s.radius.to_bits());
+        for k in [s.quadric, s.product, s.literal, s.patch] {
+            eat(u64::from(k));
+        }
+    }
+    h
 }
 
 /// CPU time of all threads of this process, seconds (Linux schedstat;

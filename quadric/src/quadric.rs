@@ -188,6 +188,7 @@ impl Quadric {
     /// The outward unit normal `∇Q / |∇Q|` (eq. 4), or `None` where the
     /// gradient vanishes (a cone's apex, a quadric's centre).
     #[must_use]
+    #[inline]
     pub fn normal(&self, x: DVec3) -> Option<DVec3> {
         self.half_gradient(x).try_normalize()
     }

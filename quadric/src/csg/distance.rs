@@ -257,9 +257,13 @@ impl<'a> CsgDistance<'a> {
             return max;
         }
         for &k in &literals[term.start as usize..term.end as usize] {
-            max = max.max(self.signed[k as usize].distance(p));
-            if max >= cap {
-                break;
+            // A compare, not `f64::max`: distances are never NaN.
+            let d = self.signed[k as usize].distance(p);
+            if d > max {
+                max = d;
+                if max >= cap {
+                    break;
+                }
             }
         }
         max
@@ -301,19 +305,40 @@ impl<'a> CsgDistance<'a> {
     /// the distance of a product or literal at `centre` (each conservative,
     /// so the sign holds and `|D| − radius` bounds the true distance
     /// anywhere in the ball):
-    /// - a product (also the own one) with `D > 3·radius` becomes the
+    /// - a product (also the own one) with `D > 2·radius` becomes the
     ///   constant `D − radius`;
-    /// - a literal of a remaining product with `D < −3·radius` becomes the
+    /// - a literal of a remaining product with `D < −2·radius` becomes the
     ///   constant `D + radius`, folded into its product's floor.
     ///
     /// Each replacement keeps the sign and shrinks the magnitude of the
     /// value it replaces, and so does every `min`/`max` of eq. 22 above it:
-    /// the result stays a conservative eq.-22 distance in the ball. `None`
-    /// when nothing can be dropped.
+    /// the result stays a conservative eq.-22 distance in the ball. Each
+    /// constant also keeps a magnitude above `radius`, so where the exact
+    /// value would reach `radius` in magnitude the culled one does too: a
+    /// caller that only compares the sign, and magnitudes with thresholds
+    /// up to `radius`, decides as without culling. `None` when nothing can
+    /// be dropped.
     #[must_use]
     pub fn cull(&self, others: &OtherTerms, centre: DVec3, radius: f64) -> Option<OtherTerms> {
-        let far = 3.0 * radius;
-        let mut literals = Vec::with_capacity(others.literals.len());
+        let mut out = OtherTerms::empty();
+        self.cull_into(others, centre, radius, &mut out)
+            .then_some(out)
+    }
+
+    /// [`cull`](Self::cull) into `out`, reusing its buffers (a subdivision
+    /// culls at every other level): `true` when something was dropped,
+    /// and `out` then holds the culled terms (else its content is
+    /// unspecified).
+    pub fn cull_into(
+        &self,
+        others: &OtherTerms,
+        centre: DVec3,
+        radius: f64,
+        out: &mut OtherTerms,
+    ) -> bool {
+        let far = 2.0 * radius;
+        let mut literals = std::mem::take(&mut out.literals);
+        literals.clear();
         let mut changed = false;
         let mut floor = others.floor;
         // The term culled, or `Err(constant)` when it became one.
@@ -352,19 +377,21 @@ impl<'a> CsgDistance<'a> {
                 floor: constant,
             },
         };
-        let mut terms = Vec::with_capacity(others.terms.len());
+        let mut terms = std::mem::take(&mut out.terms);
+        terms.clear();
         for term in &others.terms {
             match cull_term(term, &mut literals) {
                 Ok(t) => terms.push(t),
                 Err(constant) => floor = floor.min(constant),
             }
         }
-        changed.then_some(OtherTerms {
+        *out = OtherTerms {
             literals,
             terms,
             own,
             floor,
-        })
+        };
+        changed
     }
 }
 
@@ -401,6 +428,23 @@ pub struct OtherTerms {
 }
 
 impl OtherTerms {
+    /// No terms at all (`+∞` everywhere), a buffer for
+    /// [`CsgDistance::cull_into`].
+    #[must_use]
+    pub fn empty() -> Self {
+        Self {
+            literals: Vec::new(),
+            terms: Vec::new(),
+            own: Term {
+                product: 0,
+                start: 0,
+                end: 0,
+                floor: f64::NEG_INFINITY,
+            },
+            floor: f64::INFINITY,
+        }
+    }
+
     /// The bytes of the largest `OtherTerms` of `dnf`, the one
     /// [`CsgDistance::other_terms`] builds when no product is left out:
     /// an index per literal of the normal form and an entry per product.

@@ -277,6 +277,7 @@ impl Heightfield {
 
     /// The distortion `δ(x, y) = |n| / |nₖ|` (eq. 13); `+∞` on the domain's rim.
     #[must_use]
+    #[inline]
     pub fn distortion(&self, p: DVec2) -> f64 {
         let sx = self.value.x.slope(p.x);
         let sy = self.value.y.slope(p.y);
@@ -303,22 +304,40 @@ impl Heightfield {
     /// The maximum is `+∞` when the box reaches the domain's rim.
     #[must_use]
     pub fn distortion_bounds(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
-        let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
-        let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
+        let slopes = || {
+            let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
+            let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
+            (ax0, ax1, ay0, ay1)
+        };
         match self.kind {
-            HeightKind::Polynomial => ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt()),
+            HeightKind::Polynomial => {
+                let (ax0, ax1, ay0, ay1) = slopes();
+                ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt())
+            }
             HeightKind::Root { .. } => {
                 let (r0, r1) = self.value.range(lo, hi);
                 if r1 <= 0.0 {
                     return (f64::INFINITY, f64::INFINITY);
                 }
-                if self.warp(lo, hi).is_some() && r0 > 0.0 {
-                    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
-                    let d = corners.map(|c| self.distortion(c));
-                    let min = d.iter().copied().fold(f64::INFINITY, f64::min);
-                    let max = d.iter().copied().fold(0.0, f64::max);
-                    return (min, max);
+                if r0 > 0.0 && self.warp(lo, hi).is_some() {
+                    // `δ²` at the four corners from the two values and slopes
+                    // per axis (as `distortion` computes them), one square
+                    // root for each extreme (`√` is monotone).
+                    let (fx, fy) = (&self.value.x, &self.value.y);
+                    let vx = [fx.value(lo.x), fx.value(hi.x)];
+                    let vy = [fy.value(lo.y), fy.value(hi.y)];
+                    let sx = [fx.slope(lo.x), fx.slope(hi.x)].map(|s| s * s);
+                    let sy = [fy.slope(lo.y), fy.slope(hi.y)].map(|s| s * s);
+                    let mut min = f64::INFINITY;
+                    let mut max = 0.0_f64;
+                    for (i, j) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
+                        let d2 = 1.0 + (sx[i] + sy[j]) / (4.0 * (vx[i] + vy[j]));
+                        min = min.min(d2);
+                        max = max.max(d2);
+                    }
+                    return (min.sqrt(), max.sqrt());
                 }
+                let (ax0, ax1, ay0, ay1) = slopes();
                 let min = (1.0 + (ax0 + ay0) / (4.0 * r1)).sqrt();
                 let max = if r0 > 0.0 {
                     (1.0 + (ax1 + ay1) / (4.0 * r0)).sqrt()
@@ -433,6 +452,31 @@ impl Heightfield {
             return true;
         }
         self.owns_x.range(lo, hi).1 < 0.0 || self.owns_y.range(lo, hi).1 < 0.0
+    }
+
+    /// `(foreign, owned)` for the box `[lo, hi]`: whether it is foreign as
+    /// for [`box_is_foreign`](Self::box_is_foreign), and whether it lies
+    /// wholly in the domain and in this plane's low-distortion region (as
+    /// for [`box_is_owned`](Self::box_is_owned)), so that no box inside it
+    /// is foreign. One range per function.
+    #[must_use]
+    pub fn box_ownership(&self, lo: DVec2, hi: DVec2) -> (bool, bool) {
+        let root = matches!(self.kind, HeightKind::Root { .. });
+        let domain = if root {
+            let (v0, v1) = self.value.range(lo, hi);
+            if v1 < 0.0 {
+                return (true, false);
+            }
+            v0 >= 0.0
+        } else {
+            true
+        };
+        let (x0, x1) = self.owns_x.range(lo, hi);
+        let (y0, y1) = self.owns_y.range(lo, hi);
+        if x1 < 0.0 || y1 < 0.0 {
+            return (true, false);
+        }
+        (false, domain && x0 >= 0.0 && y0 >= 0.0)
     }
 
     /// A world ball `(centre, radius)` containing the surface over the box

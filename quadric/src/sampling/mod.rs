@@ -508,6 +508,7 @@ impl<'a> SamplingRun<'a> {
             others: self
                 .distance
                 .other_terms(patch.product as usize, patch.literal as usize),
+            spare: std::cell::RefCell::new(Vec::new()),
         };
         let mut stats = SamplingStats {
             basic_regions: 1,

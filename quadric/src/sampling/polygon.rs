@@ -80,16 +80,26 @@ impl Polygon {
     /// The largest distance from vertex `i` to any point of the region.
     #[must_use]
     pub fn reach(&self, i: usize) -> f64 {
+        // One square root of the largest squared distance (`√` is monotone).
         let v = self.vertices();
-        v.iter().map(|w| w.distance(v[i])).fold(0.0, f64::max)
+        v.iter()
+            .map(|w| w.distance_squared(v[i]))
+            .fold(0.0, f64::max)
+            .sqrt()
     }
 
     /// The largest distance between two vertices (the diameter of a convex polygon).
     #[must_use]
     pub fn diameter(&self) -> f64 {
-        (0..self.vertices().len())
-            .map(|i| self.reach(i))
-            .fold(0.0, f64::max)
+        let v = self.vertices();
+        if self.is_rectangle() {
+            // Both diagonals have the same length.
+            return v[0].distance(v[2]);
+        }
+        let longest = (0..3)
+            .map(|i| v[i].distance_squared(v[(i + 1) % 3]))
+            .fold(0.0, f64::max);
+        longest.sqrt()
     }
 
     /// A radius `ρ` such that discs of radius `ρ` around all vertices cover

@@ -169,7 +169,11 @@ impl Region {
                 let v = p.vertices();
                 #[allow(clippy::cast_precision_loss)]
                 let centroid = v.iter().copied().sum::<DVec2>() / v.len() as f64;
-                let reach = v.iter().map(|w| w.distance(centroid)).fold(0.0, f64::max);
+                let reach = v
+                    .iter()
+                    .map(|w| w.distance_squared(centroid))
+                    .fold(0.0, f64::max)
+                    .sqrt();
                 (centroid, reach)
             }
             Self::Curved(c) => (c.vertices()[0], c.reach(0)),

@@ -40,7 +40,12 @@ impl Quad1 {
         let (u, v) = (self.value(lo), self.value(hi));
         let (mut min, mut max) = (u.min(v), u.max(v));
         if self.a != 0.0 {
-            let vertex = -self.b / (2.0 * self.a);
+            // `b = 0` (a quadric's principal axes) needs no division.
+            let vertex = if self.b == 0.0 {
+                0.0
+            } else {
+                -self.b / (2.0 * self.a)
+            };
             if lo < vertex && vertex < hi {
                 let w = self.value(vertex);
                 min = min.min(w);

@@ -40,12 +40,15 @@
 //! whose surface lies inside the sphere (so a lone solid well inside its
 //! bounds is filled whole). Corner classifications are handed down to the
 //! children (a split adds one or two new corners), and every
-//! [`CULL_EVERY`] levels the products farther than three times the
-//! region's world radius are replaced by a constant lower bound of their
-//! distance ([`CsgDistance::cull`]), so deep regions only evaluate the
-//! products near them.
+//! [`CULL_EVERY`] levels the products farther than twice the region's
+//! world radius are replaced by a constant lower bound of their distance
+//! ([`CsgDistance::cull`]), so deep regions only evaluate the products
+//! near them. The constants stay above the world radius, the largest
+//! threshold the region's own tests compare a distance with (its cover
+//! radius and its centroid's reach, times `δ₊`), so culling changes no
+//! decision there.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 use glam::{DVec2, DVec3};
 
@@ -111,14 +114,19 @@ pub(crate) struct RegionJob<'a> {
     pub hint: Cell<usize>,
     /// The other products of the normal form as seen from this literal.
     pub others: OtherTerms,
+    /// Buffers of culled terms no longer in use ([`CsgDistance::cull_into`]).
+    pub spare: RefCell<Vec<OtherTerms>>,
 }
 
-/// Where a region lies: its subdivision depth, and whether its surface is
-/// known to lie inside the bounding sphere.
+/// Where a region lies: its subdivision depth, whether its surface is
+/// known to lie inside the bounding sphere, and whether it is a polygon
+/// known to lie in the heightfield's domain and low-distortion region
+/// (then so do the polygons it splits into, and they skip the test).
 #[derive(Clone, Copy, Debug)]
 struct Within {
     depth: u32,
     sphere: bool,
+    owned: bool,
 }
 
 /// A region corner: not yet evaluated, outside the heightfield's domain, or
@@ -136,6 +144,7 @@ impl RegionJob<'_> {
         let within = Within {
             depth: 0,
             sphere: false,
+            owned: false,
         };
         self.visit(
             region,
@@ -170,7 +179,20 @@ impl RegionJob<'_> {
         }
         let (anchor, reach) = region.anchor();
         let centre = self.heightfield.point(anchor)?;
-        self.distance.cull(others, centre, reach * delta)
+        let mut out = self
+            .spare
+            .borrow_mut()
+            .pop()
+            .unwrap_or_else(OtherTerms::empty);
+        if self
+            .distance
+            .cull_into(others, centre, reach * delta, &mut out)
+        {
+            Some(out)
+        } else {
+            self.spare.borrow_mut().push(out);
+            None
+        }
     }
 
     fn visit(
@@ -186,7 +208,20 @@ impl RegionJob<'_> {
         let depth = within.depth;
         let hf = self.heightfield;
         let (lo, hi) = region.bounds();
-        if self.budget.is_over() || hf.box_is_foreign(lo, hi) || self.outside_sphere(lo, hi) {
+        if self.budget.is_over() {
+            return;
+        }
+        if !within.owned {
+            let (foreign, owned) = hf.box_ownership(lo, hi);
+            if foreign {
+                return;
+            }
+            within.owned = owned && matches!(region, Region::Polygon(_));
+        }
+        // A box under a patch inside the sphere is not outside it (its
+        // domain points are under that patch, and it has some: it is not
+        // foreign).
+        if !within.sphere && self.outside_sphere(lo, hi) {
             return;
         }
         within.sphere = within.sphere || self.inside_sphere(lo, hi);
@@ -279,6 +314,9 @@ impl RegionJob<'_> {
             };
             self.visit(&child, inherited, others, within, out, stats);
         }
+        if let Some(buffer) = culled {
+            self.spare.borrow_mut().push(buffer);
+        }
     }
 
     /// Step 4: a point of the region on the CSG surface whose straight
@@ -295,6 +333,10 @@ impl RegionJob<'_> {
         inside_sphere: bool,
         stats: &mut SamplingStats,
     ) -> Option<(DVec2, f64)> {
+        // Both candidates need a corner on the surface.
+        if !ds.iter().any(|d| *d < 0.0) {
+            return None;
+        }
         let r = self.options.radius;
         let corner = ds
             .iter()
