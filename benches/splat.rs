@@ -28,9 +28,17 @@
 //!   the read-back sum when the adapter has them.
 //! - culling: the boxes are also read back with
 //!   `SplatSettings::cull_facing_away` off (`UnculledBoxes`), overdraw and
-//!   quadric ids; the ids must agree pixel for pixel. Beside the
-//!   no-depth-test counts, the pipeline statistics of the depth-tested
-//!   `QuadricIds` pass are reported (the paper's "invocations").
+//!   quadric ids; the ids must agree pixel for pixel.
+//! - cell boxes: a second prop of the same samples with boxes around each
+//!   splat's whole sphere (`SphereBoxes`, the proxies before they bounded
+//!   the sample's cell), overdraw and quadric ids, compared pixel for
+//!   pixel with the default boxes.
+//! - depth-tested overdraw: the `DepthTestedOverdraw` output (a depth
+//!   prepass of the splats, then 1/64 per proxy fragment that passes the
+//!   depth test against it, read back exactly): the fragment shader
+//!   invocations a GPU with early depth tests runs after a depth prepass,
+//!   the paper's depth-tested count at its lowest. Lavapipe's pipeline
+//!   statistics count invocations before the depth test, in 2×2 quads.
 //!
 //! Environment: `CHISEL_BENCH_FRAMES` (timed frames per splat step,
 //! default 15), `CHISEL_BENCH_GLOBAL_FRAMES` (per global step, default 3;
@@ -52,6 +60,7 @@ use bevy::asset::RenderAssetUsages;
 use bevy::camera::{ClearColorConfig, RenderTarget};
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::diagnostic::DiagnosticsStore;
+use bevy::math::DVec2;
 use bevy::prelude::*;
 use bevy::render::RenderPlugin;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
@@ -62,6 +71,7 @@ use bevy::render::render_resource::{
 use bevy::render::renderer::{RenderAdapterInfo, RenderDevice};
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
+use bevy_chisel::quadric::{BoundingSphere, SampleOptions, Scene, sample};
 use bevy_chisel::splat::{
     ChiselSplatPlugin, PropBounds, PropSplats, SplatMode, SplatOutput, SplatSettings,
 };
@@ -93,6 +103,11 @@ enum Variant {
     /// Surface-aligned boxes, every splat drawn (no culling of the splats
     /// facing away): the default before that culling; read back only.
     UnculledBoxes,
+    /// Surface-aligned boxes around each splat's whole sphere (tangent
+    /// half-extents `r`, normal half-extent `r (δ₊ − δ₋)` of eq. 23), as
+    /// before the boxes bounded the sample's cell: a second prop of the
+    /// same samples; read back only.
+    SphereBoxes,
     /// Screen-aligned quads.
     Quads,
     /// Global ray tracing of a cube around the prop.
@@ -102,7 +117,9 @@ enum Variant {
 impl Variant {
     fn mode(self) -> SplatMode {
         match self {
-            Variant::Boxes | Variant::OpenBoxes | Variant::UnculledBoxes => SplatMode::SurfaceBoxes,
+            Variant::Boxes | Variant::OpenBoxes | Variant::UnculledBoxes | Variant::SphereBoxes => {
+                SplatMode::SurfaceBoxes
+            }
             Variant::Quads => SplatMode::ScreenQuads,
             Variant::Global => SplatMode::GlobalRayTrace,
         }
@@ -113,7 +130,7 @@ impl Variant {
     fn vertices(self, splats: u32) -> f64 {
         let n = f64::from(splats);
         match self {
-            Variant::Boxes | Variant::UnculledBoxes => 36.0 * n,
+            Variant::Boxes | Variant::UnculledBoxes | Variant::SphereBoxes => 36.0 * n,
             Variant::OpenBoxes => 30.0 * n,
             Variant::Quads => 6.0 * n,
             Variant::Global => 36.0,
@@ -227,7 +244,11 @@ fn steps(splat_frames: u32, global_frames: u32) -> Vec<Step> {
         (Variant::Boxes, SplatOutput::QuadricIds),
         (Variant::OpenBoxes, SplatOutput::QuadricIds),
         (Variant::UnculledBoxes, SplatOutput::QuadricIds),
+        (Variant::SphereBoxes, SplatOutput::QuadricIds),
         (Variant::Boxes, SplatOutput::Overdraw),
+        (Variant::SphereBoxes, SplatOutput::Overdraw),
+        (Variant::Boxes, SplatOutput::DepthTestedOverdraw),
+        (Variant::SphereBoxes, SplatOutput::DepthTestedOverdraw),
         (Variant::UnculledBoxes, SplatOutput::Overdraw),
         (Variant::OpenBoxes, SplatOutput::Overdraw),
         (Variant::Quads, SplatOutput::Overdraw),
@@ -251,11 +272,16 @@ fn pass_diagnostic(store: &DiagnosticsStore, field: &str) -> Option<(Instant, f6
         .map(|m| (m.time, m.value))
 }
 
+/// Marks the prop whose splats are boxes around their spheres
+/// ([`Variant::SphereBoxes`]).
+#[derive(Component)]
+struct SphereProp;
+
 /// Applies the settings and visibility of `step`.
 fn begin_step(
     step: Step,
     settings: &mut SplatSettings,
-    props: &mut Query<&mut Visibility, With<PropSplats>>,
+    props: &mut Query<(&mut Visibility, Has<SphereProp>), With<PropSplats>>,
 ) {
     let (variant, output, visible) = match step {
         Step::Time {
@@ -271,8 +297,8 @@ fn begin_step(
     settings.open_boxes = variant == Variant::OpenBoxes;
     settings.cull_facing_away = variant != Variant::UnculledBoxes;
     settings.output = output;
-    for mut v in props {
-        *v = if visible {
+    for (mut v, sphere) in props {
+        *v = if visible && sphere == (variant == Variant::SphereBoxes) {
             Visibility::Inherited
         } else {
             Visibility::Hidden
@@ -328,7 +354,7 @@ fn read_back(
 fn drive(
     mut driver: ResMut<Driver>,
     mut settings: ResMut<SplatSettings>,
-    mut props: Query<&mut Visibility, With<PropSplats>>,
+    mut props: Query<(&mut Visibility, Has<SphereProp>), With<PropSplats>>,
     store: Res<DiagnosticsStore>,
     time: Res<Time<Real>>,
     log: Res<SharedLog>,
@@ -445,7 +471,13 @@ fn report_adapter(
     log.with(|log| log.adapter = text);
 }
 
-fn run_scene(splats: PropSplats, centre: Vec3, radius: f32, steps: Vec<Step>) -> Log {
+fn run_scene(
+    splats: PropSplats,
+    sphere_splats: PropSplats,
+    centre: Vec3,
+    radius: f32,
+    steps: Vec<Step>,
+) -> Log {
     let splat_count = u32::try_from(splats.0.splat_count()).expect("splats fit in u32");
     let log = SharedLog::default();
     let mut app = App::new();
@@ -499,6 +531,12 @@ fn run_scene(splats: PropSplats, centre: Vec3, radius: f32, steps: Vec<Step>) ->
         .add_systems(Startup, move |mut commands: Commands| {
             commands.spawn((splats.clone(), Transform::from_scale(Vec3::splat(SCALE))));
             commands.spawn((
+                sphere_splats.clone(),
+                SphereProp,
+                Visibility::Hidden,
+                Transform::from_scale(Vec3::splat(SCALE)),
+            ));
+            commands.spawn((
                 DirectionalLight {
                     illuminance: 8000.0,
                     ..default()
@@ -537,6 +575,42 @@ fn run_scene(splats: PropSplats, centre: Vec3, radius: f32, steps: Vec<Step>) ->
 /// the render tests' comparison eye.
 fn local_eye(centre: Vec3, radius: f32) -> Vec3 {
     common::eye(centre.as_dvec3(), f64::from(radius)).as_vec3()
+}
+
+/// The splats of `splats` with boxes around their whole spheres, as
+/// before the boxes bounded the cells: tangent half-extents `r` in the
+/// frame the shader builds from the normal alone, normal half-extent
+/// `r (δ₊ − δ₋)` over the plane box `uv ± r` (eq. 23, capped at `r`). The
+/// samples are drawn again with the same options, in the same order.
+fn sphere_boxes(scene: &Scene, bounds: PropBounds, radius: f32, splats: &PropSplats) -> PropSplats {
+    let dnf = scene.dnf().expect("normal form");
+    let sphere =
+        BoundingSphere::new(bounds.centre.as_dvec3(), f64::from(bounds.radius)).expect("bounds");
+    let options = SampleOptions::new(f64::from(radius), sphere).expect("options");
+    let samples = sample(&dnf, &options).expect("sampling");
+    let mut data = (*splats.0).clone();
+    assert_eq!(samples.samples.len(), data.splats.len(), "the same samples");
+    for (record, s) in data.splats.iter_mut().zip(&samples.samples) {
+        assert_eq!(record.position, s.position.as_vec3(), "in the same order");
+        let n = record.normal;
+        if n.length_squared() < 0.25 {
+            continue;
+        }
+        let r = s.radius;
+        let hf = &samples.patches[s.patch as usize].heightfield;
+        let (low, high) = hf.distortion_bounds(s.uv - DVec2::splat(r), s.uv + DVec2::splat(r));
+        let extent = r * (high - low);
+        let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+        record.tangent = helper.cross(n).normalize();
+        record.tangent_extent = Vec2::splat(record.radius);
+        record.normal_extent = if extent.is_finite() {
+            extent.min(r) as f32
+        } else {
+            record.radius
+        };
+    }
+    data.generation = u64::MAX - data.generation;
+    PropSplats(Arc::new(data))
 }
 
 /// Of the splats drawn: the fraction whose normal faces away from `eye`
@@ -599,10 +673,13 @@ struct SceneFigures {
     /// Fragments per covered pixel (exact) and the adapter's fragment
     /// shader invocations per covered pixel.
     overdraw: HashMap<Variant, (f64, f64)>,
-    /// The adapter's fragment shader invocations per covered pixel of the
-    /// depth-tested `QuadricIds` pass.
+    /// Fragments per covered pixel that pass the depth test after a depth
+    /// prepass (`SplatOutput::DepthTestedOverdraw`, exact).
     depth_tested: HashMap<Variant, f64>,
     covered: u64,
+    /// Pixels whose quadric ids differ between cell and sphere boxes:
+    /// `(x, y, solid with cell boxes, solid with sphere boxes)`.
+    sphere_differ: Vec<(u32, u32, bool, bool)>,
 }
 
 fn figures(log: &Log) -> SceneFigures {
@@ -638,20 +715,55 @@ fn figures(log: &Log) -> SceneFigures {
             .count();
         println!("  open boxes against closed, quadric ids: {differ} pixels differ, {holes} holes");
     }
-    if let (Some(culled), Some(unculled)) = (ids(Variant::Boxes), ids(Variant::UnculledBoxes)) {
-        let differ = culled.iter().zip(unculled).filter(|(a, b)| a != b).count();
-        println!("  culled against unculled boxes, quadric ids: {differ} pixels differ");
+    let mut sphere_differ = Vec::new();
+    for (other, what) in [
+        (Variant::UnculledBoxes, "culled against unculled boxes"),
+        (Variant::SphereBoxes, "cell boxes against sphere boxes"),
+    ] {
+        if let (Some(boxes), Some(image)) = (ids(Variant::Boxes), ids(other)) {
+            let differ: Vec<usize> = (0..boxes.len()).filter(|&i| boxes[i] != image[i]).collect();
+            let only = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+                differ
+                    .iter()
+                    .filter(|&&i| shows_solid(&a[i]) && !shows_solid(&b[i]))
+                    .count()
+            };
+            println!(
+                "  {what}, quadric ids: {} pixels differ ({} solid only with the first, {} only \
+                 with the second)",
+                differ.len(),
+                only(boxes, image),
+                only(image, boxes),
+            );
+            if other == Variant::SphereBoxes {
+                sphere_differ = differ
+                    .iter()
+                    .map(|&i| {
+                        let (x, y) = ((i % WIDTH as usize) as u32, (i / WIDTH as usize) as u32);
+                        (x, y, shows_solid(&boxes[i]), shows_solid(&image[i]))
+                    })
+                    .collect();
+            }
+        }
     }
     let mut overdraw = HashMap::new();
     let mut depth_tested = HashMap::new();
-    for variant in [Variant::Boxes, Variant::UnculledBoxes] {
-        let invocations = median_of(log.invocations.get(&(variant, SplatOutput::QuadricIds)));
+    for variant in [Variant::Boxes, Variant::SphereBoxes] {
+        let Some(image) = log.images.get(&(variant, SplatOutput::DepthTestedOverdraw)) else {
+            continue;
+        };
+        let (total, touched, max) = fragment_counts(image);
         println!(
-            "  {variant:?} quadric ids (depth-tested): {invocations} fragment shader invocations"
+            "  {variant:?} depth-tested overdraw (after a depth prepass): {total} fragments on \
+             {touched} pixels (max {max}): {:.2} per covered pixel",
+            total as f64 / covered as f64,
         );
-        depth_tested.insert(variant, invocations / covered as f64);
+        depth_tested.insert(variant, total as f64 / covered as f64);
     }
-    for variant in all.into_iter().chain([Variant::UnculledBoxes]) {
+    for variant in all
+        .into_iter()
+        .chain([Variant::UnculledBoxes, Variant::SphereBoxes])
+    {
         let key = (variant, SplatOutput::Overdraw);
         let Some(image) = log.images.get(&key) else {
             continue;
@@ -681,6 +793,7 @@ fn figures(log: &Log) -> SceneFigures {
         overdraw,
         depth_tested,
         covered,
+        sphere_differ,
     }
 }
 
@@ -714,10 +827,17 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         let bounds = PropBounds::resolve(None, &scene).expect("shipped scenes give their bounds");
         let PropBounds { centre, radius } = bounds;
         let splats = PropSplats::build(&scene, bounds, radius / divisor).expect("sampling");
+        let sphere_splats = sphere_boxes(&scene, bounds, radius / divisor, &splats);
         let (quadrics, splat_count) = (splats.0.quadrics.len(), splats.0.splat_count());
         let (away, mean_radius, squares) =
             splat_stats(&splats, local_eye(centre, radius), radius / divisor);
-        let log = run_scene(splats, centre, radius, steps(splat_frames, global_frames));
+        let log = run_scene(
+            splats,
+            sphere_splats,
+            centre,
+            radius,
+            steps(splat_frames, global_frames),
+        );
         println!(
             "\n{name}: {quadrics} quadrics, {splat_count} splats (radius {:.3}, mean {:.3} of it; \
              squares Σ(2r)² = {squares:.0}; {:.1} % face away from the eye); {}",
@@ -727,6 +847,25 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             log.adapter
         );
         let f = figures(&log);
+        // Where cell and sphere boxes disagree, the reference tracer says
+        // which shows the solid.
+        let dnf = scene.dnf().expect("normal form");
+        let camera = bevy_chisel::quadric::Camera::new(
+            local_eye(centre, radius).as_dvec3(),
+            centre.as_dvec3(),
+            FOV_DEGREES,
+            WIDTH,
+            HEIGHT,
+        )
+        .expect("camera");
+        for &(x, y, cell, sphere) in f.sphere_differ.iter().take(20) {
+            let hit = bevy_chisel::quadric::trace_ray(&dnf, &camera.ray(x, y), 0.0);
+            println!(
+                "  ({x}, {y}): solid with cell boxes {cell}, with sphere boxes {sphere}; \
+                 reference: {:?}",
+                hit.map(|h| (h.quadric, h.t))
+            );
+        }
         let pass = |v| f.pass_ms.get(&v).copied().unwrap_or(f64::NAN);
         let check = |v| f.frame_minus_empty_ms.get(&v).copied().unwrap_or(f64::NAN);
         let od = |v| f.overdraw.get(&v).copied().unwrap_or((f64::NAN, f64::NAN));
@@ -761,19 +900,23 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             "overdraw": by_variant(&|v| od(v).0),
             "invocations_per_covered_px": by_variant(&|v| od(v).1),
             "unculled_overdraw": od(Variant::UnculledBoxes).0,
-            "depth_tested_invocations_per_covered_px": tested(Variant::Boxes),
-            "unculled_depth_tested_invocations_per_covered_px": tested(Variant::UnculledBoxes),
+            "sphere_boxes_overdraw": od(Variant::SphereBoxes).0,
+            "sphere_boxes_invocations_per_covered_px": od(Variant::SphereBoxes).1,
+            "depth_tested_overdraw": tested(Variant::Boxes),
+            "sphere_boxes_depth_tested_overdraw": tested(Variant::SphereBoxes),
             "covered_px": f.covered,
         }));
         overdraws.push(format!(
-            "| {name} | {} | {:.2} → {:.2} | {:.2} → {:.2} | {:.2} → {:.2} | {:.2} | {:.2} |",
+            "| {name} | {} | {:.2} → **{:.2}** | {:.2} → **{:.2}** | {:.2} → {:.2} | {:.2} | \
+             {:.2} | {:.2} |",
             f.covered,
-            od(Variant::UnculledBoxes).0,
+            od(Variant::SphereBoxes).0,
             od(Variant::Boxes).0,
-            od(Variant::UnculledBoxes).1,
-            od(Variant::Boxes).1,
-            tested(Variant::UnculledBoxes),
+            tested(Variant::SphereBoxes),
             tested(Variant::Boxes),
+            od(Variant::SphereBoxes).1,
+            od(Variant::Boxes).1,
+            od(Variant::UnculledBoxes).0,
             od(Variant::OpenBoxes).0,
             od(Variant::Quads).0,
         ));
@@ -787,11 +930,12 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         println!("{row}");
     }
     println!(
-        "\n| scene | covered px | overdraw, unculled → culled | invocations per covered px, \
-         unculled → culled | same, depth-tested (quadric ids) | open boxes overdraw | \
-         screen quads overdraw |"
+        "\n| scene | covered px | fragments per covered px, sphere → cell boxes | \
+         depth-tested (after a depth prepass), sphere → cell boxes | adapter's invocations \
+         per covered px, sphere → cell boxes | cell boxes unculled | open cell boxes | \
+         screen quads |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     for row in overdraws {
         println!("{row}");
     }

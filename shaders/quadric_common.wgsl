@@ -71,11 +71,16 @@ struct Splat {
     radius: f32,
     normal: vec3<f32>,
     normal_extent: f32,
+    /// The box's first tangent axis; the second is `cross(normal, tangent)`.
+    tangent: vec3<f32>,
+    /// ‖A‖₂ / |As − b| at the sample: how fast the normal can turn.
+    normal_turn: f32,
+    /// The box's half-extents along the two tangent axes (≤ radius).
+    tangent_extent: vec2<f32>,
     quadric: u32,
     clip_start: u32,
     clip_count: u32,
-    /// ‖A‖_F / |As − b| at the sample: how fast the normal can turn.
-    normal_turn: f32,
+    pad: array<u32, 3>,
 };
 
 // Groups 0 and 1 are Bevy's mesh view bindings (lights, shadow maps,

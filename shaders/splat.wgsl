@@ -1,7 +1,9 @@
 // The splat pass (paper 2, §6, §6.1): one instance per splat.
 //
 // Vertex stage: each splat becomes a surface-aligned box around its patch
-// (tangent half-extent r, normal half-extent e from eq. 23), drawn with
+// (axes `tangent`, `normal × tangent`, `normal`; half-extents from the
+// surface over the sample's cell, `chisel_quadric::splats::cell_box`, each
+// at most r; a singular point gets its sphere's box), drawn with
 // back-face culling so every covered pixel runs one fragment; a box thinner
 // than `flat_ratio · r` collapses to its front face, a quad lifted by e
 // along the normal. With SPLAT_SCREEN_QUAD it is instead a camera-facing
@@ -100,7 +102,7 @@ fn prop_beyond_near_plane() -> bool {
 /// splat that holds a point facing the eye.
 ///
 /// With n = g/|g| the outward unit normal at the sample s (g = σ(As − b),
-/// σ = −1 for a complemented literal), κ = ‖A‖_F/|g| (`normal_turn`),
+/// σ = −1 for a complemented literal), κ = ‖A‖₂/|g| (`normal_turn`),
 /// w = s − eye (perspective) or the view direction (orthographic) and
 /// δ = p − s, |δ| ≤ r, a point p faces away where
 /// f(p) = σ(Ap − b)·(p − eye) > 0, and exactly
@@ -174,6 +176,8 @@ fn vertex(
 #else
     var n = s.normal;
     var e = s.normal_extent * view.radius_tolerance;
+    var t1 = s.tangent;
+    var h = s.tangent_extent * view.radius_tolerance;
     if dot(n, n) < 0.25 {
         // A singular point (cone apex): no tangent plane, bound the sphere.
         n = vec3<f32>(0.0, 0.0, 1.0);
@@ -182,12 +186,13 @@ fn vertex(
         n = -local_ray_direction(s.position);
 #endif
         e = r;
+        var helper = vec3<f32>(1.0, 0.0, 0.0);
+        if abs(n.x) > 0.9 {
+            helper = vec3<f32>(0.0, 1.0, 0.0);
+        }
+        t1 = normalize(cross(helper, n));
+        h = vec2<f32>(r, r);
     }
-    var helper = vec3<f32>(1.0, 0.0, 0.0);
-    if abs(n.x) > 0.9 {
-        helper = vec3<f32>(0.0, 1.0, 0.0);
-    }
-    let t1 = normalize(cross(helper, n));
     let t2 = cross(n, t1);
 #ifdef SPLAT_OPEN_BOX
     // Vertices 6..12 of a closed box are its −n face: skip them.
@@ -204,9 +209,9 @@ fn vertex(
             out.splat = instance;
             return out;
         }
-        return varying_at(s.position + (t1 * c.x + t2 * c.y) * r + n * e, instance);
+        return varying_at(s.position + t1 * (c.x * h.x) + t2 * (c.y * h.y) + n * e, instance);
     }
-    return varying_at(s.position + (t1 * c.x + t2 * c.y) * r + n * (c.z * e), instance);
+    return varying_at(s.position + t1 * (c.x * h.x) + t2 * (c.y * h.y) + n * (c.z * e), instance);
 #endif
 }
 

@@ -15,10 +15,10 @@
 //! bytes `encase` writes for them, and the WGSL flag constants against the
 //! kernel's.
 
-use bevy::math::{DVec3, Mat4, UVec2, Vec3, Vec4};
+use bevy::math::{DMat3, DVec3, Mat4, UVec2, Vec2, Vec3, Vec4};
 use bevy::render::render_resource::ShaderType;
 use bevy::render::view::ExtractedView;
-use chisel_quadric::{ColoredQuadric, Splat};
+use chisel_quadric::{ColoredQuadric, Splat, SymmetricEigen};
 
 use super::SplatSettings;
 
@@ -162,19 +162,28 @@ pub struct SplatRecord {
     pub normal: Vec3,
     /// Half-extent of the surface-aligned box along the normal.
     pub normal_extent: f32,
+    /// The box's first tangent axis (unit, orthogonal to `normal`; the
+    /// second is `normal × tangent`).
+    pub tangent: Vec3,
+    /// How fast the outward normal can turn, per unit of distance from
+    /// the sample: `‖A‖₂ / |As − b|` of the splat's quadric (spectral
+    /// norm of its quadratic part, its largest absolute eigenvalue,
+    /// against its half gradient at the sample), `f32::MAX` where unknown.
+    /// The splat pass drops a splat facing away from the eye by more than
+    /// this turn over its radius (`SplatSettings::cull_facing_away`).
+    pub normal_turn: f32,
+    /// Half-extents of the box along the two tangent axes
+    /// ([`chisel_quadric::Splat::tangent_extent`]: the surface over the
+    /// sample's cell, at most `radius`).
+    pub tangent_extent: Vec2,
     /// The literal the splat lies on ([`chisel_quadric::literal_reference`]).
     pub quadric: u32,
     /// Start of the clip list in the clip-index buffer.
     pub clip_start: u32,
     /// Length of the clip list.
     pub clip_count: u32,
-    /// How fast the outward normal can turn, per unit of distance from
-    /// the sample: `‖A‖_F / |As − b|` of the splat's quadric (Frobenius
-    /// norm of its quadratic part against its half gradient at the
-    /// sample), `f32::MAX` where unknown. The splat pass drops a splat
-    /// facing away from the eye by more than this turn over its radius
-    /// (`SplatSettings::cull_facing_away`).
-    pub normal_turn: f32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 3],
 }
 
 impl SplatRecord {
@@ -198,9 +207,7 @@ impl SplatRecord {
             if s.quadric & chisel_quadric::OUTSIDE_FLAG != 0 {
                 g = -g;
             }
-            let a_norm =
-                (q00 * q00 + q11 * q11 + q22 * q22 + 2.0 * (q01 * q01 + q02 * q02 + q12 * q12))
-                    .sqrt();
+            let a_norm = spectral_norm([q00, q01, q02, q11, q12, q22]);
             let len = g.length();
             let turn = a_norm / len;
             let aligned = len > 0.0 && g.dot(s.normal) >= len * (1.0 - 1e-6);
@@ -211,16 +218,39 @@ impl SplatRecord {
                 f32::MAX
             }
         });
+        // Extents rounded up, so the f32 box still holds the f64 one.
+        let up = |x: f64| (x * (1.0 + 1e-6)) as f32;
         Self {
             position: s.position.as_vec3(),
             radius: s.radius as f32,
             normal: s.normal.as_vec3(),
-            normal_extent: s.normal_extent as f32,
+            normal_extent: up(s.normal_extent),
+            tangent: s.tangent.as_vec3(),
+            normal_turn,
+            tangent_extent: s.tangent_extent.to_array().map(up).into(),
             quadric: s.quadric,
             clip_start: s.clip_start,
             clip_count: s.clip_count,
-            normal_turn,
+            pad: [0; 3],
         }
+    }
+}
+
+/// The spectral norm `‖A‖₂` of the symmetric `A` with packed entries
+/// `[a00, a01, a02, a11, a12, a22]`: its largest absolute eigenvalue,
+/// widened by `10⁻⁹ ‖A‖_F` against the solver's rounding (so never below
+/// the true norm); `‖A‖_F` itself (an upper bound) where the solver's
+/// answer is not finite.
+fn spectral_norm([a00, a01, a02, a11, a12, a22]: [f64; 6]) -> f64 {
+    let frobenius =
+        (a00 * a00 + a11 * a11 + a22 * a22 + 2.0 * (a01 * a01 + a02 * a02 + a12 * a12)).sqrt();
+    let a = DMat3::from_cols_array(&[a00, a01, a02, a01, a11, a12, a02, a12, a22]);
+    let eigen = SymmetricEigen::new(a);
+    let largest = eigen.max_value().abs().max(eigen.min_value().abs());
+    if largest.is_finite() {
+        (largest + 1e-9 * frobenius).min(frobenius)
+    } else {
+        frobenius
     }
 }
 
@@ -232,7 +262,7 @@ mod tests {
 
     #[test]
     fn rust_sizes_match_the_wgsl_sizes() {
-        assert_eq!(SplatRecord::min_size().get(), 48);
+        assert_eq!(SplatRecord::min_size().get(), 80);
         assert_eq!(QuadricRecord::min_size().get(), 64);
         assert_eq!(
             SplatRecord::min_size().get() as usize,
@@ -282,18 +312,28 @@ mod tests {
             normal: DVec3::Z,
             radius: 0.5,
             normal_extent: 0.01,
+            tangent: DVec3::X,
+            tangent_extent: bevy::math::DVec2::new(0.25, 0.5),
             quadric: 7 | chisel_quadric::OUTSIDE_FLAG,
             clip_start: 4,
             clip_count: 2,
         };
         let r = SplatRecord::new(&s, &[]);
         assert_eq!(r.position, Vec3::new(1.0, 2.0, 3.0));
-        assert_eq!((r.radius, r.normal, r.normal_extent), (0.5, Vec3::Z, 0.01));
+        assert_eq!((r.radius, r.normal, r.tangent), (0.5, Vec3::Z, Vec3::X));
+        // Extents rounded up by a hair, never down.
+        assert!(r.normal_extent >= 0.01 && r.normal_extent < 0.01 * (1.0 + 1e-5));
+        assert!(r.tangent_extent.cmpge(Vec2::new(0.25, 0.5)).all());
+        assert!(
+            r.tangent_extent
+                .cmplt(Vec2::new(0.25, 0.5) * (1.0 + 1e-5))
+                .all()
+        );
         assert_eq!(r.quadric, s.quadric);
         assert_eq!((r.clip_start, r.clip_count), (4, 2));
         assert_eq!(r.normal_turn, f32::MAX, "no quadric: never culled");
         // The unit sphere, outside it (complement): at (0, 0, 2) the outward
-        // normal is −z, |As − b| = 2, ‖A‖_F = √3.
+        // normal is −z, |As − b| = 2, ‖A‖₂ = 1 (‖A‖_F = √3).
         let sphere = ColoredQuadric {
             coefficients: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, -1.0],
             ..quadric
@@ -305,7 +345,21 @@ mod tests {
             ..s
         };
         let r = SplatRecord::new(&outside, &[sphere]);
-        assert!((r.normal_turn - 3f32.sqrt() / 2.0).abs() < 1e-5);
+        assert!(r.normal_turn >= 0.5 && r.normal_turn - 0.5 < 1e-5);
+        // A cylinder along z, x² + y² = 1 scaled by 3: ‖A‖₂ = 3 against
+        // ‖A‖_F = 3√2; at (1, 0, 0) |As − b| = 3.
+        let cylinder = ColoredQuadric {
+            coefficients: [3.0, 0.0, 0.0, 0.0, 3.0, 0.0, 0.0, 0.0, 0.0, -3.0],
+            ..quadric
+        };
+        let on_cylinder = Splat {
+            position: DVec3::X,
+            normal: DVec3::X,
+            quadric: 0,
+            ..s
+        };
+        let r = SplatRecord::new(&on_cylinder, &[cylinder]);
+        assert!(r.normal_turn >= 1.0 && r.normal_turn - 1.0 < 1e-5);
         let inverted = Splat {
             normal: DVec3::Z,
             ..outside

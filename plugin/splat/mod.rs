@@ -122,6 +122,16 @@ pub enum SplatOutput {
     Normals,
     /// `1/64` per fragment invocation, added up (no depth test): overdraw.
     Overdraw,
+    /// `1/64` per fragment whose proxy passes the depth test against the
+    /// splats' own surface, added up: the pass first draws every splat
+    /// depth only (a depth prepass), then counts the proxy fragments at or
+    /// in front of that depth, without writing it. These are the fragment
+    /// shader invocations a GPU with early depth tests runs after a depth
+    /// prepass (paper 2, §7 counts invocations with the depth test), and
+    /// the fewest it runs in any drawing order. The counted proxies are
+    /// moved towards the eye by a few units of depth rounding, so that a
+    /// flat splat's quad, which lies on its surface, is counted there.
+    DepthTestedOverdraw,
     /// The proxies themselves, each splat's in a colour of its own, at
     /// their rasterized depth: the splat bounds of §6.1 (the proxy cube in
     /// global ray-tracing mode).

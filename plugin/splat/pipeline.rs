@@ -23,9 +23,9 @@ use bevy::render::render_resource::binding_types::{storage_buffer_read_only, uni
 use bevy::render::render_resource::{
     BindGroupLayoutDescriptor, BindGroupLayoutEntries, BlendComponent, BlendFactor, BlendOperation,
     BlendState, CachedRenderPipelineId, ColorTargetState, ColorWrites, CompareFunction,
-    DepthStencilState, Face, FragmentState, MultisampleState, PipelineCache, PrimitiveState,
-    RenderPipelineDescriptor, ShaderStages, SpecializedMeshPipeline, SpecializedRenderPipeline,
-    TextureFormat, VertexFormat, VertexState, VertexStepMode,
+    DepthBiasState, DepthStencilState, Face, FragmentState, MultisampleState, PipelineCache,
+    PrimitiveState, RenderPipelineDescriptor, ShaderStages, SpecializedMeshPipeline,
+    SpecializedRenderPipeline, TextureFormat, VertexFormat, VertexState, VertexStepMode,
 };
 use bevy::shader::{Shader, ShaderDefVal};
 
@@ -237,6 +237,12 @@ pub(crate) fn init_splat_pipeline(
     commands.insert_resource(splat);
 }
 
+/// Depth bias of the counting pass of [`SplatOutput::DepthTestedOverdraw`]
+/// towards the eye (reverse-Z: positive), in units of depth rounding...
+const COUNT_DEPTH_BIAS: i32 = 64;
+/// ... and per unit of depth slope.
+const COUNT_SLOPE_BIAS: f32 = 2.0;
+
 /// What a pipeline variant depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SplatPipelineKey {
@@ -255,6 +261,9 @@ pub struct SplatPipelineKey {
     /// Splats facing away from the eye are dropped in the vertex stage
     /// ([`SplatSettings::cull_facing_away`](super::SplatSettings)).
     pub cull_facing_away: bool,
+    /// Depth only: the colour target is left unwritten (the prepass of
+    /// [`SplatOutput::DepthTestedOverdraw`]).
+    pub depth_only: bool,
     /// Bevy's mesh pipeline key of the view (MSAA, prepasses, tonemapping,
     /// fog, shadow filtering, projection…): the layout of its mesh view
     /// bind groups and the defines of its PBR shading.
@@ -285,7 +294,9 @@ impl SpecializedRenderPipeline for SplatPipeline {
             SplatOutput::Shaded => {}
             SplatOutput::QuadricIds => defs.push("OUTPUT_IDS".into()),
             SplatOutput::Normals => defs.push("OUTPUT_NORMALS".into()),
-            SplatOutput::Overdraw => defs.push("OUTPUT_OVERDRAW".into()),
+            SplatOutput::Overdraw | SplatOutput::DepthTestedOverdraw => {
+                defs.push("OUTPUT_OVERDRAW".into());
+            }
             SplatOutput::Bounds => defs.push("OUTPUT_BOUNDS".into()),
         }
         let (shader, cull_mode) = match key.mode {
@@ -308,7 +319,12 @@ impl SpecializedRenderPipeline for SplatPipeline {
         if key.early_depth_test && key.mode != SplatMode::GlobalRayTrace {
             defs.push("EARLY_DEPTH_TEST".into());
         }
-        let overdraw = key.output == SplatOutput::Overdraw;
+        let overdraw = matches!(
+            key.output,
+            SplatOutput::Overdraw | SplatOutput::DepthTestedOverdraw
+        );
+        // Counting at the proxies' rasterized depth against the prepass's.
+        let depth_tested = key.output == SplatOutput::DepthTestedOverdraw;
         let additive = BlendComponent {
             src_factor: BlendFactor::One,
             dst_factor: BlendFactor::One,
@@ -329,13 +345,24 @@ impl SpecializedRenderPipeline for SplatPipeline {
             depth_stencil: Some(DepthStencilState {
                 format: CORE_3D_DEPTH_FORMAT,
                 depth_write_enabled: Some(!overdraw),
-                depth_compare: Some(if overdraw {
+                depth_compare: Some(if overdraw && !depth_tested {
                     CompareFunction::Always
                 } else {
                     CompareFunction::GreaterEqual
                 }),
                 stencil: default(),
-                bias: default(),
+                // A flat splat's quad lies on its surface (a plane's has no
+                // lift): moved towards the eye by a few units of depth
+                // rounding, it is counted where the prepass drew it.
+                bias: if depth_tested {
+                    DepthBiasState {
+                        constant: COUNT_DEPTH_BIAS,
+                        slope_scale: COUNT_SLOPE_BIAS,
+                        clamp: 0.0,
+                    }
+                } else {
+                    DepthBiasState::default()
+                },
             }),
             multisample: MultisampleState {
                 count: key.samples,
@@ -351,7 +378,11 @@ impl SpecializedRenderPipeline for SplatPipeline {
                         color: additive,
                         alpha: additive,
                     }),
-                    write_mask: ColorWrites::ALL,
+                    write_mask: if key.depth_only {
+                        ColorWrites::empty()
+                    } else {
+                        ColorWrites::ALL
+                    },
                 })],
                 ..default()
             }),

@@ -184,7 +184,7 @@ fn insert_prop_aabb(mut world: DeferredWorld<'_>, HookContext { entity, .. }: Ho
 
 /// The buffers of one prop in GPU form (empty by default: nothing to
 /// draw).
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct PropGpuData {
     /// Unique per build: the render world re-uploads when it changes.
     pub generation: u64,

@@ -39,7 +39,7 @@ use super::gpu::{PropUniform, QuadricRecord, SplatRecord, SplatViewUniform};
 use super::material::PropMaterial;
 use super::pipeline::{PROP_GROUP, SPLAT_VIEW_GROUP, SplatPipeline, SplatPipelineKey};
 use super::prop::{PropGpuData, PropSplats};
-use super::{SplatMode, SplatSettings, SplatViewSettings};
+use super::{SplatMode, SplatOutput, SplatSettings, SplatViewSettings};
 
 /// One prop as seen by the render world this frame.
 #[derive(Reflect, Clone, Debug)]
@@ -271,6 +271,8 @@ pub(crate) struct SplatViewUniforms {
 pub(crate) struct SplatViewState {
     offset: u32,
     pipeline: CachedRenderPipelineId,
+    /// The depth prepass drawn first ([`SplatOutput::DepthTestedOverdraw`]).
+    prepass: Option<CachedRenderPipelineId>,
     vertex_count: u32,
     global: bool,
 }
@@ -304,6 +306,7 @@ pub(crate) fn prepare_views(
             early_depth_test,
             open_boxes: settings.open_boxes,
             cull_facing_away: settings.cull_facing_away,
+            depth_only: false,
             // Bevy fills the cache for every view before this system runs
             // (`RenderSystems::PrepareAssets`); the fallback is its key for
             // a plain view.
@@ -316,9 +319,20 @@ pub(crate) fn prepare_views(
                 }),
         };
         let id = pipelines.specialize(&pipeline_cache, &pipeline, key);
+        let prepass = (key.output == SplatOutput::DepthTestedOverdraw
+            && key.mode != SplatMode::GlobalRayTrace)
+            .then(|| {
+                let depth_only = SplatPipelineKey {
+                    output: SplatOutput::QuadricIds,
+                    depth_only: true,
+                    ..key
+                };
+                pipelines.specialize(&pipeline_cache, &pipeline, depth_only)
+            });
         commands.entity(entity).insert(SplatViewState {
             offset,
             pipeline: id,
+            prepass,
             vertex_count: key.vertex_count(),
             global: settings.mode == SplatMode::GlobalRayTrace,
         });
@@ -374,6 +388,13 @@ pub(crate) fn splat_pass(
     ) else {
         return;
     };
+    let prepass = match state.prepass {
+        Some(id) => match pipeline_cache.get_render_pipeline(id) {
+            Some(prepass) => Some(prepass),
+            None => return,
+        },
+        None => None,
+    };
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
@@ -388,23 +409,27 @@ pub(crate) fn splat_pass(
     if let Some(viewport) = camera.viewport.as_ref() {
         pass.set_camera_viewport(viewport);
     }
-    pass.set_render_pipeline(pipeline);
-    pass.set_bind_group(0, &mesh_view.main, &mesh_view.main_offsets);
-    pass.set_bind_group(1, &mesh_view.binding_array, &[]);
-    pass.set_bind_group(SPLAT_VIEW_GROUP as usize, view_bind_group, &[state.offset]);
-    for prop in &props.0 {
-        if visible.is_some_and(|v| v.0.binary_search(&prop.entity).is_err()) {
-            continue;
+    // The prepass (if any) writes the splats' depth; the pass proper then
+    // draws against it.
+    for pipeline in prepass.into_iter().chain([pipeline]) {
+        pass.set_render_pipeline(pipeline);
+        pass.set_bind_group(0, &mesh_view.main, &mesh_view.main_offsets);
+        pass.set_bind_group(1, &mesh_view.binding_array, &[]);
+        pass.set_bind_group(SPLAT_VIEW_GROUP as usize, view_bind_group, &[state.offset]);
+        for prop in &props.0 {
+            if visible.is_some_and(|v| v.0.binary_search(&prop.entity).is_err()) {
+                continue;
+            }
+            let Some(gpu) = buffers.0.get(&prop.entity) else {
+                continue;
+            };
+            let Some(bind_group) = gpu.bind_group.as_ref() else {
+                continue;
+            };
+            pass.set_bind_group(PROP_GROUP as usize, bind_group, &[]);
+            let instances = if state.global { 1 } else { gpu.splat_count };
+            pass.draw(0..state.vertex_count, 0..instances);
         }
-        let Some(gpu) = buffers.0.get(&prop.entity) else {
-            continue;
-        };
-        let Some(bind_group) = gpu.bind_group.as_ref() else {
-            continue;
-        };
-        pass.set_bind_group(PROP_GROUP as usize, bind_group, &[]);
-        let instances = if state.global { 1 } else { gpu.splat_count };
-        pass.draw(0..state.vertex_count, 0..instances);
     }
     span.end(&mut pass);
 }

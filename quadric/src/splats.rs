@@ -14,6 +14,11 @@
 //! - Surface-aligned box: tangent half-extent `r`, normal half-extent
 //!   `r · (max δ − min δ)` over the plane box `(x ± r, y ± r)` (eq. 23),
 //!   capped at `r` (the splat's patch always lies within its sphere).
+//!   Tightened to the sample's own cell ([`cell_box`]): a splat need only
+//!   bound the surface it is there to cover, the lifted plane box
+//!   `uv ± h` ([`Sample::cell`](crate::Sample::cell)), not its whole
+//!   sphere; boxes of a grid fill then overlap their neighbours by the
+//!   cells' stretch only, not by the disc around each cell.
 //! - Term buffer ([`encode_normal_form`]): the whole normal form for the
 //!   global ray-tracing pass, `(start, count)` per product, then the literal
 //!   references of every product.
@@ -28,7 +33,8 @@ use glam::{DVec2, DVec3};
 
 use crate::csg::{Color, CsgDag, Dnf, Literal, Side, SurfaceMaterial};
 use crate::distance::QuadricDistance;
-use crate::sampling::SampleSet;
+use crate::sampling::heightfield::Heightfield;
+use crate::sampling::{Sample, SampleSet};
 use crate::scene::DEFAULT_COLOR;
 
 /// Set in a literal reference when the solid lies where `Q ≥ 0` (the
@@ -48,8 +54,15 @@ pub struct Splat {
     pub normal: DVec3,
     /// Radius to cover (`≤` the sampling radius; reduced where regions were small, §6.1).
     pub radius: f64,
-    /// Half-extent of the surface-aligned box along the normal (eq. 23).
+    /// Half-extent of the surface-aligned box along the normal (eq. 23,
+    /// tightened to the cell by [`cell_box`]).
     pub normal_extent: f64,
+    /// The box's first tangent axis (unit, orthogonal to `normal`); the
+    /// second is `normal × tangent`.
+    pub tangent: DVec3,
+    /// Half-extents of the box along `tangent` and `normal × tangent`,
+    /// each at most `radius`.
+    pub tangent_extent: DVec2,
     /// The literal the splat lies on ([`literal_reference`]): quadric
     /// index, with [`OUTSIDE_FLAG`] for a complemented literal.
     pub quadric: u32,
@@ -134,12 +147,20 @@ impl SplatSet {
             let hf = &samples.patches[s.patch as usize].heightfield;
             let r = s.radius;
             let (dmin, dmax) = hf.distortion_bounds(s.uv - DVec2::splat(r), s.uv + DVec2::splat(r));
-            let extent = r * (dmax - dmin);
+            let cell = cell_box(hf, s).unwrap_or_else(|| {
+                let extent = r * (dmax - dmin);
+                CellBox {
+                    normal_extent: if extent.is_finite() { extent.min(r) } else { r },
+                    ..CellBox::sphere(s.normal, r)
+                }
+            });
             splats.push(Splat {
                 position: s.position,
                 normal: s.normal,
                 radius: r,
-                normal_extent: if extent.is_finite() { extent.min(r) } else { r },
+                normal_extent: cell.normal_extent,
+                tangent: cell.tangent,
+                tangent_extent: cell.tangent_extent,
                 quadric: literal_reference(own),
                 clip_start: start,
                 clip_count: count,
@@ -171,6 +192,24 @@ impl SplatSet {
     }
 }
 
+impl Splat {
+    /// Whether `p` lies in the splat's box (its centre the position, axes
+    /// `tangent`, `normal × tangent` and `normal`), every half-extent
+    /// widened by the factor `tolerance`. A splat without a normal (a
+    /// singular point) has the box of its whole sphere.
+    #[must_use]
+    pub fn box_holds(&self, p: DVec3, tolerance: f64) -> bool {
+        let d = p - self.position;
+        if self.normal.length_squared() < 0.25 {
+            return d.abs().max_element() <= self.radius * tolerance;
+        }
+        let t2 = self.normal.cross(self.tangent);
+        d.dot(self.tangent).abs() <= self.tangent_extent.x * tolerance
+            && d.dot(t2).abs() <= self.tangent_extent.y * tolerance
+            && d.dot(self.normal).abs() <= self.normal_extent * tolerance
+    }
+}
+
 impl ColoredQuadric {
     /// The coefficients as the renderer reads them: scaled to a largest
     /// magnitude of 1 (the surface and the sign of `Q` are unchanged), as
@@ -186,6 +225,94 @@ impl ColoredQuadric {
         let inv = if scale > 0.0 { 1.0 / scale } else { 1.0 };
         self.coefficients.map(|c| (c * inv) as f32)
     }
+}
+
+/// A splat's box bound from its cell: axes and half-extents.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellBox {
+    /// First tangent axis (unit, orthogonal to the normal).
+    pub tangent: DVec3,
+    /// Half-extents along `tangent` and `normal × tangent`.
+    pub tangent_extent: DVec2,
+    /// Half-extent along the normal.
+    pub normal_extent: f64,
+}
+
+impl CellBox {
+    /// The box of the whole sphere of radius `r` around a sample with
+    /// `normal`: tangent half-extents `r` in the frame the renderer builds
+    /// for a zero or unknown tangent (`shaders/splat.wgsl`).
+    #[must_use]
+    pub fn sphere(normal: DVec3, r: f64) -> Self {
+        let helper = if normal.x.abs() > 0.9 {
+            DVec3::Y
+        } else {
+            DVec3::X
+        };
+        Self {
+            tangent: helper.cross(normal).try_normalize().unwrap_or(DVec3::X),
+            tangent_extent: DVec2::splat(r),
+            normal_extent: r,
+        }
+    }
+}
+
+/// Steps of the bound on `ε` in [`cell_box`].
+const CELL_BOX_STEPS: u32 = 4;
+
+/// Relative widening of a [`cell_box`] against rounding (the sample is
+/// polished onto the quadric after its plane point was lifted).
+const CELL_BOX_MARGIN: f64 = 1e-9;
+
+/// The box around sample `s` of heightfield `hf` that holds the surface
+/// over its cell, within its radius; `None` where the cell or the gradient
+/// is unbounded (then the sphere's box, [`CellBox::sphere`]).
+///
+/// Notation: `X, Y, Z` the heightfield's plane axes and normal axis, `t`
+/// its height, `g = ∇t` at the sample's plane point `uv`, `h` the cell's
+/// half size (at most `r`: a covered point is within `r` of the sample,
+/// and the plane is nearer). A plane offset `Δ` with `|Δᵢ| ≤ hᵢ` lifts to
+/// `Δp = Δₓ A₁ + Δ_y A₂ + ε Z` exactly, with the tangents `A₁ = X + gₓZ`,
+/// `A₂ = Y + g_yZ` and `ε = t(uv + Δ) − t(uv) − g·Δ`. By the mean value
+/// theorem, `ε = ∫₀¹ (∇t(uv + sΔ) − g)·Δ ds`; for `s` in
+/// `[(k − 1)/K, k/K]` the point lies in the box `uv ± (k/K) h`, so
+/// `|ε| ≤ (1/K) Σₖ Σᵢ hᵢ max|∇ᵢt − gᵢ|` over those boxes
+/// ([`Heightfield::gradient_bounds`], `K` = [`CELL_BOX_STEPS`]: about
+/// `5/8` of the one-box bound where `∇t` varies linearly). Along any unit `d`,
+/// `|d·Δp| ≤ hₓ|d·A₁| + h_y|d·A₂| + |ε||d·Z|`: the box's half-extents
+/// along `t₁ ∝ A₁ − (A₁·n)n`, `t₂ = n × t₁` and `n` (each capped at `r`).
+///
+/// [`Heightfield::gradient_bounds`]: crate::sampling::heightfield::Heightfield::gradient_bounds
+#[must_use]
+pub fn cell_box(hf: &Heightfield, s: &Sample) -> Option<CellBox> {
+    let r = s.radius;
+    let n = s.normal;
+    if n.length_squared().is_nan() || n.length_squared() <= 0.25 || !s.cell.is_finite() {
+        return None;
+    }
+    let half = s.cell.min(DVec2::splat(r));
+    let g = hf.gradient(s.uv)?;
+    let mut eps = 0.0;
+    for k in 1..=CELL_BOX_STEPS {
+        let part = f64::from(k) / f64::from(CELL_BOX_STEPS);
+        let (low, high) = hf.gradient_bounds(s.uv - part * half, s.uv + part * half)?;
+        eps += (high - g).max(g - low).dot(half) / f64::from(CELL_BOX_STEPS);
+    }
+    let (x, y, z) = (hf.axes.x_axis, hf.axes.y_axis, hf.axes.z_axis);
+    let (a1, a2) = (x + g.x * z, y + g.y * z);
+    let t1 = (a1 - a1.dot(n) * n).try_normalize()?;
+    let t2 = n.cross(t1);
+    let margin = CELL_BOX_MARGIN * (r + s.position.length());
+    let extent = |d: DVec3| {
+        let e = half.x * d.dot(a1).abs() + half.y * d.dot(a2).abs() + eps * d.dot(z).abs();
+        (e * (1.0 + CELL_BOX_MARGIN) + margin).min(r)
+    };
+    let b = CellBox {
+        tangent: t1,
+        tangent_extent: DVec2::new(extent(t1), extent(t2)),
+        normal_extent: extent(n),
+    };
+    (b.tangent_extent.is_finite() && b.normal_extent.is_finite()).then_some(b)
 }
 
 /// How the renderer refers to a literal: its quadric index, with

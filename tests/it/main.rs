@@ -47,6 +47,8 @@ mod splat_exposure;
 #[cfg(feature = "viewer")]
 mod splat_materials;
 #[cfg(feature = "viewer")]
+mod splat_overdraw;
+#[cfg(feature = "viewer")]
 mod splat_render;
 #[cfg(feature = "viewer")]
 mod splat_shadows;

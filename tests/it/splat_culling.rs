@@ -45,19 +45,28 @@ fn splats(name: &str, centre: [f64; 3], radius: f64) -> PropSplats {
 fn box_corners(s: &bevy_chisel::splat::gpu::SplatRecord) -> Vec<Vec3> {
     let tolerance = 1.001;
     let r = s.radius * tolerance;
-    let (n, e) = if s.normal.length_squared() < 0.25 {
-        (Vec3::Z, r)
+    let (n, e, t1, h) = if s.normal.length_squared() < 0.25 {
+        let helper = Vec3::X;
+        (
+            Vec3::Z,
+            r,
+            helper.cross(Vec3::Z).normalize(),
+            Vec2::splat(r),
+        )
     } else {
-        (s.normal, s.normal_extent * tolerance)
+        (
+            s.normal,
+            s.normal_extent * tolerance,
+            s.tangent,
+            s.tangent_extent * tolerance,
+        )
     };
-    let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
-    let t1 = helper.cross(n).normalize();
     let t2 = n.cross(t1);
     let mut corners = Vec::new();
     for a in [-1.0, 1.0] {
         for b in [-1.0, 1.0] {
             for c in [-1.0, 1.0] {
-                corners.push(s.position + (t1 * a + t2 * b) * r + n * (c * e));
+                corners.push(s.position + t1 * (a * h.x) + t2 * (b * h.y) + n * (c * e));
             }
         }
     }

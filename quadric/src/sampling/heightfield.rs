@@ -380,6 +380,49 @@ impl Heightfield {
         }
     }
 
+    /// The gradient `(∂t/∂x, ∂t/∂y)` at `p`, or `None` on the domain's rim
+    /// and outside the domain.
+    #[must_use]
+    pub fn gradient(&self, p: DVec2) -> Option<DVec2> {
+        let g = DVec2::new(self.value.x.slope(p.x), self.value.y.slope(p.y));
+        match self.kind {
+            HeightKind::Polynomial => Some(g),
+            HeightKind::Root { positive } => {
+                let r = self.value.value(p);
+                (r > 0.0).then(|| g * (if positive { 0.5 } else { -0.5 } / r.sqrt()))
+            }
+        }
+    }
+
+    /// Bounds `(min, max)` of each component of the [`gradient`](Self::gradient)
+    /// over the box `[lo, hi]` (interval arithmetic on `r_x / 2√r` for a
+    /// root heightfield: `r_x` depends on `x` only, `r` lies in its exact
+    /// range), or `None` where the box reaches the domain's rim.
+    #[must_use]
+    pub fn gradient_bounds(&self, lo: DVec2, hi: DVec2) -> Option<(DVec2, DVec2)> {
+        let ends = |q: &Quad1, a: f64, b: f64| {
+            let (u, v) = (q.slope(a), q.slope(b));
+            (u.min(v), u.max(v))
+        };
+        let (x0, x1) = ends(&self.value.x, lo.x, hi.x);
+        let (y0, y1) = ends(&self.value.y, lo.y, hi.y);
+        let (min, max) = (DVec2::new(x0, y0), DVec2::new(x1, y1));
+        match self.kind {
+            HeightKind::Polynomial => Some((min, max)),
+            HeightKind::Root { positive } => {
+                let (r0, r1) = self.value.range(lo, hi);
+                if r0.is_nan() || r0 <= 0.0 {
+                    return None;
+                }
+                // Divided by the interval [2√r₀, 2√r₁] of positive numbers.
+                let (m0, m1) = (2.0 * r0.sqrt(), 2.0 * r1.sqrt());
+                let low = (min / m0).min(min / m1);
+                let high = (max / m0).max(max / m1);
+                Some(if positive { (low, high) } else { (-high, -low) })
+            }
+        }
+    }
+
     /// Bounds `(Sₓ, S_y)` of the slopes `|∂t/∂x|` and `|∂t/∂y|` over the
     /// box `[lo, hi]`, taken as [`distortion_bounds`](Self::distortion_bounds)
     /// takes `δ₊`: exact for polynomial heightfields; at the corners for a

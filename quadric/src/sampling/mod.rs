@@ -166,6 +166,12 @@ pub struct Sample {
     pub uv: DVec2,
     /// The radius it must cover, `≤ r` (reduced where regions are small, §6.1).
     pub radius: f64,
+    /// Half size of the box around [`uv`](Self::uv) (plane coordinates of
+    /// its patch) that holds the plane points of every surface point the
+    /// sample is there to cover (its fill cell, or its region): the
+    /// renderer bounds its splat by the surface over that box. `+∞` where
+    /// only [`radius`](Self::radius) bounds them.
+    pub cell: DVec2,
 }
 
 /// A heightfield of one literal, as referenced by [`Sample::patch`].

@@ -274,7 +274,9 @@ impl RegionJob<'_> {
                 self.single_sample(region, delta, ds, others, within.sphere, stats)
             {
                 if self.budget.reserve(1.0) {
-                    out.push(self.sample(uv, reach.max(f64::MIN_POSITIVE)));
+                    let (lo, hi) = region.bounds();
+                    let cell = (lo - uv).abs().max((hi - uv).abs());
+                    out.push(self.sample(uv, reach.max(f64::MIN_POSITIVE), cell));
                 }
                 return;
             }
@@ -558,7 +560,7 @@ impl RegionJob<'_> {
                     inside[k + nx + 2],
                 ];
                 if corners.iter().all(|c| *c) {
-                    out.push(self.sample(0.5 * (a + b), radius));
+                    out.push(self.sample(0.5 * (a + b), radius, 0.5 * cell));
                 } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
@@ -608,7 +610,8 @@ impl RegionJob<'_> {
         let path = delta * region.warp().path_length(far, floor);
         let radius = (box_delta * far).min(path);
         if radius <= self.options.radius || depth >= MAX_FILL_DEPTH {
-            out.push(self.sample(point, radius.min(self.options.radius)));
+            let cell = (lo - point).abs().max((hi - point).abs());
+            out.push(self.sample(point, radius.min(self.options.radius), cell));
             return;
         }
         let mid = centre;
@@ -658,14 +661,15 @@ impl RegionJob<'_> {
                 let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, f64::from(j) + 0.5);
                 let p = region.closest_point(centre);
                 if p.distance(centre) <= half_diagonal {
-                    out.push(self.sample(p, radius));
+                    out.push(self.sample(p, radius, 0.5 * cell + (p - centre).abs()));
                 }
             }
         }
     }
 
-    /// The sample above plane point `uv`, polished onto the quadric.
-    fn sample(&self, uv: DVec2, radius: f64) -> Sample {
+    /// The sample above plane point `uv`, polished onto the quadric, that
+    /// covers the surface over the plane box `uv ± cell` within `radius`.
+    fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
         let raw = self
             .heightfield
             .point(uv)
@@ -693,6 +697,7 @@ impl RegionJob<'_> {
             patch: self.patch,
             uv,
             radius,
+            cell,
         }
     }
 }

@@ -39,6 +39,10 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
         for (splat, s) in splats.splats.iter().zip(&set.samples) {
             assert_eq!(splat.quadric & INDEX_MASK, s.quadric);
             assert!(splat.normal_extent >= 0.0 && splat.normal_extent <= splat.radius);
+            assert!(splat.tangent_extent.max_element() <= splat.radius);
+            assert!(splat.tangent_extent.min_element() >= 0.0);
+            assert!(splat.tangent.dot(splat.normal).abs() < 1e-9);
+            assert!((splat.tangent.length() - 1.0).abs() < 1e-12);
             let start = splat.clip_start as usize;
             let list = &splats.clip_indices[start..start + splat.clip_count as usize];
             assert!(list.windows(2).all(|w| w[0] < w[1]));
@@ -105,16 +109,70 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
                 // Nudge inside the solid by a hair: the point then satisfies
                 // every literal strictly, except at edges it lies on.
                 let inner = p - image.normal[i] * 1e-9 * bound;
-                let kept = splats.splats.iter().any(|sp| {
-                    sp.quadric & INDEX_MASK == q
-                        && sp.position.distance(p) <= sp.radius
-                        && splats.keeps(sp, inner)
-                });
+                let kept = |boxed: bool| {
+                    splats.splats.iter().any(|sp| {
+                        sp.quadric & INDEX_MASK == q
+                            && sp.position.distance(p) <= sp.radius
+                            && (!boxed || sp.box_holds(p, 1.0 + 1e-9))
+                            && splats.keeps(sp, inner)
+                    })
+                };
                 assert!(
-                    kept,
+                    kept(false),
                     "{name}: traced point {p} clipped by every covering splat"
                 );
+                // The renderer rasterizes the boxes: one of them holds it.
+                assert!(kept(true), "{name}: traced point {p} outside every box");
             }
         }
+    }
+}
+
+/// Each splat's box holds the surface it covers: the lifted points of its
+/// cell (a 9 × 9 grid over the plane box `uv ± cell`) within its radius,
+/// at the renderer's default radius (bounds ÷ 40).
+#[test]
+fn every_splat_box_holds_the_surface_over_its_cell() {
+    for (name, centre, bound) in SCENES {
+        let scene = common::scene(name);
+        let dnf = scene.dnf().unwrap();
+        let sphere = BoundingSphere::new(DVec3::from(centre), bound).unwrap();
+        let set = sample(&dnf, &SampleOptions::new(bound / 40.0, sphere).unwrap()).unwrap();
+        let splats = SplatSet::new(&dnf, &scene.dag, &set);
+        let (mut checked, mut tight) = (0_usize, 0_usize);
+        for (splat, s) in splats.splats.iter().zip(&set.samples) {
+            let hf = &set.patches[s.patch as usize].heightfield;
+            let half = s.cell.min(glam::DVec2::splat(s.radius));
+            if !half.is_finite() {
+                continue;
+            }
+            tight += usize::from(splat.tangent_extent.max_element() < splat.radius);
+            for i in 0..=8 {
+                for j in 0..=8 {
+                    let f = glam::DVec2::new(f64::from(i) / 4.0 - 1.0, f64::from(j) / 4.0 - 1.0);
+                    let Some(p) = hf.point(s.uv + half * f) else {
+                        continue;
+                    };
+                    if p.distance(s.position) > s.radius {
+                        continue;
+                    }
+                    checked += 1;
+                    assert!(
+                        splat.box_holds(p, 1.0 + 1e-9),
+                        "{name}: {p} over the cell of the splat at {} outside its box {:?}",
+                        splat.position,
+                        (splat.tangent_extent, splat.normal_extent)
+                    );
+                }
+            }
+        }
+        println!(
+            "{name}: {checked} cell points in their boxes; {tight} of {} boxes narrower than the sphere's",
+            splats.splats.len()
+        );
+        assert!(
+            tight > splats.splats.len() / 2,
+            "{name}: the cells bound most boxes"
+        );
     }
 }
