@@ -13,7 +13,10 @@
 //! `carving_at_sixty_frames_per_second`,
 //! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`). World:
 //! chunks of the `world` example's landscape built one at a time, their
-//! size, and an app streaming them around a focus flying at 1 m per frame.
+//! size, the banded base built in one pass against painting its bands, and
+//! an app streaming them around a focus touring the world (a line, a loop
+//! or a lawnmower; `CHISEL_BENCH_TOUR`) at 50 m/s while blasting craters,
+//! with time to first frame and peak memory.
 //! Each prints its figures, then
 //! one JSON line of them. `cargo test` runs this binary without `--bench`:
 //! it then measures nothing (see `support`).
