@@ -17,8 +17,10 @@
 //! is written down as labelled faces and imported once:
 //!
 //! 1. Bands are sorted by depth (of equal depths the later one wins, as it
-//!    painted last) and a band labelled as the material under it is
-//!    dropped: its surface separates nothing.
+//!    painted last); the first band deeper than the field is high holds
+//!    all the solid under the shallower ones, so those under it go and its
+//!    depth is cut to that height; a band labelled as the material under
+//!    it is dropped: its surface separates nothing.
 //! 2. Per half `τ`: the surfaces `S_k` over `τ`, cut off below the bottom
 //!    plane, with `l_k` above and the next deeper label below; the bottom
 //!    under `τ` and the walls on the square's border edges in `τ`, split
@@ -81,7 +83,11 @@ impl Octree {
         let mut octree = Octree::new(origin, size_log2, EMPTY, config)?;
         let root = octree.root_box();
         field.check(&root)?;
-        let bands = effective_bands(field.bands, field.label);
+        // A band deeper than the field is high reaches below the bottom
+        // everywhere: it is cut to that depth, which keeps its region and
+        // every coordinate on the grid.
+        let highest = field.heights.iter().copied().max().unwrap_or(field.bottom);
+        let bands = effective_bands(field.bands, field.label, highest - field.bottom + 1);
         let mut pieces = Vec::new();
         let [nx, nz] = field.samples;
         for j in 0..nz - 1 {
@@ -98,9 +104,11 @@ impl Octree {
 }
 
 /// The bands that separate something, shallowest first: sorted by depth,
-/// the later of equal depths kept, and a band dropped where the material
+/// the later of equal depths kept, those under the first band at least
+/// `reach` deep dropped (it holds all the solid under the shallower ones)
+/// and that band cut to `reach`, and a band dropped where the material
 /// under it has its label.
-fn effective_bands(bands: &[(i64, Label)], base: Label) -> Vec<(i64, Label)> {
+fn effective_bands(bands: &[(i64, Label)], base: Label, reach: i64) -> Vec<(i64, Label)> {
     let mut sorted: Vec<(usize, i64, Label)> = bands
         .iter()
         .enumerate()
@@ -109,6 +117,10 @@ fn effective_bands(bands: &[(i64, Label)], base: Label) -> Vec<(i64, Label)> {
     // By depth, and of equal depths the latest first.
     sorted.sort_by_key(|&(n, depth, _)| (depth, std::cmp::Reverse(n)));
     sorted.dedup_by_key(|&mut (_, depth, _)| depth);
+    if let Some(first_deep) = sorted.iter().position(|&(_, depth, _)| depth >= reach) {
+        sorted.truncate(first_deep + 1);
+        sorted[first_deep].1 = reach;
+    }
     let mut kept = Vec::with_capacity(sorted.len());
     let mut under = base;
     for &(_, depth, label) in sorted.iter().rev() {

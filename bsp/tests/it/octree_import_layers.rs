@@ -242,6 +242,45 @@ fn bands_reaching_below_the_bottom_and_repeated_depths_match() {
         .map(|(l, _)| l)
         .collect();
     assert_eq!(labels, vec![1, 2, 3, 4]);
+
+    // A band of any depth: as deep as the grid allows, it holds what one
+    // reaching below the bottom everywhere holds, and hides deeper ones.
+    for (deepest, painted) in [
+        (vec![(12, 2), (i64::MAX, 3)], vec![(12, 2), (6_000, 3)]),
+        (
+            vec![(12, 2), (i64::MAX, 3), (500, 4)],
+            vec![(12, 2), (6_000, 3), (500, 4)],
+        ),
+    ] {
+        let deep = Field {
+            bands: deepest,
+            ..field.clone_shape()
+        };
+        let reference = Field {
+            bands: painted,
+            ..field.clone_shape()
+        };
+        assert_eq!(
+            deep.imported().exact_volumes(),
+            reference.painted().exact_volumes(),
+            "{:?}",
+            deep.bands
+        );
+    }
+}
+
+impl Field {
+    fn clone_shape(&self) -> Field {
+        Field {
+            corner: self.corner,
+            samples: self.samples,
+            spacing: self.spacing,
+            heights: self.heights.clone(),
+            bottom: self.bottom,
+            label: self.label,
+            bands: self.bands.clone(),
+        }
+    }
 }
 
 #[test]
