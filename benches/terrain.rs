@@ -13,7 +13,10 @@
 //! `carving_at_sixty_frames_per_second`,
 //! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`). World:
 //! chunks of the `world` example's landscape built one at a time, their
-//! size, and an app streaming them around a focus flying at 1 m per frame.
+//! size, the banded base built in one pass against painting its bands, and
+//! an app streaming them around a focus touring the world (a line, a loop
+//! or a lawnmower; `CHISEL_BENCH_TOUR`) at 50 m/s while blasting craters,
+//! with time to first frame and peak memory.
 //! Each prints its figures, then
 //! one JSON line of them. `cargo test` runs this binary without `--bench`:
 //! it then measures nothing (see `support`).
@@ -701,6 +704,71 @@ fn world_of_the_example(layers: bool) -> bevy_chisel::terrain::TerrainWorld {
     TerrainWorld::new(layout, example_noise()).expect("valid layout")
 }
 
+/// A banded heightfield base built as before the one-pass import: the
+/// closed field imported, then each band painted with one convex column
+/// per square (from the band's depth under the corners up past the
+/// highest), deepest band first.
+fn painted_bands(base: &bevy_chisel::terrain::TerrainBase) -> bevy_chisel::bsp::octree::Octree {
+    use bevy_chisel::bsp::exact::IntPoint;
+    use bevy_chisel::bsp::octree::{Octree, Tool};
+    use bevy_chisel::terrain::TerrainBase;
+    let TerrainBase::Heightfield {
+        origin,
+        size_log2,
+        field,
+    } = base
+    else {
+        panic!("a heightfield base");
+    };
+    let point = |c: [i64; 3]| IntPoint::from_array(c).expect("in range");
+    let triangles: Vec<[IntPoint; 3]> = field
+        .closed_mesh()
+        .expect("valid field")
+        .iter()
+        .map(|t| t.map(point))
+        .collect();
+    let mut octree = Octree::from_triangles(
+        *origin,
+        *size_log2,
+        &triangles,
+        field.label,
+        terrain_octree_config(),
+    )
+    .expect("closed field");
+    let [nx, nz] = field.samples;
+    let at = |i: u32, j: u32, y: i64| {
+        [
+            field.corner[0] + i64::from(i) * field.spacing,
+            y,
+            field.corner[2] + i64::from(j) * field.spacing,
+        ]
+    };
+    let height = |i: u32, j: u32| field.heights[(i + j * nx) as usize];
+    let mut layers = field.layers.clone();
+    layers.sort_by_key(|&(depth, _)| std::cmp::Reverse(depth));
+    for (depth, label) in layers {
+        for j in 0..nz - 1 {
+            for i in 0..nx - 1 {
+                let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+                let high = corners
+                    .iter()
+                    .map(|&(a, b)| height(a, b))
+                    .max()
+                    .unwrap_or(0)
+                    + 1;
+                let mut points = Vec::with_capacity(8);
+                for (a, b) in corners {
+                    points.push(point(at(a, b, height(a, b) - depth)));
+                    points.push(point(at(a, b, high)));
+                }
+                let column = Tool::convex_hull(&points).expect("a column");
+                octree.apply(&column, Edit::Paint(label)).expect("paint");
+            }
+        }
+    }
+    octree
+}
+
 /// The `world` example's landscape.
 fn example_noise() -> bevy_chisel::terrain::ValueNoise {
     use bevy_chisel::terrain::{NoiseOctave, ValueNoise};
@@ -715,6 +783,79 @@ fn example_noise() -> bevy_chisel::terrain::ValueNoise {
     }
 }
 
+/// A focus's path: a polyline through waypoints (metres, x and z), walked
+/// at constant speed and held at its end.
+struct Tour {
+    points: Vec<(f32, f32)>,
+}
+
+impl Tour {
+    /// `line`: 100 km along x at z = 10 m; `loop`: around the square
+    /// `[0, extent]²`; `lawnmower`: across it in `lanes` lanes, turning at
+    /// the ends.
+    fn new(name: &str, extent: f32, lanes: usize) -> Self {
+        let points = match name {
+            "line" => vec![(0.0, 10.0), (100_000.0, 10.0)],
+            "loop" => vec![
+                (0.0, 0.0),
+                (extent, 0.0),
+                (extent, extent),
+                (0.0, extent),
+                (0.0, 0.0),
+            ],
+            "lawnmower" => (0..lanes)
+                .flat_map(|lane| {
+                    let z = extent * (lane as f32 + 0.5) / lanes as f32;
+                    if lane % 2 == 0 {
+                        [(0.0, z), (extent, z)]
+                    } else {
+                        [(extent, z), (0.0, z)]
+                    }
+                })
+                .collect(),
+            other => panic!("CHISEL_BENCH_TOUR: no tour {other:?} (line, loop, lawnmower)"),
+        };
+        Self { points }
+    }
+
+    fn length(&self) -> f32 {
+        self.points
+            .windows(2)
+            .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+            .sum()
+    }
+
+    /// The point `distance` metres along the path.
+    fn at(&self, distance: f32) -> (f32, f32) {
+        let mut left = distance.max(0.0);
+        for w in self.points.windows(2) {
+            let leg = (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1);
+            if left <= leg && leg > 0.0 {
+                let t = left / leg;
+                return (
+                    w[0].0 + t * (w[1].0 - w[0].0),
+                    w[0].1 + t * (w[1].1 - w[0].1),
+                );
+            }
+            left -= leg;
+        }
+        *self.points.last().expect("a tour has points")
+    }
+}
+
+/// The process's peak resident memory in MiB (`VmHWM`), 0 where unknown.
+fn peak_resident_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|status| {
+            status.lines().find_map(|line| {
+                let kib = line.strip_prefix("VmHWM:")?.trim().strip_suffix("kB")?;
+                kib.trim().parse::<f64>().ok()
+            })
+        })
+        .map_or(0.0, |kib| kib / 1024.0)
+}
+
 fn streaming_a_world() {
     use bevy::transform::TransformPlugin;
     use bevy_chisel::terrain::{
@@ -724,57 +865,138 @@ fn streaming_a_world() {
     let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
     let side = (chunks as f64).sqrt().ceil() as i64;
     let mut figures = serde_json::Map::new();
-    for layers in [false, true] {
-        let world = world_of_the_example(layers);
-        let mut times = Vec::new();
-        let (mut bsp_bytes, mut leaves, mut file_bytes) = (0usize, 0usize, 0usize);
+    // CHISEL_BENCH_CHUNKS=0 leaves out the chunk builds one by one.
+    if chunks > 0 {
+        for layers in [false, true] {
+            let world = world_of_the_example(layers);
+            let mut times = Vec::new();
+            let (mut bsp_bytes, mut leaves, mut file_bytes) = (0usize, 0usize, 0usize);
+            for k in 0..chunks {
+                let coord = ChunkCoord {
+                    x: k % side,
+                    z: k / side,
+                };
+                let start = Instant::now();
+                let terrain = world.generate_chunk(coord).expect("chunk builds");
+                times.push(start.elapsed());
+                let stats = terrain.octree().stats();
+                bsp_bytes += stats.bsp_bytes;
+                leaves += stats.leaves;
+                file_bytes += terrain.to_bytes().len();
+            }
+            times.sort_unstable();
+            let n = chunks as usize;
+            let tag = if layers { "with_bands" } else { "no_bands" };
+            println!(
+                "chunk build ({tag}), one thread, {chunks} chunks: median {:.1} ms, p90 {:.1} ms; \
+             per chunk {} leaves, {} BSP bytes, {} file bytes",
+                percentile(&times, 0.5),
+                percentile(&times, 0.9),
+                leaves / n,
+                bsp_bytes / n,
+                file_bytes / n
+            );
+            figures.insert(
+                format!("build_median_ms_{tag}"),
+                percentile(&times, 0.5).into(),
+            );
+            figures.insert(
+                format!("build_p90_ms_{tag}"),
+                percentile(&times, 0.9).into(),
+            );
+            figures.insert(format!("bsp_bytes_per_chunk_{tag}"), (bsp_bytes / n).into());
+            figures.insert(
+                format!("file_bytes_per_chunk_{tag}"),
+                (file_bytes / n).into(),
+            );
+        }
+
+        // The banded base build against the construction it replaced (the
+        // closed field imported, then each band painted with one convex column
+        // per square, deepest first), alternating chunk by chunk in this run;
+        // the two must give the same exact volume per material.
+        let banded = world_of_the_example(true);
+        let noise = example_noise();
+        let (mut layered, mut painted) = (Vec::new(), Vec::new());
         for k in 0..chunks {
             let coord = ChunkCoord {
                 x: k % side,
                 z: k / side,
             };
-            let start = Instant::now();
-            let terrain = world.generate_chunk(coord).expect("chunk builds");
-            times.push(start.elapsed());
-            let stats = terrain.octree().stats();
-            bsp_bytes += stats.bsp_bytes;
-            leaves += stats.leaves;
-            file_bytes += terrain.to_bytes().len();
+            let base = banded
+                .layout()
+                .chunk_base(&noise, coord)
+                .expect("chunk base");
+            let time_layered = |times: &mut Vec<Duration>| {
+                let start = Instant::now();
+                let octree = base.build(terrain_octree_config()).expect("layered build");
+                times.push(start.elapsed());
+                octree
+            };
+            let time_painted = |times: &mut Vec<Duration>| {
+                let start = Instant::now();
+                let octree = painted_bands(&base);
+                times.push(start.elapsed());
+                octree
+            };
+            let (a, b) = if k % 2 == 0 {
+                let a = time_layered(&mut layered);
+                (a, time_painted(&mut painted))
+            } else {
+                let b = time_painted(&mut painted);
+                (time_layered(&mut layered), b)
+            };
+            let nonzero = |o: &bevy_chisel::bsp::octree::Octree| -> Vec<_> {
+                o.exact_volumes()
+                    .into_iter()
+                    .filter(|(_, v)| !v.is_zero())
+                    .collect()
+            };
+            assert_eq!(nonzero(&a), nonzero(&b), "chunk {coord:?}: same materials");
         }
-        times.sort_unstable();
-        let n = chunks as usize;
-        let tag = if layers { "with_bands" } else { "no_bands" };
+        layered.sort_unstable();
+        painted.sort_unstable();
         println!(
-            "chunk build ({tag}), one thread, {chunks} chunks: median {:.1} ms, p90 {:.1} ms; \
-             per chunk {} leaves, {} BSP bytes, {} file bytes",
-            percentile(&times, 0.5),
-            percentile(&times, 0.9),
-            leaves / n,
-            bsp_bytes / n,
-            file_bytes / n
+            "banded base build, {chunks} chunks alternating: one-pass layered import median {:.1} ms \
+         (p90 {:.1}), painted bands median {:.1} ms (p90 {:.1}), ratio {:.2}",
+            percentile(&layered, 0.5),
+            percentile(&layered, 0.9),
+            percentile(&painted, 0.5),
+            percentile(&painted, 0.9),
+            percentile(&painted, 0.5) / percentile(&layered, 0.5)
         );
         figures.insert(
-            format!("build_median_ms_{tag}"),
-            percentile(&times, 0.5).into(),
+            "base_median_ms_layered".into(),
+            percentile(&layered, 0.5).into(),
         );
         figures.insert(
-            format!("build_p90_ms_{tag}"),
-            percentile(&times, 0.9).into(),
-        );
-        figures.insert(format!("bsp_bytes_per_chunk_{tag}"), (bsp_bytes / n).into());
-        figures.insert(
-            format!("file_bytes_per_chunk_{tag}"),
-            (file_bytes / n).into(),
+            "base_median_ms_painted".into(),
+            percentile(&painted, 0.5).into(),
         );
     }
 
-    // An app streaming the banded world around a focus flying along x at
+    // An app streaming the banded world around a focus touring it at
     // CHISEL_BENCH_SPEED m/s (default 50), frames paced at 60 per second,
     // blasting a crater every CHISEL_BENCH_CRATER_EVERY metres (default 6;
-    // 0 for none), with render meshes built (no renderer).
-    let frames: usize = env_or("CHISEL_BENCH_FRAMES", 600);
+    // 0 for none) 14 m ahead, with render meshes built (no renderer). The
+    // tour (CHISEL_BENCH_TOUR): `line` (default) along x; `loop` around a
+    // square of side CHISEL_BENCH_WORLD_M metres (default 4000) from the
+    // origin; `lawnmower` across that square in CHISEL_BENCH_LANES lanes
+    // (default 4). CHISEL_BENCH_FRAMES (default 600; 0: the whole tour).
+    // Time to first frame runs from before the app is made to the first
+    // frame with the focus's chunks built and meshed; peak memory is the
+    // process's peak resident set (VmHWM) at the end.
     let speed: f32 = env_or("CHISEL_BENCH_SPEED", 50.0);
     let crater_every: f32 = env_or("CHISEL_BENCH_CRATER_EVERY", 6.0);
+    let tour_name: String = env_or("CHISEL_BENCH_TOUR", "line".to_string());
+    let extent: f32 = env_or("CHISEL_BENCH_WORLD_M", 4000.0);
+    let lanes: usize = env_or("CHISEL_BENCH_LANES", 4usize).max(1);
+    let tour = Tour::new(&tour_name, extent, lanes);
+    let frames: usize = match env_or("CHISEL_BENCH_FRAMES", 600usize) {
+        0 => (tour.length() / speed * 60.0).ceil() as usize,
+        n => n,
+    };
+    let app_start = Instant::now();
     let world = world_of_the_example(true)
         .with_streaming(StreamSettings {
             load_radius: 30.0,
@@ -792,9 +1014,10 @@ fn streaming_a_world() {
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>();
     let world = app.world_mut().spawn(world).id();
+    let (x0, z0) = tour.at(0.0);
     let focus = app
         .world_mut()
-        .spawn((TerrainFocus, Transform::from_xyz(0.0, 20.0, 10.0)))
+        .spawn((TerrainFocus, Transform::from_xyz(x0, 20.0, z0)))
         .id();
     let settled = |app: &App| {
         let w = app.world().get::<TerrainWorld>(world).expect("world");
@@ -803,11 +1026,10 @@ fn streaming_a_world() {
             && w.live_chunks()
                 .all(|(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle))
     };
-    let start = Instant::now();
-    while !settled(&app) && start.elapsed() < Duration::from_secs(600) {
+    while !settled(&app) && app_start.elapsed() < Duration::from_secs(600) {
         app.update();
     }
-    let first = start.elapsed();
+    let first = app_start.elapsed();
     let live = app
         .world()
         .get::<TerrainWorld>(world)
@@ -815,7 +1037,7 @@ fn streaming_a_world() {
         .stats()
         .live;
     println!(
-        "first fill: {live} chunks built and meshed in {:.0} ms ({:.1} chunks/s)",
+        "first frame: {live} chunks built and meshed {:.0} ms after app start ({:.1} chunks/s)",
         first.as_secs_f64() * 1e3,
         live as f64 / first.as_secs_f64()
     );
@@ -831,25 +1053,30 @@ fn streaming_a_world() {
         s.generated + s.restored
     };
     let mut next_crater = 0.0;
+    let mut craters = 0usize;
     let start = Instant::now();
     for k in 0..frames {
         let due = start + frame * k as u32;
         if let Some(wait) = due.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
         }
-        let x = speed * k as f32 / 60.0;
-        app.world_mut()
-            .get_mut::<Transform>(focus)
-            .expect("focus")
-            .translation
-            .x = x;
-        if crater_every > 0.0 && x >= next_crater {
-            next_crater = x + crater_every;
+        let flown_m = speed * k as f32 / 60.0;
+        let (x, z) = tour.at(flown_m);
+        {
+            let mut transform = app.world_mut().get_mut::<Transform>(focus).expect("focus");
+            transform.translation.x = x;
+            transform.translation.z = z;
+        }
+        if crater_every > 0.0 && flown_m >= next_crater {
+            next_crater = flown_m + crater_every;
+            craters += 1;
             // On the ground 14 m ahead (the nearest sample's height).
-            let ground = noise.height(((x + 14.0) / 1.28).round() as i64, 8) as f32 * 0.01;
+            let (cx, cz) = tour.at(flown_m + 14.0);
+            let sample = |m: f32| (m / 1.28).round() as i64;
+            let ground = noise.height(sample(cx), sample(cz)) as f32 * 0.01;
             app.world_mut().write_message(WorldCarve {
                 world,
-                tool: CarveTool::dodecahedron(1.6, Vec3::new(x + 14.0, ground, 10.24)),
+                tool: CarveTool::dodecahedron(1.6, Vec3::new(cx, ground, cz)),
                 edit: Edit::Subtract,
             });
         }
@@ -866,10 +1093,12 @@ fn streaming_a_world() {
         .clone();
     frame_times.sort_unstable();
     let built = stats.generated + stats.restored - built_before;
+    let peak_mib = peak_resident_mib();
     println!(
-        "flying {:.0} m at {speed} m/s, {frames} frames at 60/s: main-thread update median \
-         {:.2} ms, p99 {:.2} ms, max {:.2} ms; {built} chunks built ({:.1} chunks/s, {:.1} ms \
-         each on the pool); {} live, {} building, {} edited chunks stored in {} bytes",
+        "flying {:.0} m ({tour_name}) at {speed} m/s, {frames} frames at 60/s, {craters} \
+         craters: main-thread update median {:.2} ms, p99 {:.2} ms, max {:.2} ms; {built} \
+         chunks built ({:.1} chunks/s, {:.1} ms each on the pool); {} live, {} building, {} \
+         edited chunks stored in {} bytes; peak resident memory {peak_mib:.0} MiB",
         speed * frames as f32 / 60.0,
         percentile(&frame_times, 0.5),
         percentile(&frame_times, 0.99),
@@ -881,7 +1110,11 @@ fn streaming_a_world() {
         stats.stored,
         stats.stored_bytes
     );
-    figures.insert("first_fill_ms".into(), (first.as_secs_f64() * 1e3).into());
+    figures.insert("tour".into(), tour_name.clone().into());
+    figures.insert("flown_m".into(), (speed * frames as f32 / 60.0).into());
+    figures.insert("craters".into(), craters.into());
+    figures.insert("peak_rss_mib".into(), peak_mib.into());
+    figures.insert("first_frame_ms".into(), (first.as_secs_f64() * 1e3).into());
     figures.insert("first_fill_chunks".into(), live.into());
     figures.insert(
         "frame_median_ms".into(),

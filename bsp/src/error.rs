@@ -212,6 +212,13 @@ pub enum Error {
         /// A grid point outside it.
         point: [i64; 3],
     },
+    /// A heightfield that describes no solid
+    /// ([`crate::octree::import_layers::LayeredHeightfield`]).
+    #[error("invalid heightfield: {reason}")]
+    InvalidHeightfield {
+        /// What is wrong with it.
+        reason: String,
+    },
     /// An edit that cannot mean anything.
     #[error("invalid edit: {reason}")]
     InvalidEdit {

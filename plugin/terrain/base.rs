@@ -9,9 +9,8 @@
 use std::collections::{BTreeSet, HashSet};
 
 use chisel_bsp::exact::IntPoint;
-use chisel_bsp::octree::{
-    Anchors, CellBox, CubeSide, DebrisConfig, Edit, Octree, OctreeConfig, Tool,
-};
+use chisel_bsp::octree::import_layers::LayeredHeightfield;
+use chisel_bsp::octree::{Anchors, CellBox, CubeSide, DebrisConfig, Octree, OctreeConfig};
 use chisel_bsp::tree::Label;
 
 use super::error::TerrainError;
@@ -35,8 +34,10 @@ pub struct GridHeightfield {
     /// The material of the solid below the bands.
     pub label: Label,
     /// Bands `(depth, label)`: everything less than `depth` below the
-    /// surface (vertically, measured at the samples and interpolated per
-    /// square) is `label`; shallower bands are painted over deeper ones.
+    /// surface (vertically, measured at the samples and, in between, from
+    /// the lower hull of each square's corners) is `label`; shallower
+    /// bands lie over deeper ones. Built in one pass with the solid
+    /// ([`Octree::from_layered_heightfield`]).
     pub layers: Vec<(i64, Label)>,
 }
 
@@ -110,18 +111,19 @@ impl TerrainBase {
                 size_log2,
                 field,
             } => {
-                let triangles = to_points(&field.closed_mesh()?)?;
-                let mut octree =
-                    Octree::from_triangles(*origin, *size_log2, &triangles, field.label, config)?;
-                let mut layers = field.layers.clone();
-                // Deepest first, so that shallower bands paint over them.
-                layers.sort_by_key(|&(depth, _)| std::cmp::Reverse(depth));
-                for (depth, label) in layers {
-                    for column in field.band_columns(depth)? {
-                        octree.apply(&column, Edit::Paint(label))?;
-                    }
-                }
-                Ok(octree)
+                field.check()?;
+                let layered = LayeredHeightfield {
+                    corner: [field.corner[0], field.corner[2]],
+                    samples: field.samples,
+                    spacing: field.spacing,
+                    heights: &field.heights,
+                    bottom: field.bottom,
+                    label: field.label,
+                    bands: &field.layers,
+                };
+                Ok(Octree::from_layered_heightfield(
+                    *origin, *size_log2, &layered, config,
+                )?)
             }
         }
     }
@@ -304,31 +306,6 @@ impl GridHeightfield {
         walls.sort_unstable();
         out.extend(under);
         out.extend(walls);
-        Ok(out)
-    }
-
-    /// Paint tools for the band less than `depth` below the surface: one
-    /// convex column per square, from `depth` below its corners to above
-    /// its highest corner.
-    fn band_columns(&self, depth: i64) -> Result<Vec<Tool>, TerrainError> {
-        self.check()?;
-        let [nx, nz] = self.samples;
-        let mut out = Vec::with_capacity((nx as usize - 1) * (nz as usize - 1));
-        for j in 0..nz - 1 {
-            for i in 0..nx - 1 {
-                let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].map(|(a, b)| {
-                    let t = self.top(a, b);
-                    (a, b, t[1])
-                });
-                let high = corners.iter().map(|c| c.2).max().unwrap_or(0) + 1;
-                let mut points = Vec::with_capacity(8);
-                for (a, b, h) in corners {
-                    points.push(IntPoint::from_array(self.at(a, b, h - depth))?);
-                    points.push(IntPoint::from_array(self.at(a, b, high))?);
-                }
-                out.push(Tool::convex_hull(&points)?);
-            }
-        }
         Ok(out)
     }
 }

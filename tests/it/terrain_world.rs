@@ -2,7 +2,8 @@
 //! only chunks near the focus exist, with hysteresis; an edit survives its
 //! chunk streaming out and back in bit-identically; a carve across a chunk
 //! border removes exactly what one terrain over both chunks loses; saving
-//! writes only the edited chunks and loading is exact.
+//! writes only the edited chunks, removes the files of chunks undone to
+//! their base once every file is written, and loading is exact.
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -434,6 +435,98 @@ fn saving_writes_only_edited_chunks_and_loading_is_exact() {
     // A chunk file of another world is refused.
     let other = TerrainWorld::new(layout(), |i: i64, j: i64| height(i, j) + 1).expect("valid");
     assert!(other.load_edits(&dir).is_err());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The chunk files in `dir`, sorted.
+fn chunk_files(dir: &std::path::Path) -> Vec<String> {
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .expect("folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with("chunk_"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn saving_removes_the_files_of_chunks_undone_to_the_base() {
+    let (mut app, world, _focus) = app_with(world(), Vec3::new(16.0, 30.0, 16.0));
+    let near = ChunkCoord { x: 0, z: 0 };
+    let far = ChunkCoord { x: -5, z: 3 };
+    carve(
+        &mut app,
+        world,
+        dodecahedron(4.0, Vec3::new(10.0, 14.0, 20.0)),
+    );
+    carve(
+        &mut app,
+        world,
+        dodecahedron(4.0, Vec3::new(-5.0 * 32.0 + 16.0, 15.0, 3.0 * 32.0 + 16.0)),
+    );
+    settle(&mut app, world);
+    let dir = temp_folder("stale");
+    let save = |app: &App| the_world(app, world).save(&dir, |e| app.world().get::<Terrain>(e));
+    assert_eq!(save(&app).expect("saves"), vec![far, near]);
+    std::fs::write(dir.join("notes.txt"), b"not a chunk").expect("writes");
+    let far_file = std::fs::read(dir.join("chunk_-5_3.chiselterrain")).expect("far file");
+
+    // Undo the near chunk back to its base, and edit a third chunk.
+    let entity = the_world(&app, world).chunk_entity(near).expect("live");
+    app.world_mut()
+        .get_mut::<Terrain>(entity)
+        .expect("terrain")
+        .undo_now()
+        .expect("one carve to undo");
+    let third = ChunkCoord { x: 4, z: -2 };
+    carve(
+        &mut app,
+        world,
+        dodecahedron(4.0, Vec3::new(4.0 * 32.0 + 16.0, 15.0, -2.0 * 32.0 + 16.0)),
+    );
+    settle(&mut app, world);
+
+    // A save that fails to write the third chunk's file removes nothing:
+    // the folder still holds the complete earlier save.
+    let blocked = dir.join("chunk_4_-2.chiselterrain");
+    std::fs::create_dir(&blocked).expect("blocks the file");
+    assert!(matches!(save(&app), Err(TerrainError::Io { .. })));
+    assert_eq!(
+        chunk_files(&dir),
+        vec![
+            "chunk_-5_3.chiselterrain",
+            "chunk_0_0.chiselterrain",
+            "chunk_4_-2.chiselterrain"
+        ]
+    );
+    std::fs::remove_dir(&blocked).expect("unblocks");
+
+    // The save that completes removes the undone chunk's file, keeps the
+    // others and any file that is not a chunk file.
+    assert_eq!(save(&app).expect("saves"), vec![far, third]);
+    assert_eq!(
+        chunk_files(&dir),
+        vec!["chunk_-5_3.chiselterrain", "chunk_4_-2.chiselterrain"]
+    );
+    assert!(dir.join("notes.txt").exists());
+    assert_eq!(
+        std::fs::read(dir.join("chunk_-5_3.chiselterrain")).expect("far file"),
+        far_file
+    );
+
+    // Loaded, the undone chunk is its base again and the others are exact.
+    let (app2, world2, _) = app_with(world_loaded(&dir), Vec3::new(16.0, 30.0, 16.0));
+    assert!(terrain(&app2, world2, near).journal().is_empty());
+    assert_eq!(
+        terrain(&app2, world2, near).state_hash(),
+        the_world(&app2, world2)
+            .generate_chunk(near)
+            .expect("generates")
+            .state_hash()
+    );
+    let mut stored: Vec<ChunkCoord> = the_world(&app2, world2).stored_chunks().collect();
+    stored.sort();
+    assert_eq!(stored, vec![far, third]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -66,10 +66,10 @@ impl Octree {
         let mut pieces = Vec::with_capacity(triangles.len());
         for t in triangles {
             if let Some(p) = Polygon::triangle(*t)? {
-                pieces.push(p);
+                pieces.push((p, label, EMPTY));
             }
         }
-        let (node, free) = build_cell(pieces, CellKey::ROOT, root, label, &config);
+        let (node, free) = build_cell(pieces, CellKey::ROOT, root, &config);
         octree.root = node;
         octree.fill_free_cells(free);
         octree.root = merge_uniform(octree.root.clone());
@@ -77,7 +77,7 @@ impl Octree {
     }
 
     /// Labels the free cells by flood fill (see the module notes).
-    fn fill_free_cells(&mut self, free: Vec<CellKey>) {
+    pub(super) fn fill_free_cells(&mut self, free: Vec<CellKey>) {
         let mut pending: HashSet<CellKey> = free.into_iter().collect();
         while !pending.is_empty() {
             let mut keys: Vec<CellKey> = pending.iter().copied().collect();
@@ -182,12 +182,12 @@ impl Octree {
     }
 }
 
-/// The triangle octree below `key`: the node and its free leaves.
-fn build_cell(
-    pieces: Vec<Polygon>,
+/// The triangle octree below `key` of faces with the labels behind and in
+/// front of each: the node and its free leaves.
+pub(super) fn build_cell(
+    pieces: Vec<(Polygon, Label, Label)>,
     key: CellKey,
     cell: CellBox,
-    label: Label,
     config: &OctreeConfig,
 ) -> (OctNode, Vec<CellKey>) {
     if pieces.is_empty() {
@@ -195,10 +195,7 @@ fn build_cell(
     }
     if pieces.len() <= config.max_bsp_nodes || key.depth >= config.max_depth || cell.min_edge() < 2
     {
-        let bsp = Bsp::from_polygons(
-            pieces.into_iter().map(|p| (p, label, EMPTY)).collect(),
-            IMPORT_SEED,
-        );
+        let bsp = Bsp::from_polygons(pieces, IMPORT_SEED);
         let mut arena = ConvexArena::new();
         let Ok(bounds) = cell.add_to(&mut arena) else {
             return (OctNode::Leaf(Leaf::Uniform(EMPTY)), vec![key]);
@@ -210,7 +207,7 @@ fn build_cell(
     let built: Vec<(OctNode, Vec<CellKey>)> = children
         .into_par_iter()
         .enumerate()
-        .map(|(i, pieces)| build_cell(pieces, key.child(i), cell.child(i), label, config))
+        .map(|(i, pieces)| build_cell(pieces, key.child(i), cell.child(i), config))
         .collect();
     let mut free = Vec::new();
     let mut nodes = Vec::with_capacity(8);
@@ -226,10 +223,13 @@ fn build_cell(
 
 /// The pieces of each child: split by the three axis planes through the
 /// centre; a piece lying in a plane goes to both sides.
-fn split_among_children(pieces: Vec<Polygon>, cell: CellBox) -> Vec<Vec<Polygon>> {
+fn split_among_children(
+    pieces: Vec<(Polygon, Label, Label)>,
+    cell: CellBox,
+) -> Vec<Vec<(Polygon, Label, Label)>> {
     let mid = cell.mid();
-    let mut out: Vec<Vec<Polygon>> = vec![Vec::new(); 8];
-    for piece in pieces {
+    let mut out: Vec<Vec<(Polygon, Label, Label)>> = vec![Vec::new(); 8];
+    for (piece, behind, in_front) in pieces {
         let mut parts = vec![(piece, 0usize)];
         for (axis, &m) in mid.iter().enumerate() {
             let mut n = [0i64; 3];
@@ -261,14 +261,14 @@ fn split_among_children(pieces: Vec<Polygon>, cell: CellBox) -> Vec<Vec<Polygon>
             parts = next;
         }
         for (part, i) in parts {
-            out[i].push(part);
+            out[i].push((part, behind, in_front));
         }
     }
     out
 }
 
 /// Eight uniform children of one label become one leaf, bottom up.
-fn merge_uniform(node: OctNode) -> OctNode {
+pub(super) fn merge_uniform(node: OctNode) -> OctNode {
     let OctNode::Inner(children) = node else {
         return node;
     };

@@ -15,7 +15,9 @@
 //!   cutting that leaf again ([`Octree::cell_surface_from`]).
 //! - `leaf` — leaves within the budget: splitting those over it and
 //!   combining children under it (also [`Octree::from_bsp`]).
-//! - [`import`] — an octree from a closed triangle mesh (§3.9).
+//! - [`import`] — an octree from a closed triangle mesh (§3.9);
+//!   [`import_layers`] — from a heightfield with material bands by depth,
+//!   every band labelled in the same pass.
 //! - [`measure`] — material volumes for reports; [`exact_volume`] — the
 //!   same, exactly, as rationals.
 //! - [`components`] — connected components of the solid (cells sharing
@@ -62,6 +64,7 @@ pub mod exact_volume;
 mod graft;
 pub mod hash;
 pub mod import;
+pub mod import_layers;
 mod leaf;
 pub mod measure;
 mod mesh_check;

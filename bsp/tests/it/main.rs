@@ -38,6 +38,7 @@ mod octree_components;
 mod octree_debris;
 mod octree_hash;
 mod octree_import;
+mod octree_import_layers;
 mod octree_large_tools;
 mod octree_nesting;
 mod octree_seams;

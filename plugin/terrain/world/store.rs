@@ -3,11 +3,17 @@
 //! nothing for chunks nobody carved — they are rebuilt from the source.
 //!
 //! Saving writes each file whole or not at all (temporary file, sync,
-//! rename, as [`Terrain::save`]). Loading checks that every file belongs
+//! rename, as [`Terrain::save`]), and only when every file is written
+//! removes the chunk files of chunks no longer edited (undone back to the
+//! base), then syncs the folder. A crash never leaves an edited chunk
+//! without a complete file: before the removals the folder holds the new
+//! files and, at worst, the old file of a chunk since undone, which
+//! loads as that earlier edit and goes at the next save. Loading checks that every file belongs
 //! to this world: the same grid, and the base this world's source gives
 //! for that chunk, so a chunk restored from its file is bit-identical to
 //! the saved one and meets its unedited neighbours exactly.
 
+use std::collections::BTreeSet;
 use std::fs;
 use std::io::Write;
 use std::path::Path;
@@ -31,13 +37,16 @@ impl TerrainWorld {
     /// Writes every edited chunk (live ones through `terrain_of`, which
     /// gives a chunk entity's [`Terrain`], and stored ones) into `folder`,
     /// one file each, creating the folder; returns the chunks written.
-    /// Other files in the folder are left alone.
+    /// Then removes the folder's chunk files of chunks that are not edited
+    /// now (see the module notes); a live chunk whose terrain `terrain_of`
+    /// does not give keeps its file. Other files are left alone.
     ///
     /// # Errors
     /// [`TerrainError::WorldNotIdle`] while a carve waits for a chunk or
     /// an edited chunk has work in progress (nothing is written then);
-    /// [`TerrainError::Io`] naming the file that could not be written
-    /// (files written before it stay).
+    /// [`TerrainError::Io`] naming the file that could not be written or
+    /// removed (files written before it stay, and nothing is removed
+    /// before every file is written).
     pub fn save<'a>(
         &self,
         folder: impl AsRef<Path>,
@@ -50,11 +59,14 @@ impl TerrainWorld {
             });
         }
         let mut files: Vec<(ChunkCoord, Arc<Vec<u8>>)> = Vec::new();
+        // Chunks whose state is not known here: their files stay.
+        let mut unknown: BTreeSet<ChunkCoord> = BTreeSet::new();
         for (coord, state) in &self.chunks {
             let Chunk::Live(entity) = state else {
                 continue;
             };
             let Some(terrain) = terrain_of(*entity) else {
+                unknown.insert(*coord);
                 continue;
             };
             if terrain.journal().is_empty() && terrain.undo_depth() == 0 {
@@ -82,7 +94,10 @@ impl TerrainWorld {
                 message: format!("cannot save {}: {e}", path.display()),
             })?;
         }
-        Ok(files.into_iter().map(|(c, _)| c).collect())
+        let written: Vec<ChunkCoord> = files.into_iter().map(|(c, _)| c).collect();
+        let keep: BTreeSet<ChunkCoord> = written.iter().copied().chain(unknown).collect();
+        remove_stale_chunk_files(folder, &keep)?;
+        Ok(written)
     }
 
     /// Reads the edited chunks saved in `folder` ([`TerrainWorld::save`])
@@ -127,6 +142,39 @@ impl TerrainWorld {
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
         Ok(self)
     }
+}
+
+/// Removes the chunk files in `folder` of chunks not in `keep`, then syncs
+/// the folder so that the removals survive a crash.
+fn remove_stale_chunk_files(
+    folder: &Path,
+    keep: &BTreeSet<ChunkCoord>,
+) -> Result<(), TerrainError> {
+    let io = |what: &Path, e: std::io::Error| TerrainError::Io {
+        message: format!("cannot clean {}: {e}", what.display()),
+    };
+    let mut stale = Vec::new();
+    for entry in fs::read_dir(folder).map_err(|e| io(folder, e))? {
+        let entry = entry.map_err(|e| io(folder, e))?;
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        let coord = entry.file_name().to_str().and_then(parse_chunk_name);
+        if let Some(coord) = coord
+            && is_file
+            && !keep.contains(&coord)
+        {
+            stale.push(entry.path());
+        }
+    }
+    if stale.is_empty() {
+        return Ok(());
+    }
+    stale.sort();
+    for path in &stale {
+        fs::remove_file(path).map_err(|e| io(path, e))?;
+    }
+    fs::File::open(folder)
+        .and_then(|dir| dir.sync_all())
+        .map_err(|e| io(folder, e))
 }
 
 /// The chunk of a file name `chunk_X_Z.chiselterrain`.
