@@ -117,6 +117,9 @@ pub fn finish_jobs(
         // For an undo or a full build this is the octree already in place.
         terrain.octree = output.octree;
         terrain.runtime.mesher = output.mesher;
+        if output.border.is_some() {
+            terrain.runtime.border = output.border;
+        }
     }
 }
 

@@ -314,22 +314,12 @@ fn a_carve_across_a_chunk_border_edits_both_and_the_volumes_add_up() {
     }
     assert_eq!(app.world().resource::<Applied>().0.len(), 2);
 
-    // The drawn surfaces meet on the shared side x = 32: every vertex of
-    // one chunk's border edges lies on a border edge of the other. Where
-    // it lies strictly inside one, it is a T-junction (not stitched
-    // across chunks yet; see the world module's docs).
-    let (a, b) = (
-        border_edges(&app, world, left, 32.0),
-        border_edges(&app, world, right, 32.0),
-    );
-    assert!(!a.is_empty() && !b.is_empty());
-    let t_left = t_junctions(&a, &b);
-    let t_right = t_junctions(&b, &a);
-    println!(
-        "chunk border x = 32: {} and {} border edges, {t_left} + {t_right} T-junctions",
-        a.len(),
-        b.len()
-    );
+    // The drawn surfaces meet on the shared side x = 32, edge to edge:
+    // every vertex of one chunk's border edges is a vertex of the other's.
+    let (t_left, t_right) = seam_t_junctions(&app, world, left, right, 0, 32.0);
+    assert_eq!((t_left, t_right), (0, 0), "T-junctions across x = 32");
+
+    assert_closed_across(&app, world);
 
     // One terrain over both chunks, built from the same samples.
     let mut heights = Vec::new();
@@ -366,6 +356,126 @@ fn a_carve_across_a_chunk_border_edits_both_and_the_volumes_add_up() {
     assert!(
         (whole_removed - sum).abs() <= 1e-9 * whole_removed,
         "one terrain loses {whole_removed}, the chunks {sum}"
+    );
+}
+
+#[test]
+fn chunks_meet_without_t_junctions_where_four_meet_and_after_carves_beside_a_border() {
+    let (mut app, world, _) = app_with(world(), Vec3::new(32.0, 30.0, 32.0));
+    let chunk = |x, z| ChunkCoord { x, z };
+    // A crater on the corner line x = z = 32, shared by four chunks.
+    carve(
+        &mut app,
+        world,
+        dodecahedron(6.0, Vec3::new(32.0, 13.0, 32.0)),
+    );
+    settle(&mut app, world);
+    let check = |app: &App| {
+        for (a, b, axis) in [
+            (chunk(0, 0), chunk(1, 0), 0),
+            (chunk(0, 1), chunk(1, 1), 0),
+            (chunk(0, 0), chunk(0, 1), 2),
+            (chunk(1, 0), chunk(1, 1), 2),
+        ] {
+            let found = seam_t_junctions(app, world, a, b, axis, 32.0);
+            assert_eq!(found, (0, 0), "T-junctions between {a:?} and {b:?}");
+        }
+        assert_closed_across(app, world);
+    };
+    check(&app);
+    for c in [chunk(0, 0), chunk(1, 0), chunk(0, 1), chunk(1, 1)] {
+        assert_eq!(terrain(&app, world, c).journal().len(), 1, "{c:?}");
+    }
+    // Small carves beside the sides, each inside one chunk: they split
+    // its border cells, and its neighbours are sealed again at the new
+    // points.
+    for centre in [Vec3::new(30.5, 12.0, 20.0), Vec3::new(34.0, 11.0, 30.0)] {
+        carve(&mut app, world, dodecahedron(1.2, centre));
+        settle(&mut app, world);
+        check(&app);
+    }
+    assert_eq!(terrain(&app, world, chunk(0, 0)).journal().len(), 2);
+    assert_eq!(terrain(&app, world, chunk(1, 0)).journal().len(), 2);
+    assert_eq!(terrain(&app, world, chunk(1, 1)).journal().len(), 1);
+}
+
+/// Asserts that the cell meshes of all live chunks, without the triangles
+/// lying in a side shared by two live chunks (their side walls), are one
+/// closed surface: every directed edge (between exact vertices, which
+/// round to the same `f32` bits in every cell) is matched by the opposite
+/// one. A T-junction across a border leaves edges unmatched.
+fn assert_closed_across(app: &App, world: Entity) {
+    let w = the_world(app, world);
+    let live: BTreeSet<ChunkCoord> = w.live_chunks().map(|(c, _)| c).collect();
+    let edge = layout().chunk_edge() as f32;
+    // Whether the corners lie in a plane x = c or z = c with live chunks
+    // on both sides of it where they are.
+    let shared = |t: [[f32; 3]; 3]| {
+        [0usize, 2].into_iter().any(|axis| {
+            let c = t[0][axis];
+            if t.iter().any(|p| p[axis] != c) || (c / edge).fract() != 0.0 {
+                return false;
+            }
+            let other = 2 - axis;
+            let mid = (t[0][other] + t[1][other] + t[2][other]) / 3.0;
+            let (k, o) = ((c / edge) as i64, (mid / edge).floor() as i64);
+            let at = |i: i64| {
+                if axis == 0 {
+                    ChunkCoord { x: i, z: o }
+                } else {
+                    ChunkCoord { x: o, z: i }
+                }
+            };
+            live.contains(&at(k - 1)) && live.contains(&at(k))
+        })
+    };
+    let mut edges: std::collections::HashMap<([u32; 3], [u32; 3]), i64> =
+        std::collections::HashMap::new();
+    let meshes = app.world().resource::<Assets<Mesh>>();
+    let mut triangles = 0;
+    for (_, entity) in w.live_chunks() {
+        let t = app.world().get::<Terrain>(entity).expect("terrain");
+        for (_, entities) in t.cells() {
+            for e in entities {
+                let Some(handle) = app.world().get::<Mesh3d>(e) else {
+                    continue;
+                };
+                let mesh = meshes.get(&handle.0).expect("cell mesh");
+                let Ok(Some(VertexAttributeValues::Float32x3(p))) =
+                    mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION)
+                else {
+                    panic!("cell mesh without positions");
+                };
+                let Ok(Some(Indices::U32(indices))) = mesh.try_indices_option() else {
+                    panic!("cell mesh without u32 indices");
+                };
+                for tri in indices.chunks_exact(3) {
+                    let corners = [0, 1, 2].map(|k| p[tri[k] as usize]);
+                    if shared(corners) {
+                        continue;
+                    }
+                    triangles += 1;
+                    for k in 0..3 {
+                        let (u, v) = (corners[k], corners[(k + 1) % 3]);
+                        let (u, v) = (u.map(f32::to_bits), v.map(f32::to_bits));
+                        if u < v {
+                            *edges.entry((u, v)).or_default() += 1;
+                        } else {
+                            *edges.entry((v, u)).or_default() -= 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let open: Vec<_> = edges.iter().filter(|(_, n)| **n != 0).collect();
+    assert!(
+        open.is_empty(),
+        "{} of {} edges of {triangles} triangles unmatched across the chunks, e.g. {:?}",
+        open.len(),
+        edges.len(),
+        open.first()
+            .map(|((u, v), n)| (u.map(f32::from_bits), v.map(f32::from_bits), n))
     );
 }
 
@@ -609,10 +719,46 @@ fn bad_worlds_and_carves_are_typed_errors_that_change_nothing() {
     assert_eq!((stats.live, stats.failed), (0, 9));
 }
 
-/// The edges lying in the plane x = `plane` of a chunk's cell meshes, as
-/// (z, y) segments, leaving out triangles that lie in the plane (the
-/// chunk's side wall): where its surface meets its side.
-fn border_edges(app: &App, world: Entity, coord: ChunkCoord, plane: f32) -> Vec<[[f32; 2]; 2]> {
+/// The T-junctions across the side shared by chunks `a` and `b`, in the
+/// plane `x_axis = plane`: the vertices of each one's border edges
+/// strictly inside an edge of the other's ([`t_junctions`], which also
+/// checks that every such vertex lies on the other's edges).
+fn seam_t_junctions(
+    app: &App,
+    world: Entity,
+    a: ChunkCoord,
+    b: ChunkCoord,
+    axis: usize,
+    plane: f32,
+) -> (usize, usize) {
+    let (ea, eb) = (
+        border_edges(app, world, a, axis, plane),
+        border_edges(app, world, b, axis, plane),
+    );
+    assert!(!ea.is_empty() && !eb.is_empty());
+    let found = (t_junctions(&ea, &eb), t_junctions(&eb, &ea));
+    println!(
+        "chunks {a:?} | {b:?}: {} and {} border edges, {} + {} T-junctions",
+        ea.len(),
+        eb.len(),
+        found.0,
+        found.1
+    );
+    found
+}
+
+/// The edges lying in the plane `x_axis = plane` (axis 0 or 2) of a
+/// chunk's cell meshes, as segments in the other horizontal coordinate and
+/// y, leaving out triangles that lie in the plane (the chunk's side wall):
+/// where its surface meets its side.
+fn border_edges(
+    app: &App,
+    world: Entity,
+    coord: ChunkCoord,
+    axis: usize,
+    plane: f32,
+) -> Vec<[[f32; 2]; 2]> {
+    let other = 2 - axis;
     let meshes = app.world().resource::<Assets<Mesh>>();
     let mut edges = Vec::new();
     for (_, entities) in terrain(app, world, coord).cells() {
@@ -631,7 +777,7 @@ fn border_edges(app: &App, world: Entity, coord: ChunkCoord, plane: f32) -> Vec<
                 Ok(Some(Indices::U32(v))) => v.iter().map(|&i| i as usize).collect(),
                 _ => (0..p.len()).collect(),
             };
-            let on = |i: usize| (p[i][0] - plane).abs() < 1e-4;
+            let on = |i: usize| (p[i][axis] - plane).abs() < 1e-4;
             for t in indices.chunks_exact(3) {
                 if t.iter().all(|&i| on(i)) {
                     continue;
@@ -639,7 +785,7 @@ fn border_edges(app: &App, world: Entity, coord: ChunkCoord, plane: f32) -> Vec<
                 for k in 0..3 {
                     let (u, v) = (t[k], t[(k + 1) % 3]);
                     if on(u) && on(v) {
-                        edges.push([[p[u][2], p[u][1]], [p[v][2], p[v][1]]]);
+                        edges.push([[p[u][other], p[u][1]], [p[v][other], p[v][1]]]);
                     }
                 }
             }

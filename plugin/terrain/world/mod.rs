@@ -75,6 +75,7 @@
 //! Level of detail and seams between levels are not part of this module
 //! yet.
 
+pub mod seams;
 pub mod source;
 pub mod store;
 pub mod stream;
@@ -202,6 +203,8 @@ pub struct TerrainWorld {
     pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit)>>,
     pub(crate) stats: WorldStats,
     pub(crate) next_request: u64,
+    /// The chunks' border points and the outside points they were given.
+    pub(crate) seams: seams::WorldSeams,
 }
 
 impl TerrainWorld {
@@ -221,6 +224,7 @@ impl TerrainWorld {
             pending: BTreeMap::new(),
             stats: WorldStats::default(),
             next_request: 0,
+            seams: seams::WorldSeams::default(),
         })
     }
 
