@@ -8,7 +8,6 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 use bevy::asset::AssetPlugin;
-use bevy::mesh::{Indices, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{Edit, StateHash};
@@ -21,7 +20,7 @@ use bevy_chisel::terrain::{
 
 /// Grid unit = 1 world unit; chunks of 32, samples 4 apart (8 squares a
 /// side); heights 8..=20 above the floor at 0.
-fn layout() -> WorldLayout {
+pub(crate) fn layout() -> WorldLayout {
     WorldLayout {
         quantization: Quantization::new(1.0, [0.0; 3]).expect("valid unit"),
         chunk_log2: 5,
@@ -32,11 +31,11 @@ fn layout() -> WorldLayout {
     }
 }
 
-fn height(i: i64, j: i64) -> i64 {
+pub(crate) fn height(i: i64, j: i64) -> i64 {
     8 + (i * 7 + j * 13).rem_euclid(9) + (i * j).rem_euclid(5)
 }
 
-fn world() -> TerrainWorld {
+pub(crate) fn world() -> TerrainWorld {
     TerrainWorld::new(layout(), height)
         .expect("valid layout")
         .with_streaming(StreamSettings {
@@ -63,7 +62,7 @@ fn record(
     refused.0.extend(rejected.read().cloned());
 }
 
-fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
+pub(crate) fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
@@ -88,13 +87,13 @@ fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
     (app, world, focus)
 }
 
-fn the_world(app: &App, world: Entity) -> &TerrainWorld {
+pub(crate) fn the_world(app: &App, world: Entity) -> &TerrainWorld {
     app.world()
         .get::<TerrainWorld>(world)
         .expect("world entity")
 }
 
-fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
+pub(crate) fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
     let entity = the_world(app, world)
         .chunk_entity(coord)
         .unwrap_or_else(|| panic!("chunk {coord:?} is not live"));
@@ -103,7 +102,7 @@ fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
 
 /// Runs frames until nothing builds, no carve waits, every live chunk is
 /// idle and the set of live chunks stayed the same for a few frames.
-fn settle(app: &mut App, world: Entity) {
+pub(crate) fn settle(app: &mut App, world: Entity) {
     let mut calm = 0;
     let mut last = Vec::new();
     for _ in 0..20_000 {
@@ -163,11 +162,11 @@ fn prism_volume(coord: ChunkCoord) -> f64 {
     sixths as f64 / 6.0
 }
 
-fn dodecahedron(radius: f32, centre: Vec3) -> CarveTool {
+pub(crate) fn dodecahedron(radius: f32, centre: Vec3) -> CarveTool {
     CarveTool::dodecahedron(radius, centre)
 }
 
-fn carve(app: &mut App, world: Entity, tool: CarveTool) {
+pub(crate) fn carve(app: &mut App, world: Entity, tool: CarveTool) {
     app.world_mut().write_message(WorldCarve {
         world,
         tool,
@@ -316,10 +315,11 @@ fn a_carve_across_a_chunk_border_edits_both_and_the_volumes_add_up() {
 
     // The drawn surfaces meet on the shared side x = 32, edge to edge:
     // every vertex of one chunk's border edges is a vertex of the other's.
-    let (t_left, t_right) = seam_t_junctions(&app, world, left, right, 0, 32.0);
+    let (t_left, t_right) =
+        super::terrain_world_seams::seam_t_junctions(&app, world, left, right, 0, 32.0);
     assert_eq!((t_left, t_right), (0, 0), "T-junctions across x = 32");
 
-    assert_closed_across(&app, world);
+    super::terrain_world_seams::assert_closed_across(&app, world);
 
     // One terrain over both chunks, built from the same samples.
     let mut heights = Vec::new();
@@ -356,126 +356,6 @@ fn a_carve_across_a_chunk_border_edits_both_and_the_volumes_add_up() {
     assert!(
         (whole_removed - sum).abs() <= 1e-9 * whole_removed,
         "one terrain loses {whole_removed}, the chunks {sum}"
-    );
-}
-
-#[test]
-fn chunks_meet_without_t_junctions_where_four_meet_and_after_carves_beside_a_border() {
-    let (mut app, world, _) = app_with(world(), Vec3::new(32.0, 30.0, 32.0));
-    let chunk = |x, z| ChunkCoord { x, z };
-    // A crater on the corner line x = z = 32, shared by four chunks.
-    carve(
-        &mut app,
-        world,
-        dodecahedron(6.0, Vec3::new(32.0, 13.0, 32.0)),
-    );
-    settle(&mut app, world);
-    let check = |app: &App| {
-        for (a, b, axis) in [
-            (chunk(0, 0), chunk(1, 0), 0),
-            (chunk(0, 1), chunk(1, 1), 0),
-            (chunk(0, 0), chunk(0, 1), 2),
-            (chunk(1, 0), chunk(1, 1), 2),
-        ] {
-            let found = seam_t_junctions(app, world, a, b, axis, 32.0);
-            assert_eq!(found, (0, 0), "T-junctions between {a:?} and {b:?}");
-        }
-        assert_closed_across(app, world);
-    };
-    check(&app);
-    for c in [chunk(0, 0), chunk(1, 0), chunk(0, 1), chunk(1, 1)] {
-        assert_eq!(terrain(&app, world, c).journal().len(), 1, "{c:?}");
-    }
-    // Small carves beside the sides, each inside one chunk: they split
-    // its border cells, and its neighbours are sealed again at the new
-    // points.
-    for centre in [Vec3::new(30.5, 12.0, 20.0), Vec3::new(34.0, 11.0, 30.0)] {
-        carve(&mut app, world, dodecahedron(1.2, centre));
-        settle(&mut app, world);
-        check(&app);
-    }
-    assert_eq!(terrain(&app, world, chunk(0, 0)).journal().len(), 2);
-    assert_eq!(terrain(&app, world, chunk(1, 0)).journal().len(), 2);
-    assert_eq!(terrain(&app, world, chunk(1, 1)).journal().len(), 1);
-}
-
-/// Asserts that the cell meshes of all live chunks, without the triangles
-/// lying in a side shared by two live chunks (their side walls), are one
-/// closed surface: every directed edge (between exact vertices, which
-/// round to the same `f32` bits in every cell) is matched by the opposite
-/// one. A T-junction across a border leaves edges unmatched.
-fn assert_closed_across(app: &App, world: Entity) {
-    let w = the_world(app, world);
-    let live: BTreeSet<ChunkCoord> = w.live_chunks().map(|(c, _)| c).collect();
-    let edge = layout().chunk_edge() as f32;
-    // Whether the corners lie in a plane x = c or z = c with live chunks
-    // on both sides of it where they are.
-    let shared = |t: [[f32; 3]; 3]| {
-        [0usize, 2].into_iter().any(|axis| {
-            let c = t[0][axis];
-            if t.iter().any(|p| p[axis] != c) || (c / edge).fract() != 0.0 {
-                return false;
-            }
-            let other = 2 - axis;
-            let mid = (t[0][other] + t[1][other] + t[2][other]) / 3.0;
-            let (k, o) = ((c / edge) as i64, (mid / edge).floor() as i64);
-            let at = |i: i64| {
-                if axis == 0 {
-                    ChunkCoord { x: i, z: o }
-                } else {
-                    ChunkCoord { x: o, z: i }
-                }
-            };
-            live.contains(&at(k - 1)) && live.contains(&at(k))
-        })
-    };
-    let mut edges: std::collections::HashMap<([u32; 3], [u32; 3]), i64> =
-        std::collections::HashMap::new();
-    let meshes = app.world().resource::<Assets<Mesh>>();
-    let mut triangles = 0;
-    for (_, entity) in w.live_chunks() {
-        let t = app.world().get::<Terrain>(entity).expect("terrain");
-        for (_, entities) in t.cells() {
-            for e in entities {
-                let Some(handle) = app.world().get::<Mesh3d>(e) else {
-                    continue;
-                };
-                let mesh = meshes.get(&handle.0).expect("cell mesh");
-                let Ok(Some(VertexAttributeValues::Float32x3(p))) =
-                    mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION)
-                else {
-                    panic!("cell mesh without positions");
-                };
-                let Ok(Some(Indices::U32(indices))) = mesh.try_indices_option() else {
-                    panic!("cell mesh without u32 indices");
-                };
-                for tri in indices.chunks_exact(3) {
-                    let corners = [0, 1, 2].map(|k| p[tri[k] as usize]);
-                    if shared(corners) {
-                        continue;
-                    }
-                    triangles += 1;
-                    for k in 0..3 {
-                        let (u, v) = (corners[k], corners[(k + 1) % 3]);
-                        let (u, v) = (u.map(f32::to_bits), v.map(f32::to_bits));
-                        if u < v {
-                            *edges.entry((u, v)).or_default() += 1;
-                        } else {
-                            *edges.entry((v, u)).or_default() -= 1;
-                        }
-                    }
-                }
-            }
-        }
-    }
-    let open: Vec<_> = edges.iter().filter(|(_, n)| **n != 0).collect();
-    assert!(
-        open.is_empty(),
-        "{} of {} edges of {triangles} triangles unmatched across the chunks, e.g. {:?}",
-        open.len(),
-        edges.len(),
-        open.first()
-            .map(|((u, v), n)| (u.map(f32::from_bits), v.map(f32::from_bits), n))
     );
 }
 
@@ -717,108 +597,4 @@ fn bad_worlds_and_carves_are_typed_errors_that_change_nothing() {
     let (app, world, _) = app_with(too_high, Vec3::new(16.0, 30.0, 16.0));
     let stats = the_world(&app, world).stats();
     assert_eq!((stats.live, stats.failed), (0, 9));
-}
-
-/// The T-junctions across the side shared by chunks `a` and `b`, in the
-/// plane `x_axis = plane`: the vertices of each one's border edges
-/// strictly inside an edge of the other's ([`t_junctions`], which also
-/// checks that every such vertex lies on the other's edges).
-fn seam_t_junctions(
-    app: &App,
-    world: Entity,
-    a: ChunkCoord,
-    b: ChunkCoord,
-    axis: usize,
-    plane: f32,
-) -> (usize, usize) {
-    let (ea, eb) = (
-        border_edges(app, world, a, axis, plane),
-        border_edges(app, world, b, axis, plane),
-    );
-    assert!(!ea.is_empty() && !eb.is_empty());
-    let found = (t_junctions(&ea, &eb), t_junctions(&eb, &ea));
-    println!(
-        "chunks {a:?} | {b:?}: {} and {} border edges, {} + {} T-junctions",
-        ea.len(),
-        eb.len(),
-        found.0,
-        found.1
-    );
-    found
-}
-
-/// The edges lying in the plane `x_axis = plane` (axis 0 or 2) of a
-/// chunk's cell meshes, as segments in the other horizontal coordinate and
-/// y, leaving out triangles that lie in the plane (the chunk's side wall):
-/// where its surface meets its side.
-fn border_edges(
-    app: &App,
-    world: Entity,
-    coord: ChunkCoord,
-    axis: usize,
-    plane: f32,
-) -> Vec<[[f32; 2]; 2]> {
-    let other = 2 - axis;
-    let meshes = app.world().resource::<Assets<Mesh>>();
-    let mut edges = Vec::new();
-    for (_, entities) in terrain(app, world, coord).cells() {
-        for entity in entities {
-            let Some(handle) = app.world().get::<Mesh3d>(entity) else {
-                continue;
-            };
-            let mesh = meshes.get(&handle.0).expect("cell mesh");
-            let Ok(Some(VertexAttributeValues::Float32x3(p))) =
-                mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION)
-            else {
-                panic!("cell mesh without positions");
-            };
-            let indices: Vec<usize> = match mesh.try_indices_option() {
-                Ok(Some(Indices::U16(v))) => v.iter().map(|&i| usize::from(i)).collect(),
-                Ok(Some(Indices::U32(v))) => v.iter().map(|&i| i as usize).collect(),
-                _ => (0..p.len()).collect(),
-            };
-            let on = |i: usize| (p[i][axis] - plane).abs() < 1e-4;
-            for t in indices.chunks_exact(3) {
-                if t.iter().all(|&i| on(i)) {
-                    continue;
-                }
-                for k in 0..3 {
-                    let (u, v) = (t[k], t[(k + 1) % 3]);
-                    if on(u) && on(v) {
-                        edges.push([[p[u][other], p[u][1]], [p[v][other], p[v][1]]]);
-                    }
-                }
-            }
-        }
-    }
-    edges
-}
-
-/// Asserts that every endpoint of `mine` lies on an edge of `theirs`, and
-/// counts those strictly inside one (T-junctions).
-fn t_junctions(mine: &[[[f32; 2]; 2]], theirs: &[[[f32; 2]; 2]]) -> usize {
-    let close = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3;
-    let on_segment = |q: [f32; 2], [a, b]: [[f32; 2]; 2]| {
-        let (d, e) = ([b[0] - a[0], b[1] - a[1]], [q[0] - a[0], q[1] - a[1]]);
-        let len2 = d[0] * d[0] + d[1] * d[1];
-        if len2 == 0.0 {
-            return close(q, a);
-        }
-        let t = ((e[0] * d[0] + e[1] * d[1]) / len2).clamp(0.0, 1.0);
-        close(q, [a[0] + t * d[0], a[1] + t * d[1]])
-    };
-    let mut points: Vec<[f32; 2]> = mine.iter().flatten().copied().collect();
-    points.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    points.dedup_by(|a, b| close(*a, *b));
-    let mut inside = 0;
-    for q in points {
-        assert!(
-            theirs.iter().any(|&e| on_segment(q, e)),
-            "border vertex {q:?} lies on no edge of the neighbour"
-        );
-        if !theirs.iter().flatten().any(|&v| close(q, v)) {
-            inside += 1;
-        }
-    }
-    inside
 }
