@@ -67,6 +67,8 @@ pub(crate) struct Runtime {
     /// Those wall points as of the meshes shown (`None` before the first
     /// job that built cells).
     pub(crate) border: Option<Arc<BorderPoints>>,
+    /// Whether the running job only seals cells again ([`Job::Reseal`]).
+    pub(crate) resealing: bool,
 }
 
 /// A request waiting for its turn.
@@ -101,6 +103,7 @@ impl Default for Runtime {
             material_labels: None,
             publishes_border: false,
             border: None,
+            resealing: false,
         }
     }
 }

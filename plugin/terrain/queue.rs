@@ -202,6 +202,7 @@ pub fn start_jobs(
                 let octree = terrain.octree.clone();
                 let mut mesher = std::mem::take(&mut terrain.runtime.mesher);
                 mesher.set_outside_points(outside);
+                terrain.runtime.resealing = true;
                 terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                     on_pool(pool, || {
                         remesh(

@@ -34,6 +34,7 @@ pub fn finish_jobs(
             continue;
         };
         terrain.runtime.task = None;
+        terrain.runtime.resealing = false;
         let mut reports = Vec::new();
         let mut debris = Vec::new();
         let report = |edit, request, hash, cells, apply_time| CarveApplied {

@@ -21,7 +21,10 @@
 //!
 //! A chunk that streams out leaves its points with its neighbours until
 //! they are given new ones: splitting at a point where no neighbour
-//! meets the edge any more only adds a vertex on a straight edge.
+//! meets the edge any more only adds a vertex on a straight edge. It
+//! drops its own re-seal jobs, queued or running
+//! (`Terrain::is_idle_but_for_seams`): they change no octree, journal or
+//! undo step, and would hold it live while they wait on the pool.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
