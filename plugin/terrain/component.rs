@@ -285,6 +285,22 @@ impl Terrain {
             && !(r.needs_full_mesh && r.builds_cells)
     }
 
+    /// Whether the terrain is idle but for sealing cells again at new
+    /// points of neighbouring chunks ([`super::TerrainWorld`]): work that
+    /// leaves the octree, journal and undo history as they are, and that
+    /// a chunk streaming out may drop.
+    pub(crate) fn is_idle_but_for_seams(&self) -> bool {
+        let r = &self.runtime;
+        r.queue
+            .iter()
+            .all(|job| matches!(job, super::jobs::Job::Reseal { .. }))
+            && (r.task.is_none() || r.resealing)
+            && r.uploads
+                .iter()
+                .all(|u| u.reports.is_empty() && u.debris.is_empty())
+            && !(r.needs_full_mesh && r.builds_cells)
+    }
+
     /// Triangles currently shown.
     #[must_use]
     pub fn triangle_count(&self) -> usize {

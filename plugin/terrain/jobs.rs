@@ -27,6 +27,7 @@ use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use bevy::tasks::Task;
+use chisel_bsp::exact::Point4;
 use chisel_bsp::octree::{
     CellFaces, CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, SeamedMesher, Tool,
 };
@@ -40,6 +41,7 @@ use super::error::TerrainError;
 use super::mesh::{ColliderMesh, cell_meshes_of};
 use super::physics::{PhysicsInsert, TerrainPhysics};
 use super::tool::GridTool;
+use super::world::seams::BorderPoints;
 
 /// Work in progress of a terrain (main-world only).
 pub(crate) struct Runtime {
@@ -59,6 +61,14 @@ pub(crate) struct Runtime {
     /// to date from its `TerrainMaterials` (feature `render`); `None`
     /// without a table.
     pub(crate) material_labels: Option<BTreeSet<Label>>,
+    /// Whether jobs hand back the wall points on the cube's sides (a chunk
+    /// of a [`super::TerrainWorld`]).
+    pub(crate) publishes_border: bool,
+    /// Those wall points as of the meshes shown (`None` before the first
+    /// job that built cells).
+    pub(crate) border: Option<Arc<BorderPoints>>,
+    /// Whether the running job only seals cells again ([`Job::Reseal`]).
+    pub(crate) resealing: bool,
 }
 
 /// A request waiting for its turn.
@@ -71,6 +81,11 @@ pub(crate) enum Job {
     },
     Undo {
         requested: Instant,
+    },
+    /// Seal the cells again at new outside points (the wall points of
+    /// neighbouring chunks on the cube's sides).
+    Reseal {
+        outside: Vec<Point4>,
     },
 }
 
@@ -86,6 +101,9 @@ impl Default for Runtime {
             builds_cells: true,
             mesher: SeamedMesher::new(),
             material_labels: None,
+            publishes_border: false,
+            border: None,
+            resealing: false,
         }
     }
 }
@@ -163,6 +181,8 @@ pub(crate) struct JobContext {
     pub max_debris_hulls: usize,
     /// What to build for the changed cells.
     pub output: CellOutput,
+    /// Whether to hand back the wall points on the cube's sides.
+    pub publish_border: bool,
 }
 
 impl JobContext {
@@ -238,6 +258,9 @@ pub(crate) struct JobOutput {
     pub full: bool,
     pub mesh_time: Duration,
     pub collider_time: Duration,
+    /// The wall points on the cube's sides after this job, when the
+    /// context asks for them and cells were built.
+    pub border: Option<Arc<BorderPoints>>,
 }
 
 /// The thread pool of the background jobs, rebuilt when the number of
@@ -375,6 +398,7 @@ pub(crate) fn remesh(
             full,
             mesh_time: Duration::ZERO,
             collider_time: Duration::ZERO,
+            border: None,
         };
     }
     let render = context.output == CellOutput::Meshes;
@@ -383,6 +407,9 @@ pub(crate) fn remesh(
     let edited: BTreeSet<CellKey> = keys.iter().chain(fresh.keys()).copied().collect();
     let keys: BTreeSet<CellKey> = keys.into_iter().collect();
     let sealed = mesher.update(&octree, keys, fresh);
+    let border = context
+        .publish_border
+        .then(|| Arc::new(BorderPoints::of(&mesher, &octree)));
     // Meshes first (the collider triangles kept aside), then colliders,
     // so that each is timed on its own.
     let meshed: Vec<(CellKey, Option<Vec<(BuiltMesh, ColliderMesh)>>)> = sealed
@@ -440,5 +467,6 @@ pub(crate) fn remesh(
         full,
         mesh_time,
         collider_time: start.elapsed(),
+        border,
     }
 }

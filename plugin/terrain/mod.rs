@@ -283,6 +283,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
                 (
                     world::stream::route_world_carves,
                     world::stream::stream_chunks,
+                    world::seams::stitch_chunk_borders,
                 )
                     .chain()
                     .before(TerrainSystems::Carve),

@@ -122,6 +122,7 @@ pub fn start_jobs(
             debris_density: settings.debris_density,
             max_debris_hulls: settings.max_debris_hulls,
             output: settings.output,
+            publish_border: terrain.runtime.publishes_border,
         };
         terrain.runtime.builds_cells = context.builds_cells();
         if !terrain.runtime.builds_cells {
@@ -146,8 +147,10 @@ pub fn start_jobs(
             terrain.runtime.needs_full_mesh = false;
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
-            // A first build starts the border vertices afresh.
-            let mesher = SeamedMesher::new();
+            // A first build starts the border vertices afresh, with the
+            // outside points it was given.
+            let mut mesher = SeamedMesher::new();
+            mesher.set_outside_points(terrain.runtime.mesher.outside_points().to_vec());
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {
                     remesh(
@@ -195,6 +198,25 @@ pub fn start_jobs(
                     });
                 }
             },
+            Some(Job::Reseal { outside }) => {
+                let octree = terrain.octree.clone();
+                let mut mesher = std::mem::take(&mut terrain.runtime.mesher);
+                mesher.set_outside_points(outside);
+                terrain.runtime.resealing = true;
+                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                    on_pool(pool, || {
+                        remesh(
+                            octree,
+                            &context,
+                            Vec::new(),
+                            Vec::new(),
+                            BTreeMap::new(),
+                            mesher,
+                            false,
+                        )
+                    })
+                }));
+            }
             Some(Job::Carve {
                 tool,
                 edit,

@@ -34,6 +34,7 @@ pub fn finish_jobs(
             continue;
         };
         terrain.runtime.task = None;
+        terrain.runtime.resealing = false;
         let mut reports = Vec::new();
         let mut debris = Vec::new();
         let report = |edit, request, hash, cells, apply_time| CarveApplied {
@@ -117,6 +118,9 @@ pub fn finish_jobs(
         // For an undo or a full build this is the octree already in place.
         terrain.octree = output.octree;
         terrain.runtime.mesher = output.mesher;
+        if output.border.is_some() {
+            terrain.runtime.border = output.border;
+        }
     }
 }
 

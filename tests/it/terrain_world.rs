@@ -9,7 +9,6 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 use bevy::asset::AssetPlugin;
-use bevy::mesh::{Indices, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{Edit, StateHash};
@@ -22,7 +21,7 @@ use bevy_chisel::terrain::{
 
 /// Grid unit = 1 world unit; chunks of 32, samples 4 apart (8 squares a
 /// side); heights 8..=20 above the floor at 0.
-fn layout() -> WorldLayout {
+pub(crate) fn layout() -> WorldLayout {
     WorldLayout {
         quantization: Quantization::new(1.0, [0.0; 3]).expect("valid unit"),
         chunk_log2: 5,
@@ -33,11 +32,11 @@ fn layout() -> WorldLayout {
     }
 }
 
-fn height(i: i64, j: i64) -> i64 {
+pub(crate) fn height(i: i64, j: i64) -> i64 {
     8 + (i * 7 + j * 13).rem_euclid(9) + (i * j).rem_euclid(5)
 }
 
-fn world() -> TerrainWorld {
+pub(crate) fn world() -> TerrainWorld {
     TerrainWorld::new(layout(), height)
         .expect("valid layout")
         .with_streaming(StreamSettings {
@@ -64,7 +63,7 @@ fn record(
     refused.0.extend(rejected.read().cloned());
 }
 
-fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
+pub(crate) fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
@@ -89,13 +88,13 @@ fn app_with(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
     (app, world, focus)
 }
 
-fn the_world(app: &App, world: Entity) -> &TerrainWorld {
+pub(crate) fn the_world(app: &App, world: Entity) -> &TerrainWorld {
     app.world()
         .get::<TerrainWorld>(world)
         .expect("world entity")
 }
 
-fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
+pub(crate) fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
     let entity = the_world(app, world)
         .chunk_entity(coord)
         .unwrap_or_else(|| panic!("chunk {coord:?} is not live"));
@@ -104,7 +103,7 @@ fn terrain(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
 
 /// Runs frames until nothing builds, no carve waits, every live chunk is
 /// idle and the set of live chunks stayed the same for a few frames.
-fn settle(app: &mut App, world: Entity) {
+pub(crate) fn settle(app: &mut App, world: Entity) {
     let mut calm = 0;
     let mut last = Vec::new();
     for _ in 0..20_000 {
@@ -164,11 +163,11 @@ fn prism_volume(coord: ChunkCoord) -> f64 {
     sixths as f64 / 6.0
 }
 
-fn dodecahedron(radius: f32, centre: Vec3) -> CarveTool {
+pub(crate) fn dodecahedron(radius: f32, centre: Vec3) -> CarveTool {
     CarveTool::dodecahedron(radius, centre)
 }
 
-fn carve(app: &mut App, world: Entity, tool: CarveTool) {
+pub(crate) fn carve(app: &mut App, world: Entity, tool: CarveTool) {
     app.world_mut().write_message(WorldCarve {
         world,
         tool,
@@ -315,22 +314,13 @@ fn a_carve_across_a_chunk_border_edits_both_and_the_volumes_add_up() {
     }
     assert_eq!(app.world().resource::<Applied>().0.len(), 2);
 
-    // The drawn surfaces meet on the shared side x = 32: every vertex of
-    // one chunk's border edges lies on a border edge of the other. Where
-    // it lies strictly inside one, it is a T-junction (not stitched
-    // across chunks yet; see the world module's docs).
-    let (a, b) = (
-        border_edges(&app, world, left, 32.0),
-        border_edges(&app, world, right, 32.0),
-    );
-    assert!(!a.is_empty() && !b.is_empty());
-    let t_left = t_junctions(&a, &b);
-    let t_right = t_junctions(&b, &a);
-    println!(
-        "chunk border x = 32: {} and {} border edges, {t_left} + {t_right} T-junctions",
-        a.len(),
-        b.len()
-    );
+    // The drawn surfaces meet on the shared side x = 32, edge to edge:
+    // every vertex of one chunk's border edges is a vertex of the other's.
+    let (t_left, t_right) =
+        super::terrain_world_seams::seam_t_junctions(&app, world, left, right, 0, 32.0);
+    assert_eq!((t_left, t_right), (0, 0), "T-junctions across x = 32");
+
+    super::terrain_world_seams::assert_closed_across(&app, world);
 
     // One terrain over both chunks, built from the same samples.
     let mut heights = Vec::new();
@@ -700,72 +690,4 @@ fn bad_worlds_and_carves_are_typed_errors_that_change_nothing() {
     let (app, world, _) = app_with(too_high, Vec3::new(16.0, 30.0, 16.0));
     let stats = the_world(&app, world).stats();
     assert_eq!((stats.live, stats.failed), (0, 9));
-}
-
-/// The edges lying in the plane x = `plane` of a chunk's cell meshes, as
-/// (z, y) segments, leaving out triangles that lie in the plane (the
-/// chunk's side wall): where its surface meets its side.
-fn border_edges(app: &App, world: Entity, coord: ChunkCoord, plane: f32) -> Vec<[[f32; 2]; 2]> {
-    let meshes = app.world().resource::<Assets<Mesh>>();
-    let mut edges = Vec::new();
-    for (_, entities) in terrain(app, world, coord).cells() {
-        for entity in entities {
-            let Some(handle) = app.world().get::<Mesh3d>(entity) else {
-                continue;
-            };
-            let mesh = meshes.get(&handle.0).expect("cell mesh");
-            let Ok(Some(VertexAttributeValues::Float32x3(p))) =
-                mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION)
-            else {
-                panic!("cell mesh without positions");
-            };
-            let indices: Vec<usize> = match mesh.try_indices_option() {
-                Ok(Some(Indices::U16(v))) => v.iter().map(|&i| usize::from(i)).collect(),
-                Ok(Some(Indices::U32(v))) => v.iter().map(|&i| i as usize).collect(),
-                _ => (0..p.len()).collect(),
-            };
-            let on = |i: usize| (p[i][0] - plane).abs() < 1e-4;
-            for t in indices.chunks_exact(3) {
-                if t.iter().all(|&i| on(i)) {
-                    continue;
-                }
-                for k in 0..3 {
-                    let (u, v) = (t[k], t[(k + 1) % 3]);
-                    if on(u) && on(v) {
-                        edges.push([[p[u][2], p[u][1]], [p[v][2], p[v][1]]]);
-                    }
-                }
-            }
-        }
-    }
-    edges
-}
-
-/// Asserts that every endpoint of `mine` lies on an edge of `theirs`, and
-/// counts those strictly inside one (T-junctions).
-fn t_junctions(mine: &[[[f32; 2]; 2]], theirs: &[[[f32; 2]; 2]]) -> usize {
-    let close = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3;
-    let on_segment = |q: [f32; 2], [a, b]: [[f32; 2]; 2]| {
-        let (d, e) = ([b[0] - a[0], b[1] - a[1]], [q[0] - a[0], q[1] - a[1]]);
-        let len2 = d[0] * d[0] + d[1] * d[1];
-        if len2 == 0.0 {
-            return close(q, a);
-        }
-        let t = ((e[0] * d[0] + e[1] * d[1]) / len2).clamp(0.0, 1.0);
-        close(q, [a[0] + t * d[0], a[1] + t * d[1]])
-    };
-    let mut points: Vec<[f32; 2]> = mine.iter().flatten().copied().collect();
-    points.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    points.dedup_by(|a, b| close(*a, *b));
-    let mut inside = 0;
-    for q in points {
-        assert!(
-            theirs.iter().any(|&e| on_segment(q, e)),
-            "border vertex {q:?} lies on no edge of the neighbour"
-        );
-        if !theirs.iter().flatten().any(|&v| close(q, v)) {
-            inside += 1;
-        }
-    }
-    inside
 }

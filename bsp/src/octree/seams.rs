@@ -35,6 +35,17 @@
 //!
 //! Either may change its wall points in turn, so both repeat until no
 //! wall point changes; a cell's own wall points change at most once.
+//!
+//! *Outside points* ([`SeamedMesher::set_outside_points`]) are wall points
+//! of another octree's mesher lying on this octree's cube, where two
+//! octrees over neighbouring cubes meet (the chunks of a large world).
+//! They count as the wall points of one more neighbour of every leaf
+//! whose closed box holds them, so the border edges on the cube's sides
+//! are split at them too; when they change, the leaves whose seams they
+//! change are sealed again at the next update, as for a neighbour's wall
+//! points. Each octree's wall points come from its own unsealed meshes,
+//! so two meshers that take each other's
+//! ([`SeamedMesher::wall_points_in`]) need one exchange, not a loop.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -43,6 +54,8 @@ use rayon::prelude::*;
 use super::cell::{CellBox, CellKey};
 use super::tree::{Leaf, OctNode, Octree};
 use crate::exact::{Plane, Point4};
+use crate::exact::{Sign, classify_vertex};
+use crate::mesh::weld::Welder;
 use crate::mesh::{BorderEdge, SurfaceMesh, UnsealedMesh};
 use crate::tree::BoundaryFace;
 
@@ -164,6 +177,11 @@ pub struct SeamedMesher {
     /// update: what [`Octree::cell_surface`] gives while the leaf and the
     /// leaves it faces across its walls stay the same.
     unsealed: BTreeMap<CellKey, UnsealedMesh>,
+    /// The outside points, distinct, with their `f64` positions.
+    outside: Vec<Point4>,
+    outside_f64: Vec<[f64; 3]>,
+    /// Outside points gained or lost since the last update.
+    outside_changed: Vec<Point4>,
 }
 
 impl SeamedMesher {
@@ -186,6 +204,73 @@ impl SeamedMesher {
         self.borders
             .get(&key)
             .map_or(&[][..], |b| b.wall_points.as_slice())
+    }
+
+    /// The points outside the octree's cells that border edges are also
+    /// split at ([`SeamedMesher::set_outside_points`]), distinct.
+    #[must_use]
+    pub fn outside_points(&self) -> &[Point4] {
+        &self.outside
+    }
+
+    /// Sets the outside points: wall points of the meshers of octrees over
+    /// neighbouring cubes that lie on this octree's cube
+    /// ([`SeamedMesher::wall_points_in`] of that cube), which the border
+    /// edges on the cube's sides are split at like a neighbouring leaf's
+    /// wall points (see the module docs). Points off the cube split
+    /// nothing. The next [`SeamedMesher::update`] seals again every leaf
+    /// whose seams the points gained or lost change, whatever `keys` it is
+    /// given (none: only those); before a first update, set them and every
+    /// leaf is sealed with them.
+    pub fn set_outside_points(&mut self, points: Vec<Point4>) {
+        let mut welder = Welder::with_capacity(self.outside.len() + points.len());
+        // Per distinct point: bit 0 if it was an outside point, bit 1 if
+        // it is one now.
+        let mut held: Vec<u8> = Vec::with_capacity(self.outside.len() + points.len());
+        for (list, bit) in [(&self.outside, 1u8), (&points, 2u8)] {
+            for p in list {
+                let i = welder.index(p) as usize;
+                if i == held.len() {
+                    held.push(0);
+                }
+                held[i] |= bit;
+            }
+        }
+        let all = welder.into_vertices();
+        self.outside_changed.extend(
+            all.iter()
+                .zip(&held)
+                .filter(|&(_, &h)| h == 1 || h == 2)
+                .map(|(p, _)| *p),
+        );
+        self.outside = all
+            .into_iter()
+            .zip(&held)
+            .filter(|&(_, &h)| h & 2 != 0)
+            .map(|(p, _)| p)
+            .collect();
+        self.outside_f64 = self.outside.iter().map(Point4::to_f64).collect();
+    }
+
+    /// The wall points kept for the leaves of `octree` (the octree of the
+    /// last update) that lie in the closed box `region`, exactly, each
+    /// position once, in leaf order: with `region` the cube of a
+    /// neighbouring octree, what that octree's mesher takes as outside
+    /// points.
+    #[must_use]
+    pub fn wall_points_in(&self, octree: &Octree, region: &CellBox) -> Vec<Point4> {
+        let mut welder = Welder::with_capacity(0);
+        octree.for_leaves_touching_each(std::slice::from_ref(region), |key, _| {
+            let Some(border) = self.borders.get(&key) else {
+                return;
+            };
+            for (p, q) in border.wall_points.iter().zip(&border.wall_f64) {
+                if may_be_in_box(*q, region) && in_closed_box(p, region) {
+                    welder.index(p);
+                }
+            }
+        });
+        welder.into_vertices()
     }
 
     /// Meshes the cells `keys` of `octree` that an edit or undo may have
@@ -234,7 +319,8 @@ impl SeamedMesher {
             .collect::<Vec<_>>()
             .into_iter()
             .collect();
-        let mut changed = Vec::new();
+        // Outside points gained or lost count as changed wall points.
+        let mut changed = std::mem::take(&mut self.outside_changed);
         for key in &gone {
             self.leaves.remove(key);
             self.unsealed.remove(key);
@@ -492,6 +578,22 @@ impl SeamedMesher {
                 }
             }
         });
+        if !self.outside.is_empty() {
+            let root = octree.root_box();
+            for (cell, extra) in cells.iter().zip(&mut extra) {
+                let on_side =
+                    (0..3).any(|a| cell.min[a] == root.min[a] || cell.max[a] == root.max[a]);
+                if on_side {
+                    extra.extend(
+                        self.outside
+                            .iter()
+                            .zip(&self.outside_f64)
+                            .filter(|(_, q)| may_be_in_box(**q, cell))
+                            .map(|(p, _)| p),
+                    );
+                }
+            }
+        }
         extra
     }
 }
@@ -576,6 +678,14 @@ fn may_be_in_box(q: [f64; 3], cell: &CellBox) -> bool {
         let (lo, hi) = (cell.min[axis] as f64, cell.max[axis] as f64);
         let margin = (lo.abs().max(hi.abs()) + 1.0) * f64::powi(2.0, -40);
         lo - margin <= c && c <= hi + margin
+    })
+}
+
+/// Whether the exact point `p` lies in the closed box `cell`.
+fn in_closed_box(p: &Point4, cell: &CellBox) -> bool {
+    (0..3).all(|axis| {
+        classify_vertex(p, &axis_plane(axis, cell.min[axis])) != Sign::Negative
+            && classify_vertex(p, &axis_plane(axis, cell.max[axis])) != Sign::Positive
     })
 }
 

@@ -52,22 +52,24 @@
 //! surface, and a carve that opens the border cuts both with the same
 //! exact tool.
 //!
-//! What is not stitched yet (left for the level-of-detail work):
-//! - **T-junctions.** Within a terrain the seamed mesher splits every
-//!   cell's border edges at its neighbours' wall points
-//!   ([`chisel_bsp::octree::SeamedMesher`]); across a chunk border it has
-//!   no neighbours, so where the border cells of two chunks differ in size
-//!   one side's edge may pass a vertex of the other without one. The exact
-//!   surfaces meet, but rasterised triangles may leave pixel-wide gaps
-//!   along such edges; the chunks' side walls behind them are what shows
-//!   through, not the sky. To measure: take both chunks' cell meshes, keep
-//!   the edges lying in the shared plane (leaving out the walls), and
-//!   count the vertices of either side strictly inside an edge of the
-//!   other. The test of a carve across a border does this: every border
-//!   vertex lies on the neighbour's border edges, and after its crater 2
-//!   of them are T-junctions.
-//! - **Normals.** Smooth normals are averaged per chunk, so shading can
-//!   show a faint line along a border.
+//! Seams ([`seams`]): within a terrain the seamed mesher splits every
+//! cell's border edges at its neighbours' wall points
+//! ([`chisel_bsp::octree::SeamedMesher`]); across a chunk border each
+//! chunk's mesher also takes, as *outside points*, the wall points of its
+//! live neighbours' cells on its cube's sides and corner lines. Every job
+//! of a chunk hands back its own such points; when they change (a carve,
+//! an undo, a first build), [`seams::stitch_chunk_borders`] queues a
+//! re-seal of each neighbour whose outside points change, which rebuilds
+//! only the cells whose seams change (their colliders stay). So the
+//! chunks' meshes meet edge to edge with identical exact vertices, as the
+//! cells of one terrain do: no T-junctions across borders, also where four
+//! chunks meet. A neighbour's meshes follow a carve one job later, so for
+//! a frame or two after a carve the border may show a T-junction.
+//!
+//! What is not stitched yet:
+//! - **Normals.** Smooth normals are averaged per cell, from the cell's
+//!   own polygons, within a chunk as across chunks: shading can show a
+//!   faint line along cell and chunk borders.
 //! - **Debris.** Detection runs per chunk with the chunk's sides as
 //!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
 //!   in place, anchored by the border; nothing is wrongly detached.
@@ -75,6 +77,7 @@
 //! Level of detail and seams between levels are not part of this module
 //! yet.
 
+pub mod seams;
 pub mod source;
 pub mod store;
 pub mod stream;
@@ -202,6 +205,8 @@ pub struct TerrainWorld {
     pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit)>>,
     pub(crate) stats: WorldStats,
     pub(crate) next_request: u64,
+    /// The chunks' border points and the outside points they were given.
+    pub(crate) seams: seams::WorldSeams,
 }
 
 impl TerrainWorld {
@@ -221,6 +226,7 @@ impl TerrainWorld {
             pending: BTreeMap::new(),
             stats: WorldStats::default(),
             next_request: 0,
+            seams: seams::WorldSeams::default(),
         })
     }
 

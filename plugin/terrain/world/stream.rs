@@ -212,7 +212,8 @@ pub fn stream_chunks(
                 continue;
             };
             match terrains.get(entity) {
-                Ok(terrain) if !terrain.is_idle() => continue,
+                // Sealing again at a neighbour's new points is dropped.
+                Ok(terrain) if !terrain.is_idle_but_for_seams() => continue,
                 Ok(terrain) if !terrain.journal().is_empty() || terrain.undo_depth() > 0 => {
                     world.stored.insert(coord, Arc::new(terrain.to_bytes()));
                 }

@@ -1,0 +1,211 @@
+//! Seams across chunk borders: every chunk's border edges are split at the
+//! neighbouring chunks' wall points on its cube, so that the chunks' cell
+//! meshes meet edge to edge with identical exact vertices (paper 1 §3.4,
+//! carried across octrees by [`SeamedMesher::set_outside_points`]).
+//!
+//! Notation: a chunk's *border points* toward a neighbour are the wall
+//! points of its kept cell meshes that lie on the side or the corner line
+//! it shares with that neighbour ([`BorderPoints`]); a chunk's *outside
+//! points* are the border points of its live neighbours toward it.
+//!
+//! Every job of a chunk hands back its border points as of the meshes it
+//! built ([`BorderPoints::of`], on the worker). [`stitch_chunk_borders`]
+//! then gathers the outside points of each neighbour of a chunk whose
+//! border points changed and, where they differ from those the neighbour
+//! was last given, queues a job that seals the neighbour's cells again at
+//! them (only the cells whose seams change are rebuilt; their colliders
+//! stay). A chunk that has just streamed in takes its live neighbours'
+//! points before its first build. Wall points come from the unsealed
+//! meshes, so one exchange settles a border: no chunk's border points
+//! depend on its neighbours'.
+//!
+//! A chunk that streams out leaves its points with its neighbours until
+//! they are given new ones: splitting at a point where no neighbour
+//! meets the edge any more only adds a vertex on a straight edge. It
+//! drops its own re-seal jobs, queued or running
+//! (`Terrain::is_idle_but_for_seams`): they change no octree, journal or
+//! undo step, and would hold it live while they wait on the pool.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use chisel_bsp::exact::Point4;
+use chisel_bsp::octree::{CellBox, Octree, SeamedMesher};
+
+use super::super::component::Terrain;
+use super::super::jobs::Job;
+use super::{ChunkCoord, TerrainWorld};
+
+/// The eight neighbours of a chunk, as steps in x and z.
+const NEIGHBOURS: [(i64, i64); 8] = [
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
+/// A chunk's wall points on the sides of its cube, toward each neighbour
+/// (in the order of `NEIGHBOURS`): on the shared side for the four across
+/// a side, on the shared vertical corner line for the four across a
+/// corner.
+#[derive(Debug, Default)]
+pub(crate) struct BorderPoints {
+    toward: [Vec<Point4>; 8],
+}
+
+impl BorderPoints {
+    /// The border points of the cells `mesher` keeps for `octree` (a
+    /// chunk's octree, its cube one chunk of the world's grid).
+    pub(crate) fn of(mesher: &SeamedMesher, octree: &Octree) -> Self {
+        let cube = octree.root_box();
+        Self {
+            toward: NEIGHBOURS.map(|step| mesher.wall_points_in(octree, &shared_with(&cube, step))),
+        }
+    }
+
+    /// The points toward the neighbour `step` away.
+    fn toward(&self, step: (i64, i64)) -> &[Point4] {
+        NEIGHBOURS
+            .iter()
+            .position(|&s| s == step)
+            .map_or(&[][..], |i| self.toward[i].as_slice())
+    }
+}
+
+/// The part of `cube`'s boundary it shares with the cube `step` away in x
+/// and z: a side, or a vertical line.
+fn shared_with(cube: &CellBox, (dx, dz): (i64, i64)) -> CellBox {
+    let mut region = *cube;
+    for (axis, d) in [(0, dx), (2, dz)] {
+        match d {
+            -1 => region.max[axis] = cube.min[axis],
+            1 => region.min[axis] = cube.max[axis],
+            _ => {}
+        }
+    }
+    region
+}
+
+/// What a world knows of its chunks' seams.
+#[derive(Default)]
+pub(crate) struct WorldSeams {
+    /// Per live chunk, its terrain entity and the border points last seen.
+    seen: BTreeMap<ChunkCoord, (Entity, Arc<BorderPoints>)>,
+    /// Per live chunk, its terrain entity and the outside points it was
+    /// last given.
+    given: BTreeMap<ChunkCoord, (Entity, Vec<Point4>)>,
+}
+
+/// Keeps the chunks' seams closed: gives chunks that just streamed in
+/// their neighbours' border points before their first build, and queues a
+/// re-seal of the live neighbours of every chunk whose border points
+/// changed (see the module docs).
+pub fn stitch_chunk_borders(
+    mut worlds: Query<&mut TerrainWorld>,
+    mut terrains: Query<&mut Terrain>,
+) {
+    for mut world in &mut worlds {
+        let world = &mut *world;
+        let live: BTreeMap<ChunkCoord, Entity> = world.live_chunks().collect();
+        let seams = &mut world.seams;
+        seams.seen.retain(|c, (e, _)| live.get(c) == Some(e));
+        seams.given.retain(|c, (e, _)| live.get(c) == Some(e));
+
+        // Border points that changed since the last frame.
+        let mut changed = Vec::new();
+        for (&coord, &entity) in &live {
+            let Ok(terrain) = terrains.get(entity) else {
+                continue;
+            };
+            let Some(border) = &terrain.runtime.border else {
+                continue;
+            };
+            let fresh = seams
+                .seen
+                .get(&coord)
+                .is_none_or(|(_, seen)| !Arc::ptr_eq(seen, border));
+            if fresh {
+                seams.seen.insert(coord, (entity, border.clone()));
+                changed.push(coord);
+            }
+        }
+
+        // Chunks never given outside points, and the neighbours of
+        // chunks whose border points changed.
+        let mut targets: Vec<ChunkCoord> = live
+            .keys()
+            .filter(|c| !seams.given.contains_key(c))
+            .copied()
+            .collect();
+        for coord in changed {
+            targets.extend(NEIGHBOURS.iter().map(|&(dx, dz)| ChunkCoord {
+                x: coord.x + dx,
+                z: coord.z + dz,
+            }));
+        }
+        targets.sort_unstable();
+        targets.dedup();
+        for coord in targets {
+            let Some(&entity) = live.get(&coord) else {
+                continue;
+            };
+            let outside = outside_points(&seams.seen, coord);
+            let first = !seams.given.contains_key(&coord);
+            if seams
+                .given
+                .get(&coord)
+                .is_some_and(|(_, given)| same_points(given, &outside))
+            {
+                continue;
+            }
+            let Ok(mut terrain) = terrains.get_mut(entity) else {
+                continue;
+            };
+            let runtime = &mut terrain.runtime;
+            runtime.publishes_border = true;
+            if first && runtime.task.is_none() && runtime.needs_full_mesh {
+                // Before the first build: it seals with them.
+                runtime.mesher.set_outside_points(outside.clone());
+            } else if let Some(Job::Reseal { outside: queued }) = runtime
+                .queue
+                .iter_mut()
+                .find(|job| matches!(job, Job::Reseal { .. }))
+            {
+                queued.clone_from(&outside);
+            } else {
+                runtime.queue.push_back(Job::Reseal {
+                    outside: outside.clone(),
+                });
+            }
+            seams.given.insert(coord, (entity, outside));
+        }
+    }
+}
+
+/// The border points of the chunks around `coord` toward it.
+fn outside_points(
+    seen: &BTreeMap<ChunkCoord, (Entity, Arc<BorderPoints>)>,
+    coord: ChunkCoord,
+) -> Vec<Point4> {
+    let mut out = Vec::new();
+    for (dx, dz) in NEIGHBOURS {
+        let neighbour = ChunkCoord {
+            x: coord.x + dx,
+            z: coord.z + dz,
+        };
+        if let Some((_, border)) = seen.get(&neighbour) {
+            out.extend_from_slice(border.toward((-dx, -dz)));
+        }
+    }
+    out
+}
+
+/// Whether the lists hold the same points in the same order.
+fn same_points(a: &[Point4], b: &[Point4]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.same_position(q))
+}
