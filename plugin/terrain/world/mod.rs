@@ -75,6 +75,8 @@
 //! Level of detail and seams between levels are not part of this module
 //! yet.
 
+pub mod lod;
+pub mod lod_mesh;
 pub mod source;
 pub mod store;
 pub mod stream;
@@ -92,6 +94,8 @@ use super::component::Terrain;
 use super::error::TerrainError;
 use super::tool::{CarveTool, GridTool};
 
+pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
+pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 
 /// A chunk's position in its world's grid of chunks (x and z).
