@@ -76,6 +76,8 @@ mod terrain_round_tools;
 mod terrain_seams_render;
 #[cfg(feature = "terrain")]
 mod terrain_world;
+#[cfg(feature = "terrain")]
+mod terrain_world_lod;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]

@@ -16,8 +16,8 @@
 //! and `e_k = max |h(i, j) − C_k(i, j)|` over the chunk's samples: the
 //! exact largest vertical distance (computed in integers, scaled by `m`).
 //!
-//! **Edited chunk, level `k`**: vertex clustering of the exact cell
-//! meshes (side walls and floor left out) on cubes of edge
+//! **Edited chunk, level `k`**: vertex clustering of the chunk's exact
+//! surface (welded, T-junctions split; side walls and floor left out) on cubes of edge
 //! `c_k = s·2^(k−1)` aligned with the chunk's cube. A cluster's vertex is
 //! the mean of its members, which lies in its cube, so every coarse vertex
 //! is within the cube diagonal `√3·c_k` of an exact vertex, and every
@@ -38,12 +38,11 @@ use std::collections::HashMap;
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
+use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::Octree;
-use chisel_bsp::tree::Label;
-use rayon::prelude::*;
+use chisel_bsp::tree::{EMPTY, Label};
 
 use super::super::error::TerrainError;
-use super::super::mesh::cell_meshes;
 use super::ChunkCoord;
 use super::source::{WorldLayout, WorldSource};
 use crate::terrain::base::TerrainBase;
@@ -207,21 +206,22 @@ pub fn edited_pyramid(
     state_hash: u64,
 ) -> LodPyramid {
     let q = &layout.quantization;
-    let keys: Vec<_> = octree.leaves().into_iter().map(|(k, _)| k).collect();
     // Every exact triangle of the surface, in the world's local frame,
-    // with its material.
-    let exact: Vec<(Label, [[f64; 3]; 3])> = keys
-        .par_iter()
-        .flat_map_iter(|&key| {
-            cell_meshes(octree, q, key).into_iter().flat_map(|cell| {
-                let p = cell.collider.positions;
-                let label = cell.label;
-                cell.collider
-                    .triangles
-                    .into_iter()
-                    .map(move |t| (label, t.map(|v| p[v as usize].as_dvec3().to_array())))
-                    .collect::<Vec<_>>()
-            })
+    // with its material: the whole chunk's surface welded, with no
+    // T-junction between cells (a vertex in the middle of a neighbour's
+    // edge would open a gap once clustered).
+    let surface = SurfaceMesh::from_face_vec(octree.surface());
+    let positions: Vec<[f64; 3]> = (0..surface.vertices().len() as u32)
+        .map(|v| q.to_world(surface.position(v)))
+        .collect();
+    let exact: Vec<(Label, [[f64; 3]; 3])> = surface
+        .polygons()
+        .iter()
+        .filter(|p| p.outside == EMPTY)
+        .flat_map(|p| {
+            p.triangulate()
+                .into_iter()
+                .map(|t| (p.label, t.map(|v| positions[v as usize])))
         })
         .collect();
     let box_ = ChunkBox::of(layout, coord);

@@ -72,8 +72,23 @@
 //!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
 //!   in place, anchored by the border; nothing is wrongly detached.
 //!
-//! Level of detail and seams between levels are not part of this module
-//! yet.
+//! ## Level of detail
+//!
+//! A [`WorldLod`] beside the world ([`lod`], meshes in [`lod_mesh`])
+//! draws the chunks beyond the full-detail ones, out to
+//! [`LodSettings::far_radius`], from coarse meshes built on the async
+//! compute pool, no BSP and no collider: an unedited chunk as the source
+//! sampled at every `2^k`-th lattice sample (its error `e_k` the exact
+//! largest vertical distance to the full surface), an edited chunk as its
+//! exact surface simplified by vertex clustering on cubes of edge
+//! `s·2^(k−1)` (every point within the cube diagonal of the exact
+//! surface, so an edit shows at every level within that bound). Each
+//! chunk is drawn at the coarsest level whose error, projected from the
+//! nearest focus's distance with the focus camera's field of view and
+//! viewport height, stays within [`LodSettings::pixel_tolerance`], with
+//! hysteresis. Coarse meshes hang skirts down to the floor along their
+//! sides, as full-detail chunks have walls there, so no crack opens
+//! between chunks of different levels, full detail included.
 
 pub mod lod;
 pub mod lod_mesh;
