@@ -909,6 +909,7 @@ fn mesh_bytes(mesh: &Mesh) -> usize {
 
 fn lod_of_a_world() {
     use bevy::transform::TransformPlugin;
+    use bevy_chisel::terrain::WorldSource;
     use bevy_chisel::terrain::world::lod_mesh::{edited_pyramid, source_pyramid};
     use bevy_chisel::terrain::{
         ChunkCoord, LodMesh, LodSettings, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve,
@@ -951,7 +952,14 @@ fn lod_of_a_world() {
             .expect("on the grid");
         terrain.apply_now(&tool, Edit::Subtract).expect("carves");
         let start = Instant::now();
-        let pyramid = edited_pyramid(&layout, coord, terrain.octree(), terrain.state_hash());
+        let pyramid = edited_pyramid(
+            &layout,
+            &noise,
+            coord,
+            terrain.octree(),
+            terrain.state_hash(),
+        )
+        .expect("builds");
         edited_times.push(start.elapsed());
         for (l, level) in pyramid.levels.iter().enumerate() {
             edited_triangles[l] += level.triangles;

@@ -237,6 +237,12 @@ fn fly(
             hold.0 = !settled;
         }
         if !settled {
+            debug!(
+                "waiting: world settled {}, coarse {:?}, {} live",
+                world.is_settled(),
+                lod.stats(),
+                world.live_chunks().count()
+            );
             return;
         }
         flight.counted += 1;

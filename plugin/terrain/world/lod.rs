@@ -443,24 +443,31 @@ pub fn update_lod(
                         }
                     })
                 }
-                Job::Octree(hash, Some(octree)) => pool.spawn(async move {
-                    let start = Instant::now();
-                    let pyramid = Ok(edited_pyramid(&layout, coord, &octree, hash));
-                    Built {
-                        pyramid,
-                        time: start.elapsed(),
-                    }
-                }),
+                Job::Octree(hash, Some(octree)) => {
+                    let source = world.source.clone();
+                    pool.spawn(async move {
+                        let start = Instant::now();
+                        let pyramid = edited_pyramid(&layout, &*source, coord, &octree, hash);
+                        Built {
+                            pyramid,
+                            time: start.elapsed(),
+                        }
+                    })
+                }
                 Job::Octree(_, None) => continue,
-                Job::Bytes(_, bytes) => pool.spawn(async move {
-                    let start = Instant::now();
-                    let pyramid = restore(&bytes, &labels)
-                        .map(|t| edited_pyramid(&layout, coord, t.octree(), t.state_hash()));
-                    Built {
-                        pyramid,
-                        time: start.elapsed(),
-                    }
-                }),
+                Job::Bytes(_, bytes) => {
+                    let source = world.source.clone();
+                    pool.spawn(async move {
+                        let start = Instant::now();
+                        let pyramid = restore(&bytes, &labels).and_then(|t| {
+                            edited_pyramid(&layout, &*source, coord, t.octree(), t.state_hash())
+                        });
+                        Built {
+                            pyramid,
+                            time: start.elapsed(),
+                        }
+                    })
+                }
             };
             chunk.task = Some(task);
             building += 1;
@@ -605,7 +612,7 @@ mod tests {
         }
         // Farther is never finer.
         let mut last = 1;
-        for step in 0..2000 {
+        for step in 0..3000 {
             let k = choose_level(&errors, step as f32, None, v, 2.0, 0.25);
             assert!(k >= last);
             last = k;

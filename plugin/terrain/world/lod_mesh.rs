@@ -26,12 +26,18 @@
 //! came from. Vertices on a side of the chunk are clustered apart from the
 //! rest (per side), so the coarse border stays in the side's plane.
 //!
+//! The border of an edited chunk is kept exact: vertices on a side are not
+//! clustered.
+//!
 //! **Skirts**: every border edge (in a side's plane, used by one coarse
-//! triangle) hangs a vertical strip down to the floor, facing out of the
-//! chunk, as the full-detail chunk's side walls do. Along a shared side,
-//! the strips and walls of the two chunks cover the side's plane from the
-//! floor up to the higher of the two borders, whatever their levels, so no
-//! gap opens between two levels.
+//! triangle) hangs a vertical strip facing out of the chunk, `2·D_side + 1`
+//! grid units deep ([`skirt_depths`]): `D_side` bounds how far any level's
+//! border lies from the exact one along that side (unedited chunks
+//! interpolate the side's samples; edited ones keep the exact border, and
+//! a carve that changes a border edits both chunks on it). Two chunks'
+//! borders on a shared side are thus at most `2·D_side` apart, and the
+//! higher one's strip (or a full-detail chunk's wall, down to the floor)
+//! closes the gap: no crack between two levels.
 
 use std::collections::HashMap;
 
@@ -124,6 +130,7 @@ pub fn source_pyramid(
     let origin = layout.chunk_origin(coord);
     let label = surface_label(layout);
     let box_ = ChunkBox::of(layout, coord);
+    let skirt = skirt_depths(layout, &field.heights);
     let levels = (1..=coarsest_level(layout))
         .map(|k| {
             let m = 1usize << k;
@@ -160,7 +167,7 @@ pub fn source_pyramid(
                 .into_iter()
                 .map(|(a, b, side, _)| (a, b, side))
                 .collect();
-            mesh.strips(&points, &edges, &box_);
+            mesh.strips(&points, &edges, &skirt);
             level_mesh(k, error * layout.quantization.unit(), vec![(label, mesh)])
         })
         .collect();
@@ -197,14 +204,21 @@ fn heightfield_error(h: &impl Fn(usize, usize) -> i64, n: usize, m: usize) -> f6
 }
 
 /// The coarse meshes of an edited chunk, every level, by vertex clustering
-/// of its exact cell meshes.
-#[must_use]
+/// of its exact surface.
+///
+/// # Errors
+/// As [`WorldLayout::chunk_base`] (the source's samples give the skirts).
 pub fn edited_pyramid(
     layout: &WorldLayout,
+    source: &dyn WorldSource,
     coord: ChunkCoord,
     octree: &Octree,
     state_hash: u64,
-) -> LodPyramid {
+) -> Result<LodPyramid, TerrainError> {
+    let TerrainBase::Heightfield { field, .. } = layout.chunk_base(source, coord)? else {
+        unreachable!("a world chunk's base is a heightfield");
+    };
+    let skirt = skirt_depths(layout, &field.heights);
     let q = &layout.quantization;
     // Every exact triangle of the surface, in the world's local frame,
     // with its material: the whole chunk's surface welded, with no
@@ -233,14 +247,50 @@ pub fn edited_pyramid(
     let levels = (1..=coarsest_level(layout))
         .map(|k| {
             let cell = (layout.spacing() << (k - 1)) as f64 * unit;
-            let meshes = cluster(&exact, &box_, cell);
+            let meshes = cluster(&exact, &box_, cell, &skirt);
             level_mesh(k, 3f64.sqrt() * cell, meshes)
         })
         .collect();
-    LodPyramid {
+    Ok(LodPyramid {
         basis: LodBasis::Edited(state_hash),
         levels,
-    }
+    })
+}
+
+/// The skirt depth of each side (`-x`, `+x`, `-z`, `+z`), in world units:
+/// `2·D + 1` grid units, `D` the largest vertical distance, over every
+/// level, between the side's samples and their level's interpolation
+/// along the side. It depends only on the side's samples, which the two
+/// chunks sharing the side read alike, so both hang the same depth, and
+/// any two levels' borders there (or a level's and the exact one) are
+/// at most `2·D` apart.
+fn skirt_depths(layout: &WorldLayout, heights: &[i64]) -> [f64; 4] {
+    let side = (1usize << coarsest_level(layout)) + 1;
+    let line = |s: usize| -> Vec<i64> {
+        (0..side)
+            .map(|t| match s {
+                0 => heights[t * side],
+                1 => heights[side - 1 + t * side],
+                2 => heights[t],
+                _ => heights[t + (side - 1) * side],
+            })
+            .collect()
+    };
+    [0, 1, 2, 3].map(|s| {
+        let h = line(s);
+        let mut worst = 0i128;
+        for k in 1..=coarsest_level(layout) {
+            let m = 1usize << k;
+            for (t, &ht) in h.iter().enumerate() {
+                let c = (t / m).min((side - 1) / m - 1) * m;
+                let (a, b) = (i128::from(h[c]), i128::from(h[c + m]));
+                let u = (t - c) as i128;
+                let scaled = a * m as i128 + u * (b - a);
+                worst = worst.max((i128::from(ht) * m as i128 - scaled).abs() / m as i128 + 1);
+            }
+        }
+        (2 * worst + 1) as f64 * layout.quantization.unit()
+    })
 }
 
 /// Vertex clustering of `exact` on cubes of edge `cell` (world units),
@@ -249,22 +299,28 @@ fn cluster(
     exact: &[(Label, [[f64; 3]; 3])],
     box_: &ChunkBox,
     cell: f64,
+    skirt: &[f64; 4],
 ) -> Vec<(Label, MeshBuilder)> {
     let cells = ((box_.max[0] - box_.min[0]) / cell).round().max(1.0) as i64;
-    // Cluster key: the cube and the sides the vertex lies on.
+    // Cluster key: the cube, or for a vertex on a side the vertex itself
+    // (the border stays exact).
     let key = |p: [f64; 3]| {
+        let sides = box_.sides_of(p);
+        if sides != 0 {
+            return (p.map(|c| c.to_bits() as i64), 0x10 | sides);
+        }
         let c = |a: usize| (((p[a] - box_.min[a]) / cell).floor() as i64).clamp(0, cells - 1);
-        (c(0), c(1), c(2), box_.sides_of(p))
+        ([c(0), c(1), c(2)], 0)
     };
-    let mut ids: HashMap<(i64, i64, i64, u8), u32> = HashMap::new();
-    let mut sums: Vec<([f64; 3], u32)> = Vec::new();
+    let mut ids: HashMap<([i64; 3], u8), u32> = HashMap::new();
+    let mut sums: Vec<([f64; 3], u32, [f64; 3])> = Vec::new();
     let mut triangles: Vec<(Label, [u32; 3])> = Vec::with_capacity(exact.len() / 4);
     for (label, t) in exact {
         let v = t.map(|p| {
             let next = sums.len() as u32;
             let id = *ids.entry(key(p)).or_insert(next);
             if id == next {
-                sums.push(([0.0; 3], 0));
+                sums.push(([0.0; 3], 0, p));
             }
             let s = &mut sums[id as usize];
             for (sum, c) in s.0.iter_mut().zip(p) {
@@ -277,13 +333,17 @@ fn cluster(
     }
     // Each exact vertex is counted once per triangle around it: the mean
     // is weighted by valence, still a convex combination of members.
-    let mut points: Vec<[f64; 3]> = sums
+    // Border vertices keep their exact position.
+    let points: Vec<[f64; 3]> = sums
         .iter()
-        .map(|(s, count)| s.map(|c| c / f64::from(*count)))
+        .map(|(s, count, first)| {
+            if box_.sides_of(*first) != 0 {
+                *first
+            } else {
+                s.map(|c| c / f64::from(*count))
+            }
+        })
         .collect();
-    for p in &mut points {
-        box_.snap(p);
-    }
     triangles.retain(|(_, [a, b, c])| a != b && b != c && c != a);
     // The same triangle (up to rotation) from several exact ones: once.
     let canonical = |t: [u32; 3]| {
@@ -312,7 +372,7 @@ fn cluster(
                 .filter(|&&(_, _, _, t)| triangles[t].0 == label)
                 .map(|&(a, b, side, _)| (a, b, side))
                 .collect();
-            mesh.strips(&points, &edges, box_);
+            mesh.strips(&points, &edges, skirt);
             (label, mesh)
         })
         .collect()
@@ -361,16 +421,6 @@ impl ChunkBox {
             }
         }
         bits
-    }
-
-    /// Moves `p` exactly onto the sides it lies on.
-    fn snap(&self, p: &mut [f64; 3]) {
-        let bits = self.sides_of(*p);
-        for (s, &(axis, _)) in SIDES.iter().enumerate() {
-            if bits & (1 << s) != 0 {
-                p[axis] = self.plane(s);
-            }
-        }
     }
 
     /// Whether triangle `t` lies in a side's plane or on the floor (the
@@ -433,12 +483,13 @@ impl MeshBuilder {
         }));
     }
 
-    /// A strip from each edge `(a, b, side)` down to the floor, facing out
-    /// of the chunk through `side`.
-    fn strips(&mut self, points: &[[f64; 3]], edges: &[(u32, u32, u8)], box_: &ChunkBox) {
+    /// A strip from each edge `(a, b, side)` hanging `depth[side]` down,
+    /// facing out of the chunk through `side`.
+    fn strips(&mut self, points: &[[f64; 3]], edges: &[(u32, u32, u8)], depth: &[f64; 4]) {
         for &(a, b, side) in edges {
             let (pa, pb) = (points[a as usize], points[b as usize]);
-            let (fa, fb) = ([pa[0], box_.min[1], pa[2]], [pb[0], box_.min[1], pb[2]]);
+            let d = depth[usize::from(side)];
+            let (fa, fb) = ([pa[0], pa[1] - d, pa[2]], [pb[0], pb[1] - d, pb[2]]);
             let out = ChunkBox::outward(side);
             self.flat_triangle([pa, fa, pb], out);
             self.flat_triangle([pb, fa, fb], out);

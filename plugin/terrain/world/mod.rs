@@ -86,9 +86,10 @@
 //! chunk is drawn at the coarsest level whose error, projected from the
 //! nearest focus's distance with the focus camera's field of view and
 //! viewport height, stays within [`LodSettings::pixel_tolerance`], with
-//! hysteresis. Coarse meshes hang skirts down to the floor along their
-//! sides, as full-detail chunks have walls there, so no crack opens
-//! between chunks of different levels, full detail included.
+//! hysteresis. An edited chunk's coarse border stays exact, and every
+//! coarse mesh hangs skirts along its sides, deeper than any two levels'
+//! borders there can be apart (full-detail chunks have walls there), so no
+//! crack opens between chunks of different levels, full detail included.
 
 pub mod lod;
 pub mod lod_mesh;
