@@ -11,12 +11,14 @@
 //! (measurements: `crater_carves_on_a_large_terrain`,
 //! `loading_a_saved_terrain_against_replaying_its_carves`,
 //! `carving_at_sixty_frames_per_second`,
-//! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`). World:
-//! chunks of the `world` example's landscape built one at a time, their
-//! size, the banded base built in one pass against painting its bands, and
-//! an app streaming them around a focus touring the world (a line, a loop
-//! or a lawnmower; `CHISEL_BENCH_TOUR`) at 50 m/s while blasting craters,
-//! with time to first frame and peak memory.
+//! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`,
+//! `lod_of_a_world`). World: chunks of the `world` example's landscape
+//! built one at a time, their size, the banded base built in one pass
+//! against painting its bands, and an app streaming them around a focus
+//! touring the world (a line, a loop or a lawnmower; `CHISEL_BENCH_TOUR`)
+//! at 50 m/s while blasting craters, with time to first frame and peak
+//! memory. Level of detail: what coarse chunks cost to build, and what the
+//! view to a far radius draws with and without.
 //! Each prints its figures, then
 //! one JSON line of them. `cargo test` runs this binary without `--bench`:
 //! it then measures nothing (see `support`).
@@ -44,7 +46,7 @@ fn main() {
     let Some(args) = Args::parse("terrain") else {
         return;
     };
-    let all: [(&str, fn()); 5] = [
+    let all: [(&str, fn()); 6] = [
         (
             "crater_carves_on_a_large_terrain",
             crater_carves_on_a_large_terrain,
@@ -62,6 +64,7 @@ fn main() {
             crater_latency_to_meshes_and_colliders,
         ),
         ("streaming_a_world", streaming_a_world),
+        ("lod_of_a_world", lod_of_a_world),
     ];
     for (name, measure) in all {
         if args.wants(name) {
@@ -1129,4 +1132,296 @@ fn streaming_a_world() {
     figures.insert("stored_chunks".into(), stats.stored.into());
     figures.insert("stored_bytes".into(), stats.stored_bytes.into());
     json_line("streaming_a_world", serde_json::Value::Object(figures));
+}
+
+/// Bytes of a mesh's vertex and index data.
+fn mesh_bytes(mesh: &Mesh) -> usize {
+    let indices = mesh.indices().map_or(0, |i| i.len() * 4);
+    mesh.count_vertices() * mesh.get_vertex_size() as usize + indices
+}
+
+fn lod_of_a_world() {
+    use bevy::transform::TransformPlugin;
+    use bevy_chisel::terrain::WorldSource;
+    use bevy_chisel::terrain::world::lod_mesh::{edited_pyramid, source_pyramid};
+    use bevy_chisel::terrain::{
+        ChunkCoord, LodMesh, LodSettings, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve,
+        WorldLod,
+    };
+
+    let far: f32 = env_or("CHISEL_BENCH_FAR", 320.0);
+    let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
+    let mut figures = serde_json::Map::new();
+
+    // Building coarse chunks, one thread: every level of an unedited
+    // chunk from the source, and of a chunk with a crater from its octree.
+    let world = world_of_the_example(true);
+    let layout = world.layout().clone();
+    let noise = example_noise();
+    let (mut source_times, mut edited_times) = (Vec::new(), Vec::new());
+    let levels = usize::from(layout.chunk_log2 - layout.spacing_log2);
+    let mut errors = vec![0.0f64; levels];
+    let mut level_triangles = vec![0usize; levels];
+    let mut edited_triangles = vec![0usize; levels];
+    let mut edited_errors = vec![0.0f32; levels];
+    let side = (chunks as f64).sqrt().ceil() as i64;
+    for k in 0..chunks {
+        let coord = ChunkCoord {
+            x: k % side,
+            z: k / side,
+        };
+        let start = Instant::now();
+        let pyramid = source_pyramid(&layout, &noise, coord).expect("builds");
+        source_times.push(start.elapsed());
+        for (l, level) in pyramid.levels.iter().enumerate() {
+            errors[l] += f64::from(level.error) / chunks as f64;
+            level_triangles[l] += level.triangles;
+        }
+        let mut terrain = world.generate_chunk(coord).expect("builds");
+        let (cx, cz) = (coord.x as f32 * 20.48 + 10.0, coord.z as f32 * 20.48 + 10.0);
+        let ground = noise.height((cx / 1.28).round() as i64, (cz / 1.28).round() as i64) as f32;
+        let tool = CarveTool::dodecahedron(1.6, Vec3::new(cx, ground * 0.01, cz))
+            .to_grid(&layout.quantization)
+            .expect("on the grid");
+        terrain.apply_now(&tool, Edit::Subtract).expect("carves");
+        let start = Instant::now();
+        let pyramid = edited_pyramid(
+            &layout,
+            &noise,
+            coord,
+            terrain.octree(),
+            terrain.state_hash(),
+        )
+        .expect("builds");
+        edited_times.push(start.elapsed());
+        for (l, level) in pyramid.levels.iter().enumerate() {
+            edited_triangles[l] += level.triangles;
+            edited_errors[l] = level.error;
+        }
+    }
+    source_times.sort_unstable();
+    edited_times.sort_unstable();
+    let n = chunks as usize;
+    println!(
+        "coarse chunk build, one thread, {chunks} chunks, all {levels} levels: from the source \
+         median {:.3} ms; with a crater, from its octree, median {:.1} ms",
+        percentile(&source_times, 0.5),
+        percentile(&edited_times, 0.5),
+    );
+    for l in 0..levels {
+        println!(
+            "level {}: unedited {} triangles (skirts included), mean error {:.3} m; edited {} \
+             triangles, error bound {:.3} m",
+            l + 1,
+            level_triangles[l] / n,
+            errors[l],
+            edited_triangles[l] / n,
+            edited_errors[l]
+        );
+    }
+    figures.insert(
+        "coarse_build_median_ms_source".into(),
+        percentile(&source_times, 0.5).into(),
+    );
+    figures.insert(
+        "coarse_build_median_ms_edited".into(),
+        percentile(&edited_times, 0.5).into(),
+    );
+    figures.insert(
+        "level_triangles_unedited".into(),
+        level_triangles
+            .iter()
+            .map(|t| t / n)
+            .collect::<Vec<_>>()
+            .into(),
+    );
+    figures.insert("level_mean_error_m".into(), errors.clone().into());
+
+    // The view: an app streaming the banded world (load 30 m, unload 45 m)
+    // around a focus flying at 50 m/s for 300 frames with a crater every
+    // 6 m, then settled; without and with coarse chunks out to `far`.
+    for with_lod in [false, true] {
+        let world = world_of_the_example(true)
+            .with_streaming(StreamSettings {
+                load_radius: 30.0,
+                unload_radius: 45.0,
+                max_building: 4,
+            })
+            .expect("valid settings");
+        let mut app = App::new();
+        app.add_plugins((
+            MinimalPlugins,
+            TransformPlugin,
+            AssetPlugin::default(),
+            TerrainPlugin,
+        ))
+        .init_asset::<Mesh>()
+        .init_asset::<StandardMaterial>();
+        let world = if with_lod {
+            let lod = WorldLod::new(LodSettings {
+                far_radius: far,
+                ..LodSettings::default()
+            })
+            .expect("valid settings");
+            app.world_mut().spawn((world, lod)).id()
+        } else {
+            app.world_mut().spawn(world).id()
+        };
+        let focus = app
+            .world_mut()
+            .spawn((TerrainFocus, Transform::from_xyz(0.0, 20.0, 10.0)))
+            .id();
+        let settled = |app: &App| {
+            let w = app.world().get::<TerrainWorld>(world).expect("world");
+            w.is_settled()
+                && w.live_chunks().count() > 0
+                && w.live_chunks()
+                    .all(|(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle))
+                && app
+                    .world()
+                    .get::<WorldLod>(world)
+                    .is_none_or(WorldLod::is_settled)
+        };
+        let start = Instant::now();
+        while !settled(&app) && start.elapsed() < Duration::from_secs(600) {
+            app.update();
+        }
+        let first = start.elapsed();
+        let frame = Duration::from_secs_f64(1.0 / 60.0);
+        let mut frame_times = Vec::new();
+        let mut next_crater = 0.0;
+        let start = Instant::now();
+        for k in 0..300 {
+            let due = start + frame * k as u32;
+            if let Some(wait) = due.checked_duration_since(Instant::now()) {
+                std::thread::sleep(wait);
+            }
+            let x = 50.0 * k as f32 / 60.0;
+            app.world_mut()
+                .get_mut::<Transform>(focus)
+                .expect("focus")
+                .translation
+                .x = x;
+            if x >= next_crater {
+                next_crater = x + 6.0;
+                let ground = noise.height(((x + 14.0) / 1.28).round() as i64, 8) as f32 * 0.01;
+                app.world_mut().write_message(WorldCarve {
+                    world,
+                    tool: CarveTool::dodecahedron(1.6, Vec3::new(x + 14.0, ground, 10.24)),
+                    edit: Edit::Subtract,
+                });
+            }
+            let t = Instant::now();
+            app.update();
+            frame_times.push(t.elapsed());
+        }
+        let start = Instant::now();
+        while !settled(&app) && start.elapsed() < Duration::from_secs(600) {
+            app.update();
+        }
+        frame_times.sort_unstable();
+        // What is drawn: the live chunks' cells and the coarse chunks.
+        let live: Vec<Entity> = app
+            .world()
+            .get::<TerrainWorld>(world)
+            .expect("world")
+            .live_chunks()
+            .map(|(_, e)| e)
+            .collect();
+        let mut full_handles = Vec::new();
+        for &e in &live {
+            let terrain = app.world().get::<Terrain>(e).expect("terrain");
+            for (_, cells) in terrain.cells() {
+                for cell in cells {
+                    if let Some(mesh) = app.world().get::<Mesh3d>(cell) {
+                        full_handles.push(mesh.0.clone());
+                    }
+                }
+            }
+        }
+        let mut query = app.world_mut().query::<(&LodMesh, &Mesh3d)>();
+        let coarse_handles: Vec<Handle<Mesh>> =
+            query.iter(app.world()).map(|(_, m)| m.0.clone()).collect();
+        let meshes = app.world().resource::<Assets<Mesh>>();
+        let count = |handles: &[Handle<Mesh>]| {
+            handles.iter().fold((0usize, 0usize), |(t, b), h| {
+                let mesh = meshes.get(h).expect("mesh");
+                (
+                    t + mesh.indices().map_or(0, |i| i.len() / 3),
+                    b + mesh_bytes(mesh),
+                )
+            })
+        };
+        let (full_tris, full_bytes) = count(&full_handles);
+        let (coarse_tris, coarse_bytes) = count(&coarse_handles);
+        let lod = app
+            .world()
+            .get::<WorldLod>(world)
+            .map(|l| l.stats().clone());
+        let tag = if with_lod { "with_lod" } else { "without_lod" };
+        println!(
+            "{tag}: first fill {:.0} ms; flying 250 m: main-thread update median {:.2} ms, p99 \
+             {:.2} ms; then {} full chunks, {full_tris} triangles, {:.1} MB of mesh data; coarse \
+             {} chunks {:?}, {coarse_tris} triangles, {:.2} MB",
+            first.as_secs_f64() * 1e3,
+            percentile(&frame_times, 0.5),
+            percentile(&frame_times, 0.99),
+            live.len(),
+            full_bytes as f64 / 1e6,
+            lod.as_ref()
+                .map_or(0, |l| l.drawn_per_level.iter().sum::<usize>()),
+            lod.as_ref().map(|l| l.drawn_per_level.clone()),
+            coarse_bytes as f64 / 1e6,
+        );
+        if with_lod {
+            // Full detail out to the far radius instead: every chunk
+            // within it at the mean of the live chunks measured here.
+            let chunk = 20.48f64;
+            let mut within = 0usize;
+            let span = (f64::from(far) / chunk).ceil() as i64 + 1;
+            let fx = 250.0f64;
+            let (cx0, cz0) = ((fx / chunk).floor() as i64, (10.0 / chunk).floor() as i64);
+            for x in cx0 - span..=cx0 + span {
+                for z in cz0 - span..=cz0 + span {
+                    let gap = |p: f64, c: i64| {
+                        let (lo, hi) = (c as f64 * chunk, (c + 1) as f64 * chunk);
+                        (lo - p).max(p - hi).max(0.0)
+                    };
+                    if gap(fx, x).hypot(gap(10.0, z)) <= f64::from(far) {
+                        within += 1;
+                    }
+                }
+            }
+            let per = |v: usize| v as f64 / live.len().max(1) as f64;
+            println!(
+                "full detail out to {far} m instead: {within} chunks, about {:.0} triangles and \
+                 {:.0} MB of mesh data (at {:.0} triangles, {:.2} MB per live chunk)",
+                per(full_tris) * within as f64,
+                per(full_bytes) * within as f64 / 1e6,
+                per(full_tris),
+                per(full_bytes) / 1e6
+            );
+            figures.insert("full_to_far_chunks".into(), within.into());
+            figures.insert(
+                "full_to_far_triangles".into(),
+                (per(full_tris) * within as f64).into(),
+            );
+        }
+        figures.insert(format!("{tag}_full_triangles"), full_tris.into());
+        figures.insert(format!("{tag}_coarse_triangles"), coarse_tris.into());
+        figures.insert(format!("{tag}_full_bytes"), full_bytes.into());
+        figures.insert(format!("{tag}_coarse_bytes"), coarse_bytes.into());
+        figures.insert(
+            format!("{tag}_frame_median_ms"),
+            percentile(&frame_times, 0.5).into(),
+        );
+        figures.insert(
+            format!("{tag}_frame_p99_ms"),
+            percentile(&frame_times, 0.99).into(),
+        );
+    }
+    json_line(
+        "terrain::lod_of_a_world",
+        serde_json::Value::Object(figures),
+    );
 }

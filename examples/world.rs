@@ -2,6 +2,8 @@
 //! blasting a crater every few metres; terrain chunks stream in ahead of
 //! it (built on the async compute pool, nearest first) and out behind it,
 //! and the chunks it carved are kept and come back exactly as left.
+//! Beyond the full-detail chunks, coarse chunks reach to the horizon, each
+//! at the coarsest level whose error stays under 2 pixels.
 //!
 //! The landscape is integer value noise on a 1 cm grid (exact and the
 //! same on every machine); the chunks are 20.48 m cubes, each an ordinary
@@ -20,9 +22,10 @@ use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
-    NoiseOctave, StreamSettings, Terrain, TerrainFocus, TerrainMaterials, TerrainPlugin,
-    TerrainSurface, TerrainSystems, TerrainWorld, TriplanarMaterial, TriplanarMaterialPlugin,
-    ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldSource, surface_table,
+    LodSettings, NoiseOctave, StreamSettings, Terrain, TerrainFocus, TerrainMaterials,
+    TerrainPlugin, TerrainSurface, TerrainSystems, TerrainWorld, TriplanarMaterial,
+    TriplanarMaterialPlugin, ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldLod,
+    WorldSource, surface_table,
 };
 use bevy_chisel::viewer::{Overlay, blast, overlay_text};
 
@@ -41,6 +44,8 @@ const ALTITUDE: f32 = 14.0;
 /// A crater every this many metres flown.
 const CRATER_EVERY: f32 = 6.0;
 const CRATER_RADIUS: f32 = 1.6;
+/// Craters are blasted this far ahead of the camera (m), in its view.
+const CRATER_AHEAD: f32 = 18.0;
 /// Headless: the camera moves this far per counted frame.
 const HEADLESS_STEP: f32 = 1.0;
 /// Headless: the counted frames captured (the HUD's figures are logged
@@ -48,6 +53,11 @@ const HEADLESS_STEP: f32 = 1.0;
 /// that a run builds about a dozen chunks instead of thirty.
 const HEADLESS_CAPTURES: [u32; 2] = [2, 12];
 const HEADLESS_RADII: (f32, f32) = (16.0, 24.0);
+/// How far coarse chunks reach (m), in a window and headless (a ring of
+/// them past the full-detail chunks: on a software renderer each frame
+/// with coarse terrain to the horizon takes seconds).
+const FAR_RADIUS: f32 = 320.0;
+const HEADLESS_FAR_RADIUS: f32 = 30.0;
 
 fn main() -> AppExit {
     let presentation = match Presentation::detect("world") {
@@ -125,7 +135,7 @@ fn spawn_scene(
         ],
         TerrainSurface::Rock,
     );
-    commands.insert_resource(Palette(table));
+    commands.insert_resource(Palette(table.clone()));
     let layout = WorldLayout {
         quantization: Quantization::new(UNIT, [0.0; 3])?,
         chunk_log2: CHUNK_LOG2,
@@ -145,7 +155,16 @@ fn spawn_scene(
         unload_radius,
         max_building: 4,
     })?;
-    commands.spawn((world, Name::new("world")));
+    let lod = WorldLod::new(LodSettings {
+        far_radius: if flight.headless {
+            HEADLESS_FAR_RADIUS
+        } else {
+            FAR_RADIUS
+        },
+        ..default()
+    })?;
+    // The coarse chunks take the world entity's material table.
+    commands.spawn((world, lod, table, Name::new("world")));
     commands.spawn((
         DirectionalLight {
             illuminance: 11_000.0,
@@ -169,12 +188,11 @@ fn spawn_scene(
 }
 
 /// The camera `distance` metres along its path (+x), looking ahead and
-/// down.
+/// down, the horizon in view.
 fn camera_at(distance: f32) -> Transform {
     let (x, z) = (distance, 10.0);
     let eye = Vec3::new(x, ground(x, z) + ALTITUDE, z);
-    Transform::from_translation(eye)
-        .looking_at(Vec3::new(x + 18.0, ground(x + 18.0, z), z), Vec3::Y)
+    Transform::from_translation(eye).looking_at(Vec3::new(x + 40.0, ground(x, z), z + 4.0), Vec3::Y)
 }
 
 /// The chunks' look: the world's material table on every chunk.
@@ -202,16 +220,17 @@ fn fly(
     time: Res<Time>,
     mut flight: ResMut<Flight>,
     mut hold: Option<ResMut<HoldCaptures>>,
-    worlds: Query<(Entity, &TerrainWorld)>,
+    worlds: Query<(Entity, &TerrainWorld, &WorldLod)>,
     terrains: Query<&Terrain>,
     mut camera: Query<&mut Transform, With<TerrainFocus>>,
     mut carves: MessageWriter<WorldCarve>,
 ) {
-    let Ok((world_entity, world)) = worlds.single() else {
+    let Ok((world_entity, world, lod)) = worlds.single() else {
         return;
     };
     let step = if flight.headless {
         let settled = world.is_settled()
+            && lod.is_settled()
             && world.live_chunks().count() > 0
             && world
                 .live_chunks()
@@ -220,11 +239,17 @@ fn fly(
             hold.0 = !settled;
         }
         if !settled {
+            debug!(
+                "waiting: world settled {}, coarse {:?}, {} live",
+                world.is_settled(),
+                lod.stats(),
+                world.live_chunks().count()
+            );
             return;
         }
         flight.counted += 1;
         if flight.counted == HEADLESS_CAPTURES[1] {
-            report(world);
+            report(world, lod);
         }
         HEADLESS_STEP
     } else {
@@ -237,7 +262,7 @@ fn fly(
     if flight.distance >= flight.next_crater {
         flight.next_crater = flight.distance + CRATER_EVERY;
         let (x, z) = (
-            flight.distance + 14.0,
+            flight.distance + CRATER_AHEAD,
             10.0 + 3.0 * (flight.craters % 3) as f32 - 3.0,
         );
         carves.write(WorldCarve {
@@ -249,7 +274,19 @@ fn fly(
     }
 }
 
-fn report(world: &TerrainWorld) {
+fn report(world: &TerrainWorld, lod: &WorldLod) {
+    let l = lod.stats();
+    info!(
+        "coarse chunks: {} drawn (per level {:?}), {} triangles, {} kB of mesh data; {} built \
+         ({} edited), {:.2} ms each on the pool",
+        l.drawn_per_level.iter().sum::<usize>(),
+        l.drawn_per_level,
+        l.triangles,
+        l.mesh_bytes / 1024,
+        l.built_from_source + l.built_edited,
+        l.built_edited,
+        l.build_time.as_secs_f64() * 1e3 / (l.built_from_source + l.built_edited).max(1) as f64,
+    );
     let s = world.stats();
     let built = s.generated + s.restored;
     info!(
@@ -268,13 +305,14 @@ fn report(world: &TerrainWorld) {
 
 fn update_hud(
     flight: Res<Flight>,
-    worlds: Query<&TerrainWorld>,
+    worlds: Query<(&TerrainWorld, &WorldLod)>,
     terrains: Query<&Terrain>,
     mut hud: Query<&mut Text, With<Overlay>>,
 ) {
-    let Ok(world) = worlds.single() else {
+    let Ok((world, lod)) = worlds.single() else {
         return;
     };
+    let l = lod.stats();
     let s = world.stats();
     let built = (s.generated + s.restored).max(1);
     let triangles: usize = world
@@ -298,6 +336,12 @@ fn update_hud(
             s.generated + s.restored,
             s.restored,
             ms(s.build_time) / built as f64
+        ),
+        format!(
+            "coarse: {} chunks drawn, per level {:?} | {} triangles",
+            l.drawn_per_level.iter().sum::<usize>(),
+            l.drawn_per_level,
+            l.triangles
         ),
     ];
     for mut text in &mut hud {

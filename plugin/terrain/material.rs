@@ -55,6 +55,7 @@ use chisel_bsp::tree::Label;
 use super::TerrainSystems;
 use super::component::{Terrain, TerrainCell};
 use super::debris::DebrisPart;
+use super::world::LodMesh;
 
 /// Materials of a terrain's labels: put it on the terrain entity. Carves
 /// that add or paint a label without an entry are refused
@@ -193,6 +194,7 @@ pub fn assign_materials<M: Material>(
     new_cells: Query<(Entity, &TerrainCell), Added<TerrainCell>>,
     all_cells: Query<(Entity, &TerrainCell)>,
     new_debris: Query<(Entity, &DebrisPart), Added<DebrisPart>>,
+    new_coarse: Query<(Entity, &LodMesh), Added<LodMesh>>,
     mut commands: Commands,
 ) {
     for (entity, part) in &new_debris {
@@ -200,6 +202,14 @@ pub fn assign_materials<M: Material>(
             commands
                 .entity(entity)
                 .try_insert(MeshMaterial3d(table.get(part.label)));
+        }
+    }
+    // Coarse chunks take the world entity's table.
+    for (entity, coarse) in &new_coarse {
+        if let Ok(table) = tables.get(coarse.world) {
+            commands
+                .entity(entity)
+                .try_insert(MeshMaterial3d(table.get(coarse.label)));
         }
     }
     let mut give = |entity: Entity, cell: &TerrainCell, table: &TerrainMaterials<M>| {
@@ -229,9 +239,17 @@ pub fn assign_materials<M: Material>(
 pub(crate) fn default_materials(
     new_cells: Query<(Entity, &TerrainCell), Added<TerrainCell>>,
     new_debris: Query<(Entity, &DebrisPart), Added<DebrisPart>>,
+    new_coarse: Query<(Entity, &LodMesh), Added<LodMesh>>,
     tables: Query<(), With<HasTerrainMaterials>>,
     mut commands: Commands,
 ) {
+    for (entity, coarse) in &new_coarse {
+        if !tables.contains(coarse.world) {
+            commands
+                .entity(entity)
+                .try_insert(MeshMaterial3d::<StandardMaterial>::default());
+        }
+    }
     for (entity, part) in &new_debris {
         if !tables.contains(part.terrain) {
             commands

@@ -159,8 +159,9 @@ pub use tool::{
     MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
 };
 pub use world::{
-    ChunkCoord, HeightArray, NoiseOctave, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise,
-    WorldCarve, WorldChunk, WorldLayout, WorldSource, WorldStats,
+    ChunkCoord, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave, StreamSettings,
+    TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldLod,
+    WorldSource, WorldStats,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
@@ -259,6 +260,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<DebrisDetached>()
         .register_type::<TerrainFocus>()
         .register_type::<WorldChunk>()
+        .register_type::<LodMesh>()
         .register_type::<WorldCarve>()
         .register_type::<CarveTool>()
         .register_type::<Heightfield>()
@@ -292,6 +294,14 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
     if schedule == Update.intern() {
         app.configure_sets(Update, TerrainSystems::Material.after(TerrainSystems::Mesh));
     }
+    // Coarse chunks are drawing, not simulation: every frame, after the
+    // frame's cells are shown and before materials are given.
+    app.add_systems(
+        Update,
+        world::lod::update_lod
+            .after(TerrainSystems::Mesh)
+            .before(TerrainSystems::Material),
+    );
     #[cfg(feature = "render")]
     app.add_systems(
         Update,

@@ -80,6 +80,7 @@ mod terrain_seams_render;
 mod terrain_world;
 #[cfg(feature = "terrain")]
 mod terrain_world_seams;
+mod terrain_world_lod;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]

@@ -74,9 +74,27 @@
 //!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
 //!   in place, anchored by the border; nothing is wrongly detached.
 //!
-//! Level of detail and seams between levels are not part of this module
-//! yet.
+//! ## Level of detail
+//!
+//! A [`WorldLod`] beside the world ([`lod`], meshes in [`lod_mesh`])
+//! draws the chunks beyond the full-detail ones, out to
+//! [`LodSettings::far_radius`], from coarse meshes built on the async
+//! compute pool, no BSP and no collider: an unedited chunk as the source
+//! sampled at every `2^k`-th lattice sample (its error `e_k` the exact
+//! largest vertical distance to the full surface), an edited chunk as its
+//! exact surface simplified by vertex clustering on cubes of edge
+//! `s·2^(k−1)` (every point within the cube diagonal of the exact
+//! surface, so an edit shows at every level within that bound). Each
+//! chunk is drawn at the coarsest level whose error, projected from the
+//! nearest focus's distance with the focus camera's field of view and
+//! viewport height, stays within [`LodSettings::pixel_tolerance`], with
+//! hysteresis. An edited chunk's coarse border stays exact, and every
+//! coarse mesh hangs skirts along its sides, deeper than any two levels'
+//! borders there can be apart (full-detail chunks have walls there), so no
+//! crack opens between chunks of different levels, full detail included.
 
+pub mod lod;
+pub mod lod_mesh;
 pub mod seams;
 pub mod source;
 pub mod store;
@@ -95,6 +113,8 @@ use super::component::Terrain;
 use super::error::TerrainError;
 use super::tool::{CarveTool, GridTool};
 
+pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
+pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 
 /// A chunk's position in its world's grid of chunks (x and z).

@@ -228,7 +228,7 @@ pub fn stream_chunks(
 }
 
 /// Horizontal distance from `f` (grid units) to chunk `coord`'s square.
-fn square_distance(f: [f64; 2], coord: ChunkCoord, edge: i64) -> f64 {
+pub(super) fn square_distance(f: [f64; 2], coord: ChunkCoord, edge: i64) -> f64 {
     let gap = |p: f64, c: i64| {
         let (lo, hi) = ((c * edge) as f64, ((c + 1) * edge) as f64);
         (lo - p).max(p - hi).max(0.0)
