@@ -56,7 +56,7 @@ pub mod separable;
 mod subdivide;
 pub mod warp;
 
-use glam::{DVec2, DVec3};
+use glam::{DVec2, DVec3, Vec2};
 use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
@@ -147,31 +147,44 @@ impl SampleOptions {
     }
 }
 
-/// One surface sample.
+/// One surface sample (80 bytes: the output of a sampling run is written
+/// once, so its size is the run's page faults).
+///
+/// The literal, product and quadric it lies on are those of its patch
+/// ([`SampleSet::patch_of`]). The covering bounds [`radius`](Self::radius)
+/// and [`cell`](Self::cell) are stored as `f32` rounded up (away from
+/// zero), so every bound derived from them stays conservative.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
     /// The point on the quadric and on the CSG surface.
     pub position: DVec3,
     /// The solid's outward unit normal there (zero at a singular point).
     pub normal: DVec3,
-    /// Index into [`Dnf::quadrics`].
-    pub quadric: u32,
-    /// The product `a` of the literal `L_ab` it was sampled for.
-    pub product: u32,
-    /// The literal `b` within that product.
-    pub literal: u32,
-    /// Index into [`SampleSet::patches`]: the heightfield it came from.
-    pub patch: u32,
-    /// Its plane coordinates on that heightfield.
+    /// Its plane coordinates on its patch.
     pub uv: DVec2,
-    /// The radius it must cover, `≤ r` (reduced where regions are small, §6.1).
-    pub radius: f64,
+    /// Index into [`SampleSet::patches`]: the heightfield of the literal
+    /// it was sampled for.
+    pub patch: u32,
+    /// The radius it must cover, `≤ r` rounded up to `f32` (reduced where
+    /// regions are small, §6.1).
+    pub radius: f32,
     /// Half size of the box around [`uv`](Self::uv) (plane coordinates of
     /// its patch) that holds the plane points of every surface point the
-    /// sample is there to cover (its fill cell, or its region): the
-    /// renderer bounds its splat by the surface over that box. `+∞` where
-    /// only [`radius`](Self::radius) bounds them.
-    pub cell: DVec2,
+    /// sample is there to cover (its fill cell, or its region), rounded up
+    /// to `f32`: the renderer bounds its splat by the surface over that
+    /// box. `+∞` where only [`radius`](Self::radius) bounds them.
+    pub cell: Vec2,
+}
+
+/// `x` as the nearest `f32` at least `x` (`+∞` beyond the `f32` range,
+/// NaN for NaN): a stored bound that is never smaller than the computed one.
+#[must_use]
+#[inline]
+pub fn f32_at_least(x: f64) -> f32 {
+    // The rounding is the point; it is corrected upward below.
+    #[allow(clippy::cast_possible_truncation)]
+    let y = x as f32;
+    if f64::from(y) < x { y.next_up() } else { y }
 }
 
 /// A heightfield of one literal, as referenced by [`Sample::patch`].
@@ -287,6 +300,19 @@ pub struct SampleSet {
     pub stats: SamplingStats,
     /// The options used.
     pub options: SampleOptions,
+}
+
+impl SampleSet {
+    /// The patch of sample `s` (its literal, product, quadric and
+    /// heightfield).
+    ///
+    /// # Panics
+    /// If `s` is not a sample of this set (its patch index out of range).
+    #[must_use]
+    #[inline]
+    pub fn patch_of(&self, s: &Sample) -> &Patch {
+        &self.patches[s.patch as usize]
+    }
 }
 
 /// Samples the surface of `dnf` inside `options.bounds` with radius
@@ -498,9 +524,6 @@ impl<'a> SamplingRun<'a> {
         let region_job = RegionJob {
             distance: &self.distance,
             quadric,
-            quadric_index: patch.quadric,
-            product: patch.product,
-            literal: patch.literal,
             patch: job.patch,
             outward_sign: match literal.side {
                 Side::Inside => 1.0,
