@@ -328,16 +328,25 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
     // Each fold accumulator takes the samples of a contiguous run of jobs
     // in job order, and the accumulators are collected in order, so their
     // concatenation is the sequential order for any thread count; one
-    // thread gives one accumulator, which becomes the result without a
-    // copy.
-    let results: Vec<Vec<Sample>> = run
-        .jobs
-        .par_iter()
-        .fold(Vec::new, |mut out: Vec<Sample>, job| {
+    // pool of one thread runs the jobs in order into one buffer, which
+    // becomes the result without a copy (rayon would still split the jobs
+    // in two accumulators, and the second would be copied: a third of a
+    // single-quadric run's page faults).
+    let results: Vec<Vec<Sample>> = if rayon::current_num_threads() == 1 {
+        let mut out = Vec::new();
+        for job in &run.jobs {
             run.run(job, &|_, _, _| true, &mut out);
-            out
-        })
-        .collect();
+        }
+        vec![out]
+    } else {
+        run.jobs
+            .par_iter()
+            .fold(Vec::new, |mut out: Vec<Sample>, job| {
+                run.run(job, &|_, _, _| true, &mut out);
+                out
+            })
+            .collect()
+    };
     let total: usize = results.iter().map(Vec::len).sum();
     let runs = run.finish(Vec::new());
     runs.check_limits(options, total)?;
