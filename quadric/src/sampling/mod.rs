@@ -184,7 +184,15 @@ pub fn f32_at_least(x: f64) -> f32 {
     // The rounding is the point; it is corrected upward below.
     #[allow(clippy::cast_possible_truncation)]
     let y = x as f32;
-    if f64::from(y) < x { y.next_up() } else { y }
+    if f64::from(y) >= x || x.is_nan() {
+        y
+    } else if y >= 0.0 {
+        // The next `f32` up of a non-negative finite one (`f32::MAX`
+        // steps to `+∞`): one more in its bits.
+        f32::from_bits(y.to_bits() + 1)
+    } else {
+        y.next_up()
+    }
 }
 
 /// A heightfield of one literal, as referenced by [`Sample::patch`].
@@ -583,4 +591,35 @@ impl<'a> SamplingRun<'a> {
 /// Indices into normal forms fit in `u32` (the product limit is far lower).
 fn index_u32(i: usize) -> u32 {
     u32::try_from(i).unwrap_or(u32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f32_at_least;
+
+    /// The least `f32` at or above `x`: never below it, and its
+    /// predecessor is.
+    #[test]
+    fn f32_at_least_is_the_nearest_f32_not_below() {
+        for x in [
+            0.1,
+            1.0 / 3.0,
+            2.5,
+            1e-40,
+            1e-300,
+            123_456_789.123,
+            f64::from(f32::MAX),
+            -0.1,
+            -1e-300,
+        ] {
+            let y = f32_at_least(x);
+            assert!(f64::from(y) >= x, "{x}: {y}");
+            assert!(f64::from(y.next_down()) < x, "{x}: {y}");
+        }
+        assert_eq!(f32_at_least(0.0), 0.0);
+        assert_eq!(f32_at_least(0.25), 0.25);
+        assert_eq!(f32_at_least(f64::from(f32::MAX) * 1.0001), f32::INFINITY);
+        assert_eq!(f32_at_least(f64::INFINITY), f32::INFINITY);
+        assert!(f32_at_least(f64::NAN).is_nan());
+    }
 }
