@@ -596,7 +596,7 @@ fn sphere_boxes(scene: &Scene, bounds: PropBounds, radius: f32, splats: &PropSpl
         if n.length_squared() < 0.25 {
             continue;
         }
-        let r = s.radius;
+        let r = f64::from(s.radius);
         let hf = &samples.patches[s.patch as usize].heightfield;
         let (low, high) = hf.distortion_bounds(s.uv - DVec2::splat(r), s.uv + DVec2::splat(r));
         let extent = r * (high - low);

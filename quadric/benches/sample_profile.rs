@@ -96,7 +96,11 @@ fn main() {
     );
     println!("{:?}", set.stats);
     // The splats' squares, the fragment count's CPU-side proxy.
-    let squares: f64 = set.samples.iter().map(|s| 4.0 * s.radius * s.radius).sum();
+    let squares: f64 = set
+        .samples
+        .iter()
+        .map(|s| 4.0 * f64::from(s.radius) * f64::from(s.radius))
+        .sum();
     println!("splat squares sum (2r)^2 = {squares:.1}");
     // Off by default: the hash would add to a profiler's instruction count.
     if std::env::var_os("SAMPLE_HASH").is_some() {
@@ -104,7 +108,8 @@ fn main() {
     }
 }
 
-/// A hash of every field of every sample, in order (FNV-1a over 64-bit
+/// A hash of every field of every sample, in order (the literal,
+/// product and quadric are those of the patch) (FNV-1a over 64-bit
 /// words): equal hashes mean bit-identical sample sets, in practice.
 /// Printed when the environment variable `SAMPLE_HASH` is set.
 fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
@@ -120,9 +125,9 @@ fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
         }
         eat(s.uv.x.to_bits());
         eat(s.uv.y.to_bits());
-        eat(s.radius.to_bits());
-        for k in [s.quadric, s.product, s.literal, s.patch] {
-            eat(u64::from(k));
+        eat(u64::from(s.patch));
+        for bound in [s.radius, s.cell.x, s.cell.y] {
+            eat(u64::from(bound.to_bits()));
         }
     }
     h

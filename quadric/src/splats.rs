@@ -121,13 +121,15 @@ impl SplatSet {
         let mut splats = Vec::with_capacity(samples.samples.len());
         let mut list = Vec::new();
         for s in &samples.samples {
-            let product = &dnf.products()[s.product as usize];
+            let patch = samples.patch_of(s);
+            let product = &dnf.products()[patch.product as usize];
+            let r = f64::from(s.radius);
             list.clear();
             for (j, l) in product.iter().enumerate() {
-                if j == s.literal as usize {
+                if j == patch.literal as usize {
                     continue;
                 }
-                if distances[l.quadric].distance(s.position).abs() < s.radius {
+                if distances[l.quadric].distance(s.position).abs() < r {
                     list.push(literal_reference(*l));
                 }
             }
@@ -143,9 +145,8 @@ impl SplatSet {
                 lists.insert(list.clone(), start);
                 start
             };
-            let own = product[s.literal as usize];
-            let hf = &samples.patches[s.patch as usize].heightfield;
-            let r = s.radius;
+            let own = product[patch.literal as usize];
+            let hf = &patch.heightfield;
             let (dmin, dmax) = hf.distortion_bounds(s.uv - DVec2::splat(r), s.uv + DVec2::splat(r));
             let cell = cell_box(hf, s).unwrap_or_else(|| {
                 let extent = r * (dmax - dmin);
@@ -285,12 +286,12 @@ const CELL_BOX_MARGIN: f64 = 1e-9;
 /// [`Heightfield::gradient_bounds`]: crate::sampling::heightfield::Heightfield::gradient_bounds
 #[must_use]
 pub fn cell_box(hf: &Heightfield, s: &Sample) -> Option<CellBox> {
-    let r = s.radius;
+    let r = f64::from(s.radius);
     let n = s.normal;
     if n.length_squared().is_nan() || n.length_squared() <= 0.25 || !s.cell.is_finite() {
         return None;
     }
-    let half = s.cell.min(DVec2::splat(r));
+    let half = s.cell.as_dvec2().min(DVec2::splat(r));
     let g = hf.gradient(s.uv)?;
     let mut eps = 0.0;
     for k in 1..=CELL_BOX_STEPS {

@@ -315,17 +315,28 @@ impl Heightfield {
                 ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt())
             }
             HeightKind::Root { .. } => {
-                let (r0, r1) = self.value.range(lo, hi);
+                let (fx, fy) = (&self.value.x, &self.value.y);
+                let corner_form = self.in_affine_cell(lo, hi);
+                // In such a cell neither part has its vertex strictly inside
+                // the box, so the corner values give the exact range, as
+                // `Separable::range` computes it.
+                let vx = [fx.value(lo.x), fx.value(hi.x)];
+                let vy = [fy.value(lo.y), fy.value(hi.y)];
+                let (r0, r1) = if corner_form {
+                    (
+                        vx[0].min(vx[1]) + vy[0].min(vy[1]),
+                        vx[0].max(vx[1]) + vy[0].max(vy[1]),
+                    )
+                } else {
+                    self.value.range(lo, hi)
+                };
                 if r1 <= 0.0 {
                     return (f64::INFINITY, f64::INFINITY);
                 }
-                if r0 > 0.0 && self.warp(lo, hi).is_some() {
+                if r0 > 0.0 && corner_form {
                     // `δ²` at the four corners from the two values and slopes
                     // per axis (as `distortion` computes them), one square
                     // root for each extreme (`√` is monotone).
-                    let (fx, fy) = (&self.value.x, &self.value.y);
-                    let vx = [fx.value(lo.x), fx.value(hi.x)];
-                    let vy = [fy.value(lo.y), fy.value(hi.y)];
                     let sx = [fx.slope(lo.x), fx.slope(hi.x)].map(|s| s * s);
                     let sy = [fy.slope(lo.y), fy.slope(hi.y)].map(|s| s * s);
                     let mut min = f64::INFINITY;
@@ -347,6 +358,21 @@ impl Heightfield {
                 (min, max)
             }
         }
+    }
+
+    /// Whether [`warp`](Self::warp) of the box `[lo, hi]` is `Some` (the
+    /// box in one cell, where the value and both ownership functions are
+    /// affine in `w`), without building the warp.
+    #[inline]
+    fn in_affine_cell(&self, lo: DVec2, hi: DVec2) -> bool {
+        let square = [self.value.x.a != 0.0, self.value.y.a != 0.0];
+        let affine = |q: &Quad1, square: bool| if square { q.b == 0.0 } else { q.a == 0.0 };
+        let one_side = |square: bool, lo: f64, hi: f64| !square || lo >= 0.0 || hi <= 0.0;
+        one_side(square[0], lo.x, hi.x)
+            && one_side(square[1], lo.y, hi.y)
+            && [&self.value, &self.owns_x, &self.owns_y]
+                .iter()
+                .all(|f| affine(&f.x, square[0]) && affine(&f.y, square[1]))
     }
 
     /// Bounds `(min, max)` of the distortion over a set whose image in the

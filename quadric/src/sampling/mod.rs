@@ -56,7 +56,7 @@ pub mod separable;
 mod subdivide;
 pub mod warp;
 
-use glam::{DVec2, DVec3};
+use glam::{DVec2, DVec3, Vec2};
 use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
@@ -147,31 +147,52 @@ impl SampleOptions {
     }
 }
 
-/// One surface sample.
+/// One surface sample (80 bytes: the output of a sampling run is written
+/// once, so its size is the run's page faults).
+///
+/// The literal, product and quadric it lies on are those of its patch
+/// ([`SampleSet::patch_of`]). The covering bounds [`radius`](Self::radius)
+/// and [`cell`](Self::cell) are stored as `f32` rounded up (away from
+/// zero), so every bound derived from them stays conservative.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
     /// The point on the quadric and on the CSG surface.
     pub position: DVec3,
     /// The solid's outward unit normal there (zero at a singular point).
     pub normal: DVec3,
-    /// Index into [`Dnf::quadrics`].
-    pub quadric: u32,
-    /// The product `a` of the literal `L_ab` it was sampled for.
-    pub product: u32,
-    /// The literal `b` within that product.
-    pub literal: u32,
-    /// Index into [`SampleSet::patches`]: the heightfield it came from.
-    pub patch: u32,
-    /// Its plane coordinates on that heightfield.
+    /// Its plane coordinates on its patch.
     pub uv: DVec2,
-    /// The radius it must cover, `≤ r` (reduced where regions are small, §6.1).
-    pub radius: f64,
+    /// Index into [`SampleSet::patches`]: the heightfield of the literal
+    /// it was sampled for.
+    pub patch: u32,
+    /// The radius it must cover, `≤ r` rounded up to `f32` (reduced where
+    /// regions are small, §6.1).
+    pub radius: f32,
     /// Half size of the box around [`uv`](Self::uv) (plane coordinates of
     /// its patch) that holds the plane points of every surface point the
-    /// sample is there to cover (its fill cell, or its region): the
-    /// renderer bounds its splat by the surface over that box. `+∞` where
-    /// only [`radius`](Self::radius) bounds them.
-    pub cell: DVec2,
+    /// sample is there to cover (its fill cell, or its region), rounded up
+    /// to `f32`: the renderer bounds its splat by the surface over that
+    /// box. `+∞` where only [`radius`](Self::radius) bounds them.
+    pub cell: Vec2,
+}
+
+/// `x` as the nearest `f32` at least `x` (`+∞` beyond the `f32` range,
+/// NaN for NaN): a stored bound that is never smaller than the computed one.
+#[must_use]
+#[inline]
+pub fn f32_at_least(x: f64) -> f32 {
+    // The rounding is the point; it is corrected upward below.
+    #[allow(clippy::cast_possible_truncation)]
+    let y = x as f32;
+    if f64::from(y) >= x || x.is_nan() {
+        y
+    } else if y >= 0.0 {
+        // The next `f32` up of a non-negative finite one (`f32::MAX`
+        // steps to `+∞`): one more in its bits.
+        f32::from_bits(y.to_bits() + 1)
+    } else {
+        y.next_up()
+    }
 }
 
 /// A heightfield of one literal, as referenced by [`Sample::patch`].
@@ -289,6 +310,19 @@ pub struct SampleSet {
     pub options: SampleOptions,
 }
 
+impl SampleSet {
+    /// The patch of sample `s` (its literal, product, quadric and
+    /// heightfield).
+    ///
+    /// # Panics
+    /// If `s` is not a sample of this set (its patch index out of range).
+    #[must_use]
+    #[inline]
+    pub fn patch_of(&self, s: &Sample) -> &Patch {
+        &self.patches[s.patch as usize]
+    }
+}
+
 /// Samples the surface of `dnf` inside `options.bounds` with radius
 /// `options.radius`, in parallel on the current rayon pool.
 ///
@@ -302,16 +336,25 @@ pub fn sample(dnf: &Dnf, options: &SampleOptions) -> Result<SampleSet> {
     // Each fold accumulator takes the samples of a contiguous run of jobs
     // in job order, and the accumulators are collected in order, so their
     // concatenation is the sequential order for any thread count; one
-    // thread gives one accumulator, which becomes the result without a
-    // copy.
-    let results: Vec<Vec<Sample>> = run
-        .jobs
-        .par_iter()
-        .fold(Vec::new, |mut out: Vec<Sample>, job| {
+    // pool of one thread runs the jobs in order into one buffer, which
+    // becomes the result without a copy (rayon would still split the jobs
+    // in two accumulators, and the second would be copied: a third of a
+    // single-quadric run's page faults).
+    let results: Vec<Vec<Sample>> = if rayon::current_num_threads() == 1 {
+        let mut out = Vec::new();
+        for job in &run.jobs {
             run.run(job, &|_, _, _| true, &mut out);
-            out
-        })
-        .collect();
+        }
+        vec![out]
+    } else {
+        run.jobs
+            .par_iter()
+            .fold(Vec::new, |mut out: Vec<Sample>, job| {
+                run.run(job, &|_, _, _| true, &mut out);
+                out
+            })
+            .collect()
+    };
     let total: usize = results.iter().map(Vec::len).sum();
     let runs = run.finish(Vec::new());
     runs.check_limits(options, total)?;
@@ -498,9 +541,6 @@ impl<'a> SamplingRun<'a> {
         let region_job = RegionJob {
             distance: &self.distance,
             quadric,
-            quadric_index: patch.quadric,
-            product: patch.product,
-            literal: patch.literal,
             patch: job.patch,
             outward_sign: match literal.side {
                 Side::Inside => 1.0,
@@ -551,4 +591,35 @@ impl<'a> SamplingRun<'a> {
 /// Indices into normal forms fit in `u32` (the product limit is far lower).
 fn index_u32(i: usize) -> u32 {
     u32::try_from(i).unwrap_or(u32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f32_at_least;
+
+    /// The least `f32` at or above `x`: never below it, and its
+    /// predecessor is.
+    #[test]
+    fn f32_at_least_is_the_nearest_f32_not_below() {
+        for x in [
+            0.1,
+            1.0 / 3.0,
+            2.5,
+            1e-40,
+            1e-300,
+            123_456_789.123,
+            f64::from(f32::MAX),
+            -0.1,
+            -1e-300,
+        ] {
+            let y = f32_at_least(x);
+            assert!(f64::from(y) >= x, "{x}: {y}");
+            assert!(f64::from(y.next_down()) < x, "{x}: {y}");
+        }
+        assert_eq!(f32_at_least(0.0), 0.0);
+        assert_eq!(f32_at_least(0.25), 0.25);
+        assert_eq!(f32_at_least(f64::from(f32::MAX) * 1.0001), f32::INFINITY);
+        assert_eq!(f32_at_least(f64::INFINITY), f32::INFINITY);
+        assert!(f32_at_least(f64::NAN).is_nan());
+    }
 }

@@ -50,7 +50,7 @@
 
 use std::cell::{Cell, RefCell};
 
-use glam::{DVec2, DVec3};
+use glam::{DVec2, DVec3, Vec2};
 
 use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
@@ -59,7 +59,9 @@ use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::polygon::Polygon;
 use crate::sampling::regions::Region;
-use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
+use crate::sampling::{
+    BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats, f32_at_least,
+};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
 /// are classified. It must be at least `√3`, the largest distortion inside
@@ -100,9 +102,6 @@ const MAX_FILL_DEPTH: u32 = 2;
 pub(crate) struct RegionJob<'a> {
     pub distance: &'a CsgDistance<'a>,
     pub quadric: &'a Quadric,
-    pub quadric_index: u32,
-    pub product: u32,
-    pub literal: u32,
     pub patch: u32,
     pub outward_sign: f64,
     pub heightfield: &'a Heightfield,
@@ -691,13 +690,10 @@ impl RegionJob<'_> {
         Sample {
             position,
             normal,
-            quadric: self.quadric_index,
-            product: self.product,
-            literal: self.literal,
-            patch: self.patch,
             uv,
-            radius,
-            cell,
+            patch: self.patch,
+            radius: f32_at_least(radius),
+            cell: Vec2::new(f32_at_least(cell.x), f32_at_least(cell.y)),
         }
     }
 }

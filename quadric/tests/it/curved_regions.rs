@@ -51,14 +51,14 @@ fn sampled(text: &str, radius: f64) -> (Dnf, SampleSet) {
 fn check_sound(dnf: &Dnf, set: &SampleSet, what: &str) {
     let bound = set.options.bounds.radius;
     for s in &set.samples {
-        let q = &dnf.quadrics()[s.quadric as usize].quadric;
+        let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
         let g = q.gradient(s.position).length();
         assert!(
             q.value(s.position).abs() <= 1e-12 * g * bound,
             "{what}: sample {} off its quadric",
             s.position
         );
-        assert!(s.radius > 0.0 && s.radius <= set.options.radius);
+        assert!(s.radius > 0.0 && s.radius <= chisel_quadric::f32_at_least(set.options.radius));
         assert!(set.options.bounds.signed_distance(s.position) <= 1e-9 * bound);
         if s.normal != DVec3::ZERO {
             let eps = 1e-7 * bound;

@@ -73,14 +73,14 @@ fn samples_lie_on_the_csg_surface() {
         let (dnf, set) = sampled(name, bound / 25.0);
         let eps = 1e-7 * bound;
         for s in &set.samples {
-            let q = &dnf.quadrics()[s.quadric as usize].quadric;
+            let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
             let g = q.gradient(s.position).length();
             assert!(
                 q.value(s.position).abs() <= 1e-12 * g * bound,
                 "{name}: sample {} off its quadric",
                 s.position
             );
-            assert!(s.radius > 0.0 && s.radius <= set.options.radius);
+            assert!(s.radius > 0.0 && s.radius <= chisel_quadric::f32_at_least(set.options.radius));
             assert!(set.options.bounds.signed_distance(s.position) <= eps);
             // On the CSG surface: inside on one side, outside on the other,
             // unless the normal is degenerate (a cone's apex).

@@ -23,7 +23,7 @@ fn check(dnf: &Dnf, r: f64, what: &str) -> usize {
     let options = SampleOptions::new(r, sphere).unwrap();
     let set = sample(dnf, &options).unwrap();
     for s in &set.samples {
-        let q = &dnf.quadrics()[s.quadric as usize].quadric;
+        let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
         let g = q.gradient(s.position).length();
         assert!(
             q.value(s.position).abs() <= 1e-10 * g.max(1e-3),

@@ -37,7 +37,7 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
             .collect();
         let mut lists = HashSet::new();
         for (splat, s) in splats.splats.iter().zip(&set.samples) {
-            assert_eq!(splat.quadric & INDEX_MASK, s.quadric);
+            assert_eq!(splat.quadric & INDEX_MASK, set.patch_of(s).quadric);
             assert!(splat.normal_extent >= 0.0 && splat.normal_extent <= splat.radius);
             assert!(splat.tangent_extent.max_element() <= splat.radius);
             assert!(splat.tangent_extent.min_element() >= 0.0);
@@ -46,13 +46,13 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
             let start = splat.clip_start as usize;
             let list = &splats.clip_indices[start..start + splat.clip_count as usize];
             assert!(list.windows(2).all(|w| w[0] < w[1]));
-            let product = &dnf.products()[s.product as usize];
+            let product = &dnf.products()[set.patch_of(s).product as usize];
             let expect: Vec<u32> = product
                 .iter()
                 .enumerate()
                 .filter(|(j, l)| {
-                    *j != s.literal as usize
-                        && distances[l.quadric].distance(s.position).abs() < s.radius
+                    *j != set.patch_of(s).literal as usize
+                        && distances[l.quadric].distance(s.position).abs() < f64::from(s.radius)
                 })
                 .map(|(_, l)| {
                     let q = l.quadric as u32;
@@ -78,9 +78,11 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
         assert_eq!(distinct.len(), lists.len(), "{name}");
         // The scaled f32 coefficients keep the sign of every quadric at the splats.
         for (splat, s) in splats.splats.iter().zip(&set.samples).take(200) {
-            let k = splats.quadrics[s.quadric as usize].scaled_coefficients();
+            let k = splats.quadrics[set.patch_of(s).quadric as usize].scaled_coefficients();
             let p = splat.position + splat.normal * radius;
-            let exact = dnf.quadrics()[s.quadric as usize].quadric.value(p);
+            let exact = dnf.quadrics()[set.patch_of(s).quadric as usize]
+                .quadric
+                .value(p);
             let h = p.as_vec3();
             let v = k[0] * h.x * h.x
                 + 2.0 * k[1] * h.x * h.y
@@ -142,7 +144,8 @@ fn every_splat_box_holds_the_surface_over_its_cell() {
         let (mut checked, mut tight) = (0_usize, 0_usize);
         for (splat, s) in splats.splats.iter().zip(&set.samples) {
             let hf = &set.patches[s.patch as usize].heightfield;
-            let half = s.cell.min(glam::DVec2::splat(s.radius));
+            let r = f64::from(s.radius);
+            let half = s.cell.as_dvec2().min(glam::DVec2::splat(r));
             if !half.is_finite() {
                 continue;
             }
@@ -153,7 +156,7 @@ fn every_splat_box_holds_the_surface_over_its_cell() {
                     let Some(p) = hf.point(s.uv + half * f) else {
                         continue;
                     };
-                    if p.distance(s.position) > s.radius {
+                    if p.distance(s.position) > r {
                         continue;
                     }
                     checked += 1;

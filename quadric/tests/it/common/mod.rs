@@ -149,9 +149,9 @@ impl SampleGrid {
         for s in &set.samples {
             let key = grid.key(s.position);
             grid.buckets
-                .entry((s.quadric, key))
+                .entry((set.patch_of(s).quadric, key))
                 .or_default()
-                .push((s.position, s.radius));
+                .push((s.position, f64::from(s.radius)));
         }
         grid
     }
