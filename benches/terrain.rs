@@ -39,6 +39,8 @@ use serde_json::json;
 
 mod support;
 use support::{Args, env_or, json_line, percentile};
+#[path = "support/frame_steps.rs"]
+mod frame_steps;
 
 fn main() {
     let Some(args) = Args::parse("terrain") else {
@@ -996,6 +998,8 @@ fn streaming_a_world() {
         0 => (tour.length() / speed * 60.0).ceil() as usize,
         n => n,
     };
+    // The plugin's steps timed per frame (spans); see `frame_steps`.
+    let timed = frame_steps::install();
     let app_start = Instant::now();
     let world = world_of_the_example(true)
         .with_streaming(StreamSettings {
@@ -1043,6 +1047,7 @@ fn streaming_a_world() {
     );
     let noise = example_noise();
     let mut frame_times = Vec::with_capacity(frames);
+    let mut records = Vec::with_capacity(frames);
     let frame = Duration::from_secs_f64(1.0 / 60.0);
     let built_before = {
         let s = app
@@ -1080,9 +1085,15 @@ fn streaming_a_world() {
                 edit: Edit::Subtract,
             });
         }
-        let t = Instant::now();
+        frame_steps::take_frame();
+        let mark = frame_steps::Mark::now();
         app.update();
-        frame_times.push(t.elapsed());
+        let update = mark.since();
+        frame_times.push(update.wall);
+        records.push(frame_steps::FrameRecord {
+            update,
+            steps: frame_steps::take_frame(),
+        });
     }
     let flown = start.elapsed();
     let stats = app
@@ -1110,6 +1121,11 @@ fn streaming_a_world() {
         stats.stored,
         stats.stored_bytes
     );
+    if timed {
+        // CHISEL_BENCH_SLOW_SHARE: the share of slowest frames broken down
+        // (default 0.01).
+        frame_steps::report(&records, env_or("CHISEL_BENCH_SLOW_SHARE", 0.01), 12);
+    }
     figures.insert("tour".into(), tour_name.clone().into());
     figures.insert("flown_m".into(), (speed * frames as f32 / 60.0).into());
     figures.insert("craters".into(), craters.into());
