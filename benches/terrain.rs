@@ -1017,6 +1017,16 @@ fn streaming_a_world() {
     ))
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>();
+    // CHISEL_BENCH_EXECUTOR=single: every schedule on the main thread
+    // (Bevy's single-threaded executor) rather than handing systems to the
+    // compute pool's threads.
+    let executor: String = env_or("CHISEL_BENCH_EXECUTOR", "multi".to_string());
+    if executor == "single" {
+        use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
+        for (_, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
+            schedule.set_executor(SingleThreadedExecutor::new());
+        }
+    }
     let world = app.world_mut().spawn(world).id();
     let (x0, z0) = tour.at(0.0);
     let focus = app
@@ -1086,14 +1096,17 @@ fn streaming_a_world() {
             });
         }
         frame_steps::take_frame();
+        let threads_before = frame_steps::threads();
         let mark = frame_steps::Mark::now();
         app.update();
         let update = mark.since();
+        let mut steps = frame_steps::take_frame();
+        steps.extend(frame_steps::thread_steps(
+            &threads_before,
+            &frame_steps::threads(),
+        ));
         frame_times.push(update.wall);
-        records.push(frame_steps::FrameRecord {
-            update,
-            steps: frame_steps::take_frame(),
-        });
+        records.push(frame_steps::FrameRecord { update, steps });
     }
     let flown = start.elapsed();
     let stats = app
@@ -1126,6 +1139,7 @@ fn streaming_a_world() {
         // (default 0.01).
         frame_steps::report(&records, env_or("CHISEL_BENCH_SLOW_SHARE", 0.01), 12);
     }
+    figures.insert("executor".into(), executor.into());
     figures.insert("tour".into(), tour_name.clone().into());
     figures.insert("flown_m".into(), (speed * frames as f32 / 60.0).into());
     figures.insert("craters".into(), craters.into());

@@ -86,6 +86,83 @@ impl Mark {
     }
 }
 
+/// CPU and runqueue wait of each of the process's threads so far, by
+/// thread id, with the thread's group: `main` (the process's first thread),
+/// `compute` (Bevy's compute pool: the frame's systems), `async` (Bevy's
+/// async compute pool: chunk builds), `workers` (the terrain's carve and
+/// mesh threads), `io`, `other`.
+#[must_use]
+pub fn threads() -> BTreeMap<u32, (&'static str, Duration, Duration)> {
+    let mut out = BTreeMap::new();
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return out;
+    };
+    let pid = std::process::id();
+    for entry in dir.flatten() {
+        let Some(tid) = entry
+            .file_name()
+            .to_str()
+            .and_then(|s| s.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let path = entry.path();
+        let comm = std::fs::read_to_string(path.join("comm")).unwrap_or_default();
+        let group = if tid == pid {
+            "main"
+        } else if comm.starts_with("Compute") {
+            "compute"
+        } else if comm.starts_with("Async") {
+            "async"
+        } else if comm.starts_with("chisel-terrain") {
+            "workers"
+        } else if comm.starts_with("IO") {
+            "io"
+        } else {
+            "other"
+        };
+        let stat = std::fs::read_to_string(path.join("schedstat")).unwrap_or_default();
+        let mut it = stat
+            .split_whitespace()
+            .map(|n| n.parse::<u64>().unwrap_or(0));
+        let (cpu, wait) = (it.next().unwrap_or(0), it.next().unwrap_or(0));
+        out.insert(
+            tid,
+            (group, Duration::from_nanos(cpu), Duration::from_nanos(wait)),
+        );
+    }
+    out
+}
+
+/// CPU and wait per thread group between two [`threads`] readings, as
+/// steps named `threads::GROUP`.
+pub fn thread_steps(
+    before: &BTreeMap<u32, (&'static str, Duration, Duration)>,
+    after: &BTreeMap<u32, (&'static str, Duration, Duration)>,
+) -> BTreeMap<&'static str, Times> {
+    let mut out: BTreeMap<&'static str, Times> = BTreeMap::new();
+    for (tid, &(group, cpu, wait)) in after {
+        let (cpu0, wait0) = before
+            .get(tid)
+            .map_or((Duration::ZERO, Duration::ZERO), |b| (b.1, b.2));
+        let name = match group {
+            "main" => "threads::main",
+            "compute" => "threads::compute",
+            "async" => "threads::async",
+            "workers" => "threads::workers",
+            "io" => "threads::io",
+            _ => "threads::other",
+        };
+        out.entry(name).or_default().add(Times {
+            wall: Duration::ZERO,
+            cpu: cpu.saturating_sub(cpu0),
+            wait: wait.saturating_sub(wait0),
+            runs: 1,
+        });
+    }
+    out
+}
+
 /// The steps timed since the last [`take_frame`], by span name.
 static FRAME: Mutex<BTreeMap<&'static str, Times>> = Mutex::new(BTreeMap::new());
 
@@ -123,7 +200,10 @@ pub fn install() -> bool {
 
 /// The steps timed since the last call, by span name.
 pub fn take_frame() -> BTreeMap<&'static str, Times> {
-    FRAME.lock().map(|mut f| std::mem::take(&mut *f)).unwrap_or_default()
+    FRAME
+        .lock()
+        .map(|mut f| std::mem::take(&mut *f))
+        .unwrap_or_default()
 }
 
 /// One frame's record: the whole update on the main thread and its steps.
@@ -181,7 +261,9 @@ pub fn report(frames: &[FrameRecord], share: f64, worst: usize) {
         let steps: Vec<String> = f
             .steps
             .iter()
-            .filter(|(_, t)| t.wall >= Duration::from_micros(500))
+            .filter(|(_, t)| {
+                t.wall >= Duration::from_micros(500) || t.cpu + t.wait >= Duration::from_micros(500)
+            })
             .map(|(name, t)| {
                 format!(
                     "{} {:.1}/{:.1}/{:.1}",
