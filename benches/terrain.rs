@@ -41,6 +41,8 @@ use serde_json::json;
 
 mod support;
 use support::{Args, env_or, json_line, percentile};
+#[path = "support/frame_steps.rs"]
+mod frame_steps;
 
 fn main() {
     let Some(args) = Args::parse("terrain") else {
@@ -999,6 +1001,8 @@ fn streaming_a_world() {
         0 => (tour.length() / speed * 60.0).ceil() as usize,
         n => n,
     };
+    // The plugin's steps timed per frame (spans); see `frame_steps`.
+    let timed = frame_steps::install();
     let app_start = Instant::now();
     let world = world_of_the_example(true)
         .with_streaming(StreamSettings {
@@ -1016,6 +1020,16 @@ fn streaming_a_world() {
     ))
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>();
+    // CHISEL_BENCH_EXECUTOR=single: every schedule on the main thread
+    // (Bevy's single-threaded executor) rather than handing systems to the
+    // compute pool's threads.
+    let executor: String = env_or("CHISEL_BENCH_EXECUTOR", "multi".to_string());
+    if executor == "single" {
+        use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
+        for (_, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
+            schedule.set_executor(SingleThreadedExecutor::new());
+        }
+    }
     let world = app.world_mut().spawn(world).id();
     let (x0, z0) = tour.at(0.0);
     let focus = app
@@ -1046,6 +1060,7 @@ fn streaming_a_world() {
     );
     let noise = example_noise();
     let mut frame_times = Vec::with_capacity(frames);
+    let mut records = Vec::with_capacity(frames);
     let frame = Duration::from_secs_f64(1.0 / 60.0);
     let built_before = {
         let s = app
@@ -1083,9 +1098,18 @@ fn streaming_a_world() {
                 edit: Edit::Subtract,
             });
         }
-        let t = Instant::now();
+        frame_steps::take_frame();
+        let threads_before = frame_steps::threads();
+        let mark = frame_steps::Mark::now();
         app.update();
-        frame_times.push(t.elapsed());
+        let update = mark.since();
+        let mut steps = frame_steps::take_frame();
+        steps.extend(frame_steps::thread_steps(
+            &threads_before,
+            &frame_steps::threads(),
+        ));
+        frame_times.push(update.wall);
+        records.push(frame_steps::FrameRecord { update, steps });
     }
     let flown = start.elapsed();
     let stats = app
@@ -1113,6 +1137,12 @@ fn streaming_a_world() {
         stats.stored,
         stats.stored_bytes
     );
+    if timed {
+        // CHISEL_BENCH_SLOW_SHARE: the share of slowest frames broken down
+        // (default 0.01).
+        frame_steps::report(&records, env_or("CHISEL_BENCH_SLOW_SHARE", 0.01), 12);
+    }
+    figures.insert("executor".into(), executor.into());
     figures.insert("tour".into(), tour_name.clone().into());
     figures.insert("flown_m".into(), (speed * frames as f32 / 60.0).into());
     figures.insert("craters".into(), craters.into());

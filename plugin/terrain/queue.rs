@@ -108,6 +108,7 @@ pub fn start_jobs(
     mut terrains: Query<(Entity, &mut Terrain)>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
+    let _span = bevy::log::info_span!("chisel::queue::start_jobs").entered();
     for (entity, mut terrain) in &mut terrains {
         let pool = workers.pool(settings.worker_threads);
         let terrain = &mut *terrain;

@@ -25,6 +25,7 @@ pub fn finish_jobs(
     mut terrains: Query<(Entity, &mut Terrain)>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
+    let _span = bevy::log::info_span!("chisel::upload::finish_jobs").entered();
     for (entity, mut terrain) in &mut terrains {
         let terrain = &mut *terrain;
         let Some(task) = terrain.runtime.task.as_mut() else {
@@ -141,6 +142,7 @@ pub fn upload_meshes(
     mut applied: MessageWriter<CarveApplied>,
     mut detached: MessageWriter<DebrisDetached>,
 ) {
+    let _span = bevy::log::info_span!("chisel::upload::upload_meshes").entered();
     let start = Instant::now();
     let over_budget = |added: usize| added > 0 && start.elapsed() >= settings.mesh_budget;
     for (entity, mut terrain, placed) in &mut terrains {

@@ -109,6 +109,7 @@ pub fn stitch_chunk_borders(
     mut worlds: Query<&mut TerrainWorld>,
     mut terrains: Query<&mut Terrain>,
 ) {
+    let _span = bevy::log::info_span!("chisel::seams::stitch").entered();
     for mut world in &mut worlds {
         let world = &mut *world;
         let live: BTreeMap<ChunkCoord, Entity> = world.live_chunks().collect();

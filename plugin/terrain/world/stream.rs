@@ -128,7 +128,9 @@ pub fn stream_chunks(
 ) {
     for (world_entity, mut world, world_transform) in &mut worlds {
         let world = &mut *world;
+        let span = bevy::log::info_span!("chisel::stream::collect_builds").entered();
         collect_builds(&mut commands, world_entity, world);
+        drop(span);
         // Chunks that were just sent carves are not idle yet, though their
         // queues fill only when the terrain systems read the messages.
         let just_carved = send_pending(world, &terrains, &mut grid_carves);
@@ -206,6 +208,7 @@ pub fn stream_chunks(
                 Chunk::Building(_) => None,
             })
             .collect();
+        let _span = bevy::log::info_span!("chisel::stream::release").entered();
         for (coord, entity) in far {
             let Some(entity) = entity else {
                 world.chunks.remove(&coord);
@@ -215,6 +218,7 @@ pub fn stream_chunks(
                 // Sealing again at a neighbour's new points is dropped.
                 Ok(terrain) if !terrain.is_idle_but_for_seams() => continue,
                 Ok(terrain) if !terrain.journal().is_empty() || terrain.undo_depth() > 0 => {
+                    let _span = bevy::log::info_span!("chisel::stream::to_bytes").entered();
                     world.stored.insert(coord, Arc::new(terrain.to_bytes()));
                 }
                 _ => {}
