@@ -79,8 +79,9 @@ mod terrain_seams_render;
 #[cfg(feature = "terrain")]
 mod terrain_world;
 #[cfg(feature = "terrain")]
-mod terrain_world_seams;
 mod terrain_world_lod;
+#[cfg(feature = "terrain")]
+mod terrain_world_seams;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]
