@@ -345,7 +345,19 @@ pub(super) fn streaming_a_world() {
             schedule.set_executor(SingleThreadedExecutor::new());
         }
     }
-    let world = app.world_mut().spawn(world).id();
+    // CHISEL_BENCH_LOD_FAR metres (default 0: none): coarse chunks out to
+    // that radius beside the streamed full-detail ones.
+    let lod_far: f32 = env_or("CHISEL_BENCH_LOD_FAR", 0.0);
+    let world = if lod_far > 0.0 {
+        let lod = bevy_chisel::terrain::WorldLod::new(bevy_chisel::terrain::LodSettings {
+            far_radius: lod_far,
+            ..Default::default()
+        })
+        .expect("valid settings");
+        app.world_mut().spawn((world, lod)).id()
+    } else {
+        app.world_mut().spawn(world).id()
+    };
     let (x0, z0) = tour.at(0.0);
     let focus = app
         .world_mut()
