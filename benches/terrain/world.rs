@@ -4,6 +4,7 @@
 //! level of detail (`lod_of_a_world`). See the crate docs for the knobs.
 
 use super::*;
+use bevy_chisel::terrain::{LodSettings, StreamSettings, TerrainFocus, TerrainWorld, WorldLod};
 
 /// The `world` example's landscape and layout: a 1 cm grid, 20.48 m
 /// chunks, samples 1.28 m apart, with (or without) grass and dirt bands.
@@ -177,10 +178,7 @@ fn peak_resident_mib() -> f64 {
 }
 
 pub(super) fn streaming_a_world() {
-    use bevy::transform::TransformPlugin;
-    use bevy_chisel::terrain::{
-        ChunkCoord, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve, WorldSource,
-    };
+    use bevy_chisel::terrain::{ChunkCoord, WorldCarve, WorldSource};
 
     let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
     let side = (chunks as f64).sqrt().ceil() as i64;
@@ -319,22 +317,11 @@ pub(super) fn streaming_a_world() {
     // The plugin's steps timed per frame (spans); see `frame_steps`.
     let timed = frame_steps::install();
     let app_start = Instant::now();
-    let world = world_of_the_example(true)
-        .with_streaming(StreamSettings {
-            load_radius: 30.0,
-            unload_radius: 45.0,
-            max_building: 4,
-        })
-        .expect("valid settings");
-    let mut app = App::new();
-    app.add_plugins((
-        MinimalPlugins,
-        TransformPlugin,
-        AssetPlugin::default(),
-        TerrainPlugin,
-    ))
-    .init_asset::<Mesh>()
-    .init_asset::<StandardMaterial>();
+    // CHISEL_BENCH_LOD_FAR metres (default 0: none): coarse chunks out to
+    // that radius beside the streamed full-detail ones.
+    let lod_far: f32 = env_or("CHISEL_BENCH_LOD_FAR", 0.0);
+    let (x0, z0) = tour.at(0.0);
+    let (mut app, world, focus) = streaming_app(lod_far, Vec3::new(x0, 20.0, z0));
     // CHISEL_BENCH_EXECUTOR=single: every schedule on the main thread
     // (Bevy's single-threaded executor) rather than handing systems to the
     // compute pool's threads.
@@ -345,32 +332,7 @@ pub(super) fn streaming_a_world() {
             schedule.set_executor(SingleThreadedExecutor::new());
         }
     }
-    // CHISEL_BENCH_LOD_FAR metres (default 0: none): coarse chunks out to
-    // that radius beside the streamed full-detail ones.
-    let lod_far: f32 = env_or("CHISEL_BENCH_LOD_FAR", 0.0);
-    let world = if lod_far > 0.0 {
-        let lod = bevy_chisel::terrain::WorldLod::new(bevy_chisel::terrain::LodSettings {
-            far_radius: lod_far,
-            ..Default::default()
-        })
-        .expect("valid settings");
-        app.world_mut().spawn((world, lod)).id()
-    } else {
-        app.world_mut().spawn(world).id()
-    };
-    let (x0, z0) = tour.at(0.0);
-    let focus = app
-        .world_mut()
-        .spawn((TerrainFocus, Transform::from_xyz(x0, 20.0, z0)))
-        .id();
-    let settled = |app: &App| {
-        let w = app.world().get::<TerrainWorld>(world).expect("world");
-        w.is_settled()
-            && w.live_chunks().count() > 0
-            && w.live_chunks()
-                .all(|(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle))
-    };
-    while !settled(&app) && app_start.elapsed() < Duration::from_secs(600) {
+    while !full_detail_settled(&app, world) && app_start.elapsed() < Duration::from_secs(600) {
         app.update();
     }
     let first = app_start.elapsed();
@@ -491,6 +453,55 @@ pub(super) fn streaming_a_world() {
     json_line("streaming_a_world", serde_json::Value::Object(figures));
 }
 
+/// An app streaming the banded world of the `world` example (load 30 m,
+/// unload 45 m, 4 builds at a time) with render meshes but no renderer,
+/// coarse chunks out to `lod_far` metres when that is positive, and a
+/// focus at `focus_at`: the app, the world and the focus.
+fn streaming_app(lod_far: f32, focus_at: Vec3) -> (App, Entity, Entity) {
+    use bevy::transform::TransformPlugin;
+    let world = world_of_the_example(true)
+        .with_streaming(StreamSettings {
+            load_radius: 30.0,
+            unload_radius: 45.0,
+            max_building: 4,
+        })
+        .expect("valid settings");
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins,
+        TransformPlugin,
+        AssetPlugin::default(),
+        TerrainPlugin,
+    ))
+    .init_asset::<Mesh>()
+    .init_asset::<StandardMaterial>();
+    let world = if lod_far > 0.0 {
+        let lod = WorldLod::new(LodSettings {
+            far_radius: lod_far,
+            ..LodSettings::default()
+        })
+        .expect("valid settings");
+        app.world_mut().spawn((world, lod)).id()
+    } else {
+        app.world_mut().spawn(world).id()
+    };
+    let focus = app
+        .world_mut()
+        .spawn((TerrainFocus, Transform::from_translation(focus_at)))
+        .id();
+    (app, world, focus)
+}
+
+/// Whether the world's full-detail chunks around the focus are all built
+/// and meshed.
+fn full_detail_settled(app: &App, world: Entity) -> bool {
+    let w = app.world().get::<TerrainWorld>(world).expect("world");
+    w.is_settled()
+        && w.live_chunks().count() > 0
+        && w.live_chunks()
+            .all(|(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle))
+}
+
 /// Bytes of a mesh's vertex and index data.
 fn mesh_bytes(mesh: &Mesh) -> usize {
     let indices = mesh.indices().map_or(0, |i| i.len() * 4);
@@ -498,13 +509,9 @@ fn mesh_bytes(mesh: &Mesh) -> usize {
 }
 
 pub(super) fn lod_of_a_world() {
-    use bevy::transform::TransformPlugin;
     use bevy_chisel::terrain::WorldSource;
     use bevy_chisel::terrain::world::lod_mesh::{edited_pyramid, source_pyramid};
-    use bevy_chisel::terrain::{
-        ChunkCoord, LodMesh, LodSettings, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve,
-        WorldLod,
-    };
+    use bevy_chisel::terrain::{ChunkCoord, LodMesh, WorldCarve};
 
     let far: f32 = env_or("CHISEL_BENCH_FAR", 320.0);
     let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
@@ -598,42 +605,10 @@ pub(super) fn lod_of_a_world() {
     // around a focus flying at 50 m/s for 300 frames with a crater every
     // 6 m, then settled; without and with coarse chunks out to `far`.
     for with_lod in [false, true] {
-        let world = world_of_the_example(true)
-            .with_streaming(StreamSettings {
-                load_radius: 30.0,
-                unload_radius: 45.0,
-                max_building: 4,
-            })
-            .expect("valid settings");
-        let mut app = App::new();
-        app.add_plugins((
-            MinimalPlugins,
-            TransformPlugin,
-            AssetPlugin::default(),
-            TerrainPlugin,
-        ))
-        .init_asset::<Mesh>()
-        .init_asset::<StandardMaterial>();
-        let world = if with_lod {
-            let lod = WorldLod::new(LodSettings {
-                far_radius: far,
-                ..LodSettings::default()
-            })
-            .expect("valid settings");
-            app.world_mut().spawn((world, lod)).id()
-        } else {
-            app.world_mut().spawn(world).id()
-        };
-        let focus = app
-            .world_mut()
-            .spawn((TerrainFocus, Transform::from_xyz(0.0, 20.0, 10.0)))
-            .id();
+        let (mut app, world, focus) =
+            streaming_app(if with_lod { far } else { 0.0 }, Vec3::new(0.0, 20.0, 10.0));
         let settled = |app: &App| {
-            let w = app.world().get::<TerrainWorld>(world).expect("world");
-            w.is_settled()
-                && w.live_chunks().count() > 0
-                && w.live_chunks()
-                    .all(|(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle))
+            full_detail_settled(app, world)
                 && app
                     .world()
                     .get::<WorldLod>(world)

@@ -303,14 +303,14 @@ pub fn update_lod(
             })
             .collect();
         let edge = layout.chunk_edge();
-        // Distance in world units.
-        let distance = |coord: ChunkCoord| {
+        // Distance in grid units, and in world units.
+        let grid_distance = |coord: ChunkCoord| {
             focus
                 .iter()
                 .map(|f| super::stream::square_distance(*f, coord, edge))
                 .fold(f64::INFINITY, f64::min)
-                * unit
         };
+        let distance = |coord: ChunkCoord| grid_distance(coord) * unit;
         let far = f64::from(settings.far_radius);
         let keep = far * (1.0 + f64::from(settings.hysteresis));
         let load = f64::from(world.settings.load_radius);
@@ -360,24 +360,10 @@ pub fn update_lod(
             }
         }
 
-        // Chunks within the far radius, nearest first.
-        let span = (far / unit).ceil() as i64 + 1;
-        let mut wanted: Vec<(f64, ChunkCoord)> = Vec::new();
-        for f in &focus {
-            let (fx, fz) = (f[0].floor() as i64, f[1].floor() as i64);
-            for x in (fx - span).div_euclid(edge)..=(fx + span).div_euclid(edge) {
-                for z in (fz - span).div_euclid(edge)..=(fz + span).div_euclid(edge) {
-                    let coord = ChunkCoord { x, z };
-                    let d = distance(coord);
-                    if d <= far {
-                        wanted.push((d, coord));
-                    }
-                }
-            }
-        }
-        wanted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        wanted.dedup_by_key(|w| w.1);
-        for &(_, coord) in &wanted {
+        // Chunks within the far radius (builds start nearest first below).
+        let mut wanted = Vec::new();
+        super::stream::chunks_within(&focus, edge, far / unit, grid_distance, &mut wanted);
+        for (_, coord) in wanted {
             lod.chunks.entry(coord).or_default();
         }
 

@@ -162,21 +162,7 @@ pub fn stream_chunks(
             .keys()
             .map(|&c| (f64::NEG_INFINITY, c))
             .collect();
-        let span = load.ceil() as i64 + 1;
-        for f in &focus {
-            let (fx, fz) = (f[0].floor() as i64, f[1].floor() as i64);
-            let (x0, x1) = ((fx - span).div_euclid(edge), (fx + span).div_euclid(edge));
-            let (z0, z1) = ((fz - span).div_euclid(edge), (fz + span).div_euclid(edge));
-            for x in x0..=x1 {
-                for z in z0..=z1 {
-                    let coord = ChunkCoord { x, z };
-                    let d = distance(coord);
-                    if d <= load {
-                        wanted.push((d, coord));
-                    }
-                }
-            }
-        }
+        chunks_within(&focus, edge, load, distance, &mut wanted);
         wanted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         wanted.dedup_by_key(|w| w.1);
         let mut building = world
@@ -238,6 +224,34 @@ pub(super) fn square_distance(f: [f64; 2], coord: ChunkCoord, edge: i64) -> f64 
         (lo - p).max(p - hi).max(0.0)
     };
     gap(f[0], coord.x).hypot(gap(f[1], coord.z))
+}
+
+/// Appends every chunk within `radius` (grid units) of a focus `f`
+/// (grid units), with its `distance`: the chunks overlapping each focus's
+/// square of half side `radius`, kept where `distance ≤ radius`. A chunk
+/// near several foci is appended once for each.
+pub(super) fn chunks_within(
+    focus: &[[f64; 2]],
+    edge: i64,
+    radius: f64,
+    distance: impl Fn(ChunkCoord) -> f64,
+    out: &mut Vec<(f64, ChunkCoord)>,
+) {
+    let span = radius.ceil() as i64 + 1;
+    for f in focus {
+        let (fx, fz) = (f[0].floor() as i64, f[1].floor() as i64);
+        let (x0, x1) = ((fx - span).div_euclid(edge), (fx + span).div_euclid(edge));
+        let (z0, z1) = ((fz - span).div_euclid(edge), (fz + span).div_euclid(edge));
+        for x in x0..=x1 {
+            for z in z0..=z1 {
+                let coord = ChunkCoord { x, z };
+                let d = distance(coord);
+                if d <= radius {
+                    out.push((d, coord));
+                }
+            }
+        }
+    }
 }
 
 fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
