@@ -515,6 +515,14 @@ pub(super) fn lod_of_a_world() {
 
     let far: f32 = env_or("CHISEL_BENCH_FAR", 320.0);
     let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
+    // The time `update_lod` (its span) took in the frame just run (wall
+    // time: the thread CPU clock of `/proc` counts only whole ticks).
+    frame_steps::install();
+    let lod_step_time = || {
+        frame_steps::take_frame()
+            .get("chisel::lod::update")
+            .map_or(Duration::ZERO, |t| t.wall)
+    };
     let mut figures = serde_json::Map::new();
 
     // Building coarse chunks, one thread: every level of an unedited
@@ -621,6 +629,7 @@ pub(super) fn lod_of_a_world() {
         let first = start.elapsed();
         let frame = Duration::from_secs_f64(1.0 / 60.0);
         let mut frame_times = Vec::new();
+        let mut lod_steps = Vec::new();
         let mut next_crater = 0.0;
         let start = Instant::now();
         for k in 0..300 {
@@ -644,14 +653,30 @@ pub(super) fn lod_of_a_world() {
                 });
             }
             let t = Instant::now();
+            frame_steps::take_frame();
             app.update();
             frame_times.push(t.elapsed());
+            lod_steps.push(lod_step_time());
         }
         let start = Instant::now();
         while !settled(&app) && start.elapsed() < Duration::from_secs(600) {
             app.update();
         }
         frame_times.sort_unstable();
+        lod_steps.sort_unstable();
+        // Then 120 frames with the focus standing still.
+        let mut still_lod_steps = Vec::new();
+        let start = Instant::now();
+        for k in 0..120 {
+            let due = start + frame * k as u32;
+            if let Some(wait) = due.checked_duration_since(Instant::now()) {
+                std::thread::sleep(wait);
+            }
+            frame_steps::take_frame();
+            app.update();
+            still_lod_steps.push(lod_step_time());
+        }
+        still_lod_steps.sort_unstable();
         // What is drawn: the live chunks' cells and the coarse chunks.
         let live: Vec<Entity> = app
             .world()
@@ -693,11 +718,16 @@ pub(super) fn lod_of_a_world() {
         let tag = if with_lod { "with_lod" } else { "without_lod" };
         println!(
             "{tag}: first fill {:.0} ms; flying 250 m: main-thread update median {:.2} ms, p99 \
-             {:.2} ms; then {} full chunks, {full_tris} triangles, {:.1} MB of mesh data; coarse \
-             {} chunks {:?}, {coarse_tris} triangles, {:.2} MB",
+             {:.2} ms (level of detail's step: median {:.3} ms, p99 {:.3} ms; standing still \
+             {:.3} / {:.3} ms); then {} full chunks, {full_tris} triangles, {:.1} MB of mesh data; \
+             coarse {} chunks {:?}, {coarse_tris} triangles, {:.2} MB",
             first.as_secs_f64() * 1e3,
             percentile(&frame_times, 0.5),
             percentile(&frame_times, 0.99),
+            percentile(&lod_steps, 0.5),
+            percentile(&lod_steps, 0.99),
+            percentile(&still_lod_steps, 0.5),
+            percentile(&still_lod_steps, 0.99),
             live.len(),
             full_bytes as f64 / 1e6,
             lod.as_ref()
@@ -751,6 +781,19 @@ pub(super) fn lod_of_a_world() {
             format!("{tag}_frame_p99_ms"),
             percentile(&frame_times, 0.99).into(),
         );
+        for (name, times) in [
+            ("lod_step", &lod_steps),
+            ("still_lod_step", &still_lod_steps),
+        ] {
+            figures.insert(
+                format!("{tag}_{name}_median_ms"),
+                percentile(times, 0.5).into(),
+            );
+            figures.insert(
+                format!("{tag}_{name}_p99_ms"),
+                percentile(times, 0.99).into(),
+            );
+        }
     }
     json_line(
         "terrain::lod_of_a_world",

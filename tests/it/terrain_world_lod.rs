@@ -385,3 +385,89 @@ fn a_carve_across_a_lod_boundary_leaves_no_crack() {
         missing.len()
     );
 }
+
+/// Horizontal distance from `(x, z)` to chunk `c`'s square (grid unit 1,
+/// edge 32).
+fn distance_to_chunk(x: f32, z: f32, c: ChunkCoord) -> f32 {
+    let gap = |p: f32, i: i64| {
+        let (lo, hi) = ((i * 32) as f32, ((i + 1) * 32) as f32);
+        (lo - p).max(p - hi).max(0.0)
+    };
+    gap(x, c.x).hypot(gap(z, c.z))
+}
+
+fn run_frames(app: &mut App, frames: usize) {
+    for _ in 0..frames {
+        app.update();
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+}
+
+#[test]
+fn a_still_focus_costs_no_pass_over_the_coarse_chunks() {
+    let (mut app, world, focus) = app(Vec3::new(16.0, 30.0, 16.0));
+    let passes = |app: &App| {
+        let lod = app.world().get::<WorldLod>(world).expect("lod");
+        lod.stats().full_passes
+    };
+    let settled = passes(&app);
+    assert!(settled > 0);
+    run_frames(&mut app, 30);
+    assert_eq!(passes(&app), settled, "a still focus: no full pass");
+
+    // A step of 3 (under a quarter of the 32 edge): still none.
+    app.world_mut()
+        .get_mut::<Transform>(focus)
+        .expect("focus")
+        .translation = Vec3::new(19.0, 30.0, 16.0);
+    run_frames(&mut app, 30);
+    assert_eq!(passes(&app), settled, "a small step: no full pass");
+
+    // A step of 8.5 from where the last pass looked: a full pass, after
+    // which every chunk within the far radius is drawn coarse (but the
+    // live one) at the level a fresh choice gives at the new focus, and
+    // none beyond the drop distance is kept.
+    let (x, z) = (10.0, 10.0);
+    app.world_mut()
+        .get_mut::<Transform>(focus)
+        .expect("focus")
+        .translation = Vec3::new(x, 30.0, z);
+    // (The transform reaches `GlobalTransform` after the pass's frame.)
+    run_frames(&mut app, 2);
+    assert!(passes(&app) > settled, "a step of a quarter chunk: a pass");
+    settle(&mut app, world);
+    let lod = app.world().get::<WorldLod>(world).expect("lod");
+    let settings = lod.settings().clone();
+    let view = bevy_chisel::terrain::world::LodView::new(settings.fov_y, settings.viewport_height);
+    let mut checked = 0;
+    for cx in -4..=4 {
+        for cz in -4..=4 {
+            let c = ChunkCoord { x: cx, z: cz };
+            let d = distance_to_chunk(x, z, c);
+            if c == (ChunkCoord { x: 0, z: 0 }) {
+                assert!(lod.drawn_level(c).is_none(), "full detail draws (0, 0)");
+                continue;
+            }
+            if d > settings.far_radius * (1.0 + settings.hysteresis) {
+                assert!(lod.drawn_level(c).is_none(), "{c:?} at {d} is dropped");
+                continue;
+            }
+            if d > settings.far_radius {
+                continue;
+            }
+            let (level, _) = lod.drawn_level(c).expect("drawn coarse");
+            let errors = lod.pyramid(c).expect("built").errors();
+            let fresh = bevy_chisel::terrain::world::choose_level(
+                &errors,
+                d,
+                Some(level),
+                view,
+                settings.pixel_tolerance,
+                settings.hysteresis,
+            );
+            assert_eq!(level, fresh, "{c:?} at {d}");
+            checked += 1;
+        }
+    }
+    assert!(checked >= 20, "{checked}");
+}

@@ -162,6 +162,9 @@ pub struct LodStats {
     pub build_time: Duration,
     /// Coarse builds being run now.
     pub building: usize,
+    /// Frames that looked at every coarse chunk (see [`update_lod`]); the
+    /// other frames looked only at live chunks and finished builds.
+    pub full_passes: u64,
 }
 
 struct Built {
@@ -192,8 +195,41 @@ pub struct WorldLod {
     settings: LodSettings,
     chunks: BTreeMap<ChunkCoord, LodChunk>,
     stats: LodStats,
-    /// Coarse builds due but not started (the build limit).
+    /// Coarse builds of chunks that are not live, due but not started (the
+    /// build limit), as the last full pass found them.
     waiting: usize,
+    /// What the last full pass saw (see [`update_lod`]).
+    last_pass: Option<PassInputs>,
+}
+
+/// The inputs of a full pass over a world's coarse chunks besides the
+/// chunks' own state: while none of them changes, only live chunks and
+/// finished builds need a look.
+#[derive(Clone, Debug, PartialEq)]
+struct PassInputs {
+    /// The foci, in grid units (x, z).
+    focus: Vec<[f64; 2]>,
+    view: LodView,
+    /// The world's live chunks.
+    live: Vec<(ChunkCoord, Entity)>,
+    /// How many chunks the world stores.
+    stored: usize,
+}
+
+impl PassInputs {
+    /// Whether a full pass is due: a focus moved `step` grid units or
+    /// more, or anything else differs.
+    fn differ(&self, other: &Self, step: f64) -> bool {
+        self.view != other.view
+            || self.stored != other.stored
+            || self.live != other.live
+            || self.focus.len() != other.focus.len()
+            || self
+                .focus
+                .iter()
+                .zip(&other.focus)
+                .any(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]) >= step)
+    }
 }
 
 impl WorldLod {
@@ -267,9 +303,21 @@ impl WorldLod {
     }
 }
 
+/// A focus moving less than this fraction of a chunk's edge since the last
+/// full pass does not start another (see [`update_lod`]).
+const REFRESH_STEP: f64 = 0.25;
+
 /// Builds, swaps and drops the coarse chunks of every world with a
 /// [`WorldLod`]. Runs after the terrain's meshes are shown
 /// ([`TerrainSystems::Mesh`](super::super::TerrainSystems)).
+///
+/// A full pass looks at every coarse chunk: it drops those beyond the far
+/// radius, adds those within it, starts builds nearest first and chooses
+/// every chunk's level. It runs when a build finished, a focus moved a
+/// quarter of a chunk's edge, the view changed, or the world's live or
+/// stored chunks changed. Other frames look only at the live chunks (an
+/// edit, or full detail becoming ready, changes what they need), so a
+/// still or slow focus costs little however many coarse chunks there are.
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn update_lod(
     mut commands: Commands,
@@ -279,6 +327,7 @@ pub fn update_lod(
     mut meshes: ResMut<Assets<Mesh>>,
     #[cfg(feature = "render")] cameras: Query<(&Camera, &Projection)>,
 ) {
+    let _span = bevy::log::info_span!("chisel::lod::update").entered();
     for (world_entity, world, mut lod, world_transform) in &mut worlds {
         let lod = &mut *lod;
         let settings = lod.settings.clone();
@@ -316,6 +365,7 @@ pub fn update_lod(
         let load = f64::from(world.settings.load_radius);
 
         // Collect finished builds.
+        let mut finished = 0usize;
         for (coord, chunk) in &mut lod.chunks {
             let Some(task) = chunk.task.as_mut() else {
                 continue;
@@ -324,6 +374,7 @@ pub fn update_lod(
                 continue;
             };
             chunk.task = None;
+            finished += 1;
             lod.stats.build_time += built.time;
             match built.pyramid {
                 Ok(pyramid) => {
@@ -345,39 +396,61 @@ pub fn update_lod(
             }
         }
 
-        // Drop chunks beyond the far radius (with hysteresis).
-        let gone: Vec<ChunkCoord> = lod
-            .chunks
-            .keys()
-            .copied()
-            .filter(|&c| distance(c) > keep)
-            .collect();
-        for coord in gone {
-            if let Some(chunk) = lod.chunks.remove(&coord)
-                && let Some((_, entities)) = chunk.drawn
-            {
-                despawn_all(&mut commands, &entities);
+        let inputs = PassInputs {
+            focus: focus.clone(),
+            view,
+            live: world.live_chunks().collect(),
+            stored: world.stored.len(),
+        };
+        let full_pass = finished > 0
+            || lod
+                .last_pass
+                .as_ref()
+                .is_none_or(|last| last.differ(&inputs, REFRESH_STEP * edge as f64));
+
+        let visit: Vec<ChunkCoord> = if full_pass {
+            // Drop chunks beyond the far radius (with hysteresis).
+            let gone: Vec<ChunkCoord> = lod
+                .chunks
+                .keys()
+                .copied()
+                .filter(|&c| distance(c) > keep)
+                .collect();
+            for coord in gone {
+                if let Some(chunk) = lod.chunks.remove(&coord)
+                    && let Some((_, entities)) = chunk.drawn
+                {
+                    despawn_all(&mut commands, &entities);
+                }
             }
-        }
-
-        // Chunks within the far radius (builds start nearest first below).
-        let mut wanted = Vec::new();
-        super::stream::chunks_within(&focus, edge, far / unit, grid_distance, &mut wanted);
-        for (_, coord) in wanted {
-            lod.chunks.entry(coord).or_default();
-        }
-
-        // Start builds whose basis is out of date, nearest first.
-        let mut building = lod.chunks.values().filter(|c| c.task.is_some()).count();
-        let mut waiting = 0;
-        let mut order: Vec<(f64, ChunkCoord)> =
-            lod.chunks.keys().map(|&c| (distance(c), c)).collect();
+            // Chunks within the far radius.
+            let mut wanted = Vec::new();
+            super::stream::chunks_within(&focus, edge, far / unit, grid_distance, &mut wanted);
+            for (_, coord) in wanted {
+                lod.chunks.entry(coord).or_default();
+            }
+            lod.chunks.keys().copied().collect()
+        } else {
+            inputs
+                .live
+                .iter()
+                .map(|&(coord, _)| coord)
+                .filter(|c| lod.chunks.contains_key(c))
+                .collect()
+        };
+        // Builds start nearest first.
+        let mut order: Vec<(f64, ChunkCoord)> = visit.iter().map(|&c| (distance(c), c)).collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+
+        // Start builds whose basis is out of date.
+        let mut building = lod.chunks.values().filter(|c| c.task.is_some()).count();
+        let mut waiting = if full_pass { 0 } else { lod.waiting };
         for &(d, coord) in &order {
             let Some(chunk) = lod.chunks.get_mut(&coord) else {
                 continue;
             };
-            let live = world.chunk_entity(coord).and_then(|e| terrains.get(e).ok());
+            let entity = world.chunk_entity(coord);
+            let live = entity.and_then(|e| terrains.get(e).ok());
             // What the coarse meshes should be made from now, and whether
             // they can be built now.
             let job = match live {
@@ -411,7 +484,11 @@ pub fn update_lod(
                 continue;
             }
             if building >= settings.max_building {
-                waiting += 1;
+                // Live chunks are looked at every frame; the others wait
+                // for the next full pass, which a finished build starts.
+                if entity.is_none() {
+                    waiting += 1;
+                }
                 continue;
             }
             let layout = layout.clone();
@@ -460,10 +537,10 @@ pub fn update_lod(
         }
 
         // Draw: full detail where it is meshed, else the chosen level.
-        let levels = usize::from(super::lod_mesh::coarsest_level(layout));
-        let mut stats_drawn = vec![0usize; levels];
-        let (mut triangles, mut bytes) = (0usize, 0usize);
-        for (&coord, chunk) in &mut lod.chunks {
+        for &(d, coord) in &order {
+            let Some(chunk) = lod.chunks.get_mut(&coord) else {
+                continue;
+            };
             let full = match world.chunk_entity(coord) {
                 Some(e) => {
                     // Full detail draws once it was idle (meshed) once.
@@ -477,7 +554,7 @@ pub fn update_lod(
                     false
                 }
             };
-            let d = distance(coord) as f32;
+            let d = d as f32;
             let current = chunk.drawn.as_ref().map(|(l, _)| *l);
             let target = match &chunk.pyramid {
                 _ if full => None,
@@ -522,19 +599,33 @@ pub fn update_lod(
                     chunk.drawn = Some((level, entities));
                 }
             }
-            if let (Some((level, _)), Some(pyramid)) = (&chunk.drawn, &chunk.pyramid) {
+        }
+
+        let levels = usize::from(super::lod_mesh::coarsest_level(layout));
+        let mut stats_drawn = vec![0usize; levels];
+        let (mut triangles, mut bytes, mut built) = (0usize, 0usize, 0usize);
+        for chunk in lod.chunks.values() {
+            let Some(pyramid) = &chunk.pyramid else {
+                continue;
+            };
+            built += 1;
+            if let Some((level, _)) = &chunk.drawn {
                 let l = &pyramid.levels[usize::from(*level) - 1];
                 stats_drawn[usize::from(*level) - 1] += 1;
                 triangles += l.triangles;
                 bytes += l.bytes;
             }
         }
-        lod.stats.chunks = lod.chunks.values().filter(|c| c.pyramid.is_some()).count();
+        lod.stats.chunks = built;
         lod.stats.drawn_per_level = stats_drawn;
         lod.stats.triangles = triangles;
         lod.stats.mesh_bytes = bytes;
-        lod.stats.building = lod.chunks.values().filter(|c| c.task.is_some()).count();
+        lod.stats.building = building;
         lod.waiting = waiting;
+        if full_pass {
+            lod.stats.full_passes += 1;
+            lod.last_pass = Some(inputs);
+        }
     }
 }
 
