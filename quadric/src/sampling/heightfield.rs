@@ -74,6 +74,9 @@ pub struct Heightfield {
     /// every cell, so that a box on one side of each quadratic axis is in
     /// the corner form of [`distortion_bounds`](Self::distortion_bounds).
     corner_cells: bool,
+    /// Derived likewise: the branch of a root heightfield as a factor,
+    /// `±1` (`0` for a polynomial one).
+    branch: f64,
 }
 
 /// The local form of a quadric: its frame with `λ`, `β` and `γ`.
@@ -164,6 +167,7 @@ impl LocalForm {
                 owns_x: zero_separable(),
                 owns_y: zero_separable(),
                 corner_cells: false,
+                branch: 0.0,
             };
             if lk != 0.0 {
                 // r = ρx(x) + ρy(y) + ρc.
@@ -276,18 +280,18 @@ impl Heightfield {
     /// The height `t` above `p`, or `None` outside the heightfield's domain (`r < 0`).
     ///
     /// Branch-free apart from the kind (the same for every call on one
-    /// heightfield): the square root is taken unconditionally and the
-    /// domain test selects, so that a batch of calls vectorizes.
+    /// heightfield): the square root is taken unconditionally, the domain
+    /// test selects, and the branch is a factor `±1`, so that a batch of
+    /// calls vectorizes.
     #[must_use]
     #[inline]
     pub fn height(&self, p: DVec2) -> Option<f64> {
+        debug_assert!(self.derived_fields_hold());
         let v = self.value.value(p);
+        let t = self.branch * v.sqrt();
         match self.kind {
             HeightKind::Polynomial => Some(v),
-            HeightKind::Root { positive } => {
-                let t = v.sqrt();
-                (v >= 0.0).then_some(if positive { t } else { -t })
-            }
+            HeightKind::Root { .. } => (v >= 0.0).then_some(t),
         }
     }
 
@@ -351,9 +355,9 @@ impl Heightfield {
     /// one square root for each. Everything else is
     /// [`distortion_bounds_general`](Self::distortion_bounds_general).
     #[must_use]
-    #[inline]
+    #[inline(always)]
     pub fn distortion_bounds(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
-        debug_assert_eq!(self.corner_cells, self.with_derived().corner_cells);
+        debug_assert!(self.derived_fields_hold());
         let one_side = |square: bool, lo: f64, hi: f64| !square | (lo >= 0.0) | (hi <= 0.0);
         let (fx, fy) = (&self.value.x, &self.value.y);
         if !(self.corner_cells
@@ -415,8 +419,15 @@ impl Heightfield {
         }
     }
 
-    /// This heightfield with its derived field set from the others (see
-    /// `corner_cells`).
+    /// Whether the derived fields agree with the others (they are public,
+    /// and must not be changed after construction).
+    fn derived_fields_hold(&self) -> bool {
+        let derived = self.with_derived();
+        derived.corner_cells == self.corner_cells && derived.branch == self.branch
+    }
+
+    /// This heightfield with its derived fields set from the others (see
+    /// `corner_cells` and `branch`).
     #[must_use]
     fn with_derived(self) -> Self {
         let square = [self.value.x.a != 0.0, self.value.y.a != 0.0];
@@ -425,8 +436,14 @@ impl Heightfield {
             && [&self.value, &self.owns_x, &self.owns_y]
                 .iter()
                 .all(|f| affine(&f.x, square[0]) && affine(&f.y, square[1]));
+        let branch = match self.kind {
+            HeightKind::Root { positive: true } => 1.0,
+            HeightKind::Root { positive: false } => -1.0,
+            HeightKind::Polynomial => 0.0,
+        };
         Self {
             corner_cells,
+            branch,
             ..self
         }
     }
@@ -709,6 +726,7 @@ mod tests {
                 owns_x: zero_separable(),
                 owns_y: zero_separable(),
                 corner_cells: false,
+                branch: 0.0,
             }
             .with_derived();
             for (lo, hi) in [
