@@ -319,6 +319,13 @@ impl Heightfield {
     #[must_use]
     #[inline]
     pub fn distortion(&self, p: DVec2) -> f64 {
+        self.distortion_squared(p).sqrt()
+    }
+
+    /// `δ²` at `p` (see [`distortion`](Self::distortion)); `+∞` on the
+    /// domain's rim.
+    #[inline]
+    fn distortion_squared(&self, p: DVec2) -> f64 {
         let sx = self.value.x.slope(p.x);
         let sy = self.value.y.slope(p.y);
         let (sx2, sy2) = (sx * sx, sy * sy);
@@ -329,11 +336,7 @@ impl Heightfield {
         } else {
             1.0 + sx2 + sy2
         };
-        if root && r <= 0.0 {
-            f64::INFINITY
-        } else {
-            d2.sqrt()
-        }
+        if root && r <= 0.0 { f64::INFINITY } else { d2 }
     }
 
     /// Bounds `(min, max)` of the distortion over the box `[lo, hi]` (§3.4).
@@ -455,10 +458,15 @@ impl Heightfield {
     /// eq. 13 in `w`. The maximum is `+∞` when a vertex is on the rim.
     #[must_use]
     pub fn distortion_bounds_at(&self, vertices: &[DVec2]) -> (f64, f64) {
-        vertices
+        // `√` is monotone: the extremes of `δ²` (never NaN: `+∞` on the
+        // rim), then one root for each.
+        let (min, max) = vertices
             .iter()
-            .map(|v| self.distortion(*v))
-            .fold((f64::INFINITY, 0.0), |(lo, hi), d| (lo.min(d), hi.max(d)))
+            .map(|v| self.distortion_squared(*v))
+            .fold((f64::INFINITY, 0.0), |(lo, hi), d| {
+                (min2(lo, d), max2(hi, d))
+            });
+        (min.sqrt(), max.sqrt())
     }
 
     /// The slopes `(|∂t/∂x|, |∂t/∂y|)` at `p`; `+∞` on the domain's rim

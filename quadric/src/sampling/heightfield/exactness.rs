@@ -4,7 +4,8 @@
 //! outside it, across an axis).
 //!
 //! The references are the straightforward forms: `height` and
-//! `distortion` by kind with a branch for the domain, and
+//! `distortion` by kind with a branch for the domain,
+//! `distortion_bounds_at` folding the distortion of each vertex, and
 //! `distortion_bounds` deciding the corner form from the separable parts
 //! on every call and folding `f64::min`/`f64::max` over the corners.
 
@@ -154,6 +155,15 @@ fn evaluation_forms_match_the_reference_bit_for_bit() {
                     "height {h:?} at {p}"
                 );
                 assert!(same(h.distortion(p), reference_distortion(&h, p)));
+                let vertices = [lo, hi, p];
+                let (min, max) = h.distortion_bounds_at(&vertices);
+                let (rmin, rmax) = vertices
+                    .iter()
+                    .map(|v| reference_distortion(&h, *v))
+                    .fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
+                        (lo.min(d), hi.max(d))
+                    });
+                assert!(same(min, rmin) && same(max, rmax), "{h:?} at {vertices:?}");
                 let (min, max) = h.distortion_bounds(lo, hi);
                 let (rmin, rmax) = reference_distortion_bounds(&h, lo, hi);
                 assert!(
