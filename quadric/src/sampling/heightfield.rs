@@ -355,7 +355,8 @@ impl Heightfield {
     /// for a box inside the domain `δ²` at the four corners,
     /// `1 + (sxᵢ + syⱼ)/4(vxᵢ + vyⱼ)` as [`distortion`](Self::distortion)
     /// computes it (two pairs of divisions), the extremes by comparisons and
-    /// one square root for each. Everything else is
+    /// one square root for each. Polynomial heightfields take their exact
+    /// bound here too; root heightfields on boxes across cells go to
     /// [`distortion_bounds_general`](Self::distortion_bounds_general).
     #[must_use]
     #[inline(always)]
@@ -363,6 +364,13 @@ impl Heightfield {
         debug_assert!(self.derived_fields_hold());
         let one_side = |square: bool, lo: f64, hi: f64| !square | (lo >= 0.0) | (hi <= 0.0);
         let (fx, fy) = (&self.value.x, &self.value.y);
+        if matches!(self.kind, HeightKind::Polynomial) {
+            // Exact: `δ² = 1 + p_x² + p_y²` is separable (planes and
+            // paraboloids along their axis; constant on a plane).
+            let (ax0, ax1) = fx.slope_squared_range(lo.x, hi.x);
+            let (ay0, ay1) = fy.slope_squared_range(lo.y, hi.y);
+            return ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt());
+        }
         if !(self.corner_cells
             & one_side(fx.a != 0.0, lo.x, hi.x)
             & one_side(fy.a != 0.0, lo.y, hi.y))
