@@ -68,6 +68,15 @@ pub struct Heightfield {
     pub owns_x: Separable,
     /// `≥ 0` where `|nₖ| ≥ |nⱼ|` (eq. 16).
     pub owns_y: Separable,
+    /// Derived once from the fields above (by the constructors, which the
+    /// fields must not be changed after): a root heightfield whose value
+    /// and ownership functions are all affine in the warped coordinates of
+    /// every cell, so that a box on one side of each quadratic axis is in
+    /// the corner form of [`distortion_bounds`](Self::distortion_bounds).
+    corner_cells: bool,
+    /// Derived likewise: the branch of a root heightfield as a factor,
+    /// `±1` (`0` for a polynomial one).
+    branch: f64,
 }
 
 /// The local form of a quadric: its frame with `λ`, `β` and `γ`.
@@ -157,6 +166,8 @@ impl LocalForm {
                 value: zero_separable(),
                 owns_x: zero_separable(),
                 owns_y: zero_separable(),
+                corner_cells: false,
+                branch: 0.0,
             };
             if lk != 0.0 {
                 // r = ρx(x) + ρy(y) + ρc.
@@ -187,13 +198,16 @@ impl LocalForm {
                     y: minus_slope(fy),
                 };
                 for positive in [true, false] {
-                    out.push(Heightfield {
-                        kind: HeightKind::Root { positive },
-                        value,
-                        owns_x,
-                        owns_y,
-                        ..base
-                    });
+                    out.push(
+                        Heightfield {
+                            kind: HeightKind::Root { positive },
+                            value,
+                            owns_x,
+                            owns_y,
+                            ..base
+                        }
+                        .with_derived(),
+                    );
                 }
             } else if bk != 0.0 {
                 let s = -1.0 / (2.0 * bk);
@@ -218,23 +232,39 @@ impl LocalForm {
                     b: 0.0,
                     c: 0.0,
                 };
-                out.push(Heightfield {
-                    kind: HeightKind::Polynomial,
-                    value: Separable { x: px, y: py },
-                    owns_x: Separable {
-                        x: one_minus_slope(px),
-                        y: zero,
-                    },
-                    owns_y: Separable {
-                        x: zero,
-                        y: one_minus_slope(py),
-                    },
-                    ..base
-                });
+                out.push(
+                    Heightfield {
+                        kind: HeightKind::Polynomial,
+                        value: Separable { x: px, y: py },
+                        owns_x: Separable {
+                            x: one_minus_slope(px),
+                            y: zero,
+                        },
+                        owns_y: Separable {
+                            x: zero,
+                            y: one_minus_slope(py),
+                        },
+                        ..base
+                    }
+                    .with_derived(),
+                );
             }
         }
         out
     }
+}
+
+/// The smaller of two numbers that are not NaN (one comparison, no NaN
+/// handling: `minsd` on x86).
+#[inline]
+fn min2(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// The larger of two numbers that are not NaN.
+#[inline]
+fn max2(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
 }
 
 fn zero_separable() -> Separable {
@@ -248,15 +278,20 @@ fn zero_separable() -> Separable {
 
 impl Heightfield {
     /// The height `t` above `p`, or `None` outside the heightfield's domain (`r < 0`).
+    ///
+    /// Branch-free apart from the kind (the same for every call on one
+    /// heightfield): the square root is taken unconditionally, the domain
+    /// test selects, and the branch is a factor `±1`, so that a batch of
+    /// calls vectorizes.
     #[must_use]
     #[inline]
     pub fn height(&self, p: DVec2) -> Option<f64> {
+        debug_assert!(self.derived_fields_hold());
         let v = self.value.value(p);
+        let t = self.branch * v.sqrt();
         match self.kind {
             HeightKind::Polynomial => Some(v),
-            HeightKind::Root { positive } => {
-                (v >= 0.0).then(|| if positive { v.sqrt() } else { -v.sqrt() })
-            }
+            HeightKind::Root { .. } => (v >= 0.0).then_some(t),
         }
     }
 
@@ -276,22 +311,32 @@ impl Heightfield {
     }
 
     /// The distortion `δ(x, y) = |n| / |nₖ|` (eq. 13); `+∞` on the domain's rim.
+    ///
+    /// `δ² = 1 + (r_x² + r_y²)/4r` (root) or `1 + p_x² + p_y²`
+    /// (polynomial), computed without branches: both arguments and the rim
+    /// test are selected, so one division and one square root per call and
+    /// a batch of calls vectorizes.
     #[must_use]
     #[inline]
     pub fn distortion(&self, p: DVec2) -> f64 {
+        self.distortion_squared(p).sqrt()
+    }
+
+    /// `δ²` at `p` (see [`distortion`](Self::distortion)); `+∞` on the
+    /// domain's rim.
+    #[inline]
+    fn distortion_squared(&self, p: DVec2) -> f64 {
         let sx = self.value.x.slope(p.x);
         let sy = self.value.y.slope(p.y);
-        match self.kind {
-            HeightKind::Polynomial => (1.0 + sx * sx + sy * sy).sqrt(),
-            HeightKind::Root { .. } => {
-                let r = self.value.value(p);
-                if r <= 0.0 {
-                    f64::INFINITY
-                } else {
-                    (1.0 + (sx * sx + sy * sy) / (4.0 * r)).sqrt()
-                }
-            }
-        }
+        let (sx2, sy2) = (sx * sx, sy * sy);
+        let r = self.value.value(p);
+        let root = matches!(self.kind, HeightKind::Root { .. });
+        let d2 = if root {
+            1.0 + (sx2 + sy2) / (4.0 * r)
+        } else {
+            1.0 + sx2 + sy2
+        };
+        if root && r <= 0.0 { f64::INFINITY } else { d2 }
     }
 
     /// Bounds `(min, max)` of the distortion over the box `[lo, hi]` (§3.4).
@@ -302,53 +347,78 @@ impl Heightfield {
     /// [`warp`](crate::sampling::warp)). Otherwise interval bounds
     /// `δ² ∈ 1 + [N₋/r₊, N₊/r₋]`, `N = (r_x² + r_y²)/4`.
     /// The maximum is `+∞` when the box reaches the domain's rim.
+    ///
+    /// The common case, a root heightfield on a box of one cell (which
+    /// `corner_cells` and two sign tests decide), is the corner form: per
+    /// axis the two end values `v` and squared slopes `s`, the range of `r`
+    /// from the end values (no vertex is strictly inside such a box), and
+    /// for a box inside the domain `δ²` at the four corners,
+    /// `1 + (sxᵢ + syⱼ)/4(vxᵢ + vyⱼ)` as [`distortion`](Self::distortion)
+    /// computes it (two pairs of divisions), the extremes by comparisons and
+    /// one square root for each. Polynomial heightfields take their exact
+    /// bound here too; root heightfields on boxes across cells go to
+    /// [`distortion_bounds_general`](Self::distortion_bounds_general).
     #[must_use]
+    #[inline(always)]
     pub fn distortion_bounds(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
-        let slopes = || {
-            let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
-            let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
-            (ax0, ax1, ay0, ay1)
-        };
+        debug_assert!(self.derived_fields_hold());
+        let one_side = |square: bool, lo: f64, hi: f64| !square | (lo >= 0.0) | (hi <= 0.0);
+        let (fx, fy) = (&self.value.x, &self.value.y);
+        if matches!(self.kind, HeightKind::Polynomial) {
+            // Exact: `δ² = 1 + p_x² + p_y²` is separable (planes and
+            // paraboloids along their axis; constant on a plane).
+            let (ax0, ax1) = fx.slope_squared_range(lo.x, hi.x);
+            let (ay0, ay1) = fy.slope_squared_range(lo.y, hi.y);
+            return ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt());
+        }
+        if !(self.corner_cells
+            & one_side(fx.a != 0.0, lo.x, hi.x)
+            & one_side(fy.a != 0.0, lo.y, hi.y))
+        {
+            return self.distortion_bounds_general(lo, hi);
+        }
+        let square = |s: f64| s * s;
+        let vx = [fx.value(lo.x), fx.value(hi.x)];
+        let vy = [fy.value(lo.y), fy.value(hi.y)];
+        let sx = [square(fx.slope(lo.x)), square(fx.slope(hi.x))];
+        let sy = [square(fy.slope(lo.y)), square(fy.slope(hi.y))];
+        let r0 = min2(vx[0], vx[1]) + min2(vy[0], vy[1]);
+        if r0 > 0.0 {
+            let d00 = 1.0 + (sx[0] + sy[0]) / (4.0 * (vx[0] + vy[0]));
+            let d10 = 1.0 + (sx[1] + sy[0]) / (4.0 * (vx[1] + vy[0]));
+            let d01 = 1.0 + (sx[0] + sy[1]) / (4.0 * (vx[0] + vy[1]));
+            let d11 = 1.0 + (sx[1] + sy[1]) / (4.0 * (vx[1] + vy[1]));
+            let min = min2(min2(d00, d01), min2(d10, d11));
+            let max = max2(max2(d00, d01), max2(d10, d11));
+            // `√` is monotone: one square root per extreme.
+            return (min.sqrt(), max.sqrt());
+        }
+        let r1 = max2(vx[0], vx[1]) + max2(vy[0], vy[1]);
+        if r1 <= 0.0 {
+            return (f64::INFINITY, f64::INFINITY);
+        }
+        // The box reaches the rim: the interval bound of the general path,
+        // whose squared-slope ranges are the end values here (a slope keeps
+        // its sign across a box of one cell).
+        let n = min2(sx[0], sx[1]) + min2(sy[0], sy[1]);
+        ((1.0 + n / (4.0 * r1)).sqrt(), f64::INFINITY)
+    }
+
+    /// [`distortion_bounds`](Self::distortion_bounds) for polynomial
+    /// heightfields, boxes across cells, and boxes that reach the rim:
+    /// exact ranges of the separable parts and interval arithmetic.
+    #[must_use]
+    #[inline(never)]
+    pub fn distortion_bounds_general(&self, lo: DVec2, hi: DVec2) -> (f64, f64) {
+        let (ax0, ax1) = self.value.x.slope_squared_range(lo.x, hi.x);
+        let (ay0, ay1) = self.value.y.slope_squared_range(lo.y, hi.y);
         match self.kind {
-            HeightKind::Polynomial => {
-                let (ax0, ax1, ay0, ay1) = slopes();
-                ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt())
-            }
+            HeightKind::Polynomial => ((1.0 + ax0 + ay0).sqrt(), (1.0 + ax1 + ay1).sqrt()),
             HeightKind::Root { .. } => {
-                let (fx, fy) = (&self.value.x, &self.value.y);
-                let corner_form = self.in_affine_cell(lo, hi);
-                // In such a cell neither part has its vertex strictly inside
-                // the box, so the corner values give the exact range, as
-                // `Separable::range` computes it.
-                let vx = [fx.value(lo.x), fx.value(hi.x)];
-                let vy = [fy.value(lo.y), fy.value(hi.y)];
-                let (r0, r1) = if corner_form {
-                    (
-                        vx[0].min(vx[1]) + vy[0].min(vy[1]),
-                        vx[0].max(vx[1]) + vy[0].max(vy[1]),
-                    )
-                } else {
-                    self.value.range(lo, hi)
-                };
+                let (r0, r1) = self.value.range(lo, hi);
                 if r1 <= 0.0 {
                     return (f64::INFINITY, f64::INFINITY);
                 }
-                if r0 > 0.0 && corner_form {
-                    // `δ²` at the four corners from the two values and slopes
-                    // per axis (as `distortion` computes them), one square
-                    // root for each extreme (`√` is monotone).
-                    let sx = [fx.slope(lo.x), fx.slope(hi.x)].map(|s| s * s);
-                    let sy = [fy.slope(lo.y), fy.slope(hi.y)].map(|s| s * s);
-                    let mut min = f64::INFINITY;
-                    let mut max = 0.0_f64;
-                    for (i, j) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
-                        let d2 = 1.0 + (sx[i] + sy[j]) / (4.0 * (vx[i] + vy[j]));
-                        min = min.min(d2);
-                        max = max.max(d2);
-                    }
-                    return (min.sqrt(), max.sqrt());
-                }
-                let (ax0, ax1, ay0, ay1) = slopes();
                 let min = (1.0 + (ax0 + ay0) / (4.0 * r1)).sqrt();
                 let max = if r0 > 0.0 {
                     (1.0 + (ax1 + ay1) / (4.0 * r0)).sqrt()
@@ -360,19 +430,33 @@ impl Heightfield {
         }
     }
 
-    /// Whether [`warp`](Self::warp) of the box `[lo, hi]` is `Some` (the
-    /// box in one cell, where the value and both ownership functions are
-    /// affine in `w`), without building the warp.
-    #[inline]
-    fn in_affine_cell(&self, lo: DVec2, hi: DVec2) -> bool {
+    /// Whether the derived fields agree with the others (they are public,
+    /// and must not be changed after construction).
+    fn derived_fields_hold(&self) -> bool {
+        let derived = self.with_derived();
+        derived.corner_cells == self.corner_cells && derived.branch == self.branch
+    }
+
+    /// This heightfield with its derived fields set from the others (see
+    /// `corner_cells` and `branch`).
+    #[must_use]
+    fn with_derived(self) -> Self {
         let square = [self.value.x.a != 0.0, self.value.y.a != 0.0];
         let affine = |q: &Quad1, square: bool| if square { q.b == 0.0 } else { q.a == 0.0 };
-        let one_side = |square: bool, lo: f64, hi: f64| !square || lo >= 0.0 || hi <= 0.0;
-        one_side(square[0], lo.x, hi.x)
-            && one_side(square[1], lo.y, hi.y)
+        let corner_cells = matches!(self.kind, HeightKind::Root { .. })
             && [&self.value, &self.owns_x, &self.owns_y]
                 .iter()
-                .all(|f| affine(&f.x, square[0]) && affine(&f.y, square[1]))
+                .all(|f| affine(&f.x, square[0]) && affine(&f.y, square[1]));
+        let branch = match self.kind {
+            HeightKind::Root { positive: true } => 1.0,
+            HeightKind::Root { positive: false } => -1.0,
+            HeightKind::Polynomial => 0.0,
+        };
+        Self {
+            corner_cells,
+            branch,
+            ..self
+        }
     }
 
     /// Bounds `(min, max)` of the distortion over a set whose image in the
@@ -382,10 +466,15 @@ impl Heightfield {
     /// eq. 13 in `w`. The maximum is `+∞` when a vertex is on the rim.
     #[must_use]
     pub fn distortion_bounds_at(&self, vertices: &[DVec2]) -> (f64, f64) {
-        vertices
+        // `√` is monotone: the extremes of `δ²` (never NaN: `+∞` on the
+        // rim), then one root for each.
+        let (min, max) = vertices
             .iter()
-            .map(|v| self.distortion(*v))
-            .fold((f64::INFINITY, 0.0), |(lo, hi), d| (lo.min(d), hi.max(d)))
+            .map(|v| self.distortion_squared(*v))
+            .fold((f64::INFINITY, 0.0), |(lo, hi), d| {
+                (min2(lo, d), max2(hi, d))
+            });
+        (min.sqrt(), max.sqrt())
     }
 
     /// The slopes `(|∂t/∂x|, |∂t/∂y|)` at `p`; `+∞` on the domain's rim
@@ -579,6 +668,9 @@ impl Heightfield {
 }
 
 #[cfg(test)]
+mod exactness;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -649,7 +741,10 @@ mod tests {
                 },
                 owns_x: zero_separable(),
                 owns_y: zero_separable(),
-            };
+                corner_cells: false,
+                branch: 0.0,
+            }
+            .with_derived();
             for (lo, hi) in [
                 (DVec2::new(0.1, 0.2), DVec2::new(0.9, 0.6)),
                 (DVec2::new(0.0, 0.0), DVec2::new(0.5, 0.5)),
