@@ -528,6 +528,8 @@ impl RegionJob<'_> {
         }
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
+        // The bounds of every inside cell, rounded once.
+        let inside_bounds = Bounds::new(radius, 0.5 * cell);
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -559,7 +561,7 @@ impl RegionJob<'_> {
                     inside[k + nx + 2],
                 ];
                 if corners.iter().all(|c| *c) {
-                    out.push(self.sample(0.5 * (a + b), radius, 0.5 * cell));
+                    out.push(self.sample_with(0.5 * (a + b), inside_bounds));
                 } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
@@ -649,18 +651,25 @@ impl RegionJob<'_> {
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         out.reserve(cells as usize);
         let cell = DVec2::new(size.x / nx, size.y / ny);
+        let half_cell = 0.5 * cell;
         let half_diagonal = 0.5 * cell.length();
-        let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
+        let radius = cell::reach(half_cell, delta, slopes).min(self.options.radius);
+        // The bounds of a sample at its cell's centre (every cell of a
+        // rectangle), rounded once.
+        let centre_bounds = Bounds::new(radius, half_cell);
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved, each below 2^32.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as u32, ny as u32);
         for j in 0..ny {
+            let y = f64::from(j) + 0.5;
             for i in 0..nx {
-                let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, f64::from(j) + 0.5);
+                let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, y);
                 let p = region.closest_point(centre);
-                if p.distance(centre) <= half_diagonal {
-                    out.push(self.sample(p, radius, 0.5 * cell + (p - centre).abs()));
+                if p == centre {
+                    out.push(self.sample_with(p, centre_bounds));
+                } else if p.distance(centre) <= half_diagonal {
+                    out.push(self.sample(p, radius, half_cell + (p - centre).abs()));
                 }
             }
         }
@@ -669,6 +678,13 @@ impl RegionJob<'_> {
     /// The sample above plane point `uv`, polished onto the quadric, that
     /// covers the surface over the plane box `uv ± cell` within `radius`.
     fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
+        self.sample_with(uv, Bounds::new(radius, cell))
+    }
+
+    /// [`sample`](Self::sample) with its bounds already rounded (a fill
+    /// rounds those its cells share once).
+    #[inline]
+    fn sample_with(&self, uv: DVec2, bounds: Bounds) -> Sample {
         let raw = self
             .heightfield
             .point(uv)
@@ -692,6 +708,23 @@ impl RegionJob<'_> {
             normal,
             uv,
             patch: self.patch,
+            radius: bounds.radius,
+            cell: bounds.cell,
+        }
+    }
+}
+
+/// A sample's covering bounds as stored ([`Sample::radius`],
+/// [`Sample::cell`]): rounded up to `f32`.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    radius: f32,
+    cell: Vec2,
+}
+
+impl Bounds {
+    fn new(radius: f64, cell: DVec2) -> Self {
+        Self {
             radius: f32_at_least(radius),
             cell: Vec2::new(f32_at_least(cell.x), f32_at_least(cell.y)),
         }
