@@ -50,7 +50,7 @@
 
 use std::cell::{Cell, RefCell};
 
-use glam::{DVec2, DVec3, Vec2};
+use glam::{DVec2, DVec3};
 
 use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
@@ -59,9 +59,8 @@ use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::polygon::Polygon;
 use crate::sampling::regions::Region;
-use crate::sampling::{
-    BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats, f32_at_least,
-};
+use crate::sampling::storage::{Bounds, Rounding};
+use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
 /// are classified. It must be at least `√3`, the largest distortion inside
@@ -115,6 +114,8 @@ pub(crate) struct RegionJob<'a> {
     pub others: OtherTerms,
     /// Buffers of culled terms no longer in use ([`CsgDistance::cull_into`]).
     pub spare: RefCell<Vec<OtherTerms>>,
+    /// How the samples are stored in `f32`.
+    pub rounding: Rounding,
 }
 
 /// Where a region lies: its subdivision depth, whether its surface is
@@ -529,7 +530,7 @@ impl RegionJob<'_> {
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
         // The bounds of every inside cell, rounded once.
-        let inside_bounds = Bounds::new(radius, 0.5 * cell);
+        let inside_bounds = Bounds::shared(&self.rounding, radius, 0.5 * cell);
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -561,7 +562,7 @@ impl RegionJob<'_> {
                     inside[k + nx + 2],
                 ];
                 if corners.iter().all(|c| *c) {
-                    out.push(self.sample_with(0.5 * (a + b), inside_bounds));
+                    out.push(self.sample_with(0.5 * (a + b), &inside_bounds));
                 } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
@@ -656,7 +657,7 @@ impl RegionJob<'_> {
         let radius = cell::reach(half_cell, delta, slopes).min(self.options.radius);
         // The bounds of a sample at its cell's centre (every cell of a
         // rectangle), rounded once.
-        let centre_bounds = Bounds::new(radius, half_cell);
+        let centre_bounds = Bounds::shared(&self.rounding, radius, half_cell);
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved, each below 2^32.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -667,7 +668,7 @@ impl RegionJob<'_> {
                 let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, y);
                 let p = region.closest_point(centre);
                 if p == centre {
-                    out.push(self.sample_with(p, centre_bounds));
+                    out.push(self.sample_with(p, &centre_bounds));
                 } else if p.distance(centre) <= half_diagonal {
                     out.push(self.sample(p, radius, half_cell + (p - centre).abs()));
                 }
@@ -678,13 +679,13 @@ impl RegionJob<'_> {
     /// The sample above plane point `uv`, polished onto the quadric, that
     /// covers the surface over the plane box `uv ± cell` within `radius`.
     fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
-        self.sample_with(uv, Bounds::new(radius, cell))
+        self.sample_with(uv, &Bounds::shared(&self.rounding, radius, cell))
     }
 
-    /// [`sample`](Self::sample) with its bounds already rounded (a fill
-    /// rounds those its cells share once).
+    /// [`sample`](Self::sample) with bounds whose stored form is already
+    /// rounded (a fill rounds those its cells share once).
     #[inline]
-    fn sample_with(&self, uv: DVec2, bounds: Bounds) -> Sample {
+    fn sample_with(&self, uv: DVec2, bounds: &Bounds) -> Sample {
         let raw = self
             .heightfield
             .point(uv)
@@ -703,30 +704,7 @@ impl RegionJob<'_> {
                 .map_or(DVec3::ZERO, |n| n * self.outward_sign);
             (raw, normal)
         };
-        Sample {
-            position,
-            normal,
-            uv,
-            patch: self.patch,
-            radius: bounds.radius,
-            cell: bounds.cell,
-        }
-    }
-}
-
-/// A sample's covering bounds as stored ([`Sample::radius`],
-/// [`Sample::cell`]): rounded up to `f32`.
-#[derive(Clone, Copy, Debug)]
-struct Bounds {
-    radius: f32,
-    cell: Vec2,
-}
-
-impl Bounds {
-    fn new(radius: f64, cell: DVec2) -> Self {
-        Self {
-            radius: f32_at_least(radius),
-            cell: Vec2::new(f32_at_least(cell.x), f32_at_least(cell.y)),
-        }
+        self.rounding
+            .store(position, normal, uv, self.patch, bounds)
     }
 }

@@ -71,27 +71,25 @@ fn samples_lie_on_the_csg_surface() {
     for name in SCENES {
         let (_, bound) = bounds(name);
         let (dnf, set) = sampled(name, bound / 25.0);
-        let eps = 1e-7 * bound;
         for s in &set.samples {
             let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
-            let g = q.gradient(s.position).length();
+            let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+            // Stored in f32: on the surface up to that rounding.
+            let rounding = common::f32_rounding(p);
+            let eps = 1e-7 * bound + 4.0 * rounding;
+            let g = q.gradient(p).length();
             assert!(
-                q.value(s.position).abs() <= 1e-12 * g * bound,
-                "{name}: sample {} off its quadric",
-                s.position
+                q.value(p).abs() <= g * (1e-12 * bound + rounding),
+                "{name}: sample {p} off its quadric"
             );
-            assert!(s.radius > 0.0 && s.radius <= chisel_quadric::f32_at_least(set.options.radius));
-            assert!(set.options.bounds.signed_distance(s.position) <= eps);
+            assert!(s.radius > 0.0 && f64::from(s.radius) <= common::largest_radius(&set));
+            assert!(set.options.bounds.signed_distance(p) <= eps);
             // On the CSG surface: inside on one side, outside on the other,
             // unless the normal is degenerate (a cone's apex).
-            if s.normal != DVec3::ZERO {
-                let inside = dnf.contains(s.position - s.normal * eps);
-                let outside = !dnf.contains(s.position + s.normal * eps);
-                assert!(
-                    inside && outside,
-                    "{name}: sample {} not on the surface",
-                    s.position
-                );
+            if n != DVec3::ZERO {
+                let inside = dnf.contains(p - n * eps);
+                let outside = !dnf.contains(p + n * eps);
+                assert!(inside && outside, "{name}: sample {p} not on the surface");
             }
         }
     }
