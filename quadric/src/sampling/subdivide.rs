@@ -59,7 +59,7 @@ use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::polygon::Polygon;
 use crate::sampling::regions::Region;
-use crate::sampling::storage::{Bounds, Rounding};
+use crate::sampling::storage::{Bounds, Lift, Rounding};
 use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
@@ -531,6 +531,7 @@ impl RegionJob<'_> {
         let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
         // The bounds of every inside cell, rounded once.
         let inside_bounds = Bounds::shared(&self.rounding, radius, 0.5 * cell);
+        let lift = self.lift();
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -562,7 +563,7 @@ impl RegionJob<'_> {
                     inside[k + nx + 2],
                 ];
                 if corners.iter().all(|c| *c) {
-                    out.push(self.sample_with(0.5 * (a + b), &inside_bounds));
+                    out.push(lift.sample(0.5 * (a + b), &inside_bounds));
                 } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
@@ -658,17 +659,25 @@ impl RegionJob<'_> {
         // The bounds of a sample at its cell's centre (every cell of a
         // rectangle), rounded once.
         let centre_bounds = Bounds::shared(&self.rounding, radius, half_cell);
+        let lift = self.lift();
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved, each below 2^32.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as u32, ny as u32);
+        let (rectangle, corners) = (region.is_rectangle(), region.vertices());
         for j in 0..ny {
             let y = f64::from(j) + 0.5;
             for i in 0..nx {
                 let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, y);
-                let p = region.closest_point(centre);
+                // A rectangle's nearest point is the clamp to its corners
+                // (`Polygon::closest_point`), inline.
+                let p = if rectangle {
+                    centre.clamp(corners[0], corners[2])
+                } else {
+                    region.closest_point(centre)
+                };
                 if p == centre {
-                    out.push(self.sample_with(p, &centre_bounds));
+                    out.push(lift.sample(p, &centre_bounds));
                 } else if p.distance(centre) <= half_diagonal {
                     out.push(self.sample(p, radius, half_cell + (p - centre).abs()));
                 }
@@ -676,35 +685,22 @@ impl RegionJob<'_> {
         }
     }
 
-    /// The sample above plane point `uv`, polished onto the quadric, that
-    /// covers the surface over the plane box `uv ± cell` within `radius`.
+    /// The sample above plane point `uv` that covers the surface over the
+    /// plane box `uv ± cell` within `radius`.
     fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
-        self.sample_with(uv, &Bounds::shared(&self.rounding, radius, cell))
+        self.lift()
+            .sample(uv, &Bounds::shared(&self.rounding, radius, cell))
     }
 
-    /// [`sample`](Self::sample) with bounds whose stored form is already
-    /// rounded (a fill rounds those its cells share once).
-    #[inline]
-    fn sample_with(&self, uv: DVec2, bounds: &Bounds) -> Sample {
-        let raw = self
-            .heightfield
-            .point(uv)
-            .unwrap_or(self.heightfield.centre);
-        // One Newton step onto the quadric; the normal from the same
-        // gradient (the step moves the point by rounding errors only).
-        let g = self.quadric.gradient(raw);
-        let g2 = g.length_squared();
-        let (position, normal) = if g2 > 0.0 && g2.is_finite() {
-            let position = raw - g * (self.quadric.value(raw) / g2);
-            (position, g * (self.outward_sign / g2.sqrt()))
-        } else {
-            let normal = self
-                .quadric
-                .normal(raw)
-                .map_or(DVec3::ZERO, |n| n * self.outward_sign);
-            (raw, normal)
-        };
-        self.rounding
-            .store(position, normal, uv, self.patch, bounds)
+    /// A copy of what lifting a plane point to a sample reads, for a fill's
+    /// loop (a local copy, which its stores to the output cannot alias).
+    fn lift(&self) -> Lift {
+        Lift {
+            heightfield: *self.heightfield,
+            quadric: *self.quadric,
+            outward_sign: self.outward_sign,
+            patch: self.patch,
+            rounding: self.rounding,
+        }
     }
 }
