@@ -602,10 +602,13 @@ impl RegionJob<'_> {
             return;
         };
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        // One square root of the largest squared distance (`√` is monotone
+        // and correctly rounded: the same as the largest distance).
         let far = corners
             .iter()
-            .map(|c| c.distance(point))
-            .fold(0.0, f64::max);
+            .map(|c| c.distance_squared(point))
+            .fold(0.0, f64::max)
+            .sqrt();
         // The box is in the region's cell of the warp, where the distortion
         // is extreme at box corners (and unbounded where `r ≤ 0` at one).
         let (_, box_delta) = self.heightfield.distortion_bounds_at(&corners);
