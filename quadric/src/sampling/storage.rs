@@ -137,7 +137,37 @@ impl Lift {
     /// fills' loops, which call it once per sample.
     #[inline(always)]
     pub(crate) fn sample(&self, uv: DVec2, bounds: &Bounds) -> Sample {
-        let hf = &self.heightfield;
+        self.by_ref().sample(uv, bounds)
+    }
+
+    /// The same lifting, reading this copy.
+    #[inline(always)]
+    pub(crate) fn by_ref(&self) -> LiftRef<'_> {
+        LiftRef {
+            heightfield: &self.heightfield,
+            quadric: &self.quadric,
+            outward_sign: self.outward_sign,
+            patch: self.patch,
+            rounding: &self.rounding,
+        }
+    }
+}
+
+/// [`Lift`] by reference, for samples lifted one at a time.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LiftRef<'a> {
+    pub heightfield: &'a Heightfield,
+    pub quadric: &'a Quadric,
+    pub outward_sign: f64,
+    pub patch: u32,
+    pub rounding: &'a Rounding,
+}
+
+impl LiftRef<'_> {
+    /// See [`Lift::sample`].
+    #[inline(always)]
+    pub(crate) fn sample(self, uv: DVec2, bounds: &Bounds) -> Sample {
+        let hf = self.heightfield;
         let raw = hf.point(uv).unwrap_or(hf.centre);
         let g = self.quadric.gradient(raw);
         let g2 = g.length_squared();

@@ -59,7 +59,7 @@ use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
 use crate::sampling::polygon::Polygon;
 use crate::sampling::regions::Region;
-use crate::sampling::storage::{Bounds, Lift, Rounding};
+use crate::sampling::storage::{Bounds, Lift, LiftRef, Rounding};
 use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
@@ -691,8 +691,14 @@ impl RegionJob<'_> {
     /// The sample above plane point `uv` that covers the surface over the
     /// plane box `uv ± cell` within `radius`.
     fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
-        self.lift()
-            .sample(uv, &Bounds::shared(&self.rounding, radius, cell))
+        LiftRef {
+            heightfield: self.heightfield,
+            quadric: self.quadric,
+            outward_sign: self.outward_sign,
+            patch: self.patch,
+            rounding: &self.rounding,
+        }
+        .sample(uv, &Bounds::shared(&self.rounding, radius, cell))
     }
 
     /// A copy of what lifting a plane point to a sample reads, for a fill's
