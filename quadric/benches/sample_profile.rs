@@ -10,7 +10,9 @@
 //! `SAMPLE_THREADS=N` runs it on `N` threads (CPU time then sums them).
 //! With the environment variable `SAMPLE_HASH` set it also prints a hash
 //! of the sample set (every field of every sample), to check that a change
-//! keeps the samples bit-identical.
+//! keeps the samples bit-identical, and a hash of their geometry (position,
+//! normal, plane point and patch, as stored in `f32`: a base that stored
+//! them in `f64` hashes them rounded to `f32` to compare).
 //!
 //! It measures only with `--bench` among its arguments (`cargo bench`
 //! passes it): `cargo test --all-targets` runs it without, and it then
