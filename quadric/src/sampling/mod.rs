@@ -132,6 +132,11 @@ pub const DEFAULT_MAX_SAMPLES: u64 = 10_000_000;
 /// subdivision limit of halvings to come down to the splat radius.
 pub const MAX_BOUNDS_RATIO: f64 = (1u64 << 24) as f64;
 
+/// The largest coordinate magnitude of the bounding sphere's box
+/// (`|Cᵢ| + R`) that [`sample`] accepts: samples are stored in `f32`
+/// ([`Sample`], at most about `3.4·10³⁸`), with room for the rounding.
+pub const MAX_COORDINATE: f64 = 1e37;
+
 impl SampleOptions {
     /// Options with splat radius `radius` inside `bounds` and the default
     /// threshold `0.1`.
@@ -484,6 +489,16 @@ impl<'a> SamplingRun<'a> {
                     "the bounding sphere's radius {:e} is {ratio:.3e} splat radii ({:e}), more than \
                      2^24; give bounds closer around the solid or a larger radius",
                     options.bounds.radius, options.radius
+                ),
+            });
+        }
+        let reach = (options.bounds.centre.abs() + options.bounds.radius).max_element();
+        if reach > MAX_COORDINATE {
+            return Err(Error::CoverageNotReached {
+                reason: format!(
+                    "the bounding sphere reaches {reach:e}, beyond {MAX_COORDINATE:e}: samples \
+                     are stored in f32; give bounds closer around the solid, in a frame nearer \
+                     the origin"
                 ),
             });
         }

@@ -109,3 +109,26 @@ fn output_is_independent_of_thread_count() {
         assert_eq!(run(1), run(2), "{name}");
     }
 }
+
+/// Samples are stored in `f32`: bounds that reach past
+/// [`MAX_COORDINATE`](chisel_quadric::MAX_COORDINATE) are refused with a
+/// typed error before anything is sampled; the same solid in bounds near
+/// the origin is sampled.
+#[test]
+fn bounds_beyond_the_f32_range_of_samples_are_refused() {
+    use chisel_quadric::{BoundingSphere, CsgDag, Error, MAX_COORDINATE, Quadric};
+    let mut dag = CsgDag::new();
+    let ball = dag.primitive(Quadric::sphere(DVec3::ZERO, 1.0).unwrap(), [0.8; 3]);
+    let dnf = Dnf::from_dag(&dag, ball).unwrap();
+    let sampled = |centre: DVec3| {
+        let bounds = BoundingSphere::new(centre, 1.5).unwrap();
+        sample(&dnf, &SampleOptions::new(0.1, bounds).unwrap())
+    };
+    let far = DVec3::new(0.0, -3.0 * MAX_COORDINATE, 0.0);
+    assert!(
+        matches!(sampled(far), Err(Error::CoverageNotReached { .. })),
+        "{:?}",
+        sampled(far).map(|s| s.samples.len())
+    );
+    assert!(!sampled(DVec3::ZERO).unwrap().samples.is_empty());
+}
