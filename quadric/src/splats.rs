@@ -281,7 +281,7 @@ const CELL_BOX_MARGIN: f64 = 1e-9;
 /// theorem, `ε = ∫₀¹ (∇t(uv + sΔ) − g)·Δ ds`; for `s` in
 /// `[(k − 1)/K, k/K]` the point lies in the box `uv ± (k/K) h`, so
 /// `|ε| ≤ (1/K) Σₖ Σᵢ hᵢ max|∇ᵢt − gᵢ|` over those boxes
-/// ([`Heightfield::gradient_bounds`], `K` = [`CELL_BOX_STEPS`]: about
+/// ([`Heightfield::gradient_bounds`], `K` = `CELL_BOX_STEPS`: about
 /// `5/8` of the one-box bound where `∇t` varies linearly). Along any unit `d`,
 /// `|d·Δp| ≤ hₓ|d·A₁| + h_y|d·A₂| + |ε||d·Z|`: the box's half-extents
 /// along `t₁ ∝ A₁ − (A₁·n)n`, `t₂ = n × t₁` and `n` (each capped at `r`),

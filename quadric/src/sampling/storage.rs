@@ -19,7 +19,7 @@
 //! The errors are bounded once per patch, for positions inside the box
 //! `|pᵢ| ≤ Mᵢ` around the bounding sphere and plane points inside the
 //! patch's domain box (`L¹` norms, which bound the Euclidean one), so the
-//! bounds of a fill's cells are rounded once ([`Bounds::shared`]). A sample
+//! bounds of a fill's cells are rounded once (`Bounds::shared`). A sample
 //! outside those boxes gets bounds from its own rounding errors, which are
 //! exact in `f64` (`x − f64(x̃)` of two nearby numbers).
 
