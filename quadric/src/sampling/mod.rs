@@ -50,6 +50,7 @@ pub mod cell;
 mod cost;
 pub mod curved;
 pub mod heightfield;
+mod meeting;
 pub mod partial;
 pub mod polygon;
 pub mod regions;

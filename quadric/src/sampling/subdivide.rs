@@ -57,6 +57,7 @@ use crate::quadric::Quadric;
 use crate::sampling::cell;
 use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
+use crate::sampling::meeting::{FillGrid, MeetingRun};
 use crate::sampling::polygon::Polygon;
 use crate::sampling::regions::Region;
 use crate::sampling::storage::{Bounds, Lift, LiftRef, Rounding};
@@ -536,15 +537,14 @@ impl RegionJob<'_> {
         // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as usize, ny as usize);
-        let grid = |i: usize, j: usize| {
-            // Exact ends, so that the grid spans the bounds.
-            #[allow(clippy::cast_precision_loss)]
-            let (x, y) = (i as f64, j as f64);
-            DVec2::new(
-                if i == nx { hi.x } else { lo.x + cell.x * x },
-                if j == ny { hi.y } else { lo.y + cell.y * y },
-            )
+        let fill_grid = FillGrid {
+            lo,
+            hi,
+            cell,
+            nx,
+            ny,
         };
+        let grid = |i: usize, j: usize| fill_grid.point(i, j);
         out.reserve(nx * ny);
         let mut inside = vec![false; (nx + 1) * (ny + 1)];
         for j in 0..=ny {
@@ -552,7 +552,14 @@ impl RegionJob<'_> {
                 inside[j * (nx + 1) + i] = region.contains(grid(i, j));
             }
         }
+        // The grid's columns increase along a row (see `MeetingRun`).
+        let increasing = nx == 1 || grid(nx - 1, 0).x <= hi.x;
         for j in 0..ny {
+            let run = if increasing {
+                MeetingRun::of_row(region, &inside, j, fill_grid)
+            } else {
+                MeetingRun::UNKNOWN
+            };
             for i in 0..nx {
                 let (a, b) = (grid(i, j), grid(i + 1, j + 1));
                 let k = j * (nx + 1) + i;
@@ -564,7 +571,7 @@ impl RegionJob<'_> {
                 ];
                 if corners.iter().all(|c| *c) {
                     out.push(lift.sample(0.5 * (a + b), &inside_bounds));
-                } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
+                } else if corners.iter().any(|c| *c) || run.meets(i, region, a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
             }
