@@ -591,14 +591,15 @@ fn sphere_boxes(scene: &Scene, bounds: PropBounds, radius: f32, splats: &PropSpl
     let mut data = (*splats.0).clone();
     assert_eq!(samples.samples.len(), data.splats.len(), "the same samples");
     for (record, s) in data.splats.iter_mut().zip(&samples.samples) {
-        assert_eq!(record.position, s.position.as_vec3(), "in the same order");
+        assert_eq!(record.position, s.position, "in the same order");
         let n = record.normal;
         if n.length_squared() < 0.25 {
             continue;
         }
         let r = f64::from(s.radius);
         let hf = &samples.patches[s.patch as usize].heightfield;
-        let (low, high) = hf.distortion_bounds(s.uv - DVec2::splat(r), s.uv + DVec2::splat(r));
+        let uv = s.uv.as_dvec2();
+        let (low, high) = hf.distortion_bounds(uv - DVec2::splat(r), uv + DVec2::splat(r));
         let extent = r * (high - low);
         let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
         record.tangent = helper.cross(n).normalize();

@@ -10,7 +10,9 @@
 //! `SAMPLE_THREADS=N` runs it on `N` threads (CPU time then sums them).
 //! With the environment variable `SAMPLE_HASH` set it also prints a hash
 //! of the sample set (every field of every sample), to check that a change
-//! keeps the samples bit-identical.
+//! keeps the samples bit-identical, and a hash of their geometry (position,
+//! normal, plane point and patch, as stored in `f32`: a base that stored
+//! them in `f64` hashes them rounded to `f32` to compare).
 //!
 //! It measures only with `--bench` among its arguments (`cargo bench`
 //! passes it): `cargo test --all-targets` runs it without, and it then
@@ -105,6 +107,7 @@ fn main() {
     // Off by default: the hash would add to a profiler's instruction count.
     if std::env::var_os("SAMPLE_HASH").is_some() {
         println!("sample set hash {:016x}", sample_hash(&set.samples));
+        println!("geometry hash {:016x}", geometry_hash(&set.samples));
     }
 }
 
@@ -118,19 +121,37 @@ fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
         h = (h ^ bits).wrapping_mul(0x0100_0000_01b3);
     };
     for s in samples {
-        for v in [s.position, s.normal] {
-            for c in v.to_array() {
-                eat(c.to_bits());
-            }
-        }
-        eat(s.uv.x.to_bits());
-        eat(s.uv.y.to_bits());
-        eat(u64::from(s.patch));
+        eat_geometry(&mut eat, s);
         for bound in [s.radius, s.cell.x, s.cell.y] {
             eat(u64::from(bound.to_bits()));
         }
     }
     h
+}
+
+/// A hash of the position, normal, plane point and patch of every sample,
+/// in order (FNV-1a, as [`sample_hash`]): the fields that the bounds'
+/// widening for the `f32` rounding leaves alone.
+fn geometry_hash(samples: &[chisel_quadric::Sample]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325_u64;
+    let mut eat = |bits: u64| {
+        h = (h ^ bits).wrapping_mul(0x0100_0000_01b3);
+    };
+    for s in samples {
+        eat_geometry(&mut eat, s);
+    }
+    h
+}
+
+fn eat_geometry(eat: &mut impl FnMut(u64), s: &chisel_quadric::Sample) {
+    for v in [s.position, s.normal] {
+        for c in v.to_array() {
+            eat(u64::from(c.to_bits()));
+        }
+    }
+    eat(u64::from(s.uv.x.to_bits()));
+    eat(u64::from(s.uv.y.to_bits()));
+    eat(u64::from(s.patch));
 }
 
 /// CPU time of all threads of this process, seconds (Linux schedstat;

@@ -84,8 +84,8 @@ pub use frame::PrincipalFrame;
 pub use quadric::{AFFINE_TOLERANCE, Quadric, affine_inverse, snap_affine};
 pub use ray::{Hit, LineHits, Ray, Span};
 pub use sampling::{
-    BoundingSphere, DEFAULT_MAX_MEMORY, DEFAULT_MAX_SAMPLES, MAX_BOUNDS_RATIO, Sample,
-    SampleOptions, SampleSet, SamplingCost, f32_at_least, sample, sampling_cost,
+    BoundingSphere, DEFAULT_MAX_MEMORY, DEFAULT_MAX_SAMPLES, MAX_BOUNDS_RATIO, MAX_COORDINATE,
+    Sample, SampleOptions, SampleSet, SamplingCost, f32_at_least, sample, sampling_cost,
 };
 pub use scene::Scene;
 pub use splats::{

@@ -124,12 +124,14 @@ impl SplatSet {
             let patch = samples.patch_of(s);
             let product = &dnf.products()[patch.product as usize];
             let r = f64::from(s.radius);
+            let (position, normal, uv) =
+                (s.position.as_dvec3(), s.normal.as_dvec3(), s.uv.as_dvec2());
             list.clear();
             for (j, l) in product.iter().enumerate() {
                 if j == patch.literal as usize {
                     continue;
                 }
-                if distances[l.quadric].distance(s.position).abs() < r {
+                if distances[l.quadric].distance(position).abs() < r {
                     list.push(literal_reference(*l));
                 }
             }
@@ -147,17 +149,17 @@ impl SplatSet {
             };
             let own = product[patch.literal as usize];
             let hf = &patch.heightfield;
-            let (dmin, dmax) = hf.distortion_bounds(s.uv - DVec2::splat(r), s.uv + DVec2::splat(r));
+            let (dmin, dmax) = hf.distortion_bounds(uv - DVec2::splat(r), uv + DVec2::splat(r));
             let cell = cell_box(hf, s).unwrap_or_else(|| {
                 let extent = r * (dmax - dmin);
                 CellBox {
                     normal_extent: if extent.is_finite() { extent.min(r) } else { r },
-                    ..CellBox::sphere(s.normal, r)
+                    ..CellBox::sphere(normal, r)
                 }
             });
             splats.push(Splat {
-                position: s.position,
-                normal: s.normal,
+                position,
+                normal,
                 radius: r,
                 normal_extent: cell.normal_extent,
                 tangent: cell.tangent,
@@ -261,8 +263,9 @@ impl CellBox {
 /// Steps of the bound on `ε` in [`cell_box`].
 const CELL_BOX_STEPS: u32 = 4;
 
-/// Relative widening of a [`cell_box`] against rounding (the sample is
-/// polished onto the quadric after its plane point was lifted).
+/// Relative widening of a [`cell_box`] against the `f64` rounding of its
+/// bounds (the sample's own offset from the lifted plane point is added
+/// exactly).
 const CELL_BOX_MARGIN: f64 = 1e-9;
 
 /// The box around sample `s` of heightfield `hf` that holds the surface
@@ -278,32 +281,37 @@ const CELL_BOX_MARGIN: f64 = 1e-9;
 /// theorem, `ε = ∫₀¹ (∇t(uv + sΔ) − g)·Δ ds`; for `s` in
 /// `[(k − 1)/K, k/K]` the point lies in the box `uv ± (k/K) h`, so
 /// `|ε| ≤ (1/K) Σₖ Σᵢ hᵢ max|∇ᵢt − gᵢ|` over those boxes
-/// ([`Heightfield::gradient_bounds`], `K` = [`CELL_BOX_STEPS`]: about
+/// ([`Heightfield::gradient_bounds`], `K` = `CELL_BOX_STEPS`: about
 /// `5/8` of the one-box bound where `∇t` varies linearly). Along any unit `d`,
 /// `|d·Δp| ≤ hₓ|d·A₁| + h_y|d·A₂| + |ε||d·Z|`: the box's half-extents
-/// along `t₁ ∝ A₁ − (A₁·n)n`, `t₂ = n × t₁` and `n` (each capped at `r`).
+/// along `t₁ ∝ A₁ − (A₁·n)n`, `t₂ = n × t₁` and `n` (each capped at `r`),
+/// plus `|p − P(uv)|`, the offset of the box's centre, the sample's stored
+/// position `p`, from the surface point `P(uv)` the offsets `Δp` start at
+/// (the sample was polished onto the quadric and rounded to `f32`).
 ///
 /// [`Heightfield::gradient_bounds`]: crate::sampling::heightfield::Heightfield::gradient_bounds
 #[must_use]
 pub fn cell_box(hf: &Heightfield, s: &Sample) -> Option<CellBox> {
     let r = f64::from(s.radius);
-    let n = s.normal;
+    let n = s.normal.as_dvec3();
     if n.length_squared().is_nan() || n.length_squared() <= 0.25 || !s.cell.is_finite() {
         return None;
     }
+    let (position, uv) = (s.position.as_dvec3(), s.uv.as_dvec2());
     let half = s.cell.as_dvec2().min(DVec2::splat(r));
-    let g = hf.gradient(s.uv)?;
+    let g = hf.gradient(uv)?;
+    let offset = position.distance(hf.point(uv)?);
     let mut eps = 0.0;
     for k in 1..=CELL_BOX_STEPS {
         let part = f64::from(k) / f64::from(CELL_BOX_STEPS);
-        let (low, high) = hf.gradient_bounds(s.uv - part * half, s.uv + part * half)?;
+        let (low, high) = hf.gradient_bounds(uv - part * half, uv + part * half)?;
         eps += (high - g).max(g - low).dot(half) / f64::from(CELL_BOX_STEPS);
     }
     let (x, y, z) = (hf.axes.x_axis, hf.axes.y_axis, hf.axes.z_axis);
     let (a1, a2) = (x + g.x * z, y + g.y * z);
     let t1 = (a1 - a1.dot(n) * n).try_normalize()?;
     let t2 = n.cross(t1);
-    let margin = CELL_BOX_MARGIN * (r + s.position.length());
+    let margin = CELL_BOX_MARGIN * (r + position.length()) + offset;
     let extent = |d: DVec3| {
         let e = half.x * d.dot(a1).abs() + half.y * d.dot(a2).abs() + eps * d.dot(z).abs();
         (e * (1.0 + CELL_BOX_MARGIN) + margin).min(r)

@@ -36,10 +36,11 @@
 //! let options = SampleOptions::new(0.05, BoundingSphere::new(DVec3::ZERO, 1.5)?)?;
 //! let set = sample(&dnf, &options)?;
 //! // Every sample is on the sphere (z ≥ 0) or on the disc z = 0.
+//! // Positions are stored in `f32`: on the surface up to its rounding.
 //! for s in &set.samples {
-//!     let p = s.position;
-//!     assert!(((p.length() - 1.0).abs() < 1e-12 && p.z >= -1e-12)
-//!         || (p.z.abs() < 1e-12 && p.length() <= 1.0 + 1e-12));
+//!     let p = s.position.as_dvec3();
+//!     assert!(((p.length() - 1.0).abs() < 1e-7 && p.z >= -1e-7)
+//!         || (p.z.abs() < 1e-7 && p.length() <= 1.0 + 1e-7));
 //! }
 //! # Ok::<(), chisel_quadric::Error>(())
 //! ```
@@ -49,14 +50,16 @@ pub mod cell;
 mod cost;
 pub mod curved;
 pub mod heightfield;
+mod meeting;
 pub mod partial;
 pub mod polygon;
 pub mod regions;
 pub mod separable;
+pub mod storage;
 mod subdivide;
 pub mod warp;
 
-use glam::{DVec2, DVec3, Vec2};
+use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
@@ -130,6 +133,11 @@ pub const DEFAULT_MAX_SAMPLES: u64 = 10_000_000;
 /// subdivision limit of halvings to come down to the splat radius.
 pub const MAX_BOUNDS_RATIO: f64 = (1u64 << 24) as f64;
 
+/// The largest coordinate magnitude of the bounding sphere's box
+/// (`|Cᵢ| + R`) that [`sample`] accepts: samples are stored in `f32`
+/// ([`Sample`], at most about `3.4·10³⁸`), with room for the rounding.
+pub const MAX_COORDINATE: f64 = 1e37;
+
 impl SampleOptions {
     /// Options with splat radius `radius` inside `bounds` and the default
     /// threshold `0.1`.
@@ -147,32 +155,38 @@ impl SampleOptions {
     }
 }
 
-/// One surface sample (80 bytes: the output of a sampling run is written
-/// once, so its size is the run's page faults).
+/// One surface sample, in `f32` (48 bytes: the output of a sampling run
+/// is written once, so its size is the run's page faults).
 ///
-/// The literal, product and quadric it lies on are those of its patch
-/// ([`SampleSet::patch_of`]). The covering bounds [`radius`](Self::radius)
-/// and [`cell`](Self::cell) are stored as `f32` rounded up (away from
-/// zero), so every bound derived from them stays conservative.
+/// The position, normal and plane point are the computed (`f64`) ones
+/// rounded to the nearest `f32`, in the frame of the normal form (the
+/// prop's local frame). The covering bounds [`radius`](Self::radius) and
+/// [`cell`](Self::cell) are widened by that rounding and rounded up to
+/// `f32` ([`storage`]), so the coverage guarantee holds for the stored
+/// sample, and every bound derived from them stays conservative. The
+/// literal, product and quadric it lies on are those of its patch
+/// ([`SampleSet::patch_of`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
-    /// The point on the quadric and on the CSG surface.
-    pub position: DVec3,
+    /// The point on the quadric and on the CSG surface (within the
+    /// rounding to `f32`).
+    pub position: Vec3,
     /// The solid's outward unit normal there (zero at a singular point).
-    pub normal: DVec3,
+    pub normal: Vec3,
     /// Its plane coordinates on its patch.
-    pub uv: DVec2,
+    pub uv: Vec2,
     /// Index into [`SampleSet::patches`]: the heightfield of the literal
     /// it was sampled for.
     pub patch: u32,
-    /// The radius it must cover, `≤ r` rounded up to `f32` (reduced where
-    /// regions are small, §6.1).
+    /// The radius it must cover, `≤ r` (reduced where regions are small,
+    /// §6.1) plus the rounding of [`position`](Self::position), rounded up.
     pub radius: f32,
     /// Half size of the box around [`uv`](Self::uv) (plane coordinates of
     /// its patch) that holds the plane points of every surface point the
-    /// sample is there to cover (its fill cell, or its region), rounded up
-    /// to `f32`: the renderer bounds its splat by the surface over that
-    /// box. `+∞` where only [`radius`](Self::radius) bounds them.
+    /// sample is there to cover (its fill cell, or its region), plus the
+    /// rounding of `uv`, rounded up: the renderer bounds its splat by the
+    /// surface over that box. `+∞` where only [`radius`](Self::radius)
+    /// bounds them.
     pub cell: Vec2,
 }
 
@@ -479,6 +493,16 @@ impl<'a> SamplingRun<'a> {
                 ),
             });
         }
+        let reach = (options.bounds.centre.abs() + options.bounds.radius).max_element();
+        if reach > MAX_COORDINATE {
+            return Err(Error::CoverageNotReached {
+                reason: format!(
+                    "the bounding sphere reaches {reach:e}, beyond {MAX_COORDINATE:e}: samples \
+                     are stored in f32; give bounds closer around the solid, in a frame nearer \
+                     the origin"
+                ),
+            });
+        }
         let sphere = options.bounds;
         let tables = quadric_regions(dnf, sphere);
         let cost = cost_of(dnf, &tables);
@@ -555,6 +579,7 @@ impl<'a> SamplingRun<'a> {
                 .distance
                 .other_terms(patch.product as usize, patch.literal as usize),
             spare: std::cell::RefCell::new(Vec::new()),
+            rounding: storage::Rounding::new(&self.sphere, &patch.heightfield),
         };
         let mut stats = SamplingStats {
             basic_regions: 1,

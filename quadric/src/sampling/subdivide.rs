@@ -50,18 +50,18 @@
 
 use std::cell::{Cell, RefCell};
 
-use glam::{DVec2, DVec3, Vec2};
+use glam::{DVec2, DVec3};
 
 use crate::csg::{CsgDistance, OtherTerms};
 use crate::quadric::Quadric;
 use crate::sampling::cell;
 use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
+use crate::sampling::meeting::{FillGrid, MeetingRun};
 use crate::sampling::polygon::Polygon;
 use crate::sampling::regions::Region;
-use crate::sampling::{
-    BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats, f32_at_least,
-};
+use crate::sampling::storage::{Bounds, Lift, LiftRef, Rounding};
+use crate::sampling::{BoundingSphere, Sample, SampleBudget, SampleOptions, SamplingStats};
 
 /// Regions whose distortion bound exceeds this are subdivided before they
 /// are classified. It must be at least `√3`, the largest distortion inside
@@ -115,6 +115,8 @@ pub(crate) struct RegionJob<'a> {
     pub others: OtherTerms,
     /// Buffers of culled terms no longer in use ([`CsgDistance::cull_into`]).
     pub spare: RefCell<Vec<OtherTerms>>,
+    /// How the samples are stored in `f32`.
+    pub rounding: Rounding,
 }
 
 /// Where a region lies: its subdivision depth, whether its surface is
@@ -528,19 +530,21 @@ impl RegionJob<'_> {
         }
         let cell = DVec2::new(size.x / nx, size.y / ny);
         let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
+        // The bounds of every inside cell, rounded once.
+        let inside_bounds = Bounds::shared(&self.rounding, radius, 0.5 * cell);
+        let lift = self.lift();
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as usize, ny as usize);
-        let grid = |i: usize, j: usize| {
-            // Exact ends, so that the grid spans the bounds.
-            #[allow(clippy::cast_precision_loss)]
-            let (x, y) = (i as f64, j as f64);
-            DVec2::new(
-                if i == nx { hi.x } else { lo.x + cell.x * x },
-                if j == ny { hi.y } else { lo.y + cell.y * y },
-            )
+        let fill_grid = FillGrid {
+            lo,
+            hi,
+            cell,
+            nx,
+            ny,
         };
+        let grid = |i: usize, j: usize| fill_grid.point(i, j);
         out.reserve(nx * ny);
         let mut inside = vec![false; (nx + 1) * (ny + 1)];
         for j in 0..=ny {
@@ -548,7 +552,14 @@ impl RegionJob<'_> {
                 inside[j * (nx + 1) + i] = region.contains(grid(i, j));
             }
         }
+        // The grid's columns increase along a row (see `MeetingRun`).
+        let increasing = nx == 1 || grid(nx - 1, 0).x <= hi.x;
         for j in 0..ny {
+            let run = if increasing {
+                MeetingRun::of_row(region, &inside, j, fill_grid)
+            } else {
+                MeetingRun::UNKNOWN
+            };
             for i in 0..nx {
                 let (a, b) = (grid(i, j), grid(i + 1, j + 1));
                 let k = j * (nx + 1) + i;
@@ -559,8 +570,8 @@ impl RegionJob<'_> {
                     inside[k + nx + 2],
                 ];
                 if corners.iter().all(|c| *c) {
-                    out.push(self.sample(0.5 * (a + b), radius, 0.5 * cell));
-                } else if corners.iter().any(|c| *c) || region.meets_box(a, b) {
+                    out.push(lift.sample(0.5 * (a + b), &inside_bounds));
+                } else if corners.iter().any(|c| *c) || run.meets(i, region, a, b) {
                     self.cover_box(region, delta, a, b, 0, out);
                 }
             }
@@ -598,10 +609,13 @@ impl RegionJob<'_> {
             return;
         };
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        // One square root of the largest squared distance (`√` is monotone
+        // and correctly rounded: the same as the largest distance).
         let far = corners
             .iter()
-            .map(|c| c.distance(point))
-            .fold(0.0, f64::max);
+            .map(|c| c.distance_squared(point))
+            .fold(0.0, f64::max)
+            .sqrt();
         // The box is in the region's cell of the warp, where the distortion
         // is extreme at box corners (and unbounded where `r ≤ 0` at one).
         let (_, box_delta) = self.heightfield.distortion_bounds_at(&corners);
@@ -649,51 +663,60 @@ impl RegionJob<'_> {
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         out.reserve(cells as usize);
         let cell = DVec2::new(size.x / nx, size.y / ny);
+        let half_cell = 0.5 * cell;
         let half_diagonal = 0.5 * cell.length();
-        let radius = cell::reach(0.5 * cell, delta, slopes).min(self.options.radius);
+        let radius = cell::reach(half_cell, delta, slopes).min(self.options.radius);
+        // The bounds of a sample at its cell's centre (every cell of a
+        // rectangle), rounded once.
+        let centre_bounds = Bounds::shared(&self.rounding, radius, half_cell);
+        let lift = self.lift();
         // Cell counts are positive integers stored in f64, within the
         // sample budget just reserved, each below 2^32.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let (nx, ny) = (nx as u32, ny as u32);
+        let (rectangle, corners) = (region.is_rectangle(), region.vertices());
         for j in 0..ny {
+            let y = f64::from(j) + 0.5;
             for i in 0..nx {
-                let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, f64::from(j) + 0.5);
-                let p = region.closest_point(centre);
-                if p.distance(centre) <= half_diagonal {
-                    out.push(self.sample(p, radius, 0.5 * cell + (p - centre).abs()));
+                let centre = lo + cell * DVec2::new(f64::from(i) + 0.5, y);
+                // A rectangle's nearest point is the clamp to its corners
+                // (`Polygon::closest_point`), inline.
+                let p = if rectangle {
+                    centre.clamp(corners[0], corners[2])
+                } else {
+                    region.closest_point(centre)
+                };
+                if p == centre {
+                    out.push(lift.sample(p, &centre_bounds));
+                } else if p.distance(centre) <= half_diagonal {
+                    out.push(self.sample(p, radius, half_cell + (p - centre).abs()));
                 }
             }
         }
     }
 
-    /// The sample above plane point `uv`, polished onto the quadric, that
-    /// covers the surface over the plane box `uv ± cell` within `radius`.
+    /// The sample above plane point `uv` that covers the surface over the
+    /// plane box `uv ± cell` within `radius`.
     fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
-        let raw = self
-            .heightfield
-            .point(uv)
-            .unwrap_or(self.heightfield.centre);
-        // One Newton step onto the quadric; the normal from the same
-        // gradient (the step moves the point by rounding errors only).
-        let g = self.quadric.gradient(raw);
-        let g2 = g.length_squared();
-        let (position, normal) = if g2 > 0.0 && g2.is_finite() {
-            let position = raw - g * (self.quadric.value(raw) / g2);
-            (position, g * (self.outward_sign / g2.sqrt()))
-        } else {
-            let normal = self
-                .quadric
-                .normal(raw)
-                .map_or(DVec3::ZERO, |n| n * self.outward_sign);
-            (raw, normal)
-        };
-        Sample {
-            position,
-            normal,
-            uv,
+        LiftRef {
+            heightfield: self.heightfield,
+            quadric: self.quadric,
+            outward_sign: self.outward_sign,
             patch: self.patch,
-            radius: f32_at_least(radius),
-            cell: Vec2::new(f32_at_least(cell.x), f32_at_least(cell.y)),
+            rounding: &self.rounding,
+        }
+        .sample(uv, &Bounds::shared(&self.rounding, radius, cell))
+    }
+
+    /// A copy of what lifting a plane point to a sample reads, for a fill's
+    /// loop (a local copy, which its stores to the output cannot alias).
+    fn lift(&self) -> Lift {
+        Lift {
+            heightfield: *self.heightfield,
+            quadric: *self.quadric,
+            outward_sign: self.outward_sign,
+            patch: self.patch,
+            rounding: self.rounding,
         }
     }
 }

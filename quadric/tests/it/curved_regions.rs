@@ -52,21 +52,21 @@ fn check_sound(dnf: &Dnf, set: &SampleSet, what: &str) {
     let bound = set.options.bounds.radius;
     for s in &set.samples {
         let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
-        let g = q.gradient(s.position).length();
+        let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+        // Stored in f32: on the surface up to that rounding.
+        let rounding = common::f32_rounding(p);
+        let g = q.gradient(p).length();
         assert!(
-            q.value(s.position).abs() <= 1e-12 * g * bound,
-            "{what}: sample {} off its quadric",
-            s.position
+            q.value(p).abs() <= g * (1e-12 * bound + rounding),
+            "{what}: sample {p} off its quadric"
         );
-        assert!(s.radius > 0.0 && s.radius <= chisel_quadric::f32_at_least(set.options.radius));
-        assert!(set.options.bounds.signed_distance(s.position) <= 1e-9 * bound);
-        if s.normal != DVec3::ZERO {
-            let eps = 1e-7 * bound;
+        assert!(s.radius > 0.0 && f64::from(s.radius) <= common::largest_radius(set));
+        assert!(set.options.bounds.signed_distance(p) <= 1e-9 * bound + rounding);
+        if n != DVec3::ZERO {
+            let eps = 1e-7 * bound + 4.0 * rounding;
             assert!(
-                dnf.contains(s.position - s.normal * eps)
-                    && !dnf.contains(s.position + s.normal * eps),
-                "{what}: sample {} not on the CSG surface",
-                s.position
+                dnf.contains(p - n * eps) && !dnf.contains(p + n * eps),
+                "{what}: sample {p} not on the CSG surface"
             );
         }
     }

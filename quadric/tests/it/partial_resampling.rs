@@ -162,14 +162,14 @@ fn assert_valid(name: &str, dnf: &Dnf, set: &SampleSet) {
     }
     assert!(checked > 1000, "{name}: only {checked} reference points");
     assert_eq!(missed, 0, "{name}: {missed} of {checked} uncovered");
-    let eps = 1e-7 * bound;
     for s in &set.samples {
-        if s.normal != DVec3::ZERO {
+        let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+        // Stored in f32: on the surface up to that rounding.
+        let eps = 1e-7 * bound + 4.0 * common::f32_rounding(p);
+        if n != DVec3::ZERO {
             assert!(
-                dnf.contains(s.position - s.normal * eps)
-                    && !dnf.contains(s.position + s.normal * eps),
-                "{name}: sample {} not on the edited surface",
-                s.position
+                dnf.contains(p - n * eps) && !dnf.contains(p + n * eps),
+                "{name}: sample {p} not on the edited surface"
             );
         }
     }

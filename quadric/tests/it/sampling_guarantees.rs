@@ -71,27 +71,25 @@ fn samples_lie_on_the_csg_surface() {
     for name in SCENES {
         let (_, bound) = bounds(name);
         let (dnf, set) = sampled(name, bound / 25.0);
-        let eps = 1e-7 * bound;
         for s in &set.samples {
             let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
-            let g = q.gradient(s.position).length();
+            let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+            // Stored in f32: on the surface up to that rounding.
+            let rounding = common::f32_rounding(p);
+            let eps = 1e-7 * bound + 4.0 * rounding;
+            let g = q.gradient(p).length();
             assert!(
-                q.value(s.position).abs() <= 1e-12 * g * bound,
-                "{name}: sample {} off its quadric",
-                s.position
+                q.value(p).abs() <= g * (1e-12 * bound + rounding),
+                "{name}: sample {p} off its quadric"
             );
-            assert!(s.radius > 0.0 && s.radius <= chisel_quadric::f32_at_least(set.options.radius));
-            assert!(set.options.bounds.signed_distance(s.position) <= eps);
+            assert!(s.radius > 0.0 && f64::from(s.radius) <= common::largest_radius(&set));
+            assert!(set.options.bounds.signed_distance(p) <= eps);
             // On the CSG surface: inside on one side, outside on the other,
             // unless the normal is degenerate (a cone's apex).
-            if s.normal != DVec3::ZERO {
-                let inside = dnf.contains(s.position - s.normal * eps);
-                let outside = !dnf.contains(s.position + s.normal * eps);
-                assert!(
-                    inside && outside,
-                    "{name}: sample {} not on the surface",
-                    s.position
-                );
+            if n != DVec3::ZERO {
+                let inside = dnf.contains(p - n * eps);
+                let outside = !dnf.contains(p + n * eps);
+                assert!(inside && outside, "{name}: sample {p} not on the surface");
             }
         }
     }
@@ -110,4 +108,27 @@ fn output_is_independent_of_thread_count() {
         };
         assert_eq!(run(1), run(2), "{name}");
     }
+}
+
+/// Samples are stored in `f32`: bounds that reach past
+/// [`MAX_COORDINATE`](chisel_quadric::MAX_COORDINATE) are refused with a
+/// typed error before anything is sampled; the same solid in bounds near
+/// the origin is sampled.
+#[test]
+fn bounds_beyond_the_f32_range_of_samples_are_refused() {
+    use chisel_quadric::{BoundingSphere, CsgDag, Error, MAX_COORDINATE, Quadric};
+    let mut dag = CsgDag::new();
+    let ball = dag.primitive(Quadric::sphere(DVec3::ZERO, 1.0).unwrap(), [0.8; 3]);
+    let dnf = Dnf::from_dag(&dag, ball).unwrap();
+    let sampled = |centre: DVec3| {
+        let bounds = BoundingSphere::new(centre, 1.5).unwrap();
+        sample(&dnf, &SampleOptions::new(0.1, bounds).unwrap())
+    };
+    let far = DVec3::new(0.0, -3.0 * MAX_COORDINATE, 0.0);
+    assert!(
+        matches!(sampled(far), Err(Error::CoverageNotReached { .. })),
+        "{:?}",
+        sampled(far).map(|s| s.samples.len())
+    );
+    assert!(!sampled(DVec3::ZERO).unwrap().samples.is_empty());
 }

@@ -24,21 +24,21 @@ fn check(dnf: &Dnf, r: f64, what: &str) -> usize {
     let set = sample(dnf, &options).unwrap();
     for s in &set.samples {
         let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
-        let g = q.gradient(s.position).length();
+        let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+        // Stored in f32: on the surface up to that rounding.
+        let rounding = common::f32_rounding(p);
+        let g = q.gradient(p).length();
         assert!(
-            q.value(s.position).abs() <= 1e-10 * g.max(1e-3),
-            "{what}: sample {} off its quadric",
-            s.position
+            q.value(p).abs() <= 1e-10 * g.max(1e-3) + g * rounding,
+            "{what}: sample {p} off its quadric"
         );
-        assert!(sphere.signed_distance(s.position) <= 1e-9);
+        assert!(sphere.signed_distance(p) <= 1e-9 + rounding);
         // On the CSG surface: inside just behind, outside just in front.
-        if s.normal != DVec3::ZERO {
-            let eps = 1e-9;
+        if n != DVec3::ZERO {
+            let eps = 1e-9 + 4.0 * rounding;
             assert!(
-                dnf.contains(s.position - s.normal * eps)
-                    && !dnf.contains(s.position + s.normal * eps),
-                "{what}: sample {} not on the CSG surface",
-                s.position
+                dnf.contains(p - n * eps) && !dnf.contains(p + n * eps),
+                "{what}: sample {p} not on the CSG surface"
             );
         }
     }

@@ -52,7 +52,8 @@ fn splat_buffers_are_consistent_and_clip_correctly() {
                 .enumerate()
                 .filter(|(j, l)| {
                     *j != set.patch_of(s).literal as usize
-                        && distances[l.quadric].distance(s.position).abs() < f64::from(s.radius)
+                        && distances[l.quadric].distance(s.position.as_dvec3()).abs()
+                            < f64::from(s.radius)
                 })
                 .map(|(_, l)| {
                     let q = l.quadric as u32;
@@ -153,10 +154,10 @@ fn every_splat_box_holds_the_surface_over_its_cell() {
             for i in 0..=8 {
                 for j in 0..=8 {
                     let f = glam::DVec2::new(f64::from(i) / 4.0 - 1.0, f64::from(j) / 4.0 - 1.0);
-                    let Some(p) = hf.point(s.uv + half * f) else {
+                    let Some(p) = hf.point(s.uv.as_dvec2() + half * f) else {
                         continue;
                     };
-                    if p.distance(s.position) > r {
+                    if p.distance(s.position.as_dvec3()) > r {
                         continue;
                     }
                     checked += 1;

@@ -127,6 +127,23 @@ pub fn cameras(centre: DVec3, distance: f64, size: u32) -> Vec<chisel_quadric::C
 /// Sample positions and radii per `(quadric, grid cell)`.
 pub type Buckets = HashMap<(u32, [i64; 3]), Vec<(DVec3, f64)>>;
 
+/// The largest distance between a point `p` and its nearest `f32`s, from
+/// the stored `f32` point (`2⁻²⁴` of each coordinate's magnitude, twice
+/// over: `p` is within that much of the stored point, whose coordinates
+/// are within a factor `1 + 2⁻²⁴` of its own).
+pub fn f32_rounding(stored: DVec3) -> f64 {
+    2.0 * stored.abs().element_sum() * 2f64.powi(-24)
+}
+
+/// The largest stored radius a sample of `set` may have: the splat radius
+/// plus the rounding of a position in the bounding sphere's box to `f32`
+/// (`chisel_quadric::sampling::storage`), rounded up.
+pub fn largest_radius(set: &SampleSet) -> f64 {
+    let b = set.options.bounds;
+    let corner = b.centre.abs() + b.radius;
+    set.options.radius + f32_rounding(corner) + f64::from(f32::EPSILON) * set.options.radius
+}
+
 /// Samples bucketed by quadric and grid cell of size `cell`.
 pub struct SampleGrid {
     cell: f64,
@@ -147,11 +164,11 @@ impl SampleGrid {
             buckets: HashMap::new(),
         };
         for s in &set.samples {
-            let key = grid.key(s.position);
+            let key = grid.key(s.position.as_dvec3());
             grid.buckets
                 .entry((set.patch_of(s).quadric, key))
                 .or_default()
-                .push((s.position, f64::from(s.radius)));
+                .push((s.position.as_dvec3(), f64::from(s.radius)));
         }
         grid
     }

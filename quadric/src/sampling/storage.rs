@@ -1,0 +1,298 @@
+//! Samples stored in `f32`, with covering bounds widened by the rounding.
+//!
+//! Notation: `p`, `n`, `uv` a sample's position, normal and plane point as
+//! computed (`f64`), `p̃`, `ñ`, `ũv` the nearest `f32`s, `ρ` the radius and
+//! `h` the cell half size the sample must cover, `M` a bound on the
+//! magnitude of a coordinate, `ε(M) = 2⁻²⁴M + 2⁻¹⁵⁰`.
+//!
+//! A run's output is written once, so its bytes are its page faults: a
+//! [`Sample`] holds `p̃`, `ñ` and `ũv` (48 bytes, not 80). Rounding to the
+//! nearest `f32` moves a coordinate `x` with `|x| ≤ M` by at most `ε(M)`
+//! (half the `f32` spacing, at most `2⁻²³|x|` in the normal range and
+//! `2⁻¹⁴⁹` below it). A surface point within `ρ` of `p` is within
+//! `ρ + |p − p̃|` of `p̃`, and its plane point within `h + |uv − ũv|` of
+//! `ũv` along each axis; the stored bounds are those sums rounded up to
+//! `f32` (each sum first widened by `2⁻⁵⁰` of itself, more than the `f64`
+//! roundings of the sums), so the coverage guarantee holds for the stored
+//! sample as it did for the computed one.
+//!
+//! The errors are bounded once per patch, for positions inside the box
+//! `|pᵢ| ≤ Mᵢ` around the bounding sphere and plane points inside the
+//! patch's domain box (`L¹` norms, which bound the Euclidean one), so the
+//! bounds of a fill's cells are rounded once (`Bounds::shared`). A sample
+//! outside those boxes gets bounds from its own rounding errors, which are
+//! exact in `f64` (`x − f64(x̃)` of two nearby numbers).
+
+use glam::{DVec2, DVec3, Vec2};
+
+use crate::quadric::Quadric;
+use crate::sampling::heightfield::Heightfield;
+use crate::sampling::{BoundingSphere, Sample, f32_at_least};
+
+/// `2⁻²⁴`: the largest rounding error to `f32` relative to the magnitude.
+const RELATIVE: f64 = 1.0 / (1u64 << 24) as f64;
+
+/// `2⁻¹⁵⁰`: the largest rounding error to `f32` below its normal range.
+const ABSOLUTE: f64 = f64::from_bits(((1023 - 150) as u64) << 52);
+
+/// `1 + 2⁻⁵⁰`: the widening of a sum of non-negative `f64` terms that
+/// makes it at least the exact sum (each of the few roundings loses at most
+/// `2⁻⁵³` of the result).
+const WIDEN: f64 = 1.0 + 1.0 / (1u64 << 50) as f64;
+
+/// Magnitude limits above the bounding sphere's box, so that samples
+/// rounded onto its rim stay inside.
+const LIMIT_SLACK: f64 = 1.0 + 1e-6;
+
+/// How one patch's samples are rounded to `f32`, with the bounds of the
+/// rounding errors of positions and plane points within the limits.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rounding {
+    /// `M` for positions: `|Cᵢ| + R` of the bounding sphere, with slack.
+    position_limit: DVec3,
+    /// `Σᵢ ε(Mᵢ)`: bounds `|p − p̃|` for positions within the limit.
+    position_error: f64,
+    /// `M` for plane points: the patch's domain box, with slack.
+    uv_limit: DVec2,
+    /// `ε(Mᵢ)` per axis: bounds `|uvᵢ − ũvᵢ|` within the limit.
+    uv_error: DVec2,
+}
+
+/// `ε(m)` for `m ≥ 0`.
+fn error_bound(m: f64) -> f64 {
+    RELATIVE * m + ABSOLUTE
+}
+
+impl Rounding {
+    /// The rounding of the samples of heightfield `hf` inside `sphere`.
+    pub(crate) fn new(sphere: &BoundingSphere, hf: &Heightfield) -> Self {
+        let position_limit = (sphere.centre.abs() + sphere.radius) * LIMIT_SLACK;
+        let uv_limit = (hf.project(sphere.centre).abs() + sphere.radius) * LIMIT_SLACK;
+        let position_error = WIDEN
+            * (error_bound(position_limit.x)
+                + error_bound(position_limit.y)
+                + error_bound(position_limit.z));
+        Self {
+            position_limit,
+            position_error,
+            uv_limit,
+            uv_error: DVec2::new(error_bound(uv_limit.x), error_bound(uv_limit.y)) * WIDEN,
+        }
+    }
+
+    /// The stored sample at `position` with `normal` over plane point `uv`
+    /// of patch `patch`, covering `bounds`.
+    #[inline]
+    pub(crate) fn store(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        uv: DVec2,
+        patch: u32,
+        bounds: &Bounds,
+    ) -> Sample {
+        let (stored_position, stored_uv) = (position.as_vec3(), uv.as_vec2());
+        let within =
+            position.abs().cmple(self.position_limit).all() & uv.abs().cmple(self.uv_limit).all();
+        let (radius, cell) = if within {
+            (bounds.stored_radius, bounds.stored_cell)
+        } else {
+            // The exact rounding errors of this sample.
+            let moved = (position - stored_position.as_dvec3()).abs().element_sum();
+            let shifted = (uv - stored_uv.as_dvec2()).abs();
+            widened(bounds.radius, moved, bounds.cell, shifted)
+        };
+        Sample {
+            position: stored_position,
+            normal: normal.as_vec3(),
+            uv: stored_uv,
+            patch,
+            radius,
+            cell,
+        }
+    }
+}
+
+/// What lifting a plane point of one patch to a stored sample reads.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Lift {
+    /// The patch's heightfield.
+    pub heightfield: Heightfield,
+    /// Its quadric.
+    pub quadric: Quadric,
+    /// `1` where the solid is inside the quadric, `−1` outside.
+    pub outward_sign: f64,
+    /// The patch's index ([`Sample::patch`]).
+    pub patch: u32,
+    /// The rounding of its samples.
+    pub rounding: Rounding,
+}
+
+impl Lift {
+    /// The stored sample over plane point `uv`, covering `bounds`: the
+    /// surface point there, and the outward unit normal from the quadric's
+    /// gradient. The lifted point is on the quadric up to `f64` rounding,
+    /// far below the `f32` it is stored in (a Newton step onto the quadric
+    /// changed no stored sample of the shipped scenes). Inlined into the
+    /// fills' loops, which call it once per sample.
+    #[inline(always)]
+    pub(crate) fn sample(&self, uv: DVec2, bounds: &Bounds) -> Sample {
+        self.by_ref().sample(uv, bounds)
+    }
+
+    /// The same lifting, reading this copy.
+    #[inline(always)]
+    pub(crate) fn by_ref(&self) -> LiftRef<'_> {
+        LiftRef {
+            heightfield: &self.heightfield,
+            quadric: &self.quadric,
+            outward_sign: self.outward_sign,
+            patch: self.patch,
+            rounding: &self.rounding,
+        }
+    }
+}
+
+/// [`Lift`] by reference, for samples lifted one at a time.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LiftRef<'a> {
+    pub heightfield: &'a Heightfield,
+    pub quadric: &'a Quadric,
+    pub outward_sign: f64,
+    pub patch: u32,
+    pub rounding: &'a Rounding,
+}
+
+impl LiftRef<'_> {
+    /// See [`Lift::sample`].
+    #[inline(always)]
+    pub(crate) fn sample(self, uv: DVec2, bounds: &Bounds) -> Sample {
+        let hf = self.heightfield;
+        let raw = hf.point(uv).unwrap_or(hf.centre);
+        let g = self.quadric.gradient(raw);
+        let g2 = g.length_squared();
+        let normal = if g2 > 0.0 && g2.is_finite() {
+            g * (self.outward_sign / g2.sqrt())
+        } else {
+            self.quadric
+                .normal(raw)
+                .map_or(DVec3::ZERO, |n| n * self.outward_sign)
+        };
+        self.rounding.store(raw, normal, uv, self.patch, bounds)
+    }
+}
+
+/// The radius and cell half size a sample must cover, and their stored
+/// form for a sample within the limits of its patch's [`Rounding`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Bounds {
+    radius: f64,
+    cell: DVec2,
+    stored_radius: f32,
+    stored_cell: Vec2,
+}
+
+impl Bounds {
+    /// The bounds `radius` and `cell` (shared by the cells of a fill: the
+    /// stored form is rounded once).
+    #[inline]
+    pub(crate) fn shared(rounding: &Rounding, radius: f64, cell: DVec2) -> Self {
+        let (stored_radius, stored_cell) =
+            widened(radius, rounding.position_error, cell, rounding.uv_error);
+        Self {
+            radius,
+            cell,
+            stored_radius,
+            stored_cell,
+        }
+    }
+}
+
+/// `ρ + moved` and `h + shifted`, widened past the `f64` roundings and
+/// rounded up to `f32`.
+#[inline]
+fn widened(radius: f64, moved: f64, cell: DVec2, shifted: DVec2) -> (f32, Vec2) {
+    let cell = (cell + shifted) * WIDEN;
+    (
+        f32_at_least((radius + moved) * WIDEN),
+        Vec2::new(f32_at_least(cell.x), f32_at_least(cell.y)),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Quadric;
+    use crate::sampling::heightfield::LocalForm;
+
+    /// The constants are the powers of two they stand for.
+    #[test]
+    fn constants_are_exact_powers_of_two() {
+        assert_eq!(RELATIVE, 2f64.powi(-24));
+        assert_eq!(ABSOLUTE, 2f64.powi(-150));
+        assert_eq!(WIDEN - 1.0, 2f64.powi(-50));
+    }
+
+    /// `ε(M)` bounds the rounding of every `f64` of magnitude at most `M`,
+    /// also in the subnormal `f32` range, and is not loose by more than 2×
+    /// at the top of a binade.
+    #[test]
+    fn error_bound_holds_and_is_tight() {
+        let mut x = 1e-47_f64;
+        while x < 1e30 {
+            for y in [x, x * (1.0 + 3e-8), x.next_up(), (x * 1.5).next_down()] {
+                let err = (y - f64::from(y as f32)).abs();
+                assert!(
+                    err <= error_bound(y),
+                    "{y:e}: {err:e} > {:e}",
+                    error_bound(y)
+                );
+            }
+            x *= 1.37;
+        }
+        // Halfway between two f32s just below 2: the error is 2⁻²⁴.
+        let y = 2.0 - 3.0 * 2f64.powi(-24);
+        assert_eq!((y - f64::from(y as f32)).abs(), 2f64.powi(-24));
+        assert!(error_bound(y) < 2.0 * 2f64.powi(-24));
+    }
+
+    /// A stored sample reaches the surface points its computed one
+    /// reaches: `ρ̃ ≥ ρ + |p − p̃|`, `h̃ ≥ h + |uv − ũv|`, inside and outside
+    /// the limits; both ways give the same stored bounds where the exact
+    /// errors are the largest ones.
+    #[test]
+    fn stored_bounds_cover_the_rounding() {
+        let q = Quadric::sphere(DVec3::ZERO, 50.0).unwrap();
+        let hf = LocalForm::new(&q).heightfields()[0];
+        let sphere = BoundingSphere::new(DVec3::new(0.3, -7.0, 1.0), 60.0).unwrap();
+        let rounding = Rounding::new(&sphere, &hf);
+        let bounds = Bounds::shared(&rounding, 0.25, DVec2::new(0.1, 0.2));
+        let mut checked = [0; 2];
+        for i in 0..2000 {
+            let t = f64::from(i) * 0.618_033_988_7;
+            let position = DVec3::new(
+                67.0 * t.sin(),
+                71.0 * (1.3 * t).cos(),
+                3.0 + 0.1 * t.fract(),
+            );
+            let uv = DVec2::new(59.0 * (0.7 * t).cos(), 66.0 * t.sin());
+            let s = rounding.store(position, DVec3::Z, uv, 3, &bounds);
+            let moved = position.distance(s.position.as_dvec3());
+            let shifted = (uv - s.uv.as_dvec2()).abs();
+            assert!(f64::from(s.radius) >= 0.25 + moved, "{i}");
+            assert!(f64::from(s.cell.x) >= 0.1 + shifted.x, "{i}");
+            assert!(f64::from(s.cell.y) >= 0.2 + shifted.y, "{i}");
+            assert!(f64::from(s.radius) < 0.25 * (1.0 + 1e-4));
+            let within = position.abs().cmple(rounding.position_limit).all()
+                && uv.abs().cmple(rounding.uv_limit).all();
+            checked[usize::from(within)] += 1;
+            assert_eq!(s.patch, 3);
+            assert_eq!(s.normal, glam::Vec3::Z);
+        }
+        assert!(checked[0] > 100 && checked[1] > 100, "{checked:?}");
+        // Exact zero error (positions and plane points exact in f32):
+        // only the widening moves the bounds.
+        let far = rounding.store(DVec3::splat(1e3), DVec3::Z, DVec2::splat(1e3), 0, &bounds);
+        assert_eq!(far.radius, f32_at_least(0.25 * WIDEN));
+    }
+}
