@@ -202,10 +202,16 @@ impl Plane {
     /// orientation, same point set, smallest coefficients).
     #[must_use]
     pub fn normalized(&self) -> Plane {
-        let g_abc = gcd_u64(
-            gcd_u64(self.a.unsigned_abs(), self.b.unsigned_abs()),
-            self.c.unsigned_abs(),
-        );
+        // Most planes of general tools are already reduced: stop as soon
+        // as a partial gcd is 1.
+        let g_ab = gcd_u64(self.a.unsigned_abs(), self.b.unsigned_abs());
+        if g_ab == 1 {
+            return *self;
+        }
+        let g_abc = gcd_u64(g_ab, self.c.unsigned_abs());
+        if g_abc == 1 {
+            return *self;
+        }
         // g_abc > 0 because the normal is non-zero; gcd(g, d) = gcd(g, d mod g)
         // keeps the last gcd in 64 bits.
         let g = gcd_u64(g_abc, (self.d.unsigned_abs() % g_abc as u128) as u64);

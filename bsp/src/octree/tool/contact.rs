@@ -103,6 +103,34 @@ impl ConvexPiece {
         })
     }
 
+    /// The piece of a convex hull of integer points, from its arrays (the
+    /// piece [`ConvexPiece::of`] makes of the same polyhedron added to an
+    /// arena, without the arena): the vertices in the arena's order, and
+    /// per face in [`ConvexArena::faces_of`] order its plane, each side
+    /// `(from, to)` as vertex indices in the face's loop order.
+    pub(crate) fn from_hull(
+        vertices: Vec<[i64; 3]>,
+        faces: Vec<([i64; 3], i128)>,
+        sides: impl Iterator<Item = (u32, u32)>,
+    ) -> Option<ConvexPiece> {
+        let CellBox { min: lo, max: hi } = CellBox::enclosing(vertices.iter().copied())?;
+        let edges = sides
+            .filter(|(from, to)| from < to)
+            .map(|(from, to)| {
+                let (from, to) = (vertices[from as usize], vertices[to as usize]);
+                [0, 1, 2].map(|a| to[a] - from[a])
+            })
+            .collect();
+        Some(ConvexPiece {
+            lo,
+            hi,
+            faces,
+            vertices,
+            edges,
+            edge_axes: OnceLock::new(),
+        })
+    }
+
     /// The axes `e × x̂_a` with the piece's projections.
     fn edge_axes(&self) -> &[EdgeAxis] {
         self.edge_axes.get_or_init(|| {
