@@ -48,21 +48,7 @@ impl Tool {
     /// the piece's faces in [`ConvexArena::faces_of`] order, bounds one
     /// unit around the integer vertices.
     fn from_hull(hull: &HullPolygons) -> Tool {
-        let piece = ConvexPiece::from_hull(
-            hull.vertices.clone(),
-            hull.breadth_first
-                .iter()
-                .map(|&f| {
-                    let plane = hull.planes[f as usize];
-                    (plane.normal(), plane.offset())
-                })
-                .collect(),
-            hull.breadth_first.iter().flat_map(|&f| {
-                let corners = hull.face(f as usize);
-                let next = corners.iter().cycle().skip(1);
-                corners.iter().copied().zip(next.copied())
-            }),
-        );
+        let piece = ConvexPiece::from_hull(hull);
         let (mut min, mut max) = ([MAX_COORD; 3], [-MAX_COORD; 3]);
         for p in &hull.vertices {
             for a in 0..3 {

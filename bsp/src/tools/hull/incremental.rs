@@ -35,11 +35,6 @@ use crate::exact::Plane;
 pub(super) struct Incremental {
     /// Every face made, living or dead, in order of creation.
     pub(super) faces: Vec<Triangle>,
-    /// Whether each face is still on the hull.
-    pub(super) alive: Vec<bool>,
-    /// `neighbour[f][k]`: the face across edge `k` of `f` (edge `k` runs
-    /// from corner `k` to corner `k + 1`).
-    pub(super) neighbour: Vec<[u32; 3]>,
     /// Per early point, a living face it sees, or [`NONE`] (inside, or
     /// done).
     conflict: Vec<u32>,
@@ -76,17 +71,11 @@ impl Incremental {
         self.faces.reserve(expected);
         self.faces
             .extend(first.iter().map(|&f| Triangle::new(f, pts)));
-        self.alive.clear();
-        self.alive.reserve(expected);
-        self.alive.extend([true; 4]);
-        self.neighbour.clear();
-        self.neighbour.reserve(expected);
-        self.neighbour.extend([[NONE; 3]; 4]);
         for f in 0..4 {
             for k in 0..3 {
                 let v = self.faces[f].corners;
                 let (u, w) = (v[k], v[(k + 1) % 3]);
-                self.neighbour[f][k] = (0..4)
+                self.faces[f].neighbour[k] = (0..4)
                     .find(|&g| g != f && self.edge_slot(g, w, u).is_some())
                     .map_or(NONE, |g| g as u32);
             }
@@ -142,12 +131,12 @@ impl Incremental {
             self.visible.clear();
             self.stack.clear();
             self.stack.push(seed);
-            self.alive[seed as usize] = false;
+            self.faces[seed as usize].alive = false;
             while let Some(f) = self.stack.pop() {
                 self.visible.push(f);
-                for g in self.neighbour[f as usize] {
-                    if self.alive[g as usize] && self.faces[g as usize].sees(pts[p]) {
-                        self.alive[g as usize] = false;
+                for g in self.faces[f as usize].neighbour {
+                    if self.faces[g as usize].alive && self.faces[g as usize].sees(pts[p]) {
+                        self.faces[g as usize].alive = false;
                         self.stack.push(g);
                     }
                 }
@@ -160,18 +149,23 @@ impl Incremental {
                 let f = self.visible[i] as usize;
                 let v = self.faces[f].corners;
                 for k in 0..3 {
-                    let g = self.neighbour[f][k];
-                    if !self.alive[g as usize] {
+                    let g = self.faces[f].neighbour[k];
+                    if !self.faces[g as usize].alive {
                         continue;
                     }
                     let (u, w) = (v[k], v[(k + 1) % 3]);
                     let t = self.faces.len() as u32;
-                    self.faces.push(Triangle::new([u, w, p], pts));
-                    self.alive.push(true);
-                    self.first_point.push(NONE);
-                    self.neighbour.push([g, NONE, NONE]);
-                    if let Some(j) = self.edge_slot(g as usize, w, u) {
-                        self.neighbour[g as usize][j] = t;
+                    let mut new = Triangle::new([u, w, p], pts);
+                    new.neighbour[0] = g;
+                    self.faces.push(new);
+                    if p < late {
+                        self.first_point.push(NONE);
+                    }
+                    // `g` has `f` across the same edge (two faces of a
+                    // hull share at most one edge).
+                    let across = &mut self.faces[g as usize].neighbour;
+                    if let Some(j) = across.iter().position(|&h| h == f as u32) {
+                        across[j] = t;
                     }
                     self.new_face_from[u] = t;
                 }
@@ -182,8 +176,8 @@ impl Incremental {
             for t in first_new..self.faces.len() as u32 {
                 let w = self.faces[t as usize].corners[1];
                 let s = self.new_face_from[w];
-                self.neighbour[t as usize][1] = s;
-                self.neighbour[s as usize][2] = t;
+                self.faces[t as usize].neighbour[1] = s;
+                self.faces[s as usize].neighbour[2] = t;
             }
             if p < late {
                 self.reassign(pts, p, first_new);
@@ -206,7 +200,7 @@ impl Incremental {
     /// face covers the point after a tetrahedron corner (checked in debug
     /// builds to find one).
     fn seed_at_previous(&self, d: [i64; 3], at_previous: std::ops::Range<u32>) -> u32 {
-        let sees = |f: &u32| self.alive[*f as usize] && self.faces[*f as usize].sees(d);
+        let sees = |f: &u32| self.faces[*f as usize].alive && self.faces[*f as usize].sees(d);
         let empty = at_previous.is_empty();
         at_previous
             .clone()
@@ -223,9 +217,8 @@ impl Incremental {
     fn living_corners(&self) -> Vec<[usize; 3]> {
         self.faces
             .iter()
-            .zip(&self.alive)
-            .filter(|&(_, &alive)| alive)
-            .map(|(f, _)| f.corners)
+            .filter(|f| f.alive)
+            .map(|f| f.corners)
             .collect()
     }
 
@@ -264,7 +257,7 @@ impl Incremental {
                 debug_assert!(
                     found.is_some()
                         || !(0..first_new).any(|t| {
-                            self.alive[t as usize] && faces[t as usize].sees(pts[point])
+                            faces[t as usize].alive && faces[t as usize].sees(pts[point])
                         })
                 );
                 self.conflict[point] = found.unwrap_or(NONE);
@@ -280,7 +273,9 @@ impl Incremental {
 /// testing a point costs one dot product: `orient(a, b, c, d) = n · (d − a)`.
 /// In the coordinate budget (`|x| ≤ 2^26`) differences fit 28 bits and the
 /// normal's components 56 bits, so both are `i64` and each product is one
-/// `64 × 64 → 128` multiply.
+/// `64 × 64 → 128` multiply. It keeps its place in the construction
+/// (neighbours, whether still on the hull) beside it, so that a step of the
+/// construction reads and writes one record per face.
 #[derive(Clone, Copy)]
 pub(super) struct Triangle {
     /// The corners `a, b, c` (point indices), counter-clockwise from outside.
@@ -289,14 +284,19 @@ pub(super) struct Triangle {
     origin: [i64; 3],
     /// `(b − a) × (c − a)`.
     normal: [i64; 3],
+    /// `neighbour[k]`: the face across edge `k` (from corner `k` to corner
+    /// `k + 1`), or [`NONE`] while not linked yet.
+    pub(super) neighbour: [u32; 3],
+    /// Whether the face is still on the hull.
+    pub(super) alive: bool,
 }
 
 impl Triangle {
     /// The triangle on corners `corners` of `pts` (in the budget).
     pub(super) fn new(corners: [usize; 3], pts: &[[i64; 3]]) -> Self {
         let [a, b, c] = corners.map(|i| pts[i]);
-        // |b − a|, |c − a| < 2^28: each product < 2^56, each component
-        // (a difference of two) < 2^57, all in `i64`.
+        // |b − a|, |c − a| ≤ 2^27: each product ≤ 2^54, each component
+        // (a difference of two) ≤ 2^55, all in `i64`.
         let (u, v) = (
             [0, 1, 2].map(|i| b[i] - a[i]),
             [0, 1, 2].map(|i| c[i] - a[i]),
@@ -310,6 +310,8 @@ impl Triangle {
             corners,
             origin: a,
             normal,
+            neighbour: [NONE; 3],
+            alive: true,
         }
     }
 
@@ -329,8 +331,15 @@ impl Triangle {
         self.side(d) > 0
     }
 
+    /// The supporting plane reduced: [`Plane::normalized`] of
+    /// [`Triangle::plane`].
+    pub(super) fn reduced_plane(&self) -> Plane {
+        Plane::reduced_through(self.normal, self.origin)
+    }
+
     /// The supporting plane, as [`crate::exact::plane_from_points`] of the
     /// corners.
+    #[cfg(test)]
     pub(super) fn plane(&self) -> Plane {
         let [a, b, c] = self.normal;
         let [x, y, z] = self.origin.map(i128::from);

@@ -101,11 +101,11 @@ impl Merge {
         self.vertex_of.resize(pts.len(), NONE);
         out.starts.push(0);
         for first in 0..faces.len() {
-            if !hull.alive[first] || self.group_of[first] != NONE {
+            if !faces[first].alive || self.group_of[first] != NONE {
                 continue;
             }
             let group = out.planes.len() as u32;
-            out.planes.push(faces[first].plane().normalized());
+            out.planes.push(faces[first].reduced_plane());
             // The group by flood fill; its boundary edges as links.
             let mut start = usize::MAX;
             self.group_of[first] = group;
@@ -115,7 +115,7 @@ impl Merge {
                 let t = t as usize;
                 let v = faces[t].corners;
                 for k in 0..3 {
-                    let s = hull.neighbour[t][k];
+                    let s = faces[t].neighbour[k];
                     if self.group_of[s as usize] == group {
                         continue;
                     }

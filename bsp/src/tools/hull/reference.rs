@@ -206,9 +206,8 @@ fn faces_by_adjacency_equal_the_sorted_construction() {
             .incremental
             .faces
             .iter()
-            .zip(&scratch.incremental.alive)
-            .filter(|&(_, &alive)| alive)
-            .map(|(f, _)| *f)
+            .filter(|f| f.alive)
+            .copied()
             .collect();
         let (used, polygons) = reference_polygons(pts, &living);
         let hull = &scratch.polygons;
