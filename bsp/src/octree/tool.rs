@@ -19,8 +19,9 @@ use crate::Error;
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::IntPoint;
 use crate::exact::budget::MAX_COORD;
+use crate::tools::Pose;
 use crate::tools::hull::{HullPolygons, with_hull_polygons};
-use crate::tools::{Pose, placed_tool, swept_tool};
+use crate::tools::shapes::{placed_points, swept_points};
 use crate::tree::{BooleanOp, Bsp, Label};
 
 /// A solid to carve with, add or paint.
@@ -70,9 +71,7 @@ impl Tool {
     /// # Errors
     /// Non-finite or out-of-range coordinates, or a flat result.
     pub fn placed(corners: &[[f64; 3]], pose: &Pose) -> Result<Tool, Error> {
-        let mut arena = ConvexArena::new();
-        let poly = placed_tool(&mut arena, corners, pose)?;
-        Ok(Self::from_polyhedron(&arena, poly))
+        Self::convex_hull(&placed_points(corners, pose)?)
     }
 
     /// The volume a convex shape sweeps from pose `a` to pose `b` (hull of
@@ -81,9 +80,7 @@ impl Tool {
     /// # Errors
     /// As [`Tool::placed`].
     pub fn swept(corners: &[[f64; 3]], a: &Pose, b: &Pose) -> Result<Tool, Error> {
-        let mut arena = ConvexArena::new();
-        let poly = swept_tool(&mut arena, corners, a, b)?;
-        Ok(Self::from_polyhedron(&arena, poly))
+        Self::convex_hull(&swept_points(corners, a, b)?)
     }
 
     /// The axis-aligned box `solid`.
