@@ -5,17 +5,18 @@
 //!
 //! ```sh
 //! cargo bench -p chisel_bsp --bench hull                 # criterion
-//! cargo bench -p chisel_bsp --bench hull -- count 100    # the driver
+//! cargo bench -p chisel_bsp --bench hull -- count 100 [helix72|fluted40]  # the driver
 //! cargo bench -p chisel_bsp --bench hull --no-run        # prints the binary's path
-//! valgrind --tool=callgrind target/release/deps/hull-HASH --bench count 100
+//! valgrind --tool=callgrind target/release/deps/hull-HASH --bench count 100 helix72
 //! ```
 //!
 //! Criterion times, per tool, [`Tool::convex_hull`] (the hull with the
 //! tool's BSP and contact piece, what a `chisel cutter` step builds) and
 //! [`convex_hull`] into a reused arena (the hull alone).
 //!
-//! With `count R` among the arguments it runs no criterion: it builds
-//! every recorded tool `R` times both ways and prints a hash of every
+//! With `count R [LABEL]` among the arguments it runs no criterion: it
+//! builds every recorded tool (or those labelled `LABEL`) `R` times both
+//! ways and prints a hash of every
 //! result (equal hashes before and after a change mean the same faces,
 //! order, planes, BSP and contact data). Instructions per tool are the
 //! difference between two runs with different `R`, divided by the
@@ -70,12 +71,13 @@ fn result_hash(points: &[IntPoint], arena: &mut ConvexArena) -> u64 {
     hasher.finish()
 }
 
-/// The driver: every tool `rounds` times both ways, then the hashes.
-fn count(rounds: usize) {
+/// The driver: every tool (or those labelled `only`) `rounds` times both
+/// ways, then the hashes of all.
+fn count(rounds: usize, only: Option<&str>) {
     let tools = recorded_tools();
     let mut arena = ConvexArena::new();
     for _ in 0..rounds {
-        for (_, points) in &tools {
+        for (_, points) in tools.iter().filter(|(l, _)| only.is_none_or(|o| o == *l)) {
             black_box(Tool::convex_hull(black_box(points)).expect("a solid"));
             arena.clear();
             black_box(convex_hull(&mut arena, black_box(points)).expect("a solid"));
@@ -124,7 +126,7 @@ fn main() {
     }
     if let Some(i) = args.iter().position(|a| a == "count") {
         let rounds = args.get(i + 1).and_then(|r| r.parse().ok()).unwrap_or(100);
-        count(rounds);
+        count(rounds, args.get(i + 2).map(String::as_str));
         return;
     }
     let mut c = Criterion::default().configure_from_args();

@@ -142,13 +142,13 @@ impl Merge {
                 }
             }
             let n = self.ring.len();
+            let mut prev = self.ring[n - 1] as usize;
             for k in 0..n {
-                let (prev, cur, next) = (
-                    self.ring[(k + n - 1) % n] as usize,
-                    self.ring[k] as usize,
-                    self.ring[(k + 1) % n] as usize,
-                );
-                if collinear(pts[prev], pts[cur], pts[next]) {
+                let cur = self.ring[k] as usize;
+                let next = self.ring[if k + 1 < n { k + 1 } else { 0 }] as usize;
+                let straight = collinear(pts[prev], pts[cur], pts[next]);
+                prev = cur;
+                if straight {
                     continue;
                 }
                 if self.vertex_of[cur] == NONE {
