@@ -50,6 +50,7 @@ impl HullPolygons {
     }
 
     /// Per corner of face `f`, the face across the side that starts there.
+    #[cfg(test)]
     pub(crate) fn face_across(&self, f: usize) -> &[u32] {
         &self.across[self.starts[f] as usize..self.starts[f + 1] as usize]
     }
