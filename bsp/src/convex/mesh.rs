@@ -430,6 +430,36 @@ impl ConvexArena {
         PolyId(h0)
     }
 
+    /// [`ConvexArena::add_polyhedron`] for faces given as flat arrays:
+    /// face `f` lies on `planes[f]` with corners `corners[starts[f]..starts[f
+    /// + 1]]`, and `twins[i]` is the corner (index into `corners`) that
+    /// starts the opposite of the side from corner `i` to the next, so that
+    /// no pairing by sorting is needed. Same input rules and the same
+    /// result as [`ConvexArena::add_polyhedron`].
+    pub(crate) fn add_polyhedron_linked(
+        &mut self,
+        points: &[Point4],
+        planes: &[Plane],
+        starts: &[u32],
+        corners: &[u32],
+        twins: &[u32],
+    ) -> PolyId {
+        let v0 = self.vertices.len() as u32;
+        let h0 = self.half_edges.len() as u32;
+        for &point in points {
+            self.push_vertex(point, u32::MAX);
+        }
+        self.half_edges.reserve(corners.len());
+        for (f, plane) in planes.iter().enumerate() {
+            let face = &corners[starts[f] as usize..starts[f + 1] as usize];
+            self.push_face(v0, *plane, face);
+        }
+        for (h, &twin) in self.half_edges[h0 as usize..].iter_mut().zip(twins) {
+            h.twin = h0 + twin;
+        }
+        PolyId(h0)
+    }
+
     /// Adds a face on `plane` whose corners are the vertices `v0 + c` for
     /// `c` in `corners` (counter-clockwise seen from outside), its
     /// half-edges not yet paired.

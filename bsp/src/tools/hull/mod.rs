@@ -122,15 +122,27 @@ fn first_tetrahedron(pts: &[[i64; 3]]) -> Result<([[usize; 3]; 4], [usize; 4]), 
     Ok((faces, [a, b, c, d]))
 }
 
-/// Adds the polyhedron of `hull` to `arena`.
+/// Adds the polyhedron of `hull` to `arena`: the sides' opposites come
+/// from the faces across them.
 fn add_polygons(arena: &mut ConvexArena, hull: &HullPolygons) -> PolyId {
     let points: Vec<Point4> = hull
         .vertices
         .iter()
         .map(|&p| Point4::from(IntPoint::from_array(p).expect("input points are in budget")))
         .collect();
-    let polygons: Vec<_> = (0..hull.face_count())
-        .map(|f| (hull.planes[f], hull.face(f).to_vec()))
-        .collect();
-    arena.add_polyhedron(&points, &polygons)
+    let mut twins = Vec::with_capacity(hull.corners.len());
+    for f in 0..hull.face_count() {
+        let (start, face) = (hull.starts[f], hull.face(f));
+        for (k, &g) in (start..).zip(&hull.across[start as usize..hull.starts[f + 1] as usize]) {
+            // The side `from → to` of `f` runs `to → from` on `g`.
+            let to = face[(k - start + 1) as usize % face.len()];
+            let j = hull
+                .face(g as usize)
+                .iter()
+                .position(|&c| c == to)
+                .expect("neighbouring faces share the side");
+            twins.push(hull.starts[g as usize] + j as u32);
+        }
+    }
+    arena.add_polyhedron_linked(&points, &hull.planes, &hull.starts, &hull.corners, &twins)
 }

@@ -10,7 +10,7 @@ use super::incremental::Triangle;
 use super::{MAX_HULL_POINTS, Scratch};
 use crate::convex::ConvexArena;
 use crate::exact::orient::{cross, sub};
-use crate::exact::{IntPoint, Plane};
+use crate::exact::{IntPoint, Plane, Point4};
 
 /// The faces of the hull triangles `faces` (living, in order) as the
 /// previous construction made them: vertices (point indices in order of
@@ -222,6 +222,19 @@ fn faces_by_adjacency_equal_the_sorted_construction() {
         let mut arena = ConvexArena::new();
         let poly = super::add_polygons(&mut arena, hull);
         arena.validate(poly).expect("a valid polyhedron");
+        // The same half-edges as pairing the sides by sorting.
+        let mut sorted = ConvexArena::new();
+        let points: Vec<_> = hull
+            .vertices
+            .iter()
+            .map(|&p| Point4::from(IntPoint::from_array(p).expect("in budget")))
+            .collect();
+        sorted.add_polyhedron(&points, &polygons);
+        assert_eq!(
+            format!("{:?}", arena.half_edges()),
+            format!("{:?}", sorted.half_edges()),
+            "round {round}"
+        );
         let arena_faces = arena.faces_of(poly);
         let first_face = arena_faces.iter().min().copied().unwrap_or(0);
         let order: Vec<u32> = arena_faces.iter().map(|&f| f - first_face).collect();
