@@ -413,6 +413,9 @@ impl ConvexArena {
     /// Adds a closed polyhedron given its vertices and, per face, its plane
     /// and its vertex indices counter-clockwise seen from outside. The input
     /// must be a valid convex polyhedron (see [`ConvexArena::validate`]).
+    /// The half-edges are paired by sorting their end pairs (tests; the
+    /// hull gives its pairs, [`ConvexArena::add_polyhedron_linked`]).
+    #[cfg(test)]
     pub(crate) fn add_polyhedron(
         &mut self,
         points: &[Point4],
@@ -434,8 +437,8 @@ impl ConvexArena {
     /// face `f` lies on `planes[f]` with corners `corners[starts[f]..starts[f
     /// + 1]]`, and `twins[i]` is the corner (index into `corners`) that
     /// starts the opposite of the side from corner `i` to the next, so that
-    /// no pairing by sorting is needed. Same input rules and the same
-    /// result as [`ConvexArena::add_polyhedron`].
+    /// no pairing by sorting is needed. The input must be a valid convex
+    /// polyhedron (see [`ConvexArena::validate`]).
     pub(crate) fn add_polyhedron_linked(
         &mut self,
         points: &[Point4],
@@ -487,6 +490,7 @@ impl ConvexArena {
 
     /// Pairs every half-edge from `h0` on with its opposite, the half-edge
     /// between the same vertices the other way (by sorted end pairs).
+    #[cfg(test)]
     fn link_twins(&mut self, h0: u32) {
         let edges = &self.half_edges[h0 as usize..];
         let mut ends: Vec<(u32, u32, u32)> = (h0..)
