@@ -234,9 +234,9 @@ impl Plane {
     #[must_use]
     pub(crate) fn reduced_through(n: [i64; 3], p: [i64; 3]) -> Plane {
         let [mut a, mut b, mut c] = n;
-        let g_ab = gcd_u64(a.unsigned_abs(), b.unsigned_abs());
+        let g_ab = gcd_with_remainder(a.unsigned_abs(), b.unsigned_abs());
         if g_ab != 1 {
-            let g = gcd_u64(g_ab, c.unsigned_abs()) as i64;
+            let g = gcd_with_remainder(g_ab, c.unsigned_abs()) as i64;
             if g > 1 {
                 (a, b, c) = (a / g, b / g, c / g);
             }
@@ -246,6 +246,18 @@ impl Plane {
             + i128::from(c) * i128::from(p[2]));
         Plane::new_unchecked(a, b, c, d)
     }
+}
+
+/// `gcd(x, y)` by one Euclid step (`max mod min`) before the binary gcd:
+/// the binary loop takes about one step per bit the larger number has
+/// over the smaller, which a remainder removes at once (a normal's common
+/// factor against a component, or components of unlike sizes).
+fn gcd_with_remainder(x: u64, y: u64) -> u64 {
+    let (small, large) = if x < y { (x, y) } else { (y, x) };
+    if small == 0 {
+        return large;
+    }
+    gcd_u64(small, large % small)
 }
 
 /// Binary (Stein) gcd over an unsigned integer type; `gcd(0, 0) = 0`.

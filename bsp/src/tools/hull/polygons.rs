@@ -108,7 +108,7 @@ impl Merge {
             let group = out.planes.len() as u32;
             out.planes.push(faces[first].reduced_plane());
             // The group by flood fill; its boundary edges as links.
-            let mut start = usize::MAX;
+            let (mut start, mut joined) = (usize::MAX, 0);
             self.group_of[first] = group;
             self.stack.clear();
             self.stack.push(first as u32);
@@ -125,12 +125,24 @@ impl Merge {
                     {
                         self.group_of[s as usize] = group;
                         self.stack.push(s);
+                        joined += 1;
                     } else {
                         self.next_on_boundary[v[k]] = v[(k + 1) % 3] as u32;
                         self.triangle_across[v[k]] = s;
                         start = start.min(v[k]);
                     }
                 }
+            }
+            if joined == 0 {
+                // A lone triangle: its corners from the smallest.
+                let (v, across) = (faces[first].corners, faces[first].neighbour);
+                let k0 = if v[0] < v[1] { 0 } else { 1 };
+                let k0 = if v[2] < v[k0] { 2 } else { k0 };
+                for k in [k0, (k0 + 1) % 3, (k0 + 2) % 3] {
+                    self.push_corner(pts, v[k], across[k], out);
+                }
+                out.starts.push(out.corners.len() as u32);
+                continue;
             }
             // The boundary loop from its smallest point.
             self.ring.clear();
@@ -152,14 +164,9 @@ impl Merge {
                 if straight {
                     continue;
                 }
-                if self.vertex_of[cur] == NONE {
-                    self.vertex_of[cur] = out.vertices.len() as u32;
-                    out.vertices.push(pts[cur]);
-                }
-                out.corners.push(self.vertex_of[cur]);
                 // The side from `cur` to the next kept corner lies along
                 // one neighbouring face: the one across its first edge.
-                self.across_triangle.push(self.triangle_across[cur]);
+                self.push_corner(pts, cur, self.triangle_across[cur], out);
             }
             out.starts.push(out.corners.len() as u32);
         }
@@ -169,6 +176,17 @@ impl Merge {
                 .map(|&t| self.group_of[t as usize]),
         );
         self.breadth_first(out);
+    }
+
+    /// Adds point `p` as the next corner of the current face, with the
+    /// triangle across the side that starts there.
+    fn push_corner(&mut self, pts: &[[i64; 3]], p: usize, across: u32, out: &mut HullPolygons) {
+        if self.vertex_of[p] == NONE {
+            self.vertex_of[p] = out.vertices.len() as u32;
+            out.vertices.push(pts[p]);
+        }
+        out.corners.push(self.vertex_of[p]);
+        self.across_triangle.push(across);
     }
 
     /// [`HullPolygons::breadth_first`]: from face 0, the neighbours of
