@@ -60,9 +60,16 @@ pub(crate) fn with_hull_polygons<R>(
     }
     let mut scratch = SCRATCH.take().unwrap_or_default();
     let result = scratch.hull(points).map(|()| use_hull(&scratch.polygons));
-    SCRATCH.keep(scratch);
+    if scratch.pts.capacity() <= KEEP_SCRATCH_POINTS {
+        SCRATCH.keep(scratch);
+    }
     result
 }
+
+/// The largest hull (in distinct points) whose working memory a thread
+/// keeps for the next one: about 90 bytes a triangle made, some 8 made a
+/// point, so up to about 0.7 MiB; a larger hull frees its own.
+const KEEP_SCRATCH_POINTS: usize = 1024;
 
 /// The working memory of one hull.
 #[derive(Default)]
