@@ -413,6 +413,9 @@ impl ConvexArena {
     /// Adds a closed polyhedron given its vertices and, per face, its plane
     /// and its vertex indices counter-clockwise seen from outside. The input
     /// must be a valid convex polyhedron (see [`ConvexArena::validate`]).
+    /// The half-edges are paired by sorting their end pairs (tests; the
+    /// hull gives its pairs, [`ConvexArena::add_polyhedron_linked`]).
+    #[cfg(test)]
     pub(crate) fn add_polyhedron(
         &mut self,
         points: &[Point4],
@@ -427,6 +430,36 @@ impl ConvexArena {
             self.push_face(v0, *plane, corners);
         }
         self.link_twins(h0);
+        PolyId(h0)
+    }
+
+    /// [`ConvexArena::add_polyhedron`] for faces given as flat arrays:
+    /// face `f` lies on `planes[f]` with corners `corners[starts[f]..starts[f
+    /// + 1]]`, and `twins[i]` is the corner (index into `corners`) that
+    /// starts the opposite of the side from corner `i` to the next, so that
+    /// no pairing by sorting is needed. The input must be a valid convex
+    /// polyhedron (see [`ConvexArena::validate`]).
+    pub(crate) fn add_polyhedron_linked(
+        &mut self,
+        points: &[Point4],
+        planes: &[Plane],
+        starts: &[u32],
+        corners: &[u32],
+        twins: &[u32],
+    ) -> PolyId {
+        let v0 = self.vertices.len() as u32;
+        let h0 = self.half_edges.len() as u32;
+        for &point in points {
+            self.push_vertex(point, u32::MAX);
+        }
+        self.half_edges.reserve(corners.len());
+        for (f, plane) in planes.iter().enumerate() {
+            let face = &corners[starts[f] as usize..starts[f + 1] as usize];
+            self.push_face(v0, *plane, face);
+        }
+        for (h, &twin) in self.half_edges[h0 as usize..].iter_mut().zip(twins) {
+            h.twin = h0 + twin;
+        }
         PolyId(h0)
     }
 
@@ -457,6 +490,7 @@ impl ConvexArena {
 
     /// Pairs every half-edge from `h0` on with its opposite, the half-edge
     /// between the same vertices the other way (by sorted end pairs).
+    #[cfg(test)]
     fn link_twins(&mut self, h0: u32) {
         let edges = &self.half_edges[h0 as usize..];
         let mut ends: Vec<(u32, u32, u32)> = (h0..)

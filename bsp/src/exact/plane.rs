@@ -202,10 +202,16 @@ impl Plane {
     /// orientation, same point set, smallest coefficients).
     #[must_use]
     pub fn normalized(&self) -> Plane {
-        let g_abc = gcd_u64(
-            gcd_u64(self.a.unsigned_abs(), self.b.unsigned_abs()),
-            self.c.unsigned_abs(),
-        );
+        // Most planes of general tools are already reduced: stop as soon
+        // as a partial gcd is 1.
+        let g_ab = gcd_u64(self.a.unsigned_abs(), self.b.unsigned_abs());
+        if g_ab == 1 {
+            return *self;
+        }
+        let g_abc = gcd_u64(g_ab, self.c.unsigned_abs());
+        if g_abc == 1 {
+            return *self;
+        }
         // g_abc > 0 because the normal is non-zero; gcd(g, d) = gcd(g, d mod g)
         // keeps the last gcd in 64 bits.
         let g = gcd_u64(g_abc, (self.d.unsigned_abs() % g_abc as u128) as u64);
@@ -215,6 +221,43 @@ impl Plane {
         let gi = g as i64;
         Plane::new_unchecked(self.a / gi, self.b / gi, self.c / gi, self.d / g as i128)
     }
+}
+
+impl Plane {
+    /// The plane with normal `n` through the integer point `p`, reduced:
+    /// the same as [`Plane::normalized`] of `n·x − n·p = 0`. The offset is
+    /// a multiple of any common factor of `n`, so only the normal's gcd
+    /// is taken (and no further than a partial gcd of 1).
+    ///
+    /// Preconditions: `n ≠ 0`, `|n_i| ≤ 2^55` and `|p_i| ≤ 2^26` (then
+    /// `|n·p| < 2^83`).
+    #[must_use]
+    pub(crate) fn reduced_through(n: [i64; 3], p: [i64; 3]) -> Plane {
+        let [mut a, mut b, mut c] = n;
+        let g_ab = gcd_with_remainder(a.unsigned_abs(), b.unsigned_abs());
+        if g_ab != 1 {
+            let g = gcd_with_remainder(g_ab, c.unsigned_abs()) as i64;
+            if g > 1 {
+                (a, b, c) = (a / g, b / g, c / g);
+            }
+        }
+        let d = -(i128::from(a) * i128::from(p[0])
+            + i128::from(b) * i128::from(p[1])
+            + i128::from(c) * i128::from(p[2]));
+        Plane::new_unchecked(a, b, c, d)
+    }
+}
+
+/// `gcd(x, y)` by one Euclid step (`max mod min`) before the binary gcd:
+/// the binary loop takes about one step per bit the larger number has
+/// over the smaller, which a remainder removes at once (a normal's common
+/// factor against a component, or components of unlike sizes).
+fn gcd_with_remainder(x: u64, y: u64) -> u64 {
+    let (small, large) = if x < y { (x, y) } else { (y, x) };
+    if small == 0 {
+        return large;
+    }
+    gcd_u64(small, large % small)
 }
 
 /// Binary (Stein) gcd over an unsigned integer type; `gcd(0, 0) = 0`.
@@ -257,6 +300,30 @@ mod tests {
     use super::Plane;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The plane through an integer point with a reduced normal is the
+    /// normalized plane, for normals with and without common factors.
+    #[test]
+    fn reduced_through_a_point_is_the_normalized_plane() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for round in 0..20_000 {
+            let factor = [1, 2, 3, 6, 1 << 20, 7 * 11 * 13][round % 6];
+            let bits = rng.random_range(0..=55u32 - 22);
+            let mut n = [0; 3].map(|_| {
+                let x = rng.random_range(-(1i64 << bits)..=1i64 << bits) * factor;
+                if rng.random_range(0..4) == 0 { 0 } else { x }
+            });
+            if n == [0; 3] {
+                n[round % 3] = factor;
+            }
+            let p = [0; 3].map(|_| rng.random_range(-(1i64 << 26)..=1 << 26));
+            let d = -(0..3)
+                .map(|i| i128::from(n[i]) * i128::from(p[i]))
+                .sum::<i128>();
+            let expected = Plane::new_unchecked(n[0], n[1], n[2], d).normalized();
+            assert_eq!(Plane::reduced_through(n, p), expected, "{n:?} {p:?}");
+        }
+    }
 
     /// A flipped plane is the plane built from the negated coefficients,
     /// cached values and bit counts included, at every offset magnitude.

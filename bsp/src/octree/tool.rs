@@ -19,7 +19,9 @@ use crate::Error;
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::IntPoint;
 use crate::exact::budget::MAX_COORD;
-use crate::tools::{Pose, convex_hull, placed_tool, swept_tool};
+use crate::tools::Pose;
+use crate::tools::hull::{HullPolygons, with_hull_polygons};
+use crate::tools::shapes::{placed_points, swept_points};
 use crate::tree::{BooleanOp, Bsp, Label};
 
 /// A solid to carve with, add or paint.
@@ -39,9 +41,28 @@ impl Tool {
     /// # Errors
     /// [`Error::DegenerateHull`] when the points span no volume.
     pub fn convex_hull(points: &[IntPoint]) -> Result<Tool, Error> {
-        let mut arena = ConvexArena::new();
-        let poly = convex_hull(&mut arena, points)?;
-        Ok(Self::from_polyhedron(&arena, poly))
+        with_hull_polygons(points, Self::from_hull)
+    }
+
+    /// The tool [`Tool::from_polyhedron`] makes of the hull's polyhedron,
+    /// built from the hull's arrays without an arena: the BSP's planes and
+    /// the piece's faces in [`ConvexArena::faces_of`] order, bounds one
+    /// unit around the integer vertices.
+    fn from_hull(hull: &HullPolygons) -> Tool {
+        let piece = ConvexPiece::from_hull(hull);
+        let (mut min, mut max) = ([MAX_COORD; 3], [-MAX_COORD; 3]);
+        for p in &hull.vertices {
+            for a in 0..3 {
+                min[a] = min[a].min((p[a] - 1).max(-MAX_COORD));
+                max[a] = max[a].max((p[a] + 1).min(MAX_COORD));
+            }
+        }
+        let planes = hull.breadth_first.iter().map(|&f| hull.planes[f as usize]);
+        Tool {
+            bsp: Bsp::convex(planes, 1),
+            bounds: CellBox { min, max },
+            pieces: vec![(CellBox { min, max }, piece)],
+        }
     }
 
     /// A shape's corners (in grid units) placed at `pose` and rounded: the
@@ -50,9 +71,7 @@ impl Tool {
     /// # Errors
     /// Non-finite or out-of-range coordinates, or a flat result.
     pub fn placed(corners: &[[f64; 3]], pose: &Pose) -> Result<Tool, Error> {
-        let mut arena = ConvexArena::new();
-        let poly = placed_tool(&mut arena, corners, pose)?;
-        Ok(Self::from_polyhedron(&arena, poly))
+        Self::convex_hull(&placed_points(corners, pose)?)
     }
 
     /// The volume a convex shape sweeps from pose `a` to pose `b` (hull of
@@ -61,9 +80,7 @@ impl Tool {
     /// # Errors
     /// As [`Tool::placed`].
     pub fn swept(corners: &[[f64; 3]], a: &Pose, b: &Pose) -> Result<Tool, Error> {
-        let mut arena = ConvexArena::new();
-        let poly = swept_tool(&mut arena, corners, a, b)?;
-        Ok(Self::from_polyhedron(&arena, poly))
+        Self::convex_hull(&swept_points(corners, a, b)?)
     }
 
     /// The axis-aligned box `solid`.
@@ -197,6 +214,52 @@ pub(crate) fn random_hull(
             .collect();
         if let Ok(tool) = Tool::convex_hull(&points) {
             return tool;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::Tool;
+    use crate::convex::ConvexArena;
+    use crate::exact::IntPoint;
+    use crate::tools::convex_hull;
+
+    /// [`Tool::convex_hull`] builds without an arena what
+    /// [`Tool::from_polyhedron`] builds from the hull's polyhedron: the
+    /// same BSP (planes in order), bounds and contact piece.
+    #[test]
+    fn hull_tool_equals_the_tool_of_the_hull_polyhedron() {
+        let mut rng = ChaCha8Rng::seed_from_u64(72);
+        for round in 0..300 {
+            let (n, radius, centre) = match round % 3 {
+                0 => (rng.random_range(4..60), 3, 0),
+                1 => (rng.random_range(4..90), 1 << 20, 1 << 24),
+                _ => (rng.random_range(4..90), 1 << 26, 0),
+            };
+            let points: Vec<IntPoint> = (0..n)
+                .map(|_| {
+                    let c = [0; 3].map(|_: i64| {
+                        (centre + rng.random_range(-radius..=radius)).clamp(-(1 << 26), 1 << 26)
+                    });
+                    IntPoint::from_array(c).expect("in budget")
+                })
+                .collect();
+            let mut arena = ConvexArena::new();
+            let Ok(poly) = convex_hull(&mut arena, &points) else {
+                assert!(Tool::convex_hull(&points).is_err());
+                continue;
+            };
+            let expected = Tool::from_polyhedron(&arena, poly);
+            let tool = Tool::convex_hull(&points).expect("the same hull");
+            assert_eq!(
+                format!("{tool:?}"),
+                format!("{expected:?}"),
+                "round {round}"
+            );
         }
     }
 }

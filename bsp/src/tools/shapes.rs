@@ -106,11 +106,16 @@ pub fn placed_tool(
     corners: &[[f64; 3]],
     pose: &Pose,
 ) -> Result<PolyId, Error> {
-    let points = corners
-        .iter()
-        .map(|&c| pose.place(c))
-        .collect::<Result<Vec<_>, _>>()?;
-    convex_hull(arena, &points)
+    convex_hull(arena, &placed_points(corners, pose)?)
+}
+
+/// The points whose hull is [`placed_tool`]: `corners` placed at `pose`
+/// and rounded.
+///
+/// # Errors
+/// Non-finite or out-of-range coordinates.
+pub(crate) fn placed_points(corners: &[[f64; 3]], pose: &Pose) -> Result<Vec<IntPoint>, Error> {
+    corners.iter().map(|&c| pose.place(c)).collect()
 }
 
 /// The hull of a convex tool's corners at pose `a` and at pose `b`: exactly
@@ -127,9 +132,21 @@ pub fn swept_tool(
     a: &Pose,
     b: &Pose,
 ) -> Result<PolyId, Error> {
-    let points = corners
+    convex_hull(arena, &swept_points(corners, a, b)?)
+}
+
+/// The points whose hull is [`swept_tool`]: each corner placed at `a` and
+/// at `b`, rounded.
+///
+/// # Errors
+/// Non-finite or out-of-range coordinates.
+pub(crate) fn swept_points(
+    corners: &[[f64; 3]],
+    a: &Pose,
+    b: &Pose,
+) -> Result<Vec<IntPoint>, Error> {
+    corners
         .iter()
         .flat_map(|&c| [a.place(c), b.place(c)])
-        .collect::<Result<Vec<_>, _>>()?;
-    convex_hull(arena, &points)
+        .collect()
 }

@@ -55,13 +55,19 @@ impl Bsp {
     #[must_use]
     pub fn from_convex(arena: &ConvexArena, poly: PolyId, label: Label) -> Self {
         let faces = arena.faces_of(poly);
+        Self::convex(faces.iter().map(|&f| *arena.face_plane(f)), label)
+    }
+
+    /// The linear tree of [`Bsp::from_convex`] for a convex polyhedron
+    /// with face planes `planes` (positive outside), in that order.
+    pub(crate) fn convex(planes: impl ExactSizeIterator<Item = Plane>, label: Label) -> Self {
         let mut bsp = Self {
-            planes: Vec::with_capacity(faces.len()),
-            nodes: Vec::with_capacity(2 * faces.len() + 1),
+            planes: Vec::with_capacity(planes.len()),
+            nodes: Vec::with_capacity(2 * planes.len() + 1),
         };
-        for (k, &f) in faces.iter().enumerate() {
+        for (k, plane) in planes.enumerate() {
             let node = bsp.nodes.len() as NodeId;
-            bsp.planes.push(*arena.face_plane(f));
+            bsp.planes.push(plane);
             bsp.nodes.push(Node::Split {
                 plane: k as u32,
                 below: node + 2,

@@ -29,6 +29,7 @@ use std::sync::OnceLock;
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::budget::{MAX_COORD, MAX_NORMAL, MAX_OFFSET};
 use crate::octree::CellBox;
+use crate::tools::hull::HullPolygons;
 
 /// A closed convex polyhedron with integer vertices, prepared for the
 /// exact contact test against boxes.
@@ -98,6 +99,37 @@ impl ConvexPiece {
             hi,
             faces,
             vertices,
+            edges,
+            edge_axes: OnceLock::new(),
+        })
+    }
+
+    /// The piece of a convex hull of integer points, from its polygons:
+    /// the piece [`ConvexPiece::of`] makes of the same polyhedron added to
+    /// an arena (vertices in the arena's order, faces in
+    /// [`ConvexArena::faces_of`] order), without the arena.
+    pub(crate) fn from_hull(hull: &HullPolygons) -> Option<ConvexPiece> {
+        let CellBox { min: lo, max: hi } = CellBox::enclosing(hull.vertices.iter().copied())?;
+        let mut faces = Vec::with_capacity(hull.face_count());
+        let mut edges = Vec::with_capacity(hull.corners.len() / 2);
+        for &f in &hull.breadth_first {
+            let plane = hull.planes[f as usize];
+            faces.push((plane.normal(), plane.offset()));
+            let corners = hull.face(f as usize);
+            for (k, &from) in corners.iter().enumerate() {
+                let to = corners[(k + 1) % corners.len()];
+                // Each edge is seen from both faces; keep it once.
+                if from < to {
+                    let (from, to) = (hull.vertices[from as usize], hull.vertices[to as usize]);
+                    edges.push([to[0] - from[0], to[1] - from[1], to[2] - from[2]]);
+                }
+            }
+        }
+        Some(ConvexPiece {
+            lo,
+            hi,
+            faces,
+            vertices: hull.vertices.clone(),
             edges,
             edge_axes: OnceLock::new(),
         })
