@@ -11,12 +11,14 @@
 //! - [`mill`], [`cheese`], [`cutter`], [`fluted`], [`sweep`] — the generated
 //!   scenarios.
 //! - [`runner`] — applies the steps, timing each with its re-extraction.
+//! - [`cpu_clock`] — the calling thread's CPU time, for per-step figures.
 //! - [`extract`] — per-cell re-extraction and the whole surface.
 //! - [`report`] — the figures: text, one JSON line, per-step CSV.
 //! - [`check`] — per-step invariants (`--check`) for tests.
 
 pub mod check;
 pub mod cheese;
+pub mod cpu_clock;
 pub mod cutter;
 pub mod extract;
 pub mod fluted;

@@ -87,11 +87,18 @@ pub struct Report {
     pub setup_seconds: f64,
     /// All steps, seconds (wall clock).
     pub total_seconds: f64,
+    /// All steps, CPU seconds of the thread that ran them (the whole CPU
+    /// cost with `--threads 1`; see `cpu_clock`).
+    pub total_cpu_seconds: f64,
     /// What one step's latency includes.
     pub per_step: &'static str,
-    /// Per-step latency.
+    /// Per-step latency (wall clock).
     #[serde(flatten)]
     pub latency: Latency,
+    /// Per-step CPU time of the thread that ran the step, in the same
+    /// statistics: unlike wall time, not inflated by other processes on a
+    /// loaded machine.
+    pub cpu: Latency,
     /// Median time to build the tool (exact hull and its BSP), ms.
     pub hull_median_ms: f64,
     /// Median time to apply it to the octree, ms (the rest of a step is
@@ -131,7 +138,9 @@ impl Report {
     pub fn text(&self) -> String {
         let l = &self.latency;
         let o = &self.octree;
+        let c = &self.cpu;
         let ratio = l.last100_mean_ms / l.first100_mean_ms.max(1e-12);
+        let cpu_ratio = c.last100_mean_ms / c.first100_mean_ms.max(1e-12);
         let mut out = String::new();
         let mut line = |name: &str, value: String| out.push_str(&format!("{name:<16}{value}\n"));
         line("scenario", format!("{} {}", self.scenario, self.parameters));
@@ -142,8 +151,8 @@ impl Report {
         line(
             "total",
             format!(
-                "{:.3} s (base built in {:.3} s)",
-                self.total_seconds, self.setup_seconds
+                "{:.3} s, {:.3} s CPU (base built in {:.3} s)",
+                self.total_seconds, self.total_cpu_seconds, self.setup_seconds
             ),
         );
         line(
@@ -158,6 +167,13 @@ impl Report {
             format!(
                 "{:.3} ms / {:.3} ms (x{ratio:.2})",
                 l.first100_mean_ms, l.last100_mean_ms
+            ),
+        );
+        line(
+            "per step, CPU",
+            format!(
+                "median {:.3} ms, p99 {:.3} ms, mean {:.3} ms, first/last 100 {:.3} ms / {:.3} ms (x{cpu_ratio:.2})",
+                c.median_ms, c.p99_ms, c.mean_ms, c.first100_mean_ms, c.last100_mean_ms
             ),
         );
         line(
@@ -216,6 +232,8 @@ impl Report {
 pub struct StepRecord {
     /// Latency, seconds.
     pub seconds: f64,
+    /// CPU time of the thread that ran the step, seconds.
+    pub cpu_seconds: f64,
     /// Of which building the tool, seconds.
     pub hull_seconds: f64,
     /// Of which applying it, seconds.
@@ -226,7 +244,7 @@ pub struct StepRecord {
     pub triangles: usize,
 }
 
-/// Writes `step,seconds,hull_seconds,apply_seconds,changed_cells,triangles`
+/// Writes `step,seconds,cpu_seconds,hull_seconds,apply_seconds,changed_cells,triangles`
 /// rows.
 ///
 /// # Errors
@@ -236,13 +254,18 @@ pub fn write_csv(path: &Path, steps: &[StepRecord]) -> Result<(), String> {
     crate::atomic::write_with(path, |out| {
         writeln!(
             out,
-            "step,seconds,hull_seconds,apply_seconds,changed_cells,triangles"
+            "step,seconds,cpu_seconds,hull_seconds,apply_seconds,changed_cells,triangles"
         )?;
         for (i, s) in steps.iter().enumerate() {
             writeln!(
                 out,
-                "{i},{:.9},{:.9},{:.9},{},{}",
-                s.seconds, s.hull_seconds, s.apply_seconds, s.changed_cells, s.triangles
+                "{i},{:.9},{:.9},{:.9},{:.9},{},{}",
+                s.seconds,
+                s.cpu_seconds,
+                s.hull_seconds,
+                s.apply_seconds,
+                s.changed_cells,
+                s.triangles
             )?;
         }
         Ok(())

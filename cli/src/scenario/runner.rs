@@ -12,6 +12,7 @@ use chisel_bsp::tree::EMPTY;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::check;
+use super::cpu_clock::CpuStopwatch;
 use super::extract;
 use super::jsonl;
 use super::report::{Latency, OctreeFigures, Report, StepRecord, peak_memory_mib, write_csv};
@@ -209,10 +210,12 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, Failure> {
     let bar = progress(steps.len(), flags.json, scenario.name);
     let mut records = Vec::with_capacity(steps.len());
     let start = Instant::now();
+    let start_cpu = CpuStopwatch::start();
     for (i, step) in steps.iter().enumerate() {
         let fail = |e: chisel_bsp::Error| format!("step {}: {e}", i + 1);
         let before = flags.check.then(|| octree.clone());
         let t0 = Instant::now();
+        let cpu = CpuStopwatch::start();
         let points = step
             .hull
             .iter()
@@ -225,8 +228,10 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, Failure> {
             .map_err(fail)?;
         let applied = t0.elapsed().as_secs_f64();
         let triangles = extract::changed_cells(&octree, &changes.changed, faces);
+        let cpu_seconds = cpu.elapsed();
         records.push(StepRecord {
             seconds: t0.elapsed().as_secs_f64(),
+            cpu_seconds,
             hull_seconds: built,
             apply_seconds: applied - built,
             changed_cells: changes.changed.len(),
@@ -239,10 +244,12 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, Failure> {
         bar.inc(1);
     }
     let total_seconds = start.elapsed().as_secs_f64();
+    let total_cpu_seconds = start_cpu.elapsed();
     bar.finish_and_clear();
     let (mesh, closure) = extract::whole(&octree);
     let stats = octree.stats();
     let seconds: Vec<f64> = records.iter().map(|r| r.seconds).collect();
+    let cpu_seconds: Vec<f64> = records.iter().map(|r| r.cpu_seconds).collect();
     let hull: Vec<f64> = records.iter().map(|r| r.hull_seconds).collect();
     let apply: Vec<f64> = records.iter().map(|r| r.apply_seconds).collect();
     let report = Report {
@@ -252,8 +259,10 @@ fn execute(scenario: &Scenario, flags: &RunFlags) -> Result<Outcome, Failure> {
         threads: rayon::current_num_threads(),
         setup_seconds,
         total_seconds,
+        total_cpu_seconds,
         per_step: extract::PER_STEP,
         latency: Latency::of(&seconds),
+        cpu: Latency::of(&cpu_seconds),
         hull_median_ms: Latency::of(&hull).median_ms,
         apply_median_ms: Latency::of(&apply).median_ms,
         changed_cells_mean: records.iter().map(|r| r.changed_cells as f64).sum::<f64>()

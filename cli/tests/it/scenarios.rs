@@ -18,6 +18,24 @@ fn check_figures(r: &Value, steps: usize) {
     let (median, p99, max) = (f(r, "median_ms"), f(r, "p99_ms"), f(r, "max_ms"));
     assert!(0.0 < median && median <= p99 && p99 <= max, "{r}");
     assert!(f(r, "hull_median_ms") + f(r, "apply_median_ms") <= max);
+    // Per-step CPU time of the thread that ran the step: each step's is at
+    // most its wall time (read inside it), so every order statistic is too,
+    // and the steps' sum is within the loop's total.
+    let cpu = &r["cpu"];
+    let slack = 1e-3;
+    for key in ["median_ms", "p99_ms", "max_ms", "mean_ms"] {
+        assert!(f(cpu, key) <= f(r, key) + slack, "{key}: {r}");
+    }
+    assert!(
+        0.0 < f(cpu, "median_ms") && f(cpu, "median_ms") <= f(cpu, "p99_ms"),
+        "{r}"
+    );
+    assert!(f(cpu, "p99_ms") <= f(cpu, "max_ms"), "{r}");
+    assert!(f(cpu, "mean_ms") * steps as f64 <= f(r, "total_cpu_seconds") * 1e3 + slack);
+    assert!(
+        f(r, "total_cpu_seconds") <= f(r, "total_seconds") + 1e-6,
+        "{r}"
+    );
     assert!(f(r, "peak_memory_mib") > 0.0);
     let octree = &r["octree"];
     assert!(f(octree, "leaves") >= 1.0);
@@ -50,7 +68,7 @@ fn mill_subtracts_and_replays_to_the_identical_result() {
     );
     let lines = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(lines.lines().count(), steps + 1);
-    assert!(lines.starts_with("step,seconds,"));
+    assert!(lines.starts_with("step,seconds,cpu_seconds,"));
     let recorded = std::fs::read_to_string(&ops).unwrap();
     assert_eq!(recorded.lines().count(), steps + 1);
     assert!(recorded.starts_with("{\"base\":{\"box\":[[0.0,0.0,0.0],[100.0,100.0,40.0]]}}\n"));
