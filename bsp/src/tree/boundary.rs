@@ -282,14 +282,19 @@ impl Bsp {
                     above,
                 } => (plane, below, above),
             };
-            let [want_below, want_above] = self.wanted(kept_below, below, above);
-            match polygon.side_of_plane(&self.planes()[plane as usize]) {
-                Some(false) => stack.extend(want_below.then_some(below)),
-                Some(true) => stack.extend(want_above.then_some(above)),
-                None => {
-                    stack.extend(want_above.then_some(above));
-                    stack.extend(want_below.then_some(below));
-                }
+            let plane = &self.planes()[plane as usize];
+            // Only the sides that can keep a piece are asked about: where
+            // one side alone can, whether the polygon reaches it (it stops
+            // at the first corner strictly there); where neither can, nothing.
+            match self.wanted(kept_below, below, above) {
+                [true, true] => match polygon.side_of_plane(plane) {
+                    Some(false) => stack.push(below),
+                    Some(true) => stack.push(above),
+                    None => stack.extend([above, below]),
+                },
+                [true, false] => stack.extend(polygon.reaches_side(plane, false).then_some(below)),
+                [false, true] => stack.extend(polygon.reaches_side(plane, true).then_some(above)),
+                [false, false] => {}
             }
         }
         true

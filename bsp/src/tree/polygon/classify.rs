@@ -63,6 +63,29 @@ impl Polygon {
         }
         self.side_from_corners(below, above, p)
     }
+
+    /// Whether some of the polygon goes to side `above` of `p` (`false`
+    /// below): whether [`Self::side_of_plane`] is `None` or that side. It
+    /// stops at the first corner strictly on that side.
+    #[inline]
+    pub(crate) fn reaches_side(&self, p: &Plane, above: bool) -> bool {
+        let wanted = if above {
+            Sign::Positive
+        } else {
+            Sign::Negative
+        };
+        let mut off = false;
+        for k in 0..self.corners.len() {
+            let side = self.corner_side(k, p);
+            if side == wanted {
+                return true;
+            }
+            off |= side != Sign::Zero;
+        }
+        // No corner strictly on that side: the polygon goes there only
+        // lying in `p` and facing that way.
+        !off && faces_along(&self.support, p) == above
+    }
 }
 
 /// Room for the sides of a polygon's corners: on the stack for the usual

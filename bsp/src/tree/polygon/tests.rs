@@ -153,8 +153,8 @@ fn parts_of_agree_with_split_known() {
     assert!(checked > 500, "only {checked} splits checked");
 }
 
-/// [`Polygon::whole_side`] and [`Polygon::side_of_plane`] agree with
-/// classifying every corner in full, for the parts of repeated splits
+/// [`Polygon::whole_side`], [`Polygon::side_of_plane`] and
+/// [`Polygon::reaches_side`] agree with classifying every corner in full, for the parts of repeated splits
 /// against the splitting planes (on which the parts have corners, found
 /// without arithmetic) and their flips.
 #[test]
@@ -177,6 +177,10 @@ fn whole_side_agrees_with_full_classification() {
                 assert_eq!(piece.whole_side(p, &mut sides), expected);
                 assert_eq!(sides, exact);
                 assert_eq!(piece.side_of_plane(p), expected);
+                for above in [false, true] {
+                    let reaches = expected.is_none_or(|side| side == above);
+                    assert_eq!(piece.reaches_side(p, above), reaches);
+                }
                 touching += usize::from(exact.contains(&Sign::Zero));
                 checked += 1;
             }
