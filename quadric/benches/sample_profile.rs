@@ -129,7 +129,7 @@ fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
     h
 }
 
-/// A hash of the position, normal, plane point and patch of every sample,
+/// A hash of the position, normal and patch of every sample,
 /// in order (FNV-1a, as [`sample_hash`]): the fields that the bounds'
 /// widening for the `f32` rounding leaves alone.
 fn geometry_hash(samples: &[chisel_quadric::Sample]) -> u64 {
@@ -149,8 +149,6 @@ fn eat_geometry(eat: &mut impl FnMut(u64), s: &chisel_quadric::Sample) {
             eat(u64::from(c.to_bits()));
         }
     }
-    eat(u64::from(s.uv.x.to_bits()));
-    eat(u64::from(s.uv.y.to_bits()));
     eat(u64::from(s.patch));
 }
 

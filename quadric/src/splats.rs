@@ -125,7 +125,7 @@ impl SplatSet {
             let product = &dnf.products()[patch.product as usize];
             let r = f64::from(s.radius);
             let (position, normal, uv) =
-                (s.position.as_dvec3(), s.normal.as_dvec3(), s.uv.as_dvec2());
+                (s.position.as_dvec3(), s.normal.as_dvec3(), samples.uv_of(s));
             list.clear();
             for (j, l) in product.iter().enumerate() {
                 if j == patch.literal as usize {
@@ -297,7 +297,8 @@ pub fn cell_box(hf: &Heightfield, s: &Sample) -> Option<CellBox> {
     if n.length_squared().is_nan() || n.length_squared() <= 0.25 || !s.cell.is_finite() {
         return None;
     }
-    let (position, uv) = (s.position.as_dvec3(), s.uv.as_dvec2());
+    let position = s.position.as_dvec3();
+    let uv = hf.project(position);
     let half = s.cell.as_dvec2().min(DVec2::splat(r));
     let g = hf.gradient(uv)?;
     let offset = position.distance(hf.point(uv)?);

@@ -59,7 +59,7 @@ pub mod storage;
 mod subdivide;
 pub mod warp;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
@@ -158,9 +158,10 @@ impl SampleOptions {
 /// One surface sample, in `f32` (48 bytes: the output of a sampling run
 /// is written once, so its size is the run's page faults).
 ///
-/// The position, normal and plane point are the computed (`f64`) ones
-/// rounded to the nearest `f32`, in the frame of the normal form (the
-/// prop's local frame). The covering bounds [`radius`](Self::radius) and
+/// The position and normal are the computed (`f64`) ones rounded to the
+/// nearest `f32`, in the frame of the normal form (the prop's local
+/// frame); its plane point on its patch is derived from the position
+/// ([`SampleSet::uv_of`]). The covering bounds [`radius`](Self::radius) and
 /// [`cell`](Self::cell) are widened by that rounding and rounded up to
 /// `f32` ([`storage`]), so the coverage guarantee holds for the stored
 /// sample, and every bound derived from them stays conservative. The
@@ -173,16 +174,14 @@ pub struct Sample {
     pub position: Vec3,
     /// The solid's outward unit normal there (zero at a singular point).
     pub normal: Vec3,
-    /// Its plane coordinates on its patch.
-    pub uv: Vec2,
     /// Index into [`SampleSet::patches`]: the heightfield of the literal
     /// it was sampled for.
     pub patch: u32,
     /// The radius it must cover, `≤ r` (reduced where regions are small,
     /// §6.1) plus the rounding of [`position`](Self::position), rounded up.
     pub radius: f32,
-    /// Half size of the box around [`uv`](Self::uv) (plane coordinates of
-    /// its patch) that holds the plane points of every surface point the
+    /// Half size of the box around its plane point
+    /// ([`SampleSet::uv_of`], plane coordinates of its patch) that holds the plane points of every surface point the
     /// sample is there to cover (its fill cell, or its region), plus the
     /// rounding of `uv`, rounded up: the renderer bounds its splat by the
     /// surface over that box. `+∞` where only [`radius`](Self::radius)
@@ -334,6 +333,18 @@ impl SampleSet {
     #[inline]
     pub fn patch_of(&self, s: &Sample) -> &Patch {
         &self.patches[s.patch as usize]
+    }
+
+    /// The plane point of sample `s` on its patch: the projection of its
+    /// stored position ([`Heightfield::project`], in `f64`), the centre of
+    /// the box that [`Sample::cell`] bounds.
+    ///
+    /// # Panics
+    /// If `s` is not a sample of this set (its patch index out of range).
+    #[must_use]
+    #[inline]
+    pub fn uv_of(&self, s: &Sample) -> DVec2 {
+        self.patch_of(s).heightfield.project(s.position.as_dvec3())
     }
 }
 
