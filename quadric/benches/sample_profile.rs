@@ -129,7 +129,7 @@ fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
     h
 }
 
-/// A hash of the position, normal and patch of every sample,
+/// A hash of the position and patch of every sample,
 /// in order (FNV-1a, as [`sample_hash`]): the fields that the bounds'
 /// widening for the `f32` rounding leaves alone.
 fn geometry_hash(samples: &[chisel_quadric::Sample]) -> u64 {
@@ -144,10 +144,8 @@ fn geometry_hash(samples: &[chisel_quadric::Sample]) -> u64 {
 }
 
 fn eat_geometry(eat: &mut impl FnMut(u64), s: &chisel_quadric::Sample) {
-    for v in [s.position, s.normal] {
-        for c in v.to_array() {
-            eat(u64::from(c.to_bits()));
-        }
+    for c in s.position.to_array() {
+        eat(u64::from(c.to_bits()));
     }
     eat(u64::from(s.patch));
 }

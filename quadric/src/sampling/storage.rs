@@ -1,15 +1,15 @@
 //! Samples stored in `f32`, with covering bounds widened by the rounding.
 //!
-//! Notation: `p`, `n`, `uv` a sample's position, normal and plane point as
-//! computed (`f64`), `p̃`, `ñ` the nearest `f32`s, `ũv = π(p̃)` the plane
+//! Notation: `p`, `uv` a sample's position and plane point as computed
+//! (`f64`), `p̃` the nearest `f32`s, `ũv = π(p̃)` the plane
 //! point the reader derives (`π` = [`Heightfield::project`] in `f64`),
 //! `ρ` the radius and `h` the cell half size the sample must cover, `M` a
 //! bound on the magnitude of a coordinate, `ε(M) = 2⁻²⁴M + 2⁻¹⁵⁰`, `A` the
 //! heightfield's axes and `c` its centre.
 //!
 //! A run's output is written once, so its bytes are its page faults: a
-//! [`Sample`] holds `p̃` and `ñ` (40 bytes, not 80); its plane point is
-//! derived from `p̃` and its patch's plane. Rounding to the nearest `f32`
+//! [`Sample`] holds `p̃` (28 bytes, not 80); its plane point is derived
+//! from `p̃` and its patch's plane, its normal from `p̃` and its quadric. Rounding to the nearest `f32`
 //! moves a coordinate `x` with `|x| ≤ M` by at most `ε(M)` (half the `f32`
 //! spacing, at most `2⁻²³|x|` in the normal range and `2⁻¹⁴⁹` below it). A
 //! surface point within `ρ` of `p` is within `ρ + |p − p̃|` of `p̃`, and its
@@ -113,15 +113,14 @@ impl Rounding {
         }
     }
 
-    /// The stored sample with `normal` over plane point `uv` of patch
-    /// `patch` (heightfield `hf`), covering `bounds`: at `lifted`, the
-    /// point `hf.point(uv)`, or at `hf`'s centre where that is `None`.
+    /// The stored sample over plane point `uv` of patch `patch`
+    /// (heightfield `hf`), covering `bounds`: at `lifted`, the point
+    /// `hf.point(uv)`, or at `hf`'s centre where that is `None`.
     #[inline]
     pub(crate) fn store(
         &self,
         hf: &Heightfield,
         lifted: Option<DVec3>,
-        normal: DVec3,
         uv: DVec2,
         patch: u32,
         bounds: &Bounds,
@@ -139,7 +138,6 @@ impl Rounding {
         };
         Sample {
             position: stored_position,
-            normal: normal.as_vec3(),
             patch,
             radius,
             cell,
@@ -152,10 +150,6 @@ impl Rounding {
 pub(crate) struct Lift {
     /// The patch's heightfield.
     pub heightfield: Heightfield,
-    /// Its quadric.
-    pub quadric: Quadric,
-    /// `1` where the solid is inside the quadric, `−1` outside.
-    pub outward_sign: f64,
     /// The patch's index ([`Sample::patch`]).
     pub patch: u32,
     /// The rounding of its samples.
@@ -164,8 +158,8 @@ pub(crate) struct Lift {
 
 impl Lift {
     /// The stored sample over plane point `uv`, covering `bounds`: the
-    /// surface point there, and the outward unit normal from the quadric's
-    /// gradient. The lifted point is on the quadric up to `f64` rounding,
+    /// surface point there (its normal is derived where it is read,
+    /// [`outward_normal`]). The lifted point is on the quadric up to `f64` rounding,
     /// far below the `f32` it is stored in (a Newton step onto the quadric
     /// changed no stored sample of the shipped scenes). Inlined into the
     /// fills' loops, which call it once per sample.
@@ -179,8 +173,6 @@ impl Lift {
     pub(crate) fn by_ref(&self) -> LiftRef<'_> {
         LiftRef {
             heightfield: &self.heightfield,
-            quadric: &self.quadric,
-            outward_sign: self.outward_sign,
             patch: self.patch,
             rounding: &self.rounding,
         }
@@ -191,8 +183,6 @@ impl Lift {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LiftRef<'a> {
     pub heightfield: &'a Heightfield,
-    pub quadric: &'a Quadric,
-    pub outward_sign: f64,
     pub patch: u32,
     pub rounding: &'a Rounding,
 }
@@ -202,19 +192,27 @@ impl LiftRef<'_> {
     #[inline(always)]
     pub(crate) fn sample(self, uv: DVec2, bounds: &Bounds) -> Sample {
         let hf = self.heightfield;
-        let lifted = hf.point(uv);
-        let raw = lifted.unwrap_or(hf.centre);
-        let g = self.quadric.gradient(raw);
-        let g2 = g.length_squared();
-        let normal = if g2 > 0.0 && g2.is_finite() {
-            g * (self.outward_sign / g2.sqrt())
-        } else {
-            self.quadric
-                .normal(raw)
-                .map_or(DVec3::ZERO, |n| n * self.outward_sign)
-        };
         self.rounding
-            .store(hf, lifted, normal, uv, self.patch, bounds)
+            .store(hf, hf.point(uv), uv, self.patch, bounds)
+    }
+}
+
+/// The solid's outward unit normal at `position` on `quadric`, with
+/// `outward_sign` `1` where the solid is inside the quadric and `−1`
+/// outside: `±∇Q/|∇Q|`, zero at a singular point. A sample's normal
+/// ([`SampleSet::normal_of`](crate::SampleSet::normal_of)) is this at its
+/// stored position, computed where it is read, not stored.
+#[must_use]
+#[inline]
+pub fn outward_normal(quadric: &Quadric, outward_sign: f64, position: DVec3) -> DVec3 {
+    let g = quadric.gradient(position);
+    let g2 = g.length_squared();
+    if g2 > 0.0 && g2.is_finite() {
+        g * (outward_sign / g2.sqrt())
+    } else {
+        quadric
+            .normal(position)
+            .map_or(DVec3::ZERO, |n| n * outward_sign)
     }
 }
 
@@ -315,7 +313,7 @@ mod tests {
             let Some(position) = hf.point(uv) else {
                 continue;
             };
-            let s = rounding.store(&hf, Some(position), DVec3::Z, uv, 3, &bounds);
+            let s = rounding.store(&hf, Some(position), uv, 3, &bounds);
             let moved = position.distance(s.position.as_dvec3());
             let shifted = (uv - hf.project(s.position.as_dvec3())).abs();
             assert!(f64::from(s.radius) >= 0.25 + moved, "{i}");
@@ -326,7 +324,6 @@ mod tests {
             let within = position.abs().cmple(rounding.position_limit).all();
             checked[usize::from(within)] += 1;
             assert_eq!(s.patch, 3);
-            assert_eq!(s.normal, glam::Vec3::Z);
         }
         assert!(checked[0] > 100 && checked[1] > 100, "{checked:?}");
         // The shared bound is within a few times the rounding of the
@@ -335,7 +332,7 @@ mod tests {
         // Not lifted: the centre, with the exact shift from the plane
         // point.
         let uv = DVec2::new(20.0, -3.0);
-        let s = rounding.store(&hf, None, DVec3::Z, uv, 0, &bounds);
+        let s = rounding.store(&hf, None, uv, 0, &bounds);
         assert_eq!(s.position, hf.centre.as_vec3());
         let shifted = (uv - hf.project(s.position.as_dvec3())).abs();
         assert!(f64::from(s.cell.x) >= 0.1 + shifted.x);
