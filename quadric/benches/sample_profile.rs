@@ -10,9 +10,10 @@
 //! `SAMPLE_THREADS=N` runs it on `N` threads (CPU time then sums them).
 //! With the environment variable `SAMPLE_HASH` set it also prints a hash
 //! of the sample set (every field of every sample), to check that a change
-//! keeps the samples bit-identical, and a hash of their geometry (position,
-//! normal, plane point and patch, as stored in `f32`: a base that stored
-//! them in `f64` hashes them rounded to `f32` to compare).
+//! keeps the samples bit-identical, and a hash of their geometry (position
+//! and patch, as stored in `f32`). With `SAMPLE_NORMALS` set it also times
+//! what a reader pays for the normals, which samples do not store
+//! (`SampleSet::normal_of` of every sample, CPU time).
 //!
 //! It measures only with `--bench` among its arguments (`cargo bench`
 //! passes it): `cargo test --all-targets` runs it without, and it then
@@ -104,6 +105,25 @@ fn main() {
         .map(|s| 4.0 * f64::from(s.radius) * f64::from(s.radius))
         .sum();
     println!("splat squares sum (2r)^2 = {squares:.1}");
+    if std::env::var_os("SAMPLE_NORMALS").is_some() {
+        // Twenty passes: one is below the resolution of the CPU clock.
+        const PASSES: u32 = 20;
+        let before = cpu_seconds();
+        let mut sum = DVec3::ZERO;
+        for _ in 0..PASSES {
+            sum += set
+                .samples
+                .iter()
+                .map(|s| set.normal_of(&dnf, s))
+                .sum::<DVec3>();
+        }
+        let seconds = (cpu_seconds() - before) / f64::from(PASSES);
+        println!(
+            "normals derived in CPU {:.3} ms per pass ({:.1} ns each; sum {sum:.3})",
+            seconds * 1e3,
+            seconds * 1e9 / set.samples.len().max(1) as f64
+        );
+    }
     // Off by default: the hash would add to a profiler's instruction count.
     if std::env::var_os("SAMPLE_HASH").is_some() {
         println!("sample set hash {:016x}", sample_hash(&set.samples));

@@ -1,16 +1,17 @@
 //! Samples stored in `f32`, with covering bounds widened by the rounding.
 //!
 //! Notation: `p`, `uv` a sample's position and plane point as computed
-//! (`f64`), `p̃` the nearest `f32`s, `ũv = π(p̃)` the plane
-//! point the reader derives (`π` = [`Heightfield::project`] in `f64`),
+//! (`f64`), `p̃` the nearest `f32`s, `ũv = π(p̃)` the plane point the
+//! reader derives (`π` = [`Heightfield::project`] in `f64`),
 //! `ρ` the radius and `h` the cell half size the sample must cover, `M` a
 //! bound on the magnitude of a coordinate, `ε(M) = 2⁻²⁴M + 2⁻¹⁵⁰`, `A` the
 //! heightfield's axes and `c` its centre.
 //!
 //! A run's output is written once, so its bytes are its page faults: a
-//! [`Sample`] holds `p̃` (28 bytes, not 80); its plane point is derived
-//! from `p̃` and its patch's plane, its normal from `p̃` and its quadric. Rounding to the nearest `f32`
-//! moves a coordinate `x` with `|x| ≤ M` by at most `ε(M)` (half the `f32`
+//! [`Sample`] holds `p̃` and its bounds (28 bytes, not 80); its plane point
+//! is derived from `p̃` and its patch's plane, its normal from `p̃` and its
+//! quadric ([`outward_normal`]). Rounding to the nearest `f32` moves a
+//! coordinate `x` with `|x| ≤ M` by at most `ε(M)` (half the `f32`
 //! spacing, at most `2⁻²³|x|` in the normal range and `2⁻¹⁴⁹` below it). A
 //! surface point within `ρ` of `p` is within `ρ + |p − p̃|` of `p̃`, and its
 //! plane point within `h + |uv − ũv|` of `ũv` along each axis; the stored
