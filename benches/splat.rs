@@ -601,7 +601,7 @@ fn sphere_boxes(scene: &Scene, bounds: PropBounds, radius: f32, splats: &PropSpl
         }
         let r = f64::from(s.radius);
         let hf = &samples.patches[s.patch as usize].heightfield;
-        let uv = s.uv.as_dvec2();
+        let uv = samples.uv_of(s);
         let (low, high) = hf.distortion_bounds(uv - DVec2::splat(r), uv + DVec2::splat(r));
         let extent = r * (high - low);
         let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };

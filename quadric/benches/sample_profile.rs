@@ -10,9 +10,10 @@
 //! `SAMPLE_THREADS=N` runs it on `N` threads (CPU time then sums them).
 //! With the environment variable `SAMPLE_HASH` set it also prints a hash
 //! of the sample set (every field of every sample), to check that a change
-//! keeps the samples bit-identical, and a hash of their geometry (position,
-//! normal, plane point and patch, as stored in `f32`: a base that stored
-//! them in `f64` hashes them rounded to `f32` to compare).
+//! keeps the samples bit-identical, and a hash of their geometry (position
+//! and patch, as stored in `f32`). With `SAMPLE_NORMALS` set it also times
+//! what a reader pays for the normals, which samples do not store
+//! (`SampleSet::normal_of` of every sample, CPU time).
 //!
 //! It measures only with `--bench` among its arguments (`cargo bench`
 //! passes it): `cargo test --all-targets` runs it without, and it then
@@ -104,6 +105,25 @@ fn main() {
         .map(|s| 4.0 * f64::from(s.radius) * f64::from(s.radius))
         .sum();
     println!("splat squares sum (2r)^2 = {squares:.1}");
+    if std::env::var_os("SAMPLE_NORMALS").is_some() {
+        // Twenty passes: one is below the resolution of the CPU clock.
+        const PASSES: u32 = 20;
+        let before = cpu_seconds();
+        let mut sum = DVec3::ZERO;
+        for _ in 0..PASSES {
+            sum += set
+                .samples
+                .iter()
+                .map(|s| set.normal_of(&dnf, s))
+                .sum::<DVec3>();
+        }
+        let seconds = (cpu_seconds() - before) / f64::from(PASSES);
+        println!(
+            "normals derived in CPU {:.3} ms per pass ({:.1} ns each; sum {sum:.3})",
+            seconds * 1e3,
+            seconds * 1e9 / set.samples.len().max(1) as f64
+        );
+    }
     // Off by default: the hash would add to a profiler's instruction count.
     if std::env::var_os("SAMPLE_HASH").is_some() {
         println!("sample set hash {:016x}", sample_hash(&set.samples));
@@ -129,7 +149,7 @@ fn sample_hash(samples: &[chisel_quadric::Sample]) -> u64 {
     h
 }
 
-/// A hash of the position, normal, plane point and patch of every sample,
+/// A hash of the position and patch of every sample,
 /// in order (FNV-1a, as [`sample_hash`]): the fields that the bounds'
 /// widening for the `f32` rounding leaves alone.
 fn geometry_hash(samples: &[chisel_quadric::Sample]) -> u64 {
@@ -144,13 +164,9 @@ fn geometry_hash(samples: &[chisel_quadric::Sample]) -> u64 {
 }
 
 fn eat_geometry(eat: &mut impl FnMut(u64), s: &chisel_quadric::Sample) {
-    for v in [s.position, s.normal] {
-        for c in v.to_array() {
-            eat(u64::from(c.to_bits()));
-        }
+    for c in s.position.to_array() {
+        eat(u64::from(c.to_bits()));
     }
-    eat(u64::from(s.uv.x.to_bits()));
-    eat(u64::from(s.uv.y.to_bits()));
     eat(u64::from(s.patch));
 }
 

@@ -124,8 +124,11 @@ impl SplatSet {
             let patch = samples.patch_of(s);
             let product = &dnf.products()[patch.product as usize];
             let r = f64::from(s.radius);
-            let (position, normal, uv) =
-                (s.position.as_dvec3(), s.normal.as_dvec3(), s.uv.as_dvec2());
+            let (position, normal, uv) = (
+                s.position.as_dvec3(),
+                samples.normal_of(dnf, s),
+                samples.uv_of(s),
+            );
             list.clear();
             for (j, l) in product.iter().enumerate() {
                 if j == patch.literal as usize {
@@ -150,7 +153,7 @@ impl SplatSet {
             let own = product[patch.literal as usize];
             let hf = &patch.heightfield;
             let (dmin, dmax) = hf.distortion_bounds(uv - DVec2::splat(r), uv + DVec2::splat(r));
-            let cell = cell_box(hf, s).unwrap_or_else(|| {
+            let cell = cell_box(hf, s, normal).unwrap_or_else(|| {
                 let extent = r * (dmax - dmin);
                 CellBox {
                     normal_extent: if extent.is_finite() { extent.min(r) } else { r },
@@ -268,8 +271,9 @@ const CELL_BOX_STEPS: u32 = 4;
 /// exactly).
 const CELL_BOX_MARGIN: f64 = 1e-9;
 
-/// The box around sample `s` of heightfield `hf` that holds the surface
-/// over its cell, within its radius; `None` where the cell or the gradient
+/// The box around sample `s` of heightfield `hf` with outward unit normal
+/// `normal` ([`SampleSet::normal_of`](crate::SampleSet::normal_of)) that
+/// holds the surface over its cell, within its radius; `None` where the cell or the gradient
 /// is unbounded (then the sphere's box, [`CellBox::sphere`]).
 ///
 /// Notation: `X, Y, Z` the heightfield's plane axes and normal axis, `t`
@@ -291,13 +295,14 @@ const CELL_BOX_MARGIN: f64 = 1e-9;
 ///
 /// [`Heightfield::gradient_bounds`]: crate::sampling::heightfield::Heightfield::gradient_bounds
 #[must_use]
-pub fn cell_box(hf: &Heightfield, s: &Sample) -> Option<CellBox> {
+pub fn cell_box(hf: &Heightfield, s: &Sample, normal: DVec3) -> Option<CellBox> {
     let r = f64::from(s.radius);
-    let n = s.normal.as_dvec3();
+    let n = normal;
     if n.length_squared().is_nan() || n.length_squared() <= 0.25 || !s.cell.is_finite() {
         return None;
     }
-    let (position, uv) = (s.position.as_dvec3(), s.uv.as_dvec2());
+    let position = s.position.as_dvec3();
+    let uv = hf.project(position);
     let half = s.cell.as_dvec2().min(DVec2::splat(r));
     let g = hf.gradient(uv)?;
     let offset = position.distance(hf.point(uv)?);

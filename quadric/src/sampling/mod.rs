@@ -59,7 +59,7 @@ pub mod storage;
 mod subdivide;
 pub mod warp;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::csg::{CsgDistance, Dnf, Side};
@@ -69,6 +69,7 @@ pub use cost::{DEFAULT_MAX_MEMORY, SamplingCost, sampling_cost};
 use cost::{cost_of, quadric_regions};
 use heightfield::Heightfield;
 use regions::RegionKind;
+pub use storage::outward_normal;
 pub use subdivide::DISTORTION_CAP;
 use subdivide::RegionJob;
 
@@ -155,12 +156,13 @@ impl SampleOptions {
     }
 }
 
-/// One surface sample, in `f32` (48 bytes: the output of a sampling run
+/// One surface sample, in `f32` (28 bytes: the output of a sampling run
 /// is written once, so its size is the run's page faults).
 ///
-/// The position, normal and plane point are the computed (`f64`) ones
-/// rounded to the nearest `f32`, in the frame of the normal form (the
-/// prop's local frame). The covering bounds [`radius`](Self::radius) and
+/// The position is the computed (`f64`) one rounded to the nearest `f32`,
+/// in the frame of the normal form (the prop's local frame); its plane
+/// point on its patch ([`SampleSet::uv_of`]) and its normal
+/// ([`SampleSet::normal_of`]) are derived from it where they are read. The covering bounds [`radius`](Self::radius) and
 /// [`cell`](Self::cell) are widened by that rounding and rounded up to
 /// `f32` ([`storage`]), so the coverage guarantee holds for the stored
 /// sample, and every bound derived from them stays conservative. The
@@ -171,18 +173,14 @@ pub struct Sample {
     /// The point on the quadric and on the CSG surface (within the
     /// rounding to `f32`).
     pub position: Vec3,
-    /// The solid's outward unit normal there (zero at a singular point).
-    pub normal: Vec3,
-    /// Its plane coordinates on its patch.
-    pub uv: Vec2,
     /// Index into [`SampleSet::patches`]: the heightfield of the literal
     /// it was sampled for.
     pub patch: u32,
     /// The radius it must cover, `≤ r` (reduced where regions are small,
     /// §6.1) plus the rounding of [`position`](Self::position), rounded up.
     pub radius: f32,
-    /// Half size of the box around [`uv`](Self::uv) (plane coordinates of
-    /// its patch) that holds the plane points of every surface point the
+    /// Half size of the box around its plane point
+    /// ([`SampleSet::uv_of`], plane coordinates of its patch) that holds the plane points of every surface point the
     /// sample is there to cover (its fill cell, or its region), plus the
     /// rounding of `uv`, rounded up: the renderer bounds its splat by the
     /// surface over that box. `+∞` where only [`radius`](Self::radius)
@@ -334,6 +332,42 @@ impl SampleSet {
     #[inline]
     pub fn patch_of(&self, s: &Sample) -> &Patch {
         &self.patches[s.patch as usize]
+    }
+
+    /// The solid's outward unit normal at sample `s` (zero at a singular
+    /// point): [`outward_normal`] of its literal's quadric at its stored
+    /// position, in `f64`. `dnf` is the normal form the set was sampled
+    /// from.
+    ///
+    /// # Panics
+    /// If `s` is not a sample of this set, or `dnf` not its normal form
+    /// (an index out of range).
+    #[must_use]
+    #[inline]
+    pub fn normal_of(&self, dnf: &Dnf, s: &Sample) -> DVec3 {
+        let patch = self.patch_of(s);
+        let literal = dnf.products()[patch.product as usize][patch.literal as usize];
+        let sign = match literal.side {
+            Side::Inside => 1.0,
+            Side::Outside => -1.0,
+        };
+        outward_normal(
+            &dnf.quadrics()[literal.quadric].quadric,
+            sign,
+            s.position.as_dvec3(),
+        )
+    }
+
+    /// The plane point of sample `s` on its patch: the projection of its
+    /// stored position ([`Heightfield::project`], in `f64`), the centre of
+    /// the box that [`Sample::cell`] bounds.
+    ///
+    /// # Panics
+    /// If `s` is not a sample of this set (its patch index out of range).
+    #[must_use]
+    #[inline]
+    pub fn uv_of(&self, s: &Sample) -> DVec2 {
+        self.patch_of(s).heightfield.project(s.position.as_dvec3())
     }
 }
 
@@ -556,7 +590,6 @@ impl<'a> SamplingRun<'a> {
     fn run(&self, job: &Job, select: &JobSelection<'_>, out: &mut Vec<Sample>) -> bool {
         let patch = &self.patches[job.patch as usize];
         let literal = self.dnf.products()[patch.product as usize][patch.literal as usize];
-        let quadric = &self.dnf.quadrics()[literal.quadric].quadric;
         let (region, kind) =
             &self.tables[literal.quadric][job.heightfield as usize].1[job.region as usize];
         if !select(patch, job, region) {
@@ -564,12 +597,7 @@ impl<'a> SamplingRun<'a> {
         }
         let region_job = RegionJob {
             distance: &self.distance,
-            quadric,
             patch: job.patch,
-            outward_sign: match literal.side {
-                Side::Inside => 1.0,
-                Side::Outside => -1.0,
-            },
             heightfield: &patch.heightfield,
             sphere: self.sphere,
             options: self.options,

@@ -1,27 +1,38 @@
 //! Samples stored in `f32`, with covering bounds widened by the rounding.
 //!
-//! Notation: `p`, `n`, `uv` a sample's position, normal and plane point as
-//! computed (`f64`), `p̃`, `ñ`, `ũv` the nearest `f32`s, `ρ` the radius and
-//! `h` the cell half size the sample must cover, `M` a bound on the
-//! magnitude of a coordinate, `ε(M) = 2⁻²⁴M + 2⁻¹⁵⁰`.
+//! Notation: `p`, `uv` a sample's position and plane point as computed
+//! (`f64`), `p̃` the nearest `f32`s, `ũv = π(p̃)` the plane point the
+//! reader derives (`π` = [`Heightfield::project`] in `f64`),
+//! `ρ` the radius and `h` the cell half size the sample must cover, `M` a
+//! bound on the magnitude of a coordinate, `ε(M) = 2⁻²⁴M + 2⁻¹⁵⁰`, `A` the
+//! heightfield's axes and `c` its centre.
 //!
 //! A run's output is written once, so its bytes are its page faults: a
-//! [`Sample`] holds `p̃`, `ñ` and `ũv` (48 bytes, not 80). Rounding to the
-//! nearest `f32` moves a coordinate `x` with `|x| ≤ M` by at most `ε(M)`
-//! (half the `f32` spacing, at most `2⁻²³|x|` in the normal range and
-//! `2⁻¹⁴⁹` below it). A surface point within `ρ` of `p` is within
-//! `ρ + |p − p̃|` of `p̃`, and its plane point within `h + |uv − ũv|` of
-//! `ũv` along each axis; the stored bounds are those sums rounded up to
-//! `f32` (each sum first widened by `2⁻⁵⁰` of itself, more than the `f64`
-//! roundings of the sums), so the coverage guarantee holds for the stored
-//! sample as it did for the computed one.
+//! [`Sample`] holds `p̃` and its bounds (28 bytes, not 80); its plane point
+//! is derived from `p̃` and its patch's plane, its normal from `p̃` and its
+//! quadric ([`outward_normal`]). Rounding to the nearest `f32` moves a
+//! coordinate `x` with `|x| ≤ M` by at most `ε(M)` (half the `f32`
+//! spacing, at most `2⁻²³|x|` in the normal range and `2⁻¹⁴⁹` below it). A
+//! surface point within `ρ` of `p` is within `ρ + |p − p̃|` of `p̃`, and its
+//! plane point within `h + |uv − ũv|` of `ũv` along each axis; the stored
+//! bounds are those sums rounded up to `f32` (each sum first widened by
+//! `2⁻⁵⁰` of itself, more than the `f64` roundings of the sums), so the
+//! coverage guarantee holds for the stored sample as it did for the
+//! computed one.
 //!
 //! The errors are bounded once per patch, for positions inside the box
-//! `|pᵢ| ≤ Mᵢ` around the bounding sphere and plane points inside the
-//! patch's domain box (`L¹` norms, which bound the Euclidean one), so the
-//! bounds of a fill's cells are rounded once (`Bounds::shared`). A sample
-//! outside those boxes gets bounds from its own rounding errors, which are
-//! exact in `f64` (`x − f64(x̃)` of two nearby numbers).
+//! `|pᵢ| ≤ Mᵢ` around the bounding sphere (`L¹` norms, which bound the
+//! Euclidean one), so the bounds of a fill's cells are rounded once
+//! (`Bounds::shared`). For `p = c + A(uv, t)` (lifted in `f64`),
+//! `ũvᵢ − uvᵢ = aᵢ·(p̃ − p) + aᵢ·(p − c) − uvᵢ` plus the rounding of `π`:
+//! the first term is at most `|aᵢ|·|ε(M)|` (Cauchy–Schwarz over the
+//! per-axis bounds), the rest at most `(3d + 2⁻⁴⁵)·4K` with `d` the
+//! largest entry of `AᵀA − I` (plus its own rounding) and
+//! `K = Σ Mᵢ + |c|₁ ≥ |(uv, t)|` (a dot product of three terms in `f64`
+//! loses under `2⁻⁵⁰` of `Σ|aᵢⱼxⱼ|`; the lift and the projection together
+//! under `2⁻⁴⁷K`). A sample outside the box, or not lifted from its plane
+//! point, gets bounds from its own errors, which are exact in `f64` up to
+//! the widening (`x − f64(x̃)` and `π(p̃) − uv` of nearby numbers).
 
 use glam::{DVec2, DVec3, Vec2};
 
@@ -45,17 +56,17 @@ const WIDEN: f64 = 1.0 + 1.0 / (1u64 << 50) as f64;
 const LIMIT_SLACK: f64 = 1.0 + 1e-6;
 
 /// How one patch's samples are rounded to `f32`, with the bounds of the
-/// rounding errors of positions and plane points within the limits.
+/// rounding errors of positions and derived plane points within the
+/// limits.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Rounding {
     /// `M` for positions: `|Cᵢ| + R` of the bounding sphere, with slack.
     position_limit: DVec3,
     /// `Σᵢ ε(Mᵢ)`: bounds `|p − p̃|` for positions within the limit.
     position_error: f64,
-    /// `M` for plane points: the patch's domain box, with slack.
-    uv_limit: DVec2,
-    /// `ε(Mᵢ)` per axis: bounds `|uvᵢ − ũvᵢ|` within the limit.
-    uv_error: DVec2,
+    /// Bounds `|ũvᵢ − uvᵢ|` for lifted positions within the limit (see
+    /// the module notes).
+    uv_shift: f64,
 }
 
 /// `ε(m)` for `m ≥ 0`.
@@ -63,49 +74,71 @@ fn error_bound(m: f64) -> f64 {
     RELATIVE * m + ABSOLUTE
 }
 
+/// `2⁻⁴⁵`: a bound, with room, on the relative `f64` rounding of lifting a
+/// plane point and projecting it back (see the module notes).
+const LIFT_ROUNDING: f64 = 1.0 / (1u64 << 45) as f64;
+
 impl Rounding {
     /// The rounding of the samples of heightfield `hf` inside `sphere`.
     pub(crate) fn new(sphere: &BoundingSphere, hf: &Heightfield) -> Self {
         let position_limit = (sphere.centre.abs() + sphere.radius) * LIMIT_SLACK;
-        let uv_limit = (hf.project(sphere.centre).abs() + sphere.radius) * LIMIT_SLACK;
-        let position_error = WIDEN
-            * (error_bound(position_limit.x)
-                + error_bound(position_limit.y)
-                + error_bound(position_limit.z));
+        let per_axis = DVec3::new(
+            error_bound(position_limit.x),
+            error_bound(position_limit.y),
+            error_bound(position_limit.z),
+        );
+        let position_error = WIDEN * per_axis.element_sum();
+        let a = hf.axes;
+        let rows = a.transpose();
+        let row_norm = rows
+            .x_axis
+            .length()
+            .max(rows.y_axis.length())
+            .max(rows.z_axis.length());
+        let gram = a.transpose() * a - glam::DMat3::IDENTITY;
+        let defect = gram
+            .x_axis
+            .abs()
+            .max(gram.y_axis.abs())
+            .max(gram.z_axis.abs())
+            .max_element()
+            + LIFT_ROUNDING / 32.0;
+        let k = position_limit.element_sum() + hf.centre.abs().element_sum();
+        let uv_shift = WIDEN
+            * (WIDEN * row_norm * per_axis.length() + (3.0 * defect + LIFT_ROUNDING) * 4.0 * k)
+            * WIDEN;
         Self {
             position_limit,
             position_error,
-            uv_limit,
-            uv_error: DVec2::new(error_bound(uv_limit.x), error_bound(uv_limit.y)) * WIDEN,
+            uv_shift,
         }
     }
 
-    /// The stored sample at `position` with `normal` over plane point `uv`
-    /// of patch `patch`, covering `bounds`.
+    /// The stored sample over plane point `uv` of patch `patch`
+    /// (heightfield `hf`), covering `bounds`: at `lifted`, the point
+    /// `hf.point(uv)`, or at `hf`'s centre where that is `None`.
     #[inline]
     pub(crate) fn store(
         &self,
-        position: DVec3,
-        normal: DVec3,
+        hf: &Heightfield,
+        lifted: Option<DVec3>,
         uv: DVec2,
         patch: u32,
         bounds: &Bounds,
     ) -> Sample {
-        let (stored_position, stored_uv) = (position.as_vec3(), uv.as_vec2());
-        let within =
-            position.abs().cmple(self.position_limit).all() & uv.abs().cmple(self.uv_limit).all();
+        let position = lifted.unwrap_or(hf.centre);
+        let stored_position = position.as_vec3();
+        let within = lifted.is_some() & position.abs().cmple(self.position_limit).all();
         let (radius, cell) = if within {
             (bounds.stored_radius, bounds.stored_cell)
         } else {
             // The exact rounding errors of this sample.
             let moved = (position - stored_position.as_dvec3()).abs().element_sum();
-            let shifted = (uv - stored_uv.as_dvec2()).abs();
+            let shifted = (hf.project(stored_position.as_dvec3()) - uv).abs();
             widened(bounds.radius, moved, bounds.cell, shifted)
         };
         Sample {
             position: stored_position,
-            normal: normal.as_vec3(),
-            uv: stored_uv,
             patch,
             radius,
             cell,
@@ -118,10 +151,6 @@ impl Rounding {
 pub(crate) struct Lift {
     /// The patch's heightfield.
     pub heightfield: Heightfield,
-    /// Its quadric.
-    pub quadric: Quadric,
-    /// `1` where the solid is inside the quadric, `−1` outside.
-    pub outward_sign: f64,
     /// The patch's index ([`Sample::patch`]).
     pub patch: u32,
     /// The rounding of its samples.
@@ -130,8 +159,8 @@ pub(crate) struct Lift {
 
 impl Lift {
     /// The stored sample over plane point `uv`, covering `bounds`: the
-    /// surface point there, and the outward unit normal from the quadric's
-    /// gradient. The lifted point is on the quadric up to `f64` rounding,
+    /// surface point there (its normal is derived where it is read,
+    /// [`outward_normal`]). The lifted point is on the quadric up to `f64` rounding,
     /// far below the `f32` it is stored in (a Newton step onto the quadric
     /// changed no stored sample of the shipped scenes). Inlined into the
     /// fills' loops, which call it once per sample.
@@ -145,8 +174,6 @@ impl Lift {
     pub(crate) fn by_ref(&self) -> LiftRef<'_> {
         LiftRef {
             heightfield: &self.heightfield,
-            quadric: &self.quadric,
-            outward_sign: self.outward_sign,
             patch: self.patch,
             rounding: &self.rounding,
         }
@@ -157,8 +184,6 @@ impl Lift {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LiftRef<'a> {
     pub heightfield: &'a Heightfield,
-    pub quadric: &'a Quadric,
-    pub outward_sign: f64,
     pub patch: u32,
     pub rounding: &'a Rounding,
 }
@@ -168,17 +193,27 @@ impl LiftRef<'_> {
     #[inline(always)]
     pub(crate) fn sample(self, uv: DVec2, bounds: &Bounds) -> Sample {
         let hf = self.heightfield;
-        let raw = hf.point(uv).unwrap_or(hf.centre);
-        let g = self.quadric.gradient(raw);
-        let g2 = g.length_squared();
-        let normal = if g2 > 0.0 && g2.is_finite() {
-            g * (self.outward_sign / g2.sqrt())
-        } else {
-            self.quadric
-                .normal(raw)
-                .map_or(DVec3::ZERO, |n| n * self.outward_sign)
-        };
-        self.rounding.store(raw, normal, uv, self.patch, bounds)
+        self.rounding
+            .store(hf, hf.point(uv), uv, self.patch, bounds)
+    }
+}
+
+/// The solid's outward unit normal at `position` on `quadric`, with
+/// `outward_sign` `1` where the solid is inside the quadric and `−1`
+/// outside: `±∇Q/|∇Q|`, zero at a singular point. A sample's normal
+/// ([`SampleSet::normal_of`](crate::SampleSet::normal_of)) is this at its
+/// stored position, computed where it is read, not stored.
+#[must_use]
+#[inline]
+pub fn outward_normal(quadric: &Quadric, outward_sign: f64, position: DVec3) -> DVec3 {
+    let g = quadric.gradient(position);
+    let g2 = g.length_squared();
+    if g2 > 0.0 && g2.is_finite() {
+        g * (outward_sign / g2.sqrt())
+    } else {
+        quadric
+            .normal(position)
+            .map_or(DVec3::ZERO, |n| n * outward_sign)
     }
 }
 
@@ -197,8 +232,12 @@ impl Bounds {
     /// stored form is rounded once).
     #[inline]
     pub(crate) fn shared(rounding: &Rounding, radius: f64, cell: DVec2) -> Self {
-        let (stored_radius, stored_cell) =
-            widened(radius, rounding.position_error, cell, rounding.uv_error);
+        let (stored_radius, stored_cell) = widened(
+            radius,
+            rounding.position_error,
+            cell,
+            DVec2::splat(rounding.uv_shift),
+        );
         Self {
             radius,
             cell,
@@ -257,42 +296,47 @@ mod tests {
     }
 
     /// A stored sample reaches the surface points its computed one
-    /// reaches: `ρ̃ ≥ ρ + |p − p̃|`, `h̃ ≥ h + |uv − ũv|`, inside and outside
-    /// the limits; both ways give the same stored bounds where the exact
-    /// errors are the largest ones.
+    /// reaches: `ρ̃ ≥ ρ + |p − p̃|`, `h̃ ≥ h + |uv − π(p̃)|`, inside and
+    /// outside the limits, and for a sample not lifted from its plane point.
     #[test]
     fn stored_bounds_cover_the_rounding() {
-        let q = Quadric::sphere(DVec3::ZERO, 50.0).unwrap();
+        let q = Quadric::sphere(DVec3::new(3.0, -2.0, 0.5), 50.0).unwrap();
         let hf = LocalForm::new(&q).heightfields()[0];
-        let sphere = BoundingSphere::new(DVec3::new(0.3, -7.0, 1.0), 60.0).unwrap();
+        // Smaller than the quadric: lifted points beyond it are outside the
+        // limits.
+        let sphere = BoundingSphere::new(DVec3::new(0.3, -7.0, 1.0), 30.0).unwrap();
         let rounding = Rounding::new(&sphere, &hf);
         let bounds = Bounds::shared(&rounding, 0.25, DVec2::new(0.1, 0.2));
         let mut checked = [0; 2];
-        for i in 0..2000 {
+        for i in 0..4000 {
             let t = f64::from(i) * 0.618_033_988_7;
-            let position = DVec3::new(
-                67.0 * t.sin(),
-                71.0 * (1.3 * t).cos(),
-                3.0 + 0.1 * t.fract(),
-            );
-            let uv = DVec2::new(59.0 * (0.7 * t).cos(), 66.0 * t.sin());
-            let s = rounding.store(position, DVec3::Z, uv, 3, &bounds);
+            let uv = 49.9 * t.fract().sqrt() * DVec2::new((7.0 * t).cos(), (7.0 * t).sin());
+            let Some(position) = hf.point(uv) else {
+                continue;
+            };
+            let s = rounding.store(&hf, Some(position), uv, 3, &bounds);
             let moved = position.distance(s.position.as_dvec3());
-            let shifted = (uv - s.uv.as_dvec2()).abs();
+            let shifted = (uv - hf.project(s.position.as_dvec3())).abs();
             assert!(f64::from(s.radius) >= 0.25 + moved, "{i}");
             assert!(f64::from(s.cell.x) >= 0.1 + shifted.x, "{i}");
             assert!(f64::from(s.cell.y) >= 0.2 + shifted.y, "{i}");
             assert!(f64::from(s.radius) < 0.25 * (1.0 + 1e-4));
-            let within = position.abs().cmple(rounding.position_limit).all()
-                && uv.abs().cmple(rounding.uv_limit).all();
+            assert!(f64::from(s.cell.x) < 0.1 * (1.0 + 1e-3));
+            let within = position.abs().cmple(rounding.position_limit).all();
             checked[usize::from(within)] += 1;
             assert_eq!(s.patch, 3);
-            assert_eq!(s.normal, glam::Vec3::Z);
         }
         assert!(checked[0] > 100 && checked[1] > 100, "{checked:?}");
-        // Exact zero error (positions and plane points exact in f32):
-        // only the widening moves the bounds.
-        let far = rounding.store(DVec3::splat(1e3), DVec3::Z, DVec2::splat(1e3), 0, &bounds);
-        assert_eq!(far.radius, f32_at_least(0.25 * WIDEN));
+        // The shared bound is within a few times the rounding of the
+        // largest coordinate, far below the cells.
+        assert!(rounding.uv_shift < 4.0 * rounding.position_error);
+        // Not lifted: the centre, with the exact shift from the plane
+        // point.
+        let uv = DVec2::new(20.0, -3.0);
+        let s = rounding.store(&hf, None, uv, 0, &bounds);
+        assert_eq!(s.position, hf.centre.as_vec3());
+        let shifted = (uv - hf.project(s.position.as_dvec3())).abs();
+        assert!(f64::from(s.cell.x) >= 0.1 + shifted.x);
+        assert!(f64::from(s.cell.y) >= 0.2 + shifted.y);
     }
 }

@@ -53,7 +53,6 @@ use std::cell::{Cell, RefCell};
 use glam::{DVec2, DVec3};
 
 use crate::csg::{CsgDistance, OtherTerms};
-use crate::quadric::Quadric;
 use crate::sampling::cell;
 use crate::sampling::curved::CurvedTriangle;
 use crate::sampling::heightfield::Heightfield;
@@ -101,9 +100,7 @@ const MAX_FILL_DEPTH: u32 = 2;
 /// Everything one basic region's subdivision reads.
 pub(crate) struct RegionJob<'a> {
     pub distance: &'a CsgDistance<'a>,
-    pub quadric: &'a Quadric,
     pub patch: u32,
-    pub outward_sign: f64,
     pub heightfield: &'a Heightfield,
     pub sphere: BoundingSphere,
     pub options: &'a SampleOptions,
@@ -700,8 +697,6 @@ impl RegionJob<'_> {
     fn sample(&self, uv: DVec2, radius: f64, cell: DVec2) -> Sample {
         LiftRef {
             heightfield: self.heightfield,
-            quadric: self.quadric,
-            outward_sign: self.outward_sign,
             patch: self.patch,
             rounding: &self.rounding,
         }
@@ -713,8 +708,6 @@ impl RegionJob<'_> {
     fn lift(&self) -> Lift {
         Lift {
             heightfield: *self.heightfield,
-            quadric: *self.quadric,
-            outward_sign: self.outward_sign,
             patch: self.patch,
             rounding: self.rounding,
         }

@@ -163,7 +163,7 @@ fn assert_valid(name: &str, dnf: &Dnf, set: &SampleSet) {
     assert!(checked > 1000, "{name}: only {checked} reference points");
     assert_eq!(missed, 0, "{name}: {missed} of {checked} uncovered");
     for s in &set.samples {
-        let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+        let (p, n) = (s.position.as_dvec3(), set.normal_of(dnf, s));
         // Stored in f32: on the surface up to that rounding.
         let eps = 1e-7 * bound + 4.0 * common::f32_rounding(p);
         if n != DVec3::ZERO {

@@ -73,7 +73,7 @@ fn samples_lie_on_the_csg_surface() {
         let (dnf, set) = sampled(name, bound / 25.0);
         for s in &set.samples {
             let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
-            let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+            let (p, n) = (s.position.as_dvec3(), set.normal_of(&dnf, s));
             // Stored in f32: on the surface up to that rounding.
             let rounding = common::f32_rounding(p);
             let eps = 1e-7 * bound + 4.0 * rounding;

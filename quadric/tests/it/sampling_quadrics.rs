@@ -24,7 +24,7 @@ fn check(dnf: &Dnf, r: f64, what: &str) -> usize {
     let set = sample(dnf, &options).unwrap();
     for s in &set.samples {
         let q = &dnf.quadrics()[set.patch_of(s).quadric as usize].quadric;
-        let (p, n) = (s.position.as_dvec3(), s.normal.as_dvec3());
+        let (p, n) = (s.position.as_dvec3(), set.normal_of(dnf, s));
         // Stored in f32: on the surface up to that rounding.
         let rounding = common::f32_rounding(p);
         let g = q.gradient(p).length();

@@ -154,7 +154,7 @@ fn every_splat_box_holds_the_surface_over_its_cell() {
             for i in 0..=8 {
                 for j in 0..=8 {
                     let f = glam::DVec2::new(f64::from(i) / 4.0 - 1.0, f64::from(j) / 4.0 - 1.0);
-                    let Some(p) = hf.point(s.uv.as_dvec2() + half * f) else {
+                    let Some(p) = hf.point(set.uv_of(s) + half * f) else {
                         continue;
                     };
                     if p.distance(s.position.as_dvec3()) > r {
