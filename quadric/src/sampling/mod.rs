@@ -182,7 +182,8 @@ pub struct Sample {
     /// Half size of the box around its plane point
     /// ([`SampleSet::uv_of`], plane coordinates of its patch) that holds the plane points of every surface point the
     /// sample is there to cover (its fill cell, or its region), plus the
-    /// rounding of `uv`, rounded up: the renderer bounds its splat by the
+    /// gap between the computed plane point and the one derived from the
+    /// stored position, rounded up: the renderer bounds its splat by the
     /// surface over that box. `+∞` where only [`radius`](Self::radius)
     /// bounds them.
     pub cell: Vec2,
