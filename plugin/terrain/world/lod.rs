@@ -342,23 +342,11 @@ pub fn update_lod(
         }
         let layout = &world.layout;
         let unit = layout.quantization.unit();
-        let origin = layout.quantization.origin();
-        let to_local = world_transform.affine().inverse();
-        let focus: Vec<[f64; 2]> = foci
-            .iter()
-            .map(|(_, f)| {
-                let p = to_local.transform_point3(f.translation()).as_dvec3();
-                [(p.x - origin[0]) / unit, (p.z - origin[2]) / unit]
-            })
-            .collect();
+        let focus = super::stream::grid_foci(layout, world_transform, foci.iter().map(|(_, f)| f));
         let edge = layout.chunk_edge();
         // Distance in grid units, and in world units.
-        let grid_distance = |coord: ChunkCoord| {
-            focus
-                .iter()
-                .map(|f| super::stream::square_distance(*f, coord, edge))
-                .fold(f64::INFINITY, f64::min)
-        };
+        let grid_distance =
+            |coord: ChunkCoord| super::stream::nearest_distance(&focus, coord, edge);
         let distance = |coord: ChunkCoord| grid_distance(coord) * unit;
         let far = f64::from(settings.far_radius);
         let keep = far * (1.0 + f64::from(settings.hysteresis));

@@ -137,22 +137,9 @@ pub fn stream_chunks(
 
         let layout = &world.layout;
         let unit = layout.quantization.unit();
-        let origin = layout.quantization.origin();
-        let to_local = world_transform.affine().inverse();
-        let focus: Vec<[f64; 2]> = foci
-            .iter()
-            .map(|f| {
-                let p = to_local.transform_point3(f.translation()).as_dvec3();
-                [(p.x - origin[0]) / unit, (p.z - origin[2]) / unit]
-            })
-            .collect();
+        let focus = grid_foci(layout, world_transform, foci.iter());
         let edge = layout.chunk_edge();
-        let distance = |coord: ChunkCoord| {
-            focus
-                .iter()
-                .map(|f| square_distance(*f, coord, edge))
-                .fold(f64::INFINITY, f64::min)
-        };
+        let distance = |coord: ChunkCoord| nearest_distance(&focus, coord, edge);
         let load = f64::from(world.settings.load_radius) / unit;
         let unload = f64::from(world.settings.unload_radius) / unit;
 
@@ -215,6 +202,33 @@ pub fn stream_chunks(
         }
         update_counts(world);
     }
+}
+
+/// The foci's positions in the world's grid units, horizontally (x, z):
+/// their translations taken into the world entity's frame, less the grid's
+/// origin, over its unit.
+pub(super) fn grid_foci<'a>(
+    layout: &super::WorldLayout,
+    world_transform: &GlobalTransform,
+    foci: impl Iterator<Item = &'a GlobalTransform>,
+) -> Vec<[f64; 2]> {
+    let unit = layout.quantization.unit();
+    let origin = layout.quantization.origin();
+    let to_local = world_transform.affine().inverse();
+    foci.map(|f| {
+        let p = to_local.transform_point3(f.translation()).as_dvec3();
+        [(p.x - origin[0]) / unit, (p.z - origin[2]) / unit]
+    })
+    .collect()
+}
+
+/// Horizontal distance (grid units) from the nearest of `focus` to chunk
+/// `coord`'s square; `+∞` without a focus.
+pub(super) fn nearest_distance(focus: &[[f64; 2]], coord: ChunkCoord, edge: i64) -> f64 {
+    focus
+        .iter()
+        .map(|f| square_distance(*f, coord, edge))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Horizontal distance from `f` (grid units) to chunk `coord`'s square.
