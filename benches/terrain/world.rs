@@ -322,16 +322,7 @@ pub(super) fn streaming_a_world() {
     let lod_far: f32 = env_or("CHISEL_BENCH_LOD_FAR", 0.0);
     let (x0, z0) = tour.at(0.0);
     let (mut app, world, focus) = streaming_app(lod_far, Vec3::new(x0, 20.0, z0));
-    // CHISEL_BENCH_EXECUTOR=single: every schedule on the main thread
-    // (Bevy's single-threaded executor) rather than handing systems to the
-    // compute pool's threads.
-    let executor: String = env_or("CHISEL_BENCH_EXECUTOR", "multi".to_string());
-    if executor == "single" {
-        use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
-        for (_, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
-            schedule.set_executor(SingleThreadedExecutor::new());
-        }
-    }
+    let executor = executor_of_the_bench(&mut app);
     while !full_detail_settled(&app, world) && app_start.elapsed() < Duration::from_secs(600) {
         app.update();
     }
@@ -492,6 +483,21 @@ fn streaming_app(lod_far: f32, focus_at: Vec3) -> (App, Entity, Entity) {
     (app, world, focus)
 }
 
+/// CHISEL_BENCH_EXECUTOR=single: every schedule of `app` on the main
+/// thread (Bevy's single-threaded executor) rather than handing systems to
+/// the compute pool's threads; `multi` (the default) leaves them. Returns
+/// the executor's name.
+fn executor_of_the_bench(app: &mut App) -> String {
+    let executor: String = env_or("CHISEL_BENCH_EXECUTOR", "multi".to_string());
+    if executor == "single" {
+        use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
+        for (_, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
+            schedule.set_executor(SingleThreadedExecutor::new());
+        }
+    }
+    executor
+}
+
 /// Whether the world's full-detail chunks around the focus are all built
 /// and meshed.
 fn full_detail_settled(app: &App, world: Entity) -> bool {
@@ -515,13 +521,19 @@ pub(super) fn lod_of_a_world() {
 
     let far: f32 = env_or("CHISEL_BENCH_FAR", 320.0);
     let chunks: i64 = env_or("CHISEL_BENCH_CHUNKS", 16);
+    // CHISEL_BENCH_STEPS (default 1; 0: off): time the plugin's steps
+    // (its spans) and the main schedules. Off, no span is recorded: the
+    // frames as an app without a tracing subscriber runs them.
+    let timed = env_or("CHISEL_BENCH_STEPS", 1u32) != 0 && frame_steps::install();
     // The CPU time `update_lod` (its span) took in the frame just run.
-    frame_steps::install();
-    let lod_step_time = || {
-        frame_steps::take_frame()
+    let lod_step_time = |steps: &BTreeMap<&'static str, frame_steps::Times>| {
+        steps
             .get("chisel::lod::update")
             .map_or(Duration::ZERO, |t| t.cpu)
     };
+    // CHISEL_BENCH_SCHEDULES (default 1; 0: off): time each of the main
+    // schedules (`First` .. `Last`) on the main thread.
+    let time_schedules = timed && env_or("CHISEL_BENCH_SCHEDULES", 1u32) != 0;
     let mut figures = serde_json::Map::new();
 
     // Building coarse chunks, one thread: every level of an unedited
@@ -614,6 +626,10 @@ pub(super) fn lod_of_a_world() {
     for with_lod in [false, true] {
         let (mut app, world, focus) =
             streaming_app(if with_lod { far } else { 0.0 }, Vec3::new(0.0, 20.0, 10.0));
+        if time_schedules {
+            frame_steps::time_schedules(&mut app);
+        }
+        let executor = executor_of_the_bench(&mut app);
         let settled = |app: &App| {
             full_detail_settled(app, world)
                 && app
@@ -626,9 +642,15 @@ pub(super) fn lod_of_a_world() {
             app.update();
         }
         let first = start.elapsed();
+        println!("{} schedules:", if with_lod { "with_lod" } else { "without_lod" });
+        frame_steps::print_main_thread_systems(&app);
         let frame = Duration::from_secs_f64(1.0 / 60.0);
         let mut frame_times = Vec::new();
         let mut lod_steps = Vec::new();
+        // Per frame, the steps on the main thread (`update`: the whole of
+        // `App::update`) and on every thread (`threads::GROUP`: each
+        // group's CPU time).
+        let (mut main_frames, mut all_frames) = (Vec::new(), Vec::new());
         let mut next_crater = 0.0;
         let start = Instant::now();
         for k in 0..300 {
@@ -651,11 +673,23 @@ pub(super) fn lod_of_a_world() {
                     edit: Edit::Subtract,
                 });
             }
-            let t = Instant::now();
             frame_steps::take_frame();
+            frame_steps::take_main_frame();
+            let threads_before = frame_steps::threads();
+            let mark = frame_steps::Mark::now();
             app.update();
-            frame_times.push(t.elapsed());
-            lod_steps.push(lod_step_time());
+            let update = mark.since();
+            let mut main_steps = frame_steps::take_main_frame();
+            let mut steps = frame_steps::take_frame();
+            steps.extend(frame_steps::thread_steps(
+                &threads_before,
+                &frame_steps::threads(),
+            ));
+            main_steps.insert("update", update);
+            frame_times.push(update.wall);
+            lod_steps.push(lod_step_time(&steps));
+            main_frames.push(main_steps);
+            all_frames.push(steps);
         }
         let start = Instant::now();
         while !settled(&app) && start.elapsed() < Duration::from_secs(600) {
@@ -663,6 +697,62 @@ pub(super) fn lod_of_a_world() {
         }
         frame_times.sort_unstable();
         lod_steps.sort_unstable();
+        let tag = if with_lod { "with_lod" } else { "without_lod" };
+        let floor = Duration::from_micros(5);
+        frame_steps::print_medians(
+            &format!("{tag} ({executor} executor), flying: on the main thread"),
+            &main_frames,
+            floor,
+        );
+        frame_steps::print_medians(
+            &format!("{tag} ({executor} executor), flying: every thread"),
+            &all_frames,
+            floor,
+        );
+        let median_of = |frames: &[BTreeMap<&'static str, frame_steps::Times>],
+                         name: &str,
+                         cpu: bool| {
+            let mut v: Vec<Duration> = frames
+                .iter()
+                .map(|f| {
+                    f.get(name)
+                        .map_or(Duration::ZERO, |t| if cpu { t.cpu } else { t.wall })
+                })
+                .collect();
+            v.sort_unstable();
+            percentile(&v, 0.5)
+        };
+        let mut updates: Vec<frame_steps::Times> =
+            main_frames.iter().filter_map(|f| f.get("update").copied()).collect();
+        updates.sort_by_key(|t| t.wall);
+        let middle = updates.len() / 2;
+        let near_median = &updates[middle.saturating_sub(15)..(middle + 15).min(updates.len())];
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        let mean_of = |f: &dyn Fn(&frame_steps::Times) -> f64| {
+            near_median.iter().map(f).sum::<f64>() / near_median.len().max(1) as f64
+        };
+        println!(
+            "{tag} ({executor} executor), flying: the 30 frames around the median update, mean: \
+             wall {:.3} ms = main-thread CPU {:.3} + runqueue wait {:.3} + asleep {:.3}; put on a \
+             core {:.1} times",
+            mean_of(&|t| ms(t.wall)),
+            mean_of(&|t| ms(t.cpu)),
+            mean_of(&|t| ms(t.wait)),
+            mean_of(&|t| ms(t.wall) - ms(t.cpu) - ms(t.wait)),
+            mean_of(&|t| t.slices as f64),
+        );
+        figures.insert(
+            format!("{tag}_main_slices_near_median"),
+            mean_of(&|t| t.slices as f64).into(),
+        );
+        figures.insert(
+            format!("{tag}_main_cpu_median_ms"),
+            median_of(&main_frames, "update", true).into(),
+        );
+        figures.insert(
+            format!("{tag}_compute_cpu_median_ms"),
+            median_of(&all_frames, "threads::compute", true).into(),
+        );
         // Then 120 frames with the focus standing still.
         let mut still_lod_steps = Vec::new();
         let start = Instant::now();
@@ -673,7 +763,7 @@ pub(super) fn lod_of_a_world() {
             }
             frame_steps::take_frame();
             app.update();
-            still_lod_steps.push(lod_step_time());
+            still_lod_steps.push(lod_step_time(&frame_steps::take_frame()));
         }
         still_lod_steps.sort_unstable();
         // What is drawn: the live chunks' cells and the coarse chunks.
@@ -714,7 +804,6 @@ pub(super) fn lod_of_a_world() {
             .world()
             .get::<WorldLod>(world)
             .map(|l| l.stats().clone());
-        let tag = if with_lod { "with_lod" } else { "without_lod" };
         println!(
             "{tag}: first fill {:.0} ms; flying 250 m: main-thread update median {:.2} ms, p99 \
              {:.2} ms (level of detail's step: CPU median {:.3} ms, p99 {:.3} ms; standing still \
