@@ -385,8 +385,7 @@ pub fn print_main_thread_systems(app: &bevy::app::App) {
         let mut on_main = Vec::new();
         for (_, system) in systems {
             all += 1;
-            if system.system_type()
-                == std::any::TypeId::of::<bevy::ecs::schedule::ApplyDeferred>()
+            if system.system_type() == std::any::TypeId::of::<bevy::ecs::schedule::ApplyDeferred>()
             {
                 sync_points += 1;
             } else if system.is_exclusive() || !system.is_send() {
@@ -426,7 +425,15 @@ pub fn print_medians(label: &str, frames: &[BTreeMap<&'static str, Times>], floo
         v.sort_unstable();
         v.get(v.len() / 2).copied().unwrap_or_default()
     };
-    let mut rows: Vec<(&'static str, Duration, Duration, Duration, Duration, f64, f64)> = names
+    let mut rows: Vec<(
+        &'static str,
+        Duration,
+        Duration,
+        Duration,
+        Duration,
+        f64,
+        f64,
+    )> = names
         .into_iter()
         .map(|name| {
             let get = |f: &BTreeMap<&'static str, Times>| f.get(name).copied().unwrap_or_default();

@@ -642,7 +642,10 @@ pub(super) fn lod_of_a_world() {
             app.update();
         }
         let first = start.elapsed();
-        println!("{} schedules:", if with_lod { "with_lod" } else { "without_lod" });
+        println!(
+            "{} schedules:",
+            if with_lod { "with_lod" } else { "without_lod" }
+        );
         frame_steps::print_main_thread_systems(&app);
         let frame = Duration::from_secs_f64(1.0 / 60.0);
         let mut frame_times = Vec::new();
@@ -709,21 +712,22 @@ pub(super) fn lod_of_a_world() {
             &all_frames,
             floor,
         );
-        let median_of = |frames: &[BTreeMap<&'static str, frame_steps::Times>],
-                         name: &str,
-                         cpu: bool| {
-            let mut v: Vec<Duration> = frames
-                .iter()
-                .map(|f| {
-                    f.get(name)
-                        .map_or(Duration::ZERO, |t| if cpu { t.cpu } else { t.wall })
-                })
-                .collect();
-            v.sort_unstable();
-            percentile(&v, 0.5)
-        };
-        let mut updates: Vec<frame_steps::Times> =
-            main_frames.iter().filter_map(|f| f.get("update").copied()).collect();
+        let median_of =
+            |frames: &[BTreeMap<&'static str, frame_steps::Times>], name: &str, cpu: bool| {
+                let mut v: Vec<Duration> = frames
+                    .iter()
+                    .map(|f| {
+                        f.get(name)
+                            .map_or(Duration::ZERO, |t| if cpu { t.cpu } else { t.wall })
+                    })
+                    .collect();
+                v.sort_unstable();
+                percentile(&v, 0.5)
+            };
+        let mut updates: Vec<frame_steps::Times> = main_frames
+            .iter()
+            .filter_map(|f| f.get("update").copied())
+            .collect();
         updates.sort_by_key(|t| t.wall);
         let middle = updates.len() / 2;
         let near_median = &updates[middle.saturating_sub(15)..(middle + 15).min(updates.len())];
