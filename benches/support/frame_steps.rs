@@ -454,7 +454,7 @@ pub fn print_medians(label: &str, frames: &[BTreeMap<&'static str, Times>], floo
         })
         .filter(|r| r.2 >= floor || r.4 >= floor)
         .collect();
-    rows.sort_by(|a, b| b.2.cmp(&a.2));
+    rows.sort_by_key(|r| std::cmp::Reverse(r.2));
     println!(
         "{label} ({} frames), per frame: wall median / mean, CPU median / mean, times put on a \
          core (mean), runs (mean)",
