@@ -29,7 +29,15 @@
 // meshes ("unclipped depth"): proxy vertices and written depths are clamped
 // to the near plane's depth 1 instead of being clipped.
 //
-// Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, OUTPUT_IDS, OUTPUT_NORMALS,
+// Multisampled targets (PER_SAMPLE): the fragment stage runs once per
+// covered sample, with the proxy point at that sample. Run once per pixel,
+// it would trace the ray through the pixel's centre and apply the result to
+// every sample the proxy covers; where a splat's proxy covers a sample but
+// the centre's ray leaves its radius, the splat discards the whole fragment
+// and that sample keeps whatever lies behind the surface (a speckle of
+// another surface wherever splats abut, at a few pixels per splat).
+//
+// Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, PER_SAMPLE, OUTPUT_IDS, OUTPUT_NORMALS,
 // OUTPUT_OVERDRAW (a constant per fragment, for additive blending),
 // OUTPUT_BOUNDS (the proxies themselves, flat-coloured per splat),
 // SPLAT_OPEN_BOX (30 vertices per box: the −n face left out), SHADOW_DEPTH
@@ -48,7 +56,14 @@
 struct SplatVarying {
     @builtin(position) clip: vec4<f32>,
     /// The proxy point in the prop's local coordinates (on the view ray).
+    /// Multisampled, at each sample covered: the proxy of a neighbouring
+    /// splat may cover a sample but not the pixel's centre, where the ray
+    /// can leave the splat's radius and the surface would be lost there.
+#ifdef PER_SAMPLE
+    @location(0) @interpolate(perspective, sample) local: vec3<f32>,
+#else
     @location(0) local: vec3<f32>,
+#endif
     @location(1) @interpolate(flat) splat: u32,
 };
 

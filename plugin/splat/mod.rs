@@ -29,6 +29,13 @@
 //! instead (one view in global ray tracing or showing quadric ids beside
 //! the shaded one, say).
 //!
+//! Multisampling: on a camera with `Msaa` (Bevy's default is 4 samples)
+//! the splat pass traces each covered sample, so a prop's silhouette is
+//! anti-aliased like a mesh's and every sample shows the surface along its
+//! own ray (a splat's proxy can cover a sample of a pixel whose centre lies
+//! beyond the splat's radius). That is up to one fragment invocation per
+//! sample; `Msaa::Off` on the camera keeps one per pixel.
+//!
 //! Transforms: a prop follows its entity's `GlobalTransform`, any
 //! invertible affine map — non-uniform scale, shear, and mirroring (a
 //! negative determinant: the prop is drawn as the mirror image of its

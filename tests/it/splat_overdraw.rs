@@ -45,6 +45,7 @@ fn depth_tested_overdraw_keeps_the_front_and_rejects_hidden_proxies() {
                 output,
                 ..default()
             })),
+            msaa: Msaa::Off,
         };
         let image = render_views(
             splats,

@@ -80,6 +80,7 @@ fn a_mirrored_prop_is_drawn_as_the_mirror_image_of_its_scene() {
                 eye: (MIRROR * if i == 4 { near_eye } else { eye }).as_vec3() * SCALE,
                 centre: (MIRROR * centre).as_vec3() * SCALE,
                 settings: views[i],
+                msaa: Msaa::Off,
             })
             .collect();
         let image = render_views(
@@ -134,6 +135,7 @@ fn each_camera_draws_with_its_own_settings() {
         eye: eye.as_vec3() * SCALE,
         centre: centre.as_vec3() * SCALE,
         settings,
+        msaa: Msaa::Off,
     };
     let cameras = [
         view(None),
@@ -218,6 +220,7 @@ fn a_stretched_and_rotated_prop_matches_the_reference_tracer() {
         eye: eye.as_vec3() * SCALE,
         centre: moved_centre.as_vec3() * SCALE,
         settings,
+        msaa: Msaa::Off,
     };
     let cameras = [
         view(None),

@@ -124,6 +124,8 @@ pub struct View {
     pub centre: Vec3,
     /// The camera's own settings, if any.
     pub settings: Option<SplatViewSettings>,
+    /// The camera's multisampling.
+    pub msaa: Msaa,
 }
 
 /// An unlit, axis-aligned cube mesh drawn beside the prop (world units),
@@ -219,7 +221,7 @@ pub fn render_views_with(
                     }),
                     Tonemapping::None,
                     DebandDither::Disabled,
-                    Msaa::Off,
+                    view.msaa,
                     Transform::from_translation(view.eye).looking_at(view.centre, Vec3::Z),
                 ));
                 if let Some(own) = view.settings {
