@@ -22,6 +22,58 @@ use super::terrain_world::{
     app_with, carve, dodecahedron, layout, settle, terrain, the_world, world,
 };
 
+/// A world at rest makes no pass over its seams: 60 still frames after
+/// the first chunks, after a carve across a border and after streaming two
+/// chunks on; each of those events makes at least one, and every live
+/// chunk is given its neighbours' outside points.
+#[test]
+fn still_frames_make_no_pass_over_the_seams() {
+    let (mut app, world, focus) = app_with(world(), Vec3::new(48.0, 20.0, 48.0));
+    let passes = |app: &App| the_world(app, world).seam_passes();
+    let seamed_every_live_chunk = |app: &App| {
+        let w = the_world(app, world);
+        w.seamed_chunks() == w.live_chunks().count()
+    };
+    let still = |app: &mut App| {
+        for _ in 0..60 {
+            app.update();
+        }
+    };
+    let settled = passes(&app);
+    assert!(settled > 0, "the first chunks were stitched");
+    assert!(seamed_every_live_chunk(&app));
+    still(&mut app);
+    assert_eq!(passes(&app), settled, "a still world made a pass");
+
+    // A carve across a border changes both chunks' border points.
+    carve(
+        &mut app,
+        world,
+        dodecahedron(3.0, Vec3::new(32.0, 12.0, 40.0)),
+    );
+    settle(&mut app, world);
+    let carved = passes(&app);
+    assert!(
+        carved > settled,
+        "the carve's new border points were stitched"
+    );
+    still(&mut app);
+    assert_eq!(passes(&app), carved, "a still world made a pass");
+
+    // Two chunks on: chunks stream in and out, each new one is seamed.
+    app.world_mut()
+        .get_mut::<Transform>(focus)
+        .expect("focus")
+        .translation
+        .x += 64.0;
+    settle(&mut app, world);
+    let moved = passes(&app);
+    assert!(moved > carved, "streamed chunks were stitched");
+    assert!(seamed_every_live_chunk(&app));
+    still(&mut app);
+    assert_eq!(passes(&app), moved, "a still world made a pass");
+}
+
 #[test]
 fn chunks_meet_without_t_junctions_where_four_meet_and_after_carves_beside_a_border() {
     let (mut app, world, _) = app_with(world(), Vec3::new(32.0, 30.0, 32.0));

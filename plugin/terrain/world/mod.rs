@@ -299,6 +299,21 @@ impl TerrainWorld {
         &self.stats
     }
 
+    /// Passes over the chunk-border seams so far: frames in which a chunk
+    /// streamed in or out, a chunk's border points changed, or a chunk
+    /// still waited for its first outside points ([`seams`]). Other frames
+    /// only look whether one of these happened.
+    #[must_use]
+    pub fn seam_passes(&self) -> u64 {
+        self.seams.passes
+    }
+
+    /// Live chunks given their live neighbours' outside points ([`seams`]).
+    #[must_use]
+    pub fn seamed_chunks(&self) -> usize {
+        self.seams.seamed()
+    }
+
     /// The terrain entity of chunk `coord`, when it is live.
     #[must_use]
     pub fn chunk_entity(&self, coord: ChunkCoord) -> Option<Entity> {

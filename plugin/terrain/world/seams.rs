@@ -113,6 +113,11 @@ pub(crate) struct WorldSeams {
 }
 
 impl WorldSeams {
+    /// Live chunks given their neighbours' outside points.
+    pub(crate) fn seamed(&self) -> usize {
+        self.given.len()
+    }
+
     /// Whether the seams have nothing to do: the same live chunks as at
     /// the last pass, every one of them given outside points, and no
     /// border points other than those seen.
@@ -257,139 +262,4 @@ fn same_points(a: &[Point4], b: &[Point4]) -> bool {
                 p.same_position(q)
             }
         })
-}
-
-#[cfg(test)]
-mod tests {
-    use bevy::asset::AssetPlugin;
-    use bevy::prelude::*;
-    use bevy::transform::TransformPlugin;
-    use chisel_bsp::octree::Edit;
-    use chisel_bsp::tools::Quantization;
-
-    use super::super::super::component::Terrain;
-    use super::super::super::{CarveTool, TerrainPlugin};
-    use super::super::{StreamSettings, TerrainFocus, TerrainWorld, WorldCarve, WorldLayout};
-
-    /// Chunks of 32 grid units (1 unit = 1 m), samples 4 apart.
-    fn world() -> TerrainWorld {
-        let layout = WorldLayout {
-            quantization: Quantization::new(1.0, [0.0; 3]).expect("valid unit"),
-            chunk_log2: 5,
-            spacing_log2: 2,
-            floor: 0,
-            label: 1,
-            layers: Vec::new(),
-        };
-        let height = |i: i64, j: i64| 8 + (i * 7 + j * 13).rem_euclid(9) + (i * j).rem_euclid(5);
-        TerrainWorld::new(layout, height)
-            .expect("valid layout")
-            .with_streaming(StreamSettings {
-                load_radius: 40.0,
-                unload_radius: 72.0,
-                max_building: 4,
-            })
-            .expect("valid settings")
-    }
-
-    fn seams(app: &App, world: Entity) -> &super::WorldSeams {
-        &app.world().get::<TerrainWorld>(world).expect("world").seams
-    }
-
-    /// Runs frames until every live chunk is built, meshed and sealed and
-    /// the live set held for five frames.
-    fn settle(app: &mut App, world: Entity) {
-        let mut calm = 0;
-        let mut last = Vec::new();
-        for _ in 0..20_000 {
-            app.update();
-            let w = app.world().get::<TerrainWorld>(world).expect("world");
-            let live: Vec<_> = w.live_chunks().collect();
-            let idle = w.is_settled()
-                && live
-                    .iter()
-                    .all(|&(_, e)| app.world().get::<Terrain>(e).is_some_and(Terrain::is_idle));
-            calm = if idle && live == last { calm + 1 } else { 0 };
-            last = live;
-            if calm == 5 {
-                return;
-            }
-            std::thread::sleep(std::time::Duration::from_millis(1));
-        }
-        panic!("the world did not settle");
-    }
-
-    #[test]
-    fn still_frames_make_no_pass_over_the_seams() {
-        let mut app = App::new();
-        app.add_plugins((
-            MinimalPlugins,
-            TransformPlugin,
-            AssetPlugin::default(),
-            TerrainPlugin,
-        ))
-        .init_asset::<Mesh>()
-        .init_asset::<StandardMaterial>();
-        let world = app.world_mut().spawn(world()).id();
-        let focus = app
-            .world_mut()
-            .spawn((
-                TerrainFocus,
-                Transform::from_translation(Vec3::new(48.0, 20.0, 48.0)),
-            ))
-            .id();
-        settle(&mut app, world);
-        let live = |app: &App| {
-            app.world()
-                .get::<TerrainWorld>(world)
-                .expect("world")
-                .live_chunks()
-                .count()
-        };
-        let settled = seams(&app, world).passes;
-        assert!(settled > 0, "the first chunks were stitched");
-        // Every live chunk was given its outside points.
-        assert_eq!(seams(&app, world).given.len(), live(&app));
-        assert_eq!(seams(&app, world).live.len(), live(&app));
-
-        // Standing still: not one pass.
-        for _ in 0..60 {
-            app.update();
-        }
-        assert_eq!(seams(&app, world).passes, settled);
-
-        // A carve across a border changes both chunks' border points: a
-        // pass, and the neighbours are sealed again.
-        app.world_mut().write_message(WorldCarve {
-            world,
-            tool: CarveTool::dodecahedron(3.0, Vec3::new(32.0, 12.0, 40.0)),
-            edit: Edit::Subtract,
-        });
-        settle(&mut app, world);
-        let carved = seams(&app, world).passes;
-        assert!(
-            carved > settled,
-            "the carve's new border points were stitched"
-        );
-        for _ in 0..60 {
-            app.update();
-        }
-        assert_eq!(seams(&app, world).passes, carved);
-
-        // Flying two chunks on: chunks stream in and out, and each new one
-        // is given outside points.
-        app.world_mut()
-            .get_mut::<Transform>(focus)
-            .expect("focus")
-            .translation
-            .x += 64.0;
-        settle(&mut app, world);
-        let moved = seams(&app, world).passes;
-        assert!(moved > carved, "streamed chunks were stitched");
-        assert_eq!(seams(&app, world).given.len(), live(&app));
-        for _ in 0..60 {
-            app.update();
-        }
-        assert_eq!(seams(&app, world).passes, moved);
-    }
 }
