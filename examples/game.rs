@@ -566,9 +566,8 @@ fn update_hud(
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     let mut lines = vec![
         "bevy_chisel game: exact destructible terrain".to_owned(),
-        "WASD walk | Shift run | Space jump | right-drag or arrows look | wheel zoom | \
-         LMB blast | R restart"
-            .to_owned(),
+        "WASD walk | Shift run | Space jump | R restart".to_owned(),
+        "right-drag or arrows look | wheel zoom | LMB blast".to_owned(),
     ];
     for terrain in &terrains {
         lines.push(format!(
@@ -581,13 +580,13 @@ fn update_hud(
     }
     match &hud.last {
         Some(a) => lines.push(format!(
-            "last carve: kernel {:.2} ms | meshes {:.2} ms | colliders {:.2} ms | in place after \
-             {:.1} ms | {} cells",
+            "last carve ({} cells): kernel {:.2}, meshes {:.2}, colliders {:.2} ms\n\
+             in place after {:.1} ms",
+            a.cells,
             ms(a.apply_time),
             ms(a.mesh_time),
             ms(a.collider_time),
             ms(a.latency),
-            a.cells
         )),
         None => lines.push("last carve: none yet (left click to blast)".to_owned()),
     }
