@@ -35,8 +35,8 @@ use bevy_chisel::net::{
 };
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
-    CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings, TerrainSurface,
-    TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
+    CarveShape, CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings,
+    TerrainSurface, TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
 use bevy_chisel::viewer::{
     CursorPick, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
@@ -44,6 +44,7 @@ use bevy_chisel::viewer::{
 
 const ROCK: u8 = 1;
 const DIRT: u8 = 2;
+const GRASS: u8 = 3;
 const BLAST_RADIUS: f32 = 1.2;
 const HEAP_RADIUS: f32 = 0.8;
 /// Craters each scripted player blasts in the headless run.
@@ -85,7 +86,8 @@ fn fail(message: &str) -> AppExit {
     AppExit::from_code(2)
 }
 
-/// The shared world: a 24 m × 4 m × 24 m slab of rock on a 1 cm grid.
+/// The shared world: a 24 m × 4 m × 24 m slab of rock on a 1 cm grid,
+/// under 80 cm of dirt and 15 cm of grass.
 fn slab() -> Result<Terrain, BevyError> {
     let grid = Quantization::new(0.01, [-12.0, -4.0, -12.0])?;
     let base = TerrainBase::Box {
@@ -101,9 +103,19 @@ fn slab() -> Result<Terrain, BevyError> {
         max_bsp_nodes: 40,
         max_depth: 10,
     };
-    Ok(Terrain::from_base(grid, base, config)?
-        .with_labels([DIRT])
-        .with_max_undo(0))
+    let mut terrain = Terrain::from_base(grid, base, config)?
+        .with_labels([DIRT, GRASS])
+        .with_max_undo(0);
+    for (depth, label) in [(0.95, DIRT), (0.15, GRASS)] {
+        let layer = CarveTool::new(
+            CarveShape::Cuboid {
+                half_size: Vec3::new(12.0, depth / 2.0, 12.0),
+            },
+            Transform::from_xyz(0.0, -depth / 2.0, 0.0),
+        );
+        terrain.apply_now(&layer.to_grid(terrain.quantization())?, Edit::Paint(label))?;
+    }
+    Ok(terrain)
 }
 
 /// A server app (no window, no renderer): the terrain and the plugins.
@@ -227,7 +239,11 @@ fn dress_terrain(
 ) {
     let table = surface_table(
         &mut materials,
-        [(ROCK, TerrainSurface::Rock), (DIRT, TerrainSurface::Dirt)],
+        [
+            (ROCK, TerrainSurface::Rock),
+            (DIRT, TerrainSurface::Dirt),
+            (GRASS, TerrainSurface::Grass),
+        ],
         TerrainSurface::Rock,
     );
     commands.entity(add.entity).insert(table);
@@ -338,7 +354,7 @@ fn hud(
         },
     );
     text.0 = format!(
-        "multiplayer | {state} | {} hash checks passed\n\
+        "multiplayer | {state}\n{} hash checks passed\n\
          LMB blast crater | RMB heap dirt | {ORBIT_HELP}",
         stats.checks_passed
     );
