@@ -442,12 +442,15 @@ impl ChunkBox {
     }
 }
 
-/// Triangles with smooth normals, then skirt strips with flat ones.
+/// Triangles with smooth normals, then skirt strips shaded as the
+/// surface they hang from.
 #[derive(Default)]
 struct MeshBuilder {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     indices: Vec<u32>,
+    /// The render vertex of each point the surface uses.
+    surface_vertex: HashMap<u32, u32>,
 }
 
 impl MeshBuilder {
@@ -473,6 +476,8 @@ impl MeshBuilder {
                 self.indices.push(base + s);
             }
         }
+        self.surface_vertex
+            .extend(slot.into_iter().map(|(v, s)| (v, base + s)));
         self.normals.extend(normals.into_iter().map(|n| {
             let len = dot(n, n).sqrt();
             if len > 0.0 {
@@ -484,22 +489,32 @@ impl MeshBuilder {
     }
 
     /// A strip from each edge `(a, b, side)` hanging `depth[side]` down,
-    /// facing out of the chunk through `side`.
+    /// facing out of the chunk through `side`. Where a strip shows, it
+    /// fills the step down to a neighbour's lower border: each of its
+    /// vertices takes the smooth normal of the surface point it hangs
+    /// from (the side's outward normal where the surface has none), so
+    /// the step shades as the ground beside it rather than as a wall.
     fn strips(&mut self, points: &[[f64; 3]], edges: &[(u32, u32, u8)], depth: &[f64; 4]) {
         for &(a, b, side) in edges {
             let (pa, pb) = (points[a as usize], points[b as usize]);
             let d = depth[usize::from(side)];
             let (fa, fb) = ([pa[0], pa[1] - d, pa[2]], [pb[0], pb[1] - d, pb[2]]);
+            let out = ChunkBox::outward(side).map(|c| c as f32);
+            let [na, nb] = [a, b].map(|v| {
+                self.surface_vertex
+                    .get(&v)
+                    .map_or(out, |&r| self.normals[r as usize])
+            });
             let out = ChunkBox::outward(side);
-            self.flat_triangle([pa, fa, pb], out);
-            self.flat_triangle([pb, fa, fb], out);
+            self.strip_triangle([(pa, na), (fa, na), (pb, nb)], out);
+            self.strip_triangle([(pb, nb), (fa, na), (fb, nb)], out);
         }
     }
 
-    /// A triangle with normal `out`, wound counter-clockwise seen from
-    /// that side; skipped when degenerate.
-    fn flat_triangle(&mut self, t: [[f64; 3]; 3], out: [f64; 3]) {
-        let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    /// A triangle of `(position, normal)` corners, wound counter-clockwise
+    /// seen from `out`; skipped when degenerate.
+    fn strip_triangle(&mut self, t: [([f64; 3], [f32; 3]); 3], out: [f64; 3]) {
+        let n = cross(sub(t[1].0, t[0].0), sub(t[2].0, t[0].0));
         if dot(n, n) == 0.0 {
             return;
         }
@@ -509,9 +524,9 @@ impl MeshBuilder {
             t
         };
         let base = self.positions.len() as u32;
-        for p in t {
+        for (p, normal) in t {
             self.positions.push(p.map(|c| c as f32));
-            self.normals.push(out.map(|c| c as f32));
+            self.normals.push(normal);
         }
         self.indices.extend([base, base + 1, base + 2]);
     }
@@ -591,4 +606,86 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy::mesh::VertexAttributeValues;
+    use chisel_bsp::tools::Quantization;
+
+    use super::*;
+    use crate::terrain::world::generate;
+    use crate::terrain::world::source::{NoiseOctave, ValueNoise};
+
+    /// Chunks of 32 grid units, samples 2 apart, rolling noise.
+    fn layout() -> WorldLayout {
+        WorldLayout {
+            quantization: Quantization::new(1.0, [0.0; 3]).expect("valid unit"),
+            chunk_log2: 5,
+            spacing_log2: 1,
+            floor: 0,
+            label: 1,
+            layers: vec![(3, 2)],
+        }
+    }
+
+    fn source() -> ValueNoise {
+        ValueNoise {
+            base: 10,
+            octaves: vec![NoiseOctave {
+                cell: 4,
+                amplitude: 6,
+                seed: 3,
+            }],
+        }
+    }
+
+    /// Every vertex of every level's meshes has an upward normal, and the
+    /// vertices at one position share one normal: a skirt's top vertex
+    /// has the normal of the ground vertex it hangs from.
+    fn assert_skirts_shade_as_the_ground(pyramid: &LodPyramid) -> usize {
+        let mut checked = 0;
+        for level in &pyramid.levels {
+            for (_, mesh) in &level.meshes {
+                let Some(VertexAttributeValues::Float32x3(positions)) =
+                    mesh.attribute(Mesh::ATTRIBUTE_POSITION)
+                else {
+                    panic!("level {}: no positions", level.level);
+                };
+                let Some(VertexAttributeValues::Float32x3(normals)) =
+                    mesh.attribute(Mesh::ATTRIBUTE_NORMAL)
+                else {
+                    panic!("level {}: no normals", level.level);
+                };
+                let mut at: HashMap<[u32; 3], [f32; 3]> = HashMap::new();
+                for (p, n) in positions.iter().zip(normals) {
+                    assert!(
+                        n[1] > 0.0,
+                        "level {}: vertex {p:?} has normal {n:?}",
+                        level.level
+                    );
+                    if let Some(other) = at.insert(p.map(f32::to_bits), *n) {
+                        assert_eq!(other, *n, "level {}: two normals at {p:?}", level.level);
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        checked
+    }
+
+    #[test]
+    fn skirts_shade_as_the_ground_they_hang_from() {
+        let (layout, source) = (layout(), source());
+        let coord = ChunkCoord { x: 1, z: -2 };
+        let unedited = source_pyramid(&layout, &source, coord).expect("source pyramid");
+        let terrain = generate(&layout, &source, &[], coord).expect("chunk");
+        let edited =
+            edited_pyramid(&layout, &source, coord, terrain.octree(), 0).expect("edited pyramid");
+        for pyramid in [&unedited, &edited] {
+            // Skirt tops coincide with ground vertices along all four sides.
+            let shared = assert_skirts_shade_as_the_ground(pyramid);
+            assert!(shared > 0, "no skirt vertex met a ground vertex");
+        }
+    }
 }
