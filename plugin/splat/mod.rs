@@ -47,7 +47,9 @@
 //!
 //! Shaders: `shaders/splat.wgsl` (surface-aligned boxes with back-face
 //! culling, §6.1, or screen-aligned quads; local ray tracing, clipping and
-//! depth writes), `shaders/global.wgsl` (the global ray-tracing baseline).
+//! depth writes), `shaders/global.wgsl` (the global ray-tracing baseline),
+//! and `shaders/splat_shading.wgsl`, which both import: a ray-traced point
+//! lit by Bevy's PBR functions.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
