@@ -172,7 +172,7 @@ pub struct SplatSettings {
     /// open boxes can miss silhouette pixels. `benches/splat.rs`
     /// compares both pixel for pixel: on an NVIDIA H100 at 1920×1080 open
     /// boxes left 1–2 silhouette pixels uncovered on three of the four
-    /// SCENARIOS scenes (none with lavapipe). Turn it on where a few
+    /// scenes of `assets/scenes/` (none with lavapipe). Turn it on where a few
     /// missing silhouette pixels are acceptable; never with the camera or
     /// near plane inside a prop (open boxes leave out its inner surfaces).
     pub open_boxes: bool,
