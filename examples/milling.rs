@@ -15,10 +15,14 @@
 //! to about 0.18 mm here). The on-screen panel shows the time per step
 //! in the kernel and in re-meshing.
 //!
+//! Controls: `Space` pause, `R` take the bit back to the start of its
+//! path (the block stays as cut); arrow keys or a left/middle drag orbit,
+//! the wheel zooms.
+//!
 //! Runs in a window when a display exists; otherwise mills headless and
 //! writes PNG screenshots to `screenshots/`.
 //!
-//! `cargo run --release --example milling`
+//! `cargo run --release --all-features --example milling`
 
 use std::f32::consts::{FRAC_PI_2, TAU};
 use std::time::Duration;

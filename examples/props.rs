@@ -1,17 +1,18 @@
-//! Quadric CSG props drawn by the splat pass: the four SCENARIOS scenes on a
-//! ground plane, a standard cube mesh passing through one of them, an
-//! orbiting camera.
+//! Quadric CSG props drawn by the splat pass: the four scenes of
+//! `assets/scenes/` on a ground plane, a standard box mesh passing through
+//! one of them, a slowly orbiting camera.
 //!
 //! Keys: `1` splats (surface-aligned boxes), `2` splats (screen quads), `3`
 //! global ray tracing; `S` shaded, `B` splat bounds (the proxies
-//! themselves), `O` overdraw, `N` normals; arrows orbit and zoom. Without a
+//! themselves), `O` overdraw, `N` normals; left/right arrows orbit, up/down
+//! zoom. Without a
 //! display (or with `CHISEL_HEADLESS=1`) it renders offscreen and writes
 //! screenshots to `screenshots/props-*.png`: frame 40 shaded, frame 60 the
 //! splat bounds.
 //!
 //! ```sh
-//! cargo run --release --example props
-//! CHISEL_HEADLESS=1 WGPU_BACKEND=vulkan cargo run --release --example props
+//! cargo run --release --all-features --example props
+//! CHISEL_HEADLESS=1 WGPU_BACKEND=vulkan cargo run --release --all-features --example props
 //! ```
 
 use bevy::prelude::*;

@@ -1,17 +1,21 @@
-//! The bevy_chisel demo: a quarry of exact, destructible terrain.
+//! A quarry of exact, destructible terrain.
 //!
 //! A heightfield (`assets/terrain/quarry_height.png`) becomes layered
 //! terrain — grass and dirt following the surface, rock below, veins of
 //! ore — stored as an octree of exact BSPs. Click to blast craters with
-//! dodecahedra, right-click to heap up dirt, Z to undo; only the cells a
-//! blast reaches are re-meshed, on the async compute pool. The HUD shows
-//! the carve latency and the triangle count.
+//! dodecahedra, right-click to heap up dirt, Z to undo, F5 to save the
+//! terrain and F9 to load it back; only the cells a blast reaches are
+//! re-meshed, on the async compute pool. The HUD shows each carve's time
+//! in the kernel and in re-meshing, and the triangle count.
+//!
+//! Camera: WASD and Q/E move the focus, the arrow keys or a middle-button
+//! drag orbit, the wheel zooms.
 //!
 //! Runs in a window when a display exists; otherwise renders headless,
 //! blasts a few scripted craters and writes PNG screenshots to
 //! `screenshots/`.
 //!
-//! `cargo run --release --example quarry`
+//! `cargo run --release --all-features --example quarry`
 
 use std::time::Duration;
 

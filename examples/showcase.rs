@@ -27,7 +27,7 @@
 //! terrain (pixels outside the props darker in frame 8 than in frame 10)
 //! at least [`MIN_SHADOW_FRACTION`].
 //!
-//! `cargo run --release --example showcase`
+//! `cargo run --release --all-features --example showcase`
 
 use std::f32::consts::FRAC_PI_2;
 use std::time::Duration;

@@ -8,9 +8,10 @@
 //! the swept volume of the sampled motion
 //! ([`bevy_chisel::bsp::tools::sweep`], the same geometry as `chisel
 //! sweep`): each union is exact, and the prisms follow the turning gear
-//! to within each step's sagitta (corners move along chords, not arcs). Each prism is one `Carve` of a block of stone: added
-//! as brass, the swept solid grows out of the block; subtracted, the gear
-//! cuts its slot through it. The panel shows the time of every step in the
+//! to within each step's sagitta (corners move along chords, not arcs).
+//! Each prism is one `Carve` of a block of stone: added as brass, the
+//! swept solid grows out of the block; subtracted, the gear cuts its slot
+//! through it. The panel shows the time of every step in the
 //! kernel and in all (re-meshing included).
 //!
 //! Controls: `M` switch between adding and carving (restarts), `Space`
@@ -22,7 +23,7 @@
 //! and writes `screenshots/sweep-0008.png` (part way) and
 //! `screenshots/sweep-0016.png` (the whole sweep).
 //!
-//! `cargo run --release --example sweep`
+//! `cargo run --release --all-features --example sweep`
 
 use std::f32::consts::FRAC_PI_2;
 use std::time::{Duration, Instant};

@@ -13,7 +13,7 @@
 //! streams within smaller radii, flies a fixed 12 m path and writes PNG
 //! screenshots to `screenshots/` (about 30 s on two cores).
 //!
-//! `cargo run --release --example world`
+//! `cargo run --release --all-features --example world`
 
 use std::time::Duration;
 

@@ -25,6 +25,9 @@
 //!   points, and spheres, cylinders and capsules carved as exact polyhedra
 //!   within a stated tolerance of the true surface; with `props`,
 //!   `CarveTool::from_prop` carves with a convex quadric prop's shape.
+//!   Large worlds (`TerrainWorld`) are grids of terrain chunks streamed
+//!   around `TerrainFocus` entities from a procedural source, with coarse
+//!   chunks to the horizon (`WorldLod`).
 //! - `splat` (feature `props`) draws quadric CSG props: a `QuadricProp`
 //!   component (a `*.quadric.ron` scene file or an in-memory scene),
 //!   sampled on the async compute pool, rendered by a splat pass with
@@ -33,7 +36,6 @@
 //!   examples and render tests share: windowed or headless runs with
 //!   screenshots, an orbit camera, text overlays, carving under the
 //!   cursor. They are not part of the API a game needs.
-//!
 //! - `net` (feature `net`) replicates carves from one authoritative server
 //!   to its clients: integer carves in sequence order, state hashes and
 //!   snapshots, never meshes.
@@ -102,7 +104,9 @@ use bevy::app::{PluginGroup, PluginGroupBuilder};
 /// [`terrain::TriplanarMaterialPlugin`] (`terrain` and `render`),
 /// [`splat::ChiselSplatPlugin`] (`props`) and
 /// [`terrain::avian::TerrainAvianPlugin`] (`avian`; add avian's
-/// `PhysicsPlugins` yourself). Add it after `DefaultPlugins`; on a server
+/// `PhysicsPlugins` yourself). Not in the group, to add on their own:
+/// `splat::avian::PropAvianPlugin` (props' colliders), the `net` plugins
+/// and `viewer::ViewerPlugin`. Add it after `DefaultPlugins`; on a server
 /// without a renderer, after `MinimalPlugins`. As in any Bevy group, single
 /// plugins can be disabled or replaced; terrain systems in `FixedUpdate`:
 ///

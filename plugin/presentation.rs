@@ -1,9 +1,10 @@
 //! Windowed or headless: one switch for examples and render tests.
 //!
-//! With a display (`DISPLAY` or `WAYLAND_DISPLAY` set) an app opens a
-//! window. Without one it renders offscreen into an image, captures PNG
-//! screenshots at chosen frames, prints where they went and exits — so every
-//! example also runs in CI and on servers, on a CPU Vulkan driver.
+//! With a display (`DISPLAY` or `WAYLAND_DISPLAY` set, and
+//! `CHISEL_HEADLESS` not set) an app opens a window. Without one it
+//! renders offscreen into an image, captures PNG screenshots at chosen
+//! frames, prints where they went and exits — so every example also runs
+//! in CI and on servers, on a CPU Vulkan driver.
 //!
 //! Every capture is checked for content: a frame whose pixels are nearly
 //! all one colour (the clear colour of a scene that failed to draw, or an

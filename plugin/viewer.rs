@@ -1,10 +1,12 @@
 //! Viewer conveniences shared by the examples: an orbit camera, a text
 //! overlay, the terrain under the mouse cursor and click-to-carve.
 //!
-//! [`ViewerPlugin`] drives every [`OrbitCamera`] (arrow keys and a mouse
-//! drag orbit, the wheel zooms, WASD/QE move the focus) and, when a
+//! [`ViewerPlugin`] drives every [`OrbitCamera`] (arrow keys and a drag of
+//! its [`OrbitCamera::drag_buttons`] orbit, the wheel zooms, WASD/QE move
+//! the focus unless [`OrbitCamera::move_keys`] is off) and, when a
 //! [`ClickCarving`] resource exists, carves the terrain under the cursor:
-//! left click blasts a crater, right click heaps up material, Z undoes.
+//! left click blasts a crater, right click heaps up material, and
+//! [`ClickCarving::undo_key`] (Z in the examples) undoes the last carve.
 
 use bevy::ecs::system::SystemParam;
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};

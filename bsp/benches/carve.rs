@@ -1,4 +1,4 @@
-//! One carve on a well-used workpiece (SCENARIOS.md `cheese`, paper 1 §5):
+//! One carve on a well-used workpiece (`chisel cheese`, paper 1 §5):
 //! a random dodecahedron subtracted from a block that already took
 //! `PRIOR` carves, with and without re-extracting the changed cells'
 //! surfaces.

@@ -15,7 +15,10 @@
 //!   vertices and the predicates of §3.2.
 //! - [`convex`] — convex polyhedra as half-edge meshes with exact vertices,
 //!   and cutting them by planes (§3.3).
-//! - [`tools`] — convex tools: exact convex hulls of integer points.
+//! - [`tools`] — convex tools: exact convex hulls of integer points, the
+//!   corners of dodecahedra, prisms and round shapes within a tolerance,
+//!   swept volumes, and [`tools::Quantization`], the one rounding of float
+//!   input to the grid.
 //! - [`tree`] — BSP trees with material labels, and their convex cells.
 //! - [`mesh`] — boundary surfaces without T-junctions, and their triangles.
 //! - [`octree`] — the persistent octree of BSPs that edits touch locally.

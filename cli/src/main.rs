@@ -6,8 +6,8 @@
 //! - `chisel trace SCENE [--bounds X,Y,Z,R] -o IMAGE.png` renders it with the
 //!   CPU reference ray tracer. `--bounds` defaults to the scene's `bounds`.
 //! - `chisel mill --steps N`, `chisel cheese --count N`, `chisel sweep
-//!   --samples N` run the iterated CSG scenarios of SCENARIOS.md on the
-//!   octree of BSPs; `chisel replay OPS.jsonl` applies a recorded operation
+//!   --samples N` run the iterated CSG scenarios (paper 1 §5; measured
+//!   in BENCHMARKS.md, "Iterated CSG scenarios") on the octree of BSPs; `chisel replay OPS.jsonl` applies a recorded operation
 //!   sequence. All report per-step latency, result size, volume and memory
 //!   (`--json`, `--csv`, `--export`, `--record`).
 //! - `chisel cutter --path helix|spiral|tilt --sides S --steps N` sweeps a
@@ -76,8 +76,8 @@ enum Command {
     Sample(sample::SampleArgs),
     /// Render a quadric CSG scene with the CPU reference ray tracer.
     Trace(trace::TraceArgs),
-    /// Mill a block: a flat end mill swept along a zig-zag path, one
-    /// subtraction per step (SCENARIOS.md "mill").
+    /// Mill a 100 × 100 × 40 mm block: a flat end mill (16-sided prism,
+    /// radius 3 mm) swept along a zig-zag path, one subtraction per step.
     Mill {
         /// Number of tool moves (1 to 1,000,000).
         #[arg(long, default_value_t = 270, value_parser = args::steps)]
@@ -85,7 +85,8 @@ enum Command {
         #[command(flatten)]
         run: RunFlags,
     },
-    /// Carve a cube with many random dodecahedra (SCENARIOS.md "cheese").
+    /// Carve a 100 mm cube with many random dodecahedra, seeded sizes,
+    /// rotations and centres (in its top 40 mm).
     Cheese {
         /// Number of carves (1 to 1,000,000).
         #[arg(long, default_value_t = 1000, value_parser = args::steps)]
@@ -97,7 +98,8 @@ enum Command {
         run: RunFlags,
     },
     /// Sweep a tapered, tilted many-sided cutter along a helical, spiral
-    /// or 5-axis path, one subtraction per step (SCENARIOS.md "cutter").
+    /// or 5-axis path through a 100 × 100 × 40 mm block, one subtraction
+    /// per step.
     Cutter {
         /// The path.
         #[arg(long, value_enum, default_value_t = scenario::cutter::PathKind::Helix)]

@@ -3,15 +3,14 @@
 //!
 //! Exact integer carving gives the same octree on every machine, so only
 //! carves travel, never meshes: a client sends a request
-//! ([`NetCarveRequest`]), the server validates it (size limits, the grid's
-//! bit budget, a rate limit per client), rounds it to the grid once,
-//! numbers it in its terrain's order and sends the integer carve
-//! ([`NetCarve`]) to every client, which applies the carves strictly in
-//! that order. A client that joins gets each terrain's snapshot
-//! ([`crate::terrain::Terrain::to_snapshot_bytes`]: the exact octree and
-//! the rules a carve depends on, without the journal) and then the carves
-//! after it.
-//! The server sends its state hash ([`crate::terrain::Terrain::state_hash`])
+//! ([`NetCarveRequest`]), the server validates it (size limits, the
+//! terrain's materials, the grid's bit budget, a rate limit per client),
+//! rounds it to the grid once, numbers it in its terrain's order and sends
+//! the integer carve ([`NetCarve`]) to every client, which applies the
+//! carves strictly in that order. A client that joins gets each terrain's
+//! snapshot ([`crate::terrain::Terrain::to_snapshot_bytes`]: the exact
+//! octree and the rules a carve depends on, without the journal) and then
+//! the carves after it. The server sends its state hash ([`crate::terrain::Terrain::state_hash`])
 //! every [`NetLimits::check_interval`]; a client whose hash after the same
 //! carve differs reports it and gets a fresh snapshot.
 //!

@@ -47,7 +47,9 @@
 //!
 //! Shaders: `shaders/splat.wgsl` (surface-aligned boxes with back-face
 //! culling, §6.1, or screen-aligned quads; local ray tracing, clipping and
-//! depth writes), `shaders/global.wgsl` (the global ray-tracing baseline).
+//! depth writes), `shaders/global.wgsl` (the global ray-tracing baseline),
+//! and `shaders/splat_shading.wgsl`, which both import: a ray-traced point
+//! lit by Bevy's PBR functions.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -170,7 +172,7 @@ pub struct SplatSettings {
     /// open boxes can miss silhouette pixels. `benches/splat.rs`
     /// compares both pixel for pixel: on an NVIDIA H100 at 1920×1080 open
     /// boxes left 1–2 silhouette pixels uncovered on three of the four
-    /// SCENARIOS scenes (none with lavapipe). Turn it on where a few
+    /// scenes of `assets/scenes/` (none with lavapipe). Turn it on where a few
     /// missing silhouette pixels are acceptable; never with the camera or
     /// near plane inside a prop (open boxes leave out its inner surfaces).
     pub open_boxes: bool,

@@ -8,7 +8,7 @@
 //! the view's key, so the fragment shader can call Bevy's PBR functions;
 //! 2 is the splat pass's own view uniform; 3 is the prop.
 //!
-//! The shadow pipeline ([`SplatShadowPipeline`]) draws the same splats
+//! The shadow pipeline (`SplatShadowPipeline`) draws the same splats
 //! depth-only into Bevy's shadow maps: groups 2 and 3 as above (group 2
 //! holding the light's shadow view), 0 and 1 empty.
 

@@ -12,9 +12,9 @@
 //! Bevy's (early and late) ones and before the main pass: they open a
 //! render pass on the same attachment (loading what Bevy's meshes wrote)
 //! and draw every prop that casts a shadow into that view, one instanced
-//! draw each, with [`SplatShadowPipeline`].
+//! draw each, with `SplatShadowPipeline`.
 //!
-//! Per shadow view, [`prepare_shadow_views`] pushes the light's view into
+//! Per shadow view, `prepare_shadow_views` pushes the light's view into
 //! the splat view uniforms (its projection, and the light's position, or
 //! its direction for a directional cascade) and picks the props to draw:
 //! those without `NotShadowCaster` whose box meets the view's frustum and

@@ -24,9 +24,13 @@
 //!   normals, and welded triangles for its collider.
 //! - [`physics`] — [`TerrainPhysics`], the trait a physics engine
 //!   implements; `avian` implements it (feature `avian`).
-//! - [`debris`] — pieces a carve cut loose, spawned as bodies of their own.
+//! - [`debris`] — pieces a carve cut loose, spawned as bodies of their own;
+//!   [`debris_hulls`] merges a piece's convex cells into a few hulls for
+//!   its collider.
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
 //! - [`file`] — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
+//! - [`snapshot`] — the terrain as it is now, without journal or undo
+//!   history ([`Terrain::to_snapshot_bytes`]), for a peer that joins.
 //! - [`asset`] — terrain files (`*.chiselterrain`) and heightfields through
 //!   the asset server, with hot reload ([`TerrainSource`]).
 //! - [`events`] — the reports as entity events on the terrain

@@ -1,4 +1,4 @@
-//! Paper 2, Table 2: sampling the four scenes of `SCENARIOS.md` at three
+//! Paper 2, Table 2: sampling the four scenes of `assets/scenes/` at three
 //! splat radii (1/10, 1/30 and 1/100 of the bounding radius) on one core,
 //! plus `machine80` on two cores, and a single sphere (no CSG) for the
 //! raw sampling rate.

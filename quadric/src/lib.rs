@@ -31,7 +31,7 @@
 //!   transforms, colours) and its loader.
 //! - [`Error`] — the one error type: what was wrong with the input and how
 //!   to fix it.
-
+//!
 //! ## Example
 //!
 //! ```

@@ -46,7 +46,7 @@
 //!
 //! # Candidates
 //!
-//! Up to [`SCAN_MAX`] vertices (the surface of one octree cell), every
+//! Up to `SCAN_MAX` vertices (the surface of one octree cell), every
 //! vertex whose `f64` x lies in the edge's box widened by the tolerance
 //! below (the vertices sorted by x once, two binary searches per edge);
 //! above, a dense uniform grid over the `f64` positions of the

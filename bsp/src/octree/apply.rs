@@ -168,7 +168,7 @@ impl Octree {
     /// children that were not all one uniform label), the boundary faces
     /// the rebuild extracted there: its surface
     /// inside the cell, with the faces on the cell's box marked
-    /// [`BoundaryFace::on_bounds`] (for the children of a split leaf, the
+    /// [`crate::tree::BoundaryFace::on_bounds`] (for the children of a split leaf, the
     /// pieces of the leaf's faces: on a wall between two of them only
     /// where a face of the leaf lies, the material elsewhere being the
     /// same on both sides). [`Octree::cell_surface_from`] finishes

@@ -6,7 +6,7 @@
 //! face was cut) or none when it lies on the bounds.
 //!
 //! Each face of a solid cell is clipped against the subtree on its other
-//! side, as a plane-based polygon ([`super::polygon`]): at an inner node the
+//! side, as a plane-based polygon (`tree/polygon/`): at an inner node the
 //! pieces go to the side(s) they reach, split exactly when they straddle;
 //! at a leaf a piece is kept when that leaf's label differs (a transition)
 //! and dropped otherwise (same material on both sides). A transition

@@ -1,6 +1,6 @@
 //! Building a BSP from a closed polygon soup (paper 1 §3.6).
 //!
-//! Faces are convex polygons in plane-based form ([`super::polygon`]), so
+//! Faces are convex polygons in plane-based form (`tree/polygon/`), so
 //! splitting them is exact and constructs no new plane.
 //!
 //! Faces are inserted in a seeded random order. At a leaf a face becomes a

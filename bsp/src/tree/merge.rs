@@ -29,9 +29,9 @@
 //!   so its caps carry a pending tag (the split node, marked) that is
 //!   resolved once the tree is complete.
 //! - Collapsed splits. Their cell is the uncut one, so every proper cut
-//!   first saves the records of its cell ([`Survey::save`]); when the split
+//!   first saves the records of its cell (`Survey::save`); when the split
 //!   collapses, the pieces are discarded and the saved records written
-//!   back ([`Survey::restore`]): the cell is again exactly as it was before
+//!   back (`Survey::restore`): the cell is again exactly as it was before
 //!   the cut, and becomes the leaf's cell.
 
 use std::collections::HashMap;

@@ -15,6 +15,8 @@
 //! - [`boundary`] — the solid's boundary without interior faces (§3.4).
 //! - [`simplify`] — redundancy removal by extraction and rebuilding (§3.7).
 //! - `locate` — the label just beside a point (symbolic perturbation).
+//! - `polygon` — convex polygons in plane-based form and their exact
+//!   splits, for import, boundary extraction and the octree's leaves.
 
 pub mod boundary;
 pub mod bsp;

@@ -1,5 +1,5 @@
 //! `chisel cheese`: many small dodecahedra subtracted from a cube, at
-//! seeded random sizes, rotations and places (SCENARIOS.md, "cheese").
+//! seeded random sizes, rotations and places.
 
 use chisel_bsp::octree::CellBox;
 use chisel_bsp::tools::{Pose, dodecahedron_corners};

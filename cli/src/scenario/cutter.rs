@@ -1,6 +1,6 @@
 //! `chisel cutter`: a tapered, tilted many-sided cutter swept along a
 //! curved 3D path through a block, each step subtracting the hull of the
-//! tool at two consecutive poses (SCENARIOS.md, "cutter").
+//! tool at two consecutive poses.
 //!
 //! Unlike `mill`, the tool is in general orientation: its axis leans away
 //! from +z and its polygon is turned by an irrational angle, so the hull's

@@ -1,6 +1,6 @@
 //! `chisel mill`: a flat end mill swept along a zig-zag path through a
 //! block, each step subtracting the hull of the tool at two consecutive
-//! path points (SCENARIOS.md, "mill").
+//! path points.
 
 use chisel_bsp::octree::CellBox;
 use chisel_bsp::tools::{Pose, prism_corners};

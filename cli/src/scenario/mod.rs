@@ -1,5 +1,5 @@
 //! Iterated CSG scenarios: a base solid edited by a sequence of convex
-//! tools, timed step by step (SCENARIOS.md, paper 1 §5).
+//! tools, timed step by step (paper 1 §5).
 //!
 //! Every scenario is first written down as a [`Sequence`] of integer tool
 //! points (1 µm grid), then run by one [`runner`], so `mill`, `cheese`,

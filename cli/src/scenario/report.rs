@@ -1,5 +1,5 @@
-//! The figures of a scenario run (SCENARIOS.md, "Reported figures"): as a
-//! text report, one JSON line, and per-step CSV.
+//! The figures of a scenario run: as a text report, one JSON line, and
+//! per-step CSV.
 
 use std::io::Write;
 use std::path::Path;

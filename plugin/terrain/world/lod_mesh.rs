@@ -31,7 +31,7 @@
 //!
 //! **Skirts**: every border edge (in a side's plane, used by one coarse
 //! triangle) hangs a vertical strip facing out of the chunk, `2·D_side + 1`
-//! grid units deep ([`skirt_depths`]): `D_side` bounds how far any level's
+//! grid units deep (`skirt_depths`): `D_side` bounds how far any level's
 //! border lies from the exact one along that side (unedited chunks
 //! interpolate the side's samples; edited ones keep the exact border, and
 //! a carve that changes a border edits both chunks on it). Two chunks'

@@ -5,7 +5,7 @@
 //!
 //! Notation: a chunk's *border points* toward a neighbour are the wall
 //! points of its kept cell meshes that lie on the side or the corner line
-//! it shares with that neighbour ([`BorderPoints`]); a chunk's *outside
+//! it shares with that neighbour (`BorderPoints`); a chunk's *outside
 //! points* are the border points of its live neighbours toward it.
 //!
 //! Every job of a chunk hands back its border points as of the meshes it

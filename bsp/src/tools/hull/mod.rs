@@ -1,11 +1,11 @@
 //! The exact convex hull of integer points.
 //!
 //! The points, sorted and without duplicates, are added one by one to a
-//! triangulated hull ([`incremental`]); then coplanar neighbouring
+//! triangulated hull (`incremental`); then coplanar neighbouring
 //! triangles are merged into convex polygons, vertices in the middle of a
-//! straight side are dropped ([`polygons`]), and the result becomes a
+//! straight side are dropped (`polygons`), and the result becomes a
 //! strictly convex polyhedron of a [`ConvexArena`] ([`convex_hull`]) or a
-//! tool ([`crate::octree::Tool::convex_hull`], from [`with_hull_polygons`]
+//! tool ([`crate::octree::Tool::convex_hull`], from `with_hull_polygons`
 //! without an arena). The working memory is kept per thread between hulls.
 
 mod incremental;
