@@ -9,7 +9,7 @@
 //! line of the figures. `cargo test` runs this binary without `--bench`:
 //! it then measures nothing (see `support`).
 //!
-//! Per SCENARIOS scene, one app renders the prop alone (from the view of
+//! Per benchmark scene (`assets/scenes/`), one app renders the prop alone (from the view of
 //! `tests/it/splat_render.rs`, whose scenes and eye `tests/it/common/scenes.rs`
 //! gives both: the bounding sphere fills the image height)
 //! through a sequence of steps, in turn, in the same run:
@@ -656,7 +656,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
     let mut times = Vec::new();
     let mut overdraws = Vec::new();
     let mut json_scenes = Vec::new();
-    // The SCENARIOS scenes; each is sampled and viewed in its file's
+    // The benchmark scenes of `assets/scenes/`; each is sampled and viewed in its file's
     // `bounds`.
     for (name, _, _) in SCENES {
         if only.as_ref().is_some_and(|o| !o.iter().any(|n| n == name)) {

@@ -1,7 +1,7 @@
 //! The splat pass against the CPU reference ray tracer, headless on the
 //! machine's Vulkan adapter (lavapipe in CI).
 //!
-//! Each SCENARIOS scene is sampled, drawn by the plugin with quadric ids as
+//! Each benchmark scene (`assets/scenes/`) is sampled, drawn by the plugin with quadric ids as
 //! colours, and compared pixel by pixel with `chisel_quadric::trace_image`
 //! from the same camera: the primitive ids must agree on ≥ 99.5 % of the
 //! pixels, and pixels where the reference sees the solid but the pass shows

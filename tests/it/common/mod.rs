@@ -1,4 +1,4 @@
-//! Shared by the headless splat tests: the SCENARIOS scenes and their
+//! Shared by the headless splat tests: the benchmark scenes and their
 //! comparison views, a headless render of one prop seen by several cameras
 //! side by side, and the comparison of a capture with the CPU reference
 //! tracer (`chisel_quadric::trace_image`) on quadric ids and on normals.
@@ -84,7 +84,7 @@ pub fn scene_entry(name: &str) -> (&'static str, DVec3, f64) {
     let (name, centre, radius) = SCENES
         .into_iter()
         .find(|(n, _, _)| *n == name)
-        .expect("a SCENARIOS scene");
+        .expect("one of the benchmark scenes");
     (name, DVec3::from(centre), radius)
 }
 

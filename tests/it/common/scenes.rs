@@ -1,4 +1,4 @@
-//! The SCENARIOS scenes and the camera of their comparison views: shared
+//! The four benchmark scenes (`assets/scenes/`) and the camera of their comparison views: shared
 //! by the headless splat tests (through [`super`]) and the splat bench
 //! (`benches/splat.rs` includes this file by path), so it names nothing of
 //! the test binary.
