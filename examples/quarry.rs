@@ -182,7 +182,7 @@ fn keys(
     mut stats: ResMut<Stats>,
     mut commands: Commands,
 ) {
-    let path = std::env::temp_dir().join("quarry.chisel");
+    let path = std::env::temp_dir().join("quarry.chiselterrain");
     for (entity, terrain) in &terrains {
         if keys.just_pressed(KeyCode::F5) {
             stats.message = Some(match terrain.save(&path) {

@@ -69,9 +69,16 @@ impl From<String> for Failure {
 pub fn check_output(path: &std::path::Path, mesh_or_octree: bool) -> Result<(), Failure> {
     if mesh_or_octree
         && !crate::octree_file::is_octree_file(path)
-        && let Err(e) = crate::formats::MeshFormat::from_path(path)
+        && crate::formats::MeshFormat::from_path(path).is_err()
     {
-        return Err(Failure::usage(e.to_string()));
+        let what = path.extension().map_or_else(
+            || "no file extension".to_owned(),
+            |ext| format!("unknown output format '.{}'", ext.to_string_lossy()),
+        );
+        return Err(Failure::usage(format!(
+            "{}: {what} (use .obj, .ply, .glb or .chisel)",
+            path.display()
+        )));
     }
     let folder = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,

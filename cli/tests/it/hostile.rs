@@ -305,6 +305,8 @@ fn late_checks_and_causes() {
     ]);
     assert_eq!(c, Some(2), "{m}");
     assert!(m.contains(".xyz"), "{m}");
+    // It names every format the output can take, the octree file too.
+    assert!(m.contains(".chisel"), "{m}");
     let (c, m) = code(&["mill", "--steps", "1000000", "--export", "x.xyz"]);
     assert_eq!(c, Some(2), "{m}");
     let (c, m) = code(&[
