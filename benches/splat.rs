@@ -40,12 +40,27 @@
 //!   the paper's depth-tested count at its lowest. Lavapipe's pipeline
 //!   statistics count invocations before the depth test, in 2×2 quads.
 //!
+//! - MSAA (`CHISEL_BENCH_MSAA=4`, or 2 or 8): each round also times the
+//!   boxes and the empty frame on the camera with that many samples
+//!   (`Msaa::Sample4`, Bevy's default, which the game examples keep), where
+//!   the splat pass shades each covered sample (`PER_SAMPLE` in
+//!   `shaders/splat.wgsl`), beside the same boxes with `Msaa::Off` in the
+//!   same round. The read-backs stay at one sample per pixel: a
+//!   multisampled target is resolved (averaged) into the image read back,
+//!   and the counts above are exact only with one sample.
+//!
+//! A step that takes far more frames than it asked for (a measurement that
+//! never arrives: no timestamps on the adapter, a read-back that never
+//! completes) ends the run with an error naming the step, rather than
+//! rendering on for thousands of frames.
+//!
 //! Environment: `CHISEL_BENCH_FRAMES` (timed frames per splat step,
 //! default 15), `CHISEL_BENCH_GLOBAL_FRAMES` (per global step, default 3;
 //! 0 leaves the global pass out, e.g. for a sweep of splat sizes),
 //! `CHISEL_BENCH_SCENES` (comma-separated names, default all four),
 //! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
-//! 40 as `SplatRadius::default()`).
+//! 40 as `SplatRadius::default()`), `CHISEL_BENCH_MSAA` (samples of the
+//! multisampled timing steps: 2, 4 or 8; default 1, none).
 
 #[path = "../tests/it/common/scenes.rs"]
 mod common;
@@ -93,6 +108,10 @@ const READ_SETTLE: u32 = 5;
 /// Timing rounds, interleaved so that a change of machine load hits every
 /// mode alike.
 const ROUNDS: u32 = 2;
+/// Frames a step may run beyond those it asked for before the run is
+/// given up with an error: measurements lag a few frames, and a first
+/// frame of a new pipeline is dropped.
+const STEP_SLACK: u32 = 40;
 
 use support::env_or;
 
@@ -153,8 +172,12 @@ enum Draw {
 /// One step of the sequence.
 #[derive(Clone, Copy, Debug)]
 enum Step {
-    /// Record `frames` frames.
-    Time { draw: Draw, frames: u32 },
+    /// Record `frames` frames on the camera with `samples` MSAA samples.
+    Time {
+        draw: Draw,
+        frames: u32,
+        samples: u32,
+    },
     /// Read one frame of `output` back.
     Read {
         variant: Variant,
@@ -165,10 +188,10 @@ enum Step {
 /// What the steps recorded.
 #[derive(Default)]
 struct Log {
-    /// GPU time of the pass (ms) per drawing.
-    pass_ms: HashMap<Draw, Vec<f64>>,
-    /// Frame time (ms) per drawing.
-    frame_ms: HashMap<Draw, Vec<f64>>,
+    /// GPU time of the pass (ms) per drawing and MSAA samples.
+    pass_ms: HashMap<(Draw, u32), Vec<f64>>,
+    /// Frame time (ms) per drawing and MSAA samples.
+    frame_ms: HashMap<(Draw, u32), Vec<f64>>,
     /// Fragment shader invocations of the pass (pipeline statistics).
     invocations: HashMap<(Variant, SplatOutput), Vec<f64>>,
     /// Each read-back frame (linear RGBA per pixel).
@@ -204,9 +227,14 @@ struct Driver {
     splat_count: u32,
     /// Time of the last diagnostics measurement consumed.
     last_measurement: Option<Instant>,
-    /// Variants measured once: the first frame of each also compiles
-    /// lavapipe's shader variants and is not recorded.
-    seen: Vec<Variant>,
+    /// Variants measured once, with their MSAA samples: the first frame of
+    /// each also compiles lavapipe's shader variants and is not recorded.
+    seen: Vec<(Variant, u32)>,
+    /// The MSAA samples of the latest timing step that drew each variant:
+    /// a late measurement of a variant is of that step (steps of the same
+    /// variant are never adjacent, and a measurement lags less than a
+    /// step).
+    samples_of: HashMap<Variant, u32>,
     /// The read-back of the current step has arrived.
     read_done: Arc<Mutex<bool>>,
     reader: Option<Entity>,
@@ -228,18 +256,29 @@ impl Driver {
     }
 }
 
-fn steps(splat_frames: u32, global_frames: u32) -> Vec<Step> {
+/// The steps of one scene: `ROUNDS` timing rounds (with the boxes and the
+/// empty frame also at `msaa` samples where `msaa > 1`, after the global
+/// pass so that no two steps of one variant are adjacent), then the
+/// read-backs, at one sample.
+fn steps(splat_frames: u32, global_frames: u32, msaa: u32) -> Vec<Step> {
     let mut steps = Vec::new();
+    let multisampled = if msaa > 1 { splat_frames } else { 0 };
     for _ in 0..ROUNDS {
-        for (draw, frames) in [
-            (Draw::Prop(Variant::Boxes), splat_frames),
-            (Draw::Prop(Variant::OpenBoxes), splat_frames),
-            (Draw::Prop(Variant::Quads), splat_frames),
-            (Draw::Empty, splat_frames),
-            (Draw::Prop(Variant::Global), global_frames),
+        for (draw, frames, samples) in [
+            (Draw::Prop(Variant::Boxes), splat_frames, 1),
+            (Draw::Prop(Variant::OpenBoxes), splat_frames, 1),
+            (Draw::Prop(Variant::Quads), splat_frames, 1),
+            (Draw::Empty, splat_frames, 1),
+            (Draw::Prop(Variant::Global), global_frames, 1),
+            (Draw::Prop(Variant::Boxes), multisampled, msaa),
+            (Draw::Empty, multisampled, msaa),
         ] {
             if frames > 0 {
-                steps.push(Step::Time { draw, frames });
+                steps.push(Step::Time {
+                    draw,
+                    frames,
+                    samples,
+                });
             }
         }
     }
@@ -280,22 +319,29 @@ fn pass_diagnostic(store: &DiagnosticsStore, field: &str) -> Option<(Instant, f6
 #[derive(Component)]
 struct SphereProp;
 
-/// Applies the settings and visibility of `step`.
+/// Applies the settings, camera MSAA and visibility of `step`.
 fn begin_step(
     step: Step,
     settings: &mut SplatSettings,
     props: &mut Query<(&mut Visibility, Has<SphereProp>), With<PropSplats>>,
+    cameras: &mut Query<&mut Msaa, With<Camera>>,
 ) {
-    let (variant, output, visible) = match step {
+    let (variant, output, visible, samples) = match step {
         Step::Time {
             draw: Draw::Prop(variant),
+            samples,
             ..
-        } => (variant, SplatOutput::Shaded, true),
+        } => (variant, SplatOutput::Shaded, true, samples),
         Step::Time {
-            draw: Draw::Empty, ..
-        } => (Variant::Boxes, SplatOutput::Shaded, false),
-        Step::Read { variant, output } => (variant, output, true),
+            draw: Draw::Empty,
+            samples,
+            ..
+        } => (Variant::Boxes, SplatOutput::Shaded, false, samples),
+        Step::Read { variant, output } => (variant, output, true, 1),
     };
+    for mut msaa in cameras {
+        msaa.set_if_neq(Msaa::from_samples(samples));
+    }
     settings.mode = variant.mode();
     settings.open_boxes = variant == Variant::OpenBoxes;
     settings.cull_facing_away = variant != Variant::UnculledBoxes;
@@ -358,6 +404,7 @@ fn drive(
     mut driver: ResMut<Driver>,
     mut settings: ResMut<SplatSettings>,
     mut props: Query<(&mut Visibility, Has<SphereProp>), With<PropSplats>>,
+    mut cameras: Query<&mut Msaa, With<Camera>>,
     store: Res<DiagnosticsStore>,
     time: Res<Time<Real>>,
     log: Res<SharedLog>,
@@ -377,7 +424,31 @@ fn drive(
     driver.frame += 1;
     let frame = driver.frame;
     if frame == 1 {
-        begin_step(step, &mut settings, &mut props);
+        begin_step(step, &mut settings, &mut props, &mut cameras);
+        if let Step::Time {
+            draw: Draw::Prop(variant),
+            samples,
+            ..
+        } = step
+        {
+            driver.samples_of.insert(variant, samples);
+        }
+        if let Step::Read { variant, .. } = step {
+            driver.samples_of.insert(variant, 1);
+        }
+    }
+    let asked = match step {
+        Step::Time { frames, .. } => WARM_UP + frames,
+        Step::Read { .. } => READ_SETTLE + 3,
+    };
+    if frame > asked + STEP_SLACK {
+        eprintln!(
+            "splat bench: step {} ({step:?}) still short of its measurements after {frame} \
+             frames (asked for {asked}); giving up",
+            driver.step
+        );
+        exit.write(AppExit::error());
+        return;
     }
     // A new diagnostics measurement (of a frame a few frames back), and
     // the mode that drew it.
@@ -387,25 +458,35 @@ fn drive(
         driver.last_measurement = Some(t);
         driver.variant_of(vertices)
     });
-    if let Some(variant) = measured
-        && !driver.seen.contains(&variant)
+    let measured_samples = measured.map(|v| driver.samples_of.get(&v).copied().unwrap_or(1));
+    if let (Some(variant), Some(samples)) = (measured, measured_samples)
+        && !driver.seen.contains(&(variant, samples))
     {
-        driver.seen.push(variant);
+        driver.seen.push((variant, samples));
         measured = None;
     }
     let next = match step {
-        Step::Time { draw, frames } => {
+        Step::Time {
+            draw,
+            frames,
+            samples,
+        } => {
             if frame > WARM_UP {
                 log.with(|log| {
                     let ms = time.delta_secs_f64() * 1e3;
-                    log.frame_ms.entry(draw).or_default().push(ms);
+                    log.frame_ms.entry((draw, samples)).or_default().push(ms);
                 });
             }
-            if let Some(variant) = measured
+            if let (Some(variant), Some(measured_samples)) = (measured, measured_samples)
                 && let Some((_, ms)) = pass_diagnostic(&store, "elapsed_gpu")
             {
-                log.with(|log| log.pass_ms.entry(Draw::Prop(variant)).or_default().push(ms));
-                if draw == Draw::Prop(variant) {
+                log.with(|log| {
+                    log.pass_ms
+                        .entry((Draw::Prop(variant), measured_samples))
+                        .or_default()
+                        .push(ms);
+                });
+                if draw == Draw::Prop(variant) && measured_samples == samples {
                     driver.taken += 1;
                 }
             }
@@ -525,6 +606,7 @@ fn run_scene(
             splat_count,
             last_measurement: None,
             seen: Vec::new(),
+            samples_of: HashMap::new(),
             read_done: Arc::default(),
             reader: None,
             total_frames: 0,
@@ -650,10 +732,16 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
     let splat_frames = env_or("CHISEL_BENCH_FRAMES", 15);
     let global_frames = env_or("CHISEL_BENCH_GLOBAL_FRAMES", 3);
     let divisor: f32 = env_or("CHISEL_BENCH_SPLAT_DIVISOR", 40.0);
+    let msaa: u32 = env_or("CHISEL_BENCH_MSAA", 1);
+    assert!(
+        [1, 2, 4, 8].contains(&msaa),
+        "CHISEL_BENCH_MSAA must be 1 (off), 2, 4 or 8, not {msaa}"
+    );
     let only: Option<Vec<String>> = std::env::var("CHISEL_BENCH_SCENES")
         .ok()
         .map(|s| s.split(',').map(str::to_owned).collect());
     let mut times = Vec::new();
+    let mut msaa_times = Vec::new();
     let mut overdraws = Vec::new();
     let mut json_scenes = Vec::new();
     // The SCENARIOS scenes; each is sampled and viewed in its file's
@@ -675,7 +763,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             sphere_splats,
             centre,
             radius,
-            steps(splat_frames, global_frames),
+            steps(splat_frames, global_frames, msaa),
         );
         println!(
             "\n{name}: {quadrics} quadrics, {splat_count} splats (radius {:.3}, mean {:.3} of it; \
@@ -709,6 +797,15 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         let check = |v| f.frame_minus_empty_ms.get(&v).copied().unwrap_or(f64::NAN);
         let od = |v| f.overdraw.get(&v).copied().unwrap_or((f64::NAN, f64::NAN));
         let tested = |v| f.depth_tested.get(&v).copied().unwrap_or(f64::NAN);
+        if let Some(m) = f.msaa_boxes {
+            msaa_times.push(format!(
+                "| {name} | {splat_count} | {:.2} | {:.2} | {:.2}× | {:.2}× |",
+                pass(Variant::Boxes),
+                m.pass_ms,
+                m.pass_ms / pass(Variant::Boxes),
+                m.frame_minus_empty_ms / check(Variant::Boxes),
+            ));
+        }
         times.push(format!(
             "| {name} | {quadrics} | {splat_count} | {:.2} | {:.2} | {:.1}× | {:.1}× | {:.2} | {:.2} |",
             pass(Variant::Boxes),
@@ -744,6 +841,11 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             "depth_tested_overdraw": tested(Variant::Boxes),
             "sphere_boxes_depth_tested_overdraw": tested(Variant::SphereBoxes),
             "covered_px": f.covered,
+            "msaa_boxes": f.msaa_boxes.map(|m| serde_json::json!({
+                "samples": m.samples,
+                "pass_ms": m.pass_ms,
+                "frame_minus_empty_ms": m.frame_minus_empty_ms,
+            })),
         }));
         overdraws.push(format!(
             "| {name} | {} | {:.2} → **{:.2}** | {:.2} → **{:.2}** | {:.2} → {:.2} | {:.2} | \
@@ -768,6 +870,20 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
     for row in times {
         println!("{row}");
     }
+    if !msaa_times.is_empty() {
+        println!(
+            "\n| scene | splats | boxes, MSAA off, ms | boxes, {msaa}× MSAA, ms | {msaa}× ÷ off | \
+             same, frame − empty |"
+        );
+        println!("|---|---:|---:|---:|---:|---:|");
+        for row in msaa_times {
+            println!("{row}");
+        }
+        println!(
+            "(read-backs and overdraw at MSAA off: a multisampled target is resolved before it \
+             is read)"
+        );
+    }
     println!(
         "\n| scene | covered px | fragments per covered px, sphere → cell boxes | \
          depth-tested (after a depth prepass), sphere → cell boxes | adapter's invocations \
@@ -784,6 +900,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             "splat_frames": splat_frames,
             "global_frames": global_frames,
             "splat_divisor": divisor,
+            "msaa": msaa,
             "scenes": json_scenes,
         }),
     );
