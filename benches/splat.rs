@@ -60,7 +60,10 @@
 //! `CHISEL_BENCH_SCENES` (comma-separated names, default all four),
 //! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
 //! 40 as `SplatRadius::default()`), `CHISEL_BENCH_MSAA` (samples of the
-//! multisampled timing steps: 2, 4 or 8; default 1, none).
+//! multisampled timing steps: 2, 4 or 8; default 1, none),
+//! `CHISEL_BENCH_MSAA_ONLY=1` (with `CHISEL_BENCH_MSAA`: only the boxes
+//! and the empty frame, at one sample and at the multisampled camera's;
+//! no other variant, no read-back).
 
 #[path = "../tests/it/common/scenes.rs"]
 mod common;
@@ -259,15 +262,18 @@ impl Driver {
 /// The steps of one scene: `ROUNDS` timing rounds (with the boxes and the
 /// empty frame also at `msaa` samples where `msaa > 1`, after the global
 /// pass so that no two steps of one variant are adjacent), then the
-/// read-backs, at one sample.
-fn steps(splat_frames: u32, global_frames: u32, msaa: u32) -> Vec<Step> {
+/// read-backs, at one sample. `msaa_only`: only the boxes and the empty
+/// frame are timed, and nothing is read back.
+fn steps(splat_frames: u32, global_frames: u32, msaa: u32, msaa_only: bool) -> Vec<Step> {
     let mut steps = Vec::new();
     let multisampled = if msaa > 1 { splat_frames } else { 0 };
+    let others = if msaa_only { 0 } else { splat_frames };
+    let global_frames = if msaa_only { 0 } else { global_frames };
     for _ in 0..ROUNDS {
         for (draw, frames, samples) in [
             (Draw::Prop(Variant::Boxes), splat_frames, 1),
-            (Draw::Prop(Variant::OpenBoxes), splat_frames, 1),
-            (Draw::Prop(Variant::Quads), splat_frames, 1),
+            (Draw::Prop(Variant::OpenBoxes), others, 1),
+            (Draw::Prop(Variant::Quads), others, 1),
             (Draw::Empty, splat_frames, 1),
             (Draw::Prop(Variant::Global), global_frames, 1),
             (Draw::Prop(Variant::Boxes), multisampled, msaa),
@@ -281,6 +287,9 @@ fn steps(splat_frames: u32, global_frames: u32, msaa: u32) -> Vec<Step> {
                 });
             }
         }
+    }
+    if msaa_only {
+        return steps;
     }
     for (variant, output) in [
         (Variant::Boxes, SplatOutput::QuadricIds),
@@ -737,6 +746,8 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         [1, 2, 4, 8].contains(&msaa),
         "CHISEL_BENCH_MSAA must be 1 (off), 2, 4 or 8, not {msaa}"
     );
+    let msaa_only = msaa > 1 && env_or("CHISEL_BENCH_MSAA_ONLY", 0u32) == 1;
+    let global_frames = if msaa_only { 0 } else { global_frames };
     let only: Option<Vec<String>> = std::env::var("CHISEL_BENCH_SCENES")
         .ok()
         .map(|s| s.split(',').map(str::to_owned).collect());
@@ -763,7 +774,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             sphere_splats,
             centre,
             radius,
-            steps(splat_frames, global_frames, msaa),
+            steps(splat_frames, global_frames, msaa, msaa_only),
         );
         println!(
             "\n{name}: {quadrics} quadrics, {splat_count} splats (radius {:.3}, mean {:.3} of it; \
@@ -884,15 +895,19 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
              is read)"
         );
     }
-    println!(
-        "\n| scene | covered px | fragments per covered px, sphere → cell boxes | \
-         depth-tested (after a depth prepass), sphere → cell boxes | adapter's invocations \
-         per covered px, sphere → cell boxes | cell boxes unculled | open cell boxes | \
-         screen quads |"
-    );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
-    for row in overdraws {
-        println!("{row}");
+    if msaa_only {
+        println!("\n(CHISEL_BENCH_MSAA_ONLY: no other variant, no read-back)");
+    } else {
+        println!(
+            "\n| scene | covered px | fragments per covered px, sphere → cell boxes | \
+             depth-tested (after a depth prepass), sphere → cell boxes | adapter's invocations \
+             per covered px, sphere → cell boxes | cell boxes unculled | open cell boxes | \
+             screen quads |"
+        );
+        println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+        for row in overdraws {
+            println!("{row}");
+        }
     }
     support::json_line(
         "splat::splat_pass_against_global_ray_tracing_at_full_hd",
