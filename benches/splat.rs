@@ -43,9 +43,9 @@
 //! - MSAA (`CHISEL_BENCH_MSAA=4`, or 2 or 8): each round also times the
 //!   boxes and the empty frame on the camera with that many samples
 //!   (`Msaa::Sample4`, Bevy's default, which the game examples keep), where
-//!   the splat pass shades each covered sample (`PER_SAMPLE` in
-//!   `shaders/splat.wgsl`), beside the same boxes with `Msaa::Off` in the
-//!   same round. The read-backs stay at one sample per pixel: a
+//!   the splat pass traces the ray of each covered sample (`SAMPLE_RAYS`
+//!   at 4 samples, `PER_SAMPLE` at 2 or 8, in `shaders/splat.wgsl`),
+//!   beside the same boxes with `Msaa::Off` in the same round. The read-backs stay at one sample per pixel: a
 //!   multisampled target is resolved (averaged) into the image read back,
 //!   and the counts above are exact only with one sample.
 //!
