@@ -40,19 +40,40 @@
 //!   the paper's depth-tested count at its lowest. Lavapipe's pipeline
 //!   statistics count invocations before the depth test, in 2×2 quads.
 //!
+//! - MSAA (`CHISEL_BENCH_MSAA=4`, or 2 or 8): each round also times the
+//!   boxes and the empty frame on the camera with that many samples
+//!   (`Msaa::Sample4`, Bevy's default, which the game examples keep), where
+//!   the splat pass traces the ray of each covered sample (`SAMPLE_RAYS`
+//!   at 4 samples, `PER_SAMPLE` at 2 or 8, in `shaders/splat.wgsl`),
+//!   beside the same boxes with `Msaa::Off` in the same round. The read-backs stay at one sample per pixel: a
+//!   multisampled target is resolved (averaged) into the image read back,
+//!   and the counts above are exact only with one sample.
+//!
+//! A step that takes far more frames than it asked for (a measurement that
+//! never arrives: no timestamps on the adapter, a read-back that never
+//! completes) ends the run with an error naming the step, rather than
+//! rendering on for thousands of frames.
+//!
 //! Environment: `CHISEL_BENCH_FRAMES` (timed frames per splat step,
 //! default 15), `CHISEL_BENCH_GLOBAL_FRAMES` (per global step, default 3;
 //! 0 leaves the global pass out, e.g. for a sweep of splat sizes),
 //! `CHISEL_BENCH_SCENES` (comma-separated names, default all four),
 //! `CHISEL_BENCH_SPLAT_DIVISOR` (bounding radius ÷ splat radius, default
-//! 40 as `SplatRadius::default()`).
+//! 40 as `SplatRadius::default()`), `CHISEL_BENCH_MSAA` (samples of the
+//! multisampled timing steps: 2, 4 or 8; default 1, none),
+//! `CHISEL_BENCH_MSAA_ONLY=1` (with `CHISEL_BENCH_MSAA`: only the boxes
+//! and the empty frame, at one sample and at the multisampled camera's;
+//! no other variant, no read-back).
 
 #[path = "../tests/it/common/scenes.rs"]
 mod common;
+#[path = "splat/driver.rs"]
+mod driver;
 #[path = "splat/figures.rs"]
 mod figures;
 mod support;
 
+use driver::{Driver, SphereProp, drive, steps};
 use figures::figures;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -93,6 +114,10 @@ const READ_SETTLE: u32 = 5;
 /// Timing rounds, interleaved so that a change of machine load hits every
 /// mode alike.
 const ROUNDS: u32 = 2;
+/// Frames a step may run beyond those it asked for before the run is
+/// given up with an error: measurements lag a few frames, and a first
+/// frame of a new pipeline is dropped.
+const STEP_SLACK: u32 = 40;
 
 use support::env_or;
 
@@ -153,8 +178,12 @@ enum Draw {
 /// One step of the sequence.
 #[derive(Clone, Copy, Debug)]
 enum Step {
-    /// Record `frames` frames.
-    Time { draw: Draw, frames: u32 },
+    /// Record `frames` frames on the camera with `samples` MSAA samples.
+    Time {
+        draw: Draw,
+        frames: u32,
+        samples: u32,
+    },
     /// Read one frame of `output` back.
     Read {
         variant: Variant,
@@ -165,10 +194,10 @@ enum Step {
 /// What the steps recorded.
 #[derive(Default)]
 struct Log {
-    /// GPU time of the pass (ms) per drawing.
-    pass_ms: HashMap<Draw, Vec<f64>>,
-    /// Frame time (ms) per drawing.
-    frame_ms: HashMap<Draw, Vec<f64>>,
+    /// GPU time of the pass (ms) per drawing and MSAA samples.
+    pass_ms: HashMap<(Draw, u32), Vec<f64>>,
+    /// Frame time (ms) per drawing and MSAA samples.
+    frame_ms: HashMap<(Draw, u32), Vec<f64>>,
     /// Fragment shader invocations of the pass (pipeline statistics).
     invocations: HashMap<(Variant, SplatOutput), Vec<f64>>,
     /// Each read-back frame (linear RGBA per pixel).
@@ -188,273 +217,6 @@ impl SharedLog {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         f(&mut log)
-    }
-}
-
-#[derive(Resource)]
-struct Driver {
-    steps: Vec<Step>,
-    step: usize,
-    /// Frames since the current step began (1 on its first frame).
-    frame: u32,
-    /// Pass measurements of the current step's drawing taken in this step.
-    taken: u32,
-    target: Handle<Image>,
-    /// Splats of the prop: tells the modes apart by vertex invocations.
-    splat_count: u32,
-    /// Time of the last diagnostics measurement consumed.
-    last_measurement: Option<Instant>,
-    /// Variants measured once: the first frame of each also compiles
-    /// lavapipe's shader variants and is not recorded.
-    seen: Vec<Variant>,
-    /// The read-back of the current step has arrived.
-    read_done: Arc<Mutex<bool>>,
-    reader: Option<Entity>,
-    total_frames: u32,
-}
-
-impl Driver {
-    /// The variant that drew `vertices` vertex invocations: diagnostics
-    /// arrive a few frames late, so they are told apart by what they drew.
-    fn variant_of(&self, vertices: f64) -> Option<Variant> {
-        [
-            Variant::Boxes,
-            Variant::OpenBoxes,
-            Variant::Quads,
-            Variant::Global,
-        ]
-        .into_iter()
-        .find(|v| v.vertices(self.splat_count).total_cmp(&vertices).is_eq())
-    }
-}
-
-fn steps(splat_frames: u32, global_frames: u32) -> Vec<Step> {
-    let mut steps = Vec::new();
-    for _ in 0..ROUNDS {
-        for (draw, frames) in [
-            (Draw::Prop(Variant::Boxes), splat_frames),
-            (Draw::Prop(Variant::OpenBoxes), splat_frames),
-            (Draw::Prop(Variant::Quads), splat_frames),
-            (Draw::Empty, splat_frames),
-            (Draw::Prop(Variant::Global), global_frames),
-        ] {
-            if frames > 0 {
-                steps.push(Step::Time { draw, frames });
-            }
-        }
-    }
-    for (variant, output) in [
-        (Variant::Boxes, SplatOutput::QuadricIds),
-        (Variant::OpenBoxes, SplatOutput::QuadricIds),
-        (Variant::UnculledBoxes, SplatOutput::QuadricIds),
-        (Variant::SphereBoxes, SplatOutput::QuadricIds),
-        (Variant::Boxes, SplatOutput::Overdraw),
-        (Variant::SphereBoxes, SplatOutput::Overdraw),
-        (Variant::Boxes, SplatOutput::DepthTestedOverdraw),
-        (Variant::SphereBoxes, SplatOutput::DepthTestedOverdraw),
-        (Variant::UnculledBoxes, SplatOutput::Overdraw),
-        (Variant::OpenBoxes, SplatOutput::Overdraw),
-        (Variant::Quads, SplatOutput::Overdraw),
-        (Variant::Global, SplatOutput::Overdraw),
-    ] {
-        if variant == Variant::Global && global_frames == 0 {
-            continue;
-        }
-        steps.push(Step::Read { variant, output });
-    }
-    steps
-}
-
-/// The latest value of the pass diagnostic ending in `field`.
-fn pass_diagnostic(store: &DiagnosticsStore, field: &str) -> Option<(Instant, f64)> {
-    let suffix = format!("chisel_splat_pass/{field}");
-    store
-        .iter()
-        .find(|d| d.path().as_str().ends_with(&suffix))
-        .and_then(|d| d.measurement())
-        .map(|m| (m.time, m.value))
-}
-
-/// Marks the prop whose splats are boxes around their spheres
-/// ([`Variant::SphereBoxes`]).
-#[derive(Component)]
-struct SphereProp;
-
-/// Applies the settings and visibility of `step`.
-fn begin_step(
-    step: Step,
-    settings: &mut SplatSettings,
-    props: &mut Query<(&mut Visibility, Has<SphereProp>), With<PropSplats>>,
-) {
-    let (variant, output, visible) = match step {
-        Step::Time {
-            draw: Draw::Prop(variant),
-            ..
-        } => (variant, SplatOutput::Shaded, true),
-        Step::Time {
-            draw: Draw::Empty, ..
-        } => (Variant::Boxes, SplatOutput::Shaded, false),
-        Step::Read { variant, output } => (variant, output, true),
-    };
-    settings.mode = variant.mode();
-    settings.open_boxes = variant == Variant::OpenBoxes;
-    settings.cull_facing_away = variant != Variant::UnculledBoxes;
-    settings.output = output;
-    for (mut v, sphere) in props {
-        *v = if visible && sphere == (variant == Variant::SphereBoxes) {
-            Visibility::Inherited
-        } else {
-            Visibility::Hidden
-        };
-    }
-}
-
-/// Reads `target` back once; `done` is set when the image is in the log
-/// under `key`.
-fn read_back(
-    commands: &mut Commands,
-    target: Handle<Image>,
-    key: (Variant, SplatOutput),
-    log: SharedLog,
-    done: Arc<Mutex<bool>>,
-) -> Entity {
-    *done
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner) = false;
-    commands
-        .spawn(Readback::texture(target))
-        .observe(move |read: On<ReadbackComplete>| {
-            let image = Image::new(
-                Extent3d {
-                    width: WIDTH,
-                    height: HEIGHT,
-                    depth_or_array_layers: 1,
-                },
-                TextureDimension::D2,
-                read.data.clone(),
-                TextureFormat::Rgba16Float,
-                RenderAssetUsages::MAIN_WORLD,
-            );
-            let pixels: Vec<[f32; 4]> = (0..HEIGHT)
-                .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
-                .map(|(x, y)| {
-                    image
-                        .get_color_at(x, y)
-                        .map_or([f32::NAN; 4], |c| c.to_linear().to_f32_array())
-                })
-                .collect();
-            log.with(|log| {
-                log.images.entry(key).or_insert(pixels);
-            });
-            *done
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner) = true;
-        })
-        .id()
-}
-
-#[allow(clippy::too_many_arguments)]
-fn drive(
-    mut driver: ResMut<Driver>,
-    mut settings: ResMut<SplatSettings>,
-    mut props: Query<(&mut Visibility, Has<SphereProp>), With<PropSplats>>,
-    store: Res<DiagnosticsStore>,
-    time: Res<Time<Real>>,
-    log: Res<SharedLog>,
-    mut commands: Commands,
-    mut exit: MessageWriter<AppExit>,
-) {
-    driver.total_frames += 1;
-    if driver.total_frames > 5000 {
-        eprintln!("splat bench: too many frames; giving up");
-        exit.write(AppExit::error());
-        return;
-    }
-    let Some(&step) = driver.steps.get(driver.step) else {
-        exit.write(AppExit::Success);
-        return;
-    };
-    driver.frame += 1;
-    let frame = driver.frame;
-    if frame == 1 {
-        begin_step(step, &mut settings, &mut props);
-    }
-    // A new diagnostics measurement (of a frame a few frames back), and
-    // the mode that drew it.
-    let fresh = pass_diagnostic(&store, "vertex_shader_invocations")
-        .filter(|(t, _)| Some(*t) != driver.last_measurement);
-    let mut measured = fresh.and_then(|(t, vertices)| {
-        driver.last_measurement = Some(t);
-        driver.variant_of(vertices)
-    });
-    if let Some(variant) = measured
-        && !driver.seen.contains(&variant)
-    {
-        driver.seen.push(variant);
-        measured = None;
-    }
-    let next = match step {
-        Step::Time { draw, frames } => {
-            if frame > WARM_UP {
-                log.with(|log| {
-                    let ms = time.delta_secs_f64() * 1e3;
-                    log.frame_ms.entry(draw).or_default().push(ms);
-                });
-            }
-            if let Some(variant) = measured
-                && let Some((_, ms)) = pass_diagnostic(&store, "elapsed_gpu")
-            {
-                log.with(|log| log.pass_ms.entry(Draw::Prop(variant)).or_default().push(ms));
-                if draw == Draw::Prop(variant) {
-                    driver.taken += 1;
-                }
-            }
-            match draw {
-                Draw::Prop(_) => driver.taken >= frames && frame > WARM_UP + 1,
-                Draw::Empty => frame >= WARM_UP + frames,
-            }
-        }
-        Step::Read { variant, output } => {
-            // Culled and unculled boxes draw as many vertices: told apart
-            // by the step, not by the measurement.
-            let n = driver.splat_count;
-            if frame > READ_SETTLE
-                && measured.is_some_and(|m| m.vertices(n).total_cmp(&variant.vertices(n)).is_eq())
-                && let Some((_, v)) = pass_diagnostic(&store, "fragment_shader_invocations")
-            {
-                log.with(|log| {
-                    log.invocations
-                        .entry((variant, output))
-                        .or_default()
-                        .push(v)
-                });
-            }
-            if frame == READ_SETTLE {
-                let reader = read_back(
-                    &mut commands,
-                    driver.target.clone(),
-                    (variant, output),
-                    log.clone(),
-                    driver.read_done.clone(),
-                );
-                driver.reader = Some(reader);
-            }
-            let done = *driver
-                .read_done
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            // A few more frames for the pipeline statistics of this output.
-            let finished = done && frame > READ_SETTLE + 3;
-            if finished && let Some(reader) = driver.reader.take() {
-                commands.entity(reader).despawn();
-            }
-            finished
-        }
-    };
-    if next {
-        driver.step += 1;
-        driver.frame = 0;
-        driver.taken = 0;
     }
 }
 
@@ -525,6 +287,7 @@ fn run_scene(
             splat_count,
             last_measurement: None,
             seen: Vec::new(),
+            samples_of: HashMap::new(),
             read_done: Arc::default(),
             reader: None,
             total_frames: 0,
@@ -650,10 +413,18 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
     let splat_frames = env_or("CHISEL_BENCH_FRAMES", 15);
     let global_frames = env_or("CHISEL_BENCH_GLOBAL_FRAMES", 3);
     let divisor: f32 = env_or("CHISEL_BENCH_SPLAT_DIVISOR", 40.0);
+    let msaa: u32 = env_or("CHISEL_BENCH_MSAA", 1);
+    assert!(
+        [1, 2, 4, 8].contains(&msaa),
+        "CHISEL_BENCH_MSAA must be 1 (off), 2, 4 or 8, not {msaa}"
+    );
+    let msaa_only = msaa > 1 && env_or("CHISEL_BENCH_MSAA_ONLY", 0u32) == 1;
+    let global_frames = if msaa_only { 0 } else { global_frames };
     let only: Option<Vec<String>> = std::env::var("CHISEL_BENCH_SCENES")
         .ok()
         .map(|s| s.split(',').map(str::to_owned).collect());
     let mut times = Vec::new();
+    let mut msaa_times = Vec::new();
     let mut overdraws = Vec::new();
     let mut json_scenes = Vec::new();
     // The benchmark scenes of `assets/scenes/`; each is sampled and viewed in its file's
@@ -675,7 +446,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             sphere_splats,
             centre,
             radius,
-            steps(splat_frames, global_frames),
+            steps(splat_frames, global_frames, msaa, msaa_only),
         );
         println!(
             "\n{name}: {quadrics} quadrics, {splat_count} splats (radius {:.3}, mean {:.3} of it; \
@@ -709,6 +480,15 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
         let check = |v| f.frame_minus_empty_ms.get(&v).copied().unwrap_or(f64::NAN);
         let od = |v| f.overdraw.get(&v).copied().unwrap_or((f64::NAN, f64::NAN));
         let tested = |v| f.depth_tested.get(&v).copied().unwrap_or(f64::NAN);
+        if let Some(m) = f.msaa_boxes {
+            msaa_times.push(format!(
+                "| {name} | {splat_count} | {:.2} | {:.2} | {:.2}× | {:.2}× |",
+                pass(Variant::Boxes),
+                m.pass_ms,
+                m.pass_ms / pass(Variant::Boxes),
+                m.frame_minus_empty_ms / check(Variant::Boxes),
+            ));
+        }
         times.push(format!(
             "| {name} | {quadrics} | {splat_count} | {:.2} | {:.2} | {:.1}× | {:.1}× | {:.2} | {:.2} |",
             pass(Variant::Boxes),
@@ -744,6 +524,11 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             "depth_tested_overdraw": tested(Variant::Boxes),
             "sphere_boxes_depth_tested_overdraw": tested(Variant::SphereBoxes),
             "covered_px": f.covered,
+            "msaa_boxes": f.msaa_boxes.map(|m| serde_json::json!({
+                "samples": m.samples,
+                "pass_ms": m.pass_ms,
+                "frame_minus_empty_ms": m.frame_minus_empty_ms,
+            })),
         }));
         overdraws.push(format!(
             "| {name} | {} | {:.2} → **{:.2}** | {:.2} → **{:.2}** | {:.2} → {:.2} | {:.2} | \
@@ -768,15 +553,33 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
     for row in times {
         println!("{row}");
     }
-    println!(
-        "\n| scene | covered px | fragments per covered px, sphere → cell boxes | \
-         depth-tested (after a depth prepass), sphere → cell boxes | adapter's invocations \
-         per covered px, sphere → cell boxes | cell boxes unculled | open cell boxes | \
-         screen quads |"
-    );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
-    for row in overdraws {
-        println!("{row}");
+    if !msaa_times.is_empty() {
+        println!(
+            "\n| scene | splats | boxes, MSAA off, ms | boxes, {msaa}× MSAA, ms | {msaa}× ÷ off | \
+             same, frame − empty |"
+        );
+        println!("|---|---:|---:|---:|---:|---:|");
+        for row in msaa_times {
+            println!("{row}");
+        }
+        println!(
+            "(read-backs and overdraw at MSAA off: a multisampled target is resolved before it \
+             is read)"
+        );
+    }
+    if msaa_only {
+        println!("\n(CHISEL_BENCH_MSAA_ONLY: no other variant, no read-back)");
+    } else {
+        println!(
+            "\n| scene | covered px | fragments per covered px, sphere → cell boxes | \
+             depth-tested (after a depth prepass), sphere → cell boxes | adapter's invocations \
+             per covered px, sphere → cell boxes | cell boxes unculled | open cell boxes | \
+             screen quads |"
+        );
+        println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+        for row in overdraws {
+            println!("{row}");
+        }
     }
     support::json_line(
         "splat::splat_pass_against_global_ray_tracing_at_full_hd",
@@ -784,6 +587,7 @@ fn splat_pass_against_global_ray_tracing_at_full_hd() {
             "splat_frames": splat_frames,
             "global_frames": global_frames,
             "splat_divisor": divisor,
+            "msaa": msaa,
             "scenes": json_scenes,
         }),
     );

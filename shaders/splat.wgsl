@@ -29,15 +29,29 @@
 // meshes ("unclipped depth"): proxy vertices and written depths are clamped
 // to the near plane's depth 1 instead of being clipped.
 //
-// Multisampled targets (PER_SAMPLE): the fragment stage runs once per
-// covered sample, with the proxy point at that sample. Run once per pixel,
-// it would trace the ray through the pixel's centre and apply the result to
-// every sample the proxy covers; where a splat's proxy covers a sample but
-// the centre's ray leaves its radius, the splat discards the whole fragment
-// and that sample keeps whatever lies behind the surface (a speckle of
-// another surface wherever splats abut, at a few pixels per splat).
+// Multisampled targets: every covered sample shows the surface along its
+// own ray. Tracing only the ray through the pixel's centre and applying the
+// result to every sample the proxy covers is wrong: where a splat's proxy
+// covers a sample but the centre's ray leaves its radius, the splat
+// discards the whole fragment and that sample keeps whatever lies behind
+// the surface (a speckle of another surface wherever splats abut, at a few
+// pixels per splat). Two forms:
+// - SAMPLE_RAYS (4 samples, at the standard positions): the fragment stage
+//   runs once per pixel, traces the ray of each covered sample
+//   (`@builtin(sample_mask)` in), writes the samples whose ray hits the
+//   splat's patch (`sample_mask` out) and shades once, at the hit of the
+//   first of them. The rays come from `ray_point`, affine in window
+//   position, and its exact per-pixel differences (`dpdxFine`). One depth
+//   for the written samples: the farthest of their hits, so it never lies
+//   in front of any of their own hits or proxies (the early depth test's
+//   promise). Against another surface within a pixel's depth span (a mesh
+//   through the prop, two patches crossing) the samples are ordered per
+//   pixel, not per sample.
+// - PER_SAMPLE (2 or 8 samples): the fragment stage runs once per covered
+//   sample, with the proxy point at that sample: a depth per sample, and
+//   a shading per sample.
 //
-// Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, PER_SAMPLE, OUTPUT_IDS, OUTPUT_NORMALS,
+// Defines: SPLAT_SCREEN_QUAD, EARLY_DEPTH_TEST, SAMPLE_RAYS, PER_SAMPLE, OUTPUT_IDS, OUTPUT_NORMALS,
 // OUTPUT_OVERDRAW (a constant per fragment, for additive blending),
 // OUTPUT_BOUNDS (the proxies themselves, flat-coloured per splat),
 // SPLAT_OPEN_BOX (30 vertices per box: the −n face left out), SHADOW_DEPTH
@@ -257,10 +271,10 @@ fn hash_color(i: u32) -> vec3<f32> {
 }
 #else
 /// The local point of splat `splat`'s surface patch seen through the
-/// proxy point `local`: the root of the splat's quadric along the view ray
-/// nearest the sample, within its radius and inside its clip list (the
-/// fragment is discarded otherwise).
-fn splat_hit(local: vec3<f32>, splat: u32) -> vec3<f32> {
+/// point `local` of a view ray: the root of the splat's quadric along the
+/// ray nearest the sample, within its radius and inside its clip list
+/// (`w` = 1), or `w` = 0 where there is none.
+fn splat_trace(local: vec3<f32>, splat: u32) -> vec4<f32> {
     let s = splats[splat];
     let q = quadrics[s.quadric & INDEX_MASK];
     let dir = local_ray_direction(local);
@@ -273,20 +287,30 @@ fn splat_hit(local: vec3<f32>, splat: u32) -> vec3<f32> {
         u = roots.y;
     }
     if abs(u) >= NO_ROOT {
-        discard;
+        return vec4<f32>(p0, 0.0);
     }
     let p = p0 + u * dir;
     let r = s.radius * view.radius_tolerance;
     let off = p - s.position;
     if dot(off, off) > r * r {
-        discard;
+        return vec4<f32>(p, 0.0);
     }
     for (var i = 0u; i < s.clip_count; i += 1u) {
         if !literal_holds(clip_indices[s.clip_start + i], p) {
-            discard;
+            return vec4<f32>(p, 0.0);
         }
     }
-    return p;
+    return vec4<f32>(p, 1.0);
+}
+
+/// The hit of `splat_trace` through the proxy point `local`; the fragment
+/// is discarded where there is none.
+fn splat_hit(local: vec3<f32>, splat: u32) -> vec3<f32> {
+    let hit = splat_trace(local, splat);
+    if hit.w == 0.0 {
+        discard;
+    }
+    return hit.xyz;
 }
 
 #ifdef SHADOW_DEPTH
@@ -303,6 +327,82 @@ fn fragment(in: SplatVarying) -> @builtin(frag_depth) f32 {
         discard;
     }
     return depth;
+}
+#else
+#ifdef SAMPLE_RAYS
+/// Offsets of the 4 standard sample positions from the pixel's centre, in
+/// pixels, y down (Vulkan's standard locations, WebGPU's 4× pattern): bit
+/// `i` of the sample mask is sample `i`.
+const SAMPLE_OFFSETS: array<vec2<f32>, 4> = array<vec2<f32>, 4>(
+    vec2<f32>(-0.125, -0.375), vec2<f32>(0.375, -0.125),
+    vec2<f32>(-0.375, 0.125), vec2<f32>(0.125, 0.375),
+);
+
+/// A point of the view ray through the local point `x` that is an affine
+/// function of window position, so that its value at a sample is its
+/// value at the pixel's centre plus its per-pixel differences times the
+/// sample's offset. Perspective: `eye + (x − eye) / w` (`w` the clip
+/// coordinate, proportional to the depth along the view direction: the
+/// ray's direction scaled to unit depth); orthographic: `x` itself (the
+/// proxy plane's points are affine in window position, `w` = 1).
+fn ray_point(x: vec3<f32>) -> vec3<f32> {
+    if view.camera_position.w > 0.5 {
+        let eye = local_eye();
+        let w = (view.clip_from_world * (prop.world_from_local * vec4<f32>(x, 1.0))).w;
+        return eye + (x - eye) / w;
+    }
+    return x;
+}
+
+/// The surface colour and depth, and the samples they are written to.
+struct MaskedSurfaceOutput {
+    @location(0) color: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+    @builtin(sample_mask) mask: u32,
+};
+
+#ifdef EARLY_DEPTH_TEST
+@early_depth_test(less_equal)
+#endif
+@fragment
+fn fragment(in: SplatVarying, @builtin(sample_mask) covered: u32) -> MaskedSurfaceOutput {
+    // In uniform control flow: the differences come from the 2×2 quad.
+    let centre = ray_point(in.local);
+    let step_x = dpdxFine(centre);
+    let step_y = dpdyFine(centre);
+    var mask = 0u;
+    var shaded = vec3<f32>(0.0);
+    var depth = 1.0;
+    for (var i = 0u; i < 4u; i += 1u) {
+        if (covered & (1u << i)) == 0u {
+            continue;
+        }
+        let offset = SAMPLE_OFFSETS[i];
+        let hit = splat_trace(centre + step_x * offset.x + step_y * offset.y, in.splat);
+        if hit.w == 0.0 {
+            continue;
+        }
+        let d = surface_depth(hit.xyz);
+        if d < 0.0 {
+            continue;
+        }
+        if mask == 0u {
+            shaded = hit.xyz;
+        }
+        mask |= 1u << i;
+        // Reverse-Z: the smallest depth is the farthest hit.
+        depth = min(depth, d);
+    }
+    if mask == 0u {
+        discard;
+    }
+    let s = splats[in.splat];
+    var out: MaskedSurfaceOutput;
+    let frag_coord = vec4<f32>(in.clip.xy, depth, in.clip.w);
+    out.color = surface_color(s.quadric, shaded, world_normal(s.quadric, shaded), frag_coord);
+    out.depth = depth;
+    out.mask = mask;
+    return out;
 }
 #else
 #ifdef EARLY_DEPTH_TEST
@@ -322,6 +422,7 @@ fn fragment(in: SplatVarying) -> SurfaceOutput {
     out.depth = depth;
     return out;
 }
+#endif
 #endif
 #endif
 #endif

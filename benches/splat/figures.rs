@@ -42,6 +42,10 @@ fn shows_solid(p: &[f32; 4]) -> bool {
 pub(super) struct SceneFigures {
     pub(super) pass_ms: HashMap<Variant, f64>,
     pub(super) frame_minus_empty_ms: HashMap<Variant, f64>,
+    /// The boxes on the multisampled camera (`CHISEL_BENCH_MSAA`): its
+    /// samples, the pass median (ms) and the frame median less the empty
+    /// frame's at the same samples.
+    pub(super) msaa_boxes: Option<MsaaFigures>,
     /// Fragments per covered pixel (exact) and the adapter's fragment
     /// shader invocations per covered pixel.
     pub(super) overdraw: HashMap<Variant, (f64, f64)>,
@@ -54,26 +58,57 @@ pub(super) struct SceneFigures {
     pub(super) sphere_differ: Vec<(u32, u32, bool, bool)>,
 }
 
+/// The boxes' figures on a multisampled camera.
+#[derive(Clone, Copy)]
+pub(super) struct MsaaFigures {
+    pub(super) samples: u32,
+    pub(super) pass_ms: f64,
+    pub(super) frame_minus_empty_ms: f64,
+}
+
 pub(super) fn figures(log: &Log) -> SceneFigures {
     let median_of = |values: Option<&Vec<f64>>| median(values.map_or(&[][..], Vec::as_slice));
-    let empty = median_of(log.frame_ms.get(&Draw::Empty));
+    let empty = median_of(log.frame_ms.get(&(Draw::Empty, 1)));
     let all = [
         Variant::Boxes,
         Variant::OpenBoxes,
         Variant::Quads,
         Variant::Global,
     ];
-    for draw in all.map(Draw::Prop).into_iter().chain([Draw::Empty]) {
-        let pass = log.pass_ms.get(&draw).cloned().unwrap_or_default();
-        let frame = log.frame_ms.get(&draw).cloned().unwrap_or_default();
+    let msaa = log
+        .frame_ms
+        .keys()
+        .map(|&(_, samples)| samples)
+        .find(|&samples| samples > 1);
+    let drawings = all
+        .map(|v| (Draw::Prop(v), 1))
+        .into_iter()
+        .chain([(Draw::Empty, 1)])
+        .chain(msaa.into_iter().flat_map(|samples| {
+            [
+                (Draw::Prop(Variant::Boxes), samples),
+                (Draw::Empty, samples),
+            ]
+        }));
+    for key in drawings {
+        let pass = log.pass_ms.get(&key).cloned().unwrap_or_default();
+        let frame = log.frame_ms.get(&key).cloned().unwrap_or_default();
+        let (draw, samples) = key;
         println!(
-            "  {draw:?}: pass median {:.2} ms of {:.1?}; frame median {:.1} ms of {:.0?}",
+            "  {draw:?}, {samples} sample(s): pass median {:.2} ms of {:.1?}; frame median {:.1} \
+             ms of {:.0?}",
             median(&pass),
             pass,
             median(&frame),
             frame,
         );
     }
+    let msaa_boxes = msaa.map(|samples| MsaaFigures {
+        samples,
+        pass_ms: median_of(log.pass_ms.get(&(Draw::Prop(Variant::Boxes), samples))),
+        frame_minus_empty_ms: median_of(log.frame_ms.get(&(Draw::Prop(Variant::Boxes), samples)))
+            - median_of(log.frame_ms.get(&(Draw::Empty, samples))),
+    });
     let ids = |variant| log.images.get(&(variant, SplatOutput::QuadricIds));
     let covered = ids(Variant::Boxes).map_or(0, |image| {
         image.iter().filter(|p| shows_solid(p)).count() as u64
@@ -156,12 +191,13 @@ pub(super) fn figures(log: &Log) -> SceneFigures {
     SceneFigures {
         pass_ms: all
             .into_iter()
-            .map(|v| (v, median_of(log.pass_ms.get(&Draw::Prop(v)))))
+            .map(|v| (v, median_of(log.pass_ms.get(&(Draw::Prop(v), 1)))))
             .collect(),
         frame_minus_empty_ms: all
             .into_iter()
-            .map(|v| (v, median_of(log.frame_ms.get(&Draw::Prop(v))) - empty))
+            .map(|v| (v, median_of(log.frame_ms.get(&(Draw::Prop(v), 1))) - empty))
             .collect(),
+        msaa_boxes,
         overdraw,
         depth_tested,
         covered,

@@ -30,11 +30,19 @@
 //! the shaded one, say).
 //!
 //! Multisampling: on a camera with `Msaa` (Bevy's default is 4 samples)
-//! the splat pass traces each covered sample, so a prop's silhouette is
-//! anti-aliased like a mesh's and every sample shows the surface along its
-//! own ray (a splat's proxy can cover a sample of a pixel whose centre lies
-//! beyond the splat's radius). That is up to one fragment invocation per
-//! sample; `Msaa::Off` on the camera keeps one per pixel.
+//! the splat pass traces the ray of each covered sample, so a prop's
+//! silhouette is anti-aliased like a mesh's and every sample shows the
+//! surface along its own ray (a splat's proxy can cover a sample of a pixel
+//! whose centre lies beyond the splat's radius). At 4 samples that is one
+//! fragment invocation per pixel tracing up to four rays and shading once,
+//! with one depth for the samples it writes (the farthest of their hits):
+//! where a mesh or another patch crosses the prop, samples are ordered per
+//! pixel. At 2 or 8 samples it is one invocation per sample. What it
+//! costs: `benches/splat.rs` with `CHISEL_BENCH_MSAA=4`, on lavapipe at
+//! 1920×1080, puts the splat pass at 1.9–3.7× its time with `Msaa::Off`
+//! on the four SCENARIOS scenes (3.2–6.6× with one invocation per sample;
+//! BENCHMARKS.md, "Splat rendering"); `Msaa::Off` on the camera keeps one
+//! ray per pixel.
 //!
 //! Transforms: a prop follows its entity's `GlobalTransform`, any
 //! invertible affine map — non-uniform scale, shear, and mirroring (a

@@ -299,15 +299,20 @@ impl SpecializedRenderPipeline for SplatPipeline {
             }
             SplatOutput::Bounds => defs.push("OUTPUT_BOUNDS".into()),
         }
-        // A surface output on a multisampled target traces the ray at every
-        // covered sample (`shaders/splat.wgsl`, PER_SAMPLE); the proxies and
-        // the overdraw counts stay per pixel.
+        // A surface output on a multisampled target traces the ray of every
+        // covered sample (`shaders/splat.wgsl`): at 4 samples once per
+        // pixel, shaded once (SAMPLE_RAYS), else once per sample
+        // (PER_SAMPLE); the proxies and the overdraw counts stay per pixel.
         let surface = matches!(
             key.output,
             SplatOutput::Shaded | SplatOutput::QuadricIds | SplatOutput::Normals
         );
         if key.samples > 1 && surface && key.mode != SplatMode::GlobalRayTrace {
-            defs.push("PER_SAMPLE".into());
+            defs.push(if key.samples == 4 {
+                "SAMPLE_RAYS".into()
+            } else {
+                "PER_SAMPLE".into()
+            });
         }
         let (shader, cull_mode) = match key.mode {
             SplatMode::SurfaceBoxes => {
