@@ -235,7 +235,8 @@ pub(crate) enum CellCollider {
     Built(Option<PhysicsInsert>),
     /// The cell's surface is the one its collider was built from; only its
     /// seams moved (new vertices on its border edges, where a neighbour
-    /// changed), which a collider does not need. The cell's entity keeps
+    /// changed) or its normals at border vertices (a neighbour's faces
+    /// around them changed), which a collider does not need. The cell's entity keeps
     /// its collider; the triangles serve an entity that has none yet.
     Unchanged(ColliderMesh),
 }
@@ -375,8 +376,10 @@ fn detach(
 
 /// Builds `keys` of `octree` (a key that is no longer a leaf gets `None`),
 /// from the faces in `fresh` where a carve handed them back, and every
-/// neighbour whose border the change split differently: `mesher` keeps the
-/// cells' border vertices, so that neighbouring meshes meet edge to edge.
+/// neighbour whose border the change split differently or whose border
+/// normals it changed: `mesher` keeps the cells' border vertices and the
+/// faces around them, so that neighbouring meshes meet edge to edge with
+/// the same normals there.
 pub(crate) fn remesh(
     octree: Octree,
     context: &JobContext,

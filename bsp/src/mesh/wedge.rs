@@ -306,7 +306,7 @@ fn merge_into(wedges: &mut [Wedge], out: &mut Vec<Wedge>) {
         merge_on_plane(&wedges[start..end], out);
         start = end;
     }
-    out[first..].sort_unstable();
+    debug_assert!(out[first..].is_sorted(), "merged in order");
 }
 
 /// Most wedges of one plane chained without a heap buffer.
@@ -342,7 +342,14 @@ fn merge_on_plane(group: &[Wedge], out: &mut Vec<Wedge>) {
             has_previous[j] = true;
         }
     }
-    // Open chains first, from their first wedge; what is left is closed.
+    if has_previous.iter().all(|&h| h) {
+        // Every wedge has one before it: the chains close around the
+        // vertex (more than one such chain would overlap).
+        out.push(Wedge::new(group[0].normal, Ray::NONE, Ray::NONE));
+        return;
+    }
+    // Open chains, each from its first wedge, in order: the merged wedges
+    // come out sorted.
     for first in 0..group.len() {
         if has_previous[first] {
             continue;
@@ -358,9 +365,6 @@ fn merge_on_plane(group: &[Wedge], out: &mut Vec<Wedge>) {
         } else {
             Wedge::new(group[first].normal, group[first].from, group[at].to)
         });
-    }
-    if used.iter().any(|u| !u) {
-        out.push(Wedge::new(group[0].normal, Ray::NONE, Ray::NONE));
     }
 }
 

@@ -446,8 +446,9 @@ impl SeamedMesher {
                         let wall =
                             shaded.then(|| (mesh.wall_vertex_indices(), mesh.vertex_count()));
                         let (sealed, seams) = mesh.clone().seal_with_edges(extra, edges);
-                        let shading =
-                            wall.map(|(wall, own)| own_shading(&sealed, wall, own as u32));
+                        let shading = wall.map(|(wall, own)| {
+                            own_shading(&sealed, wall, own as u32, &octree.cell_box(key))
+                        });
                         (sealed, seams, shading)
                     },
                 );

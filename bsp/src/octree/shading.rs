@@ -22,15 +22,12 @@
 //! only). The wedges are exact; turning them into normals is the
 //! renderer's work.
 
-use std::collections::BTreeSet;
-
 use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
 use super::seams::{SeamedMesher, may_be_in_box, same_point};
 use super::tree::Octree;
 use crate::exact::Point4;
-use crate::mesh::weld::Welder;
 use crate::mesh::{SurfaceAround, SurfaceMesh, Wedge, merge_wedges};
 
 /// A leaf's sealed mesh with the surface around each of its vertices:
@@ -54,6 +51,11 @@ pub(super) struct CellShading {
     points_f64: Vec<[f64; 3]>,
     /// Their vertex numbers in the sealed mesh they come from.
     vertices: Vec<u32>,
+    /// Per point, the walls of the leaf's box it may lie on (`2·axis +
+    /// upper`, one bit each; a cheap filter: the exact test decides).
+    walls: Vec<u8>,
+    /// Per wall, the points that may lie on it.
+    on_wall: [Vec<u32>; 6],
     /// Point `i`'s own wedges are `wedges[start[i]..start[i + 1]]`.
     start: Vec<u32>,
     wedges: Vec<Wedge>,
@@ -67,6 +69,7 @@ impl CellShading {
         mesh: &SurfaceMesh,
         wall: impl IntoIterator<Item = u32>,
         around: &SurfaceAround,
+        cell: &CellBox,
     ) -> Self {
         let wall = wall.into_iter();
         let room = wall.size_hint().0;
@@ -74,6 +77,8 @@ impl CellShading {
             points: Vec::with_capacity(room),
             points_f64: Vec::with_capacity(room),
             vertices: Vec::with_capacity(room),
+            walls: Vec::with_capacity(room),
+            on_wall: Default::default(),
             start: Vec::with_capacity(room + 1),
             wedges: Vec::with_capacity(room * 2),
         };
@@ -84,8 +89,16 @@ impl CellShading {
                 continue;
             }
             let p = mesh.vertices()[v as usize];
+            let q = p.to_f64();
+            let walls = near_walls(q, cell);
+            for (w, list) in out.on_wall.iter_mut().enumerate() {
+                if walls & (1 << w) != 0 {
+                    list.push(out.points.len() as u32);
+                }
+            }
+            out.walls.push(walls);
             out.points.push(p);
-            out.points_f64.push(p.to_f64());
+            out.points_f64.push(q);
             out.vertices.push(v);
             out.wedges.extend_from_slice(wedges);
             out.start.push(out.wedges.len() as u32);
@@ -95,6 +108,29 @@ impl CellShading {
 
     fn wedges(&self, i: usize) -> &[Wedge] {
         &self.wedges[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+
+    /// The indices of the points that may lie on the part of the leaf's
+    /// box `own` it shares with the box `other` (a face, an edge or a
+    /// corner).
+    fn facing<'a>(&'a self, own: &CellBox, other: &CellBox) -> impl Iterator<Item = usize> + 'a {
+        let mut required = 0u8;
+        for a in 0..3 {
+            if own.min[a] == other.max[a] {
+                required |= 1 << (2 * a);
+            }
+            if own.max[a] == other.min[a] {
+                required |= 1 << (2 * a + 1);
+            }
+        }
+        let list: &[u32] = if required == 0 {
+            &[]
+        } else {
+            &self.on_wall[required.trailing_zeros() as usize]
+        };
+        list.iter()
+            .map(|&i| i as usize)
+            .filter(move |&i| self.walls[i] & required == required)
     }
 }
 
@@ -137,44 +173,34 @@ impl SeamedMesher {
         let mut before = Vec::with_capacity(sealed.len() + gone.len());
         let mut cells: Vec<(CellKey, SurfaceMesh, SurfaceAround)> =
             Vec::with_capacity(sealed.len());
-        let mut now = Vec::with_capacity(sealed.len());
         for (key, mesh, shading) in sealed {
             let (around, shading) = shading.unwrap_or_default();
             before.extend(self.shading.remove(&key).map(|s| (key, s)));
-            now.push((key, shading));
+            if !shading.points.is_empty() {
+                self.shading.insert(key, shading);
+            }
             cells.push((key, mesh, around));
         }
         for key in &gone {
             before.extend(self.shading.remove(key).map(|s| (*key, s)));
         }
-        // The points whose own wedges changed in some leaf, the other
-        // leaves that have them, and of those points, the ones where the
-        // union over all these leaves changed.
-        let candidates = candidate_points(&before, &now);
-        let listed: BTreeSet<CellKey> = cells.iter().map(|(key, ..)| *key).collect();
-        let near = self.shaded_at(octree, &candidates, &listed);
-        let mut asked: Vec<usize> = near.iter().flat_map(|(_, at)| at.iter().copied()).collect();
-        asked.sort_unstable();
-        asked.dedup();
-        let changed = changed_unions(&before, &now, &candidates, &asked);
-        let again: Vec<CellKey> = near
-            .into_iter()
-            .filter(|(_, at)| at.iter().any(|i| changed.binary_search(i).is_ok()))
-            .map(|(key, _)| key)
-            .collect();
-        for (key, shading) in now {
-            if !shading.points.is_empty() {
-                self.shading.insert(key, shading);
-            }
+        before.sort_unstable_by_key(|(key, _)| *key);
+        let keys: Vec<CellKey> = cells.iter().map(|(key, ..)| *key).collect();
+        let near = self.neighbours_of(octree, &keys);
+        let (foreign, maybe) = self.neighbour_wedges(octree, &keys, &near, Some(&before));
+        let again = self.surroundings_changed(octree, &keys, &before, maybe);
+        if again.is_empty() {
+            return finish(cells, foreign, gone);
         }
         let around = self.extra_points_of(octree, &again);
         let this = &*self;
         let resealed: Vec<SealedLeaf> = again
-            .into_par_iter()
+            .par_iter()
             .zip(around)
-            .filter_map(|(key, extra)| {
+            .filter_map(|(&key, extra)| {
                 let unsealed = this.unsealed.get(&key)?;
-                let (mesh, shading) = this.seal_shaded(key, unsealed, extra);
+                let cell = octree.cell_box(key);
+                let (mesh, shading) = this.seal_shaded(key, &cell, unsealed, extra);
                 Some((key, mesh, shading))
             })
             .collect();
@@ -186,64 +212,14 @@ impl SeamedMesher {
             cells.push((key, mesh, around));
         }
         let keys: Vec<CellKey> = cells.iter().map(|(key, ..)| *key).collect();
-        let foreign = self.neighbour_wedges(octree, &keys);
-        let mut out: Vec<(CellKey, Option<ShadedCell>)> = cells
-            .into_par_iter()
-            .zip(foreign)
-            .map(|((key, mesh, mut around), more)| {
-                around.add(more);
-                (key, Some(ShadedCell { mesh, around }))
-            })
-            .collect();
-        out.extend(gone.into_iter().map(|key| (key, None)));
-        out.sort_unstable_by_key(|(key, _)| *key);
-        out
+        let near = self.neighbours_of(octree, &keys);
+        let (foreign, _) = self.neighbour_wedges(octree, &keys, &near, None);
+        finish(cells, foreign, gone)
     }
 
-    /// The leaves not `listed` with some of the points `changed` among
-    /// their shaded points, by key, each with those points' indices.
-    fn shaded_at(
-        &self,
-        octree: &Octree,
-        changed: &[Point4],
-        listed: &BTreeSet<CellKey>,
-    ) -> Vec<(CellKey, Vec<usize>)> {
-        if changed.is_empty() {
-            return Vec::new();
-        }
-        let positions: Vec<[f64; 3]> = changed.iter().map(Point4::to_f64).collect();
-        let boxes: Vec<CellBox> = positions
-            .iter()
-            .map(|q| CellBox {
-                min: q.map(|c| c.floor() as i64 - 1),
-                max: q.map(|c| c.ceil() as i64 + 1),
-            })
-            .collect();
-        let mut out = Vec::new();
-        octree.for_leaves_touching_each(&boxes, |key, near| {
-            if listed.contains(&key) {
-                return;
-            }
-            let Some(shading) = self.shading.get(&key) else {
-                return;
-            };
-            let index = PointIndex::of(shading);
-            let at: Vec<usize> = near
-                .iter()
-                .copied()
-                .filter(|&i| index.find(shading, &changed[i], positions[i]).is_some())
-                .collect();
-            if !at.is_empty() {
-                out.push((key, at));
-            }
-        });
-        out.sort_unstable();
-        out
-    }
-
-    /// Per leaf of `keys`, the own wedges of its neighbours at its shaded
-    /// points, as `(vertex of its sealed mesh, wedges)`.
-    fn neighbour_wedges(&self, octree: &Octree, keys: &[CellKey]) -> Vec<Vec<(u32, &[Wedge])>> {
+    /// Per leaf of `keys`, the other leaves with shaded points whose
+    /// closed boxes touch its own.
+    fn neighbours_of(&self, octree: &Octree, keys: &[CellKey]) -> Vec<Vec<CellKey>> {
         let cells: Vec<CellBox> = keys.iter().map(|&key| octree.cell_box(key)).collect();
         let mut near: Vec<Vec<CellKey>> = vec![Vec::new(); keys.len()];
         octree.for_leaves_touching_each(&cells, |other, hits| {
@@ -255,28 +231,150 @@ impl SeamedMesher {
                 }
             }
         });
-        keys.par_iter()
-            .zip(cells)
+        near
+    }
+
+    /// Of the leaves `maybe` found with a shaded point where a listed
+    /// leaf's own wedges changed ([`SeamedMesher::neighbour_wedges`]),
+    /// those where the union of the own wedges of the listed and gone
+    /// leaves there changed too: before, that of the shadings `before` (the
+    /// listed and gone leaves' old ones, by key); now, that of the listed
+    /// leaves' kept ones. By key.
+    #[inline(never)]
+    fn surroundings_changed(
+        &self,
+        octree: &Octree,
+        listed: &[CellKey],
+        before: &[(CellKey, CellShading)],
+        mut maybe: Vec<(CellKey, usize)>,
+    ) -> Vec<CellKey> {
+        maybe.sort_unstable();
+        maybe.dedup();
+        let mut indices = Indices::default();
+        let mut out: Vec<CellKey> = Vec::new();
+        for (other, j) in maybe {
+            if out.last() == Some(&other) {
+                continue;
+            }
+            let theirs = &self.shading[&other];
+            let (p, q) = (&theirs.points[j], theirs.points_f64[j]);
+            if self.union_changed(octree, listed, before, &mut indices, p, q) {
+                out.push(other);
+            }
+        }
+        out
+    }
+
+    /// Whether the merged union of the own wedges at `p` (at `q`) of the
+    /// leaves `before` differs from that of the listed leaves now.
+    fn union_changed(
+        &self,
+        octree: &Octree,
+        listed: &[CellKey],
+        before: &[(CellKey, CellShading)],
+        indices: &mut Indices,
+        p: &Point4,
+        q: [f64; 3],
+    ) -> bool {
+        let mut old = Vec::new();
+        for (key, shading) in before {
+            if may_be_in_box(q, &octree.cell_box(*key)) {
+                old.extend_from_slice(indices.wedges_at(shading, p, q));
+            }
+        }
+        let mut new = Vec::new();
+        for key in listed {
+            if let Some(shading) = self.shading.get(key)
+                && may_be_in_box(q, &octree.cell_box(*key))
+            {
+                new.extend_from_slice(indices.wedges_at(shading, p, q));
+            }
+        }
+        merge_wedges(&mut old);
+        merge_wedges(&mut new);
+        old != new
+    }
+
+    /// Per leaf of `keys` (sorted), the own wedges of its neighbours
+    /// `near` at its shaded points, as `(vertex of its sealed mesh,
+    /// wedges)`. With `before` (the old shadings of the leaves of `keys`
+    /// and the gone ones, by key), also the shaded points of the
+    /// neighbours not in `keys` where the leaf's own wedges differ from
+    /// its old ones, or the leaf is new, as `(neighbour, point)`: where the
+    /// surroundings of that neighbour may have changed. A point on several
+    /// leaves of `keys` is looked at from each, so where a leaf's own
+    /// wedges stay, the union over all of them changes only through
+    /// another.
+    #[inline(never)]
+    fn neighbour_wedges(
+        &self,
+        octree: &Octree,
+        keys: &[CellKey],
+        near: &[Vec<CellKey>],
+        before: Option<&[(CellKey, CellShading)]>,
+    ) -> (Vec<Vec<(u32, &[Wedge])>>, Vec<(CellKey, usize)>) {
+        let per_leaf: Vec<(Vec<(u32, &[Wedge])>, Vec<(CellKey, usize)>)> = keys
+            .par_iter()
             .zip(near)
-            .map(|((key, cell), near)| {
-                let Some(own) = self.shading.get(key) else {
-                    return Vec::new();
-                };
-                let index = PointIndex::of(own);
-                let mut more = Vec::new();
-                for other in near {
+            .map(|(key, near)| {
+                let own = self.shading.get(key);
+                let old = before.map(|before| {
+                    before
+                        .binary_search_by_key(key, |(k, _)| *k)
+                        .ok()
+                        .map(|i| &before[i].1)
+                });
+                let cell = octree.cell_box(*key);
+                let index = own.map(PointIndex::of);
+                let mut old_index: Option<PointIndex> = None;
+                let (mut more, mut maybe) = (Vec::new(), Vec::new());
+                for &other in near {
+                    let outside = old.is_some() && keys.binary_search(&other).is_err();
+                    if own.is_none() && !outside {
+                        continue;
+                    }
                     let theirs = &self.shading[&other];
-                    for (j, (p, q)) in theirs.points.iter().zip(&theirs.points_f64).enumerate() {
-                        if may_be_in_box(*q, &cell)
-                            && let Some(i) = index.find(own, p, *q)
-                        {
+                    for j in theirs.facing(&octree.cell_box(other), &cell) {
+                        let (p, q) = (&theirs.points[j], theirs.points_f64[j]);
+                        if !may_be_in_box(q, &cell) {
+                            continue;
+                        }
+                        let found = own
+                            .zip(index.as_ref())
+                            .and_then(|(own, index)| index.find(own, p, q).map(|i| (own, i)));
+                        if let Some((own, i)) = found {
                             more.push((own.vertices[i], theirs.wedges(j)));
+                        }
+                        if outside {
+                            let now = found.map_or(&[][..], |(own, i)| own.wedges(i));
+                            let changed = match old {
+                                Some(Some(old)) => {
+                                    let index =
+                                        old_index.get_or_insert_with(|| PointIndex::of(old));
+                                    let was =
+                                        index.find(old, p, q).map_or(&[][..], |i| old.wedges(i));
+                                    was != now
+                                }
+                                _ => true,
+                            };
+                            if changed {
+                                maybe.push((other, j));
+                            }
                         }
                     }
                 }
+                (more, maybe)
+            })
+            .collect();
+        let mut maybe = Vec::new();
+        let more = per_leaf
+            .into_iter()
+            .map(|(more, m)| {
+                maybe.extend(m);
                 more
             })
-            .collect()
+            .collect();
+        (more, maybe)
     }
 
     /// Seals leaf `key`'s unsealed mesh at the neighbours' wall points
@@ -285,6 +383,7 @@ impl SeamedMesher {
     fn seal_shaded(
         &self,
         key: CellKey,
+        cell: &CellBox,
         unsealed: &crate::mesh::UnsealedMesh,
         extra: Vec<&Point4>,
     ) -> (SurfaceMesh, Option<(SurfaceAround, CellShading)>) {
@@ -295,7 +394,7 @@ impl SeamedMesher {
         let wall = unsealed.wall_vertex_indices();
         let own = unsealed.vertex_count() as u32;
         let (mesh, _) = unsealed.clone().seal_with_edges(extra, edges);
-        let shading = own_shading(&mesh, wall, own);
+        let shading = own_shading(&mesh, wall, own, cell);
         (mesh, Some(shading))
     }
 }
@@ -303,107 +402,54 @@ impl SeamedMesher {
 /// The own surface around the border vertices of a sealed `mesh` (the
 /// other vertices get no wedges) and its shaded points, given the vertices `wall` of its unsealed mesh on the cell's
 /// walls and that mesh's vertex count `own` (the vertices from `own` on
-/// are seam points, all on walls).
+/// are seam points, all on walls), in the leaf's box `cell`.
 pub(super) fn own_shading(
     mesh: &SurfaceMesh,
     mut wall: Vec<u32>,
     own: u32,
+    cell: &CellBox,
 ) -> (SurfaceAround, CellShading) {
     wall.extend(own..mesh.vertices().len() as u32);
     let around = mesh.surface_around_at(&wall);
-    let shading = CellShading::of(mesh, wall, &around);
+    let shading = CellShading::of(mesh, wall, &around, cell);
     (around, shading)
 }
 
-/// The points whose own wedges changed in one of the leaves `before` and
-/// `now` (all the leaves an update sealed or dropped, before and after it,
-/// by key): its points that differ from its old ones, and every point of a
-/// leaf new or gone. Distinct.
-fn candidate_points(
-    before: &[(CellKey, CellShading)],
-    now: &[(CellKey, CellShading)],
-) -> Vec<Point4> {
-    let old_of = |key: &CellKey| {
-        before
-            .binary_search_by_key(key, |(k, _)| *k)
-            .ok()
-            .map(|i| &before[i].1)
-    };
-    let mut candidates = Welder::with_capacity(0);
-    for (key, new) in now {
-        let Some(old) = old_of(key) else {
-            for p in &new.points {
-                candidates.index(p);
-            }
-            continue;
-        };
-        let index = PointIndex::of(old);
-        let mut matched = vec![false; old.points.len()];
-        for (i, p) in new.points.iter().enumerate() {
-            match index.find(old, p, new.points_f64[i]) {
-                Some(j) => {
-                    matched[j] = true;
-                    if old.wedges(j) != new.wedges(i) {
-                        candidates.index(p);
-                    }
-                }
-                None => {
-                    candidates.index(p);
-                }
-            }
-        }
-        for (p, _) in old.points.iter().zip(matched).filter(|(_, m)| !m) {
-            candidates.index(p);
-        }
-    }
-    for (key, old) in before {
-        if now.binary_search_by_key(key, |(k, _)| *k).is_err() {
-            for p in &old.points {
-                candidates.index(p);
-            }
-        }
-    }
-    candidates.into_vertices()
+/// Every leaf of an update with its neighbours' wedges added (`foreign`,
+/// in the order of `cells`), and `None` for every gone key, by key.
+fn finish(
+    cells: Vec<(CellKey, SurfaceMesh, SurfaceAround)>,
+    foreign: Vec<Vec<(u32, &[Wedge])>>,
+    gone: Vec<CellKey>,
+) -> Vec<(CellKey, Option<ShadedCell>)> {
+    let mut out: Vec<(CellKey, Option<ShadedCell>)> = cells
+        .into_par_iter()
+        .zip(foreign)
+        .map(|((key, mesh, mut around), more)| {
+            around.add(more);
+            (key, Some(ShadedCell { mesh, around }))
+        })
+        .collect();
+    out.extend(gone.into_iter().map(|key| (key, None)));
+    out.sort_unstable_by_key(|(key, _)| *key);
+    out
 }
 
-/// The indices, among `asked` (ascending), of the `candidates` where the
-/// union of the own wedges of the leaves `before` differs from that of
-/// the leaves `now`: what the other leaves that have such a point must see
-/// anew. A leaf split or merged with the same surface changes no point on
-/// its outer walls, though each of its points is a candidate.
-fn changed_unions(
-    before: &[(CellKey, CellShading)],
-    now: &[(CellKey, CellShading)],
-    candidates: &[Point4],
-    asked: &[usize],
-) -> Vec<usize> {
-    if asked.is_empty() {
-        return Vec::new();
+/// The [`PointIndex`] of each shading asked so far, by address (the
+/// shadings outlive it).
+#[derive(Default)]
+struct Indices(std::collections::HashMap<*const CellShading, PointIndex>);
+
+impl Indices {
+    /// The own wedges of `shading` at `p` (at `q`); none where it does not
+    /// have the point.
+    fn wedges_at<'a>(&mut self, shading: &'a CellShading, p: &Point4, q: [f64; 3]) -> &'a [Wedge] {
+        let index = self
+            .0
+            .entry(std::ptr::from_ref(shading))
+            .or_insert_with(|| PointIndex::of(shading));
+        index.find(shading, p, q).map_or(&[], |i| shading.wedges(i))
     }
-    let union = |shadings: &mut dyn Iterator<Item = &CellShading>| {
-        let mut lists: Vec<Vec<Wedge>> = vec![Vec::new(); asked.len()];
-        for shading in shadings {
-            let index = PointIndex::of(shading);
-            for (list, &c) in lists.iter_mut().zip(asked) {
-                let p = &candidates[c];
-                if let Some(j) = index.find(shading, p, p.to_f64()) {
-                    list.extend_from_slice(shading.wedges(j));
-                }
-            }
-        }
-        for list in &mut lists {
-            merge_wedges(list);
-        }
-        lists
-    };
-    let old = union(&mut before.iter().map(|(_, s)| s));
-    let new = union(&mut now.iter().map(|(_, s)| s));
-    asked
-        .iter()
-        .zip(old.iter().zip(&new))
-        .filter(|(_, (a, b))| a != b)
-        .map(|(&c, _)| c)
-        .collect()
 }
 
 /// A leaf's shaded points by `f64` x, to find a point among them.
@@ -432,6 +478,23 @@ impl PointIndex {
             .map(|&(_, i)| i as usize)
             .find(|&i| close(shading.points_f64[i], q) && same_point(&shading.points[i], p))
     }
+}
+
+/// The walls of the box `cell` (`2·axis + upper`, one bit each) that the
+/// exact point at `f64` position `q` may lie on: those within a margin of
+/// `2^-40` of the box's coordinates (far more than the rounding of `q`).
+fn near_walls(q: [f64; 3], cell: &CellBox) -> u8 {
+    let mut walls = 0;
+    for a in 0..3 {
+        for (upper, at) in [(0, cell.min[a]), (1, cell.max[a])] {
+            let at = at as f64;
+            let margin = (at.abs() + 1.0) * f64::powi(2.0, -40);
+            if (q[a] - at).abs() <= margin {
+                walls |= 1 << (2 * a + upper);
+            }
+        }
+    }
+    walls
 }
 
 /// Whether two `f64` positions of exact points may be the same point
