@@ -324,6 +324,17 @@ fn merge_on_plane(group: &[Wedge], out: &mut Vec<Wedge>) {
         out.push(*full);
         return;
     }
+    if let [a, b] = group {
+        // The common case (two faces of one plane at a vertex), without
+        // the chain search.
+        match (a.to == b.from, b.to == a.from) {
+            (true, true) => out.push(Wedge::new(a.normal, Ray::NONE, Ray::NONE)),
+            (true, false) => out.push(Wedge::new(a.normal, a.from, b.to)),
+            (false, true) => out.push(Wedge::new(a.normal, b.from, a.to)),
+            (false, false) => out.extend_from_slice(group),
+        }
+        return;
+    }
     let next_of = |w: &Wedge| group.binary_search_by(|x| x.from.cmp(&w.to)).ok();
     let (mut small_prev, mut small_used) = ([false; SMALL], [false; SMALL]);
     let (mut heap_prev, mut heap_used) = (Vec::new(), Vec::new());
