@@ -175,8 +175,8 @@ pub fn cell_meshes_around(
         .map(|v| quantization.to_world(surface.position(v)))
         .collect();
     let normals: Vec<[f64; 3]> = polygons.iter().map(|p| p.unit_normal()).collect();
-    let own = CornersAround::of(&polygons, &positions);
     let mut border = BorderWedges::new(around);
+    let own = CornersAround::of(&polygons, &positions, |v| border.has(v));
     let cos_limit = f64::from(smoothing_degrees.clamp(0.0, 180.0))
         .to_radians()
         .cos();
@@ -277,7 +277,13 @@ struct CornersAround {
 }
 
 impl CornersAround {
-    fn of(polygons: &[&MeshPolygon], positions: &[[f64; 3]]) -> Self {
+    /// The corners of `polygons`, with their angles except at the
+    /// vertices `skipped` (smoothed otherwise; angle 0 there).
+    fn of(
+        polygons: &[&MeshPolygon],
+        positions: &[[f64; 3]],
+        skipped: impl Fn(u32) -> bool,
+    ) -> Self {
         let mut start = vec![0u32; positions.len() + 1];
         for polygon in polygons {
             for &c in &polygon.corners {
@@ -293,11 +299,16 @@ impl CornersAround {
             let c = &polygon.corners;
             let n = c.len();
             for k in 0..n {
-                let at = positions[c[k] as usize];
-                let prev = positions[c[(k + n - 1) % n] as usize];
-                let next = positions[c[(k + 1) % n] as usize];
+                let weight = if skipped(c[k]) {
+                    0.0
+                } else {
+                    let at = positions[c[k] as usize];
+                    let prev = positions[c[(k + n - 1) % n] as usize];
+                    let next = positions[c[(k + 1) % n] as usize];
+                    angle(sub(prev, at), sub(next, at))
+                };
                 let slot = &mut fill[c[k] as usize];
-                corners[*slot as usize] = (p as u32, angle(sub(prev, at), sub(next, at)));
+                corners[*slot as usize] = (p as u32, weight);
                 *slot += 1;
             }
         }

@@ -223,14 +223,14 @@ impl MeshPolygon {
         rays.resize(n, Ray::NONE);
         let mut any = false;
         let s = self.plane;
-        for k in 0..n {
+        for (k, ray) in rays.iter_mut().enumerate() {
             let needed = wanted(corner(k))
                 || wanted(corner((k + 1) % n))
                 || self.corners[self.inserted_on_edge(k)]
                     .iter()
                     .any(|&v| wanted(v));
             if needed {
-                rays[k] = Ray::along(&s, &self.edges[k]);
+                *ray = Ray::along(&s, &self.edges[k]);
                 any = true;
             }
         }

@@ -427,7 +427,7 @@ impl SeamedMesher {
         let this = &*self;
         let pending: Vec<(CellKey, Option<UnsealedMesh>)> = pending.into_iter().collect();
         let keys: Vec<CellKey> = pending.iter().map(|(key, _)| *key).collect();
-        let around = this.extra_points_of(octree, &keys);
+        let (around, near) = this.extra_points_and_neighbours(octree, &keys);
         let shaded = self.shaded;
         let sealed: Vec<(CellKey, SealedLeaf, Vec<Point4>, Option<UnsealedMesh>)> = pending
             .into_par_iter()
@@ -466,7 +466,7 @@ impl SeamedMesher {
             leaves.push(leaf);
         }
         if shaded {
-            return self.shade(octree, leaves, gone);
+            return self.shade(octree, leaves, near, gone);
         }
         let mut out: Vec<(CellKey, Option<ShadedCell>)> =
             gone.into_iter().map(|key| (key, None)).collect();
@@ -603,14 +603,26 @@ impl SeamedMesher {
     /// lie on its closed box, neighbour by neighbour in leaf order: the
     /// points its border edges are split at.
     pub(super) fn extra_points_of(&self, octree: &Octree, keys: &[CellKey]) -> Vec<Vec<&Point4>> {
+        self.extra_points_and_neighbours(octree, keys).0
+    }
+
+    /// [`Self::extra_points_of`], and per leaf of `keys` its neighbours
+    /// with wall points (every leaf with shaded points among them).
+    pub(super) fn extra_points_and_neighbours(
+        &self,
+        octree: &Octree,
+        keys: &[CellKey],
+    ) -> (Vec<Vec<&Point4>>, Vec<Vec<CellKey>>) {
         let cells: Vec<CellBox> = keys.iter().map(|&key| octree.cell_box(key)).collect();
         let mut extra = vec![Vec::new(); keys.len()];
+        let mut neighbours = vec![Vec::new(); keys.len()];
         octree.for_leaves_touching_each(&cells, |other, near| {
             let Some(border) = self.borders.get(&other) else {
                 return;
             };
             for &i in near {
                 if keys[i] != other {
+                    neighbours[i].push(other);
                     extra[i].extend(
                         border
                             .wall_points
@@ -638,7 +650,7 @@ impl SeamedMesher {
                 }
             }
         }
-        extra
+        (extra, neighbours)
     }
 }
 

@@ -160,14 +160,16 @@ impl SeamedMesher {
     }
 
     /// The shading step of an update: keeps the shaded points of the
-    /// leaves `sealed` (every leaf sealed in this update) and forgets those
-    /// of `gone`, finds the other leaves whose surroundings changed and
+    /// leaves `sealed` (every leaf sealed in this update; `near`: per
+    /// leaf, its neighbours with wall points) and forgets those of `gone`,
+    /// finds the other leaves whose surroundings changed and
     /// seals them again from their kept meshes, then hands back every one
     /// with the wedges of its neighbours added, sorted by key.
     pub(super) fn shade(
         &mut self,
         octree: &Octree,
         sealed: Vec<SealedLeaf>,
+        near: Vec<Vec<CellKey>>,
         gone: Vec<CellKey>,
     ) -> Vec<(CellKey, Option<ShadedCell>)> {
         let mut before = Vec::with_capacity(sealed.len() + gone.len());
@@ -186,7 +188,6 @@ impl SeamedMesher {
         }
         before.sort_unstable_by_key(|(key, _)| *key);
         let keys: Vec<CellKey> = cells.iter().map(|(key, ..)| *key).collect();
-        let near = self.neighbours_of(octree, &keys);
         let (foreign, maybe) = self.neighbour_wedges(octree, &keys, &near, Some(&before));
         let again = self.surroundings_changed(octree, &keys, &before, maybe);
         if again.is_empty() {
@@ -333,7 +334,9 @@ impl SeamedMesher {
                     if own.is_none() && !outside {
                         continue;
                     }
-                    let theirs = &self.shading[&other];
+                    let Some(theirs) = self.shading.get(&other) else {
+                        continue;
+                    };
                     for j in theirs.facing(&octree.cell_box(other), &cell) {
                         let (p, q) = (&theirs.points[j], theirs.points_f64[j]);
                         if !may_be_in_box(q, &cell) {
@@ -485,11 +488,11 @@ impl PointIndex {
 /// `2^-40` of the box's coordinates (far more than the rounding of `q`).
 fn near_walls(q: [f64; 3], cell: &CellBox) -> u8 {
     let mut walls = 0;
-    for a in 0..3 {
+    for (a, &c) in q.iter().enumerate() {
         for (upper, at) in [(0, cell.min[a]), (1, cell.max[a])] {
             let at = at as f64;
             let margin = (at.abs() + 1.0) * f64::powi(2.0, -40);
-            if (q[a] - at).abs() <= margin {
+            if (c - at).abs() <= margin {
                 walls |= 1 << (2 * a + upper);
             }
         }
