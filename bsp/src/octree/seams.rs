@@ -46,6 +46,11 @@
 //! points. Each octree's wall points come from its own unsealed meshes,
 //! so two meshers that take each other's
 //! ([`SeamedMesher::wall_points_in`]) need one exchange, not a loop.
+//!
+//! A mesher made with [`SeamedMesher::with_shading`] also keeps the
+//! surface around every leaf's border vertices and hands it back with the
+//! sealed meshes, for smooth normals that agree across cell borders
+//! ([`super::shading`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 

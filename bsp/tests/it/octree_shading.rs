@@ -4,7 +4,7 @@
 //! at its border vertices are exactly the merged union of every leaf's own
 //! wedges at that point, and those unions equal the ones of a build from
 //! scratch (split into other pieces): merged wedges depend on the surface
-//! only.
+//! only. The same edits on one and two threads give the same wedges.
 
 use std::collections::BTreeMap;
 
@@ -145,8 +145,10 @@ fn check(octree: &Octree, kept: &BTreeMap<CellKey, ShadedCell>) -> usize {
     checked
 }
 
-#[test]
-fn border_wedges_are_the_unions_of_every_leaf_and_match_a_fresh_build() {
+/// A random sequence of 40 edits (subtracts, adds, undos) meshed after
+/// each, from the edits' faces: the kept cells, the border vertices
+/// [`check`]ed after each edit (none unless `checked`) and the undos.
+fn edit_sequence(checked: bool) -> (BTreeMap<CellKey, ShadedCell>, usize, usize) {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let mut octree = terrain();
     let mut mesher = SeamedMesher::with_shading();
@@ -156,7 +158,10 @@ fn border_wedges_are_the_unions_of_every_leaf_and_match_a_fresh_build() {
         &mut kept,
         mesher.update_shaded(&octree, all, BTreeMap::new()),
     );
-    let (mut checked, mut undos) = (check(&octree, &kept), 0);
+    let check_now = |octree: &Octree, kept: &BTreeMap<CellKey, ShadedCell>| {
+        if checked { check(octree, kept) } else { 0 }
+    };
+    let (mut count, mut undos) = (check_now(&octree, &kept), 0);
     let mut last: Option<(Octree, Changes)> = None;
     for _ in 0..40 {
         if rng.random_range(0..6) == 0
@@ -190,10 +195,45 @@ fn border_wedges_are_the_unions_of_every_leaf_and_match_a_fresh_build() {
             );
             last = Some((before, changes));
         }
-        checked += check(&octree, &kept);
+        count += check_now(&octree, &kept);
     }
+    (kept, count, undos)
+}
+
+#[test]
+fn border_wedges_are_the_unions_of_every_leaf_and_match_a_fresh_build() {
+    let (_, checked, undos) = edit_sequence(true);
     assert!(undos > 0);
     assert!(checked > 1000, "only {checked} border vertices checked");
+}
+
+/// The same edits on one and on two threads give the same meshes and the
+/// same wedges at every vertex.
+#[test]
+fn wedges_are_the_same_for_one_and_two_threads() {
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| edit_sequence(false).0)
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(one.keys().eq(two.keys()));
+    for (key, a) in &one {
+        let b = &two[key];
+        let digits = |c: &ShadedCell| -> Vec<_> {
+            c.mesh.vertices().iter().map(|p| (p.xyz(), p.w())).collect()
+        };
+        assert_eq!(digits(a), digits(b), "{key:?}");
+        for v in 0..a.mesh.vertices().len() as u32 {
+            assert_eq!(
+                a.around.of_vertex(v),
+                b.around.of_vertex(v),
+                "{key:?} vertex {v}"
+            );
+        }
+    }
 }
 
 /// A flat top split among four cells: at the point where they meet the
