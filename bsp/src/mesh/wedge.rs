@@ -415,6 +415,8 @@ impl SurfaceAround {
     pub fn add(&mut self, mut more: Vec<(u32, &[Wedge])>) {
         more.retain(|(v, _)| (*v as usize) < self.vertices());
         more.sort_by_key(|(v, _)| *v);
+        self.wedges
+            .reserve(more.iter().map(|(_, w)| w.len()).sum::<usize>() + 2 * more.len());
         let mut scratch = Vec::new();
         let mut next = more.iter().peekable();
         while let Some(&&(v, _)) = next.peek() {
@@ -457,10 +459,12 @@ impl SurfaceMesh {
     fn surface_around_where(&self, wanted: impl Fn(u32) -> bool + Copy) -> SurfaceAround {
         let n = self.vertices.len();
         // The corner wedges in polygon order, and per vertex, theirs.
-        let mut raw: Vec<Wedge> = Vec::new();
-        let mut at: Vec<u32> = Vec::new();
-        let mut rays = Vec::new();
         let mut count = vec![0u32; n + 1];
+        // Room for a corner at every vertex asked for, and a few more.
+        let room = (0..n as u32).filter(|&v| wanted(v)).count() * 3;
+        let mut raw: Vec<Wedge> = Vec::with_capacity(room);
+        let mut at: Vec<u32> = Vec::with_capacity(room);
+        let mut rays = Vec::new();
         for polygon in self.polygons.iter().filter(|p| p.outside == EMPTY) {
             polygon.for_corner_wedges(&mut rays, wanted, |v, wedge| {
                 raw.push(wedge);

@@ -620,7 +620,8 @@ impl SeamedMesher {
     ) -> (Vec<Vec<&Point4>>, Vec<Vec<CellKey>>) {
         let cells: Vec<CellBox> = keys.iter().map(|&key| octree.cell_box(key)).collect();
         let mut extra = vec![Vec::new(); keys.len()];
-        let mut neighbours = vec![Vec::new(); keys.len()];
+        let mut neighbours: Vec<Vec<CellKey>> =
+            (0..keys.len()).map(|_| Vec::with_capacity(32)).collect();
         octree.for_leaves_touching_each(&cells, |other, near| {
             let Some(border) = self.borders.get(&other) else {
                 return;

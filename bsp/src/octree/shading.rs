@@ -328,7 +328,8 @@ impl SeamedMesher {
                 let cell = octree.cell_box(*key);
                 let index = own.map(PointIndex::of);
                 let mut old_index: Option<PointIndex> = None;
-                let (mut more, mut maybe) = (Vec::new(), Vec::new());
+                let mut more = Vec::with_capacity(own.map_or(0, |own| 2 * own.points.len()));
+                let mut maybe = Vec::new();
                 for &other in near {
                     let outside = old.is_some() && keys.binary_search(&other).is_err();
                     if own.is_none() && !outside {
