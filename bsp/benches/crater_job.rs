@@ -7,7 +7,7 @@
 //! target for a profiler or an instruction count:
 //!
 //! ```sh
-//! cargo bench -p chisel_bsp --bench crater_job -- 1000 [THREADS] [check]
+//! cargo bench -p chisel_bsp --bench crater_job -- 1000 [THREADS] [check] [shade]
 //! cargo bench -p chisel_bsp --bench crater_job --no-run   # prints the binary's path
 //! perf stat -e task-clock target/release/deps/crater_job-HASH --bench 1000
 //! valgrind --tool=callgrind target/release/deps/crater_job-HASH --bench 200 1 check
@@ -17,6 +17,10 @@
 //! passes it): `cargo test --all-targets` runs it without, and it then
 //! prints one line and exits. The other arguments are positional:
 //! carves (default 1000), threads (default 1), `check`.
+//!
+//! With `shade`, the mesher also keeps the surface around border vertices
+//! ([`SeamedMesher::with_shading`]) and hands back the cells whose
+//! normals that changes, as the plugin's does.
 //!
 //! With `check`, it also prints hashes of every sealed mesh, every debris
 //! piece and the final octree (outside the timings): equal hashes before
@@ -80,6 +84,17 @@ fn hash_mesh(mesh: &SurfaceMesh, state: &mut impl Hasher) {
 }
 
 /// Feeds the debris pieces' leaves, cells, volumes and solids to `state`.
+/// The meshes of [`SeamedMesher::update_shaded`]'s cells (the `check` hash
+/// of a shaded run covers the meshes only, of more cells).
+fn shaded(
+    cells: Vec<(CellKey, Option<chisel_bsp::octree::ShadedCell>)>,
+) -> Vec<(CellKey, Option<SurfaceMesh>)> {
+    cells
+        .into_iter()
+        .map(|(key, cell)| (key, cell.map(|cell| cell.mesh)))
+        .collect()
+}
+
 fn hash_debris(detached: &Detached, state: &mut impl Hasher) {
     for piece in &detached.pieces {
         (&piece.leaves, &piece.volumes, piece.solid.state_hash()).hash(state);
@@ -105,16 +120,17 @@ fn main() {
     let arg =
         |i: usize, default: usize| args.get(i).and_then(|n| n.parse().ok()).unwrap_or(default);
     let (carves, threads) = (arg(0, 1000), arg(1, 1));
-    let check = args.get(2).is_some_and(|a| *a == "check");
+    let check = args.iter().skip(2).any(|a| *a == "check");
+    let shade = args.iter().skip(2).any(|a| *a == "shade");
     // As the plugin's jobs: everything on the worker pool's threads.
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .expect("a thread pool")
-        .install(|| run(carves, check));
+        .install(|| run(carves, check, shade));
 }
 
-fn run(carves: usize, check: bool) {
+fn run(carves: usize, check: bool, shade: bool) {
     let solid = CellBox {
         min: [0, -20_000, 0],
         max: [256_000, 0, 256_000],
@@ -139,7 +155,11 @@ fn run(carves: usize, check: bool) {
         },
         ..DebrisConfig::default()
     };
-    let mut mesher = SeamedMesher::new();
+    let mut mesher = if shade {
+        SeamedMesher::with_shading()
+    } else {
+        SeamedMesher::new()
+    };
     let all: Vec<CellKey> = octree.leaves().into_iter().map(|(key, _)| key).collect();
     mesher.update(&octree, all, BTreeMap::new());
 
@@ -176,7 +196,11 @@ fn run(carves: usize, check: bool) {
             .chain(&carved.changes.removed)
             .copied()
             .collect();
-        let sealed = mesher.update(&octree, keys, fresh);
+        let sealed = if shade {
+            shaded(mesher.update_shaded(&octree, keys, fresh))
+        } else {
+            mesher.update(&octree, keys, fresh)
+        };
         let done = start.elapsed();
         drop(before);
         if check {
@@ -194,15 +218,18 @@ fn run(carves: usize, check: bool) {
         meshes.push(done - detached);
         total.push(done);
     }
+    let cells_total: usize = cells.iter().sum();
     cells.sort_unstable();
     println!(
-        "{carves} craters: apply {:.3} ms, debris {:.3} ms, sealed meshes {:.3} ms, \
-         total {:.3} ms (medians); cells meshed per carve: median {}",
+        "{carves} craters{}: apply {:.3} ms, debris {:.3} ms, sealed meshes {:.3} ms, \
+         total {:.3} ms (medians); cells meshed per carve: median {}, mean {:.2}",
+        if shade { " (shaded)" } else { "" },
         median(&mut apply),
         median(&mut detach),
         median(&mut meshes),
         median(&mut total),
-        cells[cells.len() / 2]
+        cells[cells.len() / 2],
+        cells_total as f64 / carves as f64
     );
     let stats = octree.stats();
     println!(

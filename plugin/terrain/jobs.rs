@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use super::carve::{CarveApplied, CellOutput};
 use super::debris::{BuiltDebris, build_debris};
 use super::error::TerrainError;
-use super::mesh::{ColliderMesh, cell_meshes_of};
+use super::mesh::{ColliderMesh, cell_meshes_around};
 use super::physics::{PhysicsInsert, TerrainPhysics};
 use super::tool::GridTool;
 use super::world::seams::BorderPoints;
@@ -99,7 +99,7 @@ impl Default for Runtime {
             triangles: 0,
             needs_full_mesh: true,
             builds_cells: true,
-            mesher: SeamedMesher::new(),
+            mesher: SeamedMesher::with_shading(),
             material_labels: None,
             publishes_border: false,
             border: None,
@@ -235,7 +235,8 @@ pub(crate) enum CellCollider {
     Built(Option<PhysicsInsert>),
     /// The cell's surface is the one its collider was built from; only its
     /// seams moved (new vertices on its border edges, where a neighbour
-    /// changed), which a collider does not need. The cell's entity keeps
+    /// changed) or its normals at border vertices (a neighbour's faces
+    /// around them changed), which a collider does not need. The cell's entity keeps
     /// its collider; the triangles serve an entity that has none yet.
     Unchanged(ColliderMesh),
 }
@@ -375,8 +376,10 @@ fn detach(
 
 /// Builds `keys` of `octree` (a key that is no longer a leaf gets `None`),
 /// from the faces in `fresh` where a carve handed them back, and every
-/// neighbour whose border the change split differently: `mesher` keeps the
-/// cells' border vertices, so that neighbouring meshes meet edge to edge.
+/// neighbour whose border the change split differently or whose border
+/// normals it changed: `mesher` keeps the cells' border vertices and the
+/// faces around them, so that neighbouring meshes meet edge to edge with
+/// the same normals there.
 pub(crate) fn remesh(
     octree: Octree,
     context: &JobContext,
@@ -406,7 +409,7 @@ pub(crate) fn remesh(
     // the mesher re-seals some of them, and only their meshes change.
     let edited: BTreeSet<CellKey> = keys.iter().chain(fresh.keys()).copied().collect();
     let keys: BTreeSet<CellKey> = keys.into_iter().collect();
-    let sealed = mesher.update(&octree, keys, fresh);
+    let sealed = mesher.update_shaded(&octree, keys, fresh);
     let border = context
         .publish_border
         .then(|| Arc::new(BorderPoints::of(&mesher, &octree)));
@@ -415,20 +418,25 @@ pub(crate) fn remesh(
     let meshed: Vec<(CellKey, Option<Vec<(BuiltMesh, ColliderMesh)>>)> = sealed
         .into_par_iter()
         .map(|(key, surface)| {
-            let meshes = surface.map(|surface| {
-                cell_meshes_of(&surface, &context.quantization, context.smoothing_degrees)
-                    .into_iter()
-                    .map(|mut mesh| {
-                        let collider = std::mem::take(&mut mesh.collider);
-                        let built = BuiltMesh {
-                            label: mesh.label,
-                            triangles: mesh.triangle_count(),
-                            mesh: render.then(|| mesh.into_mesh()),
-                            collider: CellCollider::Built(None),
-                        };
-                        (built, collider)
-                    })
-                    .collect()
+            let meshes = surface.map(|cell| {
+                cell_meshes_around(
+                    &cell.mesh,
+                    &cell.around,
+                    &context.quantization,
+                    context.smoothing_degrees,
+                )
+                .into_iter()
+                .map(|mut mesh| {
+                    let collider = std::mem::take(&mut mesh.collider);
+                    let built = BuiltMesh {
+                        label: mesh.label,
+                        triangles: mesh.triangle_count(),
+                        mesh: render.then(|| mesh.into_mesh()),
+                        collider: CellCollider::Built(None),
+                    };
+                    (built, collider)
+                })
+                .collect()
             });
             (key, meshes)
         })

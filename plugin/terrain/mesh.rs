@@ -19,13 +19,25 @@
 //! rim, stay sharp; render vertices are shared by the corners of one `v`
 //! that get the same normal.
 //!
+//! Across cell borders ([`cell_meshes_around`]). At a vertex on the
+//! cell's walls the polygons around it are those of every cell that has
+//! it, handed over by the seamed mesher as exact wedges
+//! ([`SurfaceAround`], merged per plane so that how cells and pieces split
+//! the surface does not matter, in a canonical order): each wedge `W`
+//! counts `angle(W) · n_W`, its angle from its exact rays. So both sides
+//! of a border sum the same numbers in the same order and give the same
+//! bits for the same (vertex, plane of `P`), whatever the thread count,
+//! and an incremental update gives what a build from scratch gives
+//! there. Inside the cell, the angles come from the rounded positions of
+//! the cell's own polygons.
+//!
 //! Pure functions of the octree, run on the worker threads, which also
 //! build the [`Mesh`]es; the main thread only adds them as assets.
 
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
-use chisel_bsp::mesh::{MeshPolygon, SurfaceMesh};
+use chisel_bsp::mesh::{MeshPolygon, SurfaceAround, SurfaceMesh, Turn, Wedge, primitive_normal};
 use chisel_bsp::octree::{CellKey, Octree};
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, EMPTY, Label};
@@ -121,11 +133,33 @@ pub fn cell_meshes_from(
 }
 
 /// One [`CellMesh`] per material of the surface polygons of `surface` (a
-/// cell's surface, T-junctions split), sorted by label, with normals
-/// smoothed within `smoothing_degrees` (0: flat shading).
+/// cell's surface, T-junctions split, or a standalone surface such as a
+/// debris piece), sorted by label, with normals smoothed within
+/// `smoothing_degrees` (0: flat shading) over its own polygons.
 #[must_use]
 pub fn cell_meshes_of(
     surface: &SurfaceMesh,
+    quantization: &Quantization,
+    smoothing_degrees: f32,
+) -> Vec<CellMesh> {
+    cell_meshes_around(
+        surface,
+        &SurfaceAround::default(),
+        quantization,
+        smoothing_degrees,
+    )
+}
+
+/// [`cell_meshes_of`] of a sealed cell mesh, with `around` the surface
+/// around its border vertices in every cell that has them
+/// ([`chisel_bsp::octree::SeamedMesher::update_shaded`]): a vertex with
+/// wedges there is smoothed over them, so that neighbouring cells agree
+/// on its normals (see the module docs); the others over the cell's own
+/// polygons.
+#[must_use]
+pub fn cell_meshes_around(
+    surface: &SurfaceMesh,
+    around: &SurfaceAround,
     quantization: &Quantization,
     smoothing_degrees: f32,
 ) -> Vec<CellMesh> {
@@ -141,7 +175,8 @@ pub fn cell_meshes_of(
         .map(|v| quantization.to_world(surface.position(v)))
         .collect();
     let normals: Vec<[f64; 3]> = polygons.iter().map(|p| p.unit_normal()).collect();
-    let around = CornersAround::of(&polygons, &positions);
+    let mut border = BorderWedges::new(around);
+    let own = CornersAround::of(&polygons, &positions, |v| border.has(v));
     let cos_limit = f64::from(smoothing_degrees.clamp(0.0, 180.0))
         .to_radians()
         .cos();
@@ -173,18 +208,24 @@ pub fn cell_meshes_of(
                     continue;
                 }
                 let n_p = normals[p];
+                // The plane's normal as the wedges name it, at border
+                // vertices.
+                let mut n_exact = None;
+                let mut smoothed = |v: u32| {
+                    if border.has(v) {
+                        let n = *n_exact.get_or_insert_with(|| exact_unit_normal(polygon));
+                        border.smooth_normal(v, n, cos_limit)
+                    } else {
+                        smooth_normal(n_p, own.of_vertex(v), &normals, cos_limit)
+                    }
+                };
                 corner_normals.clear();
-                corner_normals.extend(polygon.corners.iter().map(|&v| {
-                    (
-                        v,
-                        smooth_normal(n_p, around.of_vertex(v), &normals, cos_limit),
-                    )
-                }));
+                corner_normals.extend(polygon.corners.iter().map(|&v| (v, smoothed(v))));
                 let mut corner = |v: u32| -> (u32, u32) {
-                    let normal = corner_normals.iter().find(|(w, _)| *w == v).map_or_else(
-                        || smooth_normal(n_p, around.of_vertex(v), &normals, cos_limit),
-                        |(_, n)| *n,
-                    );
+                    let normal = corner_normals
+                        .iter()
+                        .find(|(w, _)| *w == v)
+                        .map_or_else(|| smoothed(v), |(_, n)| *n);
                     let bits = normal.map(f32::to_bits);
                     // The render vertex of (exact vertex, normal bits).
                     let mut r = first_render[v as usize];
@@ -236,7 +277,13 @@ struct CornersAround {
 }
 
 impl CornersAround {
-    fn of(polygons: &[&MeshPolygon], positions: &[[f64; 3]]) -> Self {
+    /// The corners of `polygons`, with their angles except at the
+    /// vertices `skipped` (smoothed otherwise; angle 0 there).
+    fn of(
+        polygons: &[&MeshPolygon],
+        positions: &[[f64; 3]],
+        skipped: impl Fn(u32) -> bool,
+    ) -> Self {
         let mut start = vec![0u32; positions.len() + 1];
         for polygon in polygons {
             for &c in &polygon.corners {
@@ -252,11 +299,16 @@ impl CornersAround {
             let c = &polygon.corners;
             let n = c.len();
             for k in 0..n {
-                let at = positions[c[k] as usize];
-                let prev = positions[c[(k + n - 1) % n] as usize];
-                let next = positions[c[(k + 1) % n] as usize];
+                let weight = if skipped(c[k]) {
+                    0.0
+                } else {
+                    let at = positions[c[k] as usize];
+                    let prev = positions[c[(k + n - 1) % n] as usize];
+                    let next = positions[c[(k + 1) % n] as usize];
+                    angle(sub(prev, at), sub(next, at))
+                };
                 let slot = &mut fill[c[k] as usize];
-                corners[*slot as usize] = (p as u32, angle(sub(prev, at), sub(next, at)));
+                corners[*slot as usize] = (p as u32, weight);
                 *slot += 1;
             }
         }
@@ -266,6 +318,99 @@ impl CornersAround {
     /// The corners at vertex `v`.
     fn of_vertex(&self, v: u32) -> &[(u32, f64)] {
         &self.corners[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// The surface around the border vertices of a cell in floats: per
+/// vertex with wedges, each wedge's unit normal and angle, computed once.
+struct BorderWedges<'a> {
+    around: &'a SurfaceAround,
+    /// Per vertex, where its wedges' floats start in `floats` (`NONE`:
+    /// not yet computed).
+    start: Vec<u32>,
+    floats: Vec<([f64; 3], f64)>,
+}
+
+impl<'a> BorderWedges<'a> {
+    fn new(around: &'a SurfaceAround) -> Self {
+        Self {
+            around,
+            start: vec![NONE; around.vertices()],
+            floats: Vec::new(),
+        }
+    }
+
+    /// Whether vertex `v` has wedges.
+    fn has(&self, v: u32) -> bool {
+        !self.around.of_vertex(v).is_empty()
+    }
+
+    /// The unit normal of the corner at border vertex `v` of a polygon
+    /// with unit normal `n_p` ([`exact_unit_normal`]): the angle-weighted
+    /// mean of the wedges' normals within the smoothing angle, in the
+    /// wedges' order.
+    fn smooth_normal(&mut self, v: u32, n_p: [f64; 3], cos_limit: f64) -> [f32; 3] {
+        let wedges = self.around.of_vertex(v);
+        let start = &mut self.start[v as usize];
+        if *start == NONE {
+            *start = self.floats.len() as u32;
+            self.floats
+                .extend(wedges.iter().map(|w| (unit(w.normal), wedge_angle(w))));
+        }
+        let floats = &self.floats[*start as usize..*start as usize + wedges.len()];
+        let mut sum = [0.0f64; 3];
+        for &(n_q, weight) in floats {
+            if dot(n_p, n_q) >= cos_limit {
+                for a in 0..3 {
+                    sum[a] += weight * n_q[a];
+                }
+            }
+        }
+        normalized_or(sum, n_p)
+    }
+}
+
+/// The unit normal of `polygon`'s plane from its primitive normal, as
+/// [`BorderWedges`] computes the wedges' normals (the same bits for the
+/// same plane).
+fn exact_unit_normal(polygon: &MeshPolygon) -> [f64; 3] {
+    unit(primitive_normal(&polygon.plane))
+}
+
+/// `n` as a unit vector in `f64`.
+fn unit(n: [i64; 3]) -> [f64; 3] {
+    let n = n.map(|c| c as f64);
+    let length = dot(n, n).sqrt();
+    n.map(|c| c / length)
+}
+
+/// The angle of a wedge, in radians: from its exact turn and rays (the
+/// unsigned angle between the rays, or its complement for more than half
+/// a turn).
+fn wedge_angle(wedge: &Wedge) -> f64 {
+    match wedge.turn {
+        Turn::Full => std::f64::consts::TAU,
+        Turn::Straight => std::f64::consts::PI,
+        Turn::Convex | Turn::Reflex => {
+            let a = wedge.from.0.map(|c| c as f64);
+            let b = wedge.to.0.map(|c| c as f64);
+            let between = angle(a, b);
+            if wedge.turn == Turn::Reflex {
+                std::f64::consts::TAU - between
+            } else {
+                between
+            }
+        }
+    }
+}
+
+/// `sum` normalized, or `fallback` where it is (nearly) zero.
+fn normalized_or(sum: [f64; 3], fallback: [f64; 3]) -> [f32; 3] {
+    let length = dot(sum, sum).sqrt();
+    if length.is_finite() && length > 1e-12 {
+        sum.map(|c| (c / length) as f32)
+    } else {
+        fallback.map(|c| c as f32)
     }
 }
 
@@ -287,12 +432,7 @@ fn smooth_normal(
             }
         }
     }
-    let length = dot(sum, sum).sqrt();
-    if length.is_finite() && length > 1e-12 {
-        sum.map(|c| (c / length) as f32)
-    } else {
-        n_p.map(|c| c as f32)
-    }
+    normalized_or(sum, n_p)
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

@@ -150,7 +150,7 @@ pub fn start_jobs(
             let octree = terrain.octree.clone();
             // A first build starts the border vertices afresh, with the
             // outside points it was given.
-            let mut mesher = SeamedMesher::new();
+            let mut mesher = SeamedMesher::with_shading();
             mesher.set_outside_points(terrain.runtime.mesher.outside_points().to_vec());
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {

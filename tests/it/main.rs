@@ -66,6 +66,8 @@ mod terrain_ecs;
 mod terrain_labels;
 #[cfg(feature = "viewer")]
 mod terrain_material;
+#[cfg(feature = "terrain")]
+mod terrain_normals;
 #[cfg(feature = "avian")]
 mod terrain_output;
 #[cfg(feature = "avian")]

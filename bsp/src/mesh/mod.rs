@@ -30,6 +30,8 @@
 //!   other's wall vertices, so that they meet edge to edge.
 //! - [`watertight`] — every directed edge has exactly one opposite.
 //! - [`validate`] — the invariants of a [`SurfaceMesh`], checked exactly.
+//! - [`wedge`] — the surface around each vertex as exact wedges, for
+//!   smooth normals that do not depend on how the surface is split.
 //! - [`triangulate`] — polygons to triangles with no zero-area triangle, and
 //!   `f32` output with exact face normals and per-face materials.
 //!
@@ -70,12 +72,14 @@ pub mod tjunction;
 pub mod triangulate;
 pub mod validate;
 pub mod watertight;
+pub mod wedge;
 pub mod weld;
 
 pub use seal::{BorderEdge, UnsealedMesh};
 pub use triangulate::{FlatShadedMesh, TriangleMesh};
 pub use validate::MeshInvariantError;
 pub use watertight::{BadEdge, EdgeProblem, WatertightError};
+pub use wedge::{Ray, SurfaceAround, Turn, Wedge, merge_wedges, primitive_normal};
 
 use crate::exact::{Plane, Point4};
 use crate::tree::{BoundaryFace, Label};

@@ -133,6 +133,22 @@ impl UnsealedMesh {
             .map(|(v, _)| v)
     }
 
+    /// The numbers of the vertices lying on a wall, in vertex order (those
+    /// of [`Self::wall_vertices`]); a sealed mesh keeps them.
+    #[must_use]
+    pub fn wall_vertex_indices(&self) -> Vec<u32> {
+        (0..self.walls.len() as u32)
+            .filter(|&v| self.walls[v as usize] != 0)
+            .collect()
+    }
+
+    /// Number of vertices: those of the sealed mesh from here on are seam
+    /// points ([`Self::seal`]).
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.mesh.vertices.len()
+    }
+
     /// The original edges whose two ends lie on a common wall, polygon by
     /// polygon, edge by edge.
     #[must_use]

@@ -28,7 +28,9 @@
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
 //! - [`seams`] — sealed cell meshes that meet their neighbours' edge to
-//!   edge, kept up to date across edits ([`SeamedMesher`]).
+//!   edge, kept up to date across edits ([`SeamedMesher`]); [`shading`] —
+//!   the surface around their border vertices, shared between neighbours
+//!   for smooth normals that agree across cell borders.
 //! - [`hash`] — a state hash of an octree's content, updated per edit
 //!   from the cells it changed ([`StateHash`]).
 //! - [`store`] — octree files: exact, versioned and checked
@@ -70,6 +72,7 @@ pub mod measure;
 mod mesh_check;
 mod relabel;
 pub mod seams;
+pub mod shading;
 mod split;
 pub mod store;
 pub mod surface;
@@ -84,5 +87,6 @@ pub use exact_volume::ExactVolume;
 pub use hash::StateHash;
 pub use leaf::CellFaces;
 pub use seams::SeamedMesher;
+pub use shading::ShadedCell;
 pub use tool::Tool;
 pub use tree::{Leaf, Octree, OctreeConfig, OctreeStats};

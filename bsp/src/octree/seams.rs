@@ -46,17 +46,23 @@
 //! points. Each octree's wall points come from its own unsealed meshes,
 //! so two meshers that take each other's
 //! ([`SeamedMesher::wall_points_in`]) need one exchange, not a loop.
+//!
+//! A mesher made with [`SeamedMesher::with_shading`] also keeps the
+//! surface around every leaf's border vertices and hands it back with the
+//! sealed meshes, for smooth normals that agree across cell borders
+//! ([`super::shading`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
+use super::shading::{CellShading, SealedLeaf, ShadedCell, own_shading};
 use super::tree::{Leaf, OctNode, Octree};
 use crate::exact::{Plane, Point4};
 use crate::exact::{Sign, classify_vertex};
 use crate::mesh::weld::Welder;
-use crate::mesh::{BorderEdge, SurfaceMesh, UnsealedMesh};
+use crate::mesh::{BorderEdge, SurfaceAround, SurfaceMesh, UnsealedMesh};
 use crate::tree::BoundaryFace;
 
 impl Octree {
@@ -148,11 +154,11 @@ impl Octree {
 /// What a [`SeamedMesher`] keeps of one leaf: its wall points, border
 /// edges and seam points (see the module docs).
 #[derive(Clone, Debug, Default)]
-struct CellBorder {
+pub(super) struct CellBorder {
     wall_points: Vec<Point4>,
     /// Their `f64` positions ([`Point4::to_f64`]), for cheap filters.
     wall_f64: Vec<[f64; 3]>,
-    edges: Vec<BorderEdge>,
+    pub(super) edges: Vec<BorderEdge>,
     seams: Vec<Point4>,
     /// The polygons lying in a wall: the wall (`2·axis + upper`) and the
     /// `f64` box of the corners.
@@ -167,7 +173,7 @@ struct CellBorder {
 /// seam points (a few exact points and planes per cell of the surface).
 #[derive(Clone, Debug, Default)]
 pub struct SeamedMesher {
-    borders: BTreeMap<CellKey, CellBorder>,
+    pub(super) borders: BTreeMap<CellKey, CellBorder>,
     /// The leaf each meshed cell held when last meshed (shared with the
     /// octree, so no copy): an edited cell whose leaf is the same stored
     /// value was only touched, and its neighbours' faces are clipped
@@ -176,12 +182,18 @@ pub struct SeamedMesher {
     /// The unsealed mesh of every leaf meshed so far, as of the last
     /// update: what [`Octree::cell_surface`] gives while the leaf and the
     /// leaves it faces across its walls stay the same.
-    unsealed: BTreeMap<CellKey, UnsealedMesh>,
+    pub(super) unsealed: BTreeMap<CellKey, UnsealedMesh>,
     /// The outside points, distinct, with their `f64` positions.
     outside: Vec<Point4>,
     outside_f64: Vec<[f64; 3]>,
     /// Outside points gained or lost since the last update.
     outside_changed: Vec<Point4>,
+    /// Whether the shaded points of every leaf are kept
+    /// ([`SeamedMesher::with_shading`]).
+    pub(super) shaded: bool,
+    /// Per leaf with shaded points, those points and its own wedges
+    /// there ([`super::shading`]).
+    pub(super) shading: BTreeMap<CellKey, CellShading>,
 }
 
 impl SeamedMesher {
@@ -288,13 +300,33 @@ impl SeamedMesher {
     ///
     /// The leaves not listed must hold the surface they had at the last
     /// update. Cells run in parallel; the result does not depend on the
-    /// thread count.
+    /// thread count. A mesher [`SeamedMesher::with_shading`] also hands
+    /// back the leaves whose surroundings changed
+    /// ([`SeamedMesher::update_shaded`]).
     pub fn update(
         &mut self,
         octree: &Octree,
         keys: impl IntoIterator<Item = CellKey>,
-        mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
+        fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
     ) -> Vec<(CellKey, Option<SurfaceMesh>)> {
+        self.update_shaded(octree, keys, fresh)
+            .into_iter()
+            .map(|(key, cell)| (key, cell.map(|cell| cell.mesh)))
+            .collect()
+    }
+
+    /// [`SeamedMesher::update`], handing back with each sealed mesh the
+    /// surface around each of its vertices: for a mesher
+    /// [`SeamedMesher::with_shading`], the wedges of every leaf's surface
+    /// there (see [`super::shading`]), and the leaves whose meshes stay
+    /// but whose border vertices' surroundings changed are handed back too;
+    /// otherwise no wedges at all.
+    pub fn update_shaded(
+        &mut self,
+        octree: &Octree,
+        keys: impl IntoIterator<Item = CellKey>,
+        mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>>,
+    ) -> Vec<(CellKey, Option<ShadedCell>)> {
         let mut keys: Vec<CellKey> = keys.into_iter().chain(fresh.keys().copied()).collect();
         keys.sort_unstable();
         keys.dedup();
@@ -400,8 +432,9 @@ impl SeamedMesher {
         let this = &*self;
         let pending: Vec<(CellKey, Option<UnsealedMesh>)> = pending.into_iter().collect();
         let keys: Vec<CellKey> = pending.iter().map(|(key, _)| *key).collect();
-        let around = this.extra_points_of(octree, &keys);
-        let sealed: Vec<(CellKey, SurfaceMesh, Vec<Point4>, Option<UnsealedMesh>)> = pending
+        let (around, near) = this.extra_points_and_neighbours(octree, &keys);
+        let shaded = self.shaded;
+        let sealed: Vec<(CellKey, SealedLeaf, Vec<Point4>, Option<UnsealedMesh>)> = pending
             .into_par_iter()
             .zip(around)
             .map(|((key, mesh), extra)| {
@@ -412,24 +445,40 @@ impl SeamedMesher {
                     .borders
                     .get(&key)
                     .map_or(&[][..], |b| b.edges.as_slice());
-                let (sealed, seams) = unsealed.map_or_else(
-                    || (SurfaceMesh::default(), Vec::new()),
-                    |mesh| mesh.clone().seal_with_edges(extra, edges),
+                let (sealed, seams, shading) = unsealed.map_or_else(
+                    || (SurfaceMesh::default(), Vec::new(), None),
+                    |mesh| {
+                        let wall =
+                            shaded.then(|| (mesh.wall_vertex_indices(), mesh.vertex_count()));
+                        let (sealed, seams) = mesh.clone().seal_with_edges(extra, edges);
+                        let shading = wall.map(|(wall, own)| {
+                            own_shading(&sealed, wall, own as u32, &octree.cell_box(key))
+                        });
+                        (sealed, seams, shading)
+                    },
                 );
-                (key, sealed, seams, mesh)
+                (key, (key, sealed, shading), seams, mesh)
             })
             .collect();
-        let mut out: Vec<(CellKey, Option<SurfaceMesh>)> =
-            gone.into_iter().map(|key| (key, None)).collect();
-        for (key, mesh, seams, unsealed) in sealed {
+        let mut leaves = Vec::with_capacity(sealed.len());
+        for (key, leaf, seams, unsealed) in sealed {
             if let Some(border) = self.borders.get_mut(&key) {
                 border.seams = seams;
             }
             if let Some(unsealed) = unsealed {
                 self.unsealed.insert(key, unsealed);
             }
-            out.push((key, Some(mesh)));
+            leaves.push(leaf);
         }
+        if shaded {
+            return self.shade(octree, leaves, near, gone);
+        }
+        let mut out: Vec<(CellKey, Option<ShadedCell>)> =
+            gone.into_iter().map(|key| (key, None)).collect();
+        out.extend(leaves.into_iter().map(|(key, mesh, _)| {
+            let around = SurfaceAround::default();
+            (key, Some(ShadedCell { mesh, around }))
+        }));
         out.sort_unstable_by_key(|(key, _)| *key);
         out
     }
@@ -558,15 +607,28 @@ impl SeamedMesher {
     /// The wall points of the neighbours of each leaf of `keys` that may
     /// lie on its closed box, neighbour by neighbour in leaf order: the
     /// points its border edges are split at.
-    fn extra_points_of(&self, octree: &Octree, keys: &[CellKey]) -> Vec<Vec<&Point4>> {
+    pub(super) fn extra_points_of(&self, octree: &Octree, keys: &[CellKey]) -> Vec<Vec<&Point4>> {
+        self.extra_points_and_neighbours(octree, keys).0
+    }
+
+    /// [`Self::extra_points_of`], and per leaf of `keys` its neighbours
+    /// with wall points (every leaf with shaded points among them).
+    pub(super) fn extra_points_and_neighbours(
+        &self,
+        octree: &Octree,
+        keys: &[CellKey],
+    ) -> (Vec<Vec<&Point4>>, Vec<Vec<CellKey>>) {
         let cells: Vec<CellBox> = keys.iter().map(|&key| octree.cell_box(key)).collect();
         let mut extra = vec![Vec::new(); keys.len()];
+        let mut neighbours: Vec<Vec<CellKey>> =
+            (0..keys.len()).map(|_| Vec::with_capacity(32)).collect();
         octree.for_leaves_touching_each(&cells, |other, near| {
             let Some(border) = self.borders.get(&other) else {
                 return;
             };
             for &i in near {
                 if keys[i] != other {
+                    neighbours[i].push(other);
                     extra[i].extend(
                         border
                             .wall_points
@@ -594,7 +656,7 @@ impl SeamedMesher {
                 }
             }
         }
-        extra
+        (extra, neighbours)
     }
 }
 
@@ -673,7 +735,7 @@ fn axis_plane(axis: usize, at: i64) -> Plane {
 /// where `q` is farther outside than a margin of `2^-40` of the box's
 /// coordinates. A cheap filter: the exact decisions are made against the
 /// edges themselves.
-fn may_be_in_box(q: [f64; 3], cell: &CellBox) -> bool {
+pub(super) fn may_be_in_box(q: [f64; 3], cell: &CellBox) -> bool {
     q.iter().enumerate().all(|(axis, &c)| {
         let (lo, hi) = (cell.min[axis] as f64, cell.max[axis] as f64);
         let margin = (lo.abs().max(hi.abs()) + 1.0) * f64::powi(2.0, -40);
@@ -690,7 +752,7 @@ fn in_closed_box(p: &Point4, cell: &CellBox) -> bool {
 }
 
 /// Whether `a` and `b` are the same point (identical digits first).
-fn same_point(a: &Point4, b: &Point4) -> bool {
+pub(super) fn same_point(a: &Point4, b: &Point4) -> bool {
     (a.xyz_digits == b.xyz_digits && a.w_digits == b.w_digits) || a.same_position(b)
 }
 

@@ -43,6 +43,7 @@ mod octree_large_tools;
 mod octree_nesting;
 mod octree_seams;
 mod octree_seams_outside;
+mod octree_shading;
 mod octree_split;
 mod octree_store;
 

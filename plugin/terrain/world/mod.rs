@@ -67,9 +67,12 @@
 //! a frame or two after a carve the border may show a T-junction.
 //!
 //! What is not stitched yet:
-//! - **Normals.** Smooth normals are averaged per cell, from the cell's
-//!   own polygons, within a chunk as across chunks: shading can show a
-//!   faint line along cell and chunk borders.
+//! - **Normals across chunk borders.** Within a chunk, a vertex on a
+//!   cell border is smoothed over the faces of every cell around it
+//!   ([`chisel_bsp::octree::SeamedMesher::with_shading`]), so cell
+//!   borders show no line; on a chunk's sides the chunk's mesher knows
+//!   only its own cells' faces (the exchange carries points, not wedges),
+//!   so shading can show a faint line along chunk borders.
 //! - **Debris.** Detection runs per chunk with the chunk's sides as
 //!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
 //!   in place, anchored by the border; nothing is wrongly detached.
