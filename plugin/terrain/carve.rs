@@ -164,6 +164,14 @@ pub struct TerrainSettings {
     /// normals; sharper edges, such as crater rims, stay sharp. 0 gives
     /// flat shading.
     pub smoothing_degrees: f32,
+    /// Whether a vertex on a cell border is smoothed over the faces of
+    /// every cell around it (the default), so that shading shows no line
+    /// along cell borders. Off, each cell smooths over its own faces only,
+    /// which saves about 0.3 ms of meshing per crater carve (BENCHMARKS.md,
+    /// "Terrain crater carves"). Only render meshes with smooth normals
+    /// use it ([`TerrainSettings::shares_border_normals`]); read at each
+    /// terrain's full build.
+    pub smooth_across_cells: bool,
     /// Mass per cubic world unit of debris bodies.
     pub debris_density: f32,
     /// Most convex hulls in a debris body's collider: the piece's convex
@@ -174,6 +182,19 @@ pub struct TerrainSettings {
     /// colliders only (a dedicated server running physics) or nothing (a
     /// server or tool that needs the octree and its hash alone).
     pub output: CellOutput,
+}
+
+impl TerrainSettings {
+    /// Whether cell meshes share normals at cell borders: with
+    /// [`TerrainSettings::smooth_across_cells`], smooth shading
+    /// (`smoothing_degrees > 0`) and render meshes to build
+    /// ([`CellOutput::Meshes`]).
+    #[must_use]
+    pub fn shares_border_normals(&self) -> bool {
+        self.smooth_across_cells
+            && self.smoothing_degrees > 0.0
+            && self.output == CellOutput::Meshes
+    }
 }
 
 /// What the terrain systems build for each cell a carve changes
@@ -203,6 +224,7 @@ impl Default for TerrainSettings {
             worker_threads: std::thread::available_parallelism()
                 .map_or(1, |n| n.get().saturating_sub(1).max(1)),
             smoothing_degrees: DEFAULT_SMOOTHING_DEGREES,
+            smooth_across_cells: true,
             debris_density: DEFAULT_DEBRIS_DENSITY,
             max_debris_hulls: DEFAULT_MAX_DEBRIS_HULLS,
             output: CellOutput::Meshes,

@@ -150,7 +150,11 @@ pub fn start_jobs(
             let octree = terrain.octree.clone();
             // A first build starts the border vertices afresh, with the
             // outside points it was given.
-            let mut mesher = SeamedMesher::with_shading();
+            let mut mesher = if settings.shares_border_normals() {
+                SeamedMesher::with_shading()
+            } else {
+                SeamedMesher::new()
+            };
             mesher.set_outside_points(terrain.runtime.mesher.outside_points().to_vec());
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {
