@@ -30,6 +30,7 @@ pub use classify::{
 pub use intersect::intersect_3_planes;
 pub(crate) use intersect::intersect_3_planes_with;
 pub use plane::{Plane, are_planes_parallel, plane_from_points, plane_from_points_normalized};
+pub(crate) use plane::{gcd_u64, gcd_u128};
 pub use point::{IntPoint, Point4};
 pub use sign::Sign;
 pub use wide::{I64, I128, I192, I256, Int};

@@ -263,7 +263,8 @@ fn gcd_with_remainder(x: u64, y: u64) -> u64 {
 /// Binary (Stein) gcd over an unsigned integer type; `gcd(0, 0) = 0`.
 macro_rules! binary_gcd {
     ($name:ident, $t:ty) => {
-        fn $name(mut a: $t, mut b: $t) -> $t {
+        /// Binary (Stein) gcd; `gcd(0, 0) = 0`.
+        pub(crate) fn $name(mut a: $t, mut b: $t) -> $t {
             if a == 0 || b == 0 {
                 return a | b;
             }
@@ -283,6 +284,7 @@ macro_rules! binary_gcd {
     };
 }
 binary_gcd!(gcd_u64, u64);
+binary_gcd!(gcd_u128, u128);
 
 /// True when the normals of `p` and `q` are parallel (eq. 1:
 /// `n_p × n_q = 0`), whichever their orientations.

@@ -32,7 +32,7 @@
 //! nothing here rounds.
 
 use super::{MeshPolygon, SurfaceMesh};
-use crate::exact::{I128, I256, Plane, Sign};
+use crate::exact::{I128, I256, Plane, Sign, gcd_u64, gcd_u128};
 use crate::tree::EMPTY;
 
 /// A direction as three coprime integers (not all zero), or
@@ -169,31 +169,6 @@ fn reduced(v: [i128; 3]) -> [i128; 3] {
     };
     if g <= 1 { v } else { v.map(|c| c / g as i128) }
 }
-
-macro_rules! binary_gcd {
-    ($name:ident, $t:ty) => {
-        /// Binary (Stein) gcd; `gcd(0, 0) = 0`.
-        fn $name(mut a: $t, mut b: $t) -> $t {
-            if a == 0 || b == 0 {
-                return a | b;
-            }
-            let shift = (a | b).trailing_zeros();
-            a >>= a.trailing_zeros();
-            loop {
-                b >>= b.trailing_zeros();
-                if a > b {
-                    core::mem::swap(&mut a, &mut b);
-                }
-                b -= a;
-                if b == 0 {
-                    return a << shift;
-                }
-            }
-        }
-    };
-}
-binary_gcd!(gcd_u64, u64);
-binary_gcd!(gcd_u128, u128);
 
 impl MeshPolygon {
     /// The wedges of the polygon at each of its corners, in corner order:
