@@ -4,17 +4,25 @@
 //! meshed incrementally (from the carves' fresh faces), and each cell's
 //! normals at its border vertices equal those of a build from scratch.
 //! The cell meshes smoothed over their own polygons only (the code before
-//! border smoothing) disagree there, which shows the check can fail.
+//! border smoothing) disagree there, which shows the check can fail. The
+//! plugin's meshes do the same, and go back to per-cell smoothing with
+//! `TerrainSettings::smooth_across_cells` off.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::time::Duration;
 
+use bevy::asset::AssetPlugin;
+use bevy::mesh::VertexAttributeValues;
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellKey, Edit, Octree, OctreeConfig, SeamedMesher, ShadedCell};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::mesh::{
     CellMesh, DEFAULT_SMOOTHING_DEGREES, cell_meshes_around, cell_meshes_of,
 };
-use bevy_chisel::terrain::{CarveTool, GridHeightfield, TerrainBase, apply_carve_with_faces};
+use bevy_chisel::terrain::{
+    CarveTool, GridHeightfield, Terrain, TerrainBase, TerrainCell, TerrainPlugin, TerrainSettings,
+    apply_carve_with_faces,
+};
 
 /// Cell meshes by key.
 type Meshes = BTreeMap<CellKey, Vec<CellMesh>>;
@@ -22,6 +30,13 @@ type Meshes = BTreeMap<CellKey, Vec<CellMesh>>;
 /// A 24 × 24 heightfield of gentle waves (slopes under 17°) on a 1 cm
 /// grid, 1 m between samples, in cells of at most 40 BSP nodes.
 fn gentle_hills() -> (Octree, Quantization) {
+    let (base, config, grid) = gentle_hills_base();
+    let octree = base.build(config).expect("a valid heightfield");
+    (octree, grid)
+}
+
+/// What [`gentle_hills`] builds its octree from.
+fn gentle_hills_base() -> (TerrainBase, OctreeConfig, Quantization) {
     let n = 24u32;
     let heights = (0..n * n)
         .map(|k| {
@@ -46,9 +61,8 @@ fn gentle_hills() -> (Octree, Quantization) {
         max_bsp_nodes: 40,
         ..OctreeConfig::default()
     };
-    let octree = base.build(config).expect("a valid heightfield");
     let grid = Quantization::new(0.01, [0.0; 3]).expect("a valid unit");
-    (octree, grid)
+    (base, config, grid)
 }
 
 /// Takes an update's cells into `meshes`, smoothed across borders
@@ -248,4 +262,82 @@ fn smooth_normals_agree_across_cell_borders_and_after_carves() {
     let compared = agrees_with_scratch(&meshes, &scratch);
     eprintln!("after the carves: {compared} border vertices equal to a build from scratch");
     assert!(compared > 200, "only {compared} border vertices compared");
+}
+
+/// The cell meshes a terrain entity shows, by cell.
+fn shown_meshes(app: &mut App) -> Meshes {
+    let mut query = app.world_mut().query::<(&TerrainCell, &Mesh3d)>();
+    let shown: Vec<(CellKey, u8, AssetId<Mesh>)> = query
+        .iter(app.world())
+        .map(|(cell, mesh)| (cell.key, cell.label, mesh.id()))
+        .collect();
+    let assets = app.world().resource::<Assets<Mesh>>();
+    let mut meshes = Meshes::new();
+    for (key, label, id) in shown {
+        let mesh = assets.get(id).expect("a shown mesh");
+        let attribute = |name| match mesh.try_attribute_option(name) {
+            Ok(Some(VertexAttributeValues::Float32x3(values))) => values.clone(),
+            _ => panic!("cell meshes have Float32x3 positions and normals"),
+        };
+        meshes.entry(key).or_default().push(CellMesh {
+            label,
+            positions: attribute(Mesh::ATTRIBUTE_POSITION),
+            normals: attribute(Mesh::ATTRIBUTE_NORMAL),
+            ..CellMesh::default()
+        });
+    }
+    meshes
+}
+
+/// The gentle hills as a terrain entity, meshed by the plugin with
+/// `TerrainSettings::smooth_across_cells` as given.
+fn plugin_meshes(smooth_across_cells: bool) -> Meshes {
+    let (base, config, grid) = gentle_hills_base();
+    let terrain = Terrain::from_base(grid, base, config).expect("a valid terrain");
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, AssetPlugin::default(), TerrainPlugin))
+        .init_asset::<Mesh>()
+        .init_asset::<StandardMaterial>()
+        .insert_resource(TerrainSettings {
+            smooth_across_cells,
+            ..TerrainSettings::default()
+        });
+    let entity = app.world_mut().spawn(terrain).id();
+    for _ in 0..20_000 {
+        app.update();
+        let idle = app
+            .world()
+            .get::<Terrain>(entity)
+            .is_some_and(Terrain::is_idle);
+        if idle
+            && app
+                .world_mut()
+                .query::<&TerrainCell>()
+                .iter(app.world())
+                .count()
+                > 0
+        {
+            app.update();
+            return shown_meshes(&mut app);
+        }
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    panic!("the terrain did not settle");
+}
+
+#[test]
+fn the_plugin_shares_border_normals_unless_told_not_to() {
+    let shared = plugin_meshes(true);
+    let (compared, disagree, worst) = border_agreement(&shared);
+    assert!(compared > 100, "only {compared} shared smooth vertices");
+    assert_eq!(
+        disagree, 0,
+        "normals differ across borders by up to {worst}°"
+    );
+    let own = plugin_meshes(false);
+    let (compared, disagree, _) = border_agreement(&own);
+    assert!(
+        disagree > compared / 4,
+        "with smooth_across_cells off, {disagree} of {compared} border vertices differ"
+    );
 }
