@@ -2,15 +2,19 @@
 //! a carve across the boundary between a full-detail chunk and a coarse
 //! one leaves no crack (rays on a dense grid, vertical and slanted, all
 //! hit the drawn meshes), the coarse chunk shows the crater within its
-//! stated error, and the two swap when the focus moves.
+//! stated error, and the two swap when the focus moves; skirts shade as
+//! the ground they hang from.
 
 use bevy::asset::AssetPlugin;
 use bevy::mesh::{Indices, VertexAttributeValues};
+use std::collections::HashMap;
+
 use bevy::prelude::*;
 use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::mesh::cell_meshes;
+use bevy_chisel::terrain::world::lod_mesh::{LodPyramid, edited_pyramid, source_pyramid};
 use bevy_chisel::terrain::{
     CarveTool, ChunkCoord, LodMesh, LodSettings, NoiseOctave, StreamSettings, Terrain,
     TerrainFocus, TerrainPlugin, TerrainWorld, ValueNoise, WorldCarve, WorldLayout, WorldLod,
@@ -470,4 +474,50 @@ fn a_still_focus_costs_no_pass_over_the_coarse_chunks() {
         }
     }
     assert!(checked >= 20, "{checked}");
+}
+
+/// Every vertex of every level's meshes has an upward normal, and the
+/// vertices at one position share one normal: a skirt's top vertex has
+/// the normal of the ground vertex it hangs from. Returns how many
+/// vertices met another at their position.
+fn assert_skirts_shade_as_the_ground(pyramid: &LodPyramid) -> usize {
+    let mut shared = 0;
+    for level in &pyramid.levels {
+        for (_, mesh) in &level.meshes {
+            let attribute = |name| match mesh.try_attribute_option(name) {
+                Ok(Some(VertexAttributeValues::Float32x3(values))) => values.clone(),
+                _ => panic!("level {}: Float32x3 positions and normals", level.level),
+            };
+            let normals = attribute(Mesh::ATTRIBUTE_NORMAL);
+            let mut at: HashMap<[u32; 3], [f32; 3]> = HashMap::new();
+            for (p, n) in attribute(Mesh::ATTRIBUTE_POSITION).iter().zip(&normals) {
+                assert!(
+                    n[1] > 0.0,
+                    "level {}: vertex {p:?} has normal {n:?}",
+                    level.level
+                );
+                if let Some(other) = at.insert(p.map(f32::to_bits), *n) {
+                    assert_eq!(other, *n, "level {}: two normals at {p:?}", level.level);
+                    shared += 1;
+                }
+            }
+        }
+    }
+    shared
+}
+
+#[test]
+fn skirts_shade_as_the_ground_they_hang_from() {
+    let (layout, source) = (layout(), source());
+    let coord = ChunkCoord { x: 1, z: -2 };
+    let unedited = source_pyramid(&layout, &source, coord).expect("source pyramid");
+    let world = TerrainWorld::new(layout.clone(), source.clone()).expect("a valid world");
+    let chunk = world.generate_chunk(coord).expect("chunk");
+    let edited =
+        edited_pyramid(&layout, &source, coord, chunk.octree(), 0).expect("edited pyramid");
+    for pyramid in [&unedited, &edited] {
+        // Skirt tops coincide with ground vertices along all four sides.
+        let shared = assert_skirts_shade_as_the_ground(pyramid);
+        assert!(shared > 0, "no skirt vertex met a ground vertex");
+    }
 }
