@@ -3,11 +3,14 @@
 //! that a carve cuts through falls as one [`TerrainDebris`] whose exact
 //! volume is what the chunks lost besides the carve, summed over the
 //! chunks exactly; a slab still held by a pillar in the neighbouring chunk
-//! stays; the same carves give the same chunks and debris twice.
+//! stays; over the world's limits nothing falls; the same carves give the
+//! same chunks and debris twice.
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{Edit, ExactVolume};
-use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, TerrainDebris, WorldCarve};
+use bevy_chisel::terrain::{
+    CarveShape, CarveTool, ChunkCoord, DebrisLimits, TerrainDebris, TerrainWorld, WorldCarve,
+};
 
 use super::terrain_world::{app_with, settle, terrain, the_world, world};
 
@@ -62,7 +65,12 @@ const CUT: ([i64; 3], [i64; 3]) = ([25, 21, 9], [30, 23, 14]);
 /// A world with a slab from x = 26 to 38 over the border x = 32 on a
 /// pillar in chunk (0, 0), and also one in chunk (1, 0) when `held`.
 fn slab_world(held: bool) -> (App, Entity) {
-    let (mut app, world, _) = app_with(world(), Vec3::new(32.0, 30.0, 16.0));
+    slab_in(world(), held)
+}
+
+/// [`slab_world`] in `world`.
+fn slab_in(world: TerrainWorld, held: bool) -> (App, Entity) {
+    let (mut app, world, _) = app_with(world, Vec3::new(32.0, 30.0, 16.0));
     edit(&mut app, world, cuboid(PILLAR.0, PILLAR.1), Edit::Add(1));
     if held {
         edit(
@@ -191,4 +199,27 @@ fn the_same_carves_give_the_same_chunks_and_debris() {
     let first = run();
     assert_eq!(first.1, vec![falling()]);
     assert_eq!(first, run());
+}
+
+/// Over the world's limits the slab stays where it is, whole; at them
+/// exactly it falls.
+#[test]
+fn over_the_world_limits_nothing_falls_across_borders() {
+    let limited = |volume: u128| {
+        world().with_debris_limits(DebrisLimits {
+            max_volume: Some(volume),
+            max_cells: None,
+        })
+    };
+    let (mut app, world) = slab_in(limited(200), false);
+    let before = volumes(&app, world, &[at(1, 0)]);
+    edit(&mut app, world, cuboid(CUT.0, CUT.1), Edit::Subtract);
+    assert!(debris(&mut app).is_empty(), "201 is over 200");
+    assert_eq!(volumes(&app, world, &[at(1, 0)]), before);
+    assert_eq!(the_world(&app, world).stats().detached_across, 0);
+    let (mut app, world) = slab_in(limited(201), false);
+    edit(&mut app, world, cuboid(CUT.0, CUT.1), Edit::Subtract);
+    let pieces = debris(&mut app);
+    assert_eq!(pieces.len(), 1);
+    assert_eq!(pieces[0].exact_volume, falling());
 }
