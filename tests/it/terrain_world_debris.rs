@@ -3,13 +3,15 @@
 //! that a carve cuts through falls as one [`TerrainDebris`] whose exact
 //! volume is what the chunks lost besides the carve, summed over the
 //! chunks exactly; a slab still held by a pillar in the neighbouring chunk
-//! stays; over the world's limits nothing falls; the same carves give the
-//! same chunks and debris twice.
+//! stays; over the world's limits nothing falls; undoing the cut in its
+//! chunk brings that chunk's part back; the same carves give the same
+//! chunks and debris twice.
 
 use bevy::prelude::*;
-use bevy_chisel::bsp::octree::{Edit, ExactVolume};
+use bevy_chisel::bsp::octree::{Edit, ExactVolume, StateHash};
 use bevy_chisel::terrain::{
-    CarveShape, CarveTool, ChunkCoord, DebrisLimits, TerrainDebris, TerrainWorld, WorldCarve,
+    CarveShape, CarveTool, ChunkCoord, DebrisLimits, TerrainDebris, TerrainWorld, UndoCarve,
+    WorldCarve,
 };
 
 use super::terrain_world::{app_with, settle, terrain, the_world, world};
@@ -222,4 +224,27 @@ fn over_the_world_limits_nothing_falls_across_borders() {
     let pieces = debris(&mut app);
     assert_eq!(pieces.len(), 1);
     assert_eq!(pieces[0].exact_volume, falling());
+}
+
+/// The detach joins the cut's undo step in the chunk that was cut: undo
+/// there gives that chunk exactly its state before the cut (its part of
+/// the slab back), with a hash that agrees with its octree; the
+/// neighbour keeps its part out.
+#[test]
+fn undoing_the_cut_brings_back_the_part_in_its_chunk() {
+    let (mut app, world) = slab_world(false);
+    let hash = |app: &App, c| terrain(app, world, c).state_hash();
+    let before = hash(&app, at(0, 0));
+    edit(&mut app, world, cuboid(CUT.0, CUT.1), Edit::Subtract);
+    let neighbour = hash(&app, at(1, 0));
+    let Some(entity) = the_world(&app, world).chunk_entity(at(0, 0)) else {
+        panic!("chunk (0, 0) is live");
+    };
+    app.world_mut().write_message(UndoCarve { terrain: entity });
+    settle(&mut app, world);
+    let chunk = terrain(&app, world, at(0, 0));
+    assert_eq!(chunk.state_hash(), before);
+    assert_eq!(StateHash::of(chunk.octree()).value(), before);
+    assert_eq!(chunk.octree().label_at([30, 26, 12]).unwrap(), Some(1));
+    assert_eq!(hash(&app, at(1, 0)), neighbour);
 }
