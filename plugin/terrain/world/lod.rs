@@ -629,7 +629,7 @@ enum Job {
 
 /// Whether a chunk's terrain differs from what its source gives.
 fn edited(terrain: &Terrain) -> bool {
-    !terrain.journal().is_empty() || terrain.undo_depth() > 0
+    terrain.is_edited()
 }
 
 fn despawn_all(commands: &mut Commands, entities: &[Entity]) {

@@ -73,9 +73,15 @@
 //!   borders show no line; on a chunk's sides the chunk's mesher knows
 //!   only its own cells' faces (the exchange carries points, not wedges),
 //!   so shading can show a faint line along chunk borders.
-//! - **Debris.** Detection runs per chunk with the chunk's sides as
-//!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
-//!   in place, anchored by the border; nothing is wrongly detached.
+//!
+//! ## Debris
+//!
+//! Each chunk's jobs detach the pieces within the chunk, its sides
+//! anchoring ([`chunk_debris`]); a pass over all live chunks
+//! ([`debris`]) then joins the chunks exactly across their shared sides,
+//! so a piece cut loose over one or more borders falls as one
+//! [`TerrainDebris`](super::TerrainDebris), taken out of every chunk it
+//! spans. A side towards a chunk that is not live anchors.
 //!
 //! ## Level of detail
 //!
@@ -96,6 +102,7 @@
 //! borders there can be apart (full-detail chunks have walls there), so no
 //! crack opens between chunks of different levels, full detail included.
 
+pub mod debris;
 pub mod lod;
 pub mod lod_mesh;
 pub mod seams;
@@ -109,7 +116,7 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy::tasks::Task;
-use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig, Edit};
+use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig, DebrisLimits, Edit};
 use chisel_bsp::tree::Label;
 
 use super::component::Terrain;
@@ -189,6 +196,8 @@ pub struct WorldStats {
     pub failed: u64,
     /// Time spent building chunks on the pool (generated and restored).
     pub build_time: Duration,
+    /// Pieces cut loose across chunk borders so far ([`debris`]).
+    pub detached_across: u64,
 }
 
 /// The state of one chunk the world knows.
@@ -230,6 +239,8 @@ pub struct TerrainWorld {
     pub(crate) next_request: u64,
     /// The chunks' border points and the outside points they were given.
     pub(crate) seams: seams::WorldSeams,
+    /// What one detach across chunk borders may take out ([`debris`]).
+    pub(crate) debris_limits: DebrisLimits,
 }
 
 impl TerrainWorld {
@@ -250,7 +261,24 @@ impl TerrainWorld {
             stats: WorldStats::default(),
             next_request: 0,
             seams: seams::WorldSeams::default(),
+            debris_limits: DebrisLimits::default(),
         })
+    }
+
+    /// Bounds what one detach across chunk borders takes out, all pieces
+    /// in all chunks together, in cubic grid units and convex cells; over
+    /// them the pieces stay in place ([`debris`]). No limit by default.
+    #[must_use]
+    pub fn with_debris_limits(mut self, limits: DebrisLimits) -> Self {
+        self.debris_limits = limits;
+        self
+    }
+
+    /// The limits of a detach across chunk borders
+    /// ([`TerrainWorld::with_debris_limits`]).
+    #[must_use]
+    pub fn debris_limits(&self) -> DebrisLimits {
+        self.debris_limits
     }
 
     /// With these streaming radii and build limit.

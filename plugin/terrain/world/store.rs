@@ -69,7 +69,7 @@ impl TerrainWorld {
                 unknown.insert(*coord);
                 continue;
             };
-            if terrain.journal().is_empty() && terrain.undo_depth() == 0 {
+            if !terrain.is_edited() {
                 continue;
             }
             if !terrain.is_idle() {

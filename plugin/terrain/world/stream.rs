@@ -190,7 +190,7 @@ pub fn stream_chunks(
             match terrains.get(entity) {
                 // Sealing again at a neighbour's new points is dropped.
                 Ok(terrain) if !terrain.is_idle_but_for_seams() => continue,
-                Ok(terrain) if !terrain.journal().is_empty() || terrain.undo_depth() > 0 => {
+                Ok(terrain) if terrain.is_edited() => {
                     let _span = bevy::log::info_span!("chisel::stream::to_bytes").entered();
                     world.stored.insert(coord, Arc::new(terrain.to_bytes()));
                 }
@@ -307,8 +307,12 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
     for (coord, built) in done {
         world.stats.build_time += built.time;
         match built.terrain {
-            Ok(terrain) => {
+            Ok(mut terrain) => {
                 if built.restored {
+                    // Stored with no carve of its own: it lost solid to a
+                    // detach across chunk borders (`debris`).
+                    let own_edits = terrain.is_edited();
+                    terrain.detached_across |= !own_edits;
                     world.stats.restored += 1;
                     world.stored.remove(&coord);
                 } else {
