@@ -53,6 +53,15 @@
 //! A chunk whose build fails (a bad source sample, the same on every peer)
 //! drops its carves as in a local world; it counts as reported.
 //!
+//! Limits: the world hash is made of the hashes the chunks report after
+//! networked carves, so a local change to a chunk shows only once a later
+//! world carve reaches that chunk. A resync replaces every chunk of the
+//! client's world (live ones stream in again). A networked world is
+//! carved only through the server: a local [`WorldCarve`] on any peer's
+//! networked world is outside its order and makes it differ.
+//!
+//! [`WorldCarve`]: crate::terrain::WorldCarve
+//!
 //! - [`super::world_server`]: validation, order, broadcast, hashes and
 //!   snapshots on the server.
 //! - [`super::world_client`]: [`NetWorldCarveRequest`], ordered routing,
