@@ -92,3 +92,5 @@ mod terrain_world_seams;
 mod net_hostile;
 #[cfg(feature = "net")]
 mod net_replication;
+#[cfg(feature = "net")]
+mod net_world;
