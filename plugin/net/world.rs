@@ -53,6 +53,15 @@
 //! A chunk whose build fails (a bad source sample, the same on every peer)
 //! drops its carves as in a local world; it counts as reported.
 //!
+//! **Debris.** Each chunk detaches what a carve cuts loose within it, the
+//! same on every peer. A piece over a chunk border is detached only by a
+//! pass over the live chunks together ([`crate::terrain::world::debris`]),
+//! whose result depends on which neighbours are live; so adding
+//! [`NetWorld`] turns that pass off
+//! ([`TerrainWorld::with_debris_across_borders`]), and such a piece stays
+//! in place, held by the border. Spawn the world and its [`NetWorld`]
+//! together.
+//!
 //! Limits: the world hash is made of the hashes the chunks report after
 //! networked carves, so a local change to a chunk shows only once a later
 //! world carve reaches that chunk. A resync replaces every chunk of the
@@ -81,6 +90,17 @@ use super::wire::{NetWorldCarve, ServerPacket};
 use super::world_client::NetWorldCarveRequest;
 #[cfg(doc)]
 use crate::terrain::Terrain;
+
+/// Turns off debris across chunk borders on a world that becomes
+/// networked (see the module docs).
+pub(super) fn no_debris_across_borders(
+    add: On<Add, NetWorld>,
+    mut worlds: Query<&mut TerrainWorld>,
+) {
+    if let Ok(mut world) = worlds.get_mut(add.entity) {
+        world.debris_across_borders = false;
+    }
+}
 
 /// The world hash of edited chunks given as `(chunk, chunk state hash)`:
 /// the wrapping sum of XXH64 over each chunk's `x`, `z` and hash (little

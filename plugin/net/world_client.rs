@@ -110,6 +110,7 @@ struct WorldFollower {
 /// Adds the world systems and messages to [`super::NetClientPlugin`].
 pub(super) fn build(app: &mut App) {
     app.init_resource::<WorldFollower>()
+        .add_observer(super::world::no_debris_across_borders)
         .add_message::<NetWorldCarveRequest>()
         .add_message::<WorldSynced>()
         .add_message::<WorldDesynced>()

@@ -65,6 +65,7 @@ struct WorldSnapshot {
 pub(super) fn build(app: &mut App) {
     app.init_resource::<WorldLedger>()
         .add_observer(on_authorized)
+        .add_observer(super::world::no_debris_across_borders)
         .add_systems(
             Update,
             (

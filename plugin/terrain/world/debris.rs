@@ -82,6 +82,14 @@ pub fn detach_across_borders(
         if !seeded {
             continue;
         }
+        if !world.debris_across_borders {
+            for &entity in &live {
+                if let Ok(mut terrain) = terrains.get_mut(entity) {
+                    terrain.runtime.border_seeds.clear();
+                }
+            }
+            continue;
+        }
         let _span = bevy::log::info_span!("chisel::world::detach_across_borders").entered();
         let mut chunks = Vec::new();
         let mut entities = Vec::new();

@@ -254,6 +254,9 @@ pub struct TerrainWorld {
     pub(crate) seams: seams::WorldSeams,
     /// What one detach across chunk borders may take out ([`debris`]).
     pub(crate) debris_limits: DebrisLimits,
+    /// Whether pieces cut loose across chunk borders are detached
+    /// ([`debris`]); off in a networked world.
+    pub(crate) debris_across_borders: bool,
 }
 
 impl TerrainWorld {
@@ -276,6 +279,7 @@ impl TerrainWorld {
             next_request: 0,
             seams: seams::WorldSeams::default(),
             debris_limits: DebrisLimits::default(),
+            debris_across_borders: true,
         })
     }
 
@@ -293,6 +297,24 @@ impl TerrainWorld {
     #[must_use]
     pub fn debris_limits(&self) -> DebrisLimits {
         self.debris_limits
+    }
+
+    /// Whether pieces cut loose across chunk borders fall ([`debris`]; on
+    /// by default). Off, each chunk detaches only what lies within it and
+    /// a piece over a border stays, held by it. The detach depends on which
+    /// chunks are live, so a networked world (feature `net`, whose peers
+    /// hold different chunks) turns it off to stay identical on every peer.
+    #[must_use]
+    pub fn with_debris_across_borders(mut self, on: bool) -> Self {
+        self.debris_across_borders = on;
+        self
+    }
+
+    /// Whether pieces cut loose across chunk borders fall
+    /// ([`TerrainWorld::with_debris_across_borders`]).
+    #[must_use]
+    pub fn debris_across_borders(&self) -> bool {
+        self.debris_across_borders
     }
 
     /// With these streaming radii and build limit.
