@@ -29,7 +29,8 @@ use bevy::prelude::*;
 use bevy::tasks::Task;
 use chisel_bsp::exact::Point4;
 use chisel_bsp::octree::{
-    CellFaces, CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, SeamedMesher, Tool,
+    CellFaces, CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, PointWedges,
+    SeamedMesher, Tool,
 };
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, Label};
@@ -83,9 +84,11 @@ pub(crate) enum Job {
         requested: Instant,
     },
     /// Seal the cells again at new outside points (the wall points of
-    /// neighbouring chunks on the cube's sides).
+    /// neighbouring chunks on the cube's sides), and shade them again with
+    /// new outside wedges (those chunks' surface around the points).
     Reseal {
         outside: Vec<Point4>,
+        wedges: PointWedges,
     },
 }
 

@@ -83,6 +83,8 @@ mod terrain_world;
 #[cfg(feature = "terrain")]
 mod terrain_world_lod;
 #[cfg(feature = "terrain")]
+mod terrain_world_normals;
+#[cfg(feature = "terrain")]
 mod terrain_world_seams;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
