@@ -277,3 +277,24 @@ fn four_octrees_around_a_corner_share_the_surface_at_their_border_points() {
         }
     }
 }
+
+#[test]
+fn a_mesher_without_shading_hands_back_no_wedges_and_ignores_given_ones() {
+    let shaded = Chunk::new(1, 0);
+    let mut plain = SeamedMesher::new();
+    let octree = Chunk::new(0, 0).octree;
+    let all: Vec<CellKey> = octree.leaves().into_iter().map(|(k, _)| k).collect();
+    plain.update(&octree, all, BTreeMap::new());
+    let cube = octree.root_box();
+    let given = shaded.mesher.border_wedges_in(&shaded.octree, &cube);
+    assert!(!given.is_empty(), "the shading mesher has border wedges");
+    assert!(
+        given
+            .iter()
+            .all(|(p, w)| p.to_f64()[0] == SIZE as f64 && !w.is_empty()),
+        "all on the shared side x = SIZE, each with wedges"
+    );
+    assert!(plain.border_wedges_in(&octree, &cube).is_empty());
+    plain.set_outside_wedges(given);
+    assert!(plain.update(&octree, [], BTreeMap::new()).is_empty());
+}
