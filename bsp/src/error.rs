@@ -312,6 +312,14 @@ pub enum Error {
         /// The volume limit, in cubic grid units.
         max_volume: Option<u128>,
     },
+    /// Chunks for a detach across chunks that do not form a grid of
+    /// cubes side by side (two cubes overlap), or a seed naming no chunk
+    /// ([`crate::octree::detach_across_chunks`]).
+    #[error("invalid chunks: {reason}")]
+    InvalidChunks {
+        /// What is wrong with them.
+        reason: String,
+    },
     /// Reading or writing an octree file failed.
     #[error("octree file: {message}")]
     Io {

@@ -137,16 +137,17 @@ impl Plugin for NetClientPlugin {
             .register_type::<NetCarveRequest>()
             .register_type::<NetCarveResult>()
             .register_type::<TerrainSynced>()
-            .register_type::<Desynced>()
-            .add_systems(
-                Update,
-                (
-                    (send_requests, receive_packets, hand_over)
-                        .chain()
-                        .before(TerrainSystems::Carve),
-                    compare_hashes.after(TerrainSystems::Mesh),
-                ),
-            );
+            .register_type::<Desynced>();
+        super::world_client::build(app);
+        app.add_systems(
+            Update,
+            (
+                (send_requests, receive_packets, hand_over)
+                    .chain()
+                    .before(TerrainSystems::Carve),
+                compare_hashes.after(TerrainSystems::Mesh),
+            ),
+        );
     }
 }
 
@@ -206,34 +207,25 @@ fn receive_packets(
                 let follow = ledger.terrains.entry(*terrain).or_default();
                 follow.check = Some((*seq, *hash));
             }
+            // World packets: `super::world_client`.
+            ServerPacket::WorldCarve(_)
+            | ServerPacket::WorldCheck { .. }
+            | ServerPacket::WorldSnapshot(_) => {}
             ServerPacket::Snapshot(part) => {
                 let follow = ledger.terrains.entry(part.terrain).or_default();
-                if part.total > MAX_SNAPSHOT_BYTES {
-                    error!(
-                        "snapshot of terrain {} refused: {} bytes, more than the {} a client \
-                         accepts",
-                        part.terrain, part.total, MAX_SNAPSHOT_BYTES
-                    );
-                    follow.assembling = None;
-                    continue;
-                }
-                if part.offset == 0 {
-                    follow.assembling = Some((part.seq, Vec::new()));
-                }
-                let Some((seq, bytes)) = follow.assembling.as_mut() else {
-                    continue;
-                };
-                if *seq != part.seq || bytes.len() as u64 != part.offset {
-                    warn!("snapshot part out of order for terrain {}", part.terrain);
-                    follow.assembling = None;
-                    continue;
-                }
-                bytes.extend_from_slice(&part.bytes);
-                if (bytes.len() as u64) < part.total {
-                    continue;
-                }
-                let Some((seq, bytes)) = follow.assembling.take() else {
-                    continue;
+                let (seq, bytes) = match assemble(
+                    &mut follow.assembling,
+                    part.seq,
+                    part.total,
+                    part.offset,
+                    &part.bytes,
+                ) {
+                    Assembled::Partial => continue,
+                    Assembled::Whole(seq, bytes) => (seq, bytes),
+                    Assembled::Dropped(why) => {
+                        warn!("snapshot of terrain {} dropped: {why}", part.terrain);
+                        continue;
+                    }
                 };
                 let mut terrain = match Terrain::from_snapshot_bytes(&bytes) {
                     Ok(terrain) => terrain,
@@ -274,6 +266,52 @@ fn receive_packets(
                 });
             }
         }
+    }
+}
+
+/// What became of one snapshot part ([`assemble`]).
+pub(super) enum Assembled {
+    /// More parts to come (or a part without its start, ignored).
+    Partial,
+    /// The last part: the snapshot's `seq` and its bytes.
+    Whole(u64, Vec<u8>),
+    /// The snapshot is dropped: too large or a part out of order.
+    Dropped(String),
+}
+
+/// Adds a part (`offset` into a snapshot of `total` bytes after carve
+/// `seq`) to the snapshot being received in `slot`: a part at offset 0
+/// starts a new one.
+pub(super) fn assemble(
+    slot: &mut Option<(u64, Vec<u8>)>,
+    seq: u64,
+    total: u64,
+    offset: u64,
+    bytes: &[u8],
+) -> Assembled {
+    if total > MAX_SNAPSHOT_BYTES {
+        *slot = None;
+        return Assembled::Dropped(format!(
+            "{total} bytes, more than the {MAX_SNAPSHOT_BYTES} a client accepts"
+        ));
+    }
+    if offset == 0 {
+        *slot = Some((seq, Vec::new()));
+    }
+    let Some((at, have)) = slot.as_mut() else {
+        return Assembled::Partial;
+    };
+    if *at != seq || have.len() as u64 != offset {
+        *slot = None;
+        return Assembled::Dropped("a part out of order".into());
+    }
+    have.extend_from_slice(bytes);
+    if (have.len() as u64) < total {
+        return Assembled::Partial;
+    }
+    match slot.take() {
+        Some((seq, bytes)) => Assembled::Whole(seq, bytes),
+        None => Assembled::Partial,
     }
 }
 
@@ -368,5 +406,51 @@ fn compare_hashes(
             seq,
             hash: local,
         }));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parts_assemble_in_order_and_a_stray_part_drops_the_snapshot() {
+        let bytes: Vec<u8> = (0..=255).collect();
+        let parts: Vec<(u64, &[u8])> = super::super::wire::snapshot_parts(&bytes, 100).collect();
+        assert_eq!(
+            parts.iter().map(|(o, p)| (*o, p.len())).collect::<Vec<_>>(),
+            vec![(0, 100), (100, 100), (200, 56)]
+        );
+        let mut slot = None;
+        for (i, (offset, part)) in parts.iter().enumerate() {
+            match assemble(&mut slot, 7, 256, *offset, part) {
+                Assembled::Partial => assert!(i < 2, "part {i}"),
+                Assembled::Whole(seq, whole) => {
+                    assert_eq!((i, seq), (2, 7));
+                    assert_eq!(whole, bytes);
+                }
+                Assembled::Dropped(why) => panic!("part {i}: {why}"),
+            }
+        }
+        assert!(slot.is_none());
+        // A part of another snapshot, or at the wrong offset, drops it.
+        assert!(matches!(
+            assemble(&mut slot, 8, 256, 0, parts[0].1),
+            Assembled::Partial
+        ));
+        assert!(matches!(
+            assemble(&mut slot, 9, 256, 100, parts[1].1),
+            Assembled::Dropped(_)
+        ));
+        assert!(slot.is_none());
+        // A part without its start is ignored; an oversize one dropped.
+        assert!(matches!(
+            assemble(&mut slot, 8, 256, 100, parts[1].1),
+            Assembled::Partial
+        ));
+        assert!(matches!(
+            assemble(&mut slot, 8, MAX_SNAPSHOT_BYTES + 1, 0, &[]),
+            Assembled::Dropped(_)
+        ));
     }
 }

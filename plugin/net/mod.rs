@@ -26,11 +26,18 @@
 //! - [`client`] — [`NetClientPlugin`]: requests, ordered application,
 //!   snapshots, hash comparison.
 //! - [`secure`] — connect tokens and the secure transport.
+//! - [`world`] — streamed worlds ([`crate::terrain::TerrainWorld`]) with a
+//!   [`NetWorld`]: world carves in order, edited chunks in snapshots, a
+//!   world hash ([`world_state_hash`]); [`world_server`] and
+//!   [`world_client`] are its two sides.
 
 pub mod client;
 pub mod secure;
 pub mod server;
 pub mod wire;
+pub mod world;
+pub mod world_client;
+pub mod world_server;
 
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::time::SystemTime;
@@ -54,9 +61,12 @@ pub use secure::{
 };
 pub use server::{DesyncReported, NetLimits, NetServerPlugin, NetServerStats, RequestRejected};
 pub use wire::{
-    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, RejectReason, ServerPacket,
-    SnapshotPart, TerrainId, WirePiece, WirePose, WireShape, WireTool,
+    ChunkSnapshotPart, ClientPacket, ClientRequest, NetCarve, NetTerrain, NetWorld, NetWorldCarve,
+    Outcome, RejectReason, ServerPacket, SnapshotPart, TerrainId, WirePiece, WirePose, WireShape,
+    WireTool, WorldId, WorldSnapshotPart,
 };
+pub use world::world_state_hash;
+pub use world_client::{NetWorldCarveRequest, WorldDesynced, WorldSynced};
 
 /// The netcode protocol id of this wire format: peers with another id do
 /// not connect.
@@ -212,6 +222,10 @@ mod tests {
             (TypeId::of::<crate::terrain::GridCarve>(), "GridCarve"),
             (TypeId::of::<ClientPacket>(), "ClientPacket"),
             (TypeId::of::<ServerPacket>(), "ServerPacket"),
+            (TypeId::of::<NetWorld>(), "NetWorld"),
+            (TypeId::of::<NetWorldCarveRequest>(), "NetWorldCarveRequest"),
+            (TypeId::of::<WorldSynced>(), "WorldSynced"),
+            (TypeId::of::<WorldDesynced>(), "WorldDesynced"),
         ];
         let missing: Vec<&str> = types
             .iter()

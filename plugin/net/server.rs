@@ -41,6 +41,11 @@ pub struct NetLimits {
     pub check_interval: Duration,
     /// Bytes of one snapshot part.
     pub snapshot_part_bytes: usize,
+    /// Chunks of a networked world a carve may reach: those with
+    /// `|x|` and `|z|` at most this ([`RejectReason::OutsideWorld`]
+    /// beyond), so that no client makes the server build and keep chunks
+    /// without bound.
+    pub max_world_chunk: i64,
 }
 
 impl Default for NetLimits {
@@ -53,6 +58,7 @@ impl Default for NetLimits {
             burst: 40.0,
             check_interval: Duration::from_millis(250),
             snapshot_part_bytes: 256 << 10,
+            max_world_chunk: 1 << 16,
         }
     }
 }
@@ -122,7 +128,7 @@ struct Allowance {
 }
 
 #[derive(Resource, Default)]
-struct ServerLedger {
+pub(super) struct ServerLedger {
     terrains: HashMap<TerrainId, Ledger>,
     allowance: HashMap<ClientId, Allowance>,
     /// Clients that need a snapshot of every terrain.
@@ -160,16 +166,17 @@ impl Plugin for NetServerPlugin {
             .register_type::<NetServerStats>()
             .register_type::<RequestRejected>()
             .register_type::<DesyncReported>()
-            .add_observer(on_authorized)
-            .add_systems(
-                Update,
-                (
-                    (receive_requests, send_snapshots)
-                        .chain()
-                        .before(TerrainSystems::Carve),
-                    report_results.after(TerrainSystems::Mesh),
-                ),
-            );
+            .add_observer(on_authorized);
+        super::world_server::build(app);
+        app.add_systems(
+            Update,
+            (
+                (receive_requests, send_snapshots)
+                    .chain()
+                    .before(TerrainSystems::Carve),
+                report_results.after(TerrainSystems::Mesh),
+            ),
+        );
     }
 }
 
@@ -185,6 +192,26 @@ fn validate(
     terrain: &Terrain,
     limits: &NetLimits,
 ) -> Result<GridTool, RejectReason> {
+    check_size(tool, limits)?;
+    terrain.check_edit(edit).map_err(invalid)?;
+    let grid = round_tool(tool, terrain.quantization())?;
+    let built = check_grid_tool(&grid, terrain.quantization().unit(), limits)?;
+    if !built.bounds().overlaps(&terrain.octree().root_box()) {
+        return Err(RejectReason::Invalid(
+            "the tool lies entirely outside the terrain's cube".into(),
+        ));
+    }
+    Ok(grid)
+}
+
+/// A terrain error as the reason for refusing a request.
+pub(super) fn invalid(e: crate::terrain::TerrainError) -> RejectReason {
+    RejectReason::Invalid(e.to_string())
+}
+
+/// Checks a tool's pieces and points against the limits, before any
+/// geometry is built.
+pub(super) fn check_size(tool: &WireTool, limits: &NetLimits) -> Result<(), RejectReason> {
     let (pieces, points) = tool.size();
     if pieces > limits.max_pieces {
         return Err(RejectReason::TooManyPieces {
@@ -198,17 +225,33 @@ fn validate(
             limit: limits.max_points,
         });
     }
-    let invalid = |e: crate::terrain::TerrainError| RejectReason::Invalid(e.to_string());
-    terrain.check_edit(edit).map_err(invalid)?;
-    let grid = match tool {
-        WireTool::Grid(grid) => grid.clone(),
+    Ok(())
+}
+
+/// The request's tool on `grid`: a float tool rounded (the one rounding
+/// of a carve), a grid tool as sent.
+pub(super) fn round_tool(
+    tool: &WireTool,
+    grid: &chisel_bsp::tools::Quantization,
+) -> Result<GridTool, RejectReason> {
+    match tool {
+        WireTool::Grid(grid_tool) => Ok(grid_tool.clone()),
         WireTool::World(_) => tool
             .to_carve_tool()
             .ok_or_else(|| RejectReason::Invalid("no tool".into()))?
-            .to_grid(terrain.quantization())
-            .map_err(invalid)?,
-    };
-    let limit = (limits.max_tool_extent / terrain.quantization().unit()).min(1e15) as i64;
+            .to_grid(grid)
+            .map_err(invalid),
+    }
+}
+
+/// Checks a grid tool's extent against the limit (`unit`: world units per
+/// grid unit) and builds it (a degenerate or out-of-budget tool fails).
+pub(super) fn check_grid_tool(
+    grid: &GridTool,
+    unit: f64,
+    limits: &NetLimits,
+) -> Result<chisel_bsp::octree::Tool, RejectReason> {
+    let limit = (limits.max_tool_extent / unit).min(1e15) as i64;
     let extent = grid
         .pieces
         .iter()
@@ -224,17 +267,11 @@ fn validate(
     if extent > limit {
         return Err(RejectReason::TooLarge { extent, limit });
     }
-    let built = grid.build().map_err(invalid)?;
-    if !built.bounds().overlaps(&terrain.octree().root_box()) {
-        return Err(RejectReason::Invalid(
-            "the tool lies entirely outside the terrain's cube".into(),
-        ));
-    }
-    Ok(grid)
+    grid.build().map_err(invalid)
 }
 
 /// Whether `client` may send one more carve now.
-fn allow(ledger: &mut ServerLedger, client: ClientId, limits: &NetLimits) -> bool {
+pub(super) fn allow(ledger: &mut ServerLedger, client: ClientId, limits: &NetLimits) -> bool {
     let now = Instant::now();
     let allowance = ledger.allowance.entry(client).or_insert(Allowance {
         tokens: limits.burst,
@@ -300,6 +337,10 @@ fn receive_requests(
                     ledger.joining.push(client);
                 }
             }
+            // World carves and checks: `super::world_server`.
+            ClientPacket::Request(
+                ClientRequest::CarveWorld { .. } | ClientRequest::WorldDesync { .. },
+            ) => {}
             ClientPacket::Request(ClientRequest::Carve {
                 request,
                 terrain,
@@ -453,21 +494,17 @@ fn send_snapshots(
         let bytes = terrain.to_snapshot_bytes();
         let seq = terrain.last_request().unwrap_or(0);
         let pose = WirePose::from(&placed.copied().unwrap_or_default());
-        let parts: Vec<SnapshotPart> = bytes
-            .chunks(limits.snapshot_part_bytes.max(1))
-            .scan(0u64, |offset, chunk| {
-                let part = SnapshotPart {
+        let parts: Vec<SnapshotPart> =
+            super::wire::snapshot_parts(&bytes, limits.snapshot_part_bytes)
+                .map(|(offset, part)| SnapshotPart {
                     terrain: id.0,
                     seq,
                     total: bytes.len() as u64,
-                    offset: *offset,
-                    bytes: chunk.to_vec(),
+                    offset,
+                    bytes: part.to_vec(),
                     pose,
-                };
-                *offset += chunk.len() as u64;
-                Some(part)
-            })
-            .collect();
+                })
+                .collect();
         let log: Vec<NetCarve> = ledger
             .terrains
             .get(&id.0)

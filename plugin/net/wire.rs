@@ -25,11 +25,22 @@ use crate::terrain::{CarveShape, CarveTool, GridTool, MAX_ROUND_CORNERS, ToolPie
 /// A terrain's name on the network: the same on every peer.
 pub type TerrainId = u32;
 
+/// A streamed world's name on the network: the same on every peer.
+pub type WorldId = u32;
+
 /// Marks a terrain entity as replicated under this id. Put it on a
 /// server's terrain; clients get their terrains (with it) from snapshots.
 #[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[reflect(Component)]
 pub struct NetTerrain(pub TerrainId);
+
+/// Marks a [`crate::terrain::TerrainWorld`] entity as replicated under
+/// this id. Every peer spawns the world itself, from the same layout and
+/// source (a source is code, not data); put this on it on the server and
+/// on every client (see [`super::world`]).
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[reflect(Component)]
+pub struct NetWorld(pub WorldId);
 
 /// A pose in world units: translation, rotation quaternion `[x, y, z, w]`
 /// and scale, as in a Bevy `Transform`.
@@ -307,6 +318,28 @@ pub enum ClientRequest {
         /// The client's hash there.
         hash: u64,
     },
+    /// Carve a streamed world (variants are only ever appended); answered
+    /// by [`ServerPacket::Result`] with the same request id.
+    CarveWorld {
+        /// Chosen by the client.
+        request: u64,
+        /// The world.
+        world: WorldId,
+        /// The tool, in the world's local frame.
+        tool: WireTool,
+        /// What to do inside it.
+        edit: Edit,
+    },
+    /// The client's world hash after world carve `seq` differs from the
+    /// server's: send the world's snapshot.
+    WorldDesync {
+        /// The world.
+        world: WorldId,
+        /// The carve after which the hashes were compared.
+        seq: u64,
+        /// The client's world hash there.
+        hash: u64,
+    },
 }
 
 /// A client packet as the server received it.
@@ -428,6 +461,18 @@ pub enum RejectReason {
     /// coordinates, a degenerate hull, an unknown material, a miss.
     #[error("{0}")]
     Invalid(String),
+    /// No streamed world has this id (variants are only ever appended).
+    #[error("no world has id {0}")]
+    UnknownWorld(WorldId),
+    /// The tool reaches a world chunk beyond the range the server allows
+    /// ([`super::NetLimits::max_world_chunk`]).
+    #[error("the tool reaches chunk {chunk:?}, beyond the ±{limit} chunks allowed")]
+    OutsideWorld {
+        /// The chunk (x, z).
+        chunk: [i64; 2],
+        /// The limit on `|x|` and `|z|`.
+        limit: i64,
+    },
 }
 
 /// What became of a request.
@@ -462,6 +507,68 @@ pub struct SnapshotPart {
     pub pose: WirePose,
 }
 
+/// An accepted world carve, in the integer form every peer applies to the
+/// chunks the tool reaches.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NetWorldCarve {
+    /// The world.
+    pub world: WorldId,
+    /// Its place in the world's order of carves, from 1 without gaps.
+    pub seq: u64,
+    /// The exact tool, on the world's grid.
+    pub tool: GridTool,
+    /// What it does.
+    pub edit: Edit,
+}
+
+/// One part of a world snapshot: every edited chunk's terrain snapshot
+/// ([`crate::terrain::Terrain::to_snapshot_bytes`]), chunk after chunk,
+/// each cut into parts as a terrain snapshot is. A world without edited
+/// chunks is one part without a chunk.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WorldSnapshotPart {
+    /// The world.
+    pub world: WorldId,
+    /// Every world carve up to this one is in the chunks (or reached none
+    /// of them); the carves after it follow the snapshot.
+    pub seq: u64,
+    /// Edited chunks in the snapshot.
+    pub chunks: u32,
+    /// The part of one chunk (`None` only when `chunks` is 0).
+    pub chunk: Option<ChunkSnapshotPart>,
+}
+
+/// Part of one chunk's terrain snapshot in a [`WorldSnapshotPart`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChunkSnapshotPart {
+    /// The chunk's place among the snapshot's chunks, from 0.
+    pub index: u32,
+    /// The chunk (x, z).
+    pub coord: [i64; 2],
+    /// The last world carve the chunk holds (0: none): carves after
+    /// the world's `seq` up to this one are not applied to it again.
+    pub seq: u64,
+    /// Bytes of the chunk's whole snapshot.
+    pub total: u64,
+    /// Where this part starts.
+    pub offset: u64,
+    /// The part's bytes.
+    pub bytes: Vec<u8>,
+}
+
+/// Snapshot `bytes` cut into parts of at most `part_bytes` each: the
+/// offset of each part and its bytes.
+pub(crate) fn snapshot_parts(
+    bytes: &[u8],
+    part_bytes: usize,
+) -> impl Iterator<Item = (u64, &[u8])> {
+    bytes.chunks(part_bytes.max(1)).scan(0u64, |offset, part| {
+        let at = *offset;
+        *offset += part.len() as u64;
+        Some((at, part))
+    })
+}
+
 /// What the server sends.
 #[derive(Message, Reflect, Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[reflect(opaque)]
@@ -488,6 +595,21 @@ pub enum ServerPacket {
     },
     /// Part of a snapshot.
     Snapshot(SnapshotPart),
+    /// An accepted world carve, to every client (variants are only ever
+    /// appended).
+    WorldCarve(NetWorldCarve),
+    /// The server's world hash ([`super::world::world_state_hash`]) after
+    /// world carve `seq`.
+    WorldCheck {
+        /// The world.
+        world: WorldId,
+        /// The carve.
+        seq: u64,
+        /// The world hash after it.
+        hash: u64,
+    },
+    /// Part of a world snapshot.
+    WorldSnapshot(WorldSnapshotPart),
 }
 
 /// Registers the messages, in the same order on every peer.
@@ -496,7 +618,8 @@ pub(crate) fn register(app: &mut App) {
         .add_server_message::<ServerPacket>(Channel::Ordered)
         .make_message_independent::<ServerPacket>()
         .register_type::<ClientPacket>()
-        .register_type::<ServerPacket>();
+        .register_type::<ServerPacket>()
+        .register_type::<NetWorld>();
 }
 
 #[cfg(test)]

@@ -80,6 +80,7 @@ impl TerrainAsset {
             hash: t.hash.clone(),
             last_request: t.last_request,
             runtime: Runtime::default(),
+            detached_across: t.detached_across,
         }
     }
 }

@@ -76,6 +76,11 @@ pub struct Terrain {
     pub(crate) last_request: Option<u64>,
     #[reflect(ignore)]
     pub(crate) runtime: Runtime,
+    /// Whether a detach across chunk borders took solid out of it
+    /// (a chunk of a [`super::TerrainWorld`]): it then differs from its
+    /// source even with no carve of its own.
+    #[reflect(ignore)]
+    pub(crate) detached_across: bool,
 }
 
 /// Undo steps kept by default.
@@ -104,6 +109,7 @@ impl Terrain {
             history: VecDeque::new(),
             max_undo: DEFAULT_MAX_UNDO,
             runtime: Runtime::default(),
+            detached_across: false,
         })
     }
 
@@ -299,6 +305,12 @@ impl Terrain {
                 .iter()
                 .all(|u| u.reports.is_empty() && u.debris.is_empty())
             && !(r.needs_full_mesh && r.builds_cells)
+    }
+
+    /// Whether the terrain differs from its base: a carve in its journal
+    /// or undo history, or solid a detach across chunk borders took out.
+    pub(crate) fn is_edited(&self) -> bool {
+        !self.journal.is_empty() || !self.history.is_empty() || self.detached_across
     }
 
     /// Triangles currently shown.

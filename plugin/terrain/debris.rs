@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 
 use bevy::prelude::*;
 use chisel_bsp::mesh::SurfaceMesh;
-use chisel_bsp::octree::{DebrisPiece, ExactVolume};
+use chisel_bsp::octree::{DebrisCell, DebrisPiece, ExactVolume};
 use chisel_bsp::tree::Label;
 
 use super::debris_hulls::collider_hulls;
@@ -27,7 +27,7 @@ use super::jobs::JobContext;
 use super::mesh::cell_meshes_of;
 use super::physics::{ConvexPiece, PhysicsInsert};
 
-pub use chisel_bsp::octree::DebrisConfig;
+pub use chisel_bsp::octree::{DebrisConfig, DebrisLimits};
 
 /// Density of debris by default, in mass units per cubic world unit
 /// (rock, in kg/m³).
@@ -71,7 +71,8 @@ pub struct DebrisDetached {
     pub terrain: Entity,
     /// The debris entity ([`TerrainDebris`]).
     pub entity: Entity,
-    /// Its meshes, one per material, in the entity's frame.
+    /// Its meshes, one per material (per material and chunk for a piece
+    /// across chunk borders), in the entity's frame.
     pub meshes: Vec<(Label, Handle<Mesh>)>,
     /// Where its centre was in the terrain's frame.
     pub centre: Vec3,
@@ -106,11 +107,19 @@ impl BuiltDebris {
 
 /// Meshes a piece about its centre and builds its body.
 pub(crate) fn build_debris(piece: &DebrisPiece, context: &JobContext) -> BuiltDebris {
+    build_debris_of(&[piece], context)
+}
+
+/// Meshes the parts of one piece (its shares in neighbouring chunks of a
+/// [`super::TerrainWorld`], on one grid) together about their centre, and
+/// builds one body for all of them.
+pub(crate) fn build_debris_of(parts: &[&DebrisPiece], context: &JobContext) -> BuiltDebris {
     let q = &context.quantization;
     let unit = q.unit();
+    let cells: Vec<DebrisCell> = parts.iter().flat_map(|p| p.cells.iter().cloned()).collect();
     // The centre: the volume-weighted mean of the cells' corner averages.
     let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
-    for cell in &piece.cells {
+    for cell in &cells {
         let v = cell.volume.to_f64();
         let n = cell.vertices.len().max(1) as f64;
         for a in 0..3 {
@@ -121,8 +130,20 @@ pub(crate) fn build_debris(piece: &DebrisPiece, context: &JobContext) -> BuiltDe
     let grid_centre = if total > 0.0 {
         sum.map(|c| c / total)
     } else {
-        let b = piece.bounds;
-        [0, 1, 2].map(|a| 0.5 * (b.min[a] + b.max[a]) as f64)
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for b in parts.iter().map(|p| p.bounds) {
+            for a in 0..3 {
+                lo[a] = lo[a].min(b.min[a] as f64);
+                hi[a] = hi[a].max(b.max[a] as f64);
+            }
+        }
+        [0, 1, 2].map(|a| {
+            if lo[a] <= hi[a] {
+                0.5 * (lo[a] + hi[a])
+            } else {
+                0.0
+            }
+        })
     };
     let centre = Vec3::from_array(q.to_world(grid_centre).map(|c| c as f32));
     let local = |p: [f64; 3]| {
@@ -130,9 +151,14 @@ pub(crate) fn build_debris(piece: &DebrisPiece, context: &JobContext) -> BuiltDe
         Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32) - centre
     };
 
-    let surface = SurfaceMesh::from_face_vec(piece.solid.surface());
-    let meshes = cell_meshes_of(&surface, q, context.smoothing_degrees)
-        .into_iter()
+    // One mesh per part and material: the parts' walls on shared chunk
+    // sides meet face to face inside the piece, where nothing sees them.
+    let meshes = parts
+        .iter()
+        .flat_map(|part| {
+            let surface = SurfaceMesh::from_face_vec(part.solid.surface());
+            cell_meshes_of(&surface, q, context.smoothing_degrees)
+        })
         .map(|mut mesh| {
             for p in &mut mesh.positions {
                 *p = (Vec3::from_array(*p) - centre).to_array();
@@ -141,10 +167,20 @@ pub(crate) fn build_debris(piece: &DebrisPiece, context: &JobContext) -> BuiltDe
         })
         .collect();
 
-    let exact_volume = piece.volume();
+    let mut volumes: BTreeMap<Label, Vec<ExactVolume>> = BTreeMap::new();
+    for part in parts {
+        for (label, v) in &part.volumes {
+            volumes.entry(*label).or_default().push(v.clone());
+        }
+    }
+    let volumes: BTreeMap<Label, ExactVolume> = volumes
+        .into_iter()
+        .map(|(label, v)| (label, ExactVolume::sum_balanced(v)))
+        .collect();
+    let exact_volume = ExactVolume::sum_balanced(volumes.values().cloned().collect());
     let volume = (exact_volume.to_f64() * unit * unit * unit) as f32;
     let body = context.physics.as_ref().and_then(|physics| {
-        let pieces: Vec<ConvexPiece> = collider_hulls(&piece.cells, context.max_debris_hulls)
+        let pieces: Vec<ConvexPiece> = collider_hulls(&cells, context.max_debris_hulls)
             .into_iter()
             .map(|corners| ConvexPiece {
                 corners: corners.into_iter().map(local).collect(),
@@ -157,7 +193,7 @@ pub(crate) fn build_debris(piece: &DebrisPiece, context: &JobContext) -> BuiltDe
         meshes,
         body,
         exact_volume,
-        volumes: piece.volumes.clone(),
+        volumes,
         volume,
     }
 }

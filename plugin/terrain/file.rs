@@ -242,6 +242,7 @@ impl Terrain {
             history,
             max_undo,
             runtime: Runtime::default(),
+            detached_across: false,
         })
     }
 

@@ -29,15 +29,15 @@ use bevy::prelude::*;
 use bevy::tasks::Task;
 use chisel_bsp::exact::Point4;
 use chisel_bsp::octree::{
-    CellFaces, CellKey, Changes, DebrisConfig, DebrisPiece, Edit, Octree, PointWedges,
-    SeamedMesher, Tool,
+    CellFaces, CellKey, Changes, ChunkedPiece, DebrisConfig, DebrisPiece, Edit, Octree,
+    PointWedges, SeamedMesher, Tool,
 };
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, Label};
 use rayon::prelude::*;
 
 use super::carve::{CarveApplied, CellOutput};
-use super::debris::{BuiltDebris, build_debris};
+use super::debris::{BuiltDebris, build_debris, build_debris_of};
 use super::error::TerrainError;
 use super::mesh::{ColliderMesh, cell_meshes_around};
 use super::physics::{PhysicsInsert, TerrainPhysics};
@@ -70,6 +70,9 @@ pub(crate) struct Runtime {
     pub(crate) border: Option<Arc<BorderPoints>>,
     /// Whether the running job only seals cells again ([`Job::Reseal`]).
     pub(crate) resealing: bool,
+    /// Leaves that carves of a chunk changed since the last detach across
+    /// chunk borders (`world::debris`), sorted on use.
+    pub(crate) border_seeds: Vec<CellKey>,
 }
 
 /// A request waiting for its turn.
@@ -90,6 +93,13 @@ pub(crate) enum Job {
         outside: Vec<Point4>,
         wedges: PointWedges,
     },
+    /// Rebuild the cells a detach across chunk borders changed (already
+    /// in the octree) and build the pieces this chunk spawns
+    /// ([`super::world::debris`]).
+    Detached {
+        keys: Vec<CellKey>,
+        pieces: Vec<ChunkedPiece>,
+    },
 }
 
 impl Default for Runtime {
@@ -107,6 +117,7 @@ impl Default for Runtime {
             publishes_border: false,
             border: None,
             resealing: false,
+            border_seeds: Vec::new(),
         }
     }
 }
@@ -219,6 +230,10 @@ pub(crate) enum StepOutcome {
     Undone {
         cells: usize,
         requested: Instant,
+    },
+    /// Pieces cut loose across chunk borders, built to spawn.
+    Detached {
+        debris: Vec<BuiltDebris>,
     },
 }
 
@@ -360,6 +375,27 @@ pub(crate) fn carve_batch(
         }
     }
     remesh(octree, context, steps, keys, fresh, mesher, false)
+}
+
+/// Builds the pieces a detach across chunk borders cut loose (each as
+/// one body of all its parts) and the cells of `keys` it changed in
+/// `octree` (the chunk after the detach).
+pub(crate) fn detached_batch(
+    octree: Octree,
+    mesher: SeamedMesher,
+    context: &JobContext,
+    keys: Vec<CellKey>,
+    pieces: Vec<ChunkedPiece>,
+) -> JobOutput {
+    let debris = pieces
+        .par_iter()
+        .map(|piece| {
+            let parts: Vec<&DebrisPiece> = piece.parts.iter().map(|p| &p.piece).collect();
+            build_debris_of(&parts, context)
+        })
+        .collect();
+    let steps = vec![StepOutcome::Detached { debris }];
+    remesh(octree, context, steps, keys, BTreeMap::new(), mesher, false)
 }
 
 /// Takes the pieces the carve `changes` cut loose out of `octree` (the

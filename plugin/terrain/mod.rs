@@ -143,7 +143,7 @@ pub use carve::{
     UndoCarve,
 };
 pub use component::{JournalEntry, Terrain, TerrainCell};
-pub use debris::{DebrisConfig, DebrisDetached, DebrisPart, TerrainDebris};
+pub use debris::{DebrisConfig, DebrisDetached, DebrisLimits, DebrisPart, TerrainDebris};
 pub use debris_hulls::DEFAULT_MAX_DEBRIS_HULLS;
 pub use error::TerrainError;
 pub use events::{TerrainCarveRejected, TerrainCarved, TerrainCellRebuilt, TerrainDebrisDetached};
@@ -280,7 +280,12 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_systems(
             schedule,
             (
-                (queue::read_requests, upload::finish_jobs, queue::start_jobs)
+                (
+                    queue::read_requests,
+                    upload::finish_jobs,
+                    world::debris::detach_across_borders,
+                    queue::start_jobs,
+                )
                     .chain()
                     .in_set(TerrainSystems::Carve),
                 upload::upload_meshes.in_set(TerrainSystems::Mesh),

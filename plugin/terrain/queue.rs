@@ -18,7 +18,8 @@ use super::carve::{Carve, CarveRejected, GridCarve, TerrainSettings, UndoCarve};
 use super::component::Terrain;
 use super::error::TerrainError;
 use super::jobs::{
-    CellUpdate, Job, JobContext, StepOutcome, Upload, Workers, carve_batch, on_pool, remesh,
+    CellUpdate, Job, JobContext, StepOutcome, Upload, Workers, carve_batch, detached_batch,
+    on_pool, remesh,
 };
 use super::physics::TerrainPhysicsBackend;
 
@@ -221,6 +222,15 @@ pub fn start_jobs(
                             mesher,
                             false,
                         )
+                    })
+                }));
+            }
+            Some(Job::Detached { keys, pieces }) => {
+                let octree = terrain.octree.clone();
+                let mesher = std::mem::take(&mut terrain.runtime.mesher);
+                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                    on_pool(pool, || {
+                        detached_batch(octree, mesher, &context, keys, pieces)
                     })
                 }));
             }

@@ -131,6 +131,7 @@ impl Terrain {
             history: VecDeque::new(),
             max_undo,
             runtime: Runtime::default(),
+            detached_across: false,
         })
     }
 }

@@ -80,6 +80,12 @@ pub fn finish_jobs(
                     debris: pieces,
                 } => {
                     debris.extend(pieces);
+                    if terrain.runtime.publishes_border && terrain.debris.is_some() {
+                        // A chunk's carve: seeds of the detach across
+                        // chunk borders (`world::debris`).
+                        let seeds = &mut terrain.runtime.border_seeds;
+                        seeds.extend(changes.changed.iter().copied());
+                    }
                     let cells = changes.changed.len() + changes.removed.len();
                     terrain
                         .hash
@@ -94,6 +100,7 @@ pub fn finish_jobs(
                     ));
                     terrain.record(before, changes, tool, edit);
                 }
+                StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
                 StepOutcome::Undone { cells, requested } => {
                     let hash = terrain.hash.value();
                     reports.push((report(None, None, hash, cells, Duration::ZERO), requested));

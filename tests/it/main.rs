@@ -81,6 +81,8 @@ mod terrain_seams_render;
 #[cfg(feature = "terrain")]
 mod terrain_world;
 #[cfg(feature = "terrain")]
+mod terrain_world_debris;
+#[cfg(feature = "terrain")]
 mod terrain_world_lod;
 #[cfg(feature = "terrain")]
 mod terrain_world_normals;
@@ -92,3 +94,5 @@ mod terrain_world_seams;
 mod net_hostile;
 #[cfg(feature = "net")]
 mod net_replication;
+#[cfg(feature = "net")]
+mod net_world;

@@ -141,7 +141,7 @@ impl Octree {
 
     /// The leaves across the wall of `cell` normal to `axis` (its upper
     /// side when `upper`) whose walls share an area with it, sorted.
-    fn leaves_across(&self, cell: &CellBox, axis: usize, upper: bool) -> Vec<CellKey> {
+    pub(crate) fn leaves_across(&self, cell: &CellBox, axis: usize, upper: bool) -> Vec<CellKey> {
         let c = if upper {
             cell.max[axis]
         } else {
@@ -216,6 +216,12 @@ pub(crate) struct SolidGraph<'a> {
     leaves: WordMap<CellKey, LeafCells<'a>>,
     /// [`Octree::leaves_across`] by leaf and wall.
     across: WordMap<(CellKey, usize, bool), Vec<CellKey>>,
+    /// Sides of the root cube that lead into a neighbouring octree: the
+    /// faces on them are collected in `border`, not followed.
+    through: Vec<CubeSide>,
+    /// The faces on `through` sides that [`SolidGraph::expand`] met since
+    /// they were last taken.
+    pub(crate) border: Vec<(CubeSide, Polygon)>,
 }
 
 impl<'a> SolidGraph<'a> {
@@ -226,7 +232,17 @@ impl<'a> SolidGraph<'a> {
             root: octree.root_box(),
             leaves: WordMap::default(),
             across: WordMap::default(),
+            through: Vec::new(),
+            border: Vec::new(),
         }
+    }
+
+    /// The same graph, with the faces on the root sides `through` handed
+    /// back in [`SolidGraph::border`] (they lead into a neighbouring
+    /// octree, see `chunks.rs`).
+    pub(crate) fn passing(mut self, through: Vec<CubeSide>) -> Self {
+        self.through = through;
+        self
     }
 
     /// The cells of leaf `key`, cut on first use; `None` when `key` is not
@@ -279,7 +295,8 @@ impl<'a> SolidGraph<'a> {
     }
 
     /// Appends the solid cells adjacent to `cell` to `out` (sorted, each
-    /// once) and tells whether `cell` touches an anchor.
+    /// once) and tells whether `cell` touches an anchor. Its faces on the
+    /// `through` sides go to `border`.
     pub(crate) fn expand(&mut self, cell: SolidCell, out: &mut Vec<SolidCell>) -> bool {
         let start = out.len();
         if self.leaf_cells(cell.key).is_none() {
@@ -291,6 +308,8 @@ impl<'a> SolidGraph<'a> {
             root,
             leaves,
             across,
+            through,
+            border,
         } = self;
         let Some(cells) = leaves.get(&cell.key) else {
             return false;
@@ -325,30 +344,18 @@ impl<'a> SolidGraph<'a> {
                 cells.cell.min[axis] == root.min[axis]
             };
             if on_root {
-                anchored |= anchors.sides.contains(&CubeSide { axis, upper });
+                let side = CubeSide { axis, upper };
+                anchored |= anchors.sides.contains(&side);
+                if through.contains(&side) {
+                    border.push((side, cell_face(arena, f)));
+                }
                 continue;
             }
             let keys = across
                 .entry((cell.key, axis, upper))
                 .or_insert_with(|| octree.leaves_across(&cells.cell, axis, upper));
-            for &key in keys.iter() {
-                let wall = octree.cell_box(key);
-                let Some(piece) = clip_to_wall(cell_face(arena, f), &cells.cell, &wall, axis)
-                else {
-                    continue;
-                };
-                match octree.leaf(key) {
-                    Some(Leaf::Uniform(label)) if *label != EMPTY => {
-                        out.push(SolidCell { key, node: 0 });
-                    }
-                    Some(Leaf::Bsp(bsp)) => {
-                        clip_to_solid_leaves(bsp, 0, piece, &mut |node| {
-                            out.push(SolidCell { key, node });
-                        });
-                    }
-                    _ => {}
-                }
-            }
+            let face = cell_face(arena, f);
+            reach_across(octree, keys, &cells.cell, axis, &face, &mut |n| out.push(n));
         }
         out[start..].sort_unstable();
         let mut kept = start;
@@ -360,6 +367,34 @@ impl<'a> SolidGraph<'a> {
         }
         out.truncate(kept);
         anchored
+    }
+}
+
+/// Calls `emit` with every solid cell of `octree` in the leaves `keys`
+/// (those across the wall of the box `cell` normal to `axis`, as
+/// [`Octree::leaves_across`] lists them) that the face `face` on that wall
+/// reaches with positive area. `cell` may be a leaf of another octree
+/// whose cube touches this one's there (a neighbouring chunk).
+pub(crate) fn reach_across(
+    octree: &Octree,
+    keys: &[CellKey],
+    cell: &CellBox,
+    axis: usize,
+    face: &Polygon,
+    emit: &mut impl FnMut(SolidCell),
+) {
+    for &key in keys {
+        let wall = octree.cell_box(key);
+        let Some(piece) = clip_to_wall(face.clone(), cell, &wall, axis) else {
+            continue;
+        };
+        match octree.leaf(key) {
+            Some(Leaf::Uniform(label)) if *label != EMPTY => emit(SolidCell { key, node: 0 }),
+            Some(Leaf::Bsp(bsp)) => {
+                clip_to_solid_leaves(bsp, 0, piece, &mut |node| emit(SolidCell { key, node }));
+            }
+            _ => {}
+        }
     }
 }
 

@@ -287,7 +287,7 @@ impl Octree {
 
     /// The leaves of this octree that meet the cell `key`: the leaf at
     /// `key`, the one holding it, or the leaves below it.
-    fn leaves_meeting(&self, key: CellKey) -> Vec<CellKey> {
+    pub(super) fn leaves_meeting(&self, key: CellKey) -> Vec<CellKey> {
         let mut node = &self.root;
         let mut at = CellKey::ROOT;
         while at.depth < key.depth {
@@ -305,7 +305,11 @@ impl Octree {
     }
 
     /// The piece of these cells as an octree of its own.
-    fn piece(&self, cells: Vec<DebrisCell>, volumes: BTreeMap<Label, ExactVolume>) -> DebrisPiece {
+    pub(super) fn piece(
+        &self,
+        cells: Vec<DebrisCell>,
+        volumes: BTreeMap<Label, ExactVolume>,
+    ) -> DebrisPiece {
         let mut chosen: BTreeMap<CellKey, Vec<NodeId>> = BTreeMap::new();
         for cell in &cells {
             chosen
@@ -438,7 +442,7 @@ fn find_debris(
 }
 
 /// The convex cell `cell` with its planes, corners and exact volume.
-fn debris_cell(graph: &mut SolidGraph<'_>, cell: SolidCell) -> Option<DebrisCell> {
+pub(super) fn debris_cell(graph: &mut SolidGraph<'_>, cell: SolidCell) -> Option<DebrisCell> {
     let cells = graph.leaf_cells(cell.key)?;
     let (label, poly) = cells.find(cell.node)?;
     let arena = &cells.arena;

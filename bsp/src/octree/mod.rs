@@ -24,7 +24,9 @@
 //!   faces of positive area) and what anchors them.
 //! - [`debris`] — after an edit, finding the solid no anchor holds and
 //!   taking it out as pieces of their own (`relabel` empties or keeps
-//!   chosen cells).
+//!   chosen cells); [`chunk_debris`] — the same across octrees side by
+//!   side (the chunks of a world), a piece over several chunks found as
+//!   one.
 //! - [`surface`] — the surface of a cell or of the whole octree, with the
 //!   faces on cell borders kept only where the neighbour across is empty.
 //! - [`seams`] — sealed cell meshes that meet their neighbours' edge to
@@ -61,6 +63,7 @@
 
 pub mod apply;
 pub mod cell;
+pub mod chunk_debris;
 pub mod components;
 pub mod debris;
 pub mod exact_volume;
@@ -83,6 +86,9 @@ pub mod tree;
 
 pub use apply::{Changes, Edit};
 pub use cell::{CellBox, CellKey};
+pub use chunk_debris::{
+    ChunkOctree, ChunkPart, ChunkedDetached, ChunkedPiece, DebrisLimits, detach_across_chunks,
+};
 pub use components::{Anchors, Component, CubeSide, SolidCell};
 pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};
 pub use exact_volume::ExactVolume;

@@ -34,6 +34,7 @@ mod mesh_surface;
 
 // The octree of BSPs.
 mod octree;
+mod octree_chunk_debris;
 mod octree_components;
 mod octree_debris;
 mod octree_hash;

@@ -12,10 +12,9 @@ use chisel_bsp::Error;
 use chisel_bsp::convex::ConvexArena;
 use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Leaf, Octree, OctreeConfig, Tool};
-use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::{Bsp, EMPTY, Label};
 use common::octree_reference::{add, octree_volumes, reference_edit};
-use common::shapes::p;
+use common::shapes::{p, placed_dodecahedron, random_rotation};
 use common::volume::{Fraction, polygons_volume, volume};
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -57,21 +56,13 @@ fn surface_volumes(octree: &Octree) -> BTreeMap<Label, Fraction> {
 
 fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
     let scale = rng.random_range(60.0..300.0);
-    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
-    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
-    let pose = Pose {
-        rotation: [
-            [ca, -sa * cb, sa * sb],
-            [sa, ca * cb, -ca * sb],
-            [0.0, sb, cb],
-        ],
-        translation: [
-            rng.random_range(0.0..SIZE as f64),
-            rng.random_range(0.0..SIZE as f64),
-            rng.random_range(SIZE as f64 * 0.3..SIZE as f64 * 0.6),
-        ],
-    };
-    Tool::placed(&dodecahedron_corners(scale), &pose).unwrap()
+    let rotation = random_rotation(rng);
+    let at = [
+        rng.random_range(0.0..SIZE as f64),
+        rng.random_range(0.0..SIZE as f64),
+        rng.random_range(SIZE as f64 * 0.3..SIZE as f64 * 0.6),
+    ];
+    placed_dodecahedron(scale, rotation, at)
 }
 
 fn random_edit(rng: &mut ChaCha8Rng) -> Edit {

@@ -8,12 +8,12 @@
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
+use crate::common::shapes::{placed_dodecahedron, random_rotation};
 use chisel_bsp::exact::{Point4, Sign, classify_vertex, compare_offsets};
 use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{
     CellBox, CellKey, Changes, Edit, Octree, OctreeConfig, SeamedMesher, Tool,
 };
-use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::EMPTY;
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -57,17 +57,8 @@ fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
         .unwrap();
     }
     let scale = rng.random_range(30.0..120.0);
-    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
-    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
-    let pose = Pose {
-        rotation: [
-            [ca, -sa * cb, sa * sb],
-            [sa, ca * cb, -ca * sb],
-            [0.0, sb, cb],
-        ],
-        translation: at,
-    };
-    Tool::placed(&dodecahedron_corners(scale), &pose).unwrap()
+    let rotation = random_rotation(rng);
+    placed_dodecahedron(scale, rotation, at)
 }
 
 fn random_edit(rng: &mut ChaCha8Rng) -> Edit {

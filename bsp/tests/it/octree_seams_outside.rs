@@ -10,10 +10,10 @@
 
 use std::collections::BTreeMap;
 
+use crate::common::shapes::{placed_dodecahedron, random_rotation};
 use chisel_bsp::exact::{Sign, classify_vertex};
 use chisel_bsp::mesh::SurfaceMesh;
 use chisel_bsp::octree::{CellBox, CellKey, Edit, Octree, OctreeConfig, SeamedMesher, Tool};
-use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::EMPTY;
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -72,17 +72,8 @@ fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
         near(SIZE as f64, 150.0),
     ];
     let scale = rng.random_range(30.0..110.0);
-    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
-    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
-    let pose = Pose {
-        rotation: [
-            [ca, -sa * cb, sa * sb],
-            [sa, ca * cb, -ca * sb],
-            [0.0, sb, cb],
-        ],
-        translation: at,
-    };
-    Tool::placed(&dodecahedron_corners(scale), &pose).unwrap()
+    let rotation = random_rotation(rng);
+    placed_dodecahedron(scale, rotation, at)
 }
 
 /// Every chunk's outside points: the others' wall points on its cube.
@@ -224,15 +215,13 @@ fn outside_points_are_the_wall_points_on_the_cube_and_changes_reseal() {
     assert!(a.mesher.update(&a.octree, [], BTreeMap::new()).is_empty());
     // A crater across the side gives `b` new wall points there, which
     // seal leaves of `a` again; the old points seal them back.
-    let pose = Pose {
-        rotation: [[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0]],
-        translation: [
-            SIZE as f64 + 13.0,
-            GROUND as f64 - 5.0,
-            SIZE as f64 / 2.0 + 7.0,
-        ],
-    };
-    let tool = Tool::placed(&dodecahedron_corners(70.0), &pose).unwrap();
+    let rotation = [[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0]];
+    let at = [
+        SIZE as f64 + 13.0,
+        GROUND as f64 - 5.0,
+        SIZE as f64 / 2.0 + 7.0,
+    ];
+    let tool = placed_dodecahedron(70.0, rotation, at);
     let changes = b.octree.apply(&tool, Edit::Subtract).unwrap();
     let keys: Vec<CellKey> = changes
         .changed

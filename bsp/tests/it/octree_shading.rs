@@ -8,13 +8,13 @@
 
 use std::collections::BTreeMap;
 
+use crate::common::shapes::{placed_dodecahedron, random_rotation};
 use chisel_bsp::exact::{IntPoint, Point4};
 use chisel_bsp::mesh::weld::Welder;
 use chisel_bsp::mesh::{SurfaceAround, SurfaceMesh, Turn, Wedge, merge_wedges};
 use chisel_bsp::octree::{
     CellBox, CellKey, Changes, Edit, Octree, OctreeConfig, SeamedMesher, ShadedCell, Tool,
 };
-use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -43,17 +43,8 @@ fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
         rng.random_range(GROUND as f64 - 200.0..GROUND as f64 + 40.0),
     ];
     let scale = rng.random_range(30.0..160.0);
-    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
-    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
-    let pose = Pose {
-        rotation: [
-            [ca, -sa * cb, sa * sb],
-            [sa, ca * cb, -ca * sb],
-            [0.0, sb, cb],
-        ],
-        translation: at,
-    };
-    Tool::placed(&dodecahedron_corners(scale), &pose).unwrap()
+    let rotation = random_rotation(rng);
+    placed_dodecahedron(scale, rotation, at)
 }
 
 /// Takes an update's cells into `kept`; how many it handed back.

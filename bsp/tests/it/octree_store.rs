@@ -17,8 +17,8 @@ use chisel_bsp::octree::store::{
     FORMAT_VERSION, MAGIC, MAX_STORED_BSP_DEPTH, checksum, snapshots_from_bytes, snapshots_to_bytes,
 };
 use chisel_bsp::octree::{CellBox, CellKey, Edit, Leaf, Octree, OctreeConfig, Tool};
-use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::{Bsp, EMPTY, Label, Node};
+use common::shapes::{placed_dodecahedron, random_rotation};
 use common::volume::{Fraction, volume};
 use rand::{Rng as _, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -43,21 +43,13 @@ fn block() -> Octree {
 
 fn random_tool(rng: &mut ChaCha8Rng) -> Tool {
     let scale = rng.random_range(60.0..300.0);
-    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
-    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
-    let pose = Pose {
-        rotation: [
-            [ca, -sa * cb, sa * sb],
-            [sa, ca * cb, -ca * sb],
-            [0.0, sb, cb],
-        ],
-        translation: [
-            rng.random_range(-SIZE as f64 / 2.0..SIZE as f64 / 2.0),
-            rng.random_range(0.0..SIZE as f64),
-            rng.random_range(SIZE as f64 * 0.3..SIZE as f64 * 0.6),
-        ],
-    };
-    Tool::placed(&dodecahedron_corners(scale), &pose).expect("valid tool")
+    let rotation = random_rotation(rng);
+    let at = [
+        rng.random_range(-SIZE as f64 / 2.0..SIZE as f64 / 2.0),
+        rng.random_range(0.0..SIZE as f64),
+        rng.random_range(SIZE as f64 * 0.3..SIZE as f64 * 0.6),
+    ];
+    placed_dodecahedron(scale, rotation, at)
 }
 
 fn random_edit(rng: &mut ChaCha8Rng) -> Edit {

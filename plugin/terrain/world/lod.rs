@@ -442,7 +442,7 @@ pub fn update_lod(
             // What the coarse meshes should be made from now, and whether
             // they can be built now.
             let job = match live {
-                Some(t) if edited(t) => {
+                Some(t) if world.chunk_edited(coord, t) => {
                     chunk.seen_edited = Some(t.state_hash());
                     let ready = t.is_idle() && d > load;
                     Job::Octree(t.state_hash(), ready.then(|| t.octree().clone()))
@@ -625,11 +625,6 @@ enum Job {
     Octree(u64, Option<chisel_bsp::octree::Octree>),
     /// A stored chunk (the hash it had when last seen live, if seen).
     Bytes(Option<u64>, Arc<Vec<u8>>),
-}
-
-/// Whether a chunk's terrain differs from what its source gives.
-fn edited(terrain: &Terrain) -> bool {
-    !terrain.journal().is_empty() || terrain.undo_depth() > 0
 }
 
 fn despawn_all(commands: &mut Commands, entities: &[Entity]) {

@@ -40,6 +40,13 @@
 //!    file per edited chunk (`chunk_X_Z.chiselterrain`, atomically, as
 //!    [`Terrain::save`]); [`TerrainWorld::load_edits`] reads them back,
 //!    checking that each belongs to this world (same grid, same base).
+//! 5. **Multiplayer** (feature `net`, module `net::world`): the server
+//!    numbers world carves and every peer routes them to its own chunks
+//!    in that order ([`TerrainWorld::chunks_reached`], with the carve's
+//!    number as the chunks' request id), so every chunk any peer holds is
+//!    the server's whatever each streams in. Chunks installed from the
+//!    server's snapshot count as edited ([`TerrainWorld::chunk_edited`])
+//!    though they have no journal.
 //!
 //! ## Chunk borders
 //!
@@ -78,10 +85,14 @@
 //! off: each chunk smooths over its own faces). A neighbour is shaded
 //! again only where the wedges it is given change.
 //!
-//! What is not stitched yet:
-//! - **Debris.** Detection runs per chunk with the chunk's sides as
-//!   anchors ([`chunk_debris`]): a piece cut loose across a border stays
-//!   in place, anchored by the border; nothing is wrongly detached.
+//! ## Debris
+//!
+//! Each chunk's jobs detach the pieces within the chunk, its sides
+//! anchoring ([`chunk_debris`]); a pass over all live chunks
+//! ([`debris`]) then joins the chunks exactly across their shared sides,
+//! so a piece cut loose over one or more borders falls as one
+//! [`TerrainDebris`](super::TerrainDebris), taken out of every chunk it
+//! spans. A side towards a chunk that is not live anchors.
 //!
 //! ## Level of detail
 //!
@@ -102,6 +113,7 @@
 //! borders there can be apart (full-detail chunks have walls there), so no
 //! crack opens between chunks of different levels, full detail included.
 
+pub mod debris;
 pub mod lod;
 pub mod lod_mesh;
 pub mod seams;
@@ -109,13 +121,13 @@ pub mod source;
 pub mod store;
 pub mod stream;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy::tasks::Task;
-use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig, Edit};
+use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig, DebrisLimits, Edit};
 use chisel_bsp::tree::Label;
 
 use super::component::Terrain;
@@ -195,6 +207,8 @@ pub struct WorldStats {
     pub failed: u64,
     /// Time spent building chunks on the pool (generated and restored).
     pub build_time: Duration,
+    /// Pieces cut loose across chunk borders so far ([`debris`]).
+    pub detached_across: u64,
 }
 
 /// The state of one chunk the world knows.
@@ -230,12 +244,20 @@ pub struct TerrainWorld {
     pub(crate) chunks: BTreeMap<ChunkCoord, Chunk>,
     /// Terrain file bytes of edited chunks that are not live.
     pub(crate) stored: BTreeMap<ChunkCoord, Arc<Vec<u8>>>,
-    /// Carves for chunks that are not live yet, in order.
-    pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit)>>,
+    /// Carves for chunks that are not live yet, in order, each with the
+    /// request id of its world carve.
+    pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit, u64)>>,
+    /// Chunks kept as edited whatever their journal says: chunks installed
+    /// from a snapshot (no journal, yet not the source's).
+    pub(crate) kept: BTreeSet<ChunkCoord>,
     pub(crate) stats: WorldStats,
+    /// The request id of the next world carve routed (every chunk carve of
+    /// one world carve shares it).
     pub(crate) next_request: u64,
     /// The chunks' border points and the outside points they were given.
     pub(crate) seams: seams::WorldSeams,
+    /// What one detach across chunk borders may take out ([`debris`]).
+    pub(crate) debris_limits: DebrisLimits,
 }
 
 impl TerrainWorld {
@@ -253,10 +275,28 @@ impl TerrainWorld {
             chunks: BTreeMap::new(),
             stored: BTreeMap::new(),
             pending: BTreeMap::new(),
+            kept: BTreeSet::new(),
             stats: WorldStats::default(),
             next_request: 0,
             seams: seams::WorldSeams::default(),
+            debris_limits: DebrisLimits::default(),
         })
+    }
+
+    /// Bounds what one detach across chunk borders takes out, all pieces
+    /// in all chunks together, in cubic grid units and convex cells; over
+    /// them the pieces stay in place ([`debris`]). No limit by default.
+    #[must_use]
+    pub fn with_debris_limits(mut self, limits: DebrisLimits) -> Self {
+        self.debris_limits = limits;
+        self
+    }
+
+    /// The limits of a detach across chunk borders
+    /// ([`TerrainWorld::with_debris_limits`]).
+    #[must_use]
+    pub fn debris_limits(&self) -> DebrisLimits {
+        self.debris_limits
     }
 
     /// With these streaming radii and build limit.
@@ -343,6 +383,136 @@ impl TerrainWorld {
     /// The edited chunks kept while streamed out.
     pub fn stored_chunks(&self) -> impl Iterator<Item = ChunkCoord> + '_ {
         self.stored.keys().copied()
+    }
+
+    /// The terrain file bytes ([`Terrain::to_bytes`]) of edited chunk
+    /// `coord` while it is streamed out (`None` when it is live or
+    /// unedited).
+    #[must_use]
+    pub fn stored_chunk(&self, coord: ChunkCoord) -> Option<&[u8]> {
+        self.stored.get(&coord).map(|bytes| bytes.as_slice())
+    }
+
+    /// Whether live chunk `coord` with `terrain` (its terrain entity's
+    /// [`Terrain`]) is edited, not what the source gives: it has a journal
+    /// or undo history, a detach across chunk borders took solid out of it
+    /// ([`debris`]), or it was installed from a snapshot of a networked
+    /// world (feature `net`). Edited chunks are stored when they
+    /// stream out and written by [`TerrainWorld::save`].
+    #[must_use]
+    pub fn chunk_edited(&self, coord: ChunkCoord, terrain: &Terrain) -> bool {
+        terrain.is_edited() || self.kept.contains(&coord)
+    }
+
+    /// Checks that `edit` adds or paints only materials the world knows
+    /// (the layout's and [`TerrainWorld::with_labels`]).
+    ///
+    /// # Errors
+    /// [`TerrainError::UnknownLabel`].
+    pub fn check_edit(&self, edit: Edit) -> Result<(), TerrainError> {
+        if let Edit::Add(label) | Edit::Paint(label) = edit {
+            let known = std::iter::once(self.layout.label)
+                .chain(self.layout.layers.iter().map(|&(_, l)| l))
+                .chain(self.labels.iter().copied())
+                .collect::<BTreeSet<_>>();
+            if label != chisel_bsp::tree::EMPTY && !known.contains(&label) {
+                return Err(TerrainError::UnknownLabel {
+                    label,
+                    known: known.into_iter().collect(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The chunks a grid tool reaches, in coordinate order: those whose
+    /// cubes the grid boxes of its pieces overlap, open (a piece that only
+    /// touches a chunk's side does not reach it).
+    ///
+    /// # Errors
+    /// [`TerrainError::OutsideTerrain`] when it reaches no chunk.
+    pub fn chunks_reached(&self, tool: &GridTool) -> Result<Vec<ChunkCoord>, TerrainError> {
+        let layout = &self.layout;
+        let edge = layout.chunk_edge();
+        let (bottom, top) = (layout.floor, layout.floor + edge);
+        let mut coords = BTreeSet::new();
+        let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
+        for piece in &tool.pieces {
+            let (mut min, mut max) = ([i64::MAX; 3], [i64::MIN; 3]);
+            for p in piece {
+                for a in 0..3 {
+                    min[a] = min[a].min(p[a]);
+                    max[a] = max[a].max(p[a]);
+                }
+            }
+            for a in 0..3 {
+                lo[a] = lo[a].min(min[a]);
+                hi[a] = hi[a].max(max[a]);
+            }
+            if max[1] <= bottom || min[1] >= top || max[0] <= min[0] || max[2] <= min[2] {
+                continue;
+            }
+            for x in min[0].div_euclid(edge)..=(max[0] - 1).div_euclid(edge) {
+                for z in min[2].div_euclid(edge)..=(max[2] - 1).div_euclid(edge) {
+                    coords.insert(ChunkCoord { x, z });
+                }
+            }
+        }
+        if coords.is_empty() {
+            return Err(TerrainError::OutsideTerrain {
+                tool_min: lo,
+                tool_max: hi,
+            });
+        }
+        Ok(coords.into_iter().collect())
+    }
+
+    /// Queues one world carve for chunks `coords` under request id
+    /// `request` (what their [`CarveApplied`](super::CarveApplied) and
+    /// [`CarveRejected`](super::CarveRejected) reports name); chunks that
+    /// are not live are built for it.
+    pub(crate) fn route(
+        &mut self,
+        tool: &GridTool,
+        edit: Edit,
+        request: u64,
+        coords: &[ChunkCoord],
+    ) {
+        for &coord in coords {
+            self.pending
+                .entry(coord)
+                .or_default()
+                .push((tool.clone(), edit, request));
+        }
+        self.next_request = self.next_request.max(request.saturating_add(1));
+    }
+
+    /// Whether chunk `coord` failed to build (its carves were dropped).
+    pub(crate) fn chunk_failed(&self, coord: ChunkCoord) -> bool {
+        matches!(self.chunks.get(&coord), Some(Chunk::Failed))
+    }
+
+    /// Replaces every chunk's state with `edited` (terrain file bytes of
+    /// the edited chunks; every other chunk is the source's): live chunks
+    /// are despawned, builds dropped and waiting carves cleared, and the
+    /// chunks stream in again from `edited` or the source. The chunks in
+    /// `edited` count as edited whatever their journals say.
+    pub(crate) fn reset_chunks(
+        &mut self,
+        commands: &mut Commands,
+        edited: BTreeMap<ChunkCoord, Arc<Vec<u8>>>,
+    ) {
+        for state in std::mem::take(&mut self.chunks).into_values() {
+            if let Chunk::Live(entity) = state {
+                commands.entity(entity).try_despawn();
+                self.stats.released += 1;
+            }
+        }
+        self.pending.clear();
+        self.kept = edited.keys().copied().collect();
+        self.stored = edited;
+        self.stats.stored = self.stored.len();
+        self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
     }
 
     /// Whether no chunk is building and no carve waits for a chunk.

@@ -69,7 +69,7 @@ impl TerrainWorld {
                 unknown.insert(*coord);
                 continue;
             };
-            if terrain.journal().is_empty() && terrain.undo_depth() == 0 {
+            if !self.chunk_edited(*coord, terrain) {
                 continue;
             }
             if !terrain.is_idle() {
@@ -115,6 +115,7 @@ impl TerrainWorld {
             message: format!("cannot read {}: {e}", folder.display()),
         };
         let mut found = Vec::new();
+        let mut kept = Vec::new();
         for entry in fs::read_dir(folder).map_err(io)? {
             let entry = entry.map_err(io)?;
             let name = entry.file_name();
@@ -135,8 +136,14 @@ impl TerrainWorld {
                     ),
                 });
             }
+            if terrain.journal().is_empty() && terrain.undo_depth() == 0 {
+                // Saved though it has no journal: a chunk installed from a
+                // networked world's snapshot, edited all the same.
+                kept.push(coord);
+            }
             found.push((coord, Arc::new(bytes)));
         }
+        self.kept.extend(kept);
         self.stored.extend(found);
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();

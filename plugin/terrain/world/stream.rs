@@ -40,13 +40,8 @@ pub fn route_world_carves(
         };
         match chunks_of(&world, carve) {
             Ok((tool, coords)) => {
-                for coord in coords {
-                    world
-                        .pending
-                        .entry(coord)
-                        .or_default()
-                        .push((tool.clone(), carve.edit));
-                }
+                let request = world.next_request;
+                world.route(&tool, carve.edit, request, &coords);
             }
             Err(error) => {
                 rejected.write(CarveRejected {
@@ -64,54 +59,10 @@ fn chunks_of(
     world: &TerrainWorld,
     carve: &WorldCarve,
 ) -> Result<(super::super::tool::GridTool, Vec<ChunkCoord>), TerrainError> {
-    let layout = &world.layout;
-    if let chisel_bsp::octree::Edit::Add(label) | chisel_bsp::octree::Edit::Paint(label) =
-        carve.edit
-    {
-        let known = std::iter::once(layout.label)
-            .chain(layout.layers.iter().map(|&(_, l)| l))
-            .chain(world.labels.iter().copied())
-            .collect::<std::collections::BTreeSet<_>>();
-        if label != chisel_bsp::tree::EMPTY && !known.contains(&label) {
-            return Err(TerrainError::UnknownLabel {
-                label,
-                known: known.into_iter().collect(),
-            });
-        }
-    }
-    let tool = carve.tool.to_grid(&layout.quantization)?;
-    let edge = layout.chunk_edge();
-    let (bottom, top) = (layout.floor, layout.floor + edge);
-    let mut coords = std::collections::BTreeSet::new();
-    let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
-    for piece in &tool.pieces {
-        let (mut min, mut max) = ([i64::MAX; 3], [i64::MIN; 3]);
-        for p in piece {
-            for a in 0..3 {
-                min[a] = min[a].min(p[a]);
-                max[a] = max[a].max(p[a]);
-            }
-        }
-        for a in 0..3 {
-            lo[a] = lo[a].min(min[a]);
-            hi[a] = hi[a].max(max[a]);
-        }
-        if max[1] <= bottom || min[1] >= top || max[0] <= min[0] || max[2] <= min[2] {
-            continue;
-        }
-        for x in min[0].div_euclid(edge)..=(max[0] - 1).div_euclid(edge) {
-            for z in min[2].div_euclid(edge)..=(max[2] - 1).div_euclid(edge) {
-                coords.insert(ChunkCoord { x, z });
-            }
-        }
-    }
-    if coords.is_empty() {
-        return Err(TerrainError::OutsideTerrain {
-            tool_min: lo,
-            tool_max: hi,
-        });
-    }
-    Ok((tool, coords.into_iter().collect()))
+    world.check_edit(carve.edit)?;
+    let tool = carve.tool.to_grid(&world.layout.quantization)?;
+    let coords = world.chunks_reached(&tool)?;
+    Ok((tool, coords))
 }
 
 /// Streams every world's chunks: collects finished builds as terrain
@@ -190,7 +141,7 @@ pub fn stream_chunks(
             match terrains.get(entity) {
                 // Sealing again at a neighbour's new points is dropped.
                 Ok(terrain) if !terrain.is_idle_but_for_seams() => continue,
-                Ok(terrain) if !terrain.journal().is_empty() || terrain.undo_depth() > 0 => {
+                Ok(terrain) if world.chunk_edited(coord, terrain) => {
                     let _span = bevy::log::info_span!("chisel::stream::to_bytes").entered();
                     world.stored.insert(coord, Arc::new(terrain.to_bytes()));
                 }
@@ -307,8 +258,12 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
     for (coord, built) in done {
         world.stats.build_time += built.time;
         match built.terrain {
-            Ok(terrain) => {
+            Ok(mut terrain) => {
                 if built.restored {
+                    // Stored with no carve of its own: it lost solid to a
+                    // detach across chunk borders (`debris`).
+                    let own_edits = terrain.is_edited();
+                    terrain.detached_across |= !own_edits;
                     world.stats.restored += 1;
                     world.stored.remove(&coord);
                 } else {
@@ -355,14 +310,13 @@ fn send_pending(
         })
         .collect();
     for &(coord, entity) in &ready {
-        for (tool, edit) in world.pending.remove(&coord).unwrap_or_default() {
+        for (tool, edit, request) in world.pending.remove(&coord).unwrap_or_default() {
             grid_carves.write(GridCarve {
                 terrain: entity,
                 tool,
                 edit,
-                request: world.next_request,
+                request,
             });
-            world.next_request += 1;
         }
     }
     ready.into_iter().map(|(c, _)| c).collect()

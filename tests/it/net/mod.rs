@@ -5,14 +5,17 @@ use std::net::{Ipv4Addr, SocketAddr};
 
 use bevy::asset::AssetPlugin;
 use bevy::prelude::*;
+use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
     NetCarveRequest, NetCarveResult, NetClientPlugin, NetKey, NetLimits, NetServerPlugin,
-    NetTerrain, TerrainSynced, WireTool, start_client, start_secure_server, start_server,
+    NetTerrain, NetWorld, NetWorldCarveRequest, TerrainSynced, WireTool, WorldDesynced,
+    WorldSynced, start_client, start_secure_server, start_server,
 };
 use bevy_chisel::terrain::{
-    CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings,
+    CarveTool, CellOutput, Terrain, TerrainBase, TerrainFocus, TerrainPlugin, TerrainSettings,
+    TerrainWorld,
 };
 
 /// A 10 m × 2 m × 10 m slab of rock on a 1 cm grid, in a cube of 10.24 m.
@@ -183,6 +186,74 @@ pub fn run_until(
         std::thread::sleep(std::time::Duration::from_micros(200));
     }
     panic!("not done after {frames} frames");
+}
+
+/// A server with `world` as network world 1 (no focus: it holds only the
+/// chunks carves reach, and stores the edited ones once idle).
+pub fn world_server(world: TerrainWorld, limits: NetLimits) -> (App, SocketAddr) {
+    let mut app = base_app(1, CellOutput::Nothing);
+    app.add_plugins((TransformPlugin, NetServerPlugin))
+        .insert_resource(limits);
+    app.world_mut().spawn((world, NetWorld(1)));
+    app.finish();
+    app.cleanup();
+    let addr =
+        start_server(app.world_mut(), (Ipv4Addr::LOCALHOST, 0).into(), 16).expect("server listens");
+    (app, addr)
+}
+
+/// A client with `world` as network world 1 and a focus at `focus`,
+/// connecting to `addr`.
+pub fn world_client(addr: SocketAddr, id: u64, world: TerrainWorld, focus: Vec3) -> App {
+    let mut app = base_app(1, CellOutput::Meshes);
+    app.add_plugins((TransformPlugin, NetClientPlugin))
+        .init_resource::<Seen>()
+        .init_resource::<WorldsSeen>()
+        .add_systems(Last, (record, record_worlds));
+    app.world_mut().spawn((world, NetWorld(1)));
+    app.world_mut()
+        .spawn((TerrainFocus, Transform::from_translation(focus)));
+    app.finish();
+    app.cleanup();
+    start_client(app.world_mut(), addr, id).expect("client starts");
+    app
+}
+
+/// World messages a client saw.
+#[derive(Resource, Default)]
+pub struct WorldsSeen {
+    pub synced: Vec<WorldSynced>,
+    pub desynced: Vec<WorldDesynced>,
+}
+
+fn record_worlds(
+    mut seen: ResMut<WorldsSeen>,
+    mut synced: MessageReader<WorldSynced>,
+    mut desynced: MessageReader<WorldDesynced>,
+) {
+    seen.synced.extend(synced.read().cloned());
+    seen.desynced.extend(desynced.read().cloned());
+}
+
+/// The app's network world: entity and component.
+pub fn world_of(app: &mut App) -> (Entity, &TerrainWorld) {
+    let world = app.world_mut();
+    let mut query = world.query_filtered::<(Entity, &TerrainWorld), With<NetWorld>>();
+    query
+        .iter(app.world())
+        .next()
+        .expect("the app has its world")
+}
+
+/// Sends one world carve request from a client app.
+pub fn request_world(app: &mut App, request: u64, tool: &CarveTool, edit: Edit) {
+    let (world, _) = world_of(app);
+    app.world_mut().write_message(NetWorldCarveRequest {
+        request,
+        world,
+        tool: WireTool::from(tool),
+        edit,
+    });
 }
 
 /// A small seeded generator (SplitMix64), so that runs repeat exactly.

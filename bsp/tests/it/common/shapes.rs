@@ -2,6 +2,8 @@
 
 use chisel_bsp::convex::{ConvexArena, CutOutcome, NO_TAG, PolyId};
 use chisel_bsp::exact::{IntPoint, plane_from_points};
+use chisel_bsp::octree::Tool;
+use chisel_bsp::tools::{Pose, dodecahedron_corners};
 use chisel_bsp::tree::{Bsp, Label};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -58,4 +60,26 @@ pub fn random_convex_bsp(
     let r = rng.random_range(min_r..max_r);
     let poly = random_convex(&mut arena, rng, centre, r, cuts);
     Bsp::from_convex(&arena, poly, label)
+}
+
+/// A random turn: `a` about z after `b` about x, each drawn from
+/// `[0, 6.3)` radians, in that order.
+pub fn random_rotation(rng: &mut ChaCha8Rng) -> [[f64; 3]; 3] {
+    let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
+    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
+    [
+        [ca, -sa * cb, sa * sb],
+        [sa, ca * cb, -ca * sb],
+        [0.0, sb, cb],
+    ]
+}
+
+/// The dodecahedron of [`dodecahedron_corners`]`(scale)`, turned by
+/// `rotation` and centred at `at` (grid units).
+pub fn placed_dodecahedron(scale: f64, rotation: [[f64; 3]; 3], at: [f64; 3]) -> Tool {
+    let pose = Pose {
+        rotation,
+        translation: at,
+    };
+    Tool::placed(&dodecahedron_corners(scale), &pose).expect("a dodecahedron in budget")
 }

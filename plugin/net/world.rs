@@ -1,0 +1,292 @@
+//! Multiplayer for streamed worlds: carves of a [`TerrainWorld`] replicated
+//! so that every chunk any peer holds is bit-identical to the server's.
+//!
+//! ## Design
+//!
+//! A world's source is code (a closure, a noise function), not data, so a
+//! world is not sent: every peer spawns the same [`TerrainWorld`] (same
+//! [`WorldLayout`](crate::terrain::WorldLayout), source and labels) with a
+//! [`NetWorld`] id, and streams its chunks around its own
+//! [`TerrainFocus`](crate::terrain::TerrainFocus) as usual. Peers hold
+//! different live chunks; what is replicated is the world's carves.
+//!
+//! 1. **Requests.** A client sends a [`NetWorldCarveRequest`] (a float or
+//!    grid tool in the world's local frame). The server checks it as a
+//!    terrain carve (rate limit per client shared with terrain carves,
+//!    pieces, points, extent, the world's materials; NaN or out-of-budget
+//!    coordinates fail the rounding), rounds it to the world's grid once,
+//!    and refuses a tool that reaches no chunk or a chunk beyond
+//!    [`NetLimits::max_world_chunk`](super::NetLimits::max_world_chunk)
+//!    ([`RejectReason::OutsideWorld`](super::RejectReason::OutsideWorld));
+//!    an unknown world is [`RejectReason::UnknownWorld`](super::RejectReason::UnknownWorld).
+//! 2. **Order.** Accepted carves are numbered 1, 2, … per world and sent
+//!    to every client as [`NetWorldCarve`]s. Every peer routes carve `seq`
+//!    to the chunks its grid tool reaches ([`TerrainWorld::chunks_reached`],
+//!    a function of the integer tool only), in `seq` order, with `seq` as
+//!    the chunks' request id. A chunk that is not live is built (restored
+//!    when edited) and holds the carve until it is, as for a local
+//!    [`WorldCarve`](crate::terrain::WorldCarve). So each chunk receives the
+//!    same carves in the same order on every peer whatever is streamed in,
+//!    and exact carving makes its octree the same.
+//! 3. **Edited chunks and the world hash.** A chunk is *edited* once a
+//!    world carve applied to it (its [`CarveApplied`] report); the reports
+//!    give each edited chunk's state hash after each carve. The world hash
+//!    after carve `s` ([`world_state_hash`]) is the wrapping sum, over the
+//!    chunks edited by then, of XXH64 of `(x, z, chunk hash after s)`:
+//!    independent of order and of which chunks are live. A peer knows it
+//!    once every carve up to `s` is reported by every chunk it reached.
+//!    The server sends its world hash ([`ServerPacket::WorldCheck`]) every
+//!    [`NetLimits::check_interval`](super::NetLimits::check_interval); a
+//!    client that computes another one after the same carve reports it and
+//!    gets the world's snapshot again.
+//! 4. **Joining.** A client that joins (or resyncs) gets the world's
+//!    snapshot: every edited chunk's exact terrain snapshot
+//!    ([`Terrain::to_snapshot_bytes`]) with the last carve it holds, cut
+//!    into parts as terrain snapshots are, with `seq` the server's *done*
+//!    carve (every carve up to it reported by every chunk), then the
+//!    carves after `seq`. The client replaces all its chunks with these
+//!    (live chunks are despawned and stream in again from them or the
+//!    source), keeps them as edited whatever their empty journals say, and
+//!    routes each later carve to every chunk it reaches but those whose
+//!    snapshot already holds it.
+//!
+//! A chunk whose build fails (a bad source sample, the same on every peer)
+//! drops its carves as in a local world; it counts as reported.
+//!
+//! Limits: the world hash is made of the hashes the chunks report after
+//! networked carves, so a local change to a chunk shows only once a later
+//! world carve reaches that chunk. A resync replaces every chunk of the
+//! client's world (live ones stream in again). A networked world is
+//! carved only through the server: a local [`WorldCarve`] on any peer's
+//! networked world is outside its order and makes it differ.
+//!
+//! [`WorldCarve`]: crate::terrain::WorldCarve
+//!
+//! - [`super::world_server`]: validation, order, broadcast, hashes and
+//!   snapshots on the server.
+//! - [`super::world_client`]: [`NetWorldCarveRequest`], ordered routing,
+//!   snapshots and hash comparison on a client.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use bevy::prelude::*;
+
+use super::wire::WorldId;
+use crate::terrain::{CarveApplied, CarveRejected, ChunkCoord, TerrainWorld, WorldChunk};
+
+use super::wire::NetWorld;
+#[cfg(doc)]
+use super::wire::{NetWorldCarve, ServerPacket};
+#[cfg(doc)]
+use super::world_client::NetWorldCarveRequest;
+#[cfg(doc)]
+use crate::terrain::Terrain;
+
+/// The world hash of edited chunks given as `(chunk, chunk state hash)`:
+/// the wrapping sum of XXH64 over each chunk's `x`, `z` and hash (little
+/// endian), so independent of the order they are given in.
+#[must_use]
+pub fn world_state_hash(chunks: impl IntoIterator<Item = (ChunkCoord, u64)>) -> u64 {
+    chunks.into_iter().fold(0u64, |sum, (coord, hash)| {
+        let mut bytes = [0u8; 24];
+        bytes[..8].copy_from_slice(&coord.x.to_le_bytes());
+        bytes[8..16].copy_from_slice(&coord.z.to_le_bytes());
+        bytes[16..].copy_from_slice(&hash.to_le_bytes());
+        sum.wrapping_add(chisel_bsp::octree::store::checksum(&bytes))
+    })
+}
+
+/// One world's carves as a peer applies them: which are still to be
+/// reported by which chunks, and each edited chunk's recent hashes.
+#[derive(Default)]
+pub(crate) struct WorldBook {
+    /// Per edited chunk, its state hash after each recent carve that
+    /// applied to it (`seq → hash`); at least the latest is kept.
+    pub(crate) chunks: BTreeMap<ChunkCoord, BTreeMap<u64, u64>>,
+    /// Carves routed but not yet reported by every chunk they reach.
+    pub(crate) outstanding: BTreeMap<u64, BTreeSet<ChunkCoord>>,
+    /// The last carve routed.
+    pub(crate) routed: u64,
+    /// The world hash is not known after carves before this one (pruned,
+    /// or before a snapshot).
+    pub(crate) floor: u64,
+}
+
+impl WorldBook {
+    /// Carve `seq` was routed to `coords`.
+    pub(crate) fn note_routed(&mut self, seq: u64, coords: &[ChunkCoord]) {
+        if !coords.is_empty() {
+            self.outstanding
+                .entry(seq)
+                .or_default()
+                .extend(coords.iter().copied());
+        }
+        self.routed = self.routed.max(seq);
+    }
+
+    /// Chunk `coord` reported carve `seq`: applied with the chunk's new
+    /// `hash`, or refused (`None`). Returns whether every chunk has now
+    /// reported the carve.
+    pub(crate) fn note_report(&mut self, coord: ChunkCoord, seq: u64, hash: Option<u64>) -> bool {
+        let Some(waiting) = self.outstanding.get_mut(&seq) else {
+            return false;
+        };
+        if !waiting.remove(&coord) {
+            return false;
+        }
+        if let Some(hash) = hash {
+            self.chunks.entry(coord).or_default().insert(seq, hash);
+        }
+        if waiting.is_empty() {
+            self.outstanding.remove(&seq);
+            return true;
+        }
+        false
+    }
+
+    /// The last carve such that it and every carve before it are reported
+    /// by every chunk they reach.
+    pub(crate) fn done(&self) -> u64 {
+        self.outstanding
+            .keys()
+            .next()
+            .map_or(self.routed, |&first| first - 1)
+    }
+
+    /// The world hash after carve `seq`, when known.
+    pub(crate) fn hash_at(&self, seq: u64) -> Option<u64> {
+        if seq < self.floor || seq > self.done() {
+            return None;
+        }
+        Some(world_state_hash(self.chunks.iter().filter_map(
+            |(&coord, hashes)| hashes.range(..=seq).next_back().map(|(_, &h)| (coord, h)),
+        )))
+    }
+
+    /// Forgets the hashes that no world hash after `seq` or later needs.
+    pub(crate) fn prune(&mut self, seq: u64) {
+        for hashes in self.chunks.values_mut() {
+            if let Some(&last) = hashes.range(..=seq).next_back().map(|(s, _)| s) {
+                *hashes = hashes.split_off(&last);
+            }
+        }
+        self.floor = self.floor.max(seq);
+    }
+
+    /// Counts chunks that failed to build as having reported (refused) the
+    /// carves they were routed; returns the carves that became complete.
+    pub(crate) fn settle_failed(&mut self, world: &TerrainWorld) -> Vec<u64> {
+        let failed: Vec<(u64, ChunkCoord)> = self
+            .outstanding
+            .iter()
+            .flat_map(|(&seq, coords)| coords.iter().map(move |&c| (seq, c)))
+            .filter(|&(_, c)| world.chunk_failed(c))
+            .collect();
+        failed
+            .into_iter()
+            .filter(|&(seq, coord)| self.note_report(coord, seq, None))
+            .map(|(seq, _)| seq)
+            .collect()
+    }
+}
+
+/// A chunk's report of one world carve: the world, the chunk, the carve
+/// and the chunk's hash after it (`None`: refused).
+pub(crate) struct ChunkReport {
+    pub(crate) world: WorldId,
+    pub(crate) coord: ChunkCoord,
+    pub(crate) seq: u64,
+    pub(crate) hash: Option<u64>,
+    /// Why it was refused.
+    pub(crate) error: Option<String>,
+}
+
+/// The reports of this frame's carves in chunks of networked worlds.
+pub(crate) fn chunk_reports(
+    applied: &mut MessageReader<CarveApplied>,
+    refused: &mut MessageReader<CarveRejected>,
+    chunks: &Query<&WorldChunk>,
+    worlds: &Query<&NetWorld>,
+) -> Vec<ChunkReport> {
+    let locate = |terrain: Entity| {
+        let chunk = chunks.get(terrain).ok()?;
+        let id = worlds.get(chunk.world).ok()?;
+        Some((id.0, chunk.coord))
+    };
+    let mut reports = Vec::new();
+    for report in applied.read() {
+        if let (Some(seq), Some((world, coord))) = (report.request, locate(report.terrain)) {
+            reports.push(ChunkReport {
+                world,
+                coord,
+                seq,
+                hash: Some(report.hash),
+                error: None,
+            });
+        }
+    }
+    for report in refused.read() {
+        if let (Some(seq), Some((world, coord))) = (report.request, locate(report.terrain)) {
+            reports.push(ChunkReport {
+                world,
+                coord,
+                seq,
+                hash: None,
+                error: Some(report.error.to_string()),
+            });
+        }
+    }
+    reports
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c(x: i64, z: i64) -> ChunkCoord {
+        ChunkCoord { x, z }
+    }
+
+    #[test]
+    fn the_world_hash_ignores_order_but_not_place_or_state() {
+        let a = [(c(0, 0), 11), (c(1, -2), 22), (c(-5, 3), 33)];
+        let mut b = a;
+        b.reverse();
+        assert_eq!(world_state_hash(a), world_state_hash(b));
+        assert_ne!(
+            world_state_hash(a),
+            world_state_hash([(c(0, 0), 11), (c(-2, 1), 22), (c(-5, 3), 33)])
+        );
+        assert_ne!(
+            world_state_hash(a),
+            world_state_hash([(c(0, 0), 11), (c(1, -2), 23), (c(-5, 3), 33)])
+        );
+        assert_eq!(world_state_hash([]), 0);
+    }
+
+    /// Reports in any order give the hash after each carve once every
+    /// carve up to it is reported, from each chunk's latest state by then.
+    #[test]
+    fn the_book_knows_a_hash_once_every_carve_before_is_reported() {
+        let mut book = WorldBook::default();
+        book.note_routed(1, &[c(0, 0), c(1, 0)]);
+        book.note_routed(2, &[c(1, 0)]);
+        book.note_routed(3, &[c(0, 0)]);
+        assert!(!book.note_report(c(1, 0), 1, Some(10)));
+        assert!(book.note_report(c(1, 0), 2, Some(20)));
+        assert_eq!(book.done(), 0, "carve 1 still waits for chunk (0, 0)");
+        assert_eq!(book.hash_at(2), None);
+        assert!(book.note_report(c(0, 0), 1, None));
+        assert_eq!(book.done(), 2);
+        assert_eq!(book.hash_at(1), Some(world_state_hash([(c(1, 0), 10)])));
+        assert_eq!(book.hash_at(2), Some(world_state_hash([(c(1, 0), 20)])));
+        assert!(book.note_report(c(0, 0), 3, Some(30)));
+        let after_3 = world_state_hash([(c(0, 0), 30), (c(1, 0), 20)]);
+        assert_eq!(book.hash_at(3), Some(after_3));
+        assert!(!book.note_report(c(0, 0), 3, Some(31)), "one report each");
+        book.prune(3);
+        assert_eq!(book.hash_at(2), None, "pruned");
+        assert_eq!(book.hash_at(3), Some(after_3));
+        assert_eq!(book.chunks[&c(1, 0)].len(), 1, "only the latest kept");
+    }
+}

@@ -1,0 +1,409 @@
+//! The client side of networked worlds ([`super::world`]): sends world
+//! carve requests, installs world snapshots, routes the server's carves to
+//! its chunks strictly in order, and compares world hashes.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use chisel_bsp::octree::Edit;
+
+use super::client::{Assembled, NetCarveResult, NetClientStats, assemble};
+use super::wire::{
+    ClientPacket, ClientRequest, NetWorld, NetWorldCarve, Outcome, RejectReason, ServerPacket,
+    WireTool, WorldId, WorldSnapshotPart,
+};
+use super::world::{WorldBook, chunk_reports};
+use crate::terrain::{
+    CarveApplied, CarveRejected, ChunkCoord, Terrain, TerrainSystems, TerrainWorld, WorldChunk,
+};
+
+/// Ask the server to carve a networked world (on a client); answered by a
+/// [`NetCarveResult`] with the same request id.
+#[derive(Message, Reflect, Clone, Debug)]
+#[reflect(from_reflect = false)]
+pub struct NetWorldCarveRequest {
+    /// Chosen by the sender; echoed in [`NetCarveResult`].
+    pub request: u64,
+    /// The local world entity (with a [`NetWorld`]).
+    pub world: Entity,
+    /// The tool in the world's local frame: `WireTool::from(&carve_tool)`
+    /// for a [`crate::terrain::CarveTool`], or a tool on the world's grid.
+    #[reflect(ignore)]
+    pub tool: WireTool,
+    /// What to do inside it.
+    #[reflect(ignore)]
+    pub edit: Edit,
+}
+
+/// A world's chunks were replaced by the server's snapshot: at join, or
+/// after a desync.
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
+pub struct WorldSynced {
+    /// The local world entity.
+    pub world: Entity,
+    /// Its network id.
+    pub id: WorldId,
+    /// Every world carve up to this one is in the installed chunks.
+    pub seq: u64,
+    /// Edited chunks installed.
+    pub chunks: usize,
+    /// Their snapshot bytes.
+    pub bytes: usize,
+}
+
+/// The world hash after carve `seq` differs from the server's; the client
+/// asked for the world's snapshot.
+#[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
+pub struct WorldDesynced {
+    /// The local world entity.
+    pub world: Entity,
+    /// The carve after which the hashes differ.
+    pub seq: u64,
+    /// This client's world hash.
+    pub local: u64,
+    /// The server's.
+    pub server: u64,
+}
+
+/// A world snapshot being received.
+struct Incoming {
+    seq: u64,
+    chunks: u32,
+    /// Chunks complete so far: coordinates, last carve held, bytes.
+    done: Vec<(ChunkCoord, u64, Vec<u8>)>,
+    /// The chunk being received.
+    slot: Option<(u64, Vec<u8>)>,
+}
+
+/// A complete world snapshot, not installed yet.
+struct Received {
+    seq: u64,
+    chunks: Vec<(ChunkCoord, u64, Vec<u8>)>,
+}
+
+/// One world as this client follows it.
+#[derive(Default)]
+struct FollowWorld {
+    book: WorldBook,
+    /// A snapshot was installed: carves may be routed.
+    synced: bool,
+    /// The next carve to route.
+    next_seq: u64,
+    /// Carves received but not routed yet.
+    waiting: BTreeMap<u64, NetWorldCarve>,
+    /// Chunks whose installed snapshot holds the carves up to this one.
+    held: BTreeMap<ChunkCoord, u64>,
+    incoming: Option<Incoming>,
+    ready: Option<Received>,
+    /// The server's latest world hash not yet compared: (seq, hash).
+    check: Option<(u64, u64)>,
+    /// Waiting for a snapshot after a desync.
+    resyncing: bool,
+}
+
+#[derive(Resource, Default)]
+struct WorldFollower {
+    worlds: HashMap<WorldId, FollowWorld>,
+}
+
+/// Adds the world systems and messages to [`super::NetClientPlugin`].
+pub(super) fn build(app: &mut App) {
+    app.init_resource::<WorldFollower>()
+        .add_message::<NetWorldCarveRequest>()
+        .add_message::<WorldSynced>()
+        .add_message::<WorldDesynced>()
+        .register_type::<NetWorldCarveRequest>()
+        .register_type::<WorldSynced>()
+        .register_type::<WorldDesynced>()
+        .add_systems(
+            Update,
+            (
+                (
+                    send_world_requests,
+                    receive_world_packets,
+                    install_and_route,
+                )
+                    .chain()
+                    .before(TerrainSystems::Carve),
+                compare_world_hashes.after(TerrainSystems::Mesh),
+            ),
+        );
+}
+
+fn send_world_requests(
+    mut requests: MessageReader<NetWorldCarveRequest>,
+    worlds: Query<&NetWorld>,
+    mut packets: MessageWriter<ClientPacket>,
+    mut results: MessageWriter<NetCarveResult>,
+) {
+    for request in requests.read() {
+        let Ok(id) = worlds.get(request.world) else {
+            results.write(NetCarveResult {
+                request: Some(request.request),
+                outcome: Outcome::Rejected(RejectReason::Invalid(
+                    "the entity is no networked world".into(),
+                )),
+            });
+            continue;
+        };
+        packets.write(ClientPacket::Request(ClientRequest::CarveWorld {
+            request: request.request,
+            world: id.0,
+            tool: request.tool.clone(),
+            edit: request.edit,
+        }));
+    }
+}
+
+fn receive_world_packets(
+    mut packets: MessageReader<ServerPacket>,
+    mut follower: ResMut<WorldFollower>,
+) {
+    for packet in packets.read() {
+        match packet {
+            ServerPacket::WorldCarve(carve) => {
+                let follow = follower.worlds.entry(carve.world).or_default();
+                // Behind a snapshot come the carves after it, some of which
+                // may be routed here already: keep them for the snapshot.
+                let snapshot = follow.incoming.is_some() || follow.ready.is_some();
+                if carve.seq >= follow.next_seq || snapshot {
+                    follow
+                        .waiting
+                        .entry(carve.seq)
+                        .or_insert_with(|| carve.clone());
+                }
+            }
+            ServerPacket::WorldCheck { world, seq, hash } => {
+                follower.worlds.entry(*world).or_default().check = Some((*seq, *hash));
+            }
+            ServerPacket::WorldSnapshot(part) => {
+                let follow = follower.worlds.entry(part.world).or_default();
+                receive_part(follow, part);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Adds one part to the world snapshot being received.
+fn receive_part(follow: &mut FollowWorld, part: &WorldSnapshotPart) {
+    let Some(chunk) = &part.chunk else {
+        follow.incoming = None;
+        follow.ready = Some(Received {
+            seq: part.seq,
+            chunks: Vec::new(),
+        });
+        return;
+    };
+    if chunk.index == 0 && chunk.offset == 0 {
+        follow.incoming = Some(Incoming {
+            seq: part.seq,
+            chunks: part.chunks,
+            done: Vec::new(),
+            slot: None,
+        });
+    }
+    let Some(incoming) = follow.incoming.as_mut() else {
+        return;
+    };
+    if incoming.seq != part.seq
+        || incoming.chunks != part.chunks
+        || chunk.index as usize != incoming.done.len()
+    {
+        warn!(
+            "world {} snapshot: a part out of order; dropped",
+            part.world
+        );
+        follow.incoming = None;
+        return;
+    }
+    let assembled = assemble(
+        &mut incoming.slot,
+        chunk.seq,
+        chunk.total,
+        chunk.offset,
+        &chunk.bytes,
+    );
+    match assembled {
+        Assembled::Partial => {}
+        Assembled::Dropped(why) => {
+            warn!("world {} snapshot dropped: {why}", part.world);
+            follow.incoming = None;
+        }
+        Assembled::Whole(seq, bytes) => {
+            let coord = ChunkCoord {
+                x: chunk.coord[0],
+                z: chunk.coord[1],
+            };
+            incoming.done.push((coord, seq, bytes));
+            if incoming.done.len() >= incoming.chunks as usize {
+                let incoming = follow.incoming.take();
+                follow.ready = incoming.map(|i| Received {
+                    seq: i.seq,
+                    chunks: i.done,
+                });
+            }
+        }
+    }
+}
+
+/// Installs complete snapshots into their worlds, then routes the waiting
+/// carves of each synced world to its chunks, in order and without gaps.
+fn install_and_route(
+    mut commands: Commands,
+    mut worlds: Query<(Entity, &NetWorld, &mut TerrainWorld)>,
+    mut follower: ResMut<WorldFollower>,
+    mut stats: ResMut<NetClientStats>,
+    mut synced: MessageWriter<WorldSynced>,
+) {
+    for (entity, id, mut world) in &mut worlds {
+        let Some(follow) = follower.worlds.get_mut(&id.0) else {
+            continue;
+        };
+        if let Some(received) = follow.ready.take() {
+            let seq = received.seq;
+            match install(&mut commands, &mut world, follow, received) {
+                Ok((chunks, bytes)) => {
+                    stats.snapshots += 1;
+                    synced.write(WorldSynced {
+                        world: entity,
+                        id: id.0,
+                        seq,
+                        chunks,
+                        bytes,
+                    });
+                }
+                Err(why) => error!("world {} snapshot refused: {why}", id.0),
+            }
+        }
+        if !follow.synced || follow.resyncing {
+            continue;
+        }
+        while let Some(carve) = follow.waiting.remove(&follow.next_seq) {
+            // The server found chunks for it; none here means another world.
+            let coords: Vec<ChunkCoord> = world
+                .chunks_reached(&carve.tool)
+                .unwrap_or_default()
+                .into_iter()
+                .filter(|c| follow.held.get(c).is_none_or(|&held| held < carve.seq))
+                .collect();
+            world.route(&carve.tool, carve.edit, carve.seq, &coords);
+            follow.book.note_routed(carve.seq, &coords);
+            stats.carves += 1;
+            follow.next_seq += 1;
+        }
+        let next = follow.next_seq;
+        follow.held.retain(|_, held| *held >= next);
+    }
+}
+
+/// Replaces the world's chunks with a received snapshot's; returns the
+/// chunks and bytes installed.
+fn install(
+    commands: &mut Commands,
+    world: &mut TerrainWorld,
+    follow: &mut FollowWorld,
+    received: Received,
+) -> Result<(usize, usize), String> {
+    let layout = world.layout().clone();
+    let mut edited = BTreeMap::new();
+    let mut hashes = BTreeMap::new();
+    let mut held = BTreeMap::new();
+    let mut bytes = 0;
+    for (coord, seq, snapshot) in &received.chunks {
+        let terrain =
+            Terrain::from_snapshot_bytes(snapshot).map_err(|e| format!("chunk {coord:?}: {e}"))?;
+        let base = layout
+            .chunk_base(&*world.source, *coord)
+            .map_err(|e| format!("chunk {coord:?}: {e}"))?;
+        if *terrain.quantization() != layout.quantization || *terrain.base() != base {
+            return Err(format!(
+                "chunk {coord:?} is not a chunk of this world (another grid or base)"
+            ));
+        }
+        hashes.insert(*coord, BTreeMap::from([(*seq, terrain.state_hash())]));
+        held.insert(*coord, *seq);
+        edited.insert(*coord, Arc::new(terrain.to_bytes()));
+        bytes += snapshot.len();
+    }
+    world.reset_chunks(commands, edited);
+    let floor = held.values().copied().fold(received.seq, u64::max);
+    follow.book = WorldBook {
+        chunks: hashes,
+        outstanding: BTreeMap::new(),
+        routed: received.seq,
+        floor,
+    };
+    follow.next_seq = received.seq + 1;
+    follow.waiting.retain(|&s, _| s > received.seq);
+    follow.held = held;
+    follow.synced = true;
+    follow.resyncing = false;
+    follow.check = None;
+    Ok((received.chunks.len(), bytes))
+}
+
+/// Reads the chunks' reports of world carves and compares the world hash
+/// with the server's checks; a difference asks for the world's snapshot.
+#[allow(clippy::too_many_arguments)]
+fn compare_world_hashes(
+    mut applied: MessageReader<CarveApplied>,
+    mut refused: MessageReader<CarveRejected>,
+    chunks: Query<&WorldChunk>,
+    ids: Query<&NetWorld>,
+    worlds: Query<(Entity, &NetWorld, &TerrainWorld)>,
+    mut follower: ResMut<WorldFollower>,
+    mut stats: ResMut<NetClientStats>,
+    mut packets: MessageWriter<ClientPacket>,
+    mut desynced: MessageWriter<WorldDesynced>,
+) {
+    for report in chunk_reports(&mut applied, &mut refused, &chunks, &ids) {
+        if let Some(follow) = follower.worlds.get_mut(&report.world) {
+            follow
+                .book
+                .note_report(report.coord, report.seq, report.hash);
+        }
+    }
+    for (entity, id, world) in &worlds {
+        let Some(follow) = follower.worlds.get_mut(&id.0) else {
+            continue;
+        };
+        follow.book.settle_failed(world);
+        let Some((seq, server)) = follow.check else {
+            continue;
+        };
+        if !follow.synced || follow.resyncing || seq < follow.book.floor {
+            follow.check = None;
+            continue;
+        }
+        // Not known yet: kept until known or replaced by a newer check.
+        let Some(local) = follow.book.hash_at(seq) else {
+            continue;
+        };
+        follow.check = None;
+        follow.book.prune(seq);
+        if local == server {
+            stats.checks_passed += 1;
+            continue;
+        }
+        stats.desyncs += 1;
+        follow.resyncing = true;
+        warn!(
+            "world {}: hash {local:#018x} after carve {seq}, server has {server:#018x}; \
+             asking for the world's snapshot",
+            id.0
+        );
+        desynced.write(WorldDesynced {
+            world: entity,
+            seq,
+            local,
+            server,
+        });
+        packets.write(ClientPacket::Request(ClientRequest::WorldDesync {
+            world: id.0,
+            seq,
+            hash: local,
+        }));
+    }
+}
