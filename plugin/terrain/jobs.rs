@@ -30,7 +30,7 @@ use bevy::tasks::Task;
 use chisel_bsp::exact::Point4;
 use chisel_bsp::octree::{
     CellFaces, CellKey, Changes, ChunkedPiece, DebrisConfig, DebrisPiece, Edit, Octree,
-    SeamedMesher, Tool,
+    PointWedges, SeamedMesher, Tool,
 };
 use chisel_bsp::tools::Quantization;
 use chisel_bsp::tree::{BoundaryFace, Label};
@@ -87,9 +87,11 @@ pub(crate) enum Job {
         requested: Instant,
     },
     /// Seal the cells again at new outside points (the wall points of
-    /// neighbouring chunks on the cube's sides).
+    /// neighbouring chunks on the cube's sides), and shade them again with
+    /// new outside wedges (those chunks' surface around the points).
     Reseal {
         outside: Vec<Point4>,
+        wedges: PointWedges,
     },
     /// Rebuild the cells a detach across chunk borders changed (already
     /// in the octree) and build the pieces this chunk spawns

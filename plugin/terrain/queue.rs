@@ -150,13 +150,14 @@ pub fn start_jobs(
             let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
             let octree = terrain.octree.clone();
             // A first build starts the border vertices afresh, with the
-            // outside points it was given.
+            // outside points and wedges it was given.
             let mut mesher = if settings.shares_border_normals() {
                 SeamedMesher::with_shading()
             } else {
                 SeamedMesher::new()
             };
             mesher.set_outside_points(terrain.runtime.mesher.outside_points().to_vec());
+            mesher.set_outside_wedges(terrain.runtime.mesher.outside_wedges());
             terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                 on_pool(pool, || {
                     remesh(
@@ -204,10 +205,11 @@ pub fn start_jobs(
                     });
                 }
             },
-            Some(Job::Reseal { outside }) => {
+            Some(Job::Reseal { outside, wedges }) => {
                 let octree = terrain.octree.clone();
                 let mut mesher = std::mem::take(&mut terrain.runtime.mesher);
                 mesher.set_outside_points(outside);
+                mesher.set_outside_wedges(wedges);
                 terrain.runtime.resealing = true;
                 terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                     on_pool(pool, || {

@@ -85,6 +85,8 @@ mod terrain_world_debris;
 #[cfg(feature = "terrain")]
 mod terrain_world_lod;
 #[cfg(feature = "terrain")]
+mod terrain_world_normals;
+#[cfg(feature = "terrain")]
 mod terrain_world_seams;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.

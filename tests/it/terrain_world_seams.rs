@@ -11,9 +11,9 @@ use bevy::mesh::{Indices, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy_chisel::bsp::exact::Point4;
 use bevy_chisel::bsp::mesh::SurfaceMesh;
-use bevy_chisel::bsp::octree::{CellKey, Edit, SeamedMesher};
+use bevy_chisel::bsp::octree::{CellBox, CellKey, Edit, SeamedMesher};
 use bevy_chisel::bsp::tools::Quantization;
-use bevy_chisel::terrain::mesh::{DEFAULT_SMOOTHING_DEGREES, cell_meshes_of};
+use bevy_chisel::terrain::mesh::{DEFAULT_SMOOTHING_DEGREES, cell_meshes_around, cell_meshes_of};
 use bevy_chisel::terrain::{
     CarveTool, ChunkCoord, NoiseOctave, Terrain, TerrainWorld, ValueNoise, WorldLayout, WorldSource,
 };
@@ -320,25 +320,10 @@ fn outside_of(all: &[(ChunkCoord, Measured)], i: usize) -> Vec<Point4> {
 /// The chunk's wall points on its sides and corner lines toward each of
 /// its eight neighbours, what a job of a world chunk hands back.
 fn border_points(m: &Measured) -> Vec<Vec<Point4>> {
-    let cube = m.octree.root_box();
-    let mut out = Vec::new();
-    for dx in -1..=1i64 {
-        for dz in -1..=1i64 {
-            if (dx, dz) == (0, 0) {
-                continue;
-            }
-            let mut region = cube;
-            for (axis, d) in [(0, dx), (2, dz)] {
-                match d {
-                    -1 => region.max[axis] = cube.min[axis],
-                    1 => region.min[axis] = cube.max[axis],
-                    _ => {}
-                }
-            }
-            out.push(m.mesher.wall_points_in(&m.octree, &region));
-        }
-    }
-    out
+    border_regions(&m.octree.root_box())
+        .iter()
+        .map(|region| m.mesher.wall_points_in(&m.octree, region))
+        .collect()
 }
 
 /// Render meshes of the sealed cells, as a job builds them.
@@ -361,8 +346,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// What stitching adds to a chunk build and to a carve beside a border,
 /// in the `world` example's world (1 cm grid, 20.48 m chunks, grass and
 /// dirt bands): the steps a chunk's jobs run, through the kernel API, on
-/// one thread each. Prints the figures; checks that only a change of
-/// points seals again.
+/// one thread each, and what the border wedges add with smoothing across
+/// chunks. Prints the figures; checks that only a change of points seals
+/// again.
 #[test]
 fn the_cost_of_stitching_chunk_borders() {
     let grid = Quantization::new(0.01, [0.0; 3]).expect("valid unit");
@@ -541,7 +527,80 @@ fn the_cost_of_stitching_chunk_borders() {
             median(extra),
         );
         assert!(neighbours > 0, "no carve changed a neighbour's points");
+
+        // With smooth_across_cells: the border wedges every job adds, and
+        // the four chunks shaded with their first outside wedges.
+        let mut shaded: Vec<(ChunkCoord, Measured)> = Vec::new();
+        for (coord, m) in &chunks {
+            let octree = m.octree.clone();
+            let keys: Vec<CellKey> = octree.leaves().into_iter().map(|(k, _)| k).collect();
+            let mut mesher = SeamedMesher::with_shading();
+            mesher.set_outside_points(m.mesher.outside_points().to_vec());
+            mesher.update_shaded(&octree, keys, BTreeMap::new());
+            shaded.push((*coord, Measured { octree, mesher }));
+        }
+        let mut wedges = Vec::new();
+        for _ in 0..5 {
+            let start = Instant::now();
+            for (_, m) in &shaded {
+                let cube = m.octree.root_box();
+                for region in border_regions(&cube) {
+                    std::hint::black_box(m.mesher.border_wedges_in(&m.octree, &region));
+                }
+            }
+            wedges.push(ms(start.elapsed()) / 4.0);
+        }
+        let (mut shade, mut reshaded) = (0.0, 0);
+        for i in 0..4 {
+            let cube = shaded[i].1.octree.root_box();
+            let outside: Vec<_> = shaded
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .flat_map(|(_, (_, m))| m.mesher.border_wedges_in(&m.octree, &cube))
+                .collect();
+            let m = &mut shaded[i].1;
+            let start = Instant::now();
+            m.mesher.set_outside_wedges(outside);
+            for (_, cell) in m.mesher.update_shaded(&m.octree, [], BTreeMap::new()) {
+                let cell = cell.expect("a leaf");
+                let built =
+                    cell_meshes_around(&cell.mesh, &cell.around, &grid, DEFAULT_SMOOTHING_DEGREES);
+                std::hint::black_box(built);
+                reshaded += 1;
+            }
+            shade += ms(start.elapsed());
+        }
+        println!(
+            "smoothing across chunks, one thread: border wedges {:.2} ms per chunk (median of \
+             5); four chunks shaded with their first outside wedges {shade:.2} ms ({reshaded} \
+             cells)",
+            median(wedges),
+        );
+        assert!(reshaded > 0, "no cell took its neighbours' wedges");
     });
+}
+
+/// The sides and corner lines `cube` shares with its eight neighbours.
+fn border_regions(cube: &CellBox) -> Vec<CellBox> {
+    let mut out = Vec::new();
+    for dx in -1..=1i64 {
+        for dz in -1..=1i64 {
+            if (dx, dz) == (0, 0) {
+                continue;
+            }
+            let mut region = *cube;
+            for (axis, d) in [(0, dx), (2, dz)] {
+                match d {
+                    -1 => region.max[axis] = cube.min[axis],
+                    1 => region.min[axis] = cube.max[axis],
+                    _ => {}
+                }
+            }
+            out.push(region);
+        }
+    }
+    out
 }
 
 /// Whether the lists hold the same points in the same order (what the

@@ -32,7 +32,8 @@
 //! - [`seams`] — sealed cell meshes that meet their neighbours' edge to
 //!   edge, kept up to date across edits ([`SeamedMesher`]); [`shading`] —
 //!   the surface around their border vertices, shared between neighbours
-//!   for smooth normals that agree across cell borders.
+//!   for smooth normals that agree across cell borders; [`outside_shading`]
+//!   — the same across the cubes of neighbouring octrees.
 //! - [`hash`] — a state hash of an octree's content, updated per edit
 //!   from the cells it changed ([`StateHash`]).
 //! - [`store`] — octree files: exact, versioned and checked
@@ -73,6 +74,7 @@ pub mod import_layers;
 mod leaf;
 pub mod measure;
 mod mesh_check;
+pub mod outside_shading;
 mod relabel;
 pub mod seams;
 pub mod shading;
@@ -92,6 +94,7 @@ pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};
 pub use exact_volume::ExactVolume;
 pub use hash::StateHash;
 pub use leaf::CellFaces;
+pub use outside_shading::PointWedges;
 pub use seams::SeamedMesher;
 pub use shading::ShadedCell;
 pub use tool::Tool;

@@ -50,13 +50,15 @@
 //! A mesher made with [`SeamedMesher::with_shading`] also keeps the
 //! surface around every leaf's border vertices and hands it back with the
 //! sealed meshes, for smooth normals that agree across cell borders
-//! ([`super::shading`]).
+//! ([`super::shading`]), and across the cubes of neighbouring octrees
+//! with *outside wedges* ([`super::outside_shading`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use rayon::prelude::*;
 
 use super::cell::{CellBox, CellKey};
+use super::outside_shading::OutsideWedges;
 use super::shading::{CellShading, SealedLeaf, ShadedCell, own_shading};
 use super::tree::{Leaf, OctNode, Octree};
 use crate::exact::{Plane, Point4};
@@ -194,6 +196,9 @@ pub struct SeamedMesher {
     /// Per leaf with shaded points, those points and its own wedges
     /// there ([`super::shading`]).
     pub(super) shading: BTreeMap<CellKey, CellShading>,
+    /// The surface of other octrees around points on the cube
+    /// ([`super::outside_shading`]).
+    pub(super) outside_wedges: OutsideWedges,
 }
 
 impl SeamedMesher {
@@ -744,7 +749,7 @@ pub(super) fn may_be_in_box(q: [f64; 3], cell: &CellBox) -> bool {
 }
 
 /// Whether the exact point `p` lies in the closed box `cell`.
-fn in_closed_box(p: &Point4, cell: &CellBox) -> bool {
+pub(super) fn in_closed_box(p: &Point4, cell: &CellBox) -> bool {
     (0..3).all(|axis| {
         classify_vertex(p, &axis_plane(axis, cell.min[axis])) != Sign::Negative
             && classify_vertex(p, &axis_plane(axis, cell.max[axis])) != Sign::Positive

@@ -46,11 +46,11 @@ pub struct ShadedCell {
 /// wedges there (see the module docs).
 #[derive(Clone, Debug, Default)]
 pub(super) struct CellShading {
-    points: Vec<Point4>,
+    pub(super) points: Vec<Point4>,
     /// Their `f64` positions, for cheap filters.
-    points_f64: Vec<[f64; 3]>,
+    pub(super) points_f64: Vec<[f64; 3]>,
     /// Their vertex numbers in the sealed mesh they come from.
-    vertices: Vec<u32>,
+    pub(super) vertices: Vec<u32>,
     /// Per point, the walls of the leaf's box it may lie on (`2·axis +
     /// upper`, one bit each; a cheap filter: the exact test decides).
     walls: Vec<u8>,
@@ -106,7 +106,8 @@ impl CellShading {
         out
     }
 
-    fn wedges(&self, i: usize) -> &[Wedge] {
+    /// The own wedges at point `i`.
+    pub(super) fn wedges(&self, i: usize) -> &[Wedge] {
         &self.wedges[self.start[i] as usize..self.start[i + 1] as usize]
     }
 
@@ -187,10 +188,18 @@ impl SeamedMesher {
             before.extend(self.shading.remove(key).map(|s| (*key, s)));
         }
         before.sort_unstable_by_key(|(key, _)| *key);
+        let outside_changed = std::mem::take(&mut self.outside_wedges.changed);
         let keys: Vec<CellKey> = cells.iter().map(|(key, ..)| *key).collect();
-        let (foreign, maybe) = self.neighbour_wedges(octree, &keys, &near, Some(&before));
-        let again = self.surroundings_changed(octree, &keys, &before, maybe);
+        let (mut foreign, maybe) = self.neighbour_wedges(octree, &keys, &near, Some(&before));
+        let mut again = self.surroundings_changed(octree, &keys, &before, maybe);
+        // Leaves whose outside wedges changed ([`super::outside_shading`]).
+        let mut sorted = keys.clone();
+        sorted.sort_unstable();
+        again.extend(self.touched_by_outside(octree, &outside_changed, &sorted));
+        again.sort_unstable();
+        again.dedup();
         if again.is_empty() {
+            self.add_outside_wedges(octree, &keys, &mut foreign);
             return finish(cells, foreign, gone);
         }
         let around = self.extra_points_of(octree, &again);
@@ -214,7 +223,8 @@ impl SeamedMesher {
         }
         let keys: Vec<CellKey> = cells.iter().map(|(key, ..)| *key).collect();
         let near = self.neighbours_of(octree, &keys);
-        let (foreign, _) = self.neighbour_wedges(octree, &keys, &near, None);
+        let (mut foreign, _) = self.neighbour_wedges(octree, &keys, &near, None);
+        self.add_outside_wedges(octree, &keys, &mut foreign);
         finish(cells, foreign, gone)
     }
 
@@ -487,7 +497,7 @@ impl PointIndex {
 /// The walls of the box `cell` (`2·axis + upper`, one bit each) that the
 /// exact point at `f64` position `q` may lie on: those within a margin of
 /// `2^-40` of the box's coordinates (far more than the rounding of `q`).
-fn near_walls(q: [f64; 3], cell: &CellBox) -> u8 {
+pub(super) fn near_walls(q: [f64; 3], cell: &CellBox) -> u8 {
     let mut walls = 0;
     for (a, &c) in q.iter().enumerate() {
         for (upper, at) in [(0, cell.min[a]), (1, cell.max[a])] {
@@ -503,7 +513,7 @@ fn near_walls(q: [f64; 3], cell: &CellBox) -> u8 {
 
 /// Whether two `f64` positions of exact points may be the same point
 /// (each within `2^-51` relative; a margin of `2^-40`).
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+pub(super) fn close(a: [f64; 3], b: [f64; 3]) -> bool {
     (0..3).all(|i| {
         let margin = (a[i].abs().max(b[i].abs()) + 1.0) * f64::powi(2.0, -40);
         (a[i] - b[i]).abs() <= margin

@@ -45,6 +45,7 @@ mod octree_nesting;
 mod octree_seams;
 mod octree_seams_outside;
 mod octree_shading;
+mod octree_shading_outside;
 mod octree_split;
 mod octree_store;
 

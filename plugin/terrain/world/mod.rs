@@ -73,13 +73,17 @@
 //! chunks meet. A neighbour's meshes follow a carve one job later, so for
 //! a frame or two after a carve the border may show a T-junction.
 //!
-//! What is not stitched yet:
-//! - **Normals across chunk borders.** Within a chunk, a vertex on a
-//!   cell border is smoothed over the faces of every cell around it
-//!   ([`chisel_bsp::octree::SeamedMesher::with_shading`]), so cell
-//!   borders show no line; on a chunk's sides the chunk's mesher knows
-//!   only its own cells' faces (the exchange carries points, not wedges),
-//!   so shading can show a faint line along chunk borders.
+//! Normals across borders: with the seams, each chunk hands back the exact
+//! surface of its cells around its vertices on its sides (*border
+//! wedges*, [`chisel_bsp::octree::SeamedMesher::border_wedges_in`]), and
+//! each neighbour smooths its own vertices there over them too
+//! ([`chisel_bsp::octree::SeamedMesher::set_outside_wedges`]). So a vertex
+//! on a chunk border gets the same normal bits in every chunk that has it,
+//! smoothed over the faces of every chunk around it, as a vertex on a cell
+//! border inside a chunk does: shading shows no line along chunk borders
+//! ([`TerrainSettings::smooth_across_cells`](super::TerrainSettings::smooth_across_cells)
+//! off: each chunk smooths over its own faces). A neighbour is shaded
+//! again only where the wedges it is given change.
 //!
 //! ## Debris
 //!

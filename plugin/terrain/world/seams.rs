@@ -6,25 +6,47 @@
 //! Notation: a chunk's *border points* toward a neighbour are the wall
 //! points of its kept cell meshes that lie on the side or the corner line
 //! it shares with that neighbour (`BorderPoints`); a chunk's *outside
-//! points* are the border points of its live neighbours toward it.
+//! points* are the border points of its live neighbours toward it. Its
+//! *border wedges* there are, at each vertex of its sealed cell meshes on
+//! that side or line, the exact surface of its own cells around the
+//! vertex ([`SeamedMesher::border_wedges_in`]); its *outside wedges* are
+//! its live neighbours' border wedges toward it.
 //!
-//! Every job of a chunk hands back its border points as of the meshes it
-//! built ([`BorderPoints::of`], on the worker). [`stitch_chunk_borders`]
-//! then gathers the outside points of each neighbour of a chunk whose
-//! border points changed and, where they differ from those the neighbour
-//! was last given, queues a job that seals the neighbour's cells again at
-//! them (only the cells whose seams change are rebuilt; their colliders
-//! stay). A chunk that has just streamed in takes its live neighbours'
-//! points before its first build. Wall points come from the unsealed
-//! meshes, so one exchange settles a border: no chunk's border points
+//! Every job of a chunk hands back its border points and wedges as of
+//! the meshes it built ([`BorderPoints::of`], on the worker).
+//! [`stitch_chunk_borders`] then gathers the outside points and wedges of
+//! each neighbour of a chunk whose border changed and, where they differ
+//! from those the neighbour was last given, queues a job that seals the
+//! neighbour's cells again at the points and shades them again with the
+//! wedges (only the cells whose seams or border vertices' surroundings
+//! change are rebuilt; their colliders stay). A chunk that has just
+//! streamed in takes its live neighbours' points and wedges before its
+//! first build. Wall points come from the unsealed meshes, so one
+//! exchange settles the points of a border: no chunk's border points
 //! depend on its neighbours'.
+//!
+//! Normals ([`super::super::mesh`]): a vertex on a chunk's side is
+//! smoothed over the merged wedges of every cell around it in every chunk
+//! that has it, its own and the outside wedges
+//! ([`SeamedMesher::set_outside_wedges`]): all chunks sharing the vertex
+//! sum the same exact wedges in the same order and give it the same
+//! normal bits, as the cells of one chunk do, and an incremental update
+//! gives what a build from scratch gives. Border wedges come from the
+//! chunk's own cells, never from its outside wedges; which vertices carry
+//! them depends on its outside points, so a carve settles in at most two
+//! exchanges (the carved chunk's points and wedges, then its neighbours'
+//! wedges at those points). A chunk whose mesher keeps no shading
+//! (`TerrainSettings::smooth_across_cells` off, flat shading, no render
+//! meshes) hands back no wedges, and its cells are smoothed over its own
+//! faces at its sides.
 //!
 //! A frame in which no chunk streamed in or out and no chunk's border
 //! points changed costs one look at the live chunks, not a pass.
 //!
-//! A chunk that streams out leaves its points with its neighbours until
-//! they are given new ones: splitting at a point where no neighbour
-//! meets the edge any more only adds a vertex on a straight edge. It
+//! A chunk that streams out leaves its points and wedges with its
+//! neighbours until they are given new ones: splitting at a point where
+//! no neighbour meets the edge any more only adds a vertex on a straight
+//! edge, and the wedges are those the chunk has when it streams back. It
 //! drops its own re-seal jobs, queued or running
 //! (`Terrain::is_idle_but_for_seams`): they change no octree, journal or
 //! undo step, and would hold it live while they wait on the pool.
@@ -34,7 +56,8 @@ use std::sync::Arc;
 
 use bevy::prelude::*;
 use chisel_bsp::exact::Point4;
-use chisel_bsp::octree::{CellBox, Octree, SeamedMesher};
+use chisel_bsp::mesh::Wedge;
+use chisel_bsp::octree::{CellBox, Octree, PointWedges, SeamedMesher};
 
 use super::super::component::Terrain;
 use super::super::jobs::Job;
@@ -55,28 +78,65 @@ const NEIGHBOURS: [(i64, i64); 8] = [
 /// A chunk's wall points on the sides of its cube, toward each neighbour
 /// (in the order of `NEIGHBOURS`): on the shared side for the four across
 /// a side, on the shared vertical corner line for the four across a
-/// corner.
+/// corner; and its border wedges there (none when its mesher keeps no
+/// shading).
 #[derive(Debug, Default)]
 pub(crate) struct BorderPoints {
     toward: [Vec<Point4>; 8],
+    wedges: [PointWedges; 8],
 }
 
 impl BorderPoints {
-    /// The border points of the cells `mesher` keeps for `octree` (a
-    /// chunk's octree, its cube one chunk of the world's grid).
+    /// The border points and wedges of the cells `mesher` keeps for
+    /// `octree` (a chunk's octree, its cube one chunk of the world's
+    /// grid).
     pub(crate) fn of(mesher: &SeamedMesher, octree: &Octree) -> Self {
         let cube = octree.root_box();
+        let wedges = if mesher.keeps_shading() {
+            NEIGHBOURS.map(|step| mesher.border_wedges_in(octree, &shared_with(&cube, step)))
+        } else {
+            Default::default()
+        };
         Self {
             toward: NEIGHBOURS.map(|step| mesher.wall_points_in(octree, &shared_with(&cube, step))),
+            wedges,
         }
+    }
+
+    /// The index of the neighbour `step` away in `NEIGHBOURS`.
+    fn index(step: (i64, i64)) -> Option<usize> {
+        NEIGHBOURS.iter().position(|&s| s == step)
     }
 
     /// The points toward the neighbour `step` away.
     fn toward(&self, step: (i64, i64)) -> &[Point4] {
-        NEIGHBOURS
-            .iter()
-            .position(|&s| s == step)
-            .map_or(&[][..], |i| self.toward[i].as_slice())
+        Self::index(step).map_or(&[][..], |i| self.toward[i].as_slice())
+    }
+
+    /// The border wedges toward the neighbour `step` away.
+    fn wedges_toward(&self, step: (i64, i64)) -> &[(Point4, Vec<Wedge>)] {
+        Self::index(step).map_or(&[][..], |i| self.wedges[i].as_slice())
+    }
+}
+
+/// What a chunk is given of its neighbours: their border points and
+/// border wedges toward it.
+#[derive(Debug, Default)]
+struct Outside {
+    points: Vec<Point4>,
+    wedges: PointWedges,
+}
+
+impl Outside {
+    /// Whether both hold the same points and wedges in the same order.
+    fn same_as(&self, other: &Self) -> bool {
+        same_points(&self.points, &other.points)
+            && self.wedges.len() == other.wedges.len()
+            && self
+                .wedges
+                .iter()
+                .zip(&other.wedges)
+                .all(|((p, a), (q, b))| a == b && same_point(p, q))
     }
 }
 
@@ -99,9 +159,9 @@ fn shared_with(cube: &CellBox, (dx, dz): (i64, i64)) -> CellBox {
 pub(crate) struct WorldSeams {
     /// Per live chunk, its terrain entity and the border points last seen.
     seen: BTreeMap<ChunkCoord, (Entity, Arc<BorderPoints>)>,
-    /// Per live chunk, its terrain entity and the outside points it was
-    /// last given.
-    given: BTreeMap<ChunkCoord, (Entity, Vec<Point4>)>,
+    /// Per live chunk, its terrain entity and the outside points and
+    /// wedges it was last given.
+    given: BTreeMap<ChunkCoord, (Entity, Outside)>,
     /// The live chunks and their terrain entities at the last pass, in
     /// coordinate order.
     live: Vec<(ChunkCoord, Entity)>,
@@ -198,12 +258,12 @@ pub fn stitch_chunk_borders(
             let Some(&entity) = live.get(&coord) else {
                 continue;
             };
-            let outside = outside_points(&seams.seen, coord);
+            let outside = outside_of(&seams.seen, coord);
             let first = !seams.given.contains_key(&coord);
             if seams
                 .given
                 .get(&coord)
-                .is_some_and(|(_, given)| same_points(given, &outside))
+                .is_some_and(|(_, given)| given.same_as(&outside))
             {
                 continue;
             }
@@ -213,17 +273,23 @@ pub fn stitch_chunk_borders(
             let runtime = &mut terrain.runtime;
             runtime.publishes_border = true;
             if first && runtime.task.is_none() && runtime.needs_full_mesh {
-                // Before the first build: it seals with them.
-                runtime.mesher.set_outside_points(outside.clone());
-            } else if let Some(Job::Reseal { outside: queued }) = runtime
+                // Before the first build: it seals and shades with them.
+                runtime.mesher.set_outside_points(outside.points.clone());
+                runtime.mesher.set_outside_wedges(outside.wedges.clone());
+            } else if let Some(Job::Reseal {
+                outside: queued,
+                wedges,
+            }) = runtime
                 .queue
                 .iter_mut()
                 .find(|job| matches!(job, Job::Reseal { .. }))
             {
-                queued.clone_from(&outside);
+                queued.clone_from(&outside.points);
+                wedges.clone_from(&outside.wedges);
             } else {
                 runtime.queue.push_back(Job::Reseal {
-                    outside: outside.clone(),
+                    outside: outside.points.clone(),
+                    wedges: outside.wedges.clone(),
                 });
             }
             seams.given.insert(coord, (entity, outside));
@@ -231,19 +297,21 @@ pub fn stitch_chunk_borders(
     }
 }
 
-/// The border points of the chunks around `coord` toward it.
-fn outside_points(
+/// The border points and wedges of the chunks around `coord` toward it.
+fn outside_of(
     seen: &BTreeMap<ChunkCoord, (Entity, Arc<BorderPoints>)>,
     coord: ChunkCoord,
-) -> Vec<Point4> {
-    let mut out = Vec::new();
+) -> Outside {
+    let mut out = Outside::default();
     for (dx, dz) in NEIGHBOURS {
         let neighbour = ChunkCoord {
             x: coord.x + dx,
             z: coord.z + dz,
         };
         if let Some((_, border)) = seen.get(&neighbour) {
-            out.extend_from_slice(border.toward((-dx, -dz)));
+            out.points.extend_from_slice(border.toward((-dx, -dz)));
+            out.wedges
+                .extend_from_slice(border.wedges_toward((-dx, -dz)));
         }
     }
     out
@@ -254,12 +322,14 @@ fn outside_points(
 /// which spares the cross-multiplied comparison for the points a chunk's
 /// rebuilt cells share with the last ones (most of them).
 fn same_points(a: &[Point4], b: &[Point4]) -> bool {
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(p, q)| {
-            if p.w() == q.w() {
-                p.xyz() == q.xyz()
-            } else {
-                p.same_position(q)
-            }
-        })
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| same_point(p, q))
+}
+
+/// Whether `p` and `q` are the same point (see [`same_points`]).
+fn same_point(p: &Point4, q: &Point4) -> bool {
+    if p.w() == q.w() {
+        p.xyz() == q.xyz()
+    } else {
+        p.same_position(q)
+    }
 }
