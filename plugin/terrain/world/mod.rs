@@ -92,7 +92,9 @@
 //! ([`debris`]) then joins the chunks exactly across their shared sides,
 //! so a piece cut loose over one or more borders falls as one
 //! [`TerrainDebris`](super::TerrainDebris), taken out of every chunk it
-//! spans. A side towards a chunk that is not live anchors.
+//! spans. A side towards a chunk that is not live anchors. The pass
+//! depends on which chunks are live, so a networked world (feature `net`)
+//! turns it off ([`TerrainWorld::with_debris_across_borders`]).
 //!
 //! ## Level of detail
 //!
