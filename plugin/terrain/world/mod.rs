@@ -512,6 +512,7 @@ impl TerrainWorld {
     }
 
     /// Whether chunk `coord` failed to build (its carves were dropped).
+    #[cfg(feature = "net")]
     pub(crate) fn chunk_failed(&self, coord: ChunkCoord) -> bool {
         matches!(self.chunks.get(&coord), Some(Chunk::Failed))
     }
@@ -521,6 +522,7 @@ impl TerrainWorld {
     /// are despawned, builds dropped and waiting carves cleared, and the
     /// chunks stream in again from `edited` or the source. The chunks in
     /// `edited` count as edited whatever their journals say.
+    #[cfg(feature = "net")]
     pub(crate) fn reset_chunks(
         &mut self,
         commands: &mut Commands,
