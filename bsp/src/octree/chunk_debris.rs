@@ -81,7 +81,9 @@ use rayon::prelude::*;
 use super::apply::Changes;
 use super::cell::{CellBox, CellKey};
 use super::components::{Anchors, CubeSide, SolidCell, SolidGraph, reach_across};
-use super::debris::{DebrisCell, DebrisConfig, DebrisPiece, debris_cell};
+use super::debris::{
+    DebrisCell, DebrisConfig, DebrisPiece, check_limits, debris_cell, volumes_by_label,
+};
 use super::exact_volume::ExactVolume;
 use super::relabel::{Relabel, relabel};
 use super::tree::Octree;
@@ -403,29 +405,12 @@ fn find_joined(
             }
         }
         for (_, cells, volumes) in &mut parts {
-            let mut by_label: BTreeMap<Label, Vec<ExactVolume>> = BTreeMap::new();
-            for cell in cells.iter() {
-                by_label
-                    .entry(cell.label)
-                    .or_default()
-                    .push(cell.volume.clone());
-            }
-            *volumes = by_label
-                .into_iter()
-                .map(|(l, v)| (l, ExactVolume::sum_balanced(v)))
-                .collect();
+            *volumes = volumes_by_label(cells);
             for v in volumes.values() {
                 total_volume += v;
             }
         }
-        if too_many || limits.max_volume.is_some_and(|m| total_volume.exceeds(m)) {
-            return Err(Error::TooMuchDebris {
-                cells: total_cells,
-                volume: total_volume.to_f64(),
-                max_cells: limits.max_cells,
-                max_volume: limits.max_volume,
-            });
-        }
+        check_limits(limits, too_many, total_cells, &total_volume)?;
         debris.extend(order.iter().copied());
         out.push(parts);
     }

@@ -46,6 +46,7 @@ use rayon::prelude::*;
 
 use super::apply::{Changes, Edit};
 use super::cell::{CellBox, CellKey};
+use super::chunk_debris::DebrisLimits;
 use super::components::{Anchors, SolidCell, SolidGraph};
 use super::exact_volume::ExactVolume;
 use super::relabel::{Relabel, relabel};
@@ -413,32 +414,49 @@ fn find_debris(
                 .filter_map(|&c| debris_cell(graph, c))
                 .collect()
         };
-        let mut volumes: BTreeMap<Label, Vec<ExactVolume>> = BTreeMap::new();
-        for cell in &cells {
-            volumes
-                .entry(cell.label)
-                .or_default()
-                .push(cell.volume.clone());
-        }
-        let volumes: BTreeMap<Label, ExactVolume> = volumes
-            .into_iter()
-            .map(|(l, v)| (l, ExactVolume::sum_balanced(v)))
-            .collect();
+        let volumes = volumes_by_label(&cells);
         for v in volumes.values() {
             total_volume += v;
         }
-        if too_many || config.max_volume.is_some_and(|m| total_volume.exceeds(m)) {
-            return Err(Error::TooMuchDebris {
-                cells: total_cells,
-                volume: total_volume.to_f64(),
-                max_cells: config.max_cells,
-                max_volume: config.max_volume,
-            });
-        }
+        check_limits(config.into(), too_many, total_cells, &total_volume)?;
         debris.extend(order.iter().copied());
         out.push((cells, volumes));
     }
     Ok(out)
+}
+
+/// The exact volume per material of `cells`.
+pub(super) fn volumes_by_label(cells: &[DebrisCell]) -> BTreeMap<Label, ExactVolume> {
+    let mut by_label: BTreeMap<Label, Vec<ExactVolume>> = BTreeMap::new();
+    for cell in cells {
+        by_label
+            .entry(cell.label)
+            .or_default()
+            .push(cell.volume.clone());
+    }
+    by_label
+        .into_iter()
+        .map(|(l, v)| (l, ExactVolume::sum_balanced(v)))
+        .collect()
+}
+
+/// [`Error::TooMuchDebris`] when the debris found so far, `cells` convex
+/// cells (`too_many`: over `limits` already) of `volume`, is over `limits`.
+pub(super) fn check_limits(
+    limits: DebrisLimits,
+    too_many: bool,
+    cells: usize,
+    volume: &ExactVolume,
+) -> Result<(), Error> {
+    if too_many || limits.max_volume.is_some_and(|m| volume.exceeds(m)) {
+        return Err(Error::TooMuchDebris {
+            cells,
+            volume: volume.to_f64(),
+            max_cells: limits.max_cells,
+            max_volume: limits.max_volume,
+        });
+    }
+    Ok(())
 }
 
 /// The convex cell `cell` with its planes, corners and exact volume.

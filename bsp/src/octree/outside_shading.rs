@@ -30,7 +30,7 @@
 //! shaded point there: that polygon's whole-plane wedge is not added.
 
 use super::cell::{CellBox, CellKey};
-use super::seams::{SeamedMesher, in_closed_box, may_be_in_box, same_point};
+use super::seams::{SeamedMesher, boxes_around, in_closed_box, may_be_in_box, same_point};
 use super::shading::{close, near_walls};
 use super::tree::Octree;
 use crate::exact::Point4;
@@ -208,13 +208,7 @@ impl SeamedMesher {
             return Vec::new();
         }
         let positions: Vec<[f64; 3]> = changed.iter().map(Point4::to_f64).collect();
-        let around: Vec<CellBox> = positions
-            .iter()
-            .map(|q| CellBox {
-                min: q.map(|c| c.floor() as i64 - 1),
-                max: q.map(|c| c.ceil() as i64 + 1),
-            })
-            .collect();
+        let around = boxes_around(&positions);
         let mut out = Vec::new();
         octree.for_leaves_touching_each(&around, |key, hits| {
             if listed.binary_search(&key).is_ok() {

@@ -547,13 +547,7 @@ impl SeamedMesher {
     /// the only leaves whose seam points may change.
     fn touched_by(&self, octree: &Octree, changed: &[Point4], pending: &Pending) -> Vec<CellKey> {
         let positions: Vec<[f64; 3]> = changed.iter().map(Point4::to_f64).collect();
-        let around: Vec<CellBox> = positions
-            .iter()
-            .map(|q| CellBox {
-                min: q.map(|c| c.floor() as i64 - 1),
-                max: q.map(|c| c.ceil() as i64 + 1),
-            })
-            .collect();
+        let around = boxes_around(&positions);
         let mut near = BTreeSet::new();
         octree.for_leaves_touching_each(&around, |key, points| {
             if !pending.contains_key(&key)
@@ -776,4 +770,17 @@ fn identical(a: &[Point4], b: &[Point4]) -> bool {
 fn same_set(a: &[Point4], b: &[Point4]) -> bool {
     a.iter().all(|p| b.iter().any(|q| same_point(p, q)))
         && b.iter().all(|q| a.iter().any(|p| same_point(p, q)))
+}
+
+/// Per `f64` position of an exact point, an integer box holding the point
+/// with a margin of one grid unit (the position rounded out): the leaves
+/// whose closed boxes touch it are all those that may hold the point.
+pub(super) fn boxes_around(positions: &[[f64; 3]]) -> Vec<CellBox> {
+    positions
+        .iter()
+        .map(|q| CellBox {
+            min: q.map(|c| c.floor() as i64 - 1),
+            max: q.map(|c| c.ceil() as i64 + 1),
+        })
+        .collect()
 }
