@@ -12,7 +12,7 @@
 //! `loading_a_saved_terrain_against_replaying_its_carves`,
 //! `carving_at_sixty_frames_per_second`,
 //! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`,
-//! `lod_of_a_world`). World: chunks of the `world` example's landscape
+//! `lod_of_a_world`, `debris_across_chunk_borders`). World: chunks of the `world` example's landscape
 //! built one at a time, their size, the banded base built in one pass
 //! against painting its bands, and an app streaming them around a focus
 //! touring the world (a line, a loop or a lawnmower; `CHISEL_BENCH_TOUR`)
@@ -45,13 +45,16 @@ use support::{Args, env_or, json_line, percentile};
 mod frame_steps;
 #[path = "terrain/world.rs"]
 mod world;
+#[path = "terrain/world_debris.rs"]
+mod world_debris;
 use world::{lod_of_a_world, streaming_a_world};
+use world_debris::debris_across_chunk_borders;
 
 fn main() {
     let Some(args) = Args::parse("terrain") else {
         return;
     };
-    let all: [(&str, fn()); 6] = [
+    let all: [(&str, fn()); 7] = [
         (
             "crater_carves_on_a_large_terrain",
             crater_carves_on_a_large_terrain,
@@ -70,6 +73,7 @@ fn main() {
         ),
         ("streaming_a_world", streaming_a_world),
         ("lod_of_a_world", lod_of_a_world),
+        ("debris_across_chunk_borders", debris_across_chunk_borders),
     ];
     for (name, measure) in all {
         if args.wants(name) {

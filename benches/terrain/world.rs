@@ -8,7 +8,7 @@ use bevy_chisel::terrain::{LodSettings, StreamSettings, TerrainFocus, TerrainWor
 
 /// The `world` example's landscape and layout: a 1 cm grid, 20.48 m
 /// chunks, samples 1.28 m apart, with (or without) grass and dirt bands.
-fn world_of_the_example(layers: bool) -> bevy_chisel::terrain::TerrainWorld {
+pub(super) fn world_of_the_example(layers: bool) -> bevy_chisel::terrain::TerrainWorld {
     use bevy_chisel::terrain::{TerrainWorld, WorldLayout};
     let layout = WorldLayout {
         quantization: Quantization::new(0.01, [0.0; 3]).expect("valid unit"),
@@ -91,7 +91,7 @@ fn painted_bands(base: &bevy_chisel::terrain::TerrainBase) -> bevy_chisel::bsp::
 }
 
 /// The `world` example's landscape.
-fn example_noise() -> bevy_chisel::terrain::ValueNoise {
+pub(super) fn example_noise() -> bevy_chisel::terrain::ValueNoise {
     use bevy_chisel::terrain::{NoiseOctave, ValueNoise};
     let octave = |cell, amplitude, seed| NoiseOctave {
         cell,

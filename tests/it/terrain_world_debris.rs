@@ -248,3 +248,73 @@ fn undoing_the_cut_brings_back_the_part_in_its_chunk() {
     assert_eq!(chunk.octree().label_at([30, 26, 12]).unwrap(), Some(1));
     assert_eq!(hash(&app, at(1, 0)), neighbour);
 }
+
+/// A notch out of the top of the slab's part in chunk (1, 0).
+const NOTCH: ([i64; 3], [i64; 3]) = ([34, 26, 9], [36, 29, 15]);
+
+/// The search runs off the frames: a carve that lands on a chunk the
+/// search takes solid from while it runs (here it is asked for then and
+/// applied after the search started) makes its result stale. It is
+/// dropped, and the search run again finds exactly what one search over
+/// the chunks with both carves finds: the same piece, the same chunks.
+#[test]
+fn a_carve_landing_during_the_search_makes_it_search_again() {
+    let (mut app, world) = slab_world(false);
+    let dropped = |app: &App| the_world(app, world).stats().debris_searches_dropped;
+    let before = dropped(&app);
+    app.world_mut().write_message(WorldCarve {
+        world,
+        tool: cuboid(CUT.0, CUT.1),
+        edit: Edit::Subtract,
+    });
+    let mut frames = 0;
+    while !the_world(&app, world).debris_searching() {
+        app.update();
+        frames += 1;
+        assert!(frames < 20_000, "the cut starts a search");
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    assert!(debris(&mut app).is_empty(), "nothing fell yet");
+    edit(&mut app, world, cuboid(NOTCH.0, NOTCH.1), Edit::Subtract);
+    assert_eq!(dropped(&app), before + 1, "the first search was dropped");
+    let notched = &falling() - &box_volume([34, 26, 10], [36, 28, 14]);
+    let pieces = debris(&mut app);
+    assert_eq!(pieces.len(), 1);
+    assert_eq!(pieces[0].exact_volume, notched);
+
+    // One search over the same carves: the notch first, then the cut.
+    let (mut single, single_world) = slab_world(false);
+    edit(
+        &mut single,
+        single_world,
+        cuboid(NOTCH.0, NOTCH.1),
+        Edit::Subtract,
+    );
+    let before_cut = the_world(&single, single_world)
+        .stats()
+        .debris_searches_dropped;
+    edit(
+        &mut single,
+        single_world,
+        cuboid(CUT.0, CUT.1),
+        Edit::Subtract,
+    );
+    assert_eq!(
+        the_world(&single, single_world)
+            .stats()
+            .debris_searches_dropped,
+        before_cut
+    );
+    let reference = debris(&mut single);
+    assert_eq!(reference.len(), 1);
+    assert_eq!(reference[0].exact_volume, pieces[0].exact_volume);
+    assert_eq!(reference[0].volumes, pieces[0].volumes);
+    let hashes = |app: &App, world: Entity| -> Vec<(ChunkCoord, u64)> {
+        the_world(app, world)
+            .live_chunks()
+            .map(|(c, _)| (c, terrain(app, world, c).state_hash()))
+            .collect()
+    };
+    assert_eq!(hashes(&app, world), hashes(&single, single_world));
+    assert!(!the_world(&app, world).debris_searching());
+}

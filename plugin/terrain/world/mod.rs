@@ -92,7 +92,10 @@
 //! ([`debris`]) then joins the chunks exactly across their shared sides,
 //! so a piece cut loose over one or more borders falls as one
 //! [`TerrainDebris`](super::TerrainDebris), taken out of every chunk it
-//! spans. A side towards a chunk that is not live anchors. The pass
+//! spans. A side towards a chunk that is not live anchors. The search runs
+//! on the async compute pool, one per world; a frame only starts it and
+//! later applies its result, and only to chunks still in the state it
+//! searched (otherwise it searches again). The pass
 //! depends on which chunks are live, so a networked world (feature `net`)
 //! turns it off ([`TerrainWorld::with_debris_across_borders`]).
 //!
@@ -211,6 +214,12 @@ pub struct WorldStats {
     pub build_time: Duration,
     /// Pieces cut loose across chunk borders so far ([`debris`]).
     pub detached_across: u64,
+    /// Searches for debris across chunk borders started so far, on the
+    /// async compute pool ([`debris`]).
+    pub debris_searches: u64,
+    /// Of those, the searches dropped because a chunk they depend on
+    /// changed or streamed out while they ran (each searched again).
+    pub debris_searches_dropped: u64,
 }
 
 /// The state of one chunk the world knows.
@@ -263,6 +272,9 @@ pub struct TerrainWorld {
     /// Whether pieces cut loose across chunk borders are detached
     /// ([`debris`]); off in a networked world.
     pub(crate) debris_across_borders: bool,
+    /// The search for debris across chunk borders running or waiting to
+    /// be applied ([`debris`]).
+    pub(crate) debris_search: Option<debris::DebrisSearch>,
 }
 
 impl TerrainWorld {
@@ -286,6 +298,7 @@ impl TerrainWorld {
             seams: seams::WorldSeams::default(),
             debris_limits: DebrisLimits::default(),
             debris_across_borders: true,
+            debris_search: None,
         })
     }
 
@@ -321,6 +334,13 @@ impl TerrainWorld {
     #[must_use]
     pub fn debris_across_borders(&self) -> bool {
         self.debris_across_borders
+    }
+
+    /// Whether a search for debris across chunk borders runs on the async
+    /// compute pool or waits, done, to be applied ([`debris`]).
+    #[must_use]
+    pub fn debris_searching(&self) -> bool {
+        self.debris_search.is_some()
     }
 
     /// With these streaming radii and build limit.
@@ -535,16 +555,19 @@ impl TerrainWorld {
             }
         }
         self.pending.clear();
+        self.debris_search = None;
         self.kept = edited.keys().copied().collect();
         self.stored = edited;
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
     }
 
-    /// Whether no chunk is building and no carve waits for a chunk.
+    /// Whether no chunk is building, no carve waits for a chunk and no
+    /// search for debris across chunk borders runs or waits to be applied.
     #[must_use]
     pub fn is_settled(&self) -> bool {
         self.pending.is_empty()
+            && self.debris_search.is_none()
             && !self
                 .chunks
                 .values()
