@@ -19,7 +19,8 @@
 //!   on the async compute pool, re-meshed only in the cells that changed,
 //!   with undo, ray casts, versioned files through the asset server
 //!   (`*.chiselterrain`), entity events for observers, and physics
-//!   colliders with avian3d (feature `avian`). With `render`, terrain cells
+//!   colliders with avian3d (feature `avian`) or bevy_rapier3d (feature
+//!   `rapier`). With `render`, terrain cells
 //!   get materials (`TerrainMaterials`, `TriplanarMaterial`). Carve tools
 //!   (`CarveTool`) are unions of dodecahedra, boxes, prisms, hulls of
 //!   points, and spheres, cylinders and capsules carved as exact polyhedra
@@ -48,6 +49,7 @@
 //! | `render`  | yes | Bevy's renderer and PBR: terrain materials, the triplanar material |
 //! | `props`   | yes | quadric CSG props and the splat render pass (implies `render`) |
 //! | `avian`   | no  | colliders and debris bodies with avian3d (implies `terrain`) |
+//! | `rapier`  | no  | the same with bevy_rapier3d (implies `terrain`) |
 //! | `serde`   | no  | `Serialize`/`Deserialize` on tools, settings and bounds |
 //! | `viewer`  | no  | the examples' helpers: window or headless screenshots, orbit camera, overlays |
 //! | `net`     | no  | server-authoritative replicated carves with bevy_replicon and renet (implies `terrain`, `serde`) |
@@ -102,11 +104,13 @@ use bevy::app::{PluginGroup, PluginGroupBuilder};
 /// Every plugin of the enabled features, in one group:
 /// [`terrain::TerrainPlugin`] (feature `terrain`), with
 /// [`terrain::TriplanarMaterialPlugin`] (`terrain` and `render`),
-/// [`splat::ChiselSplatPlugin`] (`props`) and
-/// [`terrain::avian::TerrainAvianPlugin`] (`avian`; add avian's
-/// `PhysicsPlugins` yourself). Not in the group, to add on their own:
-/// `splat::avian::PropAvianPlugin` (props' colliders), the `net` plugins
-/// and `viewer::ViewerPlugin`. Add it after `DefaultPlugins`; on a server
+/// [`splat::ChiselSplatPlugin`] (`props`) and the terrain's physics:
+/// `terrain::avian::TerrainAvianPlugin` (`avian`; add avian's
+/// `PhysicsPlugins` yourself), or `terrain::rapier::TerrainRapierPlugin`
+/// (`rapier` without `avian`; add `RapierPhysicsPlugin` yourself). Not in
+/// the group, to add on their own: the props' colliders
+/// (`splat::avian::PropAvianPlugin`, `splat::rapier::PropRapierPlugin`),
+/// the `net` plugins and `viewer::ViewerPlugin`. Add it after `DefaultPlugins`; on a server
 /// without a renderer, after `MinimalPlugins`. As in any Bevy group, single
 /// plugins can be disabled or replaced; terrain systems in `FixedUpdate`:
 ///
@@ -133,6 +137,8 @@ impl PluginGroup for ChiselPlugins {
         let group = group.add(splat::ChiselSplatPlugin);
         #[cfg(feature = "avian")]
         let group = group.add(terrain::avian::TerrainAvianPlugin::default());
+        #[cfg(all(feature = "rapier", not(feature = "avian")))]
+        let group = group.add(terrain::rapier::TerrainRapierPlugin::default());
         group
     }
 }
@@ -147,6 +153,8 @@ pub mod prelude {
     };
     #[cfg(feature = "avian")]
     pub use crate::terrain::avian::TerrainAvianPlugin;
+    #[cfg(feature = "rapier")]
+    pub use crate::terrain::rapier::TerrainRapierPlugin;
     #[cfg(feature = "terrain")]
     pub use crate::terrain::{
         Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, CellOutput, DebrisDetached,

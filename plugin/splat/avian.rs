@@ -1,20 +1,9 @@
 //! Prop colliders with avian3d (feature `avian`).
 //!
-//! A quadric CSG prop has no mesh to hand a physics engine, but its solid
-//! is known exactly: [`chisel_quadric::Dnf::contains`] decides for any point
-//! whether it is inside. [`PropAvianPlugin`] turns each prop into a static
-//! body with a voxel collider: the prop's bounding cube is divided into
-//! `resolution`³ voxels, and a voxel is solid when its centre is inside the
-//! solid. Holes, arches and hollows larger than a voxel stay open, so a
-//! player walks through a ring and bumps into a cube's edge where it is
-//! drawn; the collider's surface lies within half a voxel diagonal of the
-//! drawn one. Features thinner than a voxel may be missed: raise the
-//! resolution for such props.
-//!
-//! The voxels are computed on the async compute pool when a prop's splats
-//! come in (so a changed scene gets a new collider too) and the collider
-//! is inserted on the prop entity, which avian scales and places with the
-//! entity's transform.
+//! [`PropAvianPlugin`] turns each quadric prop into a static body with a
+//! voxel collider of its exact solid ([`super::prop_collider`]: voxels
+//! whose centres are inside, computed off the main thread when the prop's
+//! splats come in), so arches and bores stay open.
 //!
 //! ```
 //! use avian3d::prelude::*;
@@ -29,14 +18,13 @@
 //! ```
 
 use avian3d::prelude::*;
-use bevy::math::DVec3;
+use bevy::ecs::system::EntityCommands;
 use bevy::prelude::*;
-use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
-use chisel_quadric::Dnf;
 
-use super::prop::{PropBounds, PropSplats, QuadricProp, QuadricScene};
+use super::prop_collider::{DEFAULT_RESOLUTION, add_prop_colliders};
+pub use super::prop_collider::{PropCollider, PropVoxels};
 
-/// Static voxel colliders for quadric props.
+/// Static voxel colliders for quadric props, with avian3d.
 #[derive(Clone, Copy, Debug)]
 pub struct PropAvianPlugin {
     /// Voxels along each edge of a prop's bounding cube (at least 2).
@@ -45,206 +33,54 @@ pub struct PropAvianPlugin {
 
 impl Default for PropAvianPlugin {
     fn default() -> Self {
-        Self { resolution: 48 }
+        Self {
+            resolution: DEFAULT_RESOLUTION,
+        }
     }
 }
 
 impl Plugin for PropAvianPlugin {
     fn build(&self, app: &mut App) {
-        app.insert_resource(PropColliderSettings {
-            resolution: self.resolution.max(2),
-        })
-        .register_type::<PropCollider>()
-        .add_systems(Update, (start_colliders, finish_colliders).chain());
+        add_prop_colliders(app, self.resolution, insert_collider);
     }
 }
 
-/// As [`PropAvianPlugin`], for the systems.
-#[derive(Resource, Clone, Copy, Debug)]
-struct PropColliderSettings {
-    resolution: u32,
+/// The avian collider of a prop's voxels (`None` when there are none).
+#[must_use]
+pub fn voxel_collider(voxels: &PropVoxels) -> Option<Collider> {
+    (!voxels.cells.is_empty()).then(|| Collider::voxels(Vec3::splat(voxels.size), &voxels.cells))
 }
 
-/// A prop's collider is in place: how many voxels it has and their edge
-/// length in the prop's local units.
-#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq)]
-#[reflect(Component)]
-pub struct PropCollider {
-    /// Solid voxels.
-    pub voxels: usize,
-    /// Edge length of a voxel (local units).
-    pub voxel_size: f32,
-}
-
-/// The voxelization running for a prop.
-#[derive(Component)]
-struct PropColliderTask(Task<Result<PropVoxels, chisel_quadric::Error>>);
-
-/// The solid voxels of a prop in its local frame: voxel `k` spans
-/// `[k·size, (k+1)·size]` on each axis.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PropVoxels {
-    /// Edge length of a voxel.
-    pub size: f32,
-    /// Grid coordinates of the solid voxels.
-    pub cells: Vec<IVec3>,
-}
-
-impl PropVoxels {
-    /// The voxels of `dnf`'s solid inside the cube around `bounds`, with
-    /// `resolution` voxels along each edge: a voxel is solid when its
-    /// centre is inside.
-    #[must_use]
-    pub fn of_solid(dnf: &Dnf, bounds: PropBounds, resolution: u32) -> Self {
-        let n = resolution.max(2);
-        let size = 2.0 * f64::from(bounds.radius) / f64::from(n);
-        let centre = bounds.centre.as_dvec3();
-        // The cube's lowest voxel, in grid coordinates.
-        let low = ((centre - DVec3::splat(f64::from(bounds.radius))) / size).floor();
-        let mut cells = Vec::new();
-        for k in 0..n {
-            for j in 0..n {
-                for i in 0..n {
-                    let key = low + DVec3::new(f64::from(i), f64::from(j), f64::from(k));
-                    if dnf.contains((key + DVec3::splat(0.5)) * size) {
-                        cells.push(key.as_ivec3());
-                    }
-                }
-            }
-        }
-        Self {
-            size: size as f32,
-            cells,
-        }
-    }
-
-    /// The avian collider of these voxels (`None` when there are none).
-    #[must_use]
-    pub fn collider(&self) -> Option<Collider> {
-        (!self.cells.is_empty()).then(|| Collider::voxels(Vec3::splat(self.size), &self.cells))
-    }
-}
-
-/// Starts a voxelization for every prop whose splats came in or changed.
-fn start_colliders(
-    settings: Res<PropColliderSettings>,
-    scenes: Res<Assets<QuadricScene>>,
-    props: Query<(Entity, &QuadricProp), Changed<PropSplats>>,
-    mut commands: Commands,
-) {
-    for (entity, prop) in &props {
-        let Some(scene) = scenes.get(&prop.scene) else {
-            continue;
-        };
-        let Some(bounds) = PropBounds::resolve(prop.bounds, &scene.0) else {
-            continue;
-        };
-        let scene = scene.0.clone();
-        let resolution = settings.resolution;
-        let task = AsyncComputeTaskPool::get().spawn(async move {
-            let dnf = scene.dnf()?;
-            Ok(PropVoxels::of_solid(&dnf, bounds, resolution))
-        });
-        commands.entity(entity).insert(PropColliderTask(task));
-    }
-}
-
-/// Inserts the finished colliders.
-fn finish_colliders(mut tasks: Query<(Entity, &mut PropColliderTask)>, mut commands: Commands) {
-    for (entity, mut task) in &mut tasks {
-        let Some(result) = check_ready(&mut task.0) else {
-            continue;
-        };
-        let mut prop = commands.entity(entity);
-        prop.remove::<PropColliderTask>();
-        match result {
-            Ok(voxels) => match voxels.collider() {
-                Some(collider) => {
-                    prop.insert((
-                        RigidBody::Static,
-                        collider,
-                        PropCollider {
-                            voxels: voxels.cells.len(),
-                            voxel_size: voxels.size,
-                        },
-                    ));
-                }
-                None => warn!(
-                    "quadric prop {entity}: no voxel centre is inside the solid; it gets no \
-                     collider (raise PropAvianPlugin::resolution)"
-                ),
-            },
-            Err(e) => error!("quadric prop {entity}: no collider: {e}"),
-        }
-    }
+fn insert_collider(voxels: &PropVoxels, prop: &mut EntityCommands) -> bool {
+    let Some(collider) = voxel_collider(voxels) else {
+        return false;
+    };
+    prop.insert((RigidBody::Static, collider));
+    true
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::prop_collider::tests::ring_voxels;
     use super::*;
-    use chisel_quadric::Scene;
-
-    const SPHERE: &str = r#"Scene(
-        primitives: [(name: "A", shape: Sphere(center: (0, 0, 0), radius: 10))],
-        root: Ref("A"),
-    )"#;
-
-    const RING: &str = r#"Scene(
-        primitives: [
-            (name: "outer", shape: Cylinder(point: (0, 0, 0), axis: (0, 0, 1), radius: 10)),
-            (name: "inner", shape: Cylinder(point: (0, 0, 0), axis: (0, 0, 1), radius: 5)),
-            (name: "slab", shape: Box(min: (-20, -20, -2), max: (20, 20, 2))),
-        ],
-        root: Difference([Intersection([Ref("outer"), Ref("slab")]), Ref("inner")]),
-    )"#;
-
-    fn voxels(text: &str, radius: f32, resolution: u32) -> PropVoxels {
-        let scene = Scene::from_ron(text).expect("valid scene");
-        let dnf = scene.dnf().expect("normal form");
-        let bounds = PropBounds {
-            centre: Vec3::ZERO,
-            radius,
-        };
-        PropVoxels::of_solid(&dnf, bounds, resolution)
-    }
 
     #[test]
-    fn a_sphere_fills_its_volume_within_a_voxel() {
-        let v = voxels(SPHERE, 12.0, 48);
-        let volume = v.cells.len() as f64 * f64::from(v.size).powi(3);
-        let exact = 4.0 / 3.0 * std::f64::consts::PI * 1000.0;
-        assert!(
-            (volume / exact - 1.0).abs() < 0.05,
-            "voxel volume {volume} vs {exact}"
-        );
-        // Every solid voxel's centre is inside, and the sphere's own
-        // centre is solid.
-        for c in &v.cells {
-            let centre = (c.as_vec3() + Vec3::splat(0.5)) * v.size;
-            assert!(centre.length() < 10.0);
-        }
-        let origin = (Vec3::ZERO / v.size).floor().as_ivec3();
-        assert!(v.cells.contains(&origin));
-    }
-
-    #[test]
-    fn a_ring_keeps_its_hole_open() {
-        let v = voxels(RING, 12.0, 48);
-        assert!(!v.cells.is_empty());
-        for c in &v.cells {
-            let centre = (c.as_vec3() + Vec3::splat(0.5)) * v.size;
-            let r = centre.truncate().length();
-            assert!((5.0..10.0).contains(&r), "voxel at radius {r}");
-            assert!(centre.z.abs() < 2.0);
-        }
+    fn the_collider_of_a_ring_is_solid_in_the_ring_and_open_in_its_hole() {
+        let voxels = ring_voxels();
+        let collider = voxel_collider(&voxels).expect("a ring has voxels");
+        let inside = |p: Vec3| collider.contains_point(Vec3::ZERO, Quat::IDENTITY, p);
+        assert!(inside(Vec3::new(7.5, 0.0, 0.0)), "the ring's material");
+        assert!(inside(Vec3::new(0.0, -7.5, 1.0)), "the ring's material");
+        assert!(!inside(Vec3::ZERO), "the hole");
+        assert!(!inside(Vec3::new(0.0, 0.0, 3.0)), "above the ring");
     }
 
     #[test]
     fn no_solid_gives_no_collider() {
-        let v = PropVoxels {
+        let voxels = PropVoxels {
             size: 1.0,
             cells: Vec::new(),
         };
-        assert!(v.collider().is_none());
+        assert!(voxel_collider(&voxels).is_none());
     }
 }

@@ -21,8 +21,10 @@
 //!   `NotShadowCaster` on a prop turns its shadow off.
 //! - `light_visibility` — main world: props in a shadow-casting light's
 //!   frusta are visible (extracted) even outside every camera, as meshes are.
-//! - `avian` (feature `avian`) — static voxel colliders for props, from the
-//!   exact inside test of their solid.
+//! - `prop_collider` (feature `avian` or `rapier`) — the voxels of a
+//!   prop's solid from the exact inside test, computed off the main
+//!   thread; `avian` (feature `avian`) and `rapier` (feature `rapier`) make
+//!   them each engine's static voxel collider.
 //!
 //! Settings: the [`SplatSettings`] resource applies to every camera; a
 //! camera with a [`SplatViewSettings`] component is drawn with those
@@ -89,6 +91,10 @@ mod light_visibility;
 pub mod material;
 pub mod pipeline;
 pub mod prop;
+#[cfg(any(feature = "avian", feature = "rapier"))]
+pub mod prop_collider;
+#[cfg(feature = "rapier")]
+pub mod rapier;
 pub mod render;
 pub mod shadow;
 

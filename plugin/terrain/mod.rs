@@ -23,7 +23,8 @@
 //! - [`mesh`] — the surface of one cell as indexed triangles with smooth
 //!   normals, and welded triangles for its collider.
 //! - [`physics`] — [`TerrainPhysics`], the trait a physics engine
-//!   implements; `avian` implements it (feature `avian`).
+//!   implements; `avian` (feature `avian`) and `rapier` (feature `rapier`)
+//!   implement it.
 //! - [`debris`] — pieces a carve cut loose, spawned as bodies of their own;
 //!   [`debris_hulls`] merges a piece's convex cells into a few hulls for
 //!   its collider.
@@ -121,6 +122,8 @@ pub mod physics;
 #[cfg(feature = "props")]
 pub mod prop_tool;
 pub mod queue;
+#[cfg(feature = "rapier")]
+pub mod rapier;
 pub mod raycast;
 pub mod snapshot;
 pub mod spawn;

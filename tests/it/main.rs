@@ -70,7 +70,7 @@ mod terrain_material;
 mod terrain_normals;
 #[cfg(feature = "avian")]
 mod terrain_output;
-#[cfg(feature = "avian")]
+#[cfg(any(feature = "avian", feature = "rapier"))]
 mod terrain_physics;
 #[cfg(all(feature = "terrain", feature = "props"))]
 mod terrain_prop_tools;

@@ -1,13 +1,21 @@
-//! Terrain colliders with avian3d (feature `avian`), in an app without
+//! Terrain colliders with a real physics engine, in an app without
 //! rendering: every cell entity carries a trimesh collider built with its
 //! mesh, a ball comes to rest on the ground and falls into a crater carved
 //! under it, a box slides over many cell borders without catching, and a
 //! bridge whose supports are carved away falls as a dynamic body with its
 //! exact volume.
+//!
+//! Each scenario is written once over [`Engine`] and run with every
+//! engine the build has: avian3d (feature `avian`, [`avian`]) and
+//! bevy_rapier3d (feature `rapier`, [`rapier`]).
+
+#[cfg(feature = "avian")]
+mod avian;
+#[cfg(feature = "rapier")]
+mod rapier;
 
 use std::time::Duration;
 
-use avian3d::prelude::*;
 use bevy::asset::AssetPlugin;
 use bevy::math::DVec3;
 use bevy::mesh::MeshPlugin;
@@ -15,7 +23,6 @@ use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_chisel::bsp::octree::{Edit, ExactVolume, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
-use bevy_chisel::terrain::avian::TerrainAvianPlugin;
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveShape, CarveTool, DebrisDetached, Terrain, TerrainCell,
     TerrainPlugin, TerrainSystems,
@@ -23,6 +30,33 @@ use bevy_chisel::terrain::{
 
 /// One physics step per update, whatever the wall clock does.
 const STEP: f32 = 1.0 / 60.0;
+
+/// What the scenarios need of a physics engine and its terrain backend.
+trait Engine {
+    /// The engine's plugins and the terrain backend for it (stepping once
+    /// per update of [`STEP`]).
+    fn add_plugins(app: &mut App);
+    /// A dynamic ball.
+    fn spawn_ball(world: &mut World, radius: f32, at: Vec3) -> Entity;
+    /// A dynamic cube that cannot turn, without friction.
+    fn spawn_sliding_cube(world: &mut World, half: f32, at: Vec3) -> Entity;
+    /// Sets a body's linear velocity.
+    fn set_velocity(world: &mut World, body: Entity, velocity: Vec3);
+    /// A body's linear velocity.
+    fn velocity(world: &World, body: Entity) -> Vec3;
+    /// A body's position.
+    fn position(world: &World, body: Entity) -> Vec3;
+    /// Whether the entity carries a collider.
+    fn has_collider(world: &World, entity: Entity) -> bool;
+    /// Whether the entity is a dynamic body.
+    fn is_dynamic(world: &World, entity: Entity) -> bool;
+    /// How many convex shapes the entity's collider has (1 when it is not
+    /// a compound).
+    fn convex_shapes(world: &World, entity: Entity) -> usize;
+    /// The entity's trimesh collider: an identity of its shape (equal only
+    /// while the shape is the same one), its vertices and triangles.
+    fn trimesh(world: &World, entity: Entity) -> (usize, Vec<[f64; 3]>, Vec<[u32; 3]>);
+}
 
 #[derive(Resource, Default)]
 struct Applied(Vec<CarveApplied>);
@@ -33,23 +67,22 @@ fn record(mut seen: ResMut<Applied>, mut applied: MessageReader<CarveApplied>) {
 
 /// A 16 m × 4 m × 16 m slab, top at y = 0, on a 1 cm grid, with a small
 /// node budget so its surface spans many cells.
-fn app_with_slab() -> (App, Entity) {
+fn app_with_slab<E: Engine>() -> (App, Entity) {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
         TransformPlugin,
         AssetPlugin::default(),
         MeshPlugin,
-        PhysicsPlugins::default(),
         TerrainPlugin,
-        TerrainAvianPlugin::default(),
-    ))
-    .init_asset::<StandardMaterial>()
-    .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
-        STEP,
-    )))
-    .init_resource::<Applied>()
-    .add_systems(Update, record.after(TerrainSystems::Mesh));
+    ));
+    E::add_plugins(&mut app);
+    app.init_asset::<StandardMaterial>()
+        .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
+            STEP,
+        )))
+        .init_resource::<Applied>()
+        .add_systems(Update, record.after(TerrainSystems::Mesh));
     let grid = Quantization::new(0.01, [0.0; 3]).expect("valid unit");
     let slab = Terrain::from_box(
         grid,
@@ -104,39 +137,30 @@ fn step(app: &mut App, frames: usize) {
     }
 }
 
-fn position(app: &App, body: Entity) -> Vec3 {
-    app.world().get::<Position>(body).expect("a rigid body").0
-}
-
 /// Every cell entity of the terrain has a collider, and there are some.
-fn assert_every_cell_has_a_collider(app: &mut App) -> usize {
+fn assert_every_cell_has_a_collider<E: Engine>(app: &mut App) -> usize {
     let mut cells = app
         .world_mut()
-        .query_filtered::<(Entity, Has<Collider>), With<TerrainCell>>();
-    let all: Vec<(Entity, bool)> = cells.iter(app.world()).collect();
+        .query_filtered::<Entity, With<TerrainCell>>();
+    let all: Vec<Entity> = cells.iter(app.world()).collect();
     assert!(!all.is_empty(), "the terrain shows no cells");
-    for (entity, has) in &all {
-        assert!(has, "cell entity {entity} has no collider");
+    for &entity in &all {
+        assert!(
+            E::has_collider(app.world(), entity),
+            "cell entity {entity} has no collider"
+        );
     }
     all.len()
 }
 
-#[test]
-fn a_ball_rests_on_the_ground_and_falls_into_a_crater_carved_under_it() {
-    let (mut app, terrain) = app_with_slab();
-    assert_every_cell_has_a_collider(&mut app);
+fn a_ball_rests_on_the_ground_and_falls_into_a_crater_carved_under_it<E: Engine>() {
+    let (mut app, terrain) = app_with_slab::<E>();
+    assert_every_cell_has_a_collider::<E>(&mut app);
 
     let radius = 0.5;
-    let ball = app
-        .world_mut()
-        .spawn((
-            RigidBody::Dynamic,
-            Collider::sphere(radius),
-            Transform::from_xyz(0.3, 2.0, -0.2),
-        ))
-        .id();
+    let ball = E::spawn_ball(app.world_mut(), radius, Vec3::new(0.3, 2.0, -0.2));
     step(&mut app, 180);
-    let rest = position(&app, ball);
+    let rest = E::position(app.world(), ball);
     assert!(
         (rest.y - radius).abs() < 0.05,
         "the ball should rest on the ground at y = {radius}, it is at {rest}"
@@ -152,54 +176,37 @@ fn a_ball_rests_on_the_ground_and_falls_into_a_crater_carved_under_it() {
     let applied = &app.world().resource::<Applied>().0;
     let last = applied.last().expect("the carve is applied");
     assert!(last.collider_time > Duration::ZERO, "colliders were built");
-    assert_every_cell_has_a_collider(&mut app);
+    assert_every_cell_has_a_collider::<E>(&mut app);
 
     step(&mut app, 180);
-    let fallen = position(&app, ball);
+    let fallen = E::position(app.world(), ball);
     assert!(
         fallen.y < -1.0,
         "the ball should have fallen into the crater, it is at {fallen}"
     );
 }
 
-#[test]
-fn a_box_slides_over_cell_borders_without_catching() {
-    let (mut app, _) = app_with_slab();
-    let cells = assert_every_cell_has_a_collider(&mut app);
+fn a_box_slides_over_cell_borders_without_catching<E: Engine>() {
+    let (mut app, _) = app_with_slab::<E>();
+    let cells = assert_every_cell_has_a_collider::<E>(&mut app);
     assert!(cells >= 4, "the slab's top spans {cells} cells");
 
     let half = 0.25;
-    let body = app
-        .world_mut()
-        .spawn((
-            RigidBody::Dynamic,
-            Collider::cuboid(2.0 * half, 2.0 * half, 2.0 * half),
-            Friction::ZERO.with_combine_rule(CoefficientCombine::Min),
-            LockedAxes::ROTATION_LOCKED,
-            Transform::from_xyz(-6.0, half + 0.01, 0.37),
-        ))
-        .id();
+    let body = E::spawn_sliding_cube(app.world_mut(), half, Vec3::new(-6.0, half + 0.01, 0.37));
     step(&mut app, 30);
-    app.world_mut()
-        .entity_mut(body)
-        .insert(LinearVelocity(Vec3::new(4.0, 0.0, 0.0)));
+    E::set_velocity(app.world_mut(), body, Vec3::new(4.0, 0.0, 0.0));
     let mut max_rise = 0.0f32;
     let mut min_speed = f32::INFINITY;
     for _ in 0..150 {
         step(&mut app, 1);
-        let p = position(&app, body);
+        let p = E::position(app.world(), body);
         max_rise = max_rise.max(p.y - half);
-        let v = app
-            .world()
-            .get::<LinearVelocity>(body)
-            .expect("a rigid body")
-            .0;
-        min_speed = min_speed.min(v.x);
+        min_speed = min_speed.min(E::velocity(app.world(), body).x);
         if p.x > 5.0 {
             break;
         }
     }
-    let end = position(&app, body);
+    let end = E::position(app.world(), body);
     assert!(end.x > 4.0, "the box stopped at {end}");
     assert!(
         max_rise < 0.02,
@@ -227,9 +234,8 @@ fn cuboid(min: Vec3, max: Vec3) -> CarveTool {
     )
 }
 
-#[test]
-fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume() {
-    let (mut app, terrain) = app_with_slab();
+fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume<E: Engine>() {
+    let (mut app, terrain) = app_with_slab::<E>();
     app.init_resource::<Detached>()
         .add_systems(Update, record_debris.after(TerrainSystems::Mesh));
     // Two pillars and a deck of dirt, 7 m × 0.5 m × 1 m, added as one tool.
@@ -284,36 +290,35 @@ fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume() {
     assert_eq!(before, after + deck.exact_volume.clone() + pillar);
 
     // The deck is a box: its cells merge into one convex hull.
-    let collider = app
-        .world()
-        .get::<Collider>(deck.entity)
-        .expect("the deck's collider");
-    let hulls = collider
-        .shape()
-        .as_compound()
-        .map_or(1, |compound| compound.shapes().len());
+    assert!(
+        E::has_collider(app.world(), deck.entity),
+        "the deck has a collider"
+    );
+    let hulls = E::convex_shapes(app.world(), deck.entity);
     assert_eq!(hulls, 1, "the deck's collider is one hull");
 
     // The deck is a dynamic body: it falls onto the ground.
-    let start = position(&app, deck.entity);
-    assert!(app.world().get::<RigidBody>(deck.entity) == Some(&RigidBody::Dynamic));
+    let start = E::position(app.world(), deck.entity);
+    assert!(E::is_dynamic(app.world(), deck.entity));
     step(&mut app, 120);
-    let end = position(&app, deck.entity);
+    let end = E::position(app.world(), deck.entity);
     assert!(
         end.y < start.y - 1.5 && end.y > 0.0,
         "the deck should fall from {start} onto the ground, it is at {end}"
     );
 }
 
-/// Per cell entity: its mesh handle, its collider's shape (pointer) and
+/// Per cell entity: its mesh handle, its collider's shape (identity) and
 /// the areas of its mesh and of its collider's triangles.
-fn cell_meshes_and_colliders(app: &mut App) -> Vec<(Entity, AssetId<Mesh>, usize, f64, f64)> {
+fn cell_meshes_and_colliders<E: Engine>(
+    app: &mut App,
+) -> Vec<(Entity, AssetId<Mesh>, usize, f64, f64)> {
     let mut cells = app
         .world_mut()
-        .query_filtered::<(Entity, &Mesh3d, &Collider), With<TerrainCell>>();
-    let found: Vec<(Entity, Handle<Mesh>, Collider)> = cells
+        .query_filtered::<(Entity, &Mesh3d), With<TerrainCell>>();
+    let found: Vec<(Entity, Handle<Mesh>)> = cells
         .iter(app.world())
-        .map(|(e, m, c)| (e, m.0.clone(), c.clone()))
+        .map(|(e, m)| (e, m.0.clone()))
         .collect();
     let meshes = app.world().resource::<Assets<Mesh>>();
     let area = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
@@ -325,7 +330,7 @@ fn cell_meshes_and_colliders(app: &mut App) -> Vec<(Entity, AssetId<Mesh>, usize
     };
     found
         .into_iter()
-        .map(|(entity, handle, collider)| {
+        .map(|(entity, handle)| {
             let mesh = meshes.get(&handle).expect("the cell's mesh is an asset");
             let Some(bevy::mesh::VertexAttributeValues::Float32x3(positions)) =
                 mesh.attribute(Mesh::ATTRIBUTE_POSITION)
@@ -338,33 +343,32 @@ fn cell_meshes_and_colliders(app: &mut App) -> Vec<(Entity, AssetId<Mesh>, usize
                 .chunks_exact(3)
                 .map(|t| area(at(t[0]), at(t[1]), at(t[2])))
                 .sum();
-            let trimesh = collider.shape().as_trimesh().expect("a trimesh collider");
-            let vertex = |i: u32| {
-                let p = trimesh.vertices()[i as usize];
-                [f64::from(p.x), f64::from(p.y), f64::from(p.z)]
-            };
-            let collider_area: f64 = trimesh
-                .indices()
+            let (shape, vertices, triangles) = E::trimesh(app.world(), entity);
+            let collider_area: f64 = triangles
                 .iter()
-                .map(|t| area(vertex(t[0]), vertex(t[1]), vertex(t[2])))
+                .map(|t| {
+                    area(
+                        vertices[t[0] as usize],
+                        vertices[t[1] as usize],
+                        vertices[t[2] as usize],
+                    )
+                })
                 .sum();
-            let shape = std::sync::Arc::as_ptr(&collider.shape().0).cast::<()>() as usize;
             (entity, handle.id(), shape, mesh_area, collider_area)
         })
         .collect()
 }
 
-#[test]
-fn cells_only_resealed_keep_their_colliders_which_match_their_meshes() {
-    let (mut app, terrain) = app_with_slab();
-    let before = cell_meshes_and_colliders(&mut app);
+fn cells_only_resealed_keep_their_colliders_which_match_their_meshes<E: Engine>() {
+    let (mut app, terrain) = app_with_slab::<E>();
+    let before = cell_meshes_and_colliders::<E>(&mut app);
     app.world_mut().write_message(Carve {
         terrain,
         tool: CarveTool::dodecahedron(0.9, Vec3::new(0.3, 0.3, 0.2)),
         edit: Edit::Subtract,
     });
     settle(&mut app, terrain);
-    let after = cell_meshes_and_colliders(&mut app);
+    let after = cell_meshes_and_colliders::<E>(&mut app);
     let (mut remeshed, mut kept) = (0, 0);
     for &(entity, mesh, shape, mesh_area, collider_area) in &after {
         // Welded f32 triangles against the mesh's own: the same surface.
@@ -386,3 +390,29 @@ fn cells_only_resealed_keep_their_colliders_which_match_their_meshes() {
          the carved ones need new colliders, the re-sealed ones not"
     );
 }
+
+/// The scenarios above as `#[test]`s for one engine.
+macro_rules! physics_tests {
+    ($engine:ty) => {
+        #[test]
+        fn a_ball_rests_on_the_ground_and_falls_into_a_crater_carved_under_it() {
+            super::a_ball_rests_on_the_ground_and_falls_into_a_crater_carved_under_it::<$engine>();
+        }
+
+        #[test]
+        fn a_box_slides_over_cell_borders_without_catching() {
+            super::a_box_slides_over_cell_borders_without_catching::<$engine>();
+        }
+
+        #[test]
+        fn a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume() {
+            super::a_bridge_whose_supports_are_carved_away_falls_with_its_exact_volume::<$engine>();
+        }
+
+        #[test]
+        fn cells_only_resealed_keep_their_colliders_which_match_their_meshes() {
+            super::cells_only_resealed_keep_their_colliders_which_match_their_meshes::<$engine>();
+        }
+    };
+}
+use physics_tests;
