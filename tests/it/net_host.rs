@@ -269,7 +269,10 @@ fn a_host_and_two_clients_end_identical_with_each_carve_applied_once() {
         .flat_map(|app| answers(app).iter().cloned())
         .collect();
     let (terrain_carves, world_carves) = (applied(&all, false), applied(&all, true));
-    println!("{terrain_carves} terrain and {world_carves} world carves applied of {want} each");
+    println!(
+        "{terrain_carves} terrain and {world_carves} world carves applied of {} each",
+        3 * ROUNDS
+    );
     assert!(terrain_carves >= 3 * ROUNDS * 9 / 10 && world_carves >= 3 * ROUNDS * 9 / 10);
     let host_applied = applied(answers(&host), false) + applied(answers(&host), true);
     assert!(host_applied > ROUNDS, "the host's own carves apply");
@@ -552,4 +555,94 @@ fn an_app_that_is_no_client_follows_none_of_its_own_packets() {
             outcome: Outcome::Applied { seq: 9 },
         }]
     );
+}
+
+/// A client that loses its connection carves alone (as a single player),
+/// then joins again: what it carved alone is replaced by the host's
+/// snapshots, and it ends identical to the host.
+#[test]
+fn a_client_that_leaves_carves_alone_and_rejoins_identical() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let limits = NetLimits {
+        carves_per_second: 1e6,
+        burst: 1e6,
+        ..NetLimits::default()
+    };
+    let (mut host, addr) = host(limits);
+    let mut a = joining(addr, 1, Vec3::new(48.0, 30.0, 48.0));
+    let ready = |app: &mut App| {
+        terrain_of(app).is_some() && app.world().resource::<Answers>().worlds_synced > 0
+    };
+    run_until(&mut [&mut host, &mut a], 20_000, |apps| {
+        ready(apps[1]) && settled(apps[1])
+    });
+    let mut rng = Rng(99);
+    let mut carve_both = |apps: [&mut App; 2], n: usize| {
+        for app in apps {
+            let (tool, edit) = random_carve(&mut rng);
+            request(app, request_id(0, false, n), &tool, edit);
+            let (tool, edit) = random_world_carve(&mut rng);
+            request_world(app, request_id(0, true, n), &tool, edit);
+        }
+    };
+    for n in 0..5 {
+        carve_both([&mut host, &mut a], n);
+        host.update();
+        a.update();
+    }
+    let state = |app: &App| *app.world().resource::<State<ClientState>>().get();
+    run_until(&mut [&mut host, &mut a], 20_000, |apps| {
+        answers(apps[1]).len() == 10 && settled(apps[0]) && settled(apps[1])
+    });
+
+    // The connection ends; the client carves alone, the host goes on.
+    a.world_mut()
+        .resource_mut::<bevy_replicon_renet::RenetClient>()
+        .disconnect();
+    run_until(&mut [&mut host, &mut a], 200, |apps| {
+        state(apps[1]) == ClientState::Disconnected
+    });
+    a.world_mut()
+        .remove_resource::<bevy_replicon_renet::RenetClient>();
+    a.world_mut()
+        .remove_resource::<bevy_replicon_renet::netcode::NetcodeClientTransport>();
+    for n in 5..10 {
+        carve_both([&mut host, &mut a], n);
+        host.update();
+        a.update();
+    }
+    run_until(&mut [&mut host, &mut a], 20_000, |apps| {
+        answers(apps[0]).len() == 20 && answers(apps[1]).len() == 20
+    });
+    let alone = applied(answers(&a), false) + applied(answers(&a), true);
+    assert!(alone >= 15, "the client's carves apply alone too");
+    run_until(&mut [&mut host, &mut a], 20_000, |apps| {
+        settled(apps[0]) && settled(apps[1])
+    });
+    let hash = |app: &mut App| terrain_of(app).map(|(_, t)| t.state_hash());
+    assert_ne!(hash(&mut a), hash(&mut host), "the terrains went apart");
+    assert!(edited_chunks(&mut a) != edited_chunks(&mut host));
+
+    // It joins again, and ends as the host.
+    start_client(a.world_mut(), addr, 11).expect("client starts");
+    run_until(&mut [&mut host, &mut a], 50_000, |apps| {
+        state(apps[1]) == ClientState::Connected
+            && settled(apps[0])
+            && settled(apps[1])
+            && terrain_of(apps[1]).map(|(_, t)| t.state_hash())
+                == terrain_of(apps[0]).map(|(_, t)| t.state_hash())
+            && edited_chunks(apps[1]) == edited_chunks(apps[0])
+    });
+    let (_, terrain) = terrain_of(&mut host).expect("host terrain");
+    let bytes = terrain.octree().to_bytes();
+    let (_, terrain) = terrain_of(&mut a).expect("client terrain");
+    assert!(terrain.octree().to_bytes() == bytes, "octree differs");
+    let stats = a.world().resource::<NetClientStats>().clone();
+    assert!(
+        stats.snapshots >= 4,
+        "two of each on joining twice: {stats:?}"
+    );
+    assert_eq!(stats.desyncs, 0);
 }
