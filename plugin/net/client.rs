@@ -13,7 +13,8 @@
 //! go to the app's own [`super::NetServerPlugin`] (bevy_replicon writes them
 //! locally) and its answers come back the same way; the carves are applied
 //! by the server side, so nothing is followed here. A request written while
-//! connecting is answered [`RejectReason::NotConnected`]. On leaving
+//! connecting, or while disconnected in an app without the server plugin,
+//! is answered [`RejectReason::NotConnected`]. On leaving
 //! `Connected`, what was being followed is dropped (the terrains stay);
 //! the next connection starts again from snapshots.
 
@@ -187,20 +188,33 @@ fn stop_following(mut ledger: ResMut<ClientLedger>) {
     }
 }
 
+/// Whether a request written now has no server to go to: while
+/// connecting, or while disconnected in an app without
+/// [`super::NetServerPlugin`].
+pub(super) fn nowhere_to_send(state: &ClientState, server_side: bool) -> bool {
+    match state {
+        ClientState::Connecting => true,
+        ClientState::Disconnected => !server_side,
+        ClientState::Connected => false,
+    }
+}
+
 /// Sends each request to the server: over the connection, or to the app's
 /// own server side when not connected (bevy_replicon writes client
-/// messages locally then). One written while connecting is answered
-/// [`RejectReason::NotConnected`].
+/// messages locally then). One with no server to go to
+/// ([`nowhere_to_send`]) is answered [`RejectReason::NotConnected`].
 fn send_requests(
     mut requests: MessageReader<NetCarveRequest>,
     terrains: Query<&NetTerrain>,
     state: Res<State<ClientState>>,
+    server_side: Option<Res<super::server::ServerLedger>>,
     mut packets: MessageWriter<ClientPacket>,
     mut results: MessageWriter<NetCarveResult>,
 ) {
+    let unsent = nowhere_to_send(state.get(), server_side.is_some());
     for request in requests.read() {
         let refused = match terrains.get(request.terrain) {
-            _ if *state.get() == ClientState::Connecting => Err(RejectReason::NotConnected),
+            _ if unsent => Err(RejectReason::NotConnected),
             Ok(id) => Ok(id),
             Err(_) => Err(RejectReason::Invalid(
                 "the entity is no networked terrain".into(),

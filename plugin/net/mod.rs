@@ -37,8 +37,9 @@
 //! The server side runs while the app is no connected client
 //! (`ClientState::Disconnected`, replicon's condition for authority); the
 //! following of a server only while connected (`ClientState::Connected`),
-//! so a host never follows its own carves. A request written while
-//! connecting is answered [`RejectReason::NotConnected`]. A dedicated
+//! so a host never follows its own carves. A request with no server to go
+//! to (written while connecting, or while disconnected in an app without
+//! [`NetServerPlugin`]) is answered [`RejectReason::NotConnected`]. A dedicated
 //! server adds [`NetServerPlugin`] alone, a client-only build
 //! [`NetClientPlugin`] alone. A single player may start hosting at any
 //! time: its order of carves goes on and joining clients get snapshots. A

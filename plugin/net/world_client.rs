@@ -11,7 +11,7 @@ use bevy::prelude::*;
 use bevy_replicon::prelude::ClientState;
 use chisel_bsp::octree::Edit;
 
-use super::client::{Assembled, NetCarveResult, NetClientStats, assemble};
+use super::client::{Assembled, NetCarveResult, NetClientStats, assemble, nowhere_to_send};
 use super::wire::{
     ClientPacket, ClientRequest, NetWorld, NetWorldCarve, Outcome, RejectReason, ServerPacket,
     WireTool, WorldId, WorldSnapshotPart,
@@ -153,12 +153,14 @@ fn send_world_requests(
     mut requests: MessageReader<NetWorldCarveRequest>,
     worlds: Query<&NetWorld>,
     state: Res<State<ClientState>>,
+    server_side: Option<Res<super::server::ServerLedger>>,
     mut packets: MessageWriter<ClientPacket>,
     mut results: MessageWriter<NetCarveResult>,
 ) {
+    let unsent = nowhere_to_send(state.get(), server_side.is_some());
     for request in requests.read() {
         let refused = match worlds.get(request.world) {
-            _ if *state.get() == ClientState::Connecting => Err(RejectReason::NotConnected),
+            _ if unsent => Err(RejectReason::NotConnected),
             Ok(id) => Ok(id),
             Err(_) => Err(RejectReason::Invalid(
                 "the entity is no networked world".into(),

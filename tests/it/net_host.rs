@@ -646,3 +646,29 @@ fn a_client_that_leaves_carves_alone_and_rejoins_identical() {
     );
     assert_eq!(stats.desyncs, 0);
 }
+
+/// A client-only app (no server plugin) that is not connected has no server
+/// to send to: its requests are answered at once, not lost.
+#[test]
+fn a_client_only_app_that_is_not_connected_answers_not_connected() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut app = net::client_app(1);
+    app.world_mut().spawn((slab(), NetTerrain(1)));
+    app.update();
+    let tool = CarveTool::dodecahedron(0.3, Vec3::new(5.0, 2.0, 5.0));
+    request(&mut app, 7, &tool, Edit::Subtract);
+    for _ in 0..3 {
+        app.update();
+    }
+    assert_eq!(
+        app.world().resource::<net::Seen>().results,
+        [NetCarveResult {
+            request: Some(7),
+            outcome: Outcome::Rejected(RejectReason::NotConnected),
+        }]
+    );
+    let (_, terrain) = terrain_of(&mut app).expect("terrain");
+    assert!(terrain.journal().is_empty(), "nothing carved");
+}
