@@ -5,7 +5,10 @@
 //! host's octrees bit-identical, which are their journals replayed, and
 //! each accepted carve was applied once. The host is validated but not
 //! rate limited; an app with neither a server nor a connection carves
-//! alone through the same messages.
+//! alone through the same messages, and follows none of the packets its
+//! own server addresses to it. A client that loses its connection carves
+//! alone and rejoins identical; a request with no server to go to is
+//! answered `NotConnected`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::net::{Ipv4Addr, SocketAddr};
