@@ -2,22 +2,31 @@
 //! other's craters live, every peer with a bit-identical terrain.
 //!
 //! ```text
-//! cargo run --release --all-features --example multiplayer -- --server          # terminal 1
+//! cargo run --release --all-features --example multiplayer -- --host            # terminal 1: plays and serves
 //! cargo run --release --all-features --example multiplayer -- --client 127.0.0.1:5000   # terminal 2, 3, …
+//! cargo run --release --all-features --example multiplayer -- --server          # or a dedicated server
 //! ```
 //!
-//! `--server [ADDR]` listens (default `0.0.0.0:5000`) without a window;
-//! `--client ADDR` opens a window: left click blasts a crater, right click
-//! heaps up dirt, and the server sends every player's carve to everyone.
-//! The HUD shows the carves in the terrain, its state hash and the hash
-//! checks passed.
+//! `--host [ADDR]` opens a window and listens (default `0.0.0.0:5000`): a
+//! listen server whose own player carves through the server's order like
+//! everyone else. `--server [ADDR]` listens without a window (a dedicated
+//! server). `--client ADDR` opens a window and joins. In a window, left
+//! click blasts a crater and right click heaps up dirt, and the server
+//! sends every player's carve to everyone. The HUD shows the carves in the
+//! terrain, its state hash, and the hash checks passed (a client) or the
+//! carves ordered (the host).
+//!
+//! A player's app adds both `NetServerPlugin` and `NetClientPlugin` and
+//! picks its role at run time; it writes the same `NetCarveRequest`s as a
+//! host or a client (`bevy_chisel::net`, "Roles").
 //!
 //! With no arguments and no display (or `CHISEL_HEADLESS=1`), one process
-//! runs a server and two scripted players on 127.0.0.1 (each in its own
+//! runs a host and two scripted players on 127.0.0.1 (each in its own
 //! thread, each its own Bevy app talking UDP), plus a third player that
-//! renders offscreen: once it has applied the others' craters it writes
+//! renders offscreen; the host, a player too, blasts one crater. Once the
+//! offscreen player has applied every crater it writes
 //! `screenshots/multiplayer-*.png` and checks that its octree is the
-//! server's, bit for bit.
+//! host's, bit for bit.
 
 use std::net::{Ipv4Addr, SocketAddr};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,8 +39,8 @@ use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
-    NetCarveRequest, NetClientPlugin, NetClientStats, NetServerPlugin, NetServerStats, NetTerrain,
-    WireTool, start_client, start_server,
+    NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientStats, NetServerPlugin,
+    NetServerStats, NetTerrain, Outcome, WireTool, start_client, start_server,
 };
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
@@ -49,36 +58,42 @@ const BLAST_RADIUS: f32 = 1.2;
 const HEAP_RADIUS: f32 = 0.8;
 /// Craters each scripted player blasts in the headless run.
 const SCRIPTED: usize = 6;
+/// Craters the host blasts in the headless run.
+const HOST_CRATERS: usize = 1;
 
 fn main() -> AppExit {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
-        Some("--server") => {
-            let addr = args
-                .get(1)
-                .map_or(Ok(SocketAddr::from((Ipv4Addr::UNSPECIFIED, 5000))), |a| {
-                    a.parse()
-                });
-            match addr {
-                Ok(addr) => run_server(addr),
-                Err(e) => fail(&format!("bad server address: {e}")),
-            }
-        }
+        Some("--server") => match listen_addr(args.get(1)) {
+            Ok(addr) => run_server(addr),
+            Err(e) => fail(&format!("bad server address: {e}")),
+        },
+        Some("--host") => match listen_addr(args.get(1)) {
+            Ok(addr) => run_host(addr, Presentation::detect("multiplayer")),
+            Err(e) => fail(&format!("bad host address: {e}")),
+        },
         Some("--client") => match args.get(1).map(|a| a.parse::<SocketAddr>()) {
             Some(Ok(addr)) => run_player(addr, Presentation::detect("multiplayer"), None),
             _ => fail("--client needs the server's address, e.g. --client 127.0.0.1:5000"),
         },
         Some(other) => fail(&format!(
-            "unknown argument {other}; use --server or --client ADDR"
+            "unknown argument {other}; use --host, --server or --client ADDR"
         )),
         None => match Presentation::detect("multiplayer") {
             Presentation::Window => fail(
-                "start a server with --server and players with --client ADDR \
-                 (or set CHISEL_HEADLESS=1 for the one-process demo)",
+                "host a game with --host (or start a server with --server) and join with \
+                 --client ADDR (or set CHISEL_HEADLESS=1 for the one-process demo)",
             ),
             Presentation::Headless(config) => run_headless(config),
         },
     }
+}
+
+/// The address to listen on: the argument, or `0.0.0.0:5000`.
+fn listen_addr(arg: Option<&String>) -> Result<SocketAddr, std::net::AddrParseError> {
+    arg.map_or(Ok(SocketAddr::from((Ipv4Addr::UNSPECIFIED, 5000))), |a| {
+        a.parse()
+    })
 }
 
 fn fail(message: &str) -> AppExit {
@@ -119,7 +134,10 @@ fn slab() -> Result<Terrain, BevyError> {
 }
 
 /// A server app (no window, no renderer): the terrain and the plugins.
-fn server_app() -> App {
+/// One that `plays` also has the client plugin, and blasts one crater of
+/// its own through the same request as every player (the headless run's
+/// host).
+fn server_app(plays: bool) -> App {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins.set(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(
@@ -141,13 +159,51 @@ fn server_app() -> App {
         commands.spawn((slab()?, NetTerrain(1)));
         Ok(())
     });
+    if plays {
+        app.add_plugins(NetClientPlugin).add_systems(
+            Update,
+            (host_crater.before(TerrainSystems::Carve), host_results),
+        );
+    }
     app.finish();
     app.cleanup();
     app
 }
 
+/// The headless host blasts [`HOST_CRATERS`] crater once its terrain is
+/// idle: a request like a client's, ordered by its own server.
+fn host_crater(
+    terrains: Query<(Entity, &Terrain), With<NetTerrain>>,
+    mut requests: MessageWriter<NetCarveRequest>,
+    mut sent: Local<bool>,
+) {
+    let Ok((entity, terrain)) = terrains.single() else {
+        return;
+    };
+    if *sent || !terrain.is_idle() {
+        return;
+    }
+    requests.write(NetCarveRequest {
+        request: 1,
+        terrain: entity,
+        tool: WireTool::from(&blast(Vec3::new(9.5, 0.0, -9.5), BLAST_RADIUS, 9)),
+        edit: Edit::Subtract,
+    });
+    *sent = true;
+}
+
+/// Prints what became of the host's own requests.
+fn host_results(mut results: MessageReader<NetCarveResult>) {
+    for result in results.read() {
+        match &result.outcome {
+            Outcome::Applied { seq } => println!("the host's crater is carve {seq}"),
+            Outcome::Rejected(why) => eprintln!("the host's crater was refused: {why}"),
+        }
+    }
+}
+
 fn run_server(addr: SocketAddr) -> AppExit {
-    let mut app = server_app();
+    let mut app = server_app(false);
     match start_server(app.world_mut(), addr, 32) {
         Ok(bound) => println!("multiplayer server listening on {bound}"),
         Err(e) => return fail(&format!("cannot listen on {addr}: {e}")),
@@ -172,6 +228,8 @@ struct Player {
     /// Scripted players send their craters; `None` for a mouse player.
     script: Option<usize>,
     sent: usize,
+    /// The player hosts the game (its app runs the server).
+    hosting: bool,
     /// In the headless run: what the server holds when it is idle.
     check: Option<Arc<Mutex<Option<ServerState>>>>,
 }
@@ -186,13 +244,10 @@ struct ServerState {
     bytes: Vec<u8>,
 }
 
-/// A player: a window (or offscreen target) with the terrain as the
-/// server sends it.
-fn run_player(
-    addr: SocketAddr,
-    presentation: Presentation,
-    check: Option<Arc<Mutex<Option<ServerState>>>>,
-) -> AppExit {
+/// A player's app: a window (or offscreen target), the terrain, both
+/// networking plugins (the role is picked by what is started: a server or
+/// a connection).
+fn player_app(presentation: Presentation, player: Player) -> App {
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — multiplayer");
@@ -200,15 +255,11 @@ fn run_player(
         TerrainPlugin,
         TriplanarMaterialPlugin,
         ViewerPlugin,
+        NetServerPlugin,
         NetClientPlugin,
     ))
     .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
-    .insert_resource(Player {
-        // The offscreen player of the one-process run blasts too.
-        script: check.is_some().then_some(2),
-        sent: 0,
-        check,
-    })
+    .insert_resource(player)
     .add_observer(dress_terrain)
     .add_systems(Startup, spawn_view)
     .add_systems(
@@ -222,11 +273,55 @@ fn run_player(
         app.insert_resource(HoldCaptures(true))
             .add_systems(Update, release_captures.after(TerrainSystems::Mesh));
     }
+    app
+}
+
+/// A player joining the game at `addr`: the terrain arrives from the
+/// server.
+fn run_player(
+    addr: SocketAddr,
+    presentation: Presentation,
+    check: Option<Arc<Mutex<Option<ServerState>>>>,
+) -> AppExit {
+    let headless = matches!(presentation, Presentation::Headless(_));
+    let player = Player {
+        // The offscreen player of the one-process run blasts too.
+        script: check.is_some().then_some(2),
+        sent: 0,
+        hosting: false,
+        check,
+    };
+    let mut app = player_app(presentation, player);
     app.finish();
     app.cleanup();
     let id = std::process::id() as u64 * 1000 + u64::from(headless);
     if let Err(e) = start_client(app.world_mut(), addr, id) {
         return fail(&format!("cannot connect to {addr}: {e}"));
+    }
+    app.run()
+}
+
+/// A player hosting the game: the terrain is its own, and it listens on
+/// `addr` for the others. Its clicks are requests like everyone's, ordered
+/// by its own server.
+fn run_host(addr: SocketAddr, presentation: Presentation) -> AppExit {
+    let player = Player {
+        script: None,
+        sent: 0,
+        hosting: true,
+        check: None,
+    };
+    let mut app = player_app(presentation, player);
+    app.add_systems(Startup, |mut commands: Commands| -> Result {
+        commands.spawn((slab()?, NetTerrain(1)));
+        Ok(())
+    })
+    .add_systems(Update, log_server);
+    app.finish();
+    app.cleanup();
+    match start_server(app.world_mut(), addr, 32) {
+        Ok(bound) => println!("hosting on {bound}; others join with --client {bound}"),
+        Err(e) => return fail(&format!("cannot listen on {addr}: {e}")),
     }
     app.run()
 }
@@ -335,7 +430,9 @@ fn scripted(
 }
 
 fn hud(
+    player: Res<Player>,
     stats: Res<NetClientStats>,
+    served: Res<NetServerStats>,
     terrains: Query<&Terrain, With<NetTerrain>>,
     mut text: Query<&mut Text, With<Overlay>>,
 ) {
@@ -353,10 +450,17 @@ fn hud(
             )
         },
     );
+    let role = if player.hosting {
+        format!(
+            "hosting: {} carves ordered, {} refused, {} snapshots sent",
+            served.accepted, served.rejected, served.snapshots
+        )
+    } else {
+        format!("{} hash checks passed", stats.checks_passed)
+    };
     text.0 = format!(
-        "multiplayer | {state}\n{} hash checks passed\n\
-         LMB blast crater | RMB heap dirt | {ORBIT_HELP}",
-        stats.checks_passed
+        "multiplayer | {state}\n{role}\n\
+         LMB blast crater | RMB heap dirt | {ORBIT_HELP}"
     );
 }
 
@@ -380,7 +484,7 @@ fn release_captures(
     };
     // Carves before this player joined came in its snapshot, which has no
     // journal: count them on the server, and compare the terrains.
-    let expected = 3 * SCRIPTED as u64;
+    let expected = (3 * SCRIPTED + HOST_CRATERS) as u64;
     if !terrain.is_idle() {
         return;
     }
@@ -397,14 +501,15 @@ fn release_captures(
             "equal hashes but different octrees"
         );
         println!(
-            "all {expected} carves applied; octree identical to the server's (hash {hash:016x})"
+            "all {expected} carves applied; octree identical to the host's (hash {hash:016x})"
         );
         hold.0 = false;
     }
 }
 
-/// One process: a server and two scripted players in threads, and a third
-/// scripted player rendering offscreen in the main thread.
+/// One process: a host (a server that blasts a crater of its own) and two
+/// scripted players in threads, and a third scripted player rendering
+/// offscreen in the main thread.
 fn run_headless(config: HeadlessConfig) -> AppExit {
     let stop = Arc::new(AtomicBool::new(false));
     let server_state: Arc<Mutex<Option<ServerState>>> = Arc::default();
@@ -413,7 +518,7 @@ fn run_headless(config: HeadlessConfig) -> AppExit {
     {
         let (stop, state) = (stop.clone(), server_state.clone());
         threads.push(std::thread::spawn(move || {
-            let mut app = server_app();
+            let mut app = server_app(true);
             let bound = start_server(app.world_mut(), (Ipv4Addr::LOCALHOST, 0).into(), 8);
             let _ = tx.send(bound.map_err(|e| e.to_string()));
             while !stop.load(Ordering::Relaxed) {
@@ -456,6 +561,7 @@ fn run_headless(config: HeadlessConfig) -> AppExit {
             .insert_resource(Player {
                 script: Some(lane),
                 sent: 0,
+                hosting: false,
                 check: None,
             })
             .add_systems(Update, scripted.before(TerrainSystems::Carve));

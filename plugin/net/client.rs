@@ -6,18 +6,33 @@
 //! ([`super::wire::WireTool::World`]) and applies only the integer
 //! [`NetCarve`]s the server sends back, through [`GridCarve`]s whose
 //! request id is the carve's sequence number.
+//!
+//! Requests and answers work in every role; following the server (its
+//! carves, checks and snapshots) only while connected
+//! (`ClientState::Connected`). On a host or in single player the requests
+//! go to the app's own [`super::NetServerPlugin`] (bevy_replicon writes them
+//! locally) and its answers come back the same way; the carves are applied
+//! by the server side, so nothing is followed here. A request written while
+//! connecting, or while disconnected in an app without the server plugin,
+//! is answered [`RejectReason::NotConnected`]. On leaving
+//! `Connected`, what was being followed is dropped (the terrains stay);
+//! the next connection starts again from snapshots.
 
 use std::collections::{BTreeMap, HashMap};
 
 use bevy::prelude::*;
+use bevy_replicon::prelude::ClientState;
 use chisel_bsp::octree::Edit;
 
 use super::wire::{
-    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, ServerPacket, TerrainId, WireTool,
+    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, RejectReason, ServerPacket,
+    TerrainId, WireTool,
 };
 use crate::terrain::{CarveApplied, GridCarve, Terrain, TerrainCell, TerrainSystems};
 
-/// Ask the server to carve a terrain (on a client).
+/// Ask the server to carve a terrain, in any role: sent to the server by a
+/// connected client, ordered by the app's own server on a host or in
+/// single player; answered by a [`NetCarveResult`].
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct NetCarveRequest {
@@ -120,6 +135,10 @@ pub struct NetClientStats {
 /// The client side of networked carving; connect with
 /// [`super::start_client`]. Terrains appear (with [`NetTerrain`]) when the
 /// server's snapshots arrive.
+///
+/// Add it with [`super::NetServerPlugin`] to pick the role at run time
+/// (module docs, "Roles"): its requests then also carve a host's or a
+/// single player's own terrains.
 pub struct NetClientPlugin;
 
 impl Plugin for NetClientPlugin {
@@ -139,33 +158,77 @@ impl Plugin for NetClientPlugin {
             .register_type::<TerrainSynced>()
             .register_type::<Desynced>();
         super::world_client::build(app);
+        let connected = in_state(ClientState::Connected);
         app.add_systems(
             Update,
             (
-                (send_requests, receive_packets, hand_over)
+                (
+                    send_requests,
+                    receive_packets,
+                    hand_over.run_if(connected.clone()),
+                )
                     .chain()
                     .before(TerrainSystems::Carve),
-                compare_hashes.after(TerrainSystems::Mesh),
+                compare_hashes.after(TerrainSystems::Mesh).run_if(connected),
             ),
-        );
+        )
+        .add_systems(OnExit(ClientState::Connected), stop_following);
     }
 }
 
+/// Forgets the carves, snapshots and checks being followed when the
+/// connection ends; the terrains stay. Sequence 0 is no carve, so every
+/// carve of the next connection waits for its snapshot.
+fn stop_following(mut ledger: ResMut<ClientLedger>) {
+    for follow in ledger.terrains.values_mut() {
+        *follow = Follow {
+            entity: follow.entity,
+            ..Follow::default()
+        };
+    }
+}
+
+/// Whether a request written now has no server to go to: while
+/// connecting, or while disconnected in an app without
+/// [`super::NetServerPlugin`].
+pub(super) fn nowhere_to_send(state: &ClientState, server_side: bool) -> bool {
+    match state {
+        ClientState::Connecting => true,
+        ClientState::Disconnected => !server_side,
+        ClientState::Connected => false,
+    }
+}
+
+/// Sends each request to the server: over the connection, or to the app's
+/// own server side when not connected (bevy_replicon writes client
+/// messages locally then). One with no server to go to
+/// ([`nowhere_to_send`]) is answered [`RejectReason::NotConnected`].
 fn send_requests(
     mut requests: MessageReader<NetCarveRequest>,
     terrains: Query<&NetTerrain>,
+    state: Res<State<ClientState>>,
+    server_side: Option<Res<super::server::ServerLedger>>,
     mut packets: MessageWriter<ClientPacket>,
     mut results: MessageWriter<NetCarveResult>,
 ) {
+    let unsent = nowhere_to_send(state.get(), server_side.is_some());
     for request in requests.read() {
-        let Ok(id) = terrains.get(request.terrain) else {
-            results.write(NetCarveResult {
-                request: Some(request.request),
-                outcome: Outcome::Rejected(super::wire::RejectReason::Invalid(
-                    "the entity is no networked terrain".into(),
-                )),
-            });
-            continue;
+        let refused = match terrains.get(request.terrain) {
+            _ if unsent => Err(RejectReason::NotConnected),
+            Ok(id) => Ok(id),
+            Err(_) => Err(RejectReason::Invalid(
+                "the entity is no networked terrain".into(),
+            )),
+        };
+        let id = match refused {
+            Ok(id) => id,
+            Err(reason) => {
+                results.write(NetCarveResult {
+                    request: Some(request.request),
+                    outcome: Outcome::Rejected(reason),
+                });
+                continue;
+            }
         };
         packets.write(ClientPacket::Request(ClientRequest::Carve {
             request: request.request,
@@ -176,9 +239,14 @@ fn send_requests(
     }
 }
 
+/// Turns the server's answers into [`NetCarveResult`]s in every role, and
+/// keeps its carves, checks and snapshots while connected: a packet of
+/// those that arrives otherwise is the app's own server speaking to
+/// itself, and is dropped.
 #[allow(clippy::too_many_arguments)]
 fn receive_packets(
     mut packets: MessageReader<ServerPacket>,
+    state: Res<State<ClientState>>,
     mut ledger: ResMut<ClientLedger>,
     mut stats: ResMut<NetClientStats>,
     cells: Query<(Entity, &TerrainCell)>,
@@ -186,7 +254,11 @@ fn receive_packets(
     mut results: MessageWriter<NetCarveResult>,
     mut synced: MessageWriter<TerrainSynced>,
 ) {
+    let following = *state.get() == ClientState::Connected;
     for packet in packets.read() {
+        if !following && !matches!(packet, ServerPacket::Result { .. }) {
+            continue;
+        }
         match packet {
             ServerPacket::Carve(carve) => {
                 let follow = ledger.terrains.entry(carve.terrain).or_default();

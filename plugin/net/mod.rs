@@ -14,6 +14,38 @@
 //! every [`NetLimits::check_interval`]; a client whose hash after the same
 //! carve differs reports it and gets a fresh snapshot.
 //!
+//! ## Roles
+//!
+//! A game adds both [`NetServerPlugin`] and [`NetClientPlugin`] to one
+//! binary and picks its role at run time, as bevy_replicon recommends; it
+//! writes the same [`NetCarveRequest`]s and [`NetWorldCarveRequest`]s and
+//! reads the same [`NetCarveResult`]s in every role:
+//!
+//! - **Client** ([`start_client`]): requests go to the server; the server's
+//!   carves are applied in its order, its hashes compared, its snapshots
+//!   installed.
+//! - **Listen-server host** ([`start_server`], the app's own player carves
+//!   too): the host's requests come to its own server side as those of
+//!   `ClientId::Server` (bevy_replicon writes a client's messages locally
+//!   while it is not connected), are validated, rounded once, ordered and
+//!   broadcast to the remote clients like any client's, and its terrains
+//!   apply each carve once; its answers come back the same way. The host
+//!   is not rate limited (it is the authority; [`NetLimits`]), every other
+//!   limit applies.
+//! - **Single player** (neither): the same, with nobody to broadcast to.
+//!
+//! The server side runs while the app is no connected client
+//! (`ClientState::Disconnected`, replicon's condition for authority); the
+//! following of a server only while connected (`ClientState::Connected`),
+//! so a host never follows its own carves. A request with no server to go
+//! to (written while connecting, or while disconnected in an app without
+//! [`NetServerPlugin`]) is answered [`RejectReason::NotConnected`]. A dedicated
+//! server adds [`NetServerPlugin`] alone, a client-only build
+//! [`NetClientPlugin`] alone. A single player may start hosting at any
+//! time: its order of carves goes on and joining clients get snapshots. A
+//! peer that was a client and then hosts should spawn its terrains and
+//! worlds anew, since theirs hold another server's order.
+//!
 //! Transport: `bevy_replicon` messages over `bevy_replicon_renet`'s netcode
 //! UDP transport: unsecured ([`start_server`], [`start_client`]) for a LAN,
 //! development and tests, or with signed connect tokens and encrypted

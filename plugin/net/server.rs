@@ -9,6 +9,16 @@
 //! terrain's [`Terrain::last_request`] names the last carve in its octree:
 //! a snapshot taken at any moment holds exactly carves `1..=last_request`,
 //! and the carves after it are kept in a log until the terrain has them.
+//!
+//! These systems hold the authority: they run while the app is no
+//! connected client (`ClientState::Disconnected`), on a dedicated server,
+//! on a listen-server host and in single player alike. The host's own
+//! requests arrive from `ClientId::Server` (bevy_replicon writes a
+//! client's messages locally while it is not connected); they are
+//! validated and ordered like any client's, but not rate limited
+//! ([`NetLimits`]). Accepted carves are broadcast to the remote clients
+//! only: the host's terrain applies each carve once, here, and its
+//! answers come back through bevy_replicon's local delivery.
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
@@ -24,6 +34,12 @@ use super::wire::{
 use crate::terrain::{CarveApplied, CarveRejected, GridCarve, GridTool, Terrain, TerrainSystems};
 
 /// What the server accepts from one client.
+///
+/// Every limit applies to every request, the host's own
+/// (`ClientId::Server`: a listen-server host or single player) included,
+/// but the rate ([`NetLimits::carves_per_second`], [`NetLimits::burst`]):
+/// the host is the authority, and its game decides how fast its own player
+/// carves.
 #[derive(Resource, Reflect, Clone, Debug)]
 #[reflect(Resource, Default)]
 pub struct NetLimits {
@@ -33,9 +49,9 @@ pub struct NetLimits {
     pub max_points: usize,
     /// Largest extent of a tool along any axis, in world units.
     pub max_tool_extent: f64,
-    /// Carves per second a client may keep up.
+    /// Carves per second a remote client may keep up.
     pub carves_per_second: f64,
-    /// Carves a client may send at once after a pause.
+    /// Carves a remote client may send at once after a pause.
     pub burst: f64,
     /// How often the server sends its hashes for comparison.
     pub check_interval: Duration,
@@ -141,6 +157,10 @@ pub(super) struct ServerLedger {
 /// [`NetTerrain`] on each terrain to replicate; start listening with
 /// [`super::start_server`].
 ///
+/// Add it with [`super::NetClientPlugin`] to pick the role at run time
+/// (module docs, "Roles"): its systems run whenever the app is not a
+/// connected client.
+///
 /// A dedicated server draws nothing: set [`TerrainSettings::output`] to
 /// [`CellOutput::Nothing`] (or [`CellOutput::Colliders`] where it runs
 /// physics) so that its terrains build no cell meshes. Its octrees and
@@ -175,7 +195,8 @@ impl Plugin for NetServerPlugin {
                     .chain()
                     .before(TerrainSystems::Carve),
                 report_results.after(TerrainSystems::Mesh),
-            ),
+            )
+                .run_if(in_state(ClientState::Disconnected)),
         );
     }
 }
@@ -270,8 +291,12 @@ pub(super) fn check_grid_tool(
     grid.build().map_err(invalid)
 }
 
-/// Whether `client` may send one more carve now.
+/// Whether `client` may send one more carve now: always for the host
+/// (`ClientId::Server`), within its allowance for a remote client.
 pub(super) fn allow(ledger: &mut ServerLedger, client: ClientId, limits: &NetLimits) -> bool {
+    if client == ClientId::Server {
+        return true;
+    }
     let now = Instant::now();
     let allowance = ledger.allowance.entry(client).or_insert(Allowance {
         tokens: limits.burst,

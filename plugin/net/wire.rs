@@ -473,6 +473,11 @@ pub enum RejectReason {
         /// The limit on `|x|` and `|z|`.
         limit: i64,
     },
+    /// The request had no server to go to (the client was connecting, or
+    /// disconnected in an app without the server plugin) and was not sent;
+    /// answered locally, never by a server.
+    #[error("not connected yet; the request was not sent")]
+    NotConnected,
 }
 
 /// What became of a request.

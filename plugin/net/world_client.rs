@@ -1,14 +1,17 @@
 //! The client side of networked worlds ([`super::world`]): sends world
 //! carve requests, installs world snapshots, routes the server's carves to
 //! its chunks strictly in order, and compares world hashes.
+//! As in [`super::client`], requests work in every role and the rest only
+//! while connected.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use bevy::prelude::*;
+use bevy_replicon::prelude::ClientState;
 use chisel_bsp::octree::Edit;
 
-use super::client::{Assembled, NetCarveResult, NetClientStats, assemble};
+use super::client::{Assembled, NetCarveResult, NetClientStats, assemble, nowhere_to_send};
 use super::wire::{
     ClientPacket, ClientRequest, NetWorld, NetWorldCarve, Outcome, RejectReason, ServerPacket,
     WireTool, WorldId, WorldSnapshotPart,
@@ -18,8 +21,9 @@ use crate::terrain::{
     CarveApplied, CarveRejected, ChunkCoord, Terrain, TerrainSystems, TerrainWorld, WorldChunk,
 };
 
-/// Ask the server to carve a networked world (on a client); answered by a
-/// [`NetCarveResult`] with the same request id.
+/// Ask the server to carve a networked world, in any role (as a
+/// [`super::NetCarveRequest`]); answered by a [`NetCarveResult`] with the
+/// same request id.
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct NetWorldCarveRequest {
@@ -122,31 +126,55 @@ pub(super) fn build(app: &mut App) {
             (
                 (
                     send_world_requests,
-                    receive_world_packets,
-                    install_and_route,
+                    (receive_world_packets, install_and_route)
+                        .chain()
+                        .run_if(in_state(ClientState::Connected)),
                 )
                     .chain()
                     .before(TerrainSystems::Carve),
-                compare_world_hashes.after(TerrainSystems::Mesh),
+                compare_world_hashes
+                    .after(TerrainSystems::Mesh)
+                    .run_if(in_state(ClientState::Connected)),
             ),
-        );
+        )
+        .add_systems(OnExit(ClientState::Connected), stop_following_worlds);
 }
 
+/// Forgets what was being followed of each world when the connection
+/// ends; the worlds and their chunks stay, and the next connection starts
+/// again from the world's snapshot.
+fn stop_following_worlds(mut follower: ResMut<WorldFollower>) {
+    follower.worlds.clear();
+}
+
+/// Sends each world request as `send_requests` in [`super::client`]
+/// sends terrain requests.
 fn send_world_requests(
     mut requests: MessageReader<NetWorldCarveRequest>,
     worlds: Query<&NetWorld>,
+    state: Res<State<ClientState>>,
+    server_side: Option<Res<super::server::ServerLedger>>,
     mut packets: MessageWriter<ClientPacket>,
     mut results: MessageWriter<NetCarveResult>,
 ) {
+    let unsent = nowhere_to_send(state.get(), server_side.is_some());
     for request in requests.read() {
-        let Ok(id) = worlds.get(request.world) else {
-            results.write(NetCarveResult {
-                request: Some(request.request),
-                outcome: Outcome::Rejected(RejectReason::Invalid(
-                    "the entity is no networked world".into(),
-                )),
-            });
-            continue;
+        let refused = match worlds.get(request.world) {
+            _ if unsent => Err(RejectReason::NotConnected),
+            Ok(id) => Ok(id),
+            Err(_) => Err(RejectReason::Invalid(
+                "the entity is no networked world".into(),
+            )),
+        };
+        let id = match refused {
+            Ok(id) => id,
+            Err(reason) => {
+                results.write(NetCarveResult {
+                    request: Some(request.request),
+                    outcome: Outcome::Rejected(reason),
+                });
+                continue;
+            }
         };
         packets.write(ClientPacket::Request(ClientRequest::CarveWorld {
             request: request.request,

@@ -2,7 +2,9 @@
 //! carve requests, numbers them per world, routes them to its own chunks,
 //! broadcasts them, answers each request once every chunk it reached
 //! reported, sends world hashes, and world snapshots to clients that join
-//! or fall out of step.
+//! or fall out of step. Like [`super::server`], it runs whenever the app
+//! is no connected client, and a host's own world carves are ordered here
+//! once and broadcast to the remote clients only.
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
@@ -73,7 +75,8 @@ pub(super) fn build(app: &mut App) {
                     .chain()
                     .before(TerrainSystems::Carve),
                 report_world_carves.after(TerrainSystems::Mesh),
-            ),
+            )
+                .run_if(in_state(ClientState::Disconnected)),
         );
 }
 

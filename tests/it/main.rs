@@ -91,6 +91,8 @@ mod terrain_world_seams;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]
+mod net_host;
+#[cfg(feature = "net")]
 mod net_hostile;
 #[cfg(feature = "net")]
 mod net_replication;
