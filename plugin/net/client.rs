@@ -199,6 +199,29 @@ pub(super) fn nowhere_to_send(state: &ClientState, server_side: bool) -> bool {
     }
 }
 
+/// The networked id a request names, when it can be sent; otherwise its
+/// refusal is answered at once: [`RejectReason::NotConnected`] when there is
+/// no server to send it to (`unsent`), or no networked `what` behind its
+/// entity (`target` is `None`).
+pub(super) fn addressee<T>(
+    request: u64,
+    unsent: bool,
+    target: Option<T>,
+    what: &str,
+    results: &mut MessageWriter<NetCarveResult>,
+) -> Option<T> {
+    let reason = match target {
+        _ if unsent => RejectReason::NotConnected,
+        Some(target) => return Some(target),
+        None => RejectReason::Invalid(format!("the entity is no networked {what}")),
+    };
+    results.write(NetCarveResult {
+        request: Some(request),
+        outcome: Outcome::Rejected(reason),
+    });
+    None
+}
+
 /// Sends each request to the server: over the connection, or to the app's
 /// own server side when not connected (bevy_replicon writes client
 /// messages locally then). One with no server to go to
@@ -213,22 +236,9 @@ fn send_requests(
 ) {
     let unsent = nowhere_to_send(state.get(), server_side.is_some());
     for request in requests.read() {
-        let refused = match terrains.get(request.terrain) {
-            _ if unsent => Err(RejectReason::NotConnected),
-            Ok(id) => Ok(id),
-            Err(_) => Err(RejectReason::Invalid(
-                "the entity is no networked terrain".into(),
-            )),
-        };
-        let id = match refused {
-            Ok(id) => id,
-            Err(reason) => {
-                results.write(NetCarveResult {
-                    request: Some(request.request),
-                    outcome: Outcome::Rejected(reason),
-                });
-                continue;
-            }
+        let target = terrains.get(request.terrain).ok();
+        let Some(id) = addressee(request.request, unsent, target, "terrain", &mut results) else {
+            continue;
         };
         packets.write(ClientPacket::Request(ClientRequest::Carve {
             request: request.request,

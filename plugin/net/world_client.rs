@@ -11,10 +11,12 @@ use bevy::prelude::*;
 use bevy_replicon::prelude::ClientState;
 use chisel_bsp::octree::Edit;
 
-use super::client::{Assembled, NetCarveResult, NetClientStats, assemble, nowhere_to_send};
+use super::client::{
+    Assembled, NetCarveResult, NetClientStats, addressee, assemble, nowhere_to_send,
+};
 use super::wire::{
-    ClientPacket, ClientRequest, NetWorld, NetWorldCarve, Outcome, RejectReason, ServerPacket,
-    WireTool, WorldId, WorldSnapshotPart,
+    ClientPacket, ClientRequest, NetWorld, NetWorldCarve, ServerPacket, WireTool, WorldId,
+    WorldSnapshotPart,
 };
 use super::world::{WorldBook, chunk_reports};
 use crate::terrain::{
@@ -159,22 +161,9 @@ fn send_world_requests(
 ) {
     let unsent = nowhere_to_send(state.get(), server_side.is_some());
     for request in requests.read() {
-        let refused = match worlds.get(request.world) {
-            _ if unsent => Err(RejectReason::NotConnected),
-            Ok(id) => Ok(id),
-            Err(_) => Err(RejectReason::Invalid(
-                "the entity is no networked world".into(),
-            )),
-        };
-        let id = match refused {
-            Ok(id) => id,
-            Err(reason) => {
-                results.write(NetCarveResult {
-                    request: Some(request.request),
-                    outcome: Outcome::Rejected(reason),
-                });
-                continue;
-            }
+        let target = worlds.get(request.world).ok();
+        let Some(id) = addressee(request.request, unsent, target, "world", &mut results) else {
+            continue;
         };
         packets.write(ClientPacket::Request(ClientRequest::CarveWorld {
             request: request.request,
