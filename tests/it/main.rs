@@ -98,3 +98,5 @@ mod net_hostile;
 mod net_replication;
 #[cfg(feature = "net")]
 mod net_world;
+#[cfg(feature = "net")]
+mod net_worlds;

@@ -13,8 +13,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::net::{Ipv4Addr, SocketAddr};
 
-use crate::{ONE_APP_AT_A_TIME, net, terrain_world};
-
+use crate::net_worlds::{edited_chunks, edited_terrains, streamed_world as world, world_settled};
+use crate::{ONE_APP_AT_A_TIME, net};
 use bevy::asset::AssetPlugin;
 use bevy::prelude::*;
 use bevy::transform::TransformPlugin;
@@ -26,8 +26,7 @@ use bevy_chisel::net::{
     start_server,
 };
 use bevy_chisel::terrain::{
-    CarveTool, CellOutput, ChunkCoord, StreamSettings, Terrain, TerrainFocus, TerrainPlugin,
-    TerrainSettings, TerrainWorld,
+    CarveTool, CellOutput, ChunkCoord, Terrain, TerrainFocus, TerrainPlugin, TerrainSettings,
 };
 use bevy_replicon::prelude::{ClientState, SendTargets, ServerState, ToClients};
 use net::{Rng, random_carve, request, request_world, run_until, slab, terrain_of, world_of};
@@ -35,20 +34,6 @@ use net::{Rng, random_carve, request, request_world, run_until, slab, terrain_of
 /// Rounds of carves; in each, every peer asks for one terrain carve and
 /// one world carve.
 const ROUNDS: usize = 40;
-
-/// The world of `terrain_world` streamed 24 m around each focus, with
-/// material 2 to add.
-fn world() -> TerrainWorld {
-    TerrainWorld::new(terrain_world::layout(), terrain_world::height)
-        .expect("valid layout")
-        .with_streaming(StreamSettings {
-            load_radius: 24.0,
-            unload_radius: 40.0,
-            max_building: 4,
-        })
-        .expect("valid settings")
-        .with_labels([2])
-}
 
 /// Results and world snapshots an app saw.
 #[derive(Resource, Default)]
@@ -120,45 +105,7 @@ fn answers(app: &App) -> &[NetCarveResult] {
 
 /// Whether the terrain (if any) is idle and the world settled.
 fn settled(app: &mut App) -> bool {
-    if terrain_of(app).is_some_and(|(_, t)| !t.is_idle()) {
-        return false;
-    }
-    let (entity, _) = world_of(app);
-    let ecs = app.world();
-    let world = ecs.get::<TerrainWorld>(entity).expect("world");
-    world.is_settled()
-        && world
-            .live_chunks()
-            .all(|(_, e)| ecs.get::<Terrain>(e).is_some_and(Terrain::is_idle))
-}
-
-/// Every edited chunk the app holds, live or stored, as a terrain.
-fn edited_terrains(app: &mut App) -> BTreeMap<ChunkCoord, Terrain> {
-    let (entity, _) = world_of(app);
-    let ecs = app.world();
-    let world = ecs.get::<TerrainWorld>(entity).expect("world");
-    let mut out = BTreeMap::new();
-    for (coord, chunk) in world.live_chunks() {
-        if let Some(terrain) = ecs.get::<Terrain>(chunk)
-            && world.chunk_edited(coord, terrain)
-        {
-            let bytes = terrain.to_bytes();
-            out.insert(coord, Terrain::from_bytes(&bytes).expect("chunk reads"));
-        }
-    }
-    for coord in world.stored_chunks() {
-        let bytes = world.stored_chunk(coord).expect("stored chunk");
-        out.insert(coord, Terrain::from_bytes(bytes).expect("chunk reads"));
-    }
-    out
-}
-
-/// Every edited chunk's octree bytes and state hash.
-fn edited_chunks(app: &mut App) -> BTreeMap<ChunkCoord, (Vec<u8>, u64)> {
-    edited_terrains(app)
-        .into_iter()
-        .map(|(c, t)| (c, (t.octree().to_bytes(), t.state_hash())))
-        .collect()
+    terrain_of(app).is_none_or(|(_, t)| t.is_idle()) && world_settled(app)
 }
 
 /// A random blast or heap near the surface of chunks (0..3, 0..3).

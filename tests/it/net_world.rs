@@ -11,34 +11,22 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::{ONE_APP_AT_A_TIME, net, terrain_world};
-
+use crate::net_worlds::{
+    edited_chunks, edited_terrains, streamed_world as world, world_settled as settled,
+};
+use crate::{ONE_APP_AT_A_TIME, net};
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::{
     ClientPacket, ClientRequest, NetClientStats, NetLimits, NetServerStats, Outcome, RejectReason,
     WirePiece, WirePose, WireShape, WireTool, world_state_hash,
 };
-use bevy_chisel::terrain::{Carve, CarveTool, ChunkCoord, StreamSettings, Terrain, TerrainWorld};
+use bevy_chisel::terrain::{Carve, CarveTool, ChunkCoord};
 use net::{Rng, Seen, WorldsSeen, request_world, run_until, world_client, world_of, world_server};
 
 const CARVES: usize = 160;
 /// Carves each of the two clients sends per frame.
 const PER_FRAME: usize = 2;
-
-/// The world of `terrain_world` (chunks of 32 grid units of 1 m, heights
-/// 8..=20), streamed 24 m around each focus, with material 2 to add.
-fn world() -> TerrainWorld {
-    TerrainWorld::new(terrain_world::layout(), terrain_world::height)
-        .expect("valid layout")
-        .with_streaming(StreamSettings {
-            load_radius: 24.0,
-            unload_radius: 40.0,
-            max_building: 4,
-        })
-        .expect("valid settings")
-        .with_labels([2])
-}
 
 /// A random blast or heap near the surface over chunks (0..3, 0..3); one in
 /// three is centred on a chunk border.
@@ -62,51 +50,6 @@ fn random_world_carve(rng: &mut Rng) -> (CarveTool, Edit) {
 
 fn synced(app: &App) -> bool {
     !app.world().resource::<WorldsSeen>().synced.is_empty()
-}
-
-/// Whether nothing builds, no carve waits and every live chunk is idle.
-fn settled(app: &mut App) -> bool {
-    let (entity, _) = world_of(app);
-    let ecs = app.world();
-    let Some(world) = ecs.get::<TerrainWorld>(entity) else {
-        return false;
-    };
-    world.is_settled()
-        && world
-            .live_chunks()
-            .all(|(_, e)| ecs.get::<Terrain>(e).is_some_and(Terrain::is_idle))
-}
-
-/// Every edited chunk the app holds, live or stored, as a terrain.
-fn edited_terrains(app: &mut App) -> BTreeMap<ChunkCoord, Terrain> {
-    let (entity, _) = world_of(app);
-    let ecs = app.world();
-    let world = ecs.get::<TerrainWorld>(entity).expect("world");
-    let mut out = BTreeMap::new();
-    for (coord, chunk) in world.live_chunks() {
-        if let Some(terrain) = ecs.get::<Terrain>(chunk)
-            && world.chunk_edited(coord, terrain)
-        {
-            let bytes = terrain.to_bytes();
-            out.insert(coord, Terrain::from_bytes(&bytes).expect("chunk reads"));
-        }
-    }
-    for coord in world.stored_chunks() {
-        let bytes = world.stored_chunk(coord).expect("stored chunk");
-        out.insert(
-            coord,
-            Terrain::from_bytes(bytes).expect("stored chunk reads"),
-        );
-    }
-    out
-}
-
-/// Every edited chunk's octree bytes and state hash.
-fn edited_chunks(app: &mut App) -> BTreeMap<ChunkCoord, (Vec<u8>, u64)> {
-    edited_terrains(app)
-        .into_iter()
-        .map(|(c, t)| (c, (t.octree().to_bytes(), t.state_hash())))
-        .collect()
 }
 
 fn peer_hash(app: &mut App) -> u64 {
