@@ -13,7 +13,9 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::net::{Ipv4Addr, SocketAddr};
 
-use crate::net_worlds::{edited_chunks, edited_terrains, streamed_world as world, world_settled};
+use crate::net_worlds::{
+    edited_chunks, edited_terrains, streamed_world as world, world_settled, world_tool,
+};
 use crate::{ONE_APP_AT_A_TIME, net};
 use bevy::asset::AssetPlugin;
 use bevy::prelude::*;
@@ -22,8 +24,7 @@ use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::{
     NetCarve, NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientStats, NetLimits,
     NetServerPlugin, NetServerStats, NetTerrain, NetWorld, Outcome, RejectReason, ServerPacket,
-    SnapshotPart, WirePiece, WirePose, WireShape, WireTool, WorldSynced, start_client,
-    start_server,
+    SnapshotPart, WirePose, WireShape, WireTool, WorldSynced, start_client, start_server,
 };
 use bevy_chisel::terrain::{
     CarveTool, CellOutput, ChunkCoord, Terrain, TerrainFocus, TerrainPlugin, TerrainSettings,
@@ -288,15 +289,10 @@ fn a_host_and_two_clients_end_identical_with_each_carve_applied_once() {
 }
 
 fn nan_tool() -> WireTool {
-    WireTool::World(vec![WirePiece {
-        shape: WireShape::Dodecahedron { radius: 0.3 },
-        pose: WirePose {
-            translation: [f32::NAN, 2.0, 5.0],
-            rotation: [0.0, 0.0, 0.0, 1.0],
-            scale: [1.0; 3],
-        },
-        sweep_to: None,
-    }])
+    world_tool(
+        WireShape::Dodecahedron { radius: 0.3 },
+        [f32::NAN, 2.0, 5.0],
+    )
 }
 
 #[test]

@@ -12,14 +12,14 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use crate::net_worlds::{
-    edited_chunks, edited_terrains, streamed_world as world, world_settled as settled,
+    edited_chunks, edited_terrains, streamed_world as world, world_settled as settled, world_tool,
 };
 use crate::{ONE_APP_AT_A_TIME, net};
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::{
     ClientPacket, ClientRequest, NetClientStats, NetLimits, NetServerStats, Outcome, RejectReason,
-    WirePiece, WirePose, WireShape, WireTool, world_state_hash,
+    WireShape, world_state_hash,
 };
 use bevy_chisel::terrain::{Carve, CarveTool, ChunkCoord};
 use net::{Rng, Seen, WorldsSeen, request_world, run_until, world_client, world_of, world_server};
@@ -228,18 +228,6 @@ fn world_carves_leave_every_held_chunk_identical_on_every_peer() {
         joined.seq > 0 && joined.chunks > 0,
         "the late client joined after carves: {joined:?}"
     );
-}
-
-fn world_tool(shape: WireShape, at: [f32; 3]) -> WireTool {
-    WireTool::World(vec![WirePiece {
-        shape,
-        pose: WirePose {
-            translation: at,
-            rotation: [0.0, 0.0, 0.0, 1.0],
-            scale: [1.0; 3],
-        },
-        sweep_to: None,
-    }])
 }
 
 #[test]

@@ -1,9 +1,11 @@
 //! What the networked world tests (`net_world`, `net_host`) share: their
-//! streamed world, and what a peer holds of it.
+//! streamed world, what a peer holds of it, and tools as a request sends
+//! them.
 
 use std::collections::BTreeMap;
 
 use bevy::prelude::*;
+use bevy_chisel::net::{WirePiece, WirePose, WireShape, WireTool};
 use bevy_chisel::terrain::{ChunkCoord, StreamSettings, Terrain, TerrainWorld};
 
 use crate::net::world_of;
@@ -67,4 +69,17 @@ pub fn edited_chunks(app: &mut App) -> BTreeMap<ChunkCoord, (Vec<u8>, u64)> {
         .into_iter()
         .map(|(c, t)| (c, (t.octree().to_bytes(), t.state_hash())))
         .collect()
+}
+
+/// A world-unit tool of one piece: `shape` at `at`, unrotated.
+pub fn world_tool(shape: WireShape, at: [f32; 3]) -> WireTool {
+    WireTool::World(vec![WirePiece {
+        shape,
+        pose: WirePose {
+            translation: at,
+            rotation: [0.0, 0.0, 0.0, 1.0],
+            scale: [1.0; 3],
+        },
+        sweep_to: None,
+    }])
 }
