@@ -33,6 +33,16 @@ const SEARCH: &str = "chisel::world::debris_search";
 /// The corner of the four live chunks, in grid units.
 const CORNER: i64 = 2048;
 
+/// The world's debris searches started and dropped as stale so far.
+fn searches(app: &App, world: Entity) -> (u64, u64) {
+    let stats = app
+        .world()
+        .get::<TerrainWorld>(world)
+        .expect("the world")
+        .stats();
+    (stats.debris_searches, stats.debris_searches_dropped)
+}
+
 /// An app with the example's world (no bands) and a focus over the
 /// corner that keeps exactly the four chunks around it live, settled.
 fn corner_app() -> (App, Entity) {
@@ -266,7 +276,10 @@ pub(super) fn debris_across_chunk_borders() {
             held_max = held_max.max(sum_and_max(&carve(&mut app, world, cut), PASS_WALL).1);
         }
         let (inline, pieces, cells) = inline_search(&app, world, &last);
+        let before = searches(&app, world);
         let frames = carve(&mut app, world, last);
+        let after = searches(&app, world);
+        let (started, dropped) = (after.0 - before.0, after.1 - before.1);
         let fell = app
             .world_mut()
             .query::<&TerrainDebris>()
@@ -279,7 +292,8 @@ pub(super) fn debris_across_chunk_borders() {
             "block {edge} m: {pieces} piece(s), {cells} cells, {fell} fell; inline search \
              {inline:.2} ms; pass {pass:.3} ms in {} frame(s), largest frame {pass_frame:.3} ms \
              ({pass_frame_cpu:.3} ms CPU); \
-             search off the frame {search:.2} ms; cuts before it: largest frame {held_max:.3} ms",
+             search off the frame {search:.2} ms ({started} search(es), {dropped} dropped as \
+             stale); cuts before it: largest frame {held_max:.3} ms",
             frames.len(),
         );
         let key = |name: &str| format!("block_{edge}m_{name}");
@@ -290,6 +304,8 @@ pub(super) fn debris_across_chunk_borders() {
         figures.insert(key("pass_max_frame_cpu_ms"), json!(pass_frame_cpu));
         figures.insert(key("search_ms"), json!(search));
         figures.insert(key("held_cuts_max_frame_ms"), json!(held_max));
+        figures.insert(key("searches"), json!(started));
+        figures.insert(key("searches_dropped"), json!(dropped));
     }
     json_line(
         "terrain::debris_across_chunk_borders",

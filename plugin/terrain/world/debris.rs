@@ -37,6 +37,12 @@
 //! Rules across chunks:
 //! - **One search per world.** Seeds that come while a search runs wait
 //!   in their chunks for the next one.
+//! - **Carves beside the seeds first.** While a chunk with seeds, or a
+//!   neighbour of one across a side, has a job running or a carve or undo
+//!   waiting, no search starts: a carve that reaches several chunks
+//!   finishes in each at its own frame, and a search over the half-done
+//!   carve would have to run again (`debris_across_chunk_borders`: one
+//!   search per block instead of two).
 //! - **Stale results.** A search depends on the chunks it takes solid from
 //!   and on their neighbours across a side (whose solid could hold the
 //!   piece, or whose absence anchors it); on every chunk when it failed.
@@ -89,8 +95,8 @@
 //! against 8.5–13.5 ms (2.6–9.4 ms of CPU) searched in the frame; a crater
 //! on a border, whose search stops at the first anchored cell, 0.014 ms
 //! against 0.35 ms. Nothing but the limits bounds a search: at the default
-//! (none) it explores the whole piece, here 5–16 ms of pool time per
-//! block, searches dropped as stale included, beside the frames.
+//! (none) it explores the whole piece, here 3–16 ms of pool time per
+//! block, beside the frames.
 //!
 //! [`TerrainDebris`]: crate::terrain::TerrainDebris
 //! [`DebrisDetached`]: crate::terrain::DebrisDetached
@@ -236,13 +242,7 @@ fn verdict(world: &TerrainWorld, terrains: &Query<&mut Terrain>) -> Verdict {
             let depends = (0..seen.len())
                 .filter(|&j| {
                     let c = seen[j].coord;
-                    near.contains(&c)
-                        || [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|(dx, dz)| {
-                            near.contains(&ChunkCoord {
-                                x: c.x + dx,
-                                z: c.z + dz,
-                            })
-                        })
+                    near.contains(&c) || side_neighbours(c).any(|n| near.contains(&n))
                 })
                 .collect();
             (touched, depends)
@@ -259,14 +259,28 @@ fn verdict(world: &TerrainWorld, terrains: &Query<&mut Terrain>) -> Verdict {
     if !unchanged {
         return Verdict::Stale;
     }
-    let busy = touched.iter().any(|&i| {
-        terrains.get(seen[i].entity).is_ok_and(|t| {
-            t.runtime.task.is_some()
-                || (t.runtime.queue.iter())
-                    .any(|job| matches!(job, Job::Carve { .. } | Job::Undo { .. }))
-        })
-    });
+    let busy = touched
+        .iter()
+        .any(|&i| terrains.get(seen[i].entity).is_ok_and(busy));
     if busy { Verdict::Wait } else { Verdict::Apply }
+}
+
+/// The four chunks across a side of `coord`.
+fn side_neighbours(coord: ChunkCoord) -> impl Iterator<Item = ChunkCoord> {
+    [(1, 0), (-1, 0), (0, 1), (0, -1)]
+        .map(|(dx, dz)| ChunkCoord {
+            x: coord.x + dx,
+            z: coord.z + dz,
+        })
+        .into_iter()
+}
+
+/// Whether a chunk has a job running, or a carve or undo waiting: its
+/// octree is about to change.
+fn busy(terrain: &Terrain) -> bool {
+    terrain.runtime.task.is_some()
+        || (terrain.runtime.queue.iter())
+            .any(|job| matches!(job, Job::Carve { .. } | Job::Undo { .. }))
 }
 
 /// Takes the pieces of a search that holds out of their chunks and queues
@@ -326,12 +340,25 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         return;
     }
     let live: Vec<(ChunkCoord, Entity)> = world.live_chunks().collect();
-    let seeded = live.iter().any(|&(_, e)| {
-        terrains
-            .get(e)
-            .is_ok_and(|t| !t.runtime.border_seeds.is_empty())
+    let seeded: BTreeSet<ChunkCoord> = (live.iter())
+        .filter(|&&(_, e)| {
+            terrains
+                .get(e)
+                .is_ok_and(|t| !t.runtime.border_seeds.is_empty())
+        })
+        .map(|&(coord, _)| coord)
+        .collect();
+    if seeded.is_empty() {
+        return;
+    }
+    // A carve still running beside the seeds (one that reaches several
+    // chunks finishes in each at its own frame) would change what the
+    // search finds: wait for it rather than search twice.
+    let waiting = live.iter().any(|&(coord, e)| {
+        (seeded.contains(&coord) || side_neighbours(coord).any(|n| seeded.contains(&n)))
+            && terrains.get(e).is_ok_and(busy)
     });
-    if !seeded {
+    if waiting {
         return;
     }
     let _span = bevy::log::info_span!("chisel::world::detach_across_borders").entered();
