@@ -47,8 +47,11 @@ mod frame_steps;
 mod world;
 #[path = "terrain/world_debris.rs"]
 mod world_debris;
-use world::{lod_of_a_world, streaming_a_world};
+#[path = "terrain/world_lod.rs"]
+mod world_lod;
+use world::streaming_a_world;
 use world_debris::debris_across_chunk_borders;
+use world_lod::lod_of_a_world;
 
 fn main() {
     let Some(args) = Args::parse("terrain") else {
