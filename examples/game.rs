@@ -1,9 +1,13 @@
 //! A playable demo: walk over exact destructible terrain, blast it, and
 //! watch what you cut loose fall.
 //!
-//! - A capsule character with a physics controller (avian3d) walks on the
-//!   terrain's colliders, which are rebuilt with the meshes of every cell a
-//!   carve changes.
+//! - A capsule character with a physics controller walks on the terrain's
+//!   colliders, which are rebuilt with the meshes of every cell a carve
+//!   changes. The physics engine is avian3d, or bevy_rapier3d with
+//!   `--physics rapier` (or `CHISEL_PHYSICS=rapier`): the game is written
+//!   once over a [`Body`] component (`game/physics.rs`), and the engine's
+//!   module (`game/avian.rs`, `game/rapier.rs`) adds its plugins and copies
+//!   the body to and from the simulation.
 //! - Left click blasts a crater where the cursor points. Rock that is no
 //!   longer connected to the ground — the slab of the bridge once both its
 //!   pillars are gone, a boulder whose stalk is cut — is found exactly,
@@ -24,14 +28,14 @@
 //! would see: the character lands and stands on the ground, walking into a
 //! prop is stopped by it, and blasting the bridge's pillars and the
 //! boulders' stalks drops them onto the ground. It writes
-//! `screenshots/game-*.png` and fails if any check fails.
+//! `screenshots/game-*.png` (`game-rapier-*.png` with Rapier) and fails if
+//! any check fails.
 //!
-//! `cargo run --release --all-features --example game`
+//! `cargo run --release --all-features --example game [-- --physics rapier]`
 
 use std::f32::consts::FRAC_PI_2;
 use std::time::Duration;
 
-use avian3d::prelude::*;
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
@@ -39,15 +43,23 @@ use bevy::transform::TransformSystems;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
-use bevy_chisel::splat::avian::{PropAvianPlugin, PropCollider};
+use bevy_chisel::splat::prop_collider::PropCollider;
 use bevy_chisel::splat::{ChiselSplatPlugin, PropSplats, QuadricProp, SplatRadius};
-use bevy_chisel::terrain::avian::TerrainAvianPlugin;
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, DebrisDetached, HeightLayer,
     Heightfield, Terrain, TerrainDebris, TerrainPlugin, TerrainSurface, TerrainSystems,
     TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
 use bevy_chisel::viewer::{Overlay, blast, overlay_text};
+
+#[path = "game/avian.rs"]
+mod avian;
+#[path = "game/physics.rs"]
+mod physics;
+#[path = "game/rapier.rs"]
+mod rapier;
+
+use physics::{AfterPhysics, Body, PhysicsEngine};
 
 const ROCK: u8 = 1;
 const DIRT: u8 = 2;
@@ -81,7 +93,18 @@ const BOULDERS: [[f32; 2]; 3] = [[1.0, -2.5], [3.5, -1.0], [-11.0, 1.0]];
 const STALK: f32 = 1.1;
 
 fn main() -> AppExit {
-    let presentation = match Presentation::detect("game") {
+    let engine = match PhysicsEngine::from_args_or_env() {
+        Ok(engine) => engine,
+        Err(e) => {
+            eprintln!("game: {e}");
+            return AppExit::error();
+        }
+    };
+    let stem = match engine {
+        PhysicsEngine::Avian => "game",
+        PhysicsEngine::Rapier => "game-rapier",
+    };
+    let presentation = match Presentation::detect(stem) {
         Presentation::Headless(config) => Presentation::Headless(HeadlessConfig {
             capture_frames: vec![25, 105, 140],
             width: 640,
@@ -94,41 +117,30 @@ fn main() -> AppExit {
     let headless = matches!(presentation, Presentation::Headless(_));
     let mut app = App::new();
     presentation.add_default_plugins(&mut app, "bevy_chisel — game");
-    app.add_plugins((
-        PhysicsPlugins::default(),
-        TerrainPlugin,
-        TerrainAvianPlugin::default(),
-        TriplanarMaterialPlugin,
-        ChiselSplatPlugin,
-        PropAvianPlugin::default(),
-    ))
-    .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
-    .init_resource::<PlayerInput>()
-    .init_resource::<Hud>()
-    .add_systems(Startup, spawn_scene)
-    .add_systems(
-        Update,
-        (
-            move_player,
-            record_carves.after(TerrainSystems::Mesh),
-            update_hud.after(TerrainSystems::Mesh),
-            tidy_debris,
-        ),
-    )
-    .add_systems(
-        PostUpdate,
-        follow_player
-            .after(PhysicsSystems::Writeback)
-            .before(TransformSystems::Propagate),
-    );
+    app.add_plugins((TerrainPlugin, TriplanarMaterialPlugin, ChiselSplatPlugin));
+    engine.add_to(&mut app, headless);
+    app.configure_sets(PostUpdate, AfterPhysics.before(TransformSystems::Propagate))
+        .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+        .init_resource::<PlayerInput>()
+        .init_resource::<Hud>()
+        .add_systems(Startup, spawn_scene)
+        .add_systems(
+            Update,
+            (
+                move_player,
+                record_carves.after(TerrainSystems::Mesh),
+                update_hud.after(TerrainSystems::Mesh),
+                tidy_debris,
+            ),
+        )
+        .add_systems(PostUpdate, follow_player.in_set(AfterPhysics));
     if headless {
-        // One frame is 1/20 s of game time and one physics step, whatever
-        // a CPU renderer takes to draw it: the script's timing does not
-        // depend on the machine.
+        // One frame is 1/20 s of game time and of physics (the engine's
+        // module sets its steps), whatever a CPU renderer takes to draw
+        // it: the script's timing does not depend on the machine.
         app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
             1.0 / 20.0,
         )))
-        .insert_resource(Time::<Fixed>::from_hz(20.0))
         // Smaller shadow maps.
         .insert_resource(bevy::light::DirectionalLightShadowMap { size: 1024 })
         // No multisampling: on the CPU renderer 4x MSAA more than doubles
@@ -245,6 +257,7 @@ fn ground(terrain: &Terrain, [x, z]: [f32; 2]) -> Option<Vec3> {
 
 /// The player's character.
 #[derive(Component)]
+#[require(Body)]
 struct Player;
 
 /// What the player wants to do this frame: from the keyboard and the
@@ -263,6 +276,22 @@ struct ThirdPerson {
     yaw: f32,
     pitch: f32,
     distance: f32,
+    /// How far from the target something blocks the view (`None`: the
+    /// view is clear up to `distance`); found by the engine's ray cast
+    /// after each physics step.
+    blocked_at: Option<f32>,
+}
+
+impl ThirdPerson {
+    /// The direction from the target to the camera.
+    fn back(&self) -> Vec3 {
+        Quat::from_euler(EulerRot::YXZ, self.yaw, -self.pitch, 0.0) * Vec3::Z
+    }
+}
+
+/// What the camera looks at: the player's head.
+fn camera_target(player: Vec3) -> Vec3 {
+    player + Vec3::Y * 0.8
 }
 
 fn spawn_scene(
@@ -310,20 +339,6 @@ fn spawn_scene(
             ..default()
         })),
         Transform::from_translation(start),
-        RigidBody::Dynamic,
-        Collider::capsule(PLAYER_RADIUS, PLAYER_LENGTH),
-        LockedAxes::ROTATION_LOCKED,
-        Friction::ZERO.with_combine_rule(CoefficientCombine::Min),
-        Restitution::ZERO.with_combine_rule(CoefficientCombine::Min),
-        // Ground probe: a sphere cast down from the capsule's centre.
-        ShapeCaster::new(
-            Collider::sphere(PLAYER_RADIUS * 0.9),
-            Vec3::ZERO,
-            Quat::IDENTITY,
-            Dir3::NEG_Y,
-        )
-        .with_max_distance(PLAYER_LENGTH / 2.0 + 0.2),
-        CollidingEntities::default(),
     ));
     commands.spawn((
         DirectionalLight {
@@ -343,6 +358,7 @@ fn spawn_scene(
             yaw: 0.0,
             pitch: 0.55,
             distance: 8.0,
+            blocked_at: None,
         },
         Transform::from_translation(start + Vec3::new(0.0, 3.0, 7.0)),
     ));
@@ -350,23 +366,17 @@ fn spawn_scene(
     Ok(())
 }
 
-/// True when the ground probe touches something within reach of the
-/// capsule's bottom.
-fn grounded(hits: &ShapeHits) -> bool {
-    hits.iter()
-        .any(|hit| hit.distance <= PLAYER_LENGTH / 2.0 + 0.1)
-}
-
 /// Steers the capsule: horizontal velocity follows the input quickly (on
 /// the ground) or slowly (in the air); gravity does the rest.
 fn move_player(
     time: Res<Time>,
     mut input: ResMut<PlayerInput>,
-    mut players: Query<(&mut LinearVelocity, &ShapeHits), With<Player>>,
+    mut players: Query<&mut Body, With<Player>>,
 ) {
     let dt = time.delta_secs();
-    for (mut velocity, hits) in &mut players {
-        let on_ground = grounded(hits);
+    for mut body in &mut players {
+        let on_ground = body.grounded;
+        let velocity = &mut body.velocity;
         let speed = if input.run { RUN } else { WALK };
         let wanted = input.walk.clamp_length_max(1.0) * speed;
         let current = Vec2::new(velocity.x, velocity.z);
@@ -386,7 +396,7 @@ fn keyboard_input(
     keys: Res<ButtonInput<KeyCode>>,
     cameras: Query<&ThirdPerson>,
     mut input: ResMut<PlayerInput>,
-    mut players: Query<(&mut Transform, &mut LinearVelocity), With<Player>>,
+    mut players: Query<(&mut Transform, &mut Body), With<Player>>,
     terrains: Query<&Terrain>,
 ) {
     let Ok(camera) = cameras.single() else {
@@ -411,9 +421,9 @@ fn keyboard_input(
             .iter()
             .find_map(|t| ground(t, START))
             .unwrap_or(Vec3::ZERO);
-        for (mut transform, mut velocity) in &mut players {
+        for (mut transform, mut body) in &mut players {
             transform.translation = start + Vec3::Y * 2.0;
-            velocity.0 = Vec3::ZERO;
+            body.velocity = Vec3::ZERO;
         }
     }
 }
@@ -449,27 +459,21 @@ fn look(
     }
 }
 
-/// Puts the camera behind the player, pulled in where the view would be
+/// Puts the camera behind the player, pulled in where the view is
 /// blocked.
 fn follow_player(
-    players: Query<(Entity, &Transform), (With<Player>, Without<ThirdPerson>)>,
+    players: Query<&Transform, (With<Player>, Without<ThirdPerson>)>,
     mut cameras: Query<(&ThirdPerson, &mut Transform)>,
-    spatial: SpatialQuery,
 ) {
-    let Ok((player, body)) = players.single() else {
+    let Ok(body) = players.single() else {
         return;
     };
-    let target = body.translation + Vec3::Y * 0.8;
+    let target = camera_target(body.translation);
     for (view, mut transform) in &mut cameras {
-        let back = Quat::from_euler(EulerRot::YXZ, view.yaw, -view.pitch, 0.0) * Vec3::Z;
-        let Ok(direction) = Dir3::new(back) else {
-            continue;
-        };
-        let filter = SpatialQueryFilter::default().with_excluded_entities([player]);
-        let distance = spatial
-            .cast_ray(target, direction, view.distance, true, &filter)
-            .map_or(view.distance, |hit| (hit.distance - 0.3).max(0.5));
-        transform.translation = target + back * distance;
+        let distance = view
+            .blocked_at
+            .map_or(view.distance, |blocked| (blocked - 0.3).max(0.5));
+        transform.translation = target + view.back() * distance;
         transform.look_at(target, Vec3::Y);
     }
 }
@@ -553,7 +557,7 @@ fn update_hud(
     real: Res<Time<Real>>,
     mut hud: ResMut<Hud>,
     terrains: Query<&Terrain>,
-    players: Query<(&Transform, &LinearVelocity, &ShapeHits), With<Player>>,
+    players: Query<(&Transform, &Body), With<Player>>,
     props: Query<Option<&PropCollider>, With<QuadricProp>>,
     mut text: Query<&mut Text, With<Overlay>>,
 ) {
@@ -601,15 +605,15 @@ fn update_hud(
     lines.push(format!("debris: {} pieces cut loose{piece}", hud.pieces));
     let solid = props.iter().filter(|c| c.is_some()).count();
     lines.push(format!("props: {solid} of {} solid", props.iter().count()));
-    for (transform, velocity, hits) in &players {
+    for (transform, body) in &players {
         let p = transform.translation;
         lines.push(format!(
             "player at ({:.1}, {:.1}, {:.1}), {:.1} m/s, {}",
             p.x,
             p.y,
             p.z,
-            velocity.length(),
-            if grounded(hits) {
+            body.velocity.length(),
+            if body.grounded {
                 "on the ground"
             } else {
                 "in the air"
@@ -651,7 +655,7 @@ fn play_script(
     mut input: ResMut<PlayerInput>,
     terrains: Query<(Entity, &Terrain)>,
     props: Query<(Entity, &Transform, Has<PropSplats>, Has<PropCollider>), With<QuadricProp>>,
-    players: Query<(&Transform, &ShapeHits, &CollidingEntities), With<Player>>,
+    players: Query<(&Transform, &Body), With<Player>>,
     debris: Query<&GlobalTransform, With<TerrainDebris>>,
     mut detached: MessageReader<DebrisDetached>,
     mut carves: MessageWriter<Carve>,
@@ -670,7 +674,7 @@ fn play_script(
     for piece in detached.read() {
         script.debris.push((piece.entity, piece.centre.y));
     }
-    let Ok((player, hits, touching)) = players.single() else {
+    let Ok((player, body)) = players.single() else {
         return;
     };
     let at = player.translation;
@@ -691,7 +695,7 @@ fn play_script(
             let floor = ground(terrain, [at.x, at.z]).map_or(f32::NAN, |g| g.y);
             let standing = at.y - floor;
             check(
-                grounded(hits) && (0.5..1.3).contains(&standing),
+                body.grounded && (0.5..1.3).contains(&standing),
                 format!(
                     "the player landed and stands on the ground (centre {standing:.2} m above it)"
                 ),
@@ -702,7 +706,7 @@ fn play_script(
             // Straight at the first prop, for three seconds: far enough to
             // pass through it if it were not solid.
             input.walk = Vec2::new(0.0, -1.0);
-            script.touched_prop |= props.iter().any(|(prop, ..)| touching.contains(&prop));
+            script.touched_prop |= props.iter().any(|(prop, ..)| body.touching.contains(&prop));
         }
         WALKED => {
             input.walk = Vec2::ZERO;
