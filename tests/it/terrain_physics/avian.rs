@@ -4,6 +4,8 @@ use avian3d::prelude::*;
 use bevy::prelude::*;
 use bevy_chisel::terrain::avian::TerrainAvianPlugin;
 
+#[cfg(feature = "props")]
+use super::prop_physics_tests;
 use super::{Engine, physics_tests};
 
 struct Avian;
@@ -11,6 +13,11 @@ struct Avian;
 impl Engine for Avian {
     fn add_plugins(app: &mut App) {
         app.add_plugins((PhysicsPlugins::default(), TerrainAvianPlugin::default()));
+    }
+
+    #[cfg(feature = "props")]
+    fn add_prop_plugin(app: &mut App) {
+        app.add_plugins(bevy_chisel::splat::avian::PropAvianPlugin::default());
     }
 
     fn spawn_ball(world: &mut World, radius: f32, at: Vec3) -> Entity {
@@ -77,3 +84,17 @@ impl Engine for Avian {
 }
 
 physics_tests!(Avian);
+#[cfg(feature = "props")]
+prop_physics_tests!(Avian, props_at_scale_1, 1.0);
+// avian3d 0.7 scales a voxel collider with parry 0.27's `Voxels::scaled`,
+// which scales the voxels but not the bounding tree of their chunks: a
+// prop whose transform has a scale other than 1 misses the contacts that
+// fall outside its unscaled chunks' boxes (at scale 1/10 balls fall
+// through the ring's band). parry 0.30 (Rapier's) scales the tree too.
+#[cfg(feature = "props")]
+prop_physics_tests!(
+    Avian,
+    props_at_scale_1_10,
+    0.1,
+    #[ignore = "avian3d 0.7 (parry 0.27) misses contacts with scaled voxel colliders"]
+);

@@ -5,12 +5,18 @@
 //! bridge whose supports are carved away falls as a dynamic body with its
 //! exact volume.
 //!
+//! With `props`, quadric props are solid in the simulation ([`props`]): a
+//! ball rests on a ring prop's band and on its rim, and falls through its
+//! hole onto the ground.
+//!
 //! Each scenario is written once over [`Engine`] and run with every
 //! engine the build has: avian3d (feature `avian`, [`avian`]) and
 //! bevy_rapier3d (feature `rapier`, [`rapier`]).
 
 #[cfg(feature = "avian")]
 mod avian;
+#[cfg(feature = "props")]
+mod props;
 #[cfg(feature = "rapier")]
 mod rapier;
 
@@ -36,6 +42,9 @@ trait Engine {
     /// The engine's plugins and the terrain backend for it (stepping once
     /// per update of [`STEP`]).
     fn add_plugins(app: &mut App);
+    /// The engine's plugin for the props' voxel colliders.
+    #[cfg(feature = "props")]
+    fn add_prop_plugin(app: &mut App);
     /// A dynamic ball.
     fn spawn_ball(world: &mut World, radius: f32, at: Vec3) -> Entity;
     /// A dynamic cube that cannot turn, without friction.
@@ -65,9 +74,9 @@ fn record(mut seen: ResMut<Applied>, mut applied: MessageReader<CarveApplied>) {
     seen.0.extend(applied.read().cloned());
 }
 
-/// A 16 m × 4 m × 16 m slab, top at y = 0, on a 1 cm grid, with a small
-/// node budget so its surface spans many cells.
-fn app_with_slab<E: Engine>() -> (App, Entity) {
+/// An app without rendering: the terrain, the engine with its terrain
+/// backend, and what `more` adds, ready to run.
+fn physics_app<E: Engine>(more: impl FnOnce(&mut App)) -> App {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
@@ -83,6 +92,16 @@ fn app_with_slab<E: Engine>() -> (App, Entity) {
         )))
         .init_resource::<Applied>()
         .add_systems(Update, record.after(TerrainSystems::Mesh));
+    more(&mut app);
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// A 16 m × 4 m × 16 m slab, top at y = 0, on a 1 cm grid, with a small
+/// node budget so its surface spans many cells.
+fn app_with_slab<E: Engine>() -> (App, Entity) {
+    let mut app = physics_app::<E>(|_| {});
     let grid = Quantization::new(0.01, [0.0; 3]).expect("valid unit");
     let slab = Terrain::from_box(
         grid,
@@ -98,8 +117,6 @@ fn app_with_slab<E: Engine>() -> (App, Entity) {
     let terrain = Terrain::from_base(grid, slab.base().clone(), config)
         .expect("same base")
         .with_labels([2]);
-    app.finish();
-    app.cleanup();
     let entity = app.world_mut().spawn(terrain).id();
     settle(&mut app, entity);
     // Small craters off to the side split the slab into many cells, whose
@@ -416,3 +433,40 @@ macro_rules! physics_tests {
     };
 }
 use physics_tests;
+
+/// The [`props`] scenarios as `#[test]`s for one engine, in a module
+/// `$module`, with the ring at `$scale` metres per scene unit and the
+/// attributes given last on each (`#[ignore = "why"]` for an engine known
+/// to fail them).
+#[cfg(feature = "props")]
+macro_rules! prop_physics_tests {
+    ($engine:ident, $module:ident, $scale:expr $(, #[$attribute:meta])*) => {
+        mod $module {
+            $(#[$attribute])*
+            #[test]
+            fn a_ball_dropped_onto_a_ring_prop_rests_on_its_band() {
+                crate::terrain_physics::props::a_ball_dropped_onto_a_ring_prop_rests_on_its_band::<
+                    super::$engine,
+                >($scale);
+            }
+
+            $(#[$attribute])*
+            #[test]
+            fn a_ball_dropped_into_a_ring_prop_falls_through_its_hole() {
+                crate::terrain_physics::props::a_ball_dropped_into_a_ring_prop_falls_through_its_hole::<
+                    super::$engine,
+                >($scale);
+            }
+
+            $(#[$attribute])*
+            #[test]
+            fn a_ball_wider_than_a_ring_props_hole_rests_on_its_rim() {
+                crate::terrain_physics::props::a_ball_wider_than_a_ring_props_hole_rests_on_its_rim::<
+                    super::$engine,
+                >($scale);
+            }
+        }
+    };
+}
+#[cfg(feature = "props")]
+use prop_physics_tests;

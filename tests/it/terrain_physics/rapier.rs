@@ -4,6 +4,8 @@ use bevy::prelude::*;
 use bevy_chisel::terrain::rapier::TerrainRapierPlugin;
 use bevy_rapier3d::prelude::*;
 
+#[cfg(feature = "props")]
+use super::prop_physics_tests;
 use super::{Engine, physics_tests};
 
 struct Rapier;
@@ -14,6 +16,11 @@ impl Engine for Rapier {
             RapierPhysicsPlugin::<NoUserData>::default(),
             TerrainRapierPlugin::default(),
         ));
+    }
+
+    #[cfg(feature = "props")]
+    fn add_prop_plugin(app: &mut App) {
+        app.add_plugins(bevy_chisel::splat::rapier::PropRapierPlugin::default());
     }
 
     fn spawn_ball(world: &mut World, radius: f32, at: Vec3) -> Entity {
@@ -87,3 +94,7 @@ impl Engine for Rapier {
 }
 
 physics_tests!(Rapier);
+#[cfg(feature = "props")]
+prop_physics_tests!(Rapier, props_at_scale_1, 1.0);
+#[cfg(feature = "props")]
+prop_physics_tests!(Rapier, props_at_scale_1_10, 0.1);
