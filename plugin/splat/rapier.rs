@@ -3,7 +3,10 @@
 //! [`PropRapierPlugin`] does for Rapier what
 //! [`super::avian::PropAvianPlugin`] does for avian3d: each quadric prop
 //! becomes a fixed body with a voxel collider of its exact solid
-//! ([`super::prop_collider`]), so arches and bores stay open.
+//! ([`super::prop_collider`]), so arches and bores stay open. Rapier
+//! places and scales the collider with the entity's transform: a ring prop
+//! scaled by 1/10 holds a ball on its band and lets a narrower one through
+//! its hole (`tests/it/terrain_physics/props.rs`).
 //!
 //! ```
 //! use bevy::prelude::*;

@@ -9,7 +9,8 @@
 //! this plugin when `avian` is off (with both features it adds the avian
 //! one); one terrain physics backend per app. Rapier
 //! wakes the bodies touching a collider that is replaced or removed, so a
-//! body asleep on ground that a carve takes away falls.
+//! body asleep on ground that a carve takes away falls. The `game` example
+//! runs on Rapier with `--physics rapier` (`examples/game/rapier.rs`).
 //!
 //! ```no_run
 //! use bevy::prelude::*;
