@@ -43,7 +43,7 @@ use bevy::transform::TransformSystems;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
-use bevy_chisel::splat::prop_collider::PropCollider;
+use bevy_chisel::splat::prop_collider::{PropCollider, PropColliderShape};
 use bevy_chisel::splat::{ChiselSplatPlugin, PropSplats, QuadricProp, SplatRadius};
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, DebrisDetached, HeightLayer,
@@ -655,6 +655,7 @@ fn play_script(
     mut input: ResMut<PlayerInput>,
     terrains: Query<(Entity, &Terrain)>,
     props: Query<(Entity, &Transform, Has<PropSplats>, Has<PropCollider>), With<QuadricProp>>,
+    prop_shapes: Query<&ChildOf, With<PropColliderShape>>,
     players: Query<(&Transform, &Body), With<Player>>,
     debris: Query<&GlobalTransform, With<TerrainDebris>>,
     mut detached: MessageReader<DebrisDetached>,
@@ -706,7 +707,12 @@ fn play_script(
             // Straight at the first prop, for three seconds: far enough to
             // pass through it if it were not solid.
             input.walk = Vec2::new(0.0, -1.0);
-            script.touched_prop |= props.iter().any(|(prop, ..)| body.touching.contains(&prop));
+            // A prop's collider is on a child of the prop (its shape).
+            script.touched_prop |= body.touching.iter().any(|&touched| {
+                prop_shapes
+                    .get(touched)
+                    .is_ok_and(|shape| props.contains(shape.parent()))
+            });
         }
         WALKED => {
             input.walk = Vec2::ZERO;
@@ -719,12 +725,13 @@ fn play_script(
                 .expect("the props are in");
             // Three seconds of walking would take the player 12 m, through
             // the cube and 6 m beyond it, if it were not solid. It touches
-            // the cube and is stopped before its far side (it may press
-            // into the bore facing it: the controller pushes hard).
+            // the cube and is stopped in its near half (it presses into
+            // the bore facing it: the controller pushes hard).
             let from = script.walk_from.map_or(at.z, |p| p.z);
-            let far_side = prop.translation.z - 50.0 * PROPS[0].2;
+            let half = 50.0 * PROPS[0].2;
+            let far_side = prop.translation.z - half;
             check(
-                script.touched_prop && from - at.z > 2.0 && at.z > far_side,
+                script.touched_prop && from - at.z > 2.0 && at.z - far_side > half,
                 format!(
                     "walking into the prop was stopped by it (walked {:.1} m, {:.2} m before its \
                      far side, touched it: {})",

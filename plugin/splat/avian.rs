@@ -1,9 +1,10 @@
 //! Prop colliders with avian3d (feature `avian`).
 //!
-//! [`PropAvianPlugin`] turns each quadric prop into a static body with a
-//! voxel collider of its exact solid ([`super::prop_collider`]: voxels
-//! whose centres are inside, computed off the main thread when the prop's
-//! splats come in), so arches and bores stay open.
+//! [`PropAvianPlugin`] gives each quadric prop a static body with a voxel
+//! collider of its exact solid ([`super::prop_collider`]: voxels whose
+//! centres are inside, computed off the main thread when the prop's splats
+//! come in, on a child fitted to the prop's scale), so arches and bores
+//! stay open, at any scale.
 //!
 //! ```
 //! use avian3d::prelude::*;
@@ -22,7 +23,7 @@ use bevy::ecs::system::EntityCommands;
 use bevy::prelude::*;
 
 use super::prop_collider::{DEFAULT_RESOLUTION, add_prop_colliders};
-pub use super::prop_collider::{PropCollider, PropVoxels};
+pub use super::prop_collider::{PropCollider, PropColliderShape, PropVoxels};
 
 /// Static voxel colliders for quadric props, with avian3d.
 #[derive(Clone, Copy, Debug)]
@@ -48,14 +49,15 @@ impl Plugin for PropAvianPlugin {
 /// The avian collider of a prop's voxels (`None` when there are none).
 #[must_use]
 pub fn voxel_collider(voxels: &PropVoxels) -> Option<Collider> {
-    (!voxels.cells.is_empty()).then(|| Collider::voxels(Vec3::splat(voxels.size), &voxels.cells))
+    (!voxels.cells.is_empty()).then(|| Collider::voxels(voxels.size, &voxels.cells))
 }
 
-fn insert_collider(voxels: &PropVoxels, prop: &mut EntityCommands) -> bool {
+/// The static body and collider on a prop's shape entity.
+fn insert_collider(voxels: &PropVoxels, shape: &mut EntityCommands) -> bool {
     let Some(collider) = voxel_collider(voxels) else {
         return false;
     };
-    prop.insert((RigidBody::Static, collider));
+    shape.insert((RigidBody::Static, collider));
     true
 }
 
@@ -78,7 +80,7 @@ mod tests {
     #[test]
     fn no_solid_gives_no_collider() {
         let voxels = PropVoxels {
-            size: 1.0,
+            size: Vec3::ONE,
             cells: Vec::new(),
         };
         assert!(voxel_collider(&voxels).is_none());

@@ -2,11 +2,11 @@
 //!
 //! [`PropRapierPlugin`] does for Rapier what
 //! [`super::avian::PropAvianPlugin`] does for avian3d: each quadric prop
-//! becomes a fixed body with a voxel collider of its exact solid
-//! ([`super::prop_collider`]), so arches and bores stay open. Rapier
-//! places and scales the collider with the entity's transform: a ring prop
-//! scaled by 1/10 holds a ball on its band and lets a narrower one through
-//! its hole (`tests/it/terrain_physics/props.rs`).
+//! gets a fixed body with a voxel collider of its exact solid
+//! ([`super::prop_collider`]: on a child fitted to the prop's scale), so
+//! arches and bores stay open: a ring prop scaled by 1/10 holds a ball on
+//! its band and lets a narrower one through its hole
+//! (`tests/it/terrain_physics/props.rs`).
 //!
 //! ```
 //! use bevy::prelude::*;
@@ -25,7 +25,7 @@ use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 
 use super::prop_collider::{DEFAULT_RESOLUTION, add_prop_colliders};
-pub use super::prop_collider::{PropCollider, PropVoxels};
+pub use super::prop_collider::{PropCollider, PropColliderShape, PropVoxels};
 
 /// Static voxel colliders for quadric props, with bevy_rapier3d.
 #[derive(Clone, Copy, Debug)]
@@ -51,14 +51,15 @@ impl Plugin for PropRapierPlugin {
 /// The Rapier collider of a prop's voxels (`None` when there are none).
 #[must_use]
 pub fn voxel_collider(voxels: &PropVoxels) -> Option<Collider> {
-    (!voxels.cells.is_empty()).then(|| Collider::voxels(Vec3::splat(voxels.size), &voxels.cells))
+    (!voxels.cells.is_empty()).then(|| Collider::voxels(voxels.size, &voxels.cells))
 }
 
-fn insert_collider(voxels: &PropVoxels, prop: &mut EntityCommands) -> bool {
+/// The static body and collider on a prop's shape entity.
+fn insert_collider(voxels: &PropVoxels, shape: &mut EntityCommands) -> bool {
     let Some(collider) = voxel_collider(voxels) else {
         return false;
     };
-    prop.insert((RigidBody::Fixed, collider));
+    shape.insert((RigidBody::Fixed, collider));
     true
 }
 
@@ -81,7 +82,7 @@ mod tests {
     #[test]
     fn no_solid_gives_no_collider() {
         let voxels = PropVoxels {
-            size: 1.0,
+            size: Vec3::ONE,
             cells: Vec::new(),
         };
         assert!(voxel_collider(&voxels).is_none());

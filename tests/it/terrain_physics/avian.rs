@@ -86,15 +86,5 @@ impl Engine for Avian {
 physics_tests!(Avian);
 #[cfg(feature = "props")]
 prop_physics_tests!(Avian, props_at_scale_1, 1.0);
-// avian3d 0.7 scales a voxel collider with parry 0.27's `Voxels::scaled`,
-// which scales the voxels but not the bounding tree of their chunks: a
-// prop whose transform has a scale other than 1 misses the contacts that
-// fall outside its unscaled chunks' boxes (at scale 1/10 balls fall
-// through the ring's band). parry 0.30 (Rapier's) scales the tree too.
 #[cfg(feature = "props")]
-prop_physics_tests!(
-    Avian,
-    props_at_scale_1_10,
-    0.1,
-    #[ignore = "avian3d 0.7 (parry 0.27) misses contacts with scaled voxel colliders"]
-);
+prop_physics_tests!(Avian, props_at_scale_1_10, 0.1);

@@ -465,6 +465,14 @@ macro_rules! prop_physics_tests {
                     super::$engine,
                 >($scale);
             }
+
+            $(#[$attribute])*
+            #[test]
+            fn a_ring_prop_scaled_again_and_mirrored_holds_a_ball_at_its_new_size() {
+                crate::terrain_physics::props::a_ring_prop_scaled_again_and_mirrored_holds_a_ball_at_its_new_size::<
+                    super::$engine,
+                >($scale);
+            }
         }
     };
 }

@@ -14,7 +14,7 @@ use std::time::Duration;
 use bevy::prelude::*;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::quadric::Scene;
-use bevy_chisel::splat::prop_collider::PropCollider;
+use bevy_chisel::splat::prop_collider::{PropCollider, PropColliderShape};
 use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, QuadricProp, QuadricScene, SplatRadius};
 use bevy_chisel::terrain::Terrain;
 
@@ -67,8 +67,8 @@ impl Ring {
 }
 
 /// The app with flat ground and the ring prop, once the prop's collider
-/// is in.
-fn app_with_ring<E: Engine>(ring: Ring) -> App {
+/// is in, and the prop.
+fn app_with_ring<E: Engine>(ring: Ring) -> (App, Entity) {
     let mut app = physics_app::<E>(|app| {
         app.add_plugins(ChiselSplatPlugin);
         E::add_prop_plugin(app);
@@ -111,15 +111,31 @@ fn app_with_ring<E: Engine>(ring: Ring) -> App {
         app.update();
         if app.world().get::<PropCollider>(prop).is_some() {
             step(&mut app, 1);
+            let shape = collider_shape(&mut app, prop);
             assert!(
-                E::has_collider(app.world(), prop),
-                "the prop has a collider"
+                E::has_collider(app.world(), shape),
+                "the prop's shape has a collider"
             );
-            return app;
+            return (app, prop);
         }
         std::thread::sleep(Duration::from_micros(300));
     }
     panic!("the prop's collider did not come in");
+}
+
+/// The prop's collider shape entity: its only child with a
+/// [`PropColliderShape`].
+fn collider_shape(app: &mut App, prop: Entity) -> Entity {
+    let mut shapes = app
+        .world_mut()
+        .query_filtered::<(Entity, &ChildOf), With<PropColliderShape>>();
+    let shapes: Vec<Entity> = shapes
+        .iter(app.world())
+        .filter(|(_, child_of)| child_of.parent() == prop)
+        .map(|(shape, _)| shape)
+        .collect();
+    assert_eq!(shapes.len(), 1, "one collider shape under the prop");
+    shapes[0]
 }
 
 /// Drops a ball of `radius` from 1.5 m over the ring's top at `(x, z)` and
@@ -128,9 +144,13 @@ fn drop_ball<E: Engine>(ring: Ring, radius: f32, x: f32, z: f32) -> Vec3 {
     let _one = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let mut app = app_with_ring::<E>(ring);
+    let (mut app, _) = app_with_ring::<E>(ring);
+    drop_ball_in::<E>(&mut app, ring, radius, x, z)
+}
+
+fn drop_ball_in<E: Engine>(app: &mut App, ring: Ring, radius: f32, x: f32, z: f32) -> Vec3 {
     let ball = E::spawn_ball(app.world_mut(), radius, Vec3::new(x, ring.top() + 1.5, z));
-    step(&mut app, FALL);
+    step(app, FALL);
     E::position(app.world(), ball)
 }
 
@@ -187,5 +207,47 @@ pub(super) fn a_ball_wider_than_a_ring_props_hole_rests_on_its_rim<E: Engine>(sc
     assert!(
         rest.x.abs() < 0.05 && rest.z.abs() < 0.05,
         "the ball should rest centred in the hole, it is at {rest}"
+    );
+}
+
+pub(super) fn a_ring_prop_scaled_again_and_mirrored_holds_a_ball_at_its_new_size<E: Engine>(
+    scale: f32,
+) {
+    // The collider comes in at twice the size; then the prop is scaled to
+    // `scale` and mirrored across the scene's x axis (the ring is
+    // symmetric, so its solid is the same): the shape is fitted again, and
+    // a ball lands on the band where the smaller ring's top is.
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let ring = Ring { scale };
+    let (mut app, prop) = app_with_ring::<E>(Ring { scale: 2.0 * scale });
+    let first = collider_shape(&mut app, prop);
+    let mirrored = Vec3::new(-scale, scale, scale);
+    let mut transform = app
+        .world_mut()
+        .get_mut::<Transform>(prop)
+        .expect("the prop's transform");
+    transform.translation.y = ring.centre_height();
+    transform.scale = mirrored;
+    step(&mut app, 2);
+    let shape = collider_shape(&mut app, prop);
+    assert_eq!(shape, first, "the same shape entity, fitted again");
+    let fitted = app
+        .world()
+        .get::<PropColliderShape>(shape)
+        .expect("a shape")
+        .scale;
+    assert!(
+        (fitted.abs() - Vec3::splat(scale)).abs().max_element() < 1e-5,
+        "fitted to the new scale: {fitted}"
+    );
+    let radius = 2.0 * scale;
+    let middle = (ring.hole() + ring.outer()) / 2.0;
+    let rest = drop_ball_in::<E>(&mut app, ring, radius, middle, 0.0);
+    assert!(
+        (rest.y - (ring.top() + radius)).abs() < CONTACT,
+        "the ball should rest on the rescaled ring's top at y = {}, it is at {rest}",
+        ring.top() + radius
     );
 }
