@@ -292,7 +292,8 @@ fn receive_packets(
             // World packets: `super::world_client`.
             ServerPacket::WorldCarve(_)
             | ServerPacket::WorldCheck { .. }
-            | ServerPacket::WorldSnapshot(_) => {}
+            | ServerPacket::WorldSnapshot(_)
+            | ServerPacket::WorldDetach(_) => {}
             ServerPacket::Snapshot(part) => {
                 let follow = ledger.terrains.entry(part.terrain).or_default();
                 let (seq, bytes) = match assemble(

@@ -526,6 +526,37 @@ pub struct NetWorldCarve {
     pub edit: Edit,
 }
 
+/// A detach across chunk borders the server applied to its world
+/// (`crate::terrain::world::debris_order`), numbered in the world's order
+/// with its carves: every peer searches `chunks` (every other chunk
+/// anchors) from `seeds` once every earlier op is applied there, and takes
+/// out the same pieces. No geometry travels.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NetWorldDetach {
+    /// The world.
+    pub world: WorldId,
+    /// Its place in the world's order, shared with the carves.
+    pub seq: u64,
+    /// The chunks it depends on (x, z), in coordinate order, at most
+    /// [`MAX_DETACH_CHUNKS`].
+    pub chunks: Vec<[i64; 2]>,
+    /// One cell per piece to search from, at most [`MAX_DETACH_SEEDS`].
+    pub seeds: Vec<WireSeed>,
+}
+
+/// A cell of one chunk of a [`NetWorldDetach`]: an octree cell key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WireSeed {
+    /// The chunk's index in the detach's `chunks`.
+    pub chunk: u32,
+    /// The cell's depth below the chunk's root.
+    pub depth: u8,
+    /// Its position in units of its edge, each below `2^depth`.
+    pub pos: [u32; 3],
+}
+
+pub use crate::terrain::world::debris_order::{MAX_DETACH_CHUNKS, MAX_DETACH_SEEDS};
+
 /// One part of a world snapshot: every edited chunk's terrain snapshot
 /// ([`crate::terrain::Terrain::to_snapshot_bytes`]), chunk after chunk,
 /// each cut into parts as a terrain snapshot is. A world without edited
@@ -615,6 +646,8 @@ pub enum ServerPacket {
     },
     /// Part of a world snapshot.
     WorldSnapshot(WorldSnapshotPart),
+    /// A detach across chunk borders in a world's order, to every client.
+    WorldDetach(NetWorldDetach),
 }
 
 /// Registers the messages, in the same order on every peer.

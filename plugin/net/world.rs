@@ -54,13 +54,25 @@
 //! drops its carves as in a local world; it counts as reported.
 //!
 //! **Debris.** Each chunk detaches what a carve cuts loose within it, the
-//! same on every peer. A piece over a chunk border is detached only by a
-//! pass over the live chunks together ([`crate::terrain::world::debris`]),
-//! whose result depends on which neighbours are live; so adding
-//! [`NetWorld`] turns that pass off
-//! ([`TerrainWorld::with_debris_across_borders`]), and such a piece stays
-//! in place, held by the border. Spawn the world and its [`NetWorld`]
-//! together.
+//! same on every peer. A piece over a chunk border is detached by a pass
+//! over live chunks together ([`crate::terrain::world::debris`]), whose
+//! result depends on which chunks are live: so only the server's pass
+//! runs ([`crate::terrain::world::debris_order`]). When it applies a
+//! result it numbers it as the next op of the world's order and sends it
+//! to every client as a [`NetWorldDetach`]: the chunks the result depends
+//! on and one cell per piece, no geometry. The server's book notes the
+//! changed chunks' hashes at that `seq` at once. A client processes the
+//! op at its place like a carve: it routes nothing after it until it is
+//! applied, builds every chunk of the op it does not hold, waits until
+//! they hold every op before it, runs the same exact search over exactly
+//! those chunks from those cells, takes out the same pieces (spawning the
+//! same debris) and reports every chunk of the op at that `seq`, so the
+//! world hash matches. A chunk that lost a part is edited (stored with the
+//! part out, in snapshots, in the world hash); a snapshot chunk that
+//! already holds the op skips it. A malformed op (too many chunks or
+//! seeds, a seed naming no chunk of the op or no cell of a chunk) is
+//! skipped with a warning; the next world check then resyncs the client.
+//! Spawn the world and its [`NetWorld`] together.
 //!
 //! Limits: the world hash is made of the hashes the chunks report after
 //! networked carves, so a local change to a chunk shows only once a later
@@ -83,23 +95,112 @@ use bevy::prelude::*;
 use super::wire::WorldId;
 use crate::terrain::{CarveApplied, CarveRejected, ChunkCoord, TerrainWorld, WorldChunk};
 
-use super::wire::NetWorld;
+use super::wire::{MAX_DETACH_CHUNKS, MAX_DETACH_SEEDS, NetWorld, NetWorldDetach, WireSeed};
 #[cfg(doc)]
 use super::wire::{NetWorldCarve, ServerPacket};
 #[cfg(doc)]
 use super::world_client::NetWorldCarveRequest;
 #[cfg(doc)]
 use crate::terrain::Terrain;
+use crate::terrain::world::debris_order::{AppliedDetach, DebrisRole, OrderedDetach};
+use chisel_bsp::octree::CellKey;
 
-/// Turns off debris across chunk borders on a world that becomes
-/// networked (see the module docs).
-pub(super) fn no_debris_across_borders(
-    add: On<Add, NetWorld>,
-    mut worlds: Query<&mut TerrainWorld>,
-) {
+/// A world that becomes networked follows its server's detaches across
+/// chunk borders until the server side claims it ([`claim_debris`]).
+pub(super) fn networked_debris(add: On<Add, NetWorld>, mut worlds: Query<&mut TerrainWorld>) {
     if let Ok(mut world) = worlds.get_mut(add.entity) {
-        world.debris_across_borders = false;
+        world.debris_role = DebrisRole::Follow;
     }
+}
+
+/// Gives a networked world its debris role (the server side's systems
+/// claim `Serve`, a connected client's `Follow`); a change drops what the
+/// world had under the other role.
+pub(super) fn claim_debris(world: &mut TerrainWorld, role: DebrisRole) {
+    if world.debris_role != role {
+        world.debris_role = role;
+        world.debris_search = None;
+        world.detach_ordered = None;
+        world.detaches_applied.clear();
+    }
+}
+
+/// The wire form of a detach the server applied, numbered `seq`.
+pub(crate) fn wire_detach(world: WorldId, seq: u64, applied: &AppliedDetach) -> NetWorldDetach {
+    let index = |c: ChunkCoord| applied.chunks.iter().position(|&d| d == c);
+    NetWorldDetach {
+        world,
+        seq,
+        chunks: applied.chunks.iter().map(|c| [c.x, c.z]).collect(),
+        seeds: (applied.seeds.iter())
+            .filter_map(|&(coord, key)| {
+                Some(WireSeed {
+                    chunk: u32::try_from(index(coord)?).ok()?,
+                    depth: key.depth,
+                    pos: key.pos,
+                })
+            })
+            .collect(),
+    }
+}
+
+/// Checks a detach from the wire against the bounds and the world's chunk
+/// size (`chunk_log2`: no cell is deeper) and gives it as the world
+/// carries it out.
+///
+/// # Errors
+/// Why it is refused: no chunk, too many chunks or seeds, chunks not in
+/// strictly increasing order, a seed naming no chunk of it or a cell
+/// outside its chunk.
+pub(crate) fn ordered_detach(
+    detach: &NetWorldDetach,
+    chunk_log2: u8,
+) -> Result<OrderedDetach, String> {
+    let (chunks, seeds) = (&detach.chunks, &detach.seeds);
+    if chunks.is_empty() || chunks.len() > MAX_DETACH_CHUNKS {
+        return Err(format!(
+            "{} chunks (1..={MAX_DETACH_CHUNKS} allowed)",
+            chunks.len()
+        ));
+    }
+    if seeds.len() > MAX_DETACH_SEEDS {
+        return Err(format!(
+            "{} seeds (at most {MAX_DETACH_SEEDS})",
+            seeds.len()
+        ));
+    }
+    let coords: Vec<ChunkCoord> = chunks.iter().map(|&[x, z]| ChunkCoord { x, z }).collect();
+    if coords.windows(2).any(|w| w[0] >= w[1]) {
+        return Err("chunks not in strictly increasing order".into());
+    }
+    let mut out = Vec::with_capacity(seeds.len());
+    for seed in seeds {
+        let Some(&coord) = usize::try_from(seed.chunk).ok().and_then(|i| coords.get(i)) else {
+            return Err(format!(
+                "a seed names chunk {} of {}",
+                seed.chunk,
+                coords.len()
+            ));
+        };
+        let cells = 1u64.checked_shl(u32::from(seed.depth)).unwrap_or(0);
+        let inside = seed.depth <= chunk_log2 && seed.pos.iter().all(|&p| u64::from(p) < cells);
+        if !inside {
+            return Err(format!(
+                "a seed's cell (depth {}, {:?}) is outside its chunk",
+                seed.depth, seed.pos
+            ));
+        }
+        let key = CellKey {
+            depth: seed.depth,
+            pos: seed.pos,
+        };
+        out.push((coord, key));
+    }
+    Ok(OrderedDetach {
+        seq: detach.seq,
+        chunks: coords,
+        seeds: out,
+    })
 }
 
 /// The world hash of edited chunks given as `(chunk, chunk state hash)`:
@@ -261,6 +362,7 @@ pub(crate) fn chunk_reports(
 
 #[cfg(test)]
 mod tests {
+    use super::super::wire::ServerPacket;
     use super::*;
 
     fn c(x: i64, z: i64) -> ChunkCoord {
@@ -308,5 +410,73 @@ mod tests {
         assert_eq!(book.hash_at(2), None, "pruned");
         assert_eq!(book.hash_at(3), Some(after_3));
         assert_eq!(book.chunks[&c(1, 0)].len(), 1, "only the latest kept");
+    }
+
+    fn applied() -> AppliedDetach {
+        let key = |depth, pos| CellKey { depth, pos };
+        AppliedDetach {
+            seq: None,
+            chunks: vec![c(-1, 0), c(0, 0), c(0, 1)],
+            seeds: vec![(c(0, 0), key(3, [7, 0, 2])), (c(0, 1), key(5, [31, 1, 0]))],
+            hashes: Vec::new(),
+        }
+    }
+
+    /// A detach survives the wire and comes back as the world carries it
+    /// out: the same chunks and seeds.
+    #[test]
+    fn a_detach_survives_the_wire() {
+        let wire = wire_detach(7, 42, &applied());
+        assert_eq!(wire.seeds[0].chunk, 1);
+        let packet = ServerPacket::WorldDetach(wire.clone());
+        let bytes = postcard::to_allocvec(&packet).unwrap();
+        let back: ServerPacket = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(back, packet);
+        let ordered = ordered_detach(&wire, 5).expect("well formed");
+        assert_eq!(ordered.seq, 42);
+        assert_eq!(ordered.chunks, applied().chunks);
+        assert_eq!(ordered.seeds, applied().seeds);
+    }
+
+    /// Every way a detach can be malformed is a refusal with its reason,
+    /// never a panic.
+    #[test]
+    fn a_malformed_detach_is_refused() {
+        let good = wire_detach(1, 3, &applied());
+        let refused = |change: &dyn Fn(&mut NetWorldDetach), why: &str| {
+            let mut bad = good.clone();
+            change(&mut bad);
+            let error = ordered_detach(&bad, 5).expect_err(why);
+            assert!(error.contains(why), "{error} (expected {why})");
+        };
+        refused(&|d| d.chunks.clear(), "0 chunks");
+        refused(
+            &|d| d.chunks = (0..=MAX_DETACH_CHUNKS as i64).map(|x| [x, 0]).collect(),
+            "65 chunks",
+        );
+        refused(
+            &|d| d.seeds = vec![d.seeds[0]; MAX_DETACH_SEEDS + 1],
+            "1025 seeds",
+        );
+        refused(&|d| d.chunks.swap(0, 1), "increasing");
+        refused(&|d| d.chunks[1] = d.chunks[0], "increasing");
+        refused(&|d| d.seeds[0].chunk = 3, "names chunk 3 of 3");
+        refused(&|d| d.seeds[0].chunk = u32::MAX, "names chunk");
+        refused(&|d| d.seeds[0].pos[2] = 8, "outside");
+        refused(&|d| d.seeds[1].depth = 6, "outside");
+        refused(&|d| d.seeds[1].depth = 255, "outside");
+        // At the bounds it is taken.
+        let mut full = good.clone();
+        full.chunks = (0..MAX_DETACH_CHUNKS as i64).map(|x| [x, 0]).collect();
+        full.seeds = vec![full.seeds[0]; MAX_DETACH_SEEDS];
+        assert!(ordered_detach(&full, 5).is_ok());
+        // The largest cell index at the deepest level is inside.
+        let mut deep = good;
+        deep.seeds[1] = WireSeed {
+            chunk: 2,
+            depth: 5,
+            pos: [31; 3],
+        };
+        assert!(ordered_detach(&deep, 5).is_ok());
     }
 }

@@ -15,10 +15,11 @@ use super::client::{
     Assembled, NetCarveResult, NetClientStats, addressee, assemble, nowhere_to_send,
 };
 use super::wire::{
-    ClientPacket, ClientRequest, NetWorld, NetWorldCarve, ServerPacket, WireTool, WorldId,
-    WorldSnapshotPart,
+    ClientPacket, ClientRequest, NetWorld, NetWorldCarve, NetWorldDetach, ServerPacket, WireTool,
+    WorldId, WorldSnapshotPart,
 };
-use super::world::{WorldBook, chunk_reports};
+use super::world::{WorldBook, chunk_reports, claim_debris, ordered_detach};
+use crate::terrain::world::debris_order::DebrisRole;
 use crate::terrain::{
     CarveApplied, CarveRejected, ChunkCoord, Terrain, TerrainSystems, TerrainWorld, WorldChunk,
 };
@@ -72,6 +73,12 @@ pub struct WorldDesynced {
     pub server: u64,
 }
 
+/// An op of a world's order as received.
+enum WorldOp {
+    Carve(NetWorldCarve),
+    Detach(NetWorldDetach),
+}
+
 /// A world snapshot being received.
 struct Incoming {
     seq: u64,
@@ -96,8 +103,8 @@ struct FollowWorld {
     synced: bool,
     /// The next carve to route.
     next_seq: u64,
-    /// Carves received but not routed yet.
-    waiting: BTreeMap<u64, NetWorldCarve>,
+    /// Ops (carves, detaches) received but not routed yet.
+    waiting: BTreeMap<u64, WorldOp>,
     /// Chunks whose installed snapshot holds the carves up to this one.
     held: BTreeMap<ChunkCoord, u64>,
     incoming: Option<Incoming>,
@@ -116,7 +123,7 @@ struct WorldFollower {
 /// Adds the world systems and messages to [`super::NetClientPlugin`].
 pub(super) fn build(app: &mut App) {
     app.init_resource::<WorldFollower>()
-        .add_observer(super::world::no_debris_across_borders)
+        .add_observer(super::world::networked_debris)
         .add_message::<NetWorldCarveRequest>()
         .add_message::<WorldSynced>()
         .add_message::<WorldDesynced>()
@@ -189,7 +196,17 @@ fn receive_world_packets(
                     follow
                         .waiting
                         .entry(carve.seq)
-                        .or_insert_with(|| carve.clone());
+                        .or_insert_with(|| WorldOp::Carve(carve.clone()));
+                }
+            }
+            ServerPacket::WorldDetach(detach) => {
+                let follow = follower.worlds.entry(detach.world).or_default();
+                let snapshot = follow.incoming.is_some() || follow.ready.is_some();
+                if detach.seq >= follow.next_seq || snapshot {
+                    follow
+                        .waiting
+                        .entry(detach.seq)
+                        .or_insert_with(|| WorldOp::Detach(detach.clone()));
                 }
             }
             ServerPacket::WorldCheck { world, seq, hash } => {
@@ -267,7 +284,9 @@ fn receive_part(follow: &mut FollowWorld, part: &WorldSnapshotPart) {
 }
 
 /// Installs complete snapshots into their worlds, then routes the waiting
-/// carves of each synced world to its chunks, in order and without gaps.
+/// ops of each synced world to its chunks, in order and without gaps: a
+/// detach across chunk borders goes to the world, and nothing after it is
+/// routed until the world applied it.
 fn install_and_route(
     mut commands: Commands,
     mut worlds: Query<(Entity, &NetWorld, &mut TerrainWorld)>,
@@ -276,6 +295,7 @@ fn install_and_route(
     mut synced: MessageWriter<WorldSynced>,
 ) {
     for (entity, id, mut world) in &mut worlds {
+        claim_debris(&mut world, DebrisRole::Follow);
         let Some(follow) = follower.worlds.get_mut(&id.0) else {
             continue;
         };
@@ -298,21 +318,56 @@ fn install_and_route(
         if !follow.synced || follow.resyncing {
             continue;
         }
-        while let Some(carve) = follow.waiting.remove(&follow.next_seq) {
-            // The server found chunks for it; none here means another world.
-            let coords: Vec<ChunkCoord> = world
-                .chunks_reached(&carve.tool)
-                .unwrap_or_default()
-                .into_iter()
-                .filter(|c| follow.held.get(c).is_none_or(|&held| held < carve.seq))
-                .collect();
-            world.route(&carve.tool, carve.edit, carve.seq, &coords);
-            follow.book.note_routed(carve.seq, &coords);
-            stats.carves += 1;
+        while world.detach_ordered.is_none() {
+            let Some(op) = follow.waiting.remove(&follow.next_seq) else {
+                break;
+            };
+            match op {
+                WorldOp::Carve(carve) => {
+                    // The server found chunks for it; none here means
+                    // another world.
+                    let coords: Vec<ChunkCoord> = world
+                        .chunks_reached(&carve.tool)
+                        .unwrap_or_default()
+                        .into_iter()
+                        .filter(|c| follow.held.get(c).is_none_or(|&held| held < carve.seq))
+                        .collect();
+                    world.route(&carve.tool, carve.edit, carve.seq, &coords);
+                    follow.book.note_routed(carve.seq, &coords);
+                    stats.carves += 1;
+                }
+                WorldOp::Detach(detach) => route_detach(&mut world, follow, &detach, id.0),
+            }
             follow.next_seq += 1;
         }
         let next = follow.next_seq;
         follow.held.retain(|_, held| *held >= next);
+    }
+}
+
+/// Hands a detach across chunk borders to the world, unless the installed
+/// snapshot already holds it (a chunk of it holds an op at or after it:
+/// the server applied it before the snapshot) or it is malformed.
+fn route_detach(
+    world: &mut TerrainWorld,
+    follow: &mut FollowWorld,
+    detach: &NetWorldDetach,
+    id: WorldId,
+) {
+    match ordered_detach(detach, world.layout().chunk_log2) {
+        Ok(ordered) => {
+            let seq = ordered.seq;
+            let held =
+                (ordered.chunks.iter()).any(|c| follow.held.get(c).is_some_and(|&h| h >= seq));
+            if !held {
+                follow.book.note_routed(seq, &ordered.chunks);
+                world.detach_ordered = Some(ordered);
+            }
+        }
+        Err(why) => warn!(
+            "world {id}: detach {} from the server is refused: {why}",
+            detach.seq
+        ),
     }
 }
 
@@ -362,15 +417,15 @@ fn install(
     Ok((received.chunks.len(), bytes))
 }
 
-/// Reads the chunks' reports of world carves and compares the world hash
-/// with the server's checks; a difference asks for the world's snapshot.
+/// Reads the chunks' reports of world carves and detaches and compares
+/// the world hash with the server's checks; a difference asks for the world's snapshot.
 #[allow(clippy::too_many_arguments)]
 fn compare_world_hashes(
     mut applied: MessageReader<CarveApplied>,
     mut refused: MessageReader<CarveRejected>,
     chunks: Query<&WorldChunk>,
     ids: Query<&NetWorld>,
-    worlds: Query<(Entity, &NetWorld, &TerrainWorld)>,
+    mut worlds: Query<(Entity, &NetWorld, &mut TerrainWorld)>,
     mut follower: ResMut<WorldFollower>,
     mut stats: ResMut<NetClientStats>,
     mut packets: MessageWriter<ClientPacket>,
@@ -383,11 +438,21 @@ fn compare_world_hashes(
                 .note_report(report.coord, report.seq, report.hash);
         }
     }
-    for (entity, id, world) in &worlds {
+    for (entity, id, mut world) in &mut worlds {
+        let applied = std::mem::take(&mut world.detaches_applied);
         let Some(follow) = follower.worlds.get_mut(&id.0) else {
             continue;
         };
-        follow.book.settle_failed(world);
+        // Each chunk of a detach the world carried out reports it.
+        for detach in applied {
+            let Some(seq) = detach.seq else {
+                continue;
+            };
+            for (coord, hash) in detach.hashes {
+                follow.book.note_report(coord, seq, hash);
+            }
+        }
+        follow.book.settle_failed(&world);
         let Some((seq, server)) = follow.check else {
             continue;
         };

@@ -21,7 +21,8 @@ use super::wire::{
     ChunkSnapshotPart, ClientPacket, ClientRequest, NetWorld, NetWorldCarve, Outcome, RejectReason,
     ServerPacket, WireTool, WorldId, WorldSnapshotPart, snapshot_parts,
 };
-use super::world::{WorldBook, chunk_reports};
+use super::world::{WorldBook, chunk_reports, claim_debris, wire_detach};
+use crate::terrain::world::debris_order::DebrisRole;
 use crate::terrain::{
     CarveApplied, CarveRejected, ChunkCoord, GridTool, Terrain, TerrainSystems, TerrainWorld,
     WorldChunk,
@@ -41,8 +42,9 @@ struct Answer {
 #[derive(Default)]
 struct ServedWorld {
     book: WorldBook,
-    /// Accepted carves after the book's done carve.
-    log: BTreeMap<u64, NetWorldCarve>,
+    /// The ops (accepted carves, applied detaches) after the book's done
+    /// carve, as sent.
+    log: BTreeMap<u64, ServerPacket>,
     answers: HashMap<u64, Answer>,
     /// The last carve whose world hash was sent.
     checked: u64,
@@ -56,10 +58,10 @@ struct WorldLedger {
     last_check: Option<Instant>,
 }
 
-/// A world's snapshot as sent: its parts, then the carves after it.
+/// A world's snapshot as sent: its parts, then the ops after it.
 struct WorldSnapshot {
     parts: Vec<WorldSnapshotPart>,
-    log: Vec<NetWorldCarve>,
+    log: Vec<ServerPacket>,
     bytes: usize,
 }
 
@@ -67,7 +69,7 @@ struct WorldSnapshot {
 pub(super) fn build(app: &mut App) {
     app.init_resource::<WorldLedger>()
         .add_observer(on_authorized)
-        .add_observer(super::world::no_debris_across_borders)
+        .add_observer(super::world::networked_debris)
         .add_systems(
             Update,
             (
@@ -87,12 +89,16 @@ fn on_authorized(add: On<Add, AuthorizedClient>, mut ledger: ResMut<WorldLedger>
 /// Starts the book of each networked world the first time it is seen,
 /// with the chunks edited before (loaded with
 /// [`TerrainWorld::load_edits`], or carved before the world was
-/// networked) as edited at carve 0.
+/// networked) as edited at carve 0; the server's pass decides debris
+/// across chunk borders in every networked world.
 fn seed_worlds(
-    worlds: Query<(&NetWorld, &TerrainWorld)>,
+    mut worlds: Query<(&NetWorld, &mut TerrainWorld)>,
     terrains: Query<&Terrain>,
     mut ledger: ResMut<WorldLedger>,
 ) {
+    for (_, mut world) in &mut worlds {
+        claim_debris(&mut world, DebrisRole::Serve);
+    }
     for (id, world) in &worlds {
         if ledger.worlds.contains_key(&id.0) {
             continue;
@@ -217,7 +223,9 @@ fn receive_world_requests(
             tool,
             edit,
         };
-        served.log.insert(seq, carve.clone());
+        served
+            .log
+            .insert(seq, ServerPacket::WorldCarve(carve.clone()));
         served.answers.insert(
             seq,
             Answer {
@@ -246,7 +254,7 @@ fn report_world_carves(
     mut refused: MessageReader<CarveRejected>,
     chunks: Query<&WorldChunk>,
     ids: Query<&NetWorld>,
-    worlds: Query<(&NetWorld, &TerrainWorld)>,
+    mut worlds: Query<(&NetWorld, &mut TerrainWorld)>,
     limits: Res<NetLimits>,
     mut ledger: ResMut<WorldLedger>,
     mut stats: ResMut<NetServerStats>,
@@ -254,6 +262,7 @@ fn report_world_carves(
     mut rejected: MessageWriter<RequestRejected>,
 ) {
     let ledger = &mut *ledger;
+    number_detaches(&mut worlds, ledger, &mut out);
     let mut finished: Vec<(WorldId, u64)> = Vec::new();
     for report in chunk_reports(&mut applied, &mut refused, &chunks, &ids) {
         let Some(served) = ledger.worlds.get_mut(&report.world) else {
@@ -345,6 +354,45 @@ fn report_world_carves(
     }
 }
 
+/// Numbers the detaches across chunk borders each world applied this
+/// frame (after its carves were handed to its chunks, before any later
+/// carve is numbered: see `crate::terrain::world::debris_order`) as the
+/// next ops of its order, notes each chunk's hash after it and sends it
+/// to every client.
+fn number_detaches(
+    worlds: &mut Query<(&NetWorld, &mut TerrainWorld)>,
+    ledger: &mut WorldLedger,
+    out: &mut MessageWriter<ToClients<ServerPacket>>,
+) {
+    for (id, mut world) in worlds.iter_mut() {
+        if world.detaches_applied.is_empty() {
+            continue;
+        }
+        let applied = std::mem::take(&mut world.detaches_applied);
+        let served = ledger.worlds.entry(id.0).or_default();
+        for detach in applied {
+            let seq = served.book.routed + 1;
+            served.book.note_routed(seq, &detach.chunks);
+            for &(coord, hash) in &detach.hashes {
+                served.book.note_report(coord, seq, hash);
+            }
+            world.next_request = world.next_request.max(seq + 1);
+            debug!(
+                "world {}: detach {seq} across chunk borders, {} pieces over {} chunks",
+                id.0,
+                detach.seeds.len(),
+                detach.chunks.len()
+            );
+            let packet = ServerPacket::WorldDetach(wire_detach(id.0, seq, &detach));
+            served.log.insert(seq, packet.clone());
+            out.write(ToClients {
+                targets: SendTargets::CLIENTS_ONLY,
+                message: packet,
+            });
+        }
+    }
+}
+
 /// The snapshot of `world` now, or `None` when an edited chunk's terrain
 /// cannot be read this frame (it was just spawned): try again next frame.
 fn world_snapshot(
@@ -403,7 +451,7 @@ fn world_snapshot(
     let log = served
         .log
         .range(done + 1..)
-        .map(|(_, carve)| carve.clone())
+        .map(|(_, op)| op.clone())
         .collect();
     Some(WorldSnapshot { parts, log, bytes })
 }
@@ -461,10 +509,10 @@ fn send_world_snapshots(
                     message: ServerPacket::WorldSnapshot(part.clone()),
                 });
             }
-            for carve in &snapshot.log {
+            for op in &snapshot.log {
                 out.write(ToClients {
                     targets: SendTargets::Single(client),
-                    message: ServerPacket::WorldCarve(carve.clone()),
+                    message: op.clone(),
                 });
             }
         }

@@ -99,4 +99,6 @@ mod net_replication;
 #[cfg(feature = "net")]
 mod net_world;
 #[cfg(feature = "net")]
+mod net_world_debris;
+#[cfg(feature = "net")]
 mod net_worlds;

@@ -108,9 +108,10 @@ use bevy::prelude::*;
 use bevy::tasks::futures::check_ready;
 use bevy::tasks::{AsyncComputeTaskPool, Task};
 use chisel_bsp::octree::{
-    CellKey, ChunkOctree, ChunkedDetached, ChunkedPiece, Octree, detach_across_chunks,
+    CellKey, ChunkOctree, ChunkedDetached, ChunkedPiece, DebrisLimits, Octree, detach_across_chunks,
 };
 
+use super::debris_order::{self, AppliedDetach, DebrisRole};
 use super::{ChunkCoord, TerrainWorld};
 use crate::terrain::component::Terrain;
 use crate::terrain::jobs::Job;
@@ -127,9 +128,19 @@ pub(crate) struct DebrisSearch {
     /// The seeds taken out of each chunk for it, given back when it is
     /// dropped.
     seeds: Vec<(Entity, Vec<CellKey>)>,
+    /// The seeds it searched from, by its chunk index, sorted.
+    near: Vec<(usize, CellKey)>,
+    /// The detach of a networked world's order it carries out (a
+    /// follower's search), by its place in the order.
+    ordered: Option<u64>,
 }
 
 impl DebrisSearch {
+    /// The chunks it joined.
+    pub(super) fn chunks(&self) -> impl Iterator<Item = ChunkCoord> + '_ {
+        self.seen.iter().map(|c| c.coord)
+    }
+
     /// Whether the search still runs.
     fn running(&mut self) -> bool {
         if let Some(task) = self.task.as_mut() {
@@ -146,11 +157,11 @@ impl DebrisSearch {
 }
 
 /// A chunk as a search saw it.
-struct SeenChunk {
-    coord: ChunkCoord,
-    entity: Entity,
+pub(super) struct SeenChunk {
+    pub(super) coord: ChunkCoord,
+    pub(super) entity: Entity,
     /// Its state hash then.
-    hash: u64,
+    pub(super) hash: u64,
 }
 
 /// What a search found: the pieces and each chunk's octree with them taken
@@ -174,14 +185,21 @@ enum Verdict {
 /// Collects the world's debris search when it is done and applies it (or
 /// drops it when it is stale), then starts a search when a live chunk has
 /// seeds and none runs. The search itself runs on the async compute pool.
+/// In a networked world ([`DebrisRole`]) the server's searches are
+/// recorded to be ordered, and a follower searches only for the detaches
+/// the server ordered ([`super::debris_order`]).
 pub fn detach_across_borders(
     mut worlds: Query<&mut TerrainWorld>,
     mut terrains: Query<&mut Terrain>,
 ) {
     for mut world in &mut worlds {
         let world = &mut *world;
-        if !world.debris_across_borders {
-            world.debris_search = None;
+        let follow = world.debris_role == DebrisRole::Follow;
+        if !world.debris_across_borders || follow {
+            if !follow {
+                world.debris_search = None;
+                world.debris_keep.clear();
+            }
             for (_, entity) in world.live_chunks() {
                 if let Ok(mut terrain) = terrains.get_mut(entity)
                     && !terrain.runtime.border_seeds.is_empty()
@@ -189,7 +207,12 @@ pub fn detach_across_borders(
                     terrain.runtime.border_seeds.clear();
                 }
             }
-            continue;
+            if !follow {
+                continue;
+            }
+        }
+        if world.debris_role != DebrisRole::Local {
+            debris_order::keep_chunks(world, &terrains);
         }
         if let Some(search) = world.debris_search.as_mut() {
             if search.running() {
@@ -210,45 +233,86 @@ pub fn detach_across_borders(
                 }
                 Verdict::Apply => {
                     if let Some(search) = world.debris_search.take() {
-                        apply(world, &mut terrains, search);
+                        apply_search(world, &mut terrains, search);
                     }
                 }
             }
         }
-        start_search(world, &mut terrains);
+        if follow {
+            debris_order::start_ordered(world, &terrains);
+        } else {
+            start_search(world, &mut terrains);
+        }
     }
+}
+
+/// Applies a search that holds, and records it in a networked world.
+fn apply_search(
+    world: &mut TerrainWorld,
+    terrains: &mut Query<&mut Terrain>,
+    search: DebrisSearch,
+) {
+    let seen: Vec<ChunkCoord> = search.seen.iter().map(|c| c.coord).collect();
+    if let Some(seq) = search.ordered {
+        // A follower: every chunk of the order reports, changed or not.
+        world.detach_ordered = None;
+        let changed = apply(world, terrains, search);
+        let hashes = (seen.iter().enumerate())
+            .map(|(i, &c)| (c, changed.get(&i).copied()))
+            .collect();
+        world.detaches_applied.push(AppliedDetach {
+            seq: Some(seq),
+            chunks: seen,
+            seeds: Vec::new(),
+            hashes,
+        });
+        return;
+    }
+    if world.debris_role != DebrisRole::Serve {
+        apply(world, terrains, search);
+        return;
+    }
+    let Some(Searched {
+        detached: Ok(detached),
+        ..
+    }) = &search.searched
+    else {
+        apply(world, terrains, search);
+        return;
+    };
+    if detached.pieces.is_empty() {
+        return;
+    }
+    let (_, depends) = touched_and_depends(&search);
+    let record = debris_order::record(detached, &search.near, &seen, &depends);
+    let record = match record {
+        Ok(record) => record,
+        Err(why) => {
+            warn!("terrain world: no debris detached across chunk borders: {why}");
+            return;
+        }
+    };
+    let changed = apply(world, terrains, search);
+    let hashes = (depends.iter())
+        .map(|&j| (seen[j], changed.get(&j).copied()))
+        .collect();
+    world
+        .detaches_applied
+        .push(AppliedDetach { hashes, ..record });
 }
 
 /// Whether the world's finished search still holds, by the rules of the
 /// module docs.
 fn verdict(world: &TerrainWorld, terrains: &Query<&mut Terrain>) -> Verdict {
-    let Some(DebrisSearch {
-        searched: Some(searched),
-        seen,
-        ..
-    }) = &world.debris_search
+    let Some(search) = world
+        .debris_search
+        .as_ref()
+        .filter(|s| s.searched.is_some())
     else {
         return Verdict::Stale;
     };
-    // The chunks it takes solid from, and those it depends on: these and
-    // their neighbours across a side (all chunks when it failed).
-    let (touched, depends): (Vec<usize>, Vec<usize>) = match &searched.detached {
-        Ok(detached) => {
-            let touched: Vec<usize> = (detached.changes.iter().enumerate())
-                .filter(|(_, c)| !(c.changed.is_empty() && c.removed.is_empty()))
-                .map(|(i, _)| i)
-                .collect();
-            let near: BTreeSet<ChunkCoord> = touched.iter().map(|&i| seen[i].coord).collect();
-            let depends = (0..seen.len())
-                .filter(|&j| {
-                    let c = seen[j].coord;
-                    near.contains(&c) || side_neighbours(c).any(|n| near.contains(&n))
-                })
-                .collect();
-            (touched, depends)
-        }
-        Err(_) => (Vec::new(), (0..seen.len()).collect()),
-    };
+    let seen = &search.seen;
+    let (touched, depends) = touched_and_depends(search);
     let unchanged = depends.iter().all(|&j| {
         let chunk = &seen[j];
         world.chunk_entity(chunk.coord) == Some(chunk.entity)
@@ -259,14 +323,47 @@ fn verdict(world: &TerrainWorld, terrains: &Query<&mut Terrain>) -> Verdict {
     if !unchanged {
         return Verdict::Stale;
     }
-    let busy = touched
-        .iter()
-        .any(|&i| terrains.get(seen[i].entity).is_ok_and(busy));
+    // In a networked world every chunk it depends on must also hold every
+    // carve ordered before it (none waiting): see `debris_order`.
+    let ordered = world.debris_role != DebrisRole::Local;
+    let waits = if ordered { &depends } else { &touched };
+    let busy = waits.iter().any(|&i| {
+        terrains.get(seen[i].entity).is_ok_and(busy)
+            || (ordered && world.pending.contains_key(&seen[i].coord))
+    });
     if busy { Verdict::Wait } else { Verdict::Apply }
 }
 
+/// The chunks a finished search takes solid from, and those it depends
+/// on: these and their neighbours across a side (all chunks when it
+/// failed, or when it carries out an ordered detach), by its chunk index.
+fn touched_and_depends(search: &DebrisSearch) -> (Vec<usize>, Vec<usize>) {
+    let seen = &search.seen;
+    let all = || (0..seen.len()).collect();
+    match search.searched.as_ref().map(|s| &s.detached) {
+        Some(Ok(detached)) => {
+            let touched: Vec<usize> = (detached.changes.iter().enumerate())
+                .filter(|(_, c)| !(c.changed.is_empty() && c.removed.is_empty()))
+                .map(|(i, _)| i)
+                .collect();
+            if search.ordered.is_some() {
+                return (touched, all());
+            }
+            let near: BTreeSet<ChunkCoord> = touched.iter().map(|&i| seen[i].coord).collect();
+            let depends = (0..seen.len())
+                .filter(|&j| {
+                    let c = seen[j].coord;
+                    near.contains(&c) || side_neighbours(c).any(|n| near.contains(&n))
+                })
+                .collect();
+            (touched, depends)
+        }
+        _ => (Vec::new(), all()),
+    }
+}
+
 /// The four chunks across a side of `coord`.
-fn side_neighbours(coord: ChunkCoord) -> impl Iterator<Item = ChunkCoord> {
+pub(super) fn side_neighbours(coord: ChunkCoord) -> impl Iterator<Item = ChunkCoord> {
     [(1, 0), (-1, 0), (0, 1), (0, -1)]
         .map(|(dx, dz)| ChunkCoord {
             x: coord.x + dx,
@@ -277,23 +374,29 @@ fn side_neighbours(coord: ChunkCoord) -> impl Iterator<Item = ChunkCoord> {
 
 /// Whether a chunk has a job running, or a carve or undo waiting: its
 /// octree is about to change.
-fn busy(terrain: &Terrain) -> bool {
+pub(super) fn busy(terrain: &Terrain) -> bool {
     terrain.runtime.task.is_some()
         || (terrain.runtime.queue.iter())
             .any(|job| matches!(job, Job::Carve { .. } | Job::Undo { .. }))
 }
 
 /// Takes the pieces of a search that holds out of their chunks and queues
-/// their rebuild and spawn.
-fn apply(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>, search: DebrisSearch) {
+/// their rebuild and spawn; returns the chunks changed (by the search's
+/// chunk index) with their new state hashes.
+fn apply(
+    world: &mut TerrainWorld,
+    terrains: &mut Query<&mut Terrain>,
+    search: DebrisSearch,
+) -> BTreeMap<usize, u64> {
+    let mut changed = BTreeMap::new();
     let Some(Searched { detached, octrees }) = search.searched else {
-        return;
+        return changed;
     };
     let detached = match detached {
         Ok(detached) => detached,
         Err(error) => {
             warn!("terrain world: no debris detached across chunk borders: {error}");
-            return;
+            return changed;
         }
     };
     world.stats.detached_across += detached.pieces.len() as u64;
@@ -329,7 +432,9 @@ fn apply(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>, search: D
             .runtime
             .queue
             .push_front(Job::Detached { keys, pieces });
+        changed.insert(i, terrain.hash.value());
     }
+    changed
 }
 
 /// Starts a search over every live chunk when one of them has seeds and
@@ -358,7 +463,10 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         (seeded.contains(&coord) || side_neighbours(coord).any(|n| seeded.contains(&n)))
             && terrains.get(e).is_ok_and(busy)
     });
-    if waiting {
+    // A server searches only with every chunk around the seeds live, so
+    // that a piece over a corner is not held by a chunk it did not load.
+    let served = world.debris_role == DebrisRole::Serve;
+    if waiting || (served && !debris_order::around_live(world, &seeded)) {
         return;
     }
     let _span = bevy::log::info_span!("chisel::world::detach_across_borders").entered();
@@ -396,6 +504,21 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         return;
     }
     let limits = world.debris_limits;
+    launch(world, chunks, seen, seeds, near, limits, None);
+}
+
+/// Hands a search over `chunks` (as `seen`) from `near` to the async
+/// compute pool as the world's search.
+pub(super) fn launch(
+    world: &mut TerrainWorld,
+    mut chunks: Vec<ChunkOctree>,
+    seen: Vec<SeenChunk>,
+    seeds: Vec<(Entity, Vec<CellKey>)>,
+    near: Vec<(usize, CellKey)>,
+    limits: DebrisLimits,
+    ordered: Option<u64>,
+) {
+    let searched_from = near.clone();
     let task = AsyncComputeTaskPool::get().spawn(async move {
         let _span = bevy::log::info_span!("chisel::world::debris_search").entered();
         let detached = detach_across_chunks(&mut chunks, &near, limits);
@@ -410,5 +533,7 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         searched: None,
         seen,
         seeds,
+        near: searched_from,
+        ordered,
     });
 }

@@ -119,6 +119,7 @@
 //! crack opens between chunks of different levels, full detail included.
 
 pub mod debris;
+pub mod debris_order;
 pub mod lod;
 pub mod lod_mesh;
 pub mod seams;
@@ -275,6 +276,17 @@ pub struct TerrainWorld {
     /// The search for debris across chunk borders running or waiting to
     /// be applied ([`debris`]).
     pub(crate) debris_search: Option<debris::DebrisSearch>,
+    /// Who decides what falls across chunk borders ([`debris_order`]).
+    pub(crate) debris_role: debris_order::DebrisRole,
+    /// Chunks built and kept for debris across borders in a networked
+    /// world ([`debris_order`]), whatever the foci.
+    pub(crate) debris_keep: BTreeSet<ChunkCoord>,
+    /// The detach a networked world's server ordered, waiting to be
+    /// carried out here ([`debris_order`]).
+    pub(crate) detach_ordered: Option<debris_order::OrderedDetach>,
+    /// Detaches applied and not yet read by the networked world's side
+    /// ([`debris_order`]).
+    pub(crate) detaches_applied: Vec<debris_order::AppliedDetach>,
 }
 
 impl TerrainWorld {
@@ -299,6 +311,10 @@ impl TerrainWorld {
             debris_limits: DebrisLimits::default(),
             debris_across_borders: true,
             debris_search: None,
+            debris_role: debris_order::DebrisRole::Local,
+            debris_keep: BTreeSet::new(),
+            detach_ordered: None,
+            detaches_applied: Vec::new(),
         })
     }
 
@@ -556,6 +572,9 @@ impl TerrainWorld {
         }
         self.pending.clear();
         self.debris_search = None;
+        self.debris_keep.clear();
+        self.detach_ordered = None;
+        self.detaches_applied.clear();
         self.kept = edited.keys().copied().collect();
         self.stored = edited;
         self.stats.stored = self.stored.len();
@@ -563,11 +582,13 @@ impl TerrainWorld {
     }
 
     /// Whether no chunk is building, no carve waits for a chunk and no
-    /// search for debris across chunk borders runs or waits to be applied.
+    /// search for debris across chunk borders runs or waits to be applied
+    /// (nor, in a networked world, a detach its server ordered).
     #[must_use]
     pub fn is_settled(&self) -> bool {
         self.pending.is_empty()
             && self.debris_search.is_none()
+            && self.detach_ordered.is_none()
             && !self
                 .chunks
                 .values()

@@ -67,7 +67,8 @@ fn chunks_of(
 
 /// Streams every world's chunks: collects finished builds as terrain
 /// entities, hands waiting carves to live chunks, starts builds of the
-/// wanted chunks nearest first (chunks with waiting carves before all),
+/// wanted chunks nearest first (chunks with waiting carves, and those kept
+/// for debris across borders in a networked world, before all),
 /// and releases chunks beyond the unload radius, keeping the state of
 /// edited ones.
 pub fn stream_chunks(
@@ -95,9 +96,8 @@ pub fn stream_chunks(
         let unload = f64::from(world.settings.unload_radius) / unit;
 
         // Wanted chunks, nearest first; those with waiting carves first.
-        let mut wanted: Vec<(f64, ChunkCoord)> = world
-            .pending
-            .keys()
+        let mut wanted: Vec<(f64, ChunkCoord)> = (world.pending.keys())
+            .chain(&world.debris_keep)
             .map(|&c| (f64::NEG_INFINITY, c))
             .collect();
         chunks_within(&focus, edge, load, distance, &mut wanted);
@@ -124,7 +124,10 @@ pub fn stream_chunks(
             .chunks
             .iter()
             .filter(|(c, _)| {
-                distance(**c) > unload && !world.pending.contains_key(c) && !just_carved.contains(c)
+                distance(**c) > unload
+                    && !world.pending.contains_key(c)
+                    && !world.debris_keep.contains(c)
+                    && !just_carved.contains(c)
             })
             .filter_map(|(c, state)| match state {
                 Chunk::Live(e) => Some((*c, Some(*e))),

@@ -1,0 +1,319 @@
+//! Debris across chunk borders in a networked world (feature `net`,
+//! `net::world`): the server's pass ([`super::debris`]) decides, and every
+//! peer takes the same pieces out of the same chunks at the same place in
+//! the world's order of carves, without any geometry on the wire.
+//!
+//! A world has a [`DebrisRole`]: `Local` (not networked: the pass as
+//! [`super::debris`] describes it), `Serve` (the server, a host, a single
+//! player of a networked world) or `Follow` (a connected client).
+//!
+//! **Server.** The pass runs over the server's own live chunks, with two
+//! rules more:
+//! - A search starts only once every chunk around each seeded chunk (the
+//!   3×3 chunks centred on it) is live or failed to build; the server
+//!   builds them for it and keeps them, and the chunks a search saw, until
+//!   it is applied or dropped. A dedicated server holds no chunk but those
+//!   carves reach, so without this a piece over a corner would always be
+//!   held by a neighbour the server did not load. A piece reaching beyond
+//!   those chunks is held by the first chunk that is not live, on every
+//!   peer alike.
+//! - A result is applied only when every chunk it *depends on* (those it
+//!   takes solid from and their live neighbours across a side) is idle —
+//!   no job running, no carve or undo queued — and no carve waits for it
+//!   in the world (a carve routed to it before it was live), besides
+//!   having the state hash the search saw.
+//!
+//! Each applied result is recorded ([`AppliedDetach`]: the chunks it
+//! depends on, one seed per piece, the new state hash of each chunk) and
+//! the server numbers it in the world's order as the next op, in the same
+//! frame, before any later carve is numbered.
+//!
+//! *Why the op is well placed.* Carves reach a chunk in `seq` order: a
+//! world carve waits in the world for a chunk that is not live, is handed
+//! to the chunk's queue once it is, then runs as the chunk's job. At the
+//! apply, for every chunk `c` the result depends on: nothing waits for
+//! `c` in the world, nothing waits in its queue and no job runs, so every
+//! carve numbered so far that reaches `c` is applied to `c`; and the op
+//! is numbered after all of them and before any later one. So the state
+//! the search saw is, in every chunk it depends on, "every op before the
+//! detach applied" — the same on every peer, whatever it streams.
+//!
+//! **Followers.** A client's own pass is off (its seeds are dropped). It
+//! processes the op at its place in the order, as a carve: it routes no
+//! later op until the detach is applied, builds or restores every chunk
+//! of the op it does not hold live (and keeps them while the op waits),
+//! waits until none has a carve waiting or a job running — then each is
+//! in its state after every op before the detach — and runs the same
+//! exact search over exactly those chunks (every other side anchors, as a
+//! chunk that is not live does) from the seeds sent, with no limits. It
+//! applies the result as the server's pass applies one (the same octree
+//! swaps, jobs, [`TerrainDebris`](crate::terrain::TerrainDebris) and
+//! [`DebrisDetached`](crate::terrain::DebrisDetached)), and every chunk of
+//! the op reports its state hash at the op's `seq` (changed or not).
+//!
+//! *Why the follower finds the same pieces.* Let `L` be the server's live
+//! chunks when it searched, `P` one of its pieces and `D` the chunks sent.
+//! `P`'s cells lie in chunks it takes solid from, and every live side
+//! neighbour of those is in `D`, so in the graph over `D` `P` has the same
+//! neighbours as over `L` (none outside `P`: it was a whole component)
+//! and touches no side towards a chunk that is not in `D` (such a chunk is
+//! not in `L` either, so that side anchored on the server, and `P` is
+//! unanchored): `P` is a whole unanchored component over `D`. Conversely a
+//! component unanchored over `D` touches no side towards a chunk outside
+//! `D`, so it is a component over `L` too, unanchored: fewer chunks can
+//! only anchor more. The seeds sent are seeds the server searched from
+//! (for each piece the first of them that meets it), so every component
+//! they reach over `D` was reached on the server: the follower finds
+//! exactly the server's pieces, cell for cell. Their total is the
+//! server's, within the server's limits; the follower searches with none,
+//! so it never explores less than the server did.
+//!
+//! A chunk that lost a part counts as edited on every peer (stored when
+//! streamed out with its part taken out, in world snapshots, in the world
+//! hash). A snapshot chunk that holds the op (its last op at or after the
+//! op's `seq`) is not searched again.
+
+use std::collections::BTreeSet;
+
+use bevy::prelude::*;
+use chisel_bsp::octree::{CellKey, ChunkOctree, ChunkedDetached, DebrisLimits};
+
+use super::debris::{SeenChunk, busy, launch};
+use super::{Chunk, ChunkCoord, TerrainWorld};
+use crate::terrain::component::Terrain;
+
+/// Most chunks one ordered detach depends on; a server's result over more
+/// is not applied (its pieces stay, held).
+pub const MAX_DETACH_CHUNKS: usize = 64;
+
+/// Most pieces (one seed each) of one ordered detach; a server's result
+/// with more is not applied.
+pub const MAX_DETACH_SEEDS: usize = 1024;
+
+/// Who decides what falls across chunk borders in a world.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum DebrisRole {
+    /// Not networked: the world's own pass.
+    #[default]
+    Local,
+    /// A networked world's server: its own pass, each applied result
+    /// recorded to be ordered.
+    Serve,
+    /// A networked world's client: no pass of its own; the detaches the
+    /// server ordered are carried out.
+    Follow,
+}
+
+/// A detach the server ordered, for a follower to carry out.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct OrderedDetach {
+    /// Its place in the world's order.
+    pub(crate) seq: u64,
+    /// The chunks it searches, in coordinate order.
+    pub(crate) chunks: Vec<ChunkCoord>,
+    /// Where it searches from: a chunk of `chunks` and a cell there.
+    pub(crate) seeds: Vec<(ChunkCoord, CellKey)>,
+}
+
+/// A detach across chunk borders applied in a networked world.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct AppliedDetach {
+    /// Its place in the order (a follower's), or `None` on the server,
+    /// which numbers it.
+    pub(crate) seq: Option<u64>,
+    /// The chunks it depends on, in coordinate order.
+    pub(crate) chunks: Vec<ChunkCoord>,
+    /// One seed per piece (on the server).
+    pub(crate) seeds: Vec<(ChunkCoord, CellKey)>,
+    /// Each chunk of `chunks` with its new state hash, `None` when
+    /// unchanged.
+    pub(crate) hashes: Vec<(ChunkCoord, Option<u64>)>,
+}
+
+/// Whether cell keys `a` and `b` are the same cell or one holds the other.
+#[must_use]
+pub(crate) fn nested(a: CellKey, b: CellKey) -> bool {
+    let (outer, inner) = if a.depth <= b.depth { (a, b) } else { (b, a) };
+    let shift = u32::from(inner.depth - outer.depth);
+    (0..3).all(|i| inner.pos[i].checked_shr(shift).unwrap_or(0) == outer.pos[i])
+}
+
+/// The 3×3 chunks centred on `coord`.
+fn around(coord: ChunkCoord) -> impl Iterator<Item = ChunkCoord> {
+    (-1..=1).flat_map(move |dx| {
+        (-1..=1).map(move |dz| ChunkCoord {
+            x: coord.x + dx,
+            z: coord.z + dz,
+        })
+    })
+}
+
+/// Whether every chunk around each of `seeded` is live or failed.
+pub(super) fn around_live(world: &TerrainWorld, seeded: &BTreeSet<ChunkCoord>) -> bool {
+    seeded
+        .iter()
+        .flat_map(|&c| around(c))
+        .all(|c| matches!(world.chunks.get(&c), Some(Chunk::Live(_) | Chunk::Failed)))
+}
+
+/// Notes the chunks the world must build and keep for debris across
+/// borders: on a server those around seeded chunks and those its search
+/// saw, on a follower those of the ordered detach.
+pub(super) fn keep_chunks(world: &mut TerrainWorld, terrains: &Query<&mut Terrain>) {
+    let mut keep = BTreeSet::new();
+    match world.debris_role {
+        DebrisRole::Local => {}
+        DebrisRole::Serve => {
+            for (coord, entity) in world.live_chunks() {
+                if terrains
+                    .get(entity)
+                    .is_ok_and(|t| !t.runtime.border_seeds.is_empty())
+                {
+                    keep.extend(around(coord));
+                }
+            }
+            if let Some(search) = &world.debris_search {
+                keep.extend(search.chunks());
+            }
+        }
+        DebrisRole::Follow => {
+            if let Some(ordered) = &world.detach_ordered {
+                keep.extend(ordered.chunks.iter().copied());
+            }
+        }
+    }
+    world.debris_keep = keep;
+}
+
+/// Starts the search of a follower's ordered detach once every chunk of
+/// it is live (or failed to build), idle and with no carve waiting.
+pub(super) fn start_ordered(world: &mut TerrainWorld, terrains: &Query<&mut Terrain>) {
+    if world.debris_search.is_some() {
+        return;
+    }
+    let Some(ordered) = world.detach_ordered.clone() else {
+        return;
+    };
+    let (mut chunks, mut seen) = (Vec::new(), Vec::new());
+    for &coord in &ordered.chunks {
+        if world.pending.contains_key(&coord) {
+            return;
+        }
+        match world.chunks.get(&coord) {
+            Some(Chunk::Live(entity)) => {
+                let Ok(terrain) = terrains.get(*entity) else {
+                    return;
+                };
+                if busy(terrain) {
+                    return;
+                }
+                let Some(config) = &terrain.debris else {
+                    continue;
+                };
+                chunks.push(ChunkOctree {
+                    octree: terrain.octree.clone(),
+                    anchors: config.anchors.clone(),
+                });
+                seen.push(SeenChunk {
+                    coord,
+                    entity: *entity,
+                    hash: terrain.hash.value(),
+                });
+            }
+            Some(Chunk::Failed) => {}
+            _ => return,
+        }
+    }
+    let mut near: Vec<(usize, CellKey)> = (ordered.seeds.iter())
+        .filter_map(|(coord, key)| {
+            let i = seen.iter().position(|s| s.coord == *coord)?;
+            Some((i, *key))
+        })
+        .collect();
+    near.sort_unstable();
+    near.dedup();
+    let _span = bevy::log::info_span!("chisel::world::detach_ordered").entered();
+    launch(
+        world,
+        chunks,
+        seen,
+        Vec::new(),
+        near,
+        DebrisLimits::default(),
+        Some(ordered.seq),
+    );
+}
+
+/// The record of a server's result before it is applied: the chunks it
+/// depends on (`depends`, by the search's chunk index into `seen`) and,
+/// for each piece, the first seed of `near` that meets it.
+///
+/// # Errors
+/// When it is over [`MAX_DETACH_CHUNKS`] or [`MAX_DETACH_SEEDS`], or (never
+/// expected) a piece no seed meets: it is then not applied.
+pub(super) fn record(
+    detached: &ChunkedDetached,
+    near: &[(usize, CellKey)],
+    seen: &[ChunkCoord],
+    depends: &[usize],
+) -> Result<AppliedDetach, String> {
+    if depends.len() > MAX_DETACH_CHUNKS || detached.pieces.len() > MAX_DETACH_SEEDS {
+        return Err(format!(
+            "{} pieces over {} chunks, more than a networked world orders \
+             ({MAX_DETACH_SEEDS} pieces, {MAX_DETACH_CHUNKS} chunks)",
+            detached.pieces.len(),
+            depends.len()
+        ));
+    }
+    let mut seeds = Vec::new();
+    for piece in &detached.pieces {
+        let meets = |&&(chunk, key): &&(usize, CellKey)| {
+            (piece.parts.iter())
+                .filter(|part| part.chunk == chunk)
+                .any(|part| part.piece.leaves.iter().any(|&leaf| nested(key, leaf)))
+        };
+        match near.iter().find(meets) {
+            Some(&(chunk, key)) if depends.contains(&chunk) => seeds.push((seen[chunk], key)),
+            _ => return Err("a piece that no seed meets".into()),
+        }
+    }
+    seeds.sort_unstable();
+    seeds.dedup();
+    Ok(AppliedDetach {
+        seq: None,
+        chunks: depends.iter().map(|&j| seen[j]).collect(),
+        seeds,
+        hashes: Vec::new(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(depth: u8, pos: [u32; 3]) -> CellKey {
+        CellKey { depth, pos }
+    }
+
+    #[test]
+    fn cells_nest_only_in_their_ancestors() {
+        let leaf = key(3, [5, 2, 7]);
+        assert!(nested(leaf, leaf));
+        assert!(nested(CellKey::ROOT, leaf));
+        assert!(nested(key(1, [1, 0, 1]), leaf));
+        assert!(nested(leaf, key(2, [2, 1, 3])), "either order");
+        assert!(!nested(key(1, [0, 0, 1]), leaf));
+        assert!(!nested(key(3, [5, 2, 6]), leaf), "a sibling");
+        assert!(nested(leaf, key(5, [21, 8, 31])));
+        assert!(!nested(leaf, key(5, [24, 8, 31])));
+    }
+
+    #[test]
+    fn around_is_the_three_by_three_block() {
+        let all: BTreeSet<ChunkCoord> = around(ChunkCoord { x: 4, z: -2 }).collect();
+        assert_eq!(all.len(), 9);
+        assert!(all.contains(&ChunkCoord { x: 3, z: -3 }));
+        assert!(all.contains(&ChunkCoord { x: 5, z: -1 }));
+        assert!(!all.contains(&ChunkCoord { x: 6, z: -2 }));
+    }
+}

@@ -1,0 +1,294 @@
+//! Debris across chunk borders in a networked streamed world: one server
+//! (no focus) and two clients on 127.0.0.1, one holding every chunk
+//! involved, one holding only some of them. A slab over a chunk border,
+//! then one over the corner of four chunks, each on a pillar that a carve
+//! cuts through, falls on every peer as one piece of the same exact
+//! volume; every edited chunk ends bit-identical on every peer; no world
+//! hash ever differs; a client that joins afterwards gets the chunks with
+//! the pieces taken out from the world's snapshot.
+
+use bevy::prelude::*;
+use bevy_chisel::bsp::octree::{Edit, ExactVolume};
+use bevy_chisel::net::{NetClientStats, NetLimits, Outcome};
+use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, Terrain};
+
+use crate::net::{
+    Seen, WorldsSeen, request_world, run_until, world_client, world_of, world_server,
+};
+use crate::net_worlds::{edited_chunks, streamed_world as world, world_settled as settled};
+use crate::{ONE_APP_AT_A_TIME, net_worlds::edited_terrains};
+
+/// The exact volumes of the pieces an app saw fall.
+#[derive(Resource, Default)]
+struct Fallen(Vec<ExactVolume>);
+
+fn record_fallen(mut fallen: ResMut<Fallen>, mut detached: MessageReader<DebrisDetached>) {
+    fallen
+        .0
+        .extend(detached.read().map(|d| d.exact_volume.clone()));
+}
+
+fn watch(mut app: App) -> App {
+    app.init_resource::<Fallen>()
+        .add_systems(Last, record_fallen);
+    app
+}
+
+fn fallen(app: &App) -> Vec<ExactVolume> {
+    app.world().resource::<Fallen>().0.clone()
+}
+
+/// A box tool with grid corners `min` and `max` (grid unit 1).
+fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
+    let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
+    let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
+    CarveTool::new(
+        CarveShape::Cuboid {
+            half_size: (hi - lo) / 2.0,
+        },
+        Transform::from_translation((lo + hi) / 2.0),
+    )
+}
+
+fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
+    ExactVolume::from_integer((0..3).map(|a| i128::from(max[a] - min[a])).product())
+}
+
+const fn at(x: i64, z: i64) -> ChunkCoord {
+    ChunkCoord { x, z }
+}
+
+/// A slab from `lo` to `lo + (12, 4, depth)` at height 24..28 on a 3×3
+/// pillar from the ground (4) up to 25 at its low corner, and the cut
+/// through the pillar at 21..23 (above the ground, at most 20 high).
+struct Slab {
+    lo: [i64; 2],
+    depth: i64,
+}
+
+impl Slab {
+    fn pillar(&self) -> ([i64; 3], [i64; 3]) {
+        let [x, z] = self.lo;
+        ([x, 4, z], [x + 3, 25, z + 3])
+    }
+
+    fn slab(&self) -> ([i64; 3], [i64; 3]) {
+        let [x, z] = self.lo;
+        ([x, 24, z], [x + 12, 28, z + self.depth])
+    }
+
+    fn cut(&self) -> ([i64; 3], [i64; 3]) {
+        let [x, z] = self.lo;
+        ([x - 1, 21, z - 1], [x + 4, 23, z + 4])
+    }
+
+    /// What falls: the pillar above the cut and the slab.
+    fn falling(&self) -> ExactVolume {
+        let [x, z] = self.lo;
+        let (slab_lo, slab_hi) = self.slab();
+        box_volume([x, 23, z], [x + 3, 24, z + 3]) + box_volume(slab_lo, slab_hi)
+    }
+}
+
+/// Sends the carves one after another from `app` (request ids from
+/// `first`) and runs every app until each is answered and every peer is
+/// settled with the same world hash.
+fn carve_and_converge(
+    apps: &mut [&mut App],
+    first: u64,
+    carves: &[(([i64; 3], [i64; 3]), Edit)],
+) -> usize {
+    for (n, &((min, max), edit)) in carves.iter().enumerate() {
+        let request = first + n as u64;
+        request_world(apps[1], request, &cuboid(min, max), edit);
+        run_until(apps, 50_000, |apps| {
+            let seen = &apps[1].world().resource::<Seen>().results;
+            seen.iter().any(|r| r.request == Some(request))
+        });
+        let seen = &apps[1].world().resource::<Seen>().results;
+        let outcome = seen.iter().find(|r| r.request == Some(request));
+        assert!(
+            outcome.is_some_and(|r| matches!(r.outcome, Outcome::Applied { .. })),
+            "carve {request} applies: {outcome:?}"
+        );
+    }
+    converge(apps)
+}
+
+/// Runs until every peer is settled with the first one's world hash,
+/// then a few frames more for the world checks.
+fn converge(apps: &mut [&mut App]) -> usize {
+    let frames = run_until(apps, 100_000, |apps| {
+        if !apps.iter_mut().all(|app| settled(app)) {
+            return false;
+        }
+        let want = edited_chunks(apps[0]);
+        apps[1..].iter_mut().all(|app| edited_chunks(app) == want)
+    });
+    for _ in 0..40 {
+        for app in apps.iter_mut() {
+            app.update();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    frames
+}
+
+/// The material at grid point `p` of chunk `coord`, as `app` holds it.
+fn label_at(app: &mut App, coord: ChunkCoord, p: [i64; 3]) -> Option<u8> {
+    let terrains = edited_terrains(app);
+    let terrain: &Terrain = terrains.get(&coord).expect("an edited chunk");
+    terrain.octree().label_at(p).expect("inside the chunk")
+}
+
+fn assert_same_chunks(server: &mut App, peers: &mut [(&str, &mut App)]) {
+    let reference = edited_chunks(server);
+    for (name, app) in peers.iter_mut() {
+        let chunks = edited_chunks(app);
+        assert_eq!(
+            chunks.keys().collect::<Vec<_>>(),
+            reference.keys().collect::<Vec<_>>(),
+            "{name}: edited chunks"
+        );
+        for (coord, (bytes, hash)) in &reference {
+            let (peer_bytes, peer_hash) = &chunks[coord];
+            assert_eq!(peer_hash, hash, "{name}: state hash of chunk {coord:?}");
+            assert!(peer_bytes == bytes, "{name}: octree of chunk {coord:?}");
+        }
+    }
+}
+
+fn no_desync(name: &str, app: &App) {
+    let stats = app.world().resource::<NetClientStats>();
+    assert_eq!(stats.desyncs, 0, "{name}: world hashes always matched");
+    assert!(
+        stats.checks_passed > 0,
+        "{name}: world hashes were compared"
+    );
+    assert!(app.world().resource::<WorldsSeen>().desynced.is_empty());
+}
+
+#[test]
+fn pieces_cut_loose_across_borders_fall_alike_on_every_peer() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let limits = NetLimits {
+        carves_per_second: 1e6,
+        burst: 1e6,
+        ..NetLimits::default()
+    };
+    let (server, addr) = world_server(world(), limits);
+    let mut server = watch(server);
+    // `a` holds chunks (0..=1, 0..=1); `b` holds (0, 0) and (0, 1) but
+    // neither (1, 0) nor (1, 1).
+    let mut a = watch(world_client(addr, 1, world(), Vec3::new(32.0, 30.0, 32.0)));
+    let mut b = watch(world_client(addr, 2, world(), Vec3::new(-10.0, 30.0, 16.0)));
+    let holds = |app: &mut App, coord| world_of(app).1.chunk_entity(coord).is_some();
+    run_until(&mut [&mut server, &mut a, &mut b], 20_000, |apps| {
+        let synced = apps[1..]
+            .iter_mut()
+            .all(|app| !app.world().resource::<WorldsSeen>().synced.is_empty() && settled(app));
+        synced && holds(apps[1], at(1, 1)) && holds(apps[2], at(0, 0))
+    });
+    let (_, b_world) = world_of(&mut b);
+    assert!(b_world.chunk_entity(at(0, 0)).is_some());
+    assert!(b_world.chunk_entity(at(1, 0)).is_none());
+    assert!(b_world.chunk_entity(at(1, 1)).is_none());
+
+    // A slab over the border x = 32, on a pillar in chunk (0, 0).
+    let border = Slab {
+        lo: [26, 10],
+        depth: 4,
+    };
+    let mut apps = [&mut server, &mut a, &mut b];
+    carve_and_converge(
+        &mut apps,
+        1,
+        &[
+            (border.pillar(), Edit::Add(1)),
+            (border.slab(), Edit::Add(1)),
+        ],
+    );
+    for app in apps.iter() {
+        assert!(fallen(app).is_empty(), "the slab rests on its pillar");
+    }
+    let frames = carve_and_converge(&mut apps, 3, &[(border.cut(), Edit::Subtract)]);
+    println!("{frames} frames to converge after the cut over a border");
+    for (name, app) in [("server", &*apps[0]), ("a", &*apps[1]), ("b", &*apps[2])] {
+        assert_eq!(
+            fallen(app),
+            vec![border.falling()],
+            "{name}: one piece fell"
+        );
+    }
+    for app in apps.iter_mut() {
+        assert_eq!(label_at(app, at(1, 0), [35, 26, 12]), Some(0), "slab out");
+        assert_eq!(label_at(app, at(0, 0), [27, 26, 12]), Some(0), "slab out");
+        assert_eq!(
+            label_at(app, at(0, 0), [27, 10, 11]),
+            Some(1),
+            "pillar stays"
+        );
+    }
+
+    // A slab over the corner of four chunks, on a pillar in chunk (0, 0).
+    let corner = Slab {
+        lo: [26, 26],
+        depth: 12,
+    };
+    carve_and_converge(
+        &mut apps,
+        4,
+        &[
+            (corner.pillar(), Edit::Add(1)),
+            (corner.slab(), Edit::Add(1)),
+        ],
+    );
+    let frames = carve_and_converge(&mut apps, 6, &[(corner.cut(), Edit::Subtract)]);
+    println!("{frames} frames to converge after the cut at a corner");
+    for (name, app) in [("server", &*apps[0]), ("a", &*apps[1]), ("b", &*apps[2])] {
+        assert_eq!(
+            fallen(app),
+            vec![border.falling(), corner.falling()],
+            "{name}: the second piece fell, over four chunks"
+        );
+    }
+    for app in apps.iter_mut() {
+        for (coord, p) in [
+            (at(1, 1), [35, 26, 35]),
+            (at(0, 1), [27, 26, 35]),
+            (at(1, 0), [35, 26, 27]),
+        ] {
+            assert_eq!(label_at(app, coord, p), Some(0), "{coord:?}: slab out");
+        }
+    }
+    let [server, a, b] = apps;
+    assert_same_chunks(server, &mut [("a", a), ("b", b)]);
+    no_desync("a", a);
+    no_desync("b", b);
+    let (_, b_world) = world_of(b);
+    assert!(
+        b_world.chunk_entity(at(1, 1)).is_none(),
+        "b does not keep the chunk it built for the detach"
+    );
+
+    // A client that joins now gets the chunks with the pieces out.
+    let mut c = watch(world_client(addr, 3, world(), Vec3::new(48.0, 30.0, 48.0)));
+    run_until(&mut [server, a, b, &mut c], 20_000, |apps| {
+        !apps[3].world().resource::<WorldsSeen>().synced.is_empty() && settled(apps[3])
+    });
+    converge(&mut [server, a, b, &mut c]);
+    assert!(fallen(&c).is_empty(), "c installs the chunks as they are");
+    // One more carve, so that c compares a world hash too.
+    carve_and_converge(
+        &mut [server, a, b, &mut c],
+        7,
+        &[(([40, 12, 40], [43, 15, 43]), Edit::Subtract)],
+    );
+    assert_eq!(label_at(&mut c, at(1, 1), [35, 26, 35]), Some(0));
+    assert_same_chunks(server, &mut [("a", a), ("b", b), ("c", &mut c)]);
+    for (name, app) in [("a", &*a), ("b", &*b), ("c", &c)] {
+        no_desync(name, app);
+    }
+}
