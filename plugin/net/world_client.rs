@@ -354,20 +354,24 @@ fn route_detach(
     detach: &NetWorldDetach,
     id: WorldId,
 ) {
+    // Routed to no chunk when skipped, so that the world hash after it is
+    // known (and, after a refusal, found to differ from the server's).
+    let seq = detach.seq;
     match ordered_detach(detach, world.layout().chunk_log2) {
         Ok(ordered) => {
-            let seq = ordered.seq;
             let held =
                 (ordered.chunks.iter()).any(|c| follow.held.get(c).is_some_and(|&h| h >= seq));
-            if !held {
+            if held {
+                follow.book.note_routed(seq, &[]);
+            } else {
                 follow.book.note_routed(seq, &ordered.chunks);
                 world.detach_ordered = Some(ordered);
             }
         }
-        Err(why) => warn!(
-            "world {id}: detach {} from the server is refused: {why}",
-            detach.seq
-        ),
+        Err(why) => {
+            warn!("world {id}: detach {seq} from the server is refused: {why}");
+            follow.book.note_routed(seq, &[]);
+        }
     }
 }
 

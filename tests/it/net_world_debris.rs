@@ -5,11 +5,13 @@
 //! cuts through, falls on every peer as one piece of the same exact
 //! volume; every edited chunk ends bit-identical on every peer; no world
 //! hash ever differs; a client that joins afterwards gets the chunks with
-//! the pieces taken out from the world's snapshot.
+//! the pieces taken out from the world's snapshot. Malformed detaches are
+//! refused and the client that skipped them resyncs.
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{Edit, ExactVolume};
-use bevy_chisel::net::{NetClientStats, NetLimits, Outcome};
+use bevy_chisel::net::wire::{NetWorldDetach, WireSeed};
+use bevy_chisel::net::{NetClientStats, NetLimits, Outcome, ServerPacket};
 use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, Terrain};
 
 use crate::net::{
@@ -291,4 +293,68 @@ fn pieces_cut_loose_across_borders_fall_alike_on_every_peer() {
     for (name, app) in [("a", &*a), ("b", &*b), ("c", &c)] {
         no_desync(name, app);
     }
+}
+
+/// Malformed detaches in a client's world order (a seed naming no chunk
+/// of the detach, too many chunks, a cell outside its chunk, a world the
+/// client does not have) are refused with a warning, never a panic; the
+/// ones that took the place of the server's carves make the client's
+/// world hash differ, and it resyncs to the server's chunks.
+#[test]
+fn a_malformed_detach_is_refused_and_the_client_resyncs() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let limits = NetLimits {
+        carves_per_second: 1e6,
+        burst: 1e6,
+        ..NetLimits::default()
+    };
+    let (mut server, addr) = world_server(world(), limits);
+    let mut a = world_client(addr, 1, world(), Vec3::new(16.0, 30.0, 16.0));
+    run_until(&mut [&mut server, &mut a], 20_000, |apps| {
+        !apps[1].world().resource::<WorldsSeen>().synced.is_empty() && settled(apps[1])
+    });
+    let seed = WireSeed {
+        chunk: 0,
+        depth: 1,
+        pos: [0, 0, 1],
+    };
+    let detach = |world, seq, chunks: Vec<[i64; 2]>, seeds| {
+        ServerPacket::WorldDetach(NetWorldDetach {
+            world,
+            seq,
+            chunks,
+            seeds,
+        })
+    };
+    let too_many = (0..100).map(|x| [x, 0]).collect();
+    let outside = WireSeed { depth: 200, ..seed };
+    for packet in [
+        detach(1, 1, vec![[0, 0]], vec![WireSeed { chunk: 1, ..seed }]),
+        detach(1, 2, too_many, vec![seed]),
+        detach(1, 3, vec![[0, 0]], vec![outside]),
+        detach(99, 1, vec![[0, 0]], vec![seed]),
+    ] {
+        a.world_mut().write_message(packet);
+    }
+    a.update();
+    for n in 0..3u64 {
+        let centre = Vec3::new(8.0 + 6.0 * n as f32, 14.0, 12.0);
+        let tool = CarveTool::dodecahedron(2.5, centre);
+        request_world(&mut a, n, &tool, Edit::Subtract);
+    }
+    converge(&mut [&mut server, &mut a]);
+    let answered = &a.world().resource::<Seen>().results;
+    assert_eq!(answered.len(), 3);
+    assert!(
+        answered
+            .iter()
+            .all(|r| matches!(r.outcome, Outcome::Applied { .. })),
+        "the server applied the carves: {answered:?}"
+    );
+    assert_same_chunks(&mut server, &mut [("a", &mut a)]);
+    let stats = a.world().resource::<NetClientStats>();
+    assert!(stats.desyncs >= 1, "the skipped carves were noticed");
+    assert!(stats.snapshots >= 2, "and the world resynced");
 }

@@ -86,6 +86,15 @@
 //!   replaying one chunk's journal alone gives its state before any detach
 //!   across borders.
 //!
+//! - **Networked worlds.** The pass depends on which chunks are live, so
+//!   in a networked world only the server runs it, with two rules more
+//!   (the chunks around the seeds built before searching; every chunk a
+//!   result depends on idle with no carve waiting before it is applied),
+//!   and records each result it applies, which the server numbers in the
+//!   world's order. A client drops its own seeds and carries out each
+//!   ordered detach at its place: the same search over the chunks it
+//!   names from the seeds it names ([`super::debris_order`]).
+//!
 //! Cost on the frame (`debris_across_chunk_borders` in the terrain bench:
 //! 1 cm grid, 20.48 m chunks, the four chunks around a corner live):
 //! starting a search clones the live chunks' octrees and sorts the seeds;

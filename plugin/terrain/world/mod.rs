@@ -46,7 +46,8 @@
 //!    number as the chunks' request id), so every chunk any peer holds is
 //!    the server's whatever each streams in. Chunks installed from the
 //!    server's snapshot count as edited ([`TerrainWorld::chunk_edited`])
-//!    though they have no journal.
+//!    though they have no journal. Debris across chunk borders is the
+//!    server's to decide and is ordered with the carves ([`debris_order`]).
 //!
 //! ## Chunk borders
 //!
@@ -95,9 +96,11 @@
 //! spans. A side towards a chunk that is not live anchors. The search runs
 //! on the async compute pool, one per world; a frame only starts it and
 //! later applies its result, and only to chunks still in the state it
-//! searched (otherwise it searches again). The pass
-//! depends on which chunks are live, so a networked world (feature `net`)
-//! turns it off ([`TerrainWorld::with_debris_across_borders`]).
+//! searched (otherwise it searches again). The pass depends on which
+//! chunks are live, so in a networked world (feature `net`) only the
+//! server's runs: each result it applies is numbered in the world's order
+//! of carves, and every client carries it out at that place over the same
+//! chunks from the same seeds, with the same pieces ([`debris_order`]).
 //!
 //! ## Level of detail
 //!
@@ -336,9 +339,9 @@ impl TerrainWorld {
 
     /// Whether pieces cut loose across chunk borders fall ([`debris`]; on
     /// by default). Off, each chunk detaches only what lies within it and
-    /// a piece over a border stays, held by it. The detach depends on which
-    /// chunks are live, so a networked world (feature `net`, whose peers
-    /// hold different chunks) turns it off to stay identical on every peer.
+    /// a piece over a border stays, held by it. In a networked world
+    /// (feature `net`) the server's setting decides: a client carries out
+    /// the detaches its server orders ([`debris_order`]) whatever its own.
     #[must_use]
     pub fn with_debris_across_borders(mut self, on: bool) -> Self {
         self.debris_across_borders = on;
