@@ -29,8 +29,9 @@
 //!    same carves in the same order on every peer whatever is streamed in,
 //!    and exact carving makes its octree the same.
 //! 3. **Edited chunks and the world hash.** A chunk is *edited* once a
-//!    world carve applied to it (its [`CarveApplied`] report); the reports
-//!    give each edited chunk's state hash after each carve. The world hash
+//!    world carve applied to it (its [`CarveApplied`] report) or a detach
+//!    across chunk borders took solid out of it (see **Debris**); the
+//!    reports give each edited chunk's state hash after each op. The world hash
 //!    after carve `s` ([`world_state_hash`]) is the wrapping sum, over the
 //!    chunks edited by then, of XXH64 of `(x, z, chunk hash after s)`:
 //!    independent of order and of which chunks are live. A peer knows it
