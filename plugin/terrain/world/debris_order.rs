@@ -308,6 +308,99 @@ mod tests {
         assert!(!nested(leaf, key(5, [24, 8, 31])));
     }
 
+    /// A server's result over four chunks in a row, recorded, and searched
+    /// again as a follower does — over only the chunks it depends on, from
+    /// the recorded seeds — gives the same pieces and the same chunks, bit
+    /// for bit, one seed per piece.
+    #[test]
+    fn a_follower_finds_the_servers_pieces_over_the_chunks_sent() {
+        use chisel_bsp::octree::{
+            Anchors, CellBox, CubeSide, Edit, ExactVolume, Octree, OctreeConfig, Tool,
+            detach_across_chunks,
+        };
+        let cube = |min, max| Tool::cuboid(CellBox { min, max }).expect("a box");
+        let side = |axis, upper| CubeSide { axis, upper };
+        let anchors = Anchors {
+            sides: vec![
+                CubeSide::BOTTOM,
+                side(0, false),
+                side(0, true),
+                side(2, false),
+                side(2, true),
+            ],
+            boxes: Vec::new(),
+        };
+        let mut chunks: Vec<ChunkOctree> = (0..4)
+            .map(|i| ChunkOctree {
+                octree: Octree::new([1024 * i, 0, 0], 10, 0, OctreeConfig::default())
+                    .expect("an octree"),
+                anchors: anchors.clone(),
+            })
+            .collect();
+        let solids = [
+            ([900, 0, 100], [1000, 300, 200]),   // pillar in chunk 0
+            ([900, 300, 100], [1100, 400, 200]), // slab over 0 | 1
+            ([100, 500, 100], [200, 600, 200]),  // floating, far from the cut
+            ([2000, 0, 100], [3100, 50, 200]),   // ground bar over 2 | 3
+        ];
+        for chunk in &mut chunks {
+            for (min, max) in solids {
+                let b = CellBox { min, max };
+                if b.overlaps(&chunk.octree.root_box()) {
+                    chunk
+                        .octree
+                        .apply(&cube(min, max), Edit::Add(1))
+                        .expect("adds");
+                }
+            }
+        }
+        let cut = cube([890, 100, 90], [1010, 150, 210]);
+        let changes = chunks[0].octree.apply(&cut, Edit::Subtract).expect("cuts");
+        let near: Vec<(usize, CellKey)> = changes.changed.iter().map(|&k| (0, k)).collect();
+        let before = chunks.clone();
+        let server =
+            detach_across_chunks(&mut chunks, &near, DebrisLimits::default()).expect("searched");
+        assert!(!server.pieces.is_empty());
+        let seen: Vec<ChunkCoord> = (0..4).map(|x| ChunkCoord { x, z: 0 }).collect();
+        let depends = [0, 1, 2];
+        let recorded = record(&server, &near, &seen, &depends).expect("recorded");
+        assert_eq!(recorded.chunks, seen[..3]);
+        // One seed may meet several pieces (a coarse changed cell holds
+        // the floating block too): it finds them all again.
+        assert!((1..=server.pieces.len()).contains(&recorded.seeds.len()));
+        for (_, key) in &recorded.seeds {
+            assert!(near.iter().any(|(_, k)| k == key), "a server seed");
+        }
+
+        let mut follower: Vec<ChunkOctree> = before[..3].to_vec();
+        let from: Vec<(usize, CellKey)> = (recorded.seeds.iter())
+            .map(|&(c, k)| (usize::try_from(c.x).expect("index"), k))
+            .collect();
+        let found =
+            detach_across_chunks(&mut follower, &from, DebrisLimits::default()).expect("searched");
+        assert_eq!(found.pieces.len(), server.pieces.len());
+        for (a, b) in found.pieces.iter().zip(&server.pieces) {
+            assert_eq!(a.volume(), b.volume());
+        }
+        // The slab and the pillar above the cut fell over two chunks.
+        let slab = ExactVolume::from_integer(100 * 150 * 100 + 200 * 100 * 100);
+        assert!(
+            server
+                .pieces
+                .iter()
+                .any(|p| p.parts.len() == 2 && p.volume() == slab)
+        );
+        for (i, chunk) in follower.iter().enumerate() {
+            assert!(
+                chunk.octree.to_bytes() == chunks[i].octree.to_bytes(),
+                "chunk {i} as on the server"
+            );
+        }
+
+        let too_many: Vec<usize> = (0..=MAX_DETACH_CHUNKS).collect();
+        assert!(record(&server, &near, &seen, &too_many).is_err());
+    }
+
     #[test]
     fn around_is_the_three_by_three_block() {
         let all: BTreeSet<ChunkCoord> = around(ChunkCoord { x: 4, z: -2 }).collect();
