@@ -581,8 +581,9 @@ pub struct ChunkSnapshotPart {
     pub index: u32,
     /// The chunk (x, z).
     pub coord: [i64; 2],
-    /// The last world carve the chunk holds (0: none): carves after
-    /// the world's `seq` up to this one are not applied to it again.
+    /// The last world op (carve or detach across chunk borders) the chunk
+    /// holds (0: none): ops after the world's `seq` up to this one are not
+    /// applied to it again.
     pub seq: u64,
     /// Bytes of the chunk's whole snapshot.
     pub total: u64,
