@@ -358,3 +358,45 @@ fn a_malformed_detach_is_refused_and_the_client_resyncs() {
     assert!(stats.desyncs >= 1, "the skipped carves were noticed");
     assert!(stats.snapshots >= 2, "and the world resynced");
 }
+
+/// What the search costs a server that holds no chunk but those carves
+/// reach: the chunks around each carved chunk are built for it (the 3×3
+/// around it, `terrain::world::debris_order`), so 12 carves in 12 places
+/// nobody holds build 108 chunks instead of 12. With debris across
+/// borders turned off on the server, only the carved chunks are built.
+#[test]
+fn a_server_without_a_focus_builds_the_chunks_around_each_carve() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    for (across_borders, builds_per_carve) in [(true, 9), (false, 1)] {
+        let limits = NetLimits {
+            carves_per_second: 1e6,
+            burst: 1e6,
+            ..NetLimits::default()
+        };
+        let served = world().with_debris_across_borders(across_borders);
+        let (mut server, addr) = world_server(served, limits);
+        let mut a = world_client(addr, 1, world(), Vec3::new(-500.0, 30.0, -500.0));
+        run_until(&mut [&mut server, &mut a], 20_000, |apps| {
+            !apps[1].world().resource::<WorldsSeen>().synced.is_empty() && settled(apps[1])
+        });
+        let before = world_of(&mut server).1.stats().clone();
+        // Three chunks apart along x, in the middle of chunk (3k, 0).
+        let carves: Vec<_> = (0..12)
+            .map(|k| {
+                let x = 96 * k + 14;
+                (([x, 14, 14], [x + 4, 22, 18]), Edit::Subtract)
+            })
+            .collect();
+        carve_and_converge(&mut [&mut server, &mut a], 1, &carves);
+        let after = world_of(&mut server).1.stats().clone();
+        let built = after.generated + after.restored - before.generated - before.restored;
+        println!(
+            "debris across borders {across_borders}: the server built {built} chunks for 12 \
+             carves in {:?}",
+            after.build_time - before.build_time
+        );
+        assert_eq!(built, 12 * builds_per_carve);
+    }
+}
