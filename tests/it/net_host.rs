@@ -147,11 +147,7 @@ fn a_host_and_two_clients_end_identical_with_each_carve_applied_once() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let limits = NetLimits {
-        carves_per_second: 1e6,
-        burst: 1e6,
-        ..NetLimits::default()
-    };
+    let limits = net::unlimited();
     let (mut host, addr) = host(limits);
     let mut a = joining(addr, 1, Vec3::new(80.0, 30.0, 48.0));
     let mut b = joining(addr, 2, Vec3::new(48.0, 30.0, 80.0));
@@ -511,11 +507,7 @@ fn a_client_that_leaves_carves_alone_and_rejoins_identical() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let limits = NetLimits {
-        carves_per_second: 1e6,
-        burst: 1e6,
-        ..NetLimits::default()
-    };
+    let limits = net::unlimited();
     let (mut host, addr) = host(limits);
     let mut a = joining(addr, 1, Vec3::new(48.0, 30.0, 48.0));
     let ready = |app: &mut App| {

@@ -40,11 +40,7 @@ fn four_peers_end_with_identical_octrees() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let limits = NetLimits {
-        carves_per_second: 1e6,
-        burst: 1e6,
-        ..NetLimits::default()
-    };
+    let limits = net::unlimited();
     let (mut server, addr) = server(slab(), limits);
     // Different worker thread counts: the results must not depend on them.
     let mut a = client(addr, 1, 1);

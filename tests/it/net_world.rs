@@ -85,11 +85,7 @@ fn world_carves_leave_every_held_chunk_identical_on_every_peer() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let limits = NetLimits {
-        carves_per_second: 1e6,
-        burst: 1e6,
-        ..NetLimits::default()
-    };
+    let limits = net::unlimited();
     let (mut server, addr) = world_server(world(), limits);
     let mut a = world_client(addr, 1, world(), Vec3::new(16.0, 30.0, 16.0));
     let mut b = world_client(addr, 2, world(), Vec3::new(80.0, 30.0, 48.0));

@@ -11,11 +11,11 @@
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{Edit, ExactVolume};
 use bevy_chisel::net::wire::{NetWorldDetach, WireSeed};
-use bevy_chisel::net::{NetClientStats, NetLimits, Outcome, ServerPacket};
+use bevy_chisel::net::{NetClientStats, Outcome, ServerPacket};
 use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, Terrain};
 
 use crate::net::{
-    Seen, WorldsSeen, request_world, run_until, world_client, world_of, world_server,
+    Seen, WorldsSeen, request_world, run_until, unlimited, world_client, world_of, world_server,
 };
 use crate::net_worlds::{edited_chunks, streamed_world as world, world_settled as settled};
 use crate::{ONE_APP_AT_A_TIME, net_worlds::edited_terrains};
@@ -175,11 +175,7 @@ fn pieces_cut_loose_across_borders_fall_alike_on_every_peer() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let limits = NetLimits {
-        carves_per_second: 1e6,
-        burst: 1e6,
-        ..NetLimits::default()
-    };
+    let limits = unlimited();
     let (server, addr) = world_server(world(), limits);
     let mut server = watch(server);
     // `a` holds chunks (0..=1, 0..=1); `b` holds (0, 0) and (0, 1) but
@@ -305,11 +301,7 @@ fn a_malformed_detach_is_refused_and_the_client_resyncs() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let limits = NetLimits {
-        carves_per_second: 1e6,
-        burst: 1e6,
-        ..NetLimits::default()
-    };
+    let limits = unlimited();
     let (mut server, addr) = world_server(world(), limits);
     let mut a = world_client(addr, 1, world(), Vec3::new(16.0, 30.0, 16.0));
     run_until(&mut [&mut server, &mut a], 20_000, |apps| {
@@ -370,11 +362,7 @@ fn a_server_without_a_focus_builds_the_chunks_around_each_carve() {
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     for (across_borders, builds_per_carve) in [(true, 9), (false, 1)] {
-        let limits = NetLimits {
-            carves_per_second: 1e6,
-            burst: 1e6,
-            ..NetLimits::default()
-        };
+        let limits = unlimited();
         let served = world().with_debris_across_borders(across_borders);
         let (mut server, addr) = world_server(served, limits);
         let mut a = world_client(addr, 1, world(), Vec3::new(-500.0, 30.0, -500.0));

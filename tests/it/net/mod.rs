@@ -188,6 +188,16 @@ pub fn run_until(
     panic!("not done after {frames} frames");
 }
 
+/// The server's limits with no rate limit: the tests send carves as fast
+/// as their frames run.
+pub fn unlimited() -> NetLimits {
+    NetLimits {
+        carves_per_second: 1e6,
+        burst: 1e6,
+        ..NetLimits::default()
+    }
+}
+
 /// A server with `world` as network world 1 (no focus: it holds only the
 /// chunks carves reach, and stores the edited ones once idle).
 pub fn world_server(world: TerrainWorld, limits: NetLimits) -> (App, SocketAddr) {
