@@ -50,6 +50,10 @@ pub type InsertCollider = fn(&PropVoxels, &mut EntityCommands) -> bool;
 /// this on any axis.
 const MIN_SCALE: f32 = 1e-6;
 
+/// A prop's scale differs from the one its collider is fitted to when it
+/// moves by more than this fraction of its largest axis.
+const SCALE_TOLERANCE: f32 = 1e-5;
+
 /// Adds the voxelization systems, with `insert` making the engine's
 /// collider and `resolution` voxels along each edge (at least 2).
 pub fn add_prop_colliders(app: &mut App, resolution: u32, insert: InsertCollider) {
@@ -250,11 +254,13 @@ fn fit_colliders(
     for (prop, global, mut held) in &mut props {
         let (scale, _, _) = global.to_scale_rotation_translation();
         let shape = held.shape.filter(|&shape| shapes.contains(shape));
-        if shape
-            .and_then(|shape| shapes.get(shape).ok())
-            .map(|s| s.scale)
-            == Some(scale)
-        {
+        // A moving or turning prop's decomposed scale wobbles in its last
+        // bits: refit only for a change the voxels could show.
+        let fitted = shape.and_then(|shape| shapes.get(shape).ok());
+        if fitted.is_some_and(|s| {
+            s.scale
+                .abs_diff_eq(scale, SCALE_TOLERANCE * scale.abs().max_element())
+        }) {
             continue;
         }
         let Some(fitted) = held.voxels.scaled(scale) else {
