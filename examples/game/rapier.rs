@@ -9,8 +9,11 @@ use bevy_rapier3d::prelude::*;
 use super::physics::{AfterPhysics, Body, GROUND_REACH, PROBE_RADIUS, PROBE_REACH};
 use super::{PLAYER_LENGTH, PLAYER_RADIUS, Player, ThirdPerson, camera_target};
 
-/// Adds Rapier with the terrain's and the props' colliders. Headless, each
-/// frame advances the physics by 1/20 s, in three steps of 1/60 s.
+/// Adds Rapier with the terrain's and the props' colliders. In a window the
+/// physics steps 1/60 s at a time, as many steps as real time has passed
+/// (so the game keeps its speed below 60 frames a second), and the player
+/// is drawn between its last two steps; headless, each frame advances it
+/// by 1/20 s, in three steps of 1/60 s.
 pub fn add_physics(app: &mut App, headless: bool) {
     app.add_plugins((
         RapierPhysicsPlugin::<NoUserData>::default(),
@@ -27,12 +30,18 @@ pub fn add_physics(app: &mut App, headless: bool) {
             .in_set(AfterPhysics)
             .before(super::follow_player),
     );
-    if headless {
-        app.insert_resource(TimestepMode::Fixed {
+    app.insert_resource(if headless {
+        TimestepMode::Fixed {
             dt: 1.0 / 20.0,
             substeps: 3,
-        });
-    }
+        }
+    } else {
+        TimestepMode::Interpolated {
+            dt: 1.0 / 60.0,
+            time_scale: 1.0,
+            substeps: 1,
+        }
+    });
 }
 
 /// A capsule that does not turn, slides without friction (the game steers
@@ -51,6 +60,7 @@ fn give_player_a_body(add: On<Add, Player>, mut commands: Commands) {
             combine_rule: CoefficientCombineRule::Min,
         },
         Velocity::zero(),
+        TransformInterpolation::default(),
         ActiveEvents::COLLISION_EVENTS,
         CollidingEntities::default(),
     ));
