@@ -129,6 +129,7 @@ pub mod seams;
 pub mod source;
 pub mod store;
 pub mod stream;
+pub mod undo;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
@@ -146,6 +147,7 @@ use super::tool::{CarveTool, GridTool};
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
+pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
 /// A chunk's position in its world's grid of chunks (x and z).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Reflect)]
@@ -290,6 +292,9 @@ pub struct TerrainWorld {
     /// Detaches applied and not yet read by the networked world's side
     /// ([`debris_order`]).
     pub(crate) detaches_applied: Vec<debris_order::AppliedDetach>,
+    /// The world carves that can be undone and the undos waiting
+    /// ([`undo`]).
+    pub(crate) history: undo::WorldHistory,
 }
 
 impl TerrainWorld {
@@ -318,6 +323,7 @@ impl TerrainWorld {
             debris_keep: BTreeSet::new(),
             detach_ordered: None,
             detaches_applied: Vec::new(),
+            history: undo::WorldHistory::default(),
         })
     }
 
@@ -360,6 +366,31 @@ impl TerrainWorld {
     #[must_use]
     pub fn debris_searching(&self) -> bool {
         self.debris_search.is_some()
+    }
+
+    /// Keeps at most `steps` world carves for [`WorldUndo`] (older ones are
+    /// forgotten), and as many undo steps in each chunk
+    /// ([`Terrain::with_max_undo`]), so that the chunks hold every step
+    /// the world may undo. The default is a terrain's,
+    /// [`DEFAULT_MAX_UNDO`](crate::terrain::component::DEFAULT_MAX_UNDO);
+    /// 0 turns undo off.
+    #[must_use]
+    pub fn with_max_undo(mut self, steps: usize) -> Self {
+        self.history.max = steps;
+        self
+    }
+
+    /// The most world carves kept for undo ([`TerrainWorld::with_max_undo`]).
+    #[must_use]
+    pub fn max_undo(&self) -> usize {
+        self.history.max
+    }
+
+    /// How many world carves a [`WorldUndo`] can take back now (those
+    /// already claimed by a waiting [`WorldUndo`] included).
+    #[must_use]
+    pub fn undo_depth(&self) -> usize {
+        self.history.depth()
     }
 
     /// With these streaming radii and build limit.
@@ -548,6 +579,9 @@ impl TerrainWorld {
                 .push((tool.clone(), edit, request));
         }
         self.next_request = self.next_request.max(request.saturating_add(1));
+        if self.debris_role == debris_order::DebrisRole::Local {
+            self.history.push_step(request, coords);
+        }
     }
 
     /// Whether chunk `coord` failed to build (its carves were dropped).
@@ -578,18 +612,21 @@ impl TerrainWorld {
         self.debris_keep.clear();
         self.detach_ordered = None;
         self.detaches_applied.clear();
+        self.history.clear();
         self.kept = edited.keys().copied().collect();
         self.stored = edited;
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
     }
 
-    /// Whether no chunk is building, no carve waits for a chunk and no
-    /// search for debris across chunk borders runs or waits to be applied
-    /// (nor, in a networked world, a detach its server ordered).
+    /// Whether no chunk is building, no carve waits for a chunk, no
+    /// [`WorldUndo`] waits, and no search for debris across chunk borders
+    /// runs or waits to be applied (nor, in a networked world, a detach
+    /// its server ordered).
     #[must_use]
     pub fn is_settled(&self) -> bool {
         self.pending.is_empty()
+            && !self.history.holds_carves()
             && self.debris_search.is_none()
             && self.detach_ordered.is_none()
             && !self
