@@ -159,6 +159,10 @@ fn one_undo_gives_back_every_chunk_of_a_carve_over_a_border_and_a_corner() {
         Edit::Subtract,
     );
     assert_eq!(differ(&corner, &states(&app, world)), CORNER.to_vec());
+    assert!(
+        debris(&mut app) > 0,
+        "the block's top fell across the corner"
+    );
     undo(&mut app, world);
     assert_eq!(states(&app, world), corner);
     undo(&mut app, world);

@@ -71,8 +71,10 @@
 //!   wait for it.
 //! - **Undo.** The removal joins the chunk's last undo step: undoing that
 //!   carve brings the chunk's part back, as undo does for debris within a
-//!   terrain; other chunks keep their parts out. A chunk with no undo
-//!   step of its own keeps its part out.
+//!   terrain; a chunk's own undo leaves the other chunks' parts out. The
+//!   world also notes the detach in its last world carve's step
+//!   ([`super::undo`]), so one [`super::WorldUndo`] brings every part
+//!   back, in every chunk.
 //! - **Streaming and files.** A chunk that lost a part counts as edited
 //!   even with no carve of its own: it is kept while streamed out and
 //!   saved with the world. A chunk that streams out while a search that

@@ -102,6 +102,21 @@
 //! of carves, and every client carries it out at that place over the same
 //! chunks from the same seeds, with the same pieces ([`debris_order`]).
 //!
+//! ## Undo
+//!
+//! A chunk's own [`UndoCarve`](super::UndoCarve) takes back only that
+//! chunk's last carve; [`WorldUndo`] takes back the world's last
+//! [`WorldCarve`] in every chunk it changed, with the parts that its
+//! detaches across chunk borders took out of chunks it never reached
+//! ([`undo`]). The world keeps one step per world carve, up to
+//! [`TerrainWorld::with_max_undo`] (a terrain's default), noting per chunk
+//! the state the carve left; the undo waits until every chunk of the step
+//! holds every request made before it (world carves asked for meanwhile
+//! wait for it, chunks streamed out are restored for it), checks them all,
+//! and then changes all or none: a chunk changed since by anything else,
+//! or whose undo history was trimmed, refuses it with a
+//! [`WorldUndoRejected`] naming the chunk. A networked world refuses it.
+//!
 //! ## Level of detail
 //!
 //! A [`WorldLod`] beside the world ([`lod`], meshes in [`lod_mesh`])
@@ -697,7 +712,8 @@ pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, Terrain
 /// that reaches no chunk's cube, or adds or paints a material the world
 /// does not know, is rejected for the world entity. A chunk that is not
 /// live is built for the carve; if its build fails (a bad source sample)
-/// its waiting carves are dropped with a warning in the log.
+/// its waiting carves are dropped with a warning in the log. [`WorldUndo`]
+/// takes the last one back in every chunk.
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct WorldCarve {
