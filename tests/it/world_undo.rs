@@ -441,3 +441,110 @@ fn an_undo_restores_a_chunk_streamed_out() {
     let source = the_world(&app, world).generate_chunk(far).expect("builds");
     assert_eq!(chunk(&app, world, far).state_hash(), source.state_hash());
 }
+
+/// The cut and a small carve elsewhere in the same chunk land in one
+/// frame (one job), so the slab's fall is searched from both and belongs
+/// to the later carve; undoing that carve gives every chunk exactly its
+/// state after the cut and its fall, as if it had never been made.
+#[test]
+fn undoing_a_carve_that_landed_with_an_earlier_cut_keeps_the_cut_and_its_fall() {
+    let (mut app, world, _) = undo_app(new_world(), Vec3::new(32.0, 30.0, 16.0));
+    carve(&mut app, world, cuboid(PILLAR.0, PILLAR.1), Edit::Add(1));
+    carve(&mut app, world, cuboid(SLAB.0, SLAB.1), Edit::Add(1));
+    let (mut reference, reference_world, _) = undo_app(new_world(), Vec3::new(32.0, 30.0, 16.0));
+    carve(
+        &mut reference,
+        reference_world,
+        cuboid(PILLAR.0, PILLAR.1),
+        Edit::Add(1),
+    );
+    carve(
+        &mut reference,
+        reference_world,
+        cuboid(SLAB.0, SLAB.1),
+        Edit::Add(1),
+    );
+    carve(
+        &mut reference,
+        reference_world,
+        cuboid(CUT.0, CUT.1),
+        Edit::Subtract,
+    );
+    assert_eq!(debris(&mut reference), 1);
+
+    for (tool, edit) in [
+        (cuboid(CUT.0, CUT.1), Edit::Subtract),
+        (sphere(3.0, Vec3::new(8.0, 16.0, 24.0)), Edit::Subtract),
+    ] {
+        app.world_mut()
+            .write_message(WorldCarve { world, tool, edit });
+    }
+    settle(&mut app, world);
+    assert_eq!(debris(&mut app), 1, "the slab fell");
+    undo(&mut app, world);
+    assert_eq!(states(&app, world), states(&reference, reference_world));
+    // Both carves landed in one job, so the fall was searched from both
+    // and belonged to the later one: its undo gave the slab back with the
+    // seeds of the cut, and the slab fell again, a second body.
+    assert_eq!(debris(&mut app), 2);
+}
+
+/// A networked world's server orders every change and its clients replay
+/// them: a local undo is refused on both, and changes nothing.
+#[cfg(feature = "net")]
+#[test]
+fn a_networked_world_refuses_undo_on_server_and_client() {
+    use crate::net::{request_world, run_until, unlimited, world_client, world_of, world_server};
+    use crate::net_worlds::{streamed_world, world_settled};
+
+    let _guard = crate::ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (mut server, addr) = world_server(streamed_world(), unlimited());
+    let mut client = world_client(addr, 1, streamed_world(), Vec3::new(32.0, 30.0, 16.0));
+    for app in [&mut server, &mut client] {
+        app.init_resource::<Heard>().add_systems(Update, hear);
+    }
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        !apps[1]
+            .world()
+            .resource::<crate::net::WorldsSeen>()
+            .synced
+            .is_empty()
+            && world_settled(apps[1])
+    });
+    let tool = sphere(5.0, Vec3::new(32.0, 16.0, 12.0));
+    request_world(&mut client, 1, &tool, Edit::Subtract);
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        world_settled(apps[0])
+            && world_settled(apps[1])
+            && world_of(apps[1]).1.chunk_entity(at(1, 0)).is_some_and(|e| {
+                apps[1]
+                    .world()
+                    .get::<Terrain>(e)
+                    .is_some_and(|t| !t.journal().is_empty())
+            })
+    });
+    let hashes = |app: &mut App| {
+        let (entity, _) = world_of(app);
+        states(app, entity)
+    };
+    let before = (hashes(&mut server), hashes(&mut client));
+    for app in [&mut server, &mut client] {
+        let (entity, _) = world_of(app);
+        app.world_mut().write_message(WorldUndo { world: entity });
+    }
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        apps.iter().all(|app| !heard(app).rejected.is_empty())
+    });
+    for app in [&mut server, &mut client] {
+        let reasons: Vec<_> = heard(app)
+            .rejected
+            .iter()
+            .map(|r| r.reason.clone())
+            .collect();
+        assert_eq!(reasons, vec![WorldUndoRefusal::Networked]);
+        assert!(heard(app).undone.is_empty());
+    }
+    assert_eq!((hashes(&mut server), hashes(&mut client)), before);
+}
