@@ -306,6 +306,13 @@ fn a_slab_cut_loose_across_a_border_comes_back_whole() {
 #[test]
 fn a_later_chunk_edit_refuses_the_world_undo_and_changes_nothing() {
     let (mut app, world, _) = undo_app(new_world(), Vec3::new(32.0, 30.0, 16.0));
+    let first = states(&app, world);
+    carve(
+        &mut app,
+        world,
+        sphere(4.0, Vec3::new(12.0, 16.0, 12.0)),
+        Edit::Subtract,
+    );
     let before = states(&app, world);
     carve(
         &mut app,
@@ -326,7 +333,11 @@ fn a_later_chunk_edit_refuses_the_world_undo_and_changes_nothing() {
     settle(&mut app, world);
     let later = states(&app, world);
     assert_eq!(differ(&carved, &later), vec![at(1, 0)]);
-    undo(&mut app, world);
+    // Two undos at once: the first is refused, and so is the second, which
+    // would undo the older carve before the newer one.
+    app.world_mut().write_message(WorldUndo { world });
+    app.world_mut().write_message(WorldUndo { world });
+    settle(&mut app, world);
     assert_eq!(states(&app, world), later, "nothing changed");
     assert_eq!(
         heard(&app)
@@ -334,15 +345,21 @@ fn a_later_chunk_edit_refuses_the_world_undo_and_changes_nothing() {
             .iter()
             .map(|r| r.reason.clone())
             .collect::<Vec<_>>(),
-        vec![WorldUndoRefusal::ChunkChanged { coord: at(1, 0) }]
+        vec![
+            WorldUndoRefusal::ChunkChanged { coord: at(1, 0) },
+            WorldUndoRefusal::EarlierUndoRefused
+        ]
     );
-    assert_eq!(the_world(&app, world).undo_depth(), 1, "the step is kept");
-    // Once that chunk's own carve is undone, the world undo goes through.
+    assert_eq!(the_world(&app, world).undo_depth(), 2, "the steps are kept");
+    // Once that chunk's own carve is undone, the world undos go through.
     app.world_mut().write_message(UndoCarve { terrain: entity });
     settle(&mut app, world);
     assert_eq!(states(&app, world), carved);
     undo(&mut app, world);
     assert_eq!(states(&app, world), before);
+    undo(&mut app, world);
+    assert_eq!(states(&app, world), first);
+    assert!(heard(&app).undone.len() == 2);
 }
 
 #[test]
