@@ -576,7 +576,11 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
     let Some(step) = world.history.steps.remove(position) else {
         return Progress::Waiting;
     };
-    world.history.undos.pop_front();
+    // A chunk held while its carve waited, that then refused the carve,
+    // has nothing to undo: its hold is taken out with the others.
+    if let Some(undo) = world.history.undos.pop_front() {
+        release_holds(world, terrains, &undo);
+    }
     let mut changed = Vec::new();
     for (coord, undoes) in targets {
         let Some(mut terrain) = (world.chunk_entity(coord)).and_then(|e| terrains.get_mut(e).ok())
@@ -584,7 +588,6 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
             continue;
         };
         let terrain = &mut *terrain;
-        terrain.runtime.queue.pop_front();
         let Some(chunk) = step.chunks.get(&coord).filter(|_| undoes) else {
             continue;
         };
