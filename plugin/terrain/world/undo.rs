@@ -27,6 +27,11 @@
 //! chunk the detach takes solid from or searched from: a piece only falls
 //! where a carve cut into it or next to it.
 //!
+//! The steps live in memory only: [`TerrainWorld::save`] writes each
+//! chunk's own history, and a world loaded with
+//! [`TerrainWorld::load_edits`] starts with no world step (its chunks
+//! still undo their own carves with [`UndoCarve`](crate::terrain::UndoCarve)).
+//!
 //! ## Undo
 //!
 //! A [`WorldUndo`] takes the last world step not yet claimed by an earlier
