@@ -160,7 +160,8 @@ pub mod prelude {
         Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, CellOutput, DebrisDetached,
         HeightLayer, Heightfield, Terrain, TerrainCarveRejected, TerrainCarved, TerrainCell,
         TerrainCellChanged, TerrainCellRebuilt, TerrainDebris, TerrainError, TerrainHit,
-        TerrainPlugin, TerrainSettings, TerrainSystems, UndoCarve,
+        TerrainPlugin, TerrainSettings, TerrainSystems, TerrainWorld, UndoCarve, WorldCarve,
+        WorldUndo, WorldUndoRejected, WorldUndone,
     };
     #[cfg(all(feature = "terrain", feature = "render"))]
     pub use crate::terrain::{

@@ -74,7 +74,9 @@ pub struct GridCarve {
     pub request: u64,
 }
 
-/// Undo the last carve of a terrain.
+/// Undo the last carve of a terrain. For a world carve over several chunks
+/// of a [`super::TerrainWorld`], send [`super::WorldUndo`] instead: it
+/// undoes the carve in every chunk at once, with its debris across borders.
 #[derive(Message, Reflect, Clone, Copy, Debug)]
 pub struct UndoCarve {
     /// The terrain entity.

@@ -73,6 +73,11 @@ pub(crate) struct Runtime {
     /// Leaves that carves of a chunk changed since the last detach across
     /// chunk borders (`world::debris`), sorted on use.
     pub(crate) border_seeds: Vec<CellKey>,
+    /// Whether tracked carves are noted in `landed` (a chunk of a world
+    /// that keeps undo steps, `world::undo`).
+    pub(crate) records_landed: bool,
+    /// Tracked carves applied or refused since the world last looked.
+    pub(crate) landed: Vec<super::world::undo::Landed>,
 }
 
 /// A request waiting for its turn.
@@ -85,6 +90,12 @@ pub(crate) enum Job {
     },
     Undo {
         requested: Instant,
+    },
+    /// Holds the queue until the world's undo of world step `request` is
+    /// carried out in every chunk it changed (`world::undo`): the jobs
+    /// behind it were asked for after that undo.
+    HoldForWorldUndo {
+        request: u64,
     },
     /// Seal the cells again at new outside points (the wall points of
     /// neighbouring chunks on the cube's sides), and shade them again with
@@ -118,6 +129,8 @@ impl Default for Runtime {
             border: None,
             resealing: false,
             border_seeds: Vec::new(),
+            records_landed: false,
+            landed: Vec::new(),
         }
     }
 }

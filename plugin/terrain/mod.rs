@@ -168,7 +168,7 @@ pub use tool::{
 pub use world::{
     ChunkCoord, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave, StreamSettings,
     TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldLod,
-    WorldSource, WorldStats,
+    WorldSource, WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
@@ -251,6 +251,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_message::<DebrisDetached>()
         .add_message::<TerrainCellChanged>()
         .add_message::<WorldCarve>()
+        .add_message::<WorldUndo>()
+        .add_message::<WorldUndone>()
+        .add_message::<WorldUndoRejected>()
         .register_type::<Terrain>()
         .register_type::<TerrainCell>()
         .register_type::<TerrainDebris>()
@@ -269,6 +272,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<WorldChunk>()
         .register_type::<LodMesh>()
         .register_type::<WorldCarve>()
+        .register_type::<WorldUndo>()
+        .register_type::<WorldUndone>()
+        .register_type::<WorldUndoRejected>()
         .register_type::<CarveTool>()
         .register_type::<Heightfield>()
         .register_type::<TerrainSource>()
@@ -287,6 +293,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
                     queue::read_requests,
                     upload::finish_jobs,
                     world::debris::detach_across_borders,
+                    world::undo::undo_world_carves,
                     queue::start_jobs,
                 )
                     .chain()

@@ -175,6 +175,10 @@ pub fn start_jobs(
         }
         match terrain.runtime.queue.pop_front() {
             None => {}
+            Some(hold @ Job::HoldForWorldUndo { .. }) => {
+                // The world carries it out and takes it away.
+                terrain.runtime.queue.push_front(hold);
+            }
             Some(Job::Undo { requested }) => match terrain.undo_now() {
                 Ok(keys) => {
                     let octree = terrain.octree.clone();

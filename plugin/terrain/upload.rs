@@ -99,6 +99,13 @@ pub fn finish_jobs(
                         requested,
                     ));
                     terrain.record(before, changes, tool, edit);
+                    if let (Some(request), true) = (request, terrain.runtime.records_landed) {
+                        let journal = terrain.journal.len();
+                        terrain
+                            .runtime
+                            .landed
+                            .push((request, Some((hash, journal))));
+                    }
                 }
                 StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
                 StepOutcome::Undone { cells, requested } => {
@@ -108,6 +115,9 @@ pub fn finish_jobs(
                 StepOutcome::Rejected { error, request } => {
                     if request.is_some() {
                         terrain.last_request = request;
+                    }
+                    if let (Some(request), true) = (request, terrain.runtime.records_landed) {
+                        terrain.runtime.landed.push((request, None));
                     }
                     rejected.write(CarveRejected {
                         terrain: entity,

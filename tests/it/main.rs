@@ -88,6 +88,8 @@ mod terrain_world_lod;
 mod terrain_world_normals;
 #[cfg(feature = "terrain")]
 mod terrain_world_seams;
+#[cfg(feature = "terrain")]
+mod world_undo;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]

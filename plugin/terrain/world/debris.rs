@@ -71,8 +71,10 @@
 //!   wait for it.
 //! - **Undo.** The removal joins the chunk's last undo step: undoing that
 //!   carve brings the chunk's part back, as undo does for debris within a
-//!   terrain; other chunks keep their parts out. A chunk with no undo
-//!   step of its own keeps its part out.
+//!   terrain; a chunk's own undo leaves the other chunks' parts out. The
+//!   world also notes the detach in its last world carve's step
+//!   ([`super::undo`]), so one [`super::WorldUndo`] brings every part
+//!   back, in every chunk.
 //! - **Streaming and files.** A chunk that lost a part counts as edited
 //!   even with no carve of its own: it is kept while streamed out and
 //!   saved with the world. A chunk that streams out while a search that
@@ -121,6 +123,7 @@ use chisel_bsp::octree::{
 };
 
 use super::debris_order::{self, AppliedDetach, DebrisRole};
+use super::undo::DetachedChunk;
 use super::{ChunkCoord, TerrainWorld};
 use crate::terrain::component::Terrain;
 use crate::terrain::jobs::Job;
@@ -385,8 +388,12 @@ pub(super) fn side_neighbours(coord: ChunkCoord) -> impl Iterator<Item = ChunkCo
 /// octree is about to change.
 pub(super) fn busy(terrain: &Terrain) -> bool {
     terrain.runtime.task.is_some()
-        || (terrain.runtime.queue.iter())
-            .any(|job| matches!(job, Job::Carve { .. } | Job::Undo { .. }))
+        || (terrain.runtime.queue.iter()).any(|job| {
+            matches!(
+                job,
+                Job::Carve { .. } | Job::Undo { .. } | Job::HoldForWorldUndo { .. }
+            )
+        })
 }
 
 /// Takes the pieces of a search that holds out of their chunks and queues
@@ -416,6 +423,7 @@ fn apply(
             spawned_by.entry(first.chunk).or_default().push(piece);
         }
     }
+    let mut undo_chunks = Vec::new();
     for (i, (octree, changes)) in octrees.into_iter().zip(detached.changes).enumerate() {
         let pieces = spawned_by.remove(&i).unwrap_or_default();
         if changes.changed.is_empty() && changes.removed.is_empty() && pieces.is_empty() {
@@ -425,7 +433,8 @@ fn apply(
             continue;
         };
         let terrain = &mut *terrain;
-        terrain.octree = octree;
+        let (hash_before, was) = (terrain.hash.value(), terrain.detached_across);
+        let before = std::mem::replace(&mut terrain.octree, octree);
         terrain.hash.update(
             &terrain.octree,
             changes.changed.iter().chain(&changes.removed),
@@ -437,12 +446,20 @@ fn apply(
         let mut keys: Vec<CellKey> = changes.changed.into_iter().chain(changes.removed).collect();
         keys.sort_unstable();
         keys.dedup();
+        let coord = search.seen[i].coord;
+        let chunk = DetachedChunk::new(coord, terrain, before, hash_before, was, &keys);
+        undo_chunks.push(chunk);
         terrain
             .runtime
             .queue
             .push_front(Job::Detached { keys, pieces });
         changed.insert(i, terrain.hash.value());
     }
+    let coord_of = |e: Entity| search.seen.iter().find(|c| c.entity == e).map(|c| c.coord);
+    let seeds = (search.seeds.into_iter())
+        .filter_map(|(e, keys)| Some((coord_of(e)?, keys)))
+        .collect();
+    super::undo::note_detach(world, undo_chunks, seeds);
     changed
 }
 

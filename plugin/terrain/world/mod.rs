@@ -102,6 +102,21 @@
 //! of carves, and every client carries it out at that place over the same
 //! chunks from the same seeds, with the same pieces ([`debris_order`]).
 //!
+//! ## Undo
+//!
+//! A chunk's own [`UndoCarve`](super::UndoCarve) takes back only that
+//! chunk's last carve; [`WorldUndo`] takes back the world's last
+//! [`WorldCarve`] in every chunk it changed, with the parts that its
+//! detaches across chunk borders took out of chunks it never reached
+//! ([`undo`]). The world keeps one step per world carve, up to
+//! [`TerrainWorld::with_max_undo`] (a terrain's default), noting per chunk
+//! the state the carve left; the undo waits until every chunk of the step
+//! holds every request made before it (world carves asked for meanwhile
+//! wait for it, chunks streamed out are restored for it), checks them all,
+//! and then changes all or none: a chunk changed since by anything else,
+//! or whose undo history was trimmed, refuses it with a
+//! [`WorldUndoRejected`] naming the chunk. A networked world refuses it.
+//!
 //! ## Level of detail
 //!
 //! A [`WorldLod`] beside the world ([`lod`], meshes in [`lod_mesh`])
@@ -129,6 +144,7 @@ pub mod seams;
 pub mod source;
 pub mod store;
 pub mod stream;
+pub mod undo;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
@@ -146,6 +162,7 @@ use super::tool::{CarveTool, GridTool};
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
+pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
 /// A chunk's position in its world's grid of chunks (x and z).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Reflect)]
@@ -290,6 +307,9 @@ pub struct TerrainWorld {
     /// Detaches applied and not yet read by the networked world's side
     /// ([`debris_order`]).
     pub(crate) detaches_applied: Vec<debris_order::AppliedDetach>,
+    /// The world carves that can be undone and the undos waiting
+    /// ([`undo`]).
+    pub(crate) history: undo::WorldHistory,
 }
 
 impl TerrainWorld {
@@ -318,6 +338,7 @@ impl TerrainWorld {
             debris_keep: BTreeSet::new(),
             detach_ordered: None,
             detaches_applied: Vec::new(),
+            history: undo::WorldHistory::default(),
         })
     }
 
@@ -360,6 +381,31 @@ impl TerrainWorld {
     #[must_use]
     pub fn debris_searching(&self) -> bool {
         self.debris_search.is_some()
+    }
+
+    /// Keeps at most `steps` world carves for [`WorldUndo`] (older ones are
+    /// forgotten), and as many undo steps in each chunk
+    /// ([`Terrain::with_max_undo`]), so that the chunks hold every step
+    /// the world may undo. The default is a terrain's,
+    /// [`DEFAULT_MAX_UNDO`](crate::terrain::component::DEFAULT_MAX_UNDO);
+    /// 0 turns undo off.
+    #[must_use]
+    pub fn with_max_undo(mut self, steps: usize) -> Self {
+        self.history.max = steps;
+        self
+    }
+
+    /// The most world carves kept for undo ([`TerrainWorld::with_max_undo`]).
+    #[must_use]
+    pub fn max_undo(&self) -> usize {
+        self.history.max
+    }
+
+    /// How many world carves a [`WorldUndo`] can take back now (those
+    /// already claimed by a waiting [`WorldUndo`] included).
+    #[must_use]
+    pub fn undo_depth(&self) -> usize {
+        self.history.depth()
     }
 
     /// With these streaming radii and build limit.
@@ -548,6 +594,9 @@ impl TerrainWorld {
                 .push((tool.clone(), edit, request));
         }
         self.next_request = self.next_request.max(request.saturating_add(1));
+        if self.debris_role == debris_order::DebrisRole::Local {
+            self.history.push_step(request, coords);
+        }
     }
 
     /// Whether chunk `coord` failed to build (its carves were dropped).
@@ -578,18 +627,21 @@ impl TerrainWorld {
         self.debris_keep.clear();
         self.detach_ordered = None;
         self.detaches_applied.clear();
+        self.history.clear();
         self.kept = edited.keys().copied().collect();
         self.stored = edited;
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
     }
 
-    /// Whether no chunk is building, no carve waits for a chunk and no
-    /// search for debris across chunk borders runs or waits to be applied
-    /// (nor, in a networked world, a detach its server ordered).
+    /// Whether no chunk is building, no carve waits for a chunk, no
+    /// [`WorldUndo`] waits, and no search for debris across chunk borders
+    /// runs or waits to be applied (nor, in a networked world, a detach
+    /// its server ordered).
     #[must_use]
     pub fn is_settled(&self) -> bool {
         self.pending.is_empty()
+            && !self.history.holds_carves()
             && self.debris_search.is_none()
             && self.detach_ordered.is_none()
             && !self
@@ -660,7 +712,8 @@ pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, Terrain
 /// that reaches no chunk's cube, or adds or paints a material the world
 /// does not know, is rejected for the world entity. A chunk that is not
 /// live is built for the carve; if its build fails (a bad source sample)
-/// its waiting carves are dropped with a warning in the log.
+/// its waiting carves are dropped with a warning in the log. [`WorldUndo`]
+/// takes the last one back in every chunk.
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct WorldCarve {

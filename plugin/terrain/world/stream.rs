@@ -39,6 +39,10 @@ pub fn route_world_carves(
             continue;
         };
         match chunks_of(&world, carve) {
+            // After a waiting undo, the carve waits for it (`undo`).
+            Ok((tool, coords)) if world.history.holds_carves() => {
+                world.history.hold(tool, carve.edit, coords);
+            }
             Ok((tool, coords)) => {
                 let request = world.next_request;
                 world.route(&tool, carve.edit, request, &coords);
@@ -96,10 +100,12 @@ pub fn stream_chunks(
         let unload = f64::from(world.settings.unload_radius) / unit;
 
         // Wanted chunks, nearest first; those with waiting carves first.
-        let mut wanted: Vec<(f64, ChunkCoord)> = (world.pending.keys())
-            .chain(&world.debris_keep)
-            .map(|&c| (f64::NEG_INFINITY, c))
+        let mut wanted: Vec<(f64, ChunkCoord)> = (world.pending.keys().copied())
+            .chain(world.debris_keep.iter().copied())
+            .chain(world.history.wanted())
+            .map(|c| (f64::NEG_INFINITY, c))
             .collect();
+        let undoing: Vec<ChunkCoord> = world.history.wanted().collect();
         chunks_within(&focus, edge, load, distance, &mut wanted);
         wanted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         wanted.dedup_by_key(|w| w.1);
@@ -128,6 +134,7 @@ pub fn stream_chunks(
                     && !world.pending.contains_key(c)
                     && !world.debris_keep.contains(c)
                     && !just_carved.contains(c)
+                    && !undoing.contains(c)
             })
             .filter_map(|(c, state)| match state {
                 Chunk::Live(e) => Some((*c, Some(*e))),
@@ -261,7 +268,8 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
     for (coord, built) in done {
         world.stats.build_time += built.time;
         match built.terrain {
-            Ok(mut terrain) => {
+            Ok(terrain) => {
+                let mut terrain = terrain.with_max_undo(world.history.max);
                 if built.restored {
                     // Stored with no carve of its own: it lost solid to a
                     // detach across chunk borders (`debris`).
