@@ -284,6 +284,10 @@ pub struct TerrainWorld {
     /// Chunks built and kept for debris across borders in a networked
     /// world ([`debris_order`]), whatever the foci.
     pub(crate) debris_keep: BTreeSet<ChunkCoord>,
+    /// A server's chunks to build before it searches again: the chunks
+    /// across the open sides where its last search stopped
+    /// ([`debris_order`]).
+    pub(crate) debris_wanted: BTreeSet<ChunkCoord>,
     /// The detach a networked world's server ordered, waiting to be
     /// carried out here ([`debris_order`]).
     pub(crate) detach_ordered: Option<debris_order::OrderedDetach>,
@@ -316,6 +320,7 @@ impl TerrainWorld {
             debris_search: None,
             debris_role: debris_order::DebrisRole::Local,
             debris_keep: BTreeSet::new(),
+            debris_wanted: BTreeSet::new(),
             detach_ordered: None,
             detaches_applied: Vec::new(),
         })
@@ -576,6 +581,7 @@ impl TerrainWorld {
         self.pending.clear();
         self.debris_search = None;
         self.debris_keep.clear();
+        self.debris_wanted.clear();
         self.detach_ordered = None;
         self.detaches_applied.clear();
         self.kept = edited.keys().copied().collect();
