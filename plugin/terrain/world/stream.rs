@@ -5,7 +5,8 @@
 //! nearest point of a chunk's square; a chunk is wanted when one focus is
 //! within [`StreamSettings::load_radius`](super::StreamSettings) of it,
 //! and released once every focus is beyond `unload_radius` and the chunk
-//! is idle with no carve waiting for it.
+//! is idle with no carve waiting for it (at the earliest the frame after
+//! its build is collected, when its terrain can be read and stored).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -81,7 +82,9 @@ pub fn stream_chunks(
     for (world_entity, mut world, world_transform) in &mut worlds {
         let world = &mut *world;
         let span = bevy::log::info_span!("chisel::stream::collect_builds").entered();
-        collect_builds(&mut commands, world_entity, world);
+        // Their terrains are spawned by this frame's commands: none can be
+        // read (nor stored when it streams out) before the next frame.
+        let just_built = collect_builds(&mut commands, world_entity, world);
         drop(span);
         // Chunks that were just sent carves are not idle yet, though their
         // queues fill only when the terrain systems read the messages.
@@ -128,6 +131,7 @@ pub fn stream_chunks(
                     && !world.pending.contains_key(c)
                     && !world.debris_keep.contains(c)
                     && !just_carved.contains(c)
+                    && !just_built.contains(c)
             })
             .filter_map(|(c, state)| match state {
                 Chunk::Live(e) => Some((*c, Some(*e))),
@@ -249,7 +253,13 @@ fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     world.chunks.insert(coord, Chunk::Building(task));
 }
 
-fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut TerrainWorld) {
+/// Turns the finished builds into terrain entities (spawned by `commands`)
+/// or failed chunks; returns the chunks collected.
+fn collect_builds(
+    commands: &mut Commands,
+    world_entity: Entity,
+    world: &mut TerrainWorld,
+) -> Vec<ChunkCoord> {
     let mut done = Vec::new();
     for (coord, state) in &mut world.chunks {
         if let Chunk::Building(task) = state
@@ -258,6 +268,7 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
             done.push((*coord, built));
         }
     }
+    let collected = done.iter().map(|(coord, _)| *coord).collect();
     for (coord, built) in done {
         world.stats.build_time += built.time;
         match built.terrain {
@@ -295,6 +306,7 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
             }
         }
     }
+    collected
 }
 
 /// Sends the waiting carves of chunks whose terrain entity exists;
