@@ -36,7 +36,8 @@
 //!
 //! Rules across chunks:
 //! - **One search per world.** Seeds that come while a search runs wait
-//!   in their chunks for the next one.
+//!   in their chunks for the next one. A world with seeds waiting is not
+//!   settled ([`TerrainWorld::is_settled`]): a search is still to come.
 //! - **Carves beside the seeds first.** While a chunk with seeds, or a
 //!   neighbour of one across a side, has a job running or a carve or undo
 //!   waiting, no search starts: a carve that reaches several chunks
@@ -87,12 +88,13 @@
 //!   across borders.
 //!
 //! - **Networked worlds.** The pass depends on which chunks are live, so
-//!   in a networked world only the server runs it, with two rules more
+//!   in a networked world only the server runs it, with three rules more
 //!   (a search looks past sides towards chunks that are not live, and the
 //!   server builds those where only such sides hold what it found, then
-//!   searches again; every chunk a result depends on idle with no carve
-//!   waiting before it is applied),
-//!   and records each result it applies, which the server numbers in the
+//!   searches again; the chunks with seeds, those a search saw and those
+//!   it wants built are kept whatever the foci; every chunk a result
+//!   depends on idle with no carve waiting before it is applied), and
+//!   records each result it applies, which the server numbers in the
 //!   world's order. A client drops its own seeds and carries out each
 //!   ordered detach at its place: the same search over the chunks it
 //!   names from the seeds it names ([`super::debris_order`]).
@@ -226,6 +228,7 @@ pub fn detach_across_borders(
         let world = &mut *world;
         let follow = world.debris_role == DebrisRole::Follow;
         if !world.debris_across_borders || follow {
+            world.debris_seeded = false;
             if !follow {
                 world.debris_search = None;
                 world.debris_keep.clear();
@@ -279,6 +282,11 @@ pub fn detach_across_borders(
             debris_order::start_ordered(world, &terrains);
         } else {
             start_search(world, &mut terrains);
+        }
+        if world.debris_role != DebrisRole::Local {
+            // Kept from the next frame's streaming on: the chunks a search
+            // started now sees, and those a dropped result wants built.
+            debris_order::keep_chunks(world, &terrains);
         }
     }
 }
@@ -519,6 +527,9 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         })
         .map(|&(coord, _)| coord)
         .collect();
+    // Seeds that wait (for a chunk beside them, or one a search wants
+    // built) keep the world from being settled.
+    world.debris_seeded = !seeded.is_empty();
     if seeded.is_empty() {
         return;
     }
@@ -565,6 +576,7 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
             seeds.push((entity, taken));
         }
     }
+    world.debris_seeded = false;
     if near.is_empty() {
         return;
     }

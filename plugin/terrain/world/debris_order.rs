@@ -7,22 +7,28 @@
 //! [`super::debris`] describes it), `Serve` (the server, a host, a single
 //! player of a networked world) or `Follow` (a connected client).
 //!
-//! **Server.** The pass runs over the server's own live chunks, with two
+//! **Server.** The pass runs over the server's own live chunks, with three
 //! rules more:
 //! - A search looks past *open* sides, those towards a chunk that is not
 //!   live ([`chisel_bsp::octree::detach_across_chunks_with_open_sides`]):
 //!   it stops only at the ground, and a component that nothing but open
 //!   sides holds stays and names them. When such a side faces a chunk
 //!   among the 3×3 around a chunk the search started from, the server
-//!   drops the result, builds that chunk (and keeps it, and the chunks a
-//!   search saw, until a result is applied) and searches again. A
-//!   dedicated server holds no chunk but those carves reach, so without
-//!   this a piece over a border would always be held by a neighbour it
-//!   did not load; with it, a crater whose search reaches the ground
-//!   builds nothing more (`net_world_debris` tests: 12 craters in 12
-//!   places nobody holds build 12 chunks, as with the search off). A
-//!   piece reaching beyond those chunks is held by the first chunk that
-//!   is not live, on every peer alike.
+//!   drops the result, builds that chunk and searches again. A dedicated
+//!   server holds no chunk but those carves reach, so without this a
+//!   piece over a border would always be held by a neighbour it did not
+//!   load; with it, a crater whose search reaches the ground builds
+//!   nothing more (`net_world_debris` tests: 12 craters in 12 places
+//!   nobody holds build 12 chunks, as with the search off). A piece
+//!   reaching beyond those chunks is held by the first chunk that is not
+//!   live, on every peer alike.
+//! - Whatever the foci, the server keeps (builds, and does not stream
+//!   out) the chunks with seeds, the chunks its search saw while it runs
+//!   or waits, and the chunks a dropped result wants built until a result
+//!   is applied. The pass notes them again after it starts a search, so
+//!   that the next frame's streaming, which runs before it, does not
+//!   release a chunk the new search just saw (the search would be dropped
+//!   and run again over the chunk restored).
 //! - A result is applied only when every chunk it *depends on* (those it
 //!   takes solid from and their live neighbours across a side) is idle —
 //!   no job running, no carve or undo queued — and no carve waits for it

@@ -288,6 +288,9 @@ pub struct TerrainWorld {
     /// across the open sides where its last search stopped
     /// ([`debris_order`]).
     pub(crate) debris_wanted: BTreeSet<ChunkCoord>,
+    /// Whether a live chunk held seeds that no search took when the pass
+    /// last looked ([`debris`]): a search is still to come.
+    pub(crate) debris_seeded: bool,
     /// The detach a networked world's server ordered, waiting to be
     /// carried out here ([`debris_order`]).
     pub(crate) detach_ordered: Option<debris_order::OrderedDetach>,
@@ -321,6 +324,7 @@ impl TerrainWorld {
             debris_role: debris_order::DebrisRole::Local,
             debris_keep: BTreeSet::new(),
             debris_wanted: BTreeSet::new(),
+            debris_seeded: false,
             detach_ordered: None,
             detaches_applied: Vec::new(),
         })
@@ -582,6 +586,7 @@ impl TerrainWorld {
         self.debris_search = None;
         self.debris_keep.clear();
         self.debris_wanted.clear();
+        self.debris_seeded = false;
         self.detach_ordered = None;
         self.detaches_applied.clear();
         self.kept = edited.keys().copied().collect();
@@ -591,12 +596,14 @@ impl TerrainWorld {
     }
 
     /// Whether no chunk is building, no carve waits for a chunk and no
-    /// search for debris across chunk borders runs or waits to be applied
-    /// (nor, in a networked world, a detach its server ordered).
+    /// search for debris across chunk borders runs, waits to be applied
+    /// or waits to start (seeds in a chunk; nor, in a networked world, a
+    /// detach its server ordered).
     #[must_use]
     pub fn is_settled(&self) -> bool {
         self.pending.is_empty()
             && self.debris_search.is_none()
+            && !self.debris_seeded
             && self.detach_ordered.is_none()
             && !self
                 .chunks
