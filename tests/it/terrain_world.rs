@@ -285,6 +285,57 @@ fn an_edit_far_from_the_focus_survives_streaming_out_and_in() {
     assert!(the_world(&app, world).stats().restored >= 2);
 }
 
+/// A chunk whose restore finishes in the frame it is no longer wanted is
+/// released no earlier than the next frame, stored again: its terrain is
+/// spawned by that frame's commands and cannot be read before, and the
+/// release took it for an unedited chunk and lost its edits.
+#[test]
+fn an_edited_chunk_restored_as_its_focus_leaves_keeps_its_edits() {
+    let home = Vec3::new(16.0, 30.0, 16.0);
+    let (mut app, world, focus) = app_with(world(), home);
+    let far = ChunkCoord { x: 6, z: 0 };
+    let tool = dodecahedron(5.0, Vec3::new(6.0 * 32.0 + 12.0, 14.0, 16.0));
+    carve(&mut app, world, tool.clone());
+    settle(&mut app, world);
+    let want = reference(the_world(&app, world), far, std::slice::from_ref(&tool));
+    assert_eq!(
+        the_world(&app, world).stored_chunks().collect::<Vec<_>>(),
+        vec![far]
+    );
+    // The focus goes to the chunk for one frame: its restore starts (the
+    // nearest wanted chunk first).
+    let place = |app: &mut App, at: Vec3| {
+        let mut entity = app.world_mut().entity_mut(focus);
+        *entity.get_mut::<Transform>().expect("focus") = Transform::from_translation(at);
+        *entity.get_mut::<GlobalTransform>().expect("focus") =
+            GlobalTransform::from_translation(at);
+    };
+    place(&mut app, Vec3::new(6.0 * 32.0 + 16.0, 30.0, 16.0));
+    app.update();
+    assert!(the_world(&app, world).stats().building > 0, "restoring");
+    // It leaves before the restore is collected, which then happens in
+    // the frame the chunk is beyond the unload radius.
+    place(&mut app, home);
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    app.update();
+    settle(&mut app, world);
+    let w = the_world(&app, world);
+    assert!(w.chunk_entity(far).is_none());
+    assert_eq!(
+        w.stored_chunks().collect::<Vec<_>>(),
+        vec![far],
+        "the chunk's edits are kept"
+    );
+    move_focus(
+        &mut app,
+        world,
+        focus,
+        Vec3::new(6.0 * 32.0 + 16.0, 30.0, 16.0),
+    );
+    assert_eq!(terrain(&app, world, far).state_hash(), want.state_hash());
+    assert_eq!(terrain(&app, world, far).journal(), want.journal());
+}
+
 fn w_generate(app: &App, world: Entity, coord: ChunkCoord) -> u64 {
     the_world(app, world)
         .generate_chunk(coord)

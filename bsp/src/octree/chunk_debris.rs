@@ -170,6 +170,10 @@ pub struct ChunkedDetached {
     /// Each chunk's changes by the call, by chunk index (empty for a
     /// chunk nothing was taken from).
     pub changes: Vec<Changes>,
+    /// The open sides ([`detach_across_chunks_with_open_sides`]) that
+    /// components held by open sides alone touch: the chunk and the
+    /// side, sorted, each once. Empty from [`detach_across_chunks`].
+    pub held_at_open_sides: Vec<(usize, CubeSide)>,
 }
 
 impl ChunkedDetached {
@@ -201,32 +205,66 @@ pub fn detach_across_chunks(
     near: &[(usize, CellKey)],
     limits: DebrisLimits,
 ) -> Result<ChunkedDetached, Error> {
+    detach_across_chunks_with_open_sides(chunks, near, limits, &[])
+}
+
+/// [`detach_across_chunks`], where a side in `open` that a chunk lists as
+/// an anchor and that no chunk of the set lies across (an *open* side:
+/// the chunk across is not loaded) does not stop a search from a seed:
+/// it goes on towards the other anchors. A component that only open sides
+/// hold stays, as with [`detach_across_chunks`], and the open sides it
+/// touches are listed in [`ChunkedDetached::held_at_open_sides`]: load
+/// the chunks across them and search again to know whether it falls.
+/// The pieces taken out, and the chunks left, are those
+/// [`detach_across_chunks`] gives: a component stays in both when any
+/// anchor, open or not, holds it.
+///
+/// # Errors
+/// As [`detach_across_chunks`].
+pub fn detach_across_chunks_with_open_sides(
+    chunks: &mut [ChunkOctree],
+    near: &[(usize, CellKey)],
+    limits: DebrisLimits,
+    open: &[CubeSide],
+) -> Result<ChunkedDetached, Error> {
     let neighbours = neighbours(chunks)?;
     if let Some(&(chunk, _)) = near.iter().find(|(c, _)| *c >= chunks.len()) {
         return Err(Error::InvalidChunks {
             reason: format!("a seed names chunk {chunk} of {}", chunks.len()),
         });
     }
-    let found = {
-        // The anchors of each chunk without its shared sides.
-        let anchors: Vec<Anchors> = chunks
+    let (found, held_at_open_sides) = {
+        // The anchors of each chunk without its shared sides, and its
+        // open sides apart.
+        let unshared = |chunk: &ChunkOctree, across: &[(CubeSide, usize)]| {
+            (chunk.anchors.sides.iter())
+                .filter(|s| !across.iter().any(|(t, _)| t == *s))
+                .copied()
+                .collect::<Vec<CubeSide>>()
+        };
+        let (anchors, opened): (Vec<Anchors>, Vec<Vec<CubeSide>>) = chunks
             .iter()
             .zip(&neighbours)
-            .map(|(chunk, across)| Anchors {
-                sides: (chunk.anchors.sides.iter())
-                    .filter(|s| !across.iter().any(|(t, _)| t == *s))
-                    .copied()
-                    .collect(),
-                boxes: chunk.anchors.boxes.clone(),
+            .map(|(chunk, across)| {
+                let (opened, sides) = unshared(chunk, across)
+                    .into_iter()
+                    .partition(|s| open.contains(s));
+                let anchors = Anchors {
+                    sides,
+                    boxes: chunk.anchors.boxes.clone(),
+                };
+                (anchors, opened)
             })
-            .collect();
+            .unzip();
         let mut graphs: Vec<SolidGraph<'_>> = chunks
             .iter()
             .zip(&anchors)
             .zip(&neighbours)
-            .map(|((chunk, anchors), across)| {
+            .zip(opened)
+            .map(|(((chunk, anchors), across), opened)| {
                 SolidGraph::new(&chunk.octree, anchors)
                     .passing(across.iter().map(|(side, _)| *side).collect())
+                    .noting(opened)
             })
             .collect();
         let mut seeds: Vec<Node> = Vec::new();
@@ -239,13 +277,25 @@ pub fn detach_across_chunks(
         seeds.sort_unstable();
         seeds.dedup();
         let octrees: Vec<&Octree> = chunks.iter().map(|c| &c.octree).collect();
-        find_joined(&mut graphs, &octrees, &neighbours, &seeds, limits)?
+        let mut held_at: Vec<(usize, CubeSide)> = Vec::new();
+        let found = find_joined(
+            &mut graphs,
+            &octrees,
+            &neighbours,
+            &seeds,
+            limits,
+            &mut held_at,
+        )?;
+        held_at.sort_unstable_by_key(|&(chunk, side)| (chunk, side.axis, side.upper));
+        held_at.dedup();
+        (found, held_at)
     };
     let mut changes = vec![Changes::default(); chunks.len()];
     if found.is_empty() {
         return Ok(ChunkedDetached {
             pieces: Vec::new(),
             changes,
+            held_at_open_sides,
         });
     }
     let pieces: Vec<ChunkedPiece> = found
@@ -276,7 +326,11 @@ pub fn detach_across_chunks(
         }
         changes[chunk] = chunk_changes;
     }
-    Ok(ChunkedDetached { pieces, changes })
+    Ok(ChunkedDetached {
+        pieces,
+        changes,
+        held_at_open_sides,
+    })
 }
 
 /// For each chunk, its shared sides with the neighbour across each,
@@ -323,7 +377,9 @@ fn neighbours(chunks: &[ChunkOctree]) -> Result<Vec<Vec<(CubeSide, usize)>>, Err
 type Joined = Vec<(usize, Vec<DebrisCell>, BTreeMap<Label, ExactVolume>)>;
 
 /// The unanchored components of the joined graph with a cell among
-/// `seeds` (sorted), in the order of their first cells.
+/// `seeds` (sorted), in the order of their first cells. A component that
+/// no anchor holds but that touches open sides (the graphs' noted sides)
+/// is held; those sides go to `held_at`.
 ///
 /// # Errors
 /// [`Error::TooMuchDebris`] as soon as the debris found is over `limits`.
@@ -333,6 +389,7 @@ fn find_joined(
     neighbours: &[Vec<(CubeSide, usize)>],
     seeds: &[Node],
     limits: DebrisLimits,
+    held_at: &mut Vec<(usize, CubeSide)>,
 ) -> Result<Vec<Joined>, Error> {
     let mut anchored: WordSet<Node> = WordSet::default();
     let mut debris: WordSet<Node> = WordSet::default();
@@ -349,12 +406,14 @@ fn find_joined(
         let gap = |graphs: &[SolidGraph<'_>], (chunk, cell): Node| graphs[chunk].gap(cell.key);
         let mut heap = BinaryHeap::from([Reverse((gap(graphs, seed), seed))]);
         let mut held = false;
+        let mut open_sides: Vec<(usize, CubeSide)> = Vec::new();
         while let Some(Reverse((_, (chunk, cell)))) = heap.pop() {
             next.clear();
             joined.clear();
             // The neighbours of an anchored cell are anchored too: they
             // join the search before it stops.
             held = graphs[chunk].expand(cell, &mut next);
+            open_sides.extend(graphs[chunk].touched.iter().map(|&side| (chunk, side)));
             joined.extend(next.iter().map(|&n| (chunk, n)));
             let box_of_leaf = octrees[chunk].cell_box(cell.key);
             for (side, face) in std::mem::take(&mut graphs[chunk].border) {
@@ -382,7 +441,10 @@ fn find_joined(
                 break;
             }
         }
-        if held {
+        if held || !open_sides.is_empty() {
+            if !held {
+                held_at.extend(open_sides);
+            }
             anchored.extend(order);
             continue;
         }

@@ -222,6 +222,12 @@ pub(crate) struct SolidGraph<'a> {
     /// The faces on `through` sides that [`SolidGraph::expand`] met since
     /// they were last taken.
     pub(crate) border: Vec<(CubeSide, Polygon)>,
+    /// Root sides that are noted, not followed and not anchors (see
+    /// [`SolidGraph::noting`]).
+    noted: Vec<CubeSide>,
+    /// The `noted` sides the cell [`SolidGraph::expand`] last expanded
+    /// touches.
+    pub(crate) touched: Vec<CubeSide>,
 }
 
 impl<'a> SolidGraph<'a> {
@@ -234,6 +240,8 @@ impl<'a> SolidGraph<'a> {
             across: WordMap::default(),
             through: Vec::new(),
             border: Vec::new(),
+            noted: Vec::new(),
+            touched: Vec::new(),
         }
     }
 
@@ -242,6 +250,14 @@ impl<'a> SolidGraph<'a> {
     /// octree, see `chunks.rs`).
     pub(crate) fn passing(mut self, through: Vec<CubeSide>) -> Self {
         self.through = through;
+        self
+    }
+
+    /// The same graph, noting in [`SolidGraph::touched`] which of the root
+    /// sides `noted` the expanded cell touches (they are neither anchors
+    /// nor followed).
+    pub(crate) fn noting(mut self, noted: Vec<CubeSide>) -> Self {
+        self.noted = noted;
         self
     }
 
@@ -296,9 +312,11 @@ impl<'a> SolidGraph<'a> {
 
     /// Appends the solid cells adjacent to `cell` to `out` (sorted, each
     /// once) and tells whether `cell` touches an anchor. Its faces on the
-    /// `through` sides go to `border`.
+    /// `through` sides go to `border`, the `noted` sides it touches to
+    /// `touched`.
     pub(crate) fn expand(&mut self, cell: SolidCell, out: &mut Vec<SolidCell>) -> bool {
         let start = out.len();
+        self.touched.clear();
         if self.leaf_cells(cell.key).is_none() {
             return false;
         }
@@ -310,6 +328,8 @@ impl<'a> SolidGraph<'a> {
             across,
             through,
             border,
+            noted,
+            touched,
         } = self;
         let Some(cells) = leaves.get(&cell.key) else {
             return false;
@@ -346,6 +366,9 @@ impl<'a> SolidGraph<'a> {
             if on_root {
                 let side = CubeSide { axis, upper };
                 anchored |= anchors.sides.contains(&side);
+                if noted.contains(&side) && !touched.contains(&side) {
+                    touched.push(side);
+                }
                 if through.contains(&side) {
                     border.push((side, cell_face(arena, f)));
                 }

@@ -88,6 +88,7 @@ pub use apply::{Changes, Edit};
 pub use cell::{CellBox, CellKey};
 pub use chunk_debris::{
     ChunkOctree, ChunkPart, ChunkedDetached, ChunkedPiece, DebrisLimits, detach_across_chunks,
+    detach_across_chunks_with_open_sides,
 };
 pub use components::{Anchors, Component, CubeSide, SolidCell};
 pub use debris::{Carved, DebrisCell, DebrisConfig, DebrisPiece, Detached};

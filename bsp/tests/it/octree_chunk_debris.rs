@@ -15,6 +15,7 @@ use chisel_bsp::exact::IntPoint;
 use chisel_bsp::octree::{
     Anchors, CellBox, CellKey, ChunkOctree, ChunkedDetached, CubeSide, DebrisConfig, DebrisLimits,
     Edit, ExactVolume, Octree, OctreeConfig, Tool, detach_across_chunks,
+    detach_across_chunks_with_open_sides,
 };
 use chisel_bsp::tree::Label;
 use rand::{Rng as _, SeedableRng};
@@ -36,6 +37,26 @@ fn config() -> OctreeConfig {
 fn cube(min: [i64; 3], max: [i64; 3]) -> CellBox {
     CellBox { min, max }
 }
+
+/// A chunk's four vertical sides: open where no chunk lies across.
+const OPEN: [CubeSide; 4] = [
+    CubeSide {
+        axis: 0,
+        upper: false,
+    },
+    CubeSide {
+        axis: 0,
+        upper: true,
+    },
+    CubeSide {
+        axis: 2,
+        upper: false,
+    },
+    CubeSide {
+        axis: 2,
+        upper: true,
+    },
+];
 
 /// A chunk's anchors: the bottom and its four vertical sides, as a
 /// world's chunks list them.
@@ -119,7 +140,16 @@ fn carve_world(
         pieces.extend(carved.detached.pieces.iter().map(|p| p.volumes.clone()));
         near.extend(carved.changes.changed.iter().map(|&k| (i, k)));
     }
-    let across = detach_across_chunks(chunks, &near, limits)?;
+    // Past the open sides too: the same pieces and chunks, and the open
+    // sides that held what stays.
+    let mut plain_chunks = chunks.to_vec();
+    let plain = detach_across_chunks(&mut plain_chunks, &near, limits);
+    let across = detach_across_chunks_with_open_sides(chunks, &near, limits, &OPEN)?;
+    let plain = plain.expect("the same outcome without open sides");
+    assert!(plain.held_at_open_sides.is_empty());
+    assert_eq!(bytes(&plain_chunks), bytes(chunks), "the same chunks");
+    let volumes = |d: &ChunkedDetached| d.pieces.iter().map(|p| p.volumes()).collect::<Vec<_>>();
+    assert_eq!(volumes(&plain), volumes(&across), "the same pieces");
     pieces.extend(across.pieces.iter().map(|p| p.volumes()));
     pieces.sort();
     Ok((pieces, across))
@@ -266,7 +296,7 @@ fn a_piece_held_through_the_neighbour_stays() {
 }
 
 /// Without the neighbouring chunk in the set (not loaded), the side the
-/// slab crosses anchors it: nothing falls.
+/// slab crosses anchors it: nothing falls, and the result names that side.
 #[test]
 fn a_chunk_not_loaded_anchors() {
     let boxes = slab_on_pillar();
@@ -277,6 +307,24 @@ fn a_chunk_not_loaded_anchors() {
     assert!(pieces.is_empty());
     assert_eq!(bytes(&chunks), before);
     check(&before, &chunks, &across);
+    // The search from the slab stopped on that side: loading the chunk
+    // across is what would let it fall.
+    let across_x = CubeSide {
+        axis: 0,
+        upper: true,
+    };
+    assert!(
+        across.held_at_open_sides.contains(&(0, across_x)),
+        "{:?}",
+        across.held_at_open_sides
+    );
+    let mut both = world(&FOUR[..2], &boxes);
+    let (_, across) = carve_world(&mut both, &pillar_cut(), DebrisLimits::default()).unwrap();
+    assert!(
+        !across.held_at_open_sides.contains(&(0, across_x)),
+        "a side with a chunk across holds nothing: {:?}",
+        across.held_at_open_sides
+    );
 }
 
 /// A slab over the corner where four chunks meet, on a pillar in one of

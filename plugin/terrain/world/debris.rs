@@ -36,7 +36,8 @@
 //!
 //! Rules across chunks:
 //! - **One search per world.** Seeds that come while a search runs wait
-//!   in their chunks for the next one.
+//!   in their chunks for the next one. A world with seeds waiting is not
+//!   settled ([`TerrainWorld::is_settled`]): a search is still to come.
 //! - **Carves beside the seeds first.** While a chunk with seeds, or a
 //!   neighbour of one across a side, has a job running or a carve or undo
 //!   waiting, no search starts: a carve that reaches several chunks
@@ -89,10 +90,13 @@
 //!   across borders.
 //!
 //! - **Networked worlds.** The pass depends on which chunks are live, so
-//!   in a networked world only the server runs it, with two rules more
-//!   (the chunks around the seeds built before searching; every chunk a
-//!   result depends on idle with no carve waiting before it is applied),
-//!   and records each result it applies, which the server numbers in the
+//!   in a networked world only the server runs it, with three rules more
+//!   (a search looks past sides towards chunks that are not live, and the
+//!   server builds those where only such sides hold what it found, then
+//!   searches again; the chunks with seeds, those a search saw and those
+//!   it wants built are kept whatever the foci; every chunk a result
+//!   depends on idle with no carve waiting before it is applied), and
+//!   records each result it applies, which the server numbers in the
 //!   world's order. A client drops its own seeds and carries out each
 //!   ordered detach at its place: the same search over the chunks it
 //!   names from the seeds it names ([`super::debris_order`]).
@@ -119,7 +123,8 @@ use bevy::prelude::*;
 use bevy::tasks::futures::check_ready;
 use bevy::tasks::{AsyncComputeTaskPool, Task};
 use chisel_bsp::octree::{
-    CellKey, ChunkOctree, ChunkedDetached, ChunkedPiece, DebrisLimits, Octree, detach_across_chunks,
+    CellKey, ChunkOctree, ChunkedDetached, ChunkedPiece, CubeSide, DebrisLimits, Octree,
+    detach_across_chunks_with_open_sides,
 };
 
 use super::debris_order::{self, AppliedDetach, DebrisRole};
@@ -151,6 +156,24 @@ impl DebrisSearch {
     /// The chunks it joined.
     pub(super) fn chunks(&self) -> impl Iterator<Item = ChunkCoord> + '_ {
         self.seen.iter().map(|c| c.coord)
+    }
+
+    /// The indices (into [`DebrisSearch::chunks`]) of the chunks it
+    /// searched from, each once.
+    pub(super) fn seeded(&self) -> impl Iterator<Item = usize> + '_ {
+        let mut last = None;
+        self.near.iter().filter_map(move |&(i, _)| {
+            let new = last != Some(i);
+            last = Some(i);
+            new.then_some(i)
+        })
+    }
+
+    /// What it found, once it is done and did not fail.
+    pub(super) fn detached(&self) -> Option<&ChunkedDetached> {
+        self.searched
+            .as_ref()
+            .and_then(|s| s.detached.as_ref().ok())
     }
 
     /// Whether the search still runs.
@@ -208,9 +231,11 @@ pub fn detach_across_borders(
         let world = &mut *world;
         let follow = world.debris_role == DebrisRole::Follow;
         if !world.debris_across_borders || follow {
+            world.debris_seeded = false;
             if !follow {
                 world.debris_search = None;
                 world.debris_keep.clear();
+                world.debris_wanted.clear();
             }
             for (_, entity) in world.live_chunks() {
                 if let Ok(mut terrain) = terrains.get_mut(entity)
@@ -236,16 +261,22 @@ pub fn detach_across_borders(
                 Verdict::Stale => {
                     world.stats.debris_searches_dropped += 1;
                     if let Some(search) = world.debris_search.take() {
-                        for (entity, seeds) in search.seeds {
-                            if let Ok(mut terrain) = terrains.get_mut(entity) {
-                                terrain.runtime.border_seeds.extend(seeds);
-                            }
-                        }
+                        give_back_seeds(search, &mut terrains);
                     }
                 }
                 Verdict::Apply => {
-                    if let Some(search) = world.debris_search.take() {
+                    let Some(search) = world.debris_search.take() else {
+                        continue;
+                    };
+                    let wanted = debris_order::chunks_across_open_sides(world, &search);
+                    if wanted.is_empty() {
+                        world.debris_wanted.clear();
                         apply_search(world, &mut terrains, search);
+                    } else {
+                        // A server's search stopped where a chunk it did
+                        // not load could go on: build it, search again.
+                        world.debris_wanted.extend(wanted);
+                        give_back_seeds(search, &mut terrains);
                     }
                 }
             }
@@ -254,6 +285,40 @@ pub fn detach_across_borders(
             debris_order::start_ordered(world, &terrains);
         } else {
             start_search(world, &mut terrains);
+        }
+        if world.debris_role != DebrisRole::Local {
+            // Kept from the next frame's streaming on: the chunks a search
+            // started now sees, and those a dropped result wants built.
+            debris_order::keep_chunks(world, &terrains);
+        }
+    }
+}
+
+/// A chunk's four sides towards its neighbours in the world's grid.
+const HORIZONTAL_SIDES: [CubeSide; 4] = [
+    CubeSide {
+        axis: 0,
+        upper: false,
+    },
+    CubeSide {
+        axis: 0,
+        upper: true,
+    },
+    CubeSide {
+        axis: 2,
+        upper: false,
+    },
+    CubeSide {
+        axis: 2,
+        upper: true,
+    },
+];
+
+/// Puts a dropped search's seeds back into their chunks.
+fn give_back_seeds(search: DebrisSearch, terrains: &mut Query<&mut Terrain>) {
+    for (entity, seeds) in search.seeds {
+        if let Ok(mut terrain) = terrains.get_mut(entity) {
+            terrain.runtime.border_seeds.extend(seeds);
         }
     }
 }
@@ -479,6 +544,9 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         })
         .map(|&(coord, _)| coord)
         .collect();
+    // Seeds that wait (for a chunk beside them, or one a search wants
+    // built) keep the world from being settled.
+    world.debris_seeded = !seeded.is_empty();
     if seeded.is_empty() {
         return;
     }
@@ -489,10 +557,9 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         (seeded.contains(&coord) || side_neighbours(coord).any(|n| seeded.contains(&n)))
             && terrains.get(e).is_ok_and(busy)
     });
-    // A server searches only with every chunk around the seeds live, so
-    // that a piece over a corner is not held by a chunk it did not load.
-    let served = world.debris_role == DebrisRole::Serve;
-    if waiting || (served && !debris_order::around_live(world, &seeded)) {
+    // A server whose last search stopped on a side towards a chunk it did
+    // not load searches again once that chunk is built.
+    if waiting || !debris_order::wanted_built(world) {
         return;
     }
     let _span = bevy::log::info_span!("chisel::world::detach_across_borders").entered();
@@ -526,6 +593,7 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
             seeds.push((entity, taken));
         }
     }
+    world.debris_seeded = false;
     if near.is_empty() {
         return;
     }
@@ -545,9 +613,16 @@ pub(super) fn launch(
     ordered: Option<u64>,
 ) {
     let searched_from = near.clone();
+    // A server looks past the sides towards chunks it did not load, to
+    // build them when only those hold what it found (`debris_order`).
+    let open: &[CubeSide] = if world.debris_role == DebrisRole::Serve && ordered.is_none() {
+        &HORIZONTAL_SIDES
+    } else {
+        &[]
+    };
     let task = AsyncComputeTaskPool::get().spawn(async move {
         let _span = bevy::log::info_span!("chisel::world::debris_search").entered();
-        let detached = detach_across_chunks(&mut chunks, &near, limits);
+        let detached = detach_across_chunks_with_open_sides(&mut chunks, &near, limits, open);
         Searched {
             detached,
             octrees: chunks.into_iter().map(|c| c.octree).collect(),

@@ -7,16 +7,28 @@
 //! [`super::debris`] describes it), `Serve` (the server, a host, a single
 //! player of a networked world) or `Follow` (a connected client).
 //!
-//! **Server.** The pass runs over the server's own live chunks, with two
+//! **Server.** The pass runs over the server's own live chunks, with three
 //! rules more:
-//! - A search starts only once every chunk around each seeded chunk (the
-//!   3×3 chunks centred on it) is live or failed to build; the server
-//!   builds them for it and keeps them, and the chunks a search saw, until
-//!   it is applied or dropped. A dedicated server holds no chunk but those
-//!   carves reach, so without this a piece over a corner would always be
-//!   held by a neighbour the server did not load. A piece reaching beyond
-//!   those chunks is held by the first chunk that is not live, on every
-//!   peer alike.
+//! - A search looks past *open* sides, those towards a chunk that is not
+//!   live ([`chisel_bsp::octree::detach_across_chunks_with_open_sides`]):
+//!   it stops only at the ground, and a component that nothing but open
+//!   sides holds stays and names them. When such a side faces a chunk
+//!   among the 3×3 around a chunk the search started from, the server
+//!   drops the result, builds that chunk and searches again. A dedicated
+//!   server holds no chunk but those carves reach, so without this a
+//!   piece over a border would always be held by a neighbour it did not
+//!   load; with it, a crater whose search reaches the ground builds
+//!   nothing more (`net_world_debris` tests: 12 craters in 12 places
+//!   nobody holds build 12 chunks, as with the search off). A piece
+//!   reaching beyond those chunks is held by the first chunk that is not
+//!   live, on every peer alike.
+//! - Whatever the foci, the server keeps (builds, and does not stream
+//!   out) the chunks with seeds, the chunks its search saw while it runs
+//!   or waits, and the chunks a dropped result wants built until a result
+//!   is applied. The pass notes them again after it starts a search, so
+//!   that the next frame's streaming, which runs before it, does not
+//!   release a chunk the new search just saw (the search would be dropped
+//!   and run again over the chunk restored).
 //! - A result is applied only when every chunk it *depends on* (those it
 //!   takes solid from and their live neighbours across a side) is idle —
 //!   no job running, no carve or undo queued — and no carve waits for it
@@ -78,7 +90,7 @@ use std::collections::BTreeSet;
 use bevy::prelude::*;
 use chisel_bsp::octree::{CellKey, ChunkOctree, ChunkedDetached, DebrisLimits};
 
-use super::debris::{SeenChunk, busy, launch};
+use super::debris::{DebrisSearch, SeenChunk, busy, launch};
 use super::{Chunk, ChunkCoord, TerrainWorld};
 use crate::terrain::component::Terrain;
 
@@ -148,12 +160,57 @@ fn around(coord: ChunkCoord) -> impl Iterator<Item = ChunkCoord> {
     })
 }
 
-/// Whether every chunk around each of `seeded` is live or failed.
-pub(super) fn around_live(world: &TerrainWorld, seeded: &BTreeSet<ChunkCoord>) -> bool {
-    seeded
-        .iter()
-        .flat_map(|&c| around(c))
-        .all(|c| matches!(world.chunks.get(&c), Some(Chunk::Live(_) | Chunk::Failed)))
+/// Whether every chunk a server's search wants built first is live or
+/// failed.
+pub(super) fn wanted_built(world: &TerrainWorld) -> bool {
+    (world.debris_wanted.iter())
+        .all(|c| matches!(world.chunks.get(c), Some(Chunk::Live(_) | Chunk::Failed)))
+}
+
+/// A server's finished search: the chunks across the open sides where it
+/// stopped (a side listed as an anchor only because the chunk across was
+/// not live) that lie around a chunk it searched from and are neither
+/// live nor failed. Empty on other roles, and when the search failed.
+pub(super) fn chunks_across_open_sides(
+    world: &TerrainWorld,
+    search: &DebrisSearch,
+) -> BTreeSet<ChunkCoord> {
+    let mut wanted = BTreeSet::new();
+    let Some(detached) = search
+        .detached()
+        .filter(|_| world.debris_role == DebrisRole::Serve)
+    else {
+        return wanted;
+    };
+    let seen: Vec<ChunkCoord> = search.chunks().collect();
+    let seeded: BTreeSet<ChunkCoord> = search.seeded().map(|i| seen[i]).collect();
+    for &(chunk, side) in &detached.held_at_open_sides {
+        if side.axis == 1 {
+            continue;
+        }
+        let step = if side.upper { 1 } else { -1 };
+        let coord = seen[chunk];
+        let across = if side.axis == 0 {
+            ChunkCoord {
+                x: coord.x + step,
+                z: coord.z,
+            }
+        } else {
+            ChunkCoord {
+                x: coord.x,
+                z: coord.z + step,
+            }
+        };
+        let near_seeds = seeded.iter().any(|&s| around(s).any(|c| c == across));
+        let built = matches!(
+            world.chunks.get(&across),
+            Some(Chunk::Live(_) | Chunk::Failed)
+        );
+        if near_seeds && !built {
+            wanted.insert(across);
+        }
+    }
+    wanted
 }
 
 /// Notes the chunks the world must build and keep for debris across
@@ -169,12 +226,13 @@ pub(super) fn keep_chunks(world: &mut TerrainWorld, terrains: &Query<&mut Terrai
                     .get(entity)
                     .is_ok_and(|t| !t.runtime.border_seeds.is_empty())
                 {
-                    keep.extend(around(coord));
+                    keep.insert(coord);
                 }
             }
             if let Some(search) = &world.debris_search {
                 keep.extend(search.chunks());
             }
+            keep.extend(world.debris_wanted.iter().copied());
         }
         DebrisRole::Follow => {
             if let Some(ordered) = &world.detach_ordered {

@@ -301,6 +301,13 @@ pub struct TerrainWorld {
     /// Chunks built and kept for debris across borders in a networked
     /// world ([`debris_order`]), whatever the foci.
     pub(crate) debris_keep: BTreeSet<ChunkCoord>,
+    /// A server's chunks to build before it searches again: the chunks
+    /// across the open sides where its last search stopped
+    /// ([`debris_order`]).
+    pub(crate) debris_wanted: BTreeSet<ChunkCoord>,
+    /// Whether a live chunk held seeds that no search took when the pass
+    /// last looked ([`debris`]): a search is still to come.
+    pub(crate) debris_seeded: bool,
     /// The detach a networked world's server ordered, waiting to be
     /// carried out here ([`debris_order`]).
     pub(crate) detach_ordered: Option<debris_order::OrderedDetach>,
@@ -336,6 +343,8 @@ impl TerrainWorld {
             debris_search: None,
             debris_role: debris_order::DebrisRole::Local,
             debris_keep: BTreeSet::new(),
+            debris_wanted: BTreeSet::new(),
+            debris_seeded: false,
             detach_ordered: None,
             detaches_applied: Vec::new(),
             history: undo::WorldHistory::default(),
@@ -625,6 +634,8 @@ impl TerrainWorld {
         self.pending.clear();
         self.debris_search = None;
         self.debris_keep.clear();
+        self.debris_wanted.clear();
+        self.debris_seeded = false;
         self.detach_ordered = None;
         self.detaches_applied.clear();
         self.history.clear();
@@ -636,13 +647,14 @@ impl TerrainWorld {
 
     /// Whether no chunk is building, no carve waits for a chunk, no
     /// [`WorldUndo`] waits, and no search for debris across chunk borders
-    /// runs or waits to be applied (nor, in a networked world, a detach
-    /// its server ordered).
+    /// runs, waits to be applied or waits to start (seeds in a chunk; nor,
+    /// in a networked world, a detach its server ordered).
     #[must_use]
     pub fn is_settled(&self) -> bool {
         self.pending.is_empty()
             && !self.history.holds_carves()
             && self.debris_search.is_none()
+            && !self.debris_seeded
             && self.detach_ordered.is_none()
             && !self
                 .chunks

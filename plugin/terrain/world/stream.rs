@@ -5,7 +5,8 @@
 //! nearest point of a chunk's square; a chunk is wanted when one focus is
 //! within [`StreamSettings::load_radius`](super::StreamSettings) of it,
 //! and released once every focus is beyond `unload_radius` and the chunk
-//! is idle with no carve waiting for it.
+//! is idle with no carve waiting for it (at the earliest the frame after
+//! its build is collected, when its terrain can be read and stored).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -85,7 +86,9 @@ pub fn stream_chunks(
     for (world_entity, mut world, world_transform) in &mut worlds {
         let world = &mut *world;
         let span = bevy::log::info_span!("chisel::stream::collect_builds").entered();
-        collect_builds(&mut commands, world_entity, world);
+        // Their terrains are spawned by this frame's commands: none can be
+        // read (nor stored when it streams out) before the next frame.
+        let just_built = collect_builds(&mut commands, world_entity, world);
         drop(span);
         // Chunks that were just sent carves are not idle yet, though their
         // queues fill only when the terrain systems read the messages.
@@ -135,6 +138,7 @@ pub fn stream_chunks(
                     && !world.debris_keep.contains(c)
                     && !just_carved.contains(c)
                     && !undoing.contains(c)
+                    && !just_built.contains(c)
             })
             .filter_map(|(c, state)| match state {
                 Chunk::Live(e) => Some((*c, Some(*e))),
@@ -256,7 +260,13 @@ fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     world.chunks.insert(coord, Chunk::Building(task));
 }
 
-fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut TerrainWorld) {
+/// Turns the finished builds into terrain entities (spawned by `commands`)
+/// or failed chunks; returns the chunks collected.
+fn collect_builds(
+    commands: &mut Commands,
+    world_entity: Entity,
+    world: &mut TerrainWorld,
+) -> Vec<ChunkCoord> {
     let mut done = Vec::new();
     for (coord, state) in &mut world.chunks {
         if let Chunk::Building(task) = state
@@ -265,6 +275,7 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
             done.push((*coord, built));
         }
     }
+    let collected = done.iter().map(|(coord, _)| *coord).collect();
     for (coord, built) in done {
         world.stats.build_time += built.time;
         match built.terrain {
@@ -303,6 +314,7 @@ fn collect_builds(commands: &mut Commands, world_entity: Entity, world: &mut Ter
             }
         }
     }
+    collected
 }
 
 /// Sends the waiting carves of chunks whose terrain entity exists;
