@@ -9,6 +9,8 @@
 //! same on every machine); the chunks are 20.48 m cubes, each an ordinary
 //! destructible terrain. The HUD shows the chunk counts and build times.
 //!
+//! `U` takes the last crater back, in every chunk it reached.
+//!
 //! Runs in a window when a display exists; otherwise renders headless,
 //! streams within smaller radii, flies a fixed 12 m path and writes PNG
 //! screenshots to `screenshots/` (about 30 s on two cores).
@@ -25,7 +27,7 @@ use bevy_chisel::terrain::{
     LodSettings, NoiseOctave, StreamSettings, Terrain, TerrainFocus, TerrainMaterials,
     TerrainPlugin, TerrainSurface, TerrainSystems, TerrainWorld, TriplanarMaterial,
     TriplanarMaterialPlugin, ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldLod,
-    WorldSource, surface_table,
+    WorldSource, WorldUndo, WorldUndoRejected, WorldUndone, surface_table,
 };
 use bevy_chisel::viewer::{Overlay, blast, overlay_text};
 
@@ -85,7 +87,7 @@ fn main() -> AppExit {
         .add_systems(
             Update,
             (
-                fly.before(TerrainSystems::Carve),
+                (fly, undo_crater).before(TerrainSystems::Carve),
                 update_hud.after(TerrainSystems::Mesh),
             ),
         )
@@ -211,6 +213,8 @@ struct Flight {
     distance: f32,
     next_crater: f32,
     craters: usize,
+    /// Craters taken back with `U`.
+    undone: usize,
     /// Headless: frames counted towards the captures.
     counted: u32,
 }
@@ -276,6 +280,30 @@ fn fly(
     }
 }
 
+/// `U` takes the last crater back in every chunk it reached
+/// ([`WorldUndo`]); the answer is logged.
+fn undo_crater(
+    keys: Option<Res<ButtonInput<KeyCode>>>,
+    worlds: Query<Entity, With<TerrainWorld>>,
+    mut flight: ResMut<Flight>,
+    mut undos: MessageWriter<WorldUndo>,
+    mut undone: MessageReader<WorldUndone>,
+    mut refused: MessageReader<WorldUndoRejected>,
+) {
+    if let (Some(keys), Ok(world)) = (keys, worlds.single())
+        && keys.just_pressed(KeyCode::KeyU)
+    {
+        undos.write(WorldUndo { world });
+    }
+    for done in undone.read() {
+        flight.undone += 1;
+        info!("crater undone in chunks {:?}", done.chunks);
+    }
+    for refusal in refused.read() {
+        warn!("undo refused: {}", refusal.reason);
+    }
+}
+
 fn report(world: &TerrainWorld, lod: &WorldLod) {
     let l = lod.stats();
     info!(
@@ -326,8 +354,8 @@ fn update_hud(
     let lines = [
         "bevy_chisel world: streamed exact terrain chunks".to_owned(),
         format!(
-            "flown {:.0} m | craters {} | triangles {triangles}",
-            flight.distance, flight.craters
+            "flown {:.0} m | craters {} ({} undone, U undoes the last) | triangles {triangles}",
+            flight.distance, flight.craters, flight.undone
         ),
         format!(
             "chunks: {} live, {} building, {} edited stored ({} kB) | built {} ({} restored), {:.1} ms each",
