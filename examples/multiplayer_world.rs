@@ -217,21 +217,12 @@ fn on_ground(at: Vec2, above: f32) -> Vec3 {
 }
 
 /// Every edited chunk a peer holds, live (`terrain` gives a chunk
-/// entity's terrain) or stored: its state hash and, with `bytes`, its
-/// octree's bytes.
+/// entity's terrain) or stored: its octree's bytes and state hash.
 fn edited_chunks<'a>(
     world: &TerrainWorld,
     terrain: impl Fn(Entity) -> Option<&'a Terrain>,
-    bytes: bool,
 ) -> BTreeMap<ChunkCoord, (Vec<u8>, u64)> {
-    let record = |t: &Terrain| {
-        let octree = if bytes {
-            t.octree().to_bytes()
-        } else {
-            Vec::new()
-        };
-        (octree, t.state_hash())
-    };
+    let record = |t: &Terrain| (t.octree().to_bytes(), t.state_hash());
     let mut out = BTreeMap::new();
     for (coord, entity) in world.live_chunks() {
         if let Some(t) = terrain(entity)

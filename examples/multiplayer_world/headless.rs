@@ -57,7 +57,7 @@ pub fn publish(app: &mut App, out: &Mutex<Option<ServerState>>) {
     {
         return;
     }
-    let chunks = edited_chunks(terrain_world, |e| world.get::<Terrain>(e), true);
+    let chunks = edited_chunks(terrain_world, |e| world.get::<Terrain>(e));
     *state = Some(ServerState {
         accepted,
         detached,
@@ -105,7 +105,7 @@ pub fn release_captures(
         if state.accepted < CARVES || state.detached == 0 {
             return;
         }
-        let mine = edited_chunks(world, |e| terrains.get(e).ok(), true);
+        let mine = edited_chunks(world, |e| terrains.get(e).ok());
         if mine != state.chunks {
             return;
         }

@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::{
     NetClientPlugin, NetClientStats, NetServerPlugin, NetServerStats, NetWorld,
-    NetWorldCarveRequest, WireTool, world_state_hash,
+    NetWorldCarveRequest, WireTool,
 };
 use bevy_chisel::presentation::{HoldCaptures, Presentation};
 use bevy_chisel::terrain::avian::TerrainAvianPlugin;
@@ -25,7 +25,7 @@ use bevy_chisel::viewer::{
 use super::headless::{ServerState, connect_when_drawn, release_captures, stop_when_disconnected};
 use super::{
     BLAST_RADIUS, CAMERA_DISTANCE, CAMERA_PITCH, CRATERS, DIRT, GRASS, HEAP_RADIUS, ROCK, SITE,
-    bridge, edited_chunks, new_world, on_ground, settled,
+    bridge, new_world, on_ground, settled,
 };
 
 /// What a player does, sees and waits for.
@@ -317,8 +317,15 @@ pub fn hud(
     let (Ok(world), Ok(mut text)) = (worlds.single(), text.single_mut()) else {
         return;
     };
-    let chunks = edited_chunks(world, |e| terrains.get(e).ok(), false);
-    let hash = world_state_hash(chunks.iter().map(|(c, (_, h))| (*c, *h)));
+    // Counted, not hashed: a world hash would decode every stored chunk
+    // each frame (the hash checks compare it with the server's).
+    let live_edited = (world.live_chunks())
+        .filter(|(coord, e)| {
+            terrains
+                .get(*e)
+                .is_ok_and(|t| world.chunk_edited(*coord, t))
+        })
+        .count();
     let stats = world.stats();
     let role = if served.accepted > 0 {
         format!(
@@ -332,12 +339,9 @@ pub fn hud(
         )
     };
     text.0 = format!(
-        "multiplayer world | world hash {hash:016x} | {} edited chunks | {} live, {} building\n\
+        "multiplayer world | edited chunks: {live_edited} live, {} stored | {} live, {} building\n\
          {role} | pieces cut loose: {}\n\
          LMB blast | RMB heap dirt | B bridge, knocked down | {ORBIT_HELP}",
-        chunks.len(),
-        stats.live,
-        stats.building,
-        player.fallen,
+        stats.stored, stats.live, stats.building, player.fallen,
     );
 }
