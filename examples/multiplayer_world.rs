@@ -16,8 +16,8 @@
 //! same [`NetWorld`] id; only the carves travel. In a window, left click
 //! blasts a crater, right click heaps up dirt, and `B` builds a stone
 //! bridge where the cursor points and cuts its pillar: the deck falls
-//! (avian3d), on every peer's screen. The HUD shows the world hash, the
-//! edited chunks and the hash checks passed.
+//! (avian3d), on every peer's screen. The HUD shows the edited chunks,
+//! live and stored, and the world hash checks passed.
 //!
 //! With no display (or `CHISEL_HEADLESS=1`) one process runs a dedicated
 //! server (no camera: it builds only the chunks carves reach), two
