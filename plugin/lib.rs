@@ -64,6 +64,9 @@
 //! | 0.1         | 0.19 |
 
 #![warn(missing_docs)]
+// docs.rs builds with `--cfg docsrs` on nightly: each item behind a cargo
+// feature then says which one.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "net")]
 pub mod net;

@@ -67,7 +67,7 @@ pub struct ExtractedProp {
 
 /// The props to draw this frame: those a camera sees, and those in the
 /// shadow frusta of a light that casts shadows (their `ViewVisibility`,
-/// Bevy's and [`mark_props_seen_by_lights`](super::light_visibility)'s).
+/// Bevy's and `mark_props_seen_by_lights`'s).
 #[derive(Resource, Reflect, Default, Debug)]
 #[reflect(Resource, Default)]
 pub struct ExtractedProps(pub Vec<ExtractedProp>);

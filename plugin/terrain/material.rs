@@ -4,7 +4,7 @@
 //! ([`TerrainMaterialPlugin`]).
 //!
 //! Cell entities are spawned without a material; in the same frame,
-//! [`TerrainSystems::Material`](super::TerrainSystems::Material) gives each
+//! [`TerrainSystems::Material`] gives each
 //! new [`TerrainCell`] the `MeshMaterial3d<M>` of its label from its
 //! terrain's `TerrainMaterials<M>`, for every `M` with a
 //! `TerrainMaterialPlugin<M>`. Changing a table re-assigns the materials of

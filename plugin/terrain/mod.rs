@@ -29,7 +29,7 @@
 //!   [`debris_hulls`] merges a piece's convex cells into a few hulls for
 //!   its collider.
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
-//! - [`file`] — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
+//! - [`file`](mod@file) — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
 //! - [`snapshot`] — the terrain as it is now, without journal or undo
 //!   history ([`Terrain::to_snapshot_bytes`]), for a peer that joins.
 //! - [`asset`] — terrain files (`*.chiselterrain`) and heightfields through
@@ -37,7 +37,7 @@
 //! - [`events`] — the reports as entity events on the terrain
 //!   ([`TerrainCarved`], [`TerrainCarveRejected`], [`TerrainCellRebuilt`],
 //!   [`TerrainDebrisDetached`]), for observers.
-//! - [`error`] — [`TerrainError`].
+//! - [`error`](mod@error) — [`TerrainError`].
 //! - [`world`] — [`TerrainWorld`]: large worlds as a grid of terrain
 //!   chunks from a procedural [`WorldSource`], streamed around
 //!   [`TerrainFocus`] entities, with only edited chunks stored.

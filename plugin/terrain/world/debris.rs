@@ -220,7 +220,7 @@ enum Verdict {
 /// Collects the world's debris search when it is done and applies it (or
 /// drops it when it is stale), then starts a search when a live chunk has
 /// seeds and none runs. The search itself runs on the async compute pool.
-/// In a networked world ([`DebrisRole`]) the server's searches are
+/// In a networked world (`DebrisRole`) the server's searches are
 /// recorded to be ordered, and a follower searches only for the detaches
 /// the server ordered ([`super::debris_order`]).
 pub fn detach_across_borders(

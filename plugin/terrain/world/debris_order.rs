@@ -3,7 +3,7 @@
 //! peer takes the same pieces out of the same chunks at the same place in
 //! the world's order of carves, without any geometry on the wire.
 //!
-//! A world has a [`DebrisRole`]: `Local` (not networked: the pass as
+//! A world has a `DebrisRole`: `Local` (not networked: the pass as
 //! [`super::debris`] describes it), `Serve` (the server, a host, a single
 //! player of a networked world) or `Follow` (a connected client).
 //!
@@ -35,7 +35,7 @@
 //!   in the world (a carve routed to it before it was live), besides
 //!   having the state hash the search saw.
 //!
-//! Each applied result is recorded ([`AppliedDetach`]: the chunks it
+//! Each applied result is recorded (`AppliedDetach`: the chunks it
 //! depends on, one seed per piece, the new state hash of each chunk) and
 //! the server numbers it in the world's order as the next op, in the same
 //! frame, before any later carve is numbered.

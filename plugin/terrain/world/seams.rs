@@ -13,7 +13,7 @@
 //! its live neighbours' border wedges toward it.
 //!
 //! Every job of a chunk hands back its border points and wedges as of
-//! the meshes it built ([`BorderPoints::of`], on the worker).
+//! the meshes it built (`BorderPoints::of`, on the worker).
 //! [`stitch_chunk_borders`] then gathers the outside points and wedges of
 //! each neighbour of a chunk whose border changed and, where they differ
 //! from those the neighbour was last given, queues a job that seals the
