@@ -110,13 +110,15 @@ use chisel_bsp::octree::CellKey;
 /// chunk borders until the server side claims it ([`claim_debris`]).
 pub(super) fn networked_debris(add: On<Add, NetWorld>, mut worlds: Query<&mut TerrainWorld>) {
     if let Ok(mut world) = worlds.get_mut(add.entity) {
-        world.debris_role = DebrisRole::Follow;
+        // Who decides debris is bookkeeping, not a change of the world.
+        world.bypass_change_detection().debris_role = DebrisRole::Follow;
     }
 }
 
 /// Gives a networked world its debris role (the server side's systems
 /// claim `Serve`, a connected client's `Follow`); a change drops what the
-/// world had under the other role.
+/// world had under the other role. Bookkeeping: callers pass the world
+/// past change detection (`Mut::bypass_change_detection`).
 pub(super) fn claim_debris(world: &mut TerrainWorld, role: DebrisRole) {
     if world.debris_role != role {
         world.debris_role = role;

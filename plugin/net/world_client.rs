@@ -295,7 +295,7 @@ fn install_and_route(
     mut synced: MessageWriter<WorldSynced>,
 ) {
     for (entity, id, mut world) in &mut worlds {
-        claim_debris(&mut world, DebrisRole::Follow);
+        claim_debris(world.bypass_change_detection(), DebrisRole::Follow);
         let Some(follow) = follower.worlds.get_mut(&id.0) else {
             continue;
         };
@@ -443,7 +443,8 @@ fn compare_world_hashes(
         }
     }
     for (entity, id, mut world) in &mut worlds {
-        let applied = std::mem::take(&mut world.detaches_applied);
+        // Reading the detaches applied is bookkeeping.
+        let applied = std::mem::take(&mut world.bypass_change_detection().detaches_applied);
         let Some(follow) = follower.worlds.get_mut(&id.0) else {
             continue;
         };

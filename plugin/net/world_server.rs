@@ -97,7 +97,7 @@ fn seed_worlds(
     mut ledger: ResMut<WorldLedger>,
 ) {
     for (_, mut world) in &mut worlds {
-        claim_debris(&mut world, DebrisRole::Serve);
+        claim_debris(world.bypass_change_detection(), DebrisRole::Serve);
     }
     for (id, world) in &worlds {
         if ledger.worlds.contains_key(&id.0) {
@@ -368,6 +368,8 @@ fn number_detaches(
         if world.detaches_applied.is_empty() {
             continue;
         }
+        // Numbering the world's detaches is the server's bookkeeping.
+        let world = world.bypass_change_detection();
         let applied = std::mem::take(&mut world.detaches_applied);
         let served = ledger.worlds.entry(id.0).or_default();
         for detach in applied {

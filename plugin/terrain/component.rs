@@ -45,6 +45,23 @@ pub(crate) struct UndoStep {
 /// Coordinates of tools, rays and meshes are in the terrain's local frame;
 /// the [`Quantization`] maps them to the grid. Carve with the
 /// [`super::Carve`] message; undo with [`super::UndoCarve`].
+///
+/// # Change detection
+///
+/// `Changed<Terrain>` (and `Ref::is_changed`) marks the frames in which
+/// what a game reads of the terrain's content changed: its octree, state
+/// hash, journal, undo history or [`Terrain::last_request`] (a carve
+/// applied, a tracked carve refused, an undo, solid a detach across chunk
+/// borders took out or a world undo gave back), its material labels
+/// ([`Terrain::material_labels`]), the component inserted again (a
+/// snapshot or file loaded), and any write of the game's own through
+/// `&mut Terrain`. The plugin's bookkeeping marks nothing: requests queued,
+/// jobs started and polled, cells and meshes shown
+/// ([`Terrain::cells`], [`Terrain::triangle_count`], [`Terrain::is_idle`]
+/// follow [`super::TerrainCellChanged`] and [`super::CarveApplied`]
+/// instead), seams sealed again. A settled terrain is never marked; a
+/// carve marks the frame its octree is swapped in, an undo the frame it
+/// is applied, before their meshes are shown (the same or a later frame).
 #[derive(Component, Reflect)]
 #[reflect(Component, from_reflect = false)]
 #[require(Transform)]

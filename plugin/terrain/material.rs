@@ -156,7 +156,8 @@ impl<M: Material> Plugin for TerrainMaterialPlugin<M> {
 /// ([`TerrainError::NoMaterial`](super::TerrainError::NoMaterial)), and
 /// warns when a new or changed table has no material for a label the
 /// terrain already has (those are drawn with the fallback). Runs in
-/// `PreUpdate`, before the carves of the frame are read.
+/// `PreUpdate`, before the carves of the frame are read. A terrain is
+/// marked changed only when its material labels change.
 pub fn sync_material_labels<M: Material>(
     mut tables: Query<
         (Entity, &mut Terrain, Ref<TerrainMaterials<M>>),
@@ -177,12 +178,16 @@ pub fn sync_material_labels<M: Material>(
                 );
             }
         }
-        // Not a change of the terrain's content.
-        terrain.bypass_change_detection().runtime.material_labels = Some(drawn);
+        // What carves may add or paint changes only with the table's labels.
+        if terrain.material_labels() != Some(&drawn) {
+            terrain.runtime.material_labels = Some(drawn);
+        }
     }
     for entity in removed.read() {
-        if let Ok(mut terrain) = bare.get_mut(entity) {
-            terrain.bypass_change_detection().runtime.material_labels = None;
+        if let Ok(mut terrain) = bare.get_mut(entity)
+            && terrain.material_labels().is_some()
+        {
+            terrain.runtime.material_labels = None;
         }
     }
 }

@@ -8,6 +8,7 @@
 //! builds the changed cells. [`super::upload`] collects the result.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::time::Instant;
 
 use bevy::prelude::*;
@@ -40,7 +41,9 @@ pub fn read_requests(
             .map_err(|_| TerrainError::NoSuchTerrain)
             .and_then(|mut terrain| {
                 terrain.check_label(carve.edit)?;
-                terrain.runtime.queue.push_back(Job::Carve {
+                // A request, not a change of the terrain's content yet.
+                let runtime = &mut terrain.bypass_change_detection().runtime;
+                runtime.queue.push_back(Job::Carve {
                     tool: carve.tool.clone(),
                     edit: carve.edit,
                     requested: now,
@@ -69,12 +72,15 @@ pub fn read_requests(
             .check_edit(carve.edit)
             .and_then(|()| carve.tool.to_grid(&terrain.quantization));
         match tool {
-            Ok(tool) => terrain.runtime.queue.push_back(Job::Carve {
-                tool,
-                edit: carve.edit,
-                requested: now,
-                request: None,
-            }),
+            Ok(tool) => {
+                let runtime = &mut terrain.bypass_change_detection().runtime;
+                runtime.queue.push_back(Job::Carve {
+                    tool,
+                    edit: carve.edit,
+                    requested: now,
+                    request: None,
+                });
+            }
             Err(error) => {
                 rejected.write(CarveRejected {
                     terrain: carve.terrain,
@@ -86,9 +92,7 @@ pub fn read_requests(
     }
     for undo in undos.read() {
         match terrains.get_mut(undo.terrain) {
-            Ok(mut terrain) => terrain
-                .runtime
-                .queue
+            Ok(mut terrain) => (terrain.bypass_change_detection().runtime.queue)
                 .push_back(Job::Undo { requested: now }),
             Err(_) => {
                 rejected.write(CarveRejected {
@@ -112,158 +116,184 @@ pub fn start_jobs(
     let _span = bevy::log::info_span!("chisel::queue::start_jobs").entered();
     for (entity, mut terrain) in &mut terrains {
         let pool = workers.pool(settings.worker_threads);
-        let terrain = &mut *terrain;
         if terrain.runtime.task.is_some() {
             continue;
         }
-        let context = JobContext {
-            quantization: terrain.quantization,
-            smoothing_degrees: settings.smoothing_degrees,
-            physics: physics.0.clone(),
-            debris: terrain.debris.clone(),
-            debris_density: settings.debris_density,
-            max_debris_hulls: settings.max_debris_hulls,
-            output: settings.output,
-            publish_border: terrain.runtime.publishes_border,
-        };
-        terrain.runtime.builds_cells = context.builds_cells();
-        if !terrain.runtime.builds_cells {
-            // Cells shown before the output changed are taken away, and
-            // every cell is built again once cells are asked for again.
-            if !terrain.runtime.cells.is_empty() && terrain.runtime.uploads.is_empty() {
-                let cells = terrain
-                    .runtime
-                    .cells
-                    .keys()
-                    .map(|&key| CellUpdate { key, meshes: None })
-                    .collect();
-                terrain.runtime.uploads.push_back(Upload {
-                    cells,
-                    spread: false,
-                    reports: Vec::new(),
-                    debris: Vec::new(),
-                });
-            }
-            terrain.runtime.needs_full_mesh = true;
-        } else if terrain.runtime.needs_full_mesh {
-            terrain.runtime.needs_full_mesh = false;
-            let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
-            let octree = terrain.octree.clone();
-            // A first build starts the border vertices afresh, with the
-            // outside points and wedges it was given.
-            let mut mesher = if settings.shares_border_normals() {
-                SeamedMesher::with_shading()
-            } else {
-                SeamedMesher::new()
-            };
-            mesher.set_outside_points(terrain.runtime.mesher.outside_points().to_vec());
-            mesher.set_outside_wedges(terrain.runtime.mesher.outside_wedges());
-            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                on_pool(pool, || {
-                    remesh(
-                        octree,
-                        &context,
-                        Vec::new(),
-                        keys,
-                        BTreeMap::new(),
-                        mesher,
-                        true,
-                    )
-                })
-            }));
-            continue;
+        // The plugin's bookkeeping; only an undo changes the content here.
+        let terrain_now = terrain.bypass_change_detection();
+        if start_next(
+            entity,
+            terrain_now,
+            &settings,
+            &physics,
+            pool,
+            &mut rejected,
+        ) {
+            terrain.set_changed();
         }
-        match terrain.runtime.queue.pop_front() {
-            None => {}
-            Some(hold @ Job::HoldForWorldUndo { .. }) => {
-                // The world carries it out and takes it away.
-                terrain.runtime.queue.push_front(hold);
-            }
-            Some(Job::Undo { requested }) => match terrain.undo_now() {
-                Ok(keys) => {
-                    let octree = terrain.octree.clone();
-                    let steps = vec![StepOutcome::Undone {
-                        cells: keys.len(),
-                        requested,
-                    }];
-                    let mesher = std::mem::take(&mut terrain.runtime.mesher);
-                    terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                        on_pool(pool, || {
-                            remesh(
-                                octree,
-                                &context,
-                                steps,
-                                keys,
-                                BTreeMap::new(),
-                                mesher,
-                                false,
-                            )
-                        })
-                    }));
-                }
-                Err(error) => {
-                    rejected.write(CarveRejected {
-                        terrain: entity,
-                        request: None,
-                        error,
-                    });
-                }
-            },
-            Some(Job::Reseal { outside, wedges }) => {
+    }
+}
+
+/// Starts the next job of `terrain` (which has none running); returns
+/// whether its content changed: an undo is applied here, before its cells
+/// are rebuilt on the pool.
+fn start_next(
+    entity: Entity,
+    terrain: &mut Terrain,
+    settings: &TerrainSettings,
+    physics: &TerrainPhysicsBackend,
+    pool: Option<Arc<rayon::ThreadPool>>,
+    rejected: &mut MessageWriter<CarveRejected>,
+) -> bool {
+    let context = JobContext {
+        quantization: terrain.quantization,
+        smoothing_degrees: settings.smoothing_degrees,
+        physics: physics.0.clone(),
+        debris: terrain.debris.clone(),
+        debris_density: settings.debris_density,
+        max_debris_hulls: settings.max_debris_hulls,
+        output: settings.output,
+        publish_border: terrain.runtime.publishes_border,
+    };
+    terrain.runtime.builds_cells = context.builds_cells();
+    if !terrain.runtime.builds_cells {
+        // Cells shown before the output changed are taken away, and
+        // every cell is built again once cells are asked for again.
+        if !terrain.runtime.cells.is_empty() && terrain.runtime.uploads.is_empty() {
+            let cells = terrain
+                .runtime
+                .cells
+                .keys()
+                .map(|&key| CellUpdate { key, meshes: None })
+                .collect();
+            terrain.runtime.uploads.push_back(Upload {
+                cells,
+                spread: false,
+                reports: Vec::new(),
+                debris: Vec::new(),
+            });
+        }
+        terrain.runtime.needs_full_mesh = true;
+    } else if terrain.runtime.needs_full_mesh {
+        terrain.runtime.needs_full_mesh = false;
+        let keys: Vec<CellKey> = terrain.octree.leaves().iter().map(|(k, _)| *k).collect();
+        let octree = terrain.octree.clone();
+        // A first build starts the border vertices afresh, with the
+        // outside points and wedges it was given.
+        let mut mesher = if settings.shares_border_normals() {
+            SeamedMesher::with_shading()
+        } else {
+            SeamedMesher::new()
+        };
+        mesher.set_outside_points(terrain.runtime.mesher.outside_points().to_vec());
+        mesher.set_outside_wedges(terrain.runtime.mesher.outside_wedges());
+        terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+            on_pool(pool, || {
+                remesh(
+                    octree,
+                    &context,
+                    Vec::new(),
+                    keys,
+                    BTreeMap::new(),
+                    mesher,
+                    true,
+                )
+            })
+        }));
+        return false;
+    }
+    match terrain.runtime.queue.pop_front() {
+        None => {}
+        Some(hold @ Job::HoldForWorldUndo { .. }) => {
+            // The world carries it out and takes it away.
+            terrain.runtime.queue.push_front(hold);
+        }
+        Some(Job::Undo { requested }) => match terrain.undo_now() {
+            Ok(keys) => {
                 let octree = terrain.octree.clone();
-                let mut mesher = std::mem::take(&mut terrain.runtime.mesher);
-                mesher.set_outside_points(outside);
-                mesher.set_outside_wedges(wedges);
-                terrain.runtime.resealing = true;
+                let steps = vec![StepOutcome::Undone {
+                    cells: keys.len(),
+                    requested,
+                }];
+                let mesher = std::mem::take(&mut terrain.runtime.mesher);
                 terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                     on_pool(pool, || {
                         remesh(
                             octree,
                             &context,
-                            Vec::new(),
-                            Vec::new(),
+                            steps,
+                            keys,
                             BTreeMap::new(),
                             mesher,
                             false,
                         )
                     })
                 }));
+                return true;
             }
-            Some(Job::Detached { keys, pieces }) => {
-                let octree = terrain.octree.clone();
-                let mesher = std::mem::take(&mut terrain.runtime.mesher);
-                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                    on_pool(pool, || {
-                        detached_batch(octree, mesher, &context, keys, pieces)
-                    })
-                }));
+            Err(error) => {
+                rejected.write(CarveRejected {
+                    terrain: entity,
+                    request: None,
+                    error,
+                });
             }
-            Some(Job::Carve {
-                tool,
-                edit,
-                requested,
-                request,
-            }) => {
-                let mut batch = vec![(tool, edit, requested, request)];
-                while batch.len() < settings.max_batch.max(1)
-                    && matches!(terrain.runtime.queue.front(), Some(Job::Carve { .. }))
+        },
+        Some(Job::Reseal { outside, wedges }) => {
+            let octree = terrain.octree.clone();
+            let mut mesher = std::mem::take(&mut terrain.runtime.mesher);
+            mesher.set_outside_points(outside);
+            mesher.set_outside_wedges(wedges);
+            terrain.runtime.resealing = true;
+            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                on_pool(pool, || {
+                    remesh(
+                        octree,
+                        &context,
+                        Vec::new(),
+                        Vec::new(),
+                        BTreeMap::new(),
+                        mesher,
+                        false,
+                    )
+                })
+            }));
+        }
+        Some(Job::Detached { keys, pieces }) => {
+            let octree = terrain.octree.clone();
+            let mesher = std::mem::take(&mut terrain.runtime.mesher);
+            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                on_pool(pool, || {
+                    detached_batch(octree, mesher, &context, keys, pieces)
+                })
+            }));
+        }
+        Some(Job::Carve {
+            tool,
+            edit,
+            requested,
+            request,
+        }) => {
+            let mut batch = vec![(tool, edit, requested, request)];
+            while batch.len() < settings.max_batch.max(1)
+                && matches!(terrain.runtime.queue.front(), Some(Job::Carve { .. }))
+            {
+                if let Some(Job::Carve {
+                    tool,
+                    edit,
+                    requested,
+                    request,
+                }) = terrain.runtime.queue.pop_front()
                 {
-                    if let Some(Job::Carve {
-                        tool,
-                        edit,
-                        requested,
-                        request,
-                    }) = terrain.runtime.queue.pop_front()
-                    {
-                        batch.push((tool, edit, requested, request));
-                    }
+                    batch.push((tool, edit, requested, request));
                 }
-                let octree = terrain.octree.clone();
-                let mesher = std::mem::take(&mut terrain.runtime.mesher);
-                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-                    on_pool(pool, || carve_batch(octree, mesher, &context, batch))
-                }));
             }
+            let octree = terrain.octree.clone();
+            let mesher = std::mem::take(&mut terrain.runtime.mesher);
+            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                on_pool(pool, || carve_batch(octree, mesher, &context, batch))
+            }));
         }
     }
+    false
 }

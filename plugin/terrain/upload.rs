@@ -27,119 +27,135 @@ pub fn finish_jobs(
 ) {
     let _span = bevy::log::info_span!("chisel::upload::finish_jobs").entered();
     for (entity, mut terrain) in &mut terrains {
-        let terrain = &mut *terrain;
-        let Some(task) = terrain.runtime.task.as_mut() else {
-            continue;
-        };
-        let Some(output) = check_ready(task) else {
-            continue;
-        };
-        terrain.runtime.task = None;
-        terrain.runtime.resealing = false;
-        let mut reports = Vec::new();
-        let mut debris = Vec::new();
-        let report = |edit, request, hash, cells, apply_time| CarveApplied {
-            terrain: entity,
-            edit,
-            request,
-            hash,
-            cells,
-            apply_time,
-            mesh_time: output.mesh_time,
-            collider_time: output.collider_time,
-            latency: Duration::ZERO,
-        };
-        // The octree after each applied step: the next applied step's
-        // `before`, or the job's octree after the last.
-        let afters: Vec<Octree> = {
-            let mut next = output.octree.clone();
-            let mut out: Vec<Octree> = output
-                .steps
-                .iter()
-                .rev()
-                .map(|step| match step {
-                    StepOutcome::Applied { before, .. } => {
-                        std::mem::replace(&mut next, before.clone())
-                    }
-                    _ => next.clone(),
-                })
-                .collect();
-            out.reverse();
-            out
-        };
-        for (step, after) in output.steps.into_iter().zip(afters) {
-            match step {
-                StepOutcome::Applied {
-                    before,
-                    changes,
-                    tool,
-                    edit,
-                    apply_time,
-                    requested,
-                    request,
-                    debris: pieces,
-                } => {
-                    debris.extend(pieces);
-                    if terrain.runtime.publishes_border && terrain.debris.is_some() {
-                        // A chunk's carve: seeds of the detach across
-                        // chunk borders (`world::debris`).
-                        let seeds = &mut terrain.runtime.border_seeds;
-                        seeds.extend(changes.changed.iter().copied());
-                    }
-                    let cells = changes.changed.len() + changes.removed.len();
-                    terrain
-                        .hash
-                        .update(&after, changes.changed.iter().chain(&changes.removed));
-                    if request.is_some() {
-                        terrain.last_request = request;
-                    }
-                    let hash = terrain.hash.value();
-                    reports.push((
-                        report(Some(edit), request, hash, cells, apply_time),
-                        requested,
-                    ));
-                    terrain.record(before, changes, tool, edit);
-                    if let (Some(request), true) = (request, terrain.runtime.records_landed) {
-                        let journal = terrain.journal.len();
-                        terrain
-                            .runtime
-                            .landed
-                            .push((request, Some((hash, journal))));
-                    }
-                }
-                StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
-                StepOutcome::Undone { cells, requested } => {
-                    let hash = terrain.hash.value();
-                    reports.push((report(None, None, hash, cells, Duration::ZERO), requested));
-                }
-                StepOutcome::Rejected { error, request } => {
-                    if request.is_some() {
-                        terrain.last_request = request;
-                    }
-                    if let (Some(request), true) = (request, terrain.runtime.records_landed) {
-                        terrain.runtime.landed.push((request, None));
-                    }
-                    rejected.write(CarveRejected {
-                        terrain: entity,
-                        request,
-                        error,
-                    });
-                }
-            }
-        }
-        terrain.runtime.uploads.push_back(Upload {
-            cells: output.cells.into(),
-            spread: output.full,
-            reports,
-            debris,
-        });
-        // For an undo or a full build this is the octree already in place.
-        terrain.octree = output.octree;
-        terrain.runtime.mesher = output.mesher;
-        if output.border.is_some() {
-            terrain.runtime.border = output.border;
+        // Polling is the plugin's bookkeeping: the terrain is marked
+        // changed only when a finished job changed its content.
+        if finish_job(entity, terrain.bypass_change_detection(), &mut rejected) {
+            terrain.set_changed();
         }
     }
+}
+
+/// Collects `terrain`'s job when it is done; returns whether its content
+/// changed: a carve applied, or a tracked carve refused (its
+/// [`Terrain::last_request`] moves on).
+fn finish_job(
+    entity: Entity,
+    terrain: &mut Terrain,
+    rejected: &mut MessageWriter<CarveRejected>,
+) -> bool {
+    let Some(task) = terrain.runtime.task.as_mut() else {
+        return false;
+    };
+    let Some(output) = check_ready(task) else {
+        return false;
+    };
+    let mut content_changed = false;
+    terrain.runtime.task = None;
+    terrain.runtime.resealing = false;
+    let mut reports = Vec::new();
+    let mut debris = Vec::new();
+    let report = |edit, request, hash, cells, apply_time| CarveApplied {
+        terrain: entity,
+        edit,
+        request,
+        hash,
+        cells,
+        apply_time,
+        mesh_time: output.mesh_time,
+        collider_time: output.collider_time,
+        latency: Duration::ZERO,
+    };
+    // The octree after each applied step: the next applied step's
+    // `before`, or the job's octree after the last.
+    let afters: Vec<Octree> = {
+        let mut next = output.octree.clone();
+        let mut out: Vec<Octree> = output
+            .steps
+            .iter()
+            .rev()
+            .map(|step| match step {
+                StepOutcome::Applied { before, .. } => std::mem::replace(&mut next, before.clone()),
+                _ => next.clone(),
+            })
+            .collect();
+        out.reverse();
+        out
+    };
+    for (step, after) in output.steps.into_iter().zip(afters) {
+        match step {
+            StepOutcome::Applied {
+                before,
+                changes,
+                tool,
+                edit,
+                apply_time,
+                requested,
+                request,
+                debris: pieces,
+            } => {
+                content_changed = true;
+                debris.extend(pieces);
+                if terrain.runtime.publishes_border && terrain.debris.is_some() {
+                    // A chunk's carve: seeds of the detach across
+                    // chunk borders (`world::debris`).
+                    let seeds = &mut terrain.runtime.border_seeds;
+                    seeds.extend(changes.changed.iter().copied());
+                }
+                let cells = changes.changed.len() + changes.removed.len();
+                terrain
+                    .hash
+                    .update(&after, changes.changed.iter().chain(&changes.removed));
+                if request.is_some() {
+                    terrain.last_request = request;
+                }
+                let hash = terrain.hash.value();
+                reports.push((
+                    report(Some(edit), request, hash, cells, apply_time),
+                    requested,
+                ));
+                terrain.record(before, changes, tool, edit);
+                if let (Some(request), true) = (request, terrain.runtime.records_landed) {
+                    let journal = terrain.journal.len();
+                    terrain
+                        .runtime
+                        .landed
+                        .push((request, Some((hash, journal))));
+                }
+            }
+            StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
+            StepOutcome::Undone { cells, requested } => {
+                let hash = terrain.hash.value();
+                reports.push((report(None, None, hash, cells, Duration::ZERO), requested));
+            }
+            StepOutcome::Rejected { error, request } => {
+                if request.is_some() {
+                    content_changed |= terrain.last_request != request;
+                    terrain.last_request = request;
+                }
+                if let (Some(request), true) = (request, terrain.runtime.records_landed) {
+                    terrain.runtime.landed.push((request, None));
+                }
+                rejected.write(CarveRejected {
+                    terrain: entity,
+                    request,
+                    error,
+                });
+            }
+        }
+    }
+    terrain.runtime.uploads.push_back(Upload {
+        cells: output.cells.into(),
+        spread: output.full,
+        reports,
+        debris,
+    });
+    // For an undo or a full build this is the octree already in place.
+    terrain.octree = output.octree;
+    terrain.runtime.mesher = output.mesher;
+    if output.border.is_some() {
+        terrain.runtime.border = output.border;
+    }
+    content_changed
 }
 
 /// Adds queued cells as assets and entities, with their colliders, and
@@ -164,7 +180,8 @@ pub fn upload_meshes(
     let over_budget = |added: usize| added > 0 && start.elapsed() >= settings.mesh_budget;
     for (entity, mut terrain, placed) in &mut terrains {
         let placed = placed.copied().unwrap_or_default();
-        let runtime = &mut terrain.runtime;
+        // Cells shown are not a change of the terrain's content.
+        let runtime = &mut terrain.bypass_change_detection().runtime;
         let mut added = 0usize;
         while let Some(mut upload) = runtime.uploads.pop_front() {
             if !upload.spread && over_budget(added) {

@@ -57,6 +57,8 @@ mod splat_views;
 
 // Destructible terrain.
 #[cfg(feature = "terrain")]
+mod change_detection;
+#[cfg(feature = "terrain")]
 mod terrain_assets;
 #[cfg(feature = "terrain")]
 mod terrain_data;

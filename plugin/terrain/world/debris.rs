@@ -222,13 +222,18 @@ enum Verdict {
 /// seeds and none runs. The search itself runs on the async compute pool.
 /// In a networked world (`DebrisRole`) the server's searches are
 /// recorded to be ordered, and a follower searches only for the detaches
-/// the server ordered ([`super::debris_order`]).
+/// the server ordered ([`super::debris_order`]). The world and the chunks
+/// a detach takes solid out of are marked changed in the frame it is
+/// applied; searching marks nothing.
 pub fn detach_across_borders(
     mut worlds: Query<&mut TerrainWorld>,
     mut terrains: Query<&mut Terrain>,
 ) {
-    for mut world in &mut worlds {
-        let world = &mut *world;
+    for mut world_mut in &mut worlds {
+        // Searching is the plugin's bookkeeping: the world and its chunks
+        // are marked changed only when a detach takes solid out.
+        let world = world_mut.bypass_change_detection();
+        let mut detached = false;
         let follow = world.debris_role == DebrisRole::Follow;
         if !world.debris_across_borders || follow {
             world.debris_seeded = false;
@@ -241,7 +246,7 @@ pub fn detach_across_borders(
                 if let Ok(mut terrain) = terrains.get_mut(entity)
                     && !terrain.runtime.border_seeds.is_empty()
                 {
-                    terrain.runtime.border_seeds.clear();
+                    (terrain.bypass_change_detection().runtime.border_seeds).clear();
                 }
             }
             if !follow {
@@ -271,7 +276,7 @@ pub fn detach_across_borders(
                     let wanted = debris_order::chunks_across_open_sides(world, &search);
                     if wanted.is_empty() {
                         world.debris_wanted.clear();
-                        apply_search(world, &mut terrains, search);
+                        detached = apply_search(world, &mut terrains, search);
                     } else {
                         // A server's search stopped where a chunk it did
                         // not load could go on: build it, search again.
@@ -290,6 +295,9 @@ pub fn detach_across_borders(
             // Kept from the next frame's streaming on: the chunks a search
             // started now sees, and those a dropped result wants built.
             debris_order::keep_chunks(world, &terrains);
+        }
+        if detached {
+            world_mut.set_changed();
         }
     }
 }
@@ -318,17 +326,18 @@ const HORIZONTAL_SIDES: [CubeSide; 4] = [
 fn give_back_seeds(search: DebrisSearch, terrains: &mut Query<&mut Terrain>) {
     for (entity, seeds) in search.seeds {
         if let Ok(mut terrain) = terrains.get_mut(entity) {
-            terrain.runtime.border_seeds.extend(seeds);
+            (terrain.bypass_change_detection().runtime.border_seeds).extend(seeds);
         }
     }
 }
 
-/// Applies a search that holds, and records it in a networked world.
+/// Applies a search that holds, and records it in a networked world;
+/// returns whether it took solid out of a chunk.
 fn apply_search(
     world: &mut TerrainWorld,
     terrains: &mut Query<&mut Terrain>,
     search: DebrisSearch,
-) {
+) -> bool {
     let seen: Vec<ChunkCoord> = search.seen.iter().map(|c| c.coord).collect();
     if let Some(seq) = search.ordered {
         // A follower: every chunk of the order reports, changed or not.
@@ -343,22 +352,20 @@ fn apply_search(
             seeds: Vec::new(),
             hashes,
         });
-        return;
+        return !changed.is_empty();
     }
     if world.debris_role != DebrisRole::Serve {
-        apply(world, terrains, search);
-        return;
+        return !apply(world, terrains, search).is_empty();
     }
     let Some(Searched {
         detached: Ok(detached),
         ..
     }) = &search.searched
     else {
-        apply(world, terrains, search);
-        return;
+        return !apply(world, terrains, search).is_empty();
     };
     if detached.pieces.is_empty() {
-        return;
+        return false;
     }
     let (_, depends) = touched_and_depends(&search);
     let record = debris_order::record(detached, &search.near, &seen, &depends);
@@ -366,7 +373,7 @@ fn apply_search(
         Ok(record) => record,
         Err(why) => {
             warn!("terrain world: no debris detached across chunk borders: {why}");
-            return;
+            return false;
         }
     };
     let changed = apply(world, terrains, search);
@@ -376,6 +383,7 @@ fn apply_search(
     world
         .detaches_applied
         .push(AppliedDetach { hashes, ..record });
+    !changed.is_empty()
 }
 
 /// Whether the world's finished search still holds, by the rules of the
@@ -569,6 +577,8 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         let Ok(mut terrain) = terrains.get_mut(entity) else {
             continue;
         };
+        // Taking the seeds is bookkeeping, not a change of the chunk.
+        let terrain = terrain.bypass_change_detection();
         let taken = std::mem::take(&mut terrain.runtime.border_seeds);
         // A chunk without debris detection is left out: it anchors what
         // touches it, as a chunk not loaded does.

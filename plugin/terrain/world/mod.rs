@@ -264,6 +264,20 @@ pub(crate) struct Built {
 /// A streamed world of terrain chunks. Spawn it with a
 /// [`WorldLayout`] and a [`WorldSource`]; put [`TerrainFocus`] on the
 /// entities chunks should stream around, and carve it with [`WorldCarve`].
+///
+/// # Change detection
+///
+/// `Changed<TerrainWorld>` marks the frames in which the world's chunks or
+/// edits changed: a chunk build started or collected (a chunk goes live
+/// or fails), a chunk released or stored, waiting carves handed to a
+/// chunk, a [`WorldCarve`] routed, a [`WorldUndo`] accepted and then
+/// carried out or refused, a detach across chunk borders applied, the chunks replaced
+/// from a snapshot (feature `net`), and any write of the game's own
+/// through `&mut TerrainWorld`. Frames that only poll builds, seams and
+/// debris searches mark nothing, so a settled world with still foci is
+/// never marked. The chunks' own content is each chunk's
+/// `Changed<Terrain>` ([`Terrain`], "Change detection"): a world carve
+/// marks exactly the chunks it reached, each in the frame it lands there.
 #[derive(Component)]
 #[require(Transform)]
 #[cfg_attr(feature = "render", require(Visibility))]

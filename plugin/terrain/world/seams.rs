@@ -212,7 +212,9 @@ pub fn stitch_chunk_borders(
         if world.seams.at_rest(&world, &terrains) {
             continue;
         }
-        let world = &mut *world;
+        // Seams are the plugin's bookkeeping: neither the world nor its
+        // chunks change content here.
+        let world = world.bypass_change_detection();
         let live: BTreeMap<ChunkCoord, Entity> = world.live_chunks().collect();
         let seams = &mut world.seams;
         seams.passes += 1;
@@ -270,7 +272,7 @@ pub fn stitch_chunk_borders(
             let Ok(mut terrain) = terrains.get_mut(entity) else {
                 continue;
             };
-            let runtime = &mut terrain.runtime;
+            let runtime = &mut terrain.bypass_change_detection().runtime;
             runtime.publishes_border = true;
             if first && runtime.task.is_none() && runtime.needs_full_mesh {
                 // Before the first build: it seals and shades with them.

@@ -75,7 +75,9 @@ fn chunks_of(
 /// wanted chunks nearest first (chunks with waiting carves, and those kept
 /// for debris across borders in a networked world, before all),
 /// and releases chunks beyond the unload radius, keeping the state of
-/// edited ones.
+/// edited ones. A world is marked changed in the frames its chunks change
+/// (a build starts or is collected, a chunk is handed its waiting carves
+/// or released), not in those that only poll its builds.
 pub fn stream_chunks(
     mut commands: Commands,
     mut worlds: Query<(Entity, &mut TerrainWorld, &GlobalTransform)>,
@@ -83,8 +85,10 @@ pub fn stream_chunks(
     terrains: Query<&Terrain>,
     mut grid_carves: MessageWriter<GridCarve>,
 ) {
-    for (world_entity, mut world, world_transform) in &mut worlds {
-        let world = &mut *world;
+    for (world_entity, mut world_mut, world_transform) in &mut worlds {
+        // Polling builds is the plugin's bookkeeping: the world is marked
+        // changed only when its chunks change (below).
+        let world = world_mut.bypass_change_detection();
         let span = bevy::log::info_span!("chisel::stream::collect_builds").entered();
         // Their terrains are spawned by this frame's commands: none can be
         // read (nor stored when it streams out) before the next frame.
@@ -93,6 +97,7 @@ pub fn stream_chunks(
         // Chunks that were just sent carves are not idle yet, though their
         // queues fill only when the terrain systems read the messages.
         let just_carved = send_pending(world, &terrains, &mut grid_carves);
+        let mut chunks_changed = !just_built.is_empty() || !just_carved.is_empty();
 
         let layout = &world.layout;
         let unit = layout.quantization.unit();
@@ -126,6 +131,7 @@ pub fn stream_chunks(
             }
             start_build(world, coord);
             building += 1;
+            chunks_changed = true;
         }
 
         // Release chunks beyond the unload radius.
@@ -150,6 +156,7 @@ pub fn stream_chunks(
         for (coord, entity) in far {
             let Some(entity) = entity else {
                 world.chunks.remove(&coord);
+                chunks_changed = true;
                 continue;
             };
             match terrains.get(entity) {
@@ -164,8 +171,12 @@ pub fn stream_chunks(
             commands.entity(entity).try_despawn();
             world.chunks.remove(&coord);
             world.stats.released += 1;
+            chunks_changed = true;
         }
         update_counts(world);
+        if chunks_changed {
+            world_mut.set_changed();
+        }
     }
 }
 

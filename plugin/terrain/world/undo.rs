@@ -439,11 +439,13 @@ pub fn undo_world_carves(
     mut rejected: MessageWriter<WorldUndoRejected>,
 ) {
     for (_, mut world) in &mut worlds {
-        let world = &mut *world;
+        // What the chunks' jobs applied, noted: bookkeeping.
+        let world = world.bypass_change_detection();
         let local = world.debris_role == DebrisRole::Local;
         let live: Vec<(ChunkCoord, Entity)> = world.live_chunks().collect();
         for (coord, entity) in live {
             if let Ok(mut terrain) = terrains.get_mut(entity) {
+                let terrain = terrain.bypass_change_detection();
                 terrain.runtime.records_landed = local;
                 let landed = std::mem::take(&mut terrain.runtime.landed);
                 if local && !landed.is_empty() {
@@ -457,27 +459,31 @@ pub fn undo_world_carves(
             refuse(&mut rejected, undo.world, WorldUndoRefusal::NoSuchWorld);
             continue;
         };
-        let world = &mut *world;
         if world.debris_role != DebrisRole::Local {
             refuse(&mut rejected, undo.world, WorldUndoRefusal::Networked);
             continue;
         }
-        let history = &mut world.history;
-        let claimed = history.undos.len();
-        let Some(index) = history.steps.len().checked_sub(claimed + 1) else {
+        let claimed = world.history.undos.len();
+        let Some(index) = world.history.steps.len().checked_sub(claimed + 1) else {
             refuse(&mut rejected, undo.world, WorldUndoRefusal::NothingToUndo);
             continue;
         };
+        // A claimed undo marks the world changed; a refused one does not.
+        let history = &mut world.history;
         let request = history.steps[index].request;
         history.undos.push_back(WaitingUndo {
             request,
             held: BTreeSet::new(),
         });
     }
-    for (world_entity, mut world) in &mut worlds {
-        let world = &mut *world;
+    for (world_entity, mut world_mut) in &mut worlds {
+        // Waiting is bookkeeping: the world is marked changed when an undo
+        // is carried out or refused, or the carves it held are routed.
+        let world = world_mut.bypass_change_detection();
+        let mut changed = false;
         while !world.history.undos.is_empty() {
             let outcome = advance(world, &mut terrains);
+            changed |= !matches!(outcome, Progress::Waiting);
             match outcome {
                 Progress::Waiting => break,
                 Progress::Undone(done) => {
@@ -506,6 +512,10 @@ pub fn undo_world_carves(
                 let request = world.next_request;
                 world.route(&tool, edit, request, &coords);
             }
+            changed = true;
+        }
+        if changed {
+            world_mut.set_changed();
         }
     }
 }
@@ -588,18 +598,23 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
     }
     let mut changed = Vec::new();
     for (coord, undoes) in targets {
-        let Some(mut terrain) = (world.chunk_entity(coord)).and_then(|e| terrains.get_mut(e).ok())
+        let Some(mut chunk_terrain) =
+            (world.chunk_entity(coord)).and_then(|e| terrains.get_mut(e).ok())
         else {
             continue;
         };
-        let terrain = &mut *terrain;
         let Some(chunk) = step.chunks.get(&coord).filter(|_| undoes) else {
             continue;
         };
+        let terrain = chunk_terrain.bypass_change_detection();
         let mut keys = Vec::new();
+        let mut undone = false;
         if chunk.carve == CarveState::Landed {
             match terrain.undo_now() {
-                Ok(undone) => keys.extend(undone),
+                Ok(cells) => {
+                    keys.extend(cells);
+                    undone = true;
+                }
                 Err(error) => warn!("terrain world: chunk undo: {error}"),
             }
         }
@@ -608,6 +623,7 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
             terrain.hash.update(&terrain.octree, &before.keys);
             terrain.detached_across = before.detached_across;
             keys.extend(before.keys.iter().copied());
+            undone = true;
         }
         keys.sort_unstable();
         keys.dedup();
@@ -615,6 +631,9 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
             keys,
             pieces: Vec::new(),
         });
+        if undone {
+            chunk_terrain.set_changed();
+        }
         changed.push(coord);
     }
     // The seeds its detaches searched from go back to their chunks.
@@ -622,7 +641,7 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
         if let Some(mut terrain) =
             (world.chunk_entity(coord)).and_then(|e| terrains.get_mut(e).ok())
         {
-            terrain.runtime.border_seeds.extend(seeds);
+            (terrain.bypass_change_detection().runtime.border_seeds).extend(seeds);
         }
     }
     Progress::Undone((request, changed))
@@ -661,7 +680,8 @@ fn hold_chunks(
         match world.chunks.get(&coord) {
             Some(Chunk::Live(entity)) if !world.pending.contains_key(&coord) => {
                 if let Ok(mut terrain) = terrains.get_mut(*entity) {
-                    (terrain.runtime.queue).push_back(Job::HoldForWorldUndo { request });
+                    (terrain.bypass_change_detection().runtime.queue)
+                        .push_back(Job::HoldForWorldUndo { request });
                     newly.push(coord);
                 }
             }
@@ -682,7 +702,7 @@ fn release_holds(world: &TerrainWorld, terrains: &mut Query<&mut Terrain>, undo:
             continue;
         };
         if let Ok(mut terrain) = terrains.get_mut(entity) {
-            terrain.runtime.queue.retain(
+            (terrain.bypass_change_detection().runtime.queue).retain(
                 |job| !matches!(job, Job::HoldForWorldUndo { request } if *request == undo.request),
             );
         }
