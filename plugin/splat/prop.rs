@@ -326,7 +326,9 @@ fn to_u32(n: usize) -> u32 {
     u32::try_from(n).unwrap_or(u32::MAX)
 }
 
-/// The sampling state of a prop.
+/// The sampling state of a prop. `Changed<PropSampling>` marks the frames
+/// in which a sampling was asked for, started or finished, not those in
+/// which one only runs.
 #[derive(Component, Reflect, Default)]
 #[reflect(Component, from_reflect = false)]
 pub struct PropSampling {
@@ -478,7 +480,8 @@ pub(crate) fn finish_sampling(
     mut props: Query<(Entity, &mut PropSampling)>,
 ) {
     for (entity, mut state) in &mut props {
-        let Some(task) = state.task.as_mut() else {
+        // Polling is no change; a finished task is (`Changed<PropSampling>`).
+        let Some(task) = state.bypass_change_detection().task.as_mut() else {
             continue;
         };
         let Some(result) = check_ready(task) else {

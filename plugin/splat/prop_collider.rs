@@ -206,7 +206,8 @@ fn finish_colliders(
     mut commands: Commands,
 ) {
     for (entity, mut task, held) in &mut tasks {
-        let Some(result) = check_ready(&mut task.0) else {
+        // Polling is no change of the component.
+        let Some(result) = check_ready(&mut task.bypass_change_detection().0) else {
             continue;
         };
         let mut prop = commands.entity(entity);

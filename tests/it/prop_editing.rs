@@ -330,12 +330,28 @@ fn a_scene_that_failed_to_load_is_sampled_once_fixed() {
     assert_eq!(runs(&app, prop), 1);
 }
 
+/// Frames (counted in `Last`) in which a prop's sampling state or splats
+/// were marked changed.
+#[derive(Resource, Default)]
+struct PropChanges(usize);
+
+fn count_prop_changes(
+    changed: Query<(), Or<(Changed<PropSampling>, Changed<PropSplats>)>>,
+    mut count: ResMut<PropChanges>,
+) {
+    if !changed.is_empty() {
+        count.0 += 1;
+    }
+}
+
 #[test]
 fn moving_or_scaling_a_prop_does_not_resample_it() {
     let _one = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let mut app = app_in(&asset_dir("move"));
+    app.init_resource::<PropChanges>()
+        .add_systems(Last, count_prop_changes);
     let scene = Scene::from_ron(&shipped("classic")).expect("scene");
     let handle = app
         .world_mut()
@@ -354,6 +370,7 @@ fn moving_or_scaling_a_prop_does_not_resample_it() {
     });
     let first = generation(&app, prop);
     assert_eq!(runs(&app, prop), 1);
+    app.world_mut().resource_mut::<PropChanges>().0 = 0;
 
     for i in 0..30 {
         let t = i as f32;
@@ -379,6 +396,8 @@ fn moving_or_scaling_a_prop_does_not_resample_it() {
         let state = app.world().get::<PropSampling>(prop).expect("state");
         assert!(!state.is_busy());
     }
+    // Nor does it mark its sampling state or splats changed.
+    assert_eq!(app.world().resource::<PropChanges>().0, 0);
 
     // A change of the prop itself does re-sample it: the count can move.
     app.world_mut()

@@ -400,6 +400,21 @@ fn distance_to_chunk(x: f32, z: f32, c: ChunkCoord) -> f32 {
     gap(x, c.x).hypot(gap(z, c.z))
 }
 
+/// Frames (counted in `Last`) in which the world's [`WorldLod`] was marked
+/// changed.
+#[derive(Resource, Default)]
+struct LodChanges(usize);
+
+fn count_lod_changes(changed: Query<(), Changed<WorldLod>>, mut count: ResMut<LodChanges>) {
+    if !changed.is_empty() {
+        count.0 += 1;
+    }
+}
+
+fn lod_changes(app: &App) -> usize {
+    app.world().resource::<LodChanges>().0
+}
+
 fn run_frames(app: &mut App, frames: usize) {
     for _ in 0..frames {
         app.update();
@@ -414,10 +429,16 @@ fn a_still_focus_costs_no_pass_over_the_coarse_chunks() {
         let lod = app.world().get::<WorldLod>(world).expect("lod");
         lod.stats().full_passes
     };
+    app.init_resource::<LodChanges>()
+        .add_systems(Last, count_lod_changes);
+    // A system's first run sees every component as changed.
+    app.update();
+    app.world_mut().resource_mut::<LodChanges>().0 = 0;
     let settled = passes(&app);
     assert!(settled > 0);
     run_frames(&mut app, 30);
     assert_eq!(passes(&app), settled, "a still focus: no full pass");
+    assert_eq!(lod_changes(&app), 0, "a still focus: `WorldLod` unchanged");
 
     // A step of 3 (under a quarter of the 32 edge): still none.
     app.world_mut()
@@ -426,6 +447,7 @@ fn a_still_focus_costs_no_pass_over_the_coarse_chunks() {
         .translation = Vec3::new(19.0, 30.0, 16.0);
     run_frames(&mut app, 30);
     assert_eq!(passes(&app), settled, "a small step: no full pass");
+    assert_eq!(lod_changes(&app), 0, "a small step: `WorldLod` unchanged");
 
     // A step of 8.5 from where the last pass looked: a full pass, after
     // which every chunk within the far radius is drawn coarse (but the
@@ -439,6 +461,7 @@ fn a_still_focus_costs_no_pass_over_the_coarse_chunks() {
     // (The transform reaches `GlobalTransform` after the pass's frame.)
     run_frames(&mut app, 2);
     assert!(passes(&app) > settled, "a step of a quarter chunk: a pass");
+    assert!(lod_changes(&app) > 0, "a pass marks `WorldLod` changed");
     settle(&mut app, world);
     let lod = app.world().get::<WorldLod>(world).expect("lod");
     let settings = lod.settings().clone();

@@ -190,6 +190,13 @@ struct LodChunk {
 
 /// Level of detail for the [`TerrainWorld`] on the same entity: coarse
 /// chunks out to the far radius. Insert it beside the world.
+///
+/// # Change detection
+///
+/// `Changed<WorldLod>` marks the frames in which a coarse chunk was drawn
+/// at another level (or taken away), a coarse build started or finished,
+/// or its [`LodStats`] moved otherwise; frames that only look at still
+/// chunks mark nothing.
 #[derive(Component, Default)]
 pub struct WorldLod {
     settings: LodSettings,
@@ -328,8 +335,12 @@ pub fn update_lod(
     #[cfg(feature = "render")] cameras: Query<(&Camera, &Projection)>,
 ) {
     let _span = bevy::log::info_span!("chisel::lod::update").entered();
-    for (world_entity, world, mut lod, world_transform) in &mut worlds {
-        let lod = &mut *lod;
+    for (world_entity, world, mut lod_mut, world_transform) in &mut worlds {
+        // Bookkeeping bypasses change detection: the component is marked
+        // changed only when what it shows or reports changed.
+        let lod = lod_mut.bypass_change_detection();
+        let stats_before = lod.stats.clone();
+        let mut redrawn = false;
         let settings = lod.settings.clone();
         #[allow(unused_mut)]
         let mut view = LodView::new(settings.fov_y, settings.viewport_height);
@@ -560,6 +571,7 @@ pub fn update_lod(
             };
             if current != target || chunk.stale {
                 chunk.stale = false;
+                redrawn = true;
                 if let Some((_, entities)) = chunk.drawn.take() {
                     despawn_all(&mut commands, &entities);
                 }
@@ -613,6 +625,9 @@ pub fn update_lod(
         if full_pass {
             lod.stats.full_passes += 1;
             lod.last_pass = Some(inputs);
+        }
+        if redrawn || lod.stats != stats_before {
+            lod_mut.set_changed();
         }
     }
 }
