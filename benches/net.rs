@@ -25,13 +25,11 @@ use std::time::Instant;
 
 use bevy::mesh::{Indices, Mesh3d};
 use bevy::prelude::*;
-use bevy_chisel::net::{
-    ClientPacket, ClientRequest, NetLimits, NetProtocolPlugin, NetServerStats, Outcome,
-    ServerPacket, WireTool, start_client,
-};
+use bevy_chisel::net::{ClientPacket, ClientRequest, NetLimits, NetServerStats, WireTool};
 use bevy_chisel::terrain::{CarveApplied, CellOutput, TerrainCellChanged};
 use net::{
-    Rng, Seen, client, random_carve, request, run_until, server, server_building, slab, terrain_of,
+    Answers, Rng, Seen, client, light_client, random_carve, request, run_until, server,
+    server_building, slab, terrain_of,
 };
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -113,33 +111,6 @@ fn wire_against_meshes() -> (f64, f64, usize) {
     let mesh = meshes.iter().sum::<u64>() as f64 / meshes.len() as f64;
     (wire, mesh, N)
 }
-
-/// A light client: the protocol only, no terrain.
-fn light_client(addr: std::net::SocketAddr, id: u64) -> App {
-    let mut app = App::new();
-    app.add_plugins((MinimalPlugins, NetProtocolPlugin))
-        .init_resource::<Answers>()
-        .add_systems(
-            Update,
-            |mut packets: MessageReader<ServerPacket>, mut answers: ResMut<Answers>| {
-                for packet in packets.read() {
-                    if let ServerPacket::Result { outcome, .. } = packet {
-                        answers.0 += 1;
-                        if matches!(outcome, Outcome::Applied { .. }) {
-                            answers.1 += 1;
-                        }
-                    }
-                }
-            },
-        );
-    app.finish();
-    app.cleanup();
-    start_client(app.world_mut(), addr, id).expect("client starts");
-    app
-}
-
-#[derive(Resource, Default)]
-struct Answers(usize, usize);
 
 /// Carves per second with 8 clients sending at once, the server building
 /// `output` for its cells.

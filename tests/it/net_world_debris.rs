@@ -5,20 +5,25 @@
 //! cuts through, falls on every peer as one piece of the same exact
 //! volume; every edited chunk ends bit-identical on every peer; no world
 //! hash ever differs; a client that joins afterwards gets the chunks with
-//! the pieces taken out from the world's snapshot. Malformed detaches are
-//! refused and the client that skipped them resyncs.
+//! the pieces taken out from the world's snapshot. A snapshot followed in
+//! the log by a detach (taken before it, or holding it already) ends
+//! identical too. Malformed detaches are refused and the client that
+//! skipped them resyncs.
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{Edit, ExactVolume};
+use bevy_chisel::net::wire::WorldSnapshotPart;
 use bevy_chisel::net::wire::{NetWorldDetach, WireSeed};
 use bevy_chisel::net::{NetClientStats, Outcome, ServerPacket};
 use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, Terrain};
 
+use crate::net::world::world_hash;
 use crate::net::{
-    Seen, WorldsSeen, request_world, run_until, unlimited, world_client, world_of, world_server,
+    Seen, WorldsSeen, request_world, run_until, unlimited, update_all, world_client, world_of,
+    world_server,
 };
 use crate::net_worlds::{edited_chunks, streamed_world as world, world_settled as settled};
-use crate::{ONE_APP_AT_A_TIME, net_worlds::edited_terrains};
+use crate::{ONE_APP_AT_A_TIME, net, net_worlds::edited_terrains};
 
 /// The exact volumes of the pieces an app saw fall.
 #[derive(Resource, Default)]
@@ -387,5 +392,204 @@ fn a_server_without_a_focus_builds_only_the_carved_chunks_for_craters() {
             after.build_time - before.build_time
         );
         assert_eq!(built, 12, "one chunk built per carve");
+    }
+}
+
+/// Every server packet an app received, in order.
+#[derive(Resource, Default)]
+struct Received(Vec<ServerPacket>);
+
+fn record_packets(mut received: ResMut<Received>, mut packets: MessageReader<ServerPacket>) {
+    received.0.extend(packets.read().cloned());
+}
+
+/// A light client (the protocol only, no world) that records what the
+/// server sends it.
+fn recorder(addr: std::net::SocketAddr, id: u64) -> App {
+    let mut app = net::light_client(addr, id);
+    app.init_resource::<Received>()
+        .add_systems(Update, record_packets);
+    app
+}
+
+fn received(app: &App) -> Vec<ServerPacket> {
+    app.world().resource::<Received>().0.clone()
+}
+
+/// The snapshot parts among `packets`.
+fn snapshot_parts(packets: &[ServerPacket]) -> Vec<WorldSnapshotPart> {
+    (packets.iter())
+        .filter_map(|p| match p {
+            ServerPacket::WorldSnapshot(part) => Some(part.clone()),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The exact volume of material 1 in chunks `coords` as `app` holds them.
+fn rock_in(app: &mut App, coords: &[ChunkCoord]) -> ExactVolume {
+    let terrains = edited_terrains(app);
+    coords
+        .iter()
+        .filter_map(|coord| terrains.get(coord))
+        .filter_map(|terrain| terrain.octree().exact_volumes().remove(&1))
+        .fold(ExactVolume::default(), |sum, v| sum + v)
+}
+
+/// A client whose world snapshot lands while a detach across chunk
+/// borders is in the server's order after the snapshot's `seq`, in the
+/// two forms the server sends:
+///
+/// - **before**: the snapshot was taken before the cut that frees a slab
+///   (its chunks do not hold the cut), and the cut and its detach follow
+///   it in the log: the client must carry the detach out (skipping it
+///   would leave the slab);
+/// - **holding**: the server's *done* op was still before the cut (an
+///   earlier carve not yet reported by every chunk) while the cut's
+///   chunks already held the cut and the detach, so the snapshot's `seq`
+///   is before the cut, its chunks' own `seq` at the detach, and the cut
+///   and the detach follow: the client must skip both for those chunks.
+///
+/// The packets are the server's own, recorded by light clients that
+/// joined before and after the cut (the second's snapshot `seq` set back
+/// to before the cut, as a server whose done op lags sends it), and given
+/// to a connected client as a resync. Each client ends bit-identical to
+/// the server: same edited chunks, octrees, state hashes and world hash,
+/// the rock of the slab's chunks less exactly the cut and the piece; the
+/// piece falls on the first client only. A client that skipped the
+/// detach in the first form keeps the slab and fails; one that carried it
+/// out again in the second form searches cells already empty, finds
+/// nothing and ends the same (checked by changing the client's routing).
+#[test]
+fn a_snapshot_landing_before_a_detach_in_the_log_ends_identical() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (server, addr) = world_server(world(), unlimited());
+    let mut server = watch(server);
+    let mut a = watch(world_client(addr, 1, world(), Vec3::new(32.0, 30.0, 32.0)));
+    run_until(&mut [&mut server, &mut a], 20_000, |apps| {
+        !apps[1].world().resource::<WorldsSeen>().synced.is_empty() && settled(apps[1])
+    });
+    let border = Slab {
+        lo: [26, 10],
+        depth: 4,
+    };
+    carve_and_converge(
+        &mut [&mut server, &mut a],
+        1,
+        &[
+            (border.pillar(), Edit::Add(1)),
+            (border.slab(), Edit::Add(1)),
+        ],
+    );
+    let slab_chunks = [at(0, 0), at(1, 0)];
+    let rock_before = rock_in(&mut server, &slab_chunks);
+    // Joins before the cut, and records the cut and the detach after its
+    // snapshot.
+    let mut early = recorder(addr, 10);
+    run_until(&mut [&mut server, &mut a, &mut early], 20_000, |apps| {
+        !snapshot_parts(&received(apps[2])).is_empty()
+    });
+    carve_and_converge(
+        &mut [&mut server, &mut a],
+        3,
+        &[(border.cut(), Edit::Subtract)],
+    );
+    run_until(&mut [&mut server, &mut a, &mut early], 20_000, |apps| {
+        (received(apps[2]).iter()).any(|p| matches!(p, ServerPacket::WorldDetach(_)))
+    });
+    // Joins after the detach: its snapshot's chunks hold it.
+    let mut late = recorder(addr, 11);
+    run_until(&mut [&mut server, &mut a, &mut late], 20_000, |apps| {
+        !snapshot_parts(&received(apps[2])).is_empty()
+    });
+    for _ in 0..20 {
+        update_all(&mut [&mut server, &mut a, &mut late]);
+    }
+
+    let early_packets = received(&early);
+    let before = snapshot_parts(&early_packets);
+    let ops: Vec<ServerPacket> = (early_packets.iter())
+        .filter(|p| {
+            matches!(
+                p,
+                ServerPacket::WorldCarve(_) | ServerPacket::WorldDetach(_)
+            )
+        })
+        .cloned()
+        .collect();
+    let cut = match &ops[..] {
+        [
+            ServerPacket::WorldCarve(cut),
+            ServerPacket::WorldDetach(detach),
+        ] => {
+            assert_eq!(detach.seq, cut.seq + 1, "the detach follows the cut");
+            cut.seq
+        }
+        other => panic!("the early recorder saw the cut and its detach: {other:?}"),
+    };
+    assert!(before.iter().all(|p| p.seq == cut - 1), "before the cut");
+    let holding: Vec<WorldSnapshotPart> = snapshot_parts(&received(&late))
+        .into_iter()
+        .map(|mut part| {
+            assert_eq!(part.seq, cut + 1, "the late snapshot holds the detach");
+            part.seq = cut - 1;
+            part
+        })
+        .collect();
+    let held: Vec<u64> = (holding.iter())
+        .filter_map(|p| p.chunk.as_ref())
+        .filter(|c| slab_chunks.contains(&at(c.coord[0], c.coord[1])))
+        .map(|c| c.seq)
+        .collect();
+    assert!(
+        !held.is_empty() && held.iter().all(|&s| s == cut + 1),
+        "the slab's chunks hold the detach: {held:?}"
+    );
+
+    let falling = border.falling();
+    let cut_rock = box_volume([26, 21, 10], [29, 23, 13]);
+    let variants = [
+        (20, "before", before, true),
+        (21, "holding", holding, false),
+    ];
+    for (id, name, parts, falls) in variants {
+        let mut c = watch(world_client(addr, id, world(), Vec3::new(48.0, 30.0, 16.0)));
+        run_until(&mut [&mut server, &mut c], 20_000, |apps| {
+            !apps[1].world().resource::<WorldsSeen>().synced.is_empty() && settled(apps[1])
+        });
+        for part in parts {
+            c.world_mut()
+                .write_message(ServerPacket::WorldSnapshot(part));
+        }
+        for op in &ops {
+            c.world_mut().write_message(op.clone());
+        }
+        let want = edited_chunks(&mut server);
+        run_until(&mut [&mut server, &mut c], 20_000, |apps| {
+            apps[1].world().resource::<WorldsSeen>().synced.len() == 2
+                && settled(apps[1])
+                && edited_chunks(apps[1]) == want
+        });
+        let pieces = fallen(&c);
+        if falls {
+            assert_eq!(pieces, vec![falling.clone()], "{name}: the piece fell");
+        } else {
+            assert!(pieces.is_empty(), "{name}: the snapshot holds the detach");
+        }
+        assert_eq!(
+            rock_in(&mut c, &slab_chunks) + cut_rock.clone() + falling.clone(),
+            rock_before,
+            "{name}: the slab's chunks lost exactly the cut and the piece"
+        );
+        assert_eq!(
+            label_at(&mut c, at(1, 0), [35, 26, 12]),
+            Some(0),
+            "slab out"
+        );
+        assert_eq!(label_at(&mut c, at(0, 0), [27, 10, 11]), Some(1), "pillar");
+        assert_same_chunks(&mut server, &mut [(name, &mut c)]);
+        assert_eq!(world_hash(&mut c), world_hash(&mut server), "{name}");
     }
 }

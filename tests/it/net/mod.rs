@@ -1,5 +1,8 @@
 //! What the networked tests share: a server and clients as Bevy apps in
 //! one process, talking over renet's netcode UDP transport on 127.0.0.1.
+//! [`world`] has what a peer holds of a networked world.
+
+pub mod world;
 
 use std::net::{Ipv4Addr, SocketAddr};
 
@@ -9,9 +12,10 @@ use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
-    NetCarveRequest, NetCarveResult, NetClientPlugin, NetKey, NetLimits, NetServerPlugin,
-    NetTerrain, NetWorld, NetWorldCarveRequest, TerrainSynced, WireTool, WorldDesynced,
-    WorldSynced, start_client, start_secure_server, start_server,
+    NetCarveRequest, NetCarveResult, NetClientPlugin, NetKey, NetLimits, NetProtocolPlugin,
+    NetServerPlugin, NetTerrain, NetWorld, NetWorldCarveRequest, Outcome, ServerPacket,
+    TerrainSynced, WireTool, WorldDesynced, WorldSynced, start_client, start_secure_server,
+    start_server,
 };
 use bevy_chisel::terrain::{
     CarveTool, CellOutput, Terrain, TerrainBase, TerrainFocus, TerrainPlugin, TerrainSettings,
@@ -125,6 +129,35 @@ pub fn client_app(threads: usize) -> App {
 /// A client connecting to `addr` with `threads` worker threads.
 pub fn client(addr: SocketAddr, id: u64, threads: usize) -> App {
     let mut app = client_app(threads);
+    start_client(app.world_mut(), addr, id).expect("client starts");
+    app
+}
+
+/// Requests a light client answered: all of them, and those applied.
+#[derive(Resource, Default)]
+pub struct Answers(pub usize, pub usize);
+
+/// A light client connecting to `addr`: the protocol only, no terrain or
+/// world; it counts the answers to its requests in [`Answers`].
+pub fn light_client(addr: SocketAddr, id: u64) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, NetProtocolPlugin))
+        .init_resource::<Answers>()
+        .add_systems(
+            Update,
+            |mut packets: MessageReader<ServerPacket>, mut answers: ResMut<Answers>| {
+                for packet in packets.read() {
+                    if let ServerPacket::Result { outcome, .. } = packet {
+                        answers.0 += 1;
+                        if matches!(outcome, Outcome::Applied { .. }) {
+                            answers.1 += 1;
+                        }
+                    }
+                }
+            },
+        );
+    app.finish();
+    app.cleanup();
     start_client(app.world_mut(), addr, id).expect("client starts");
     app
 }
