@@ -218,6 +218,18 @@ pub enum CellOutput {
     Nothing,
 }
 
+impl CellOutput {
+    /// What a chunk out of sight ([`ChunkOffstage`](super::ChunkOffstage))
+    /// builds: no render meshes, colliders where this output builds them.
+    #[must_use]
+    pub fn out_of_sight(self) -> Self {
+        match self {
+            CellOutput::Meshes | CellOutput::Colliders => CellOutput::Colliders,
+            CellOutput::Nothing => CellOutput::Nothing,
+        }
+    }
+}
+
 impl Default for TerrainSettings {
     fn default() -> Self {
         Self {

@@ -55,6 +55,9 @@ pub(crate) struct Runtime {
     /// Whether the settings ask for cells ([`CellOutput`]): when
     /// not, a pending full build does not keep the terrain busy.
     pub(crate) builds_cells: bool,
+    /// The output the cells shown were built for (`None` before the
+    /// first job that built cells): another output rebuilds every cell.
+    pub(crate) cells_output: Option<CellOutput>,
     /// The border vertices of the cells shown (in the running job while
     /// there is one).
     pub(crate) mesher: SeamedMesher,
@@ -123,6 +126,7 @@ impl Default for Runtime {
             triangles: 0,
             needs_full_mesh: true,
             builds_cells: true,
+            cells_output: None,
             mesher: SeamedMesher::with_shading(),
             material_labels: None,
             publishes_border: false,

@@ -166,9 +166,9 @@ pub use tool::{
     MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
 };
 pub use world::{
-    ChunkCoord, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave, StreamSettings,
-    TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldLod,
-    WorldSource, WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
+    ChunkCoord, ChunkOffstage, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave,
+    StreamSettings, TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk, WorldLayout,
+    WorldLod, WorldSource, WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
@@ -270,6 +270,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<DebrisDetached>()
         .register_type::<TerrainFocus>()
         .register_type::<WorldChunk>()
+        .register_type::<ChunkOffstage>()
         .register_type::<LodMesh>()
         .register_type::<WorldCarve>()
         .register_type::<WorldUndo>()

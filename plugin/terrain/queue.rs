@@ -15,7 +15,7 @@ use bevy::prelude::*;
 use bevy::tasks::AsyncComputeTaskPool;
 use chisel_bsp::octree::{CellKey, SeamedMesher};
 
-use super::carve::{Carve, CarveRejected, GridCarve, TerrainSettings, UndoCarve};
+use super::carve::{Carve, CarveRejected, CellOutput, GridCarve, TerrainSettings, UndoCarve};
 use super::component::Terrain;
 use super::error::TerrainError;
 use super::jobs::{
@@ -23,6 +23,7 @@ use super::jobs::{
     on_pool, remesh,
 };
 use super::physics::TerrainPhysicsBackend;
+use super::world::ChunkOffstage;
 
 /// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
 /// queues.
@@ -110,20 +111,27 @@ pub fn start_jobs(
     settings: Res<TerrainSettings>,
     physics: Res<TerrainPhysicsBackend>,
     mut workers: Local<Workers>,
-    mut terrains: Query<(Entity, &mut Terrain)>,
+    mut terrains: Query<(Entity, &mut Terrain, Has<ChunkOffstage>)>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
     let _span = bevy::log::info_span!("chisel::queue::start_jobs").entered();
-    for (entity, mut terrain) in &mut terrains {
+    for (entity, mut terrain, offstage) in &mut terrains {
         let pool = workers.pool(settings.worker_threads);
         if terrain.runtime.task.is_some() {
             continue;
         }
         // The plugin's bookkeeping; only an undo changes the content here.
         let terrain_now = terrain.bypass_change_detection();
+        // A chunk built only for work out of sight draws nothing.
+        let output = if offstage {
+            settings.output.out_of_sight()
+        } else {
+            settings.output
+        };
         if start_next(
             entity,
             terrain_now,
+            output,
             &settings,
             &physics,
             pool,
@@ -140,6 +148,7 @@ pub fn start_jobs(
 fn start_next(
     entity: Entity,
     terrain: &mut Terrain,
+    output: CellOutput,
     settings: &TerrainSettings,
     physics: &TerrainPhysicsBackend,
     pool: Option<Arc<rayon::ThreadPool>>,
@@ -152,10 +161,23 @@ fn start_next(
         debris: terrain.debris.clone(),
         debris_density: settings.debris_density,
         max_debris_hulls: settings.max_debris_hulls,
-        output: settings.output,
+        output,
         publish_border: terrain.runtime.publishes_border,
     };
     terrain.runtime.builds_cells = context.builds_cells();
+    if terrain.runtime.builds_cells
+        && terrain
+            .runtime
+            .cells_output
+            .is_some_and(|built| built != output)
+    {
+        // Cells built for another output (colliders only, before an
+        // offstage chunk came into sight) are built again.
+        terrain.runtime.needs_full_mesh = true;
+    }
+    if terrain.runtime.builds_cells {
+        terrain.runtime.cells_output = Some(output);
+    }
     if !terrain.runtime.builds_cells {
         // Cells shown before the output changed are taken away, and
         // every cell is built again once cells are asked for again.

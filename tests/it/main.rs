@@ -89,6 +89,8 @@ mod terrain_world_lod;
 #[cfg(feature = "terrain")]
 mod terrain_world_normals;
 #[cfg(feature = "terrain")]
+mod terrain_world_offstage;
+#[cfg(feature = "terrain")]
 mod terrain_world_seams;
 #[cfg(feature = "terrain")]
 mod world_undo;

@@ -177,7 +177,7 @@ pub(crate) fn carve(app: &mut App, world: Entity, tool: CarveTool) {
 
 /// Chunk `coord` as generated, with `tools` applied synchronously: the
 /// reference of what the app's chunk must hold.
-fn reference(world: &TerrainWorld, coord: ChunkCoord, tools: &[CarveTool]) -> Terrain {
+pub(crate) fn reference(world: &TerrainWorld, coord: ChunkCoord, tools: &[CarveTool]) -> Terrain {
     let mut terrain = world.generate_chunk(coord).expect("chunk builds");
     for tool in tools {
         let grid = tool.to_grid(&layout().quantization).expect("tool on grid");

@@ -331,6 +331,7 @@ pub fn update_lod(
     mut worlds: Query<(Entity, &TerrainWorld, &mut WorldLod, &GlobalTransform)>,
     foci: Query<(Entity, &GlobalTransform), With<TerrainFocus>>,
     terrains: Query<&Terrain>,
+    offstage: Query<(), With<super::ChunkOffstage>>,
     mut meshes: ResMut<Assets<Mesh>>,
     #[cfg(feature = "render")] cameras: Query<(&Camera, &Projection)>,
 ) {
@@ -541,6 +542,11 @@ pub fn update_lod(
                 continue;
             };
             let full = match world.chunk_entity(coord) {
+                // A chunk out of sight builds no meshes: coarse draws it.
+                Some(e) if offstage.contains(e) => {
+                    chunk.full = None;
+                    false
+                }
                 Some(e) => {
                     // Full detail draws once it was idle (meshed) once.
                     if chunk.full != Some(e) && terrains.get(e).is_ok_and(Terrain::is_idle) {

@@ -189,6 +189,20 @@ pub struct WorldChunk {
     pub coord: ChunkCoord,
 }
 
+/// A live chunk that no focus has come near: built beyond every focus's
+/// unload radius, only for work there (a carve routed to it, an undo, a
+/// search for debris across borders, or a networked world's carve from
+/// another player), and released once that is done. Its cells get no
+/// render meshes (colliders still, where the [`CellOutput`] and a
+/// physics backend build them), and coarse chunks ([`WorldLod`]) stand in
+/// for it. The marker is taken away, for good, once a focus comes within
+/// the unload radius; the chunk then builds its meshes.
+///
+/// [`CellOutput`]: crate::terrain::CellOutput
+#[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[reflect(Component, Default)]
+pub struct ChunkOffstage;
+
 /// How far around the foci chunks are kept, and how many build at once.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StreamSettings {

@@ -18,7 +18,9 @@ use bevy::tasks::futures::check_ready;
 use super::super::carve::{CarveRejected, GridCarve};
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::{Built, Chunk, ChunkCoord, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk};
+use super::{
+    Built, Chunk, ChunkCoord, ChunkOffstage, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk,
+};
 use super::{generate, restore};
 
 /// Splits every [`WorldCarve`] into grid carves of the chunks its tool
@@ -83,29 +85,36 @@ pub fn stream_chunks(
     mut worlds: Query<(Entity, &mut TerrainWorld, &GlobalTransform)>,
     foci: Query<&GlobalTransform, With<TerrainFocus>>,
     terrains: Query<&Terrain>,
+    offstage: Query<(), With<ChunkOffstage>>,
     mut grid_carves: MessageWriter<GridCarve>,
 ) {
     for (world_entity, mut world_mut, world_transform) in &mut worlds {
         // Polling builds is the plugin's bookkeeping: the world is marked
         // changed only when its chunks change (below).
         let world = world_mut.bypass_change_detection();
+        let unit = world.layout.quantization.unit();
+        let focus = grid_foci(&world.layout, world_transform, foci.iter());
+        let edge = world.layout.chunk_edge();
+        let distance = |coord: ChunkCoord| nearest_distance(&focus, coord, edge);
+        let load = f64::from(world.settings.load_radius) / unit;
+        let unload = f64::from(world.settings.unload_radius) / unit;
+        let out_of_sight = |coord: ChunkCoord| distance(coord) > unload;
+
         let span = bevy::log::info_span!("chisel::stream::collect_builds").entered();
         // Their terrains are spawned by this frame's commands: none can be
         // read (nor stored when it streams out) before the next frame.
-        let just_built = collect_builds(&mut commands, world_entity, world);
+        let just_built = collect_builds(&mut commands, world_entity, world, out_of_sight);
         drop(span);
+        // Chunks built out of sight that a focus came near build meshes.
+        for (coord, entity) in world.live_chunks() {
+            if offstage.contains(entity) && !out_of_sight(coord) {
+                commands.entity(entity).try_remove::<ChunkOffstage>();
+            }
+        }
         // Chunks that were just sent carves are not idle yet, though their
         // queues fill only when the terrain systems read the messages.
         let just_carved = send_pending(world, &terrains, &mut grid_carves);
         let mut chunks_changed = !just_built.is_empty() || !just_carved.is_empty();
-
-        let layout = &world.layout;
-        let unit = layout.quantization.unit();
-        let focus = grid_foci(layout, world_transform, foci.iter());
-        let edge = layout.chunk_edge();
-        let distance = |coord: ChunkCoord| nearest_distance(&focus, coord, edge);
-        let load = f64::from(world.settings.load_radius) / unit;
-        let unload = f64::from(world.settings.unload_radius) / unit;
 
         // Wanted chunks, nearest first; those with waiting carves first.
         let mut wanted: Vec<(f64, ChunkCoord)> = (world.pending.keys().copied())
@@ -271,12 +280,14 @@ fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     world.chunks.insert(coord, Chunk::Building(task));
 }
 
-/// Turns the finished builds into terrain entities (spawned by `commands`)
-/// or failed chunks; returns the chunks collected.
+/// Turns the finished builds into terrain entities (spawned by `commands`;
+/// [`ChunkOffstage`] where `out_of_sight`) or failed chunks; returns the
+/// chunks collected.
 fn collect_builds(
     commands: &mut Commands,
     world_entity: Entity,
     world: &mut TerrainWorld,
+    out_of_sight: impl Fn(ChunkCoord) -> bool,
 ) -> Vec<ChunkCoord> {
     let mut done = Vec::new();
     for (coord, state) in &mut world.chunks {
@@ -313,6 +324,9 @@ fn collect_builds(
                         Name::new(format!("chunk {} {}", coord.x, coord.z)),
                     ))
                     .id();
+                if out_of_sight(coord) {
+                    commands.entity(entity).insert(ChunkOffstage);
+                }
                 world.chunks.insert(coord, Chunk::Live(entity));
             }
             Err(error) => {
