@@ -109,25 +109,6 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
-/// CPU time of the whole process so far (every thread).
-fn process_cpu() -> Duration {
-    let mut now = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `clock_gettime` writes one `timespec` through the pointer,
-    // which points to a live, writable `timespec` on this stack.
-    let status = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &raw mut now) };
-    match (
-        status,
-        u64::try_from(now.tv_sec),
-        u32::try_from(now.tv_nsec),
-    ) {
-        (0, Ok(secs), Ok(nanos)) => Duration::new(secs, nanos),
-        _ => Duration::ZERO,
-    }
-}
-
 /// What a measuring client saw, frame by frame: mesh bytes of the cells
 /// changed (running total), the world ops it applied, their wire sizes.
 #[derive(Resource, Default)]
@@ -369,7 +350,7 @@ fn remote_carves(
         };
         let built_before = built(o);
         let meshed = o.world().resource::<Watch>().mesh_bytes;
-        let (start, cpu) = (Instant::now(), process_cpu());
+        let (start, cpu) = (Instant::now(), support::process_cpu());
         let mut frame = 0;
         loop {
             o.update();
@@ -394,7 +375,7 @@ fn remote_carves(
             std::thread::sleep(Duration::from_micros(200));
         }
         walls.push(start.elapsed().as_secs_f64() * 1e3);
-        cpus.push((process_cpu() - cpu).as_secs_f64() * 1e3);
+        cpus.push((support::process_cpu() - cpu).as_secs_f64() * 1e3);
         frames.push(f64::from(frame));
         builds.push((built(o) - built_before) as f64);
         mesh_bytes.push((o.world().resource::<Watch>().mesh_bytes - meshed) as f64);
@@ -439,12 +420,12 @@ fn near_against_far() -> (RemoteCost, RemoteCost, usize, f64) {
         })
         .collect();
     // What a frame of the client costs with nothing to do.
-    let (cpu, frames) = (process_cpu(), 100);
+    let (cpu, frames) = (support::process_cpu(), 100);
     for _ in 0..frames {
         o.update();
         std::thread::sleep(Duration::from_micros(200));
     }
-    let idle_ms = (process_cpu() - cpu).as_secs_f64() * 1e3 / f64::from(frames);
+    let idle_ms = (support::process_cpu() - cpu).as_secs_f64() * 1e3 / f64::from(frames);
     let near_cost = remote_carves(&mut server, &mut sender, &mut o, 0, &near);
     let far_cost = remote_carves(&mut server, &mut sender, &mut o, 1_000, &far);
     // The client holds every chunk it was sent as the server does.

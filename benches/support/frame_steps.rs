@@ -56,7 +56,7 @@ impl Times {
 #[must_use]
 pub fn thread_clock() -> (Duration, Duration, u64) {
     let (wait, slices) = schedstat();
-    (thread_cpu(), wait, slices)
+    (super::support::thread_cpu(), wait, slices)
 }
 
 std::thread_local! {
@@ -93,32 +93,6 @@ fn schedstat() -> (Duration, u64) {
 #[cfg(not(unix))]
 fn schedstat() -> (Duration, u64) {
     (Duration::ZERO, 0)
-}
-
-/// The running thread's CPU time so far (0 where there is no such clock).
-#[cfg(unix)]
-fn thread_cpu() -> Duration {
-    let mut now = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `clock_gettime` writes one `timespec` through the pointer,
-    // which points to a live, writable `timespec` on this stack.
-    let status = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &raw mut now) };
-    match (
-        status,
-        u64::try_from(now.tv_sec),
-        u32::try_from(now.tv_nsec),
-    ) {
-        (0, Ok(secs), Ok(nanos)) => Duration::new(secs, nanos),
-        _ => Duration::ZERO,
-    }
-}
-
-/// The running thread's CPU time so far: never known here.
-#[cfg(not(unix))]
-fn thread_cpu() -> Duration {
-    Duration::ZERO
 }
 
 /// A point in time on the running thread, to time an interval with

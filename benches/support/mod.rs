@@ -51,6 +51,55 @@ pub fn percentile(sorted: &[Duration], p: f64) -> f64 {
     sorted[k].as_secs_f64() * 1e3
 }
 
+/// CPU time of the whole process so far, every thread.
+#[cfg(unix)]
+#[allow(dead_code, reason = "not every bench measures CPU time")]
+pub fn process_cpu() -> Duration {
+    cpu_clock(libc::CLOCK_PROCESS_CPUTIME_ID)
+}
+
+/// CPU time of the running thread so far.
+#[cfg(unix)]
+#[allow(dead_code, reason = "not every bench measures CPU time")]
+pub fn thread_cpu() -> Duration {
+    cpu_clock(libc::CLOCK_THREAD_CPUTIME_ID)
+}
+
+/// CPU time of the whole process: never known here.
+#[cfg(not(unix))]
+#[allow(dead_code, reason = "not every bench measures CPU time")]
+pub fn process_cpu() -> Duration {
+    Duration::ZERO
+}
+
+/// CPU time of the running thread: never known here.
+#[cfg(not(unix))]
+#[allow(dead_code, reason = "not every bench measures CPU time")]
+pub fn thread_cpu() -> Duration {
+    Duration::ZERO
+}
+
+/// The CPU time `clock` reads now (0 where it cannot be read).
+#[cfg(unix)]
+#[allow(dead_code, reason = "not every bench measures CPU time")]
+fn cpu_clock(clock: libc::clockid_t) -> Duration {
+    let mut now = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `clock_gettime` writes one `timespec` through the pointer,
+    // which points to a live, writable `timespec` on this stack.
+    let status = unsafe { libc::clock_gettime(clock, &raw mut now) };
+    match (
+        status,
+        u64::try_from(now.tv_sec),
+        u32::try_from(now.tv_nsec),
+    ) {
+        (0, Ok(secs), Ok(nanos)) => Duration::new(secs, nanos),
+        _ => Duration::ZERO,
+    }
+}
+
 /// Prints `figures` (a JSON object) as one line, with `"bench":
 /// "BENCH::MEASUREMENT"` added: the line a script reads.
 pub fn json_line(measurement: &str, figures: serde_json::Value) {
