@@ -25,10 +25,10 @@ use std::time::Instant;
 
 use bevy::mesh::{Indices, Mesh3d};
 use bevy::prelude::*;
-use bevy_chisel::net::{ClientPacket, ClientRequest, NetLimits, NetServerStats, WireTool};
+use bevy_chisel::net::{ClientRequest, NetLimits, NetServerStats, WireTool};
 use bevy_chisel::terrain::{CarveApplied, CellOutput, TerrainCellChanged};
 use net::{
-    Answers, Rng, Seen, client, light_client, random_carve, request, run_until, server,
+    Rng, Seen, burst_rate, client, light_client, random_carve, request, run_until, server,
     server_building, slab, terrain_of,
 };
 
@@ -123,37 +123,16 @@ fn eight_clients(output: CellOutput) -> (f64, usize) {
         clients.iter_mut().for_each(App::update);
         std::thread::sleep(std::time::Duration::from_millis(1));
     }
-    const PER_CLIENT: usize = 50;
     let mut rng = Rng(8);
-    let start = Instant::now();
-    for (n, app) in clients.iter_mut().enumerate() {
-        for i in 0..PER_CLIENT {
-            let (tool, edit) = random_carve(&mut rng);
-            app.world_mut()
-                .write_message(ClientPacket::Request(ClientRequest::Carve {
-                    request: (n * PER_CLIENT + i) as u64,
-                    terrain: 1,
-                    tool: WireTool::from(&tool),
-                    edit,
-                }));
+    burst_rate(&mut server, &mut clients, 50, |n, i| {
+        let (tool, edit) = random_carve(&mut rng);
+        ClientRequest::Carve {
+            request: (n * 50 + i) as u64,
+            terrain: 1,
+            tool: WireTool::from(&tool),
+            edit,
         }
-    }
-    loop {
-        server.update();
-        clients.iter_mut().for_each(App::update);
-        let answered: usize = clients
-            .iter()
-            .map(|app| app.world().resource::<Answers>().0)
-            .sum();
-        if answered >= 8 * PER_CLIENT {
-            break;
-        }
-    }
-    let applied: usize = clients
-        .iter()
-        .map(|app| app.world().resource::<Answers>().1)
-        .sum();
-    (applied as f64 / start.elapsed().as_secs_f64(), applied)
+    })
 }
 
 /// Join time after 10,000 carves.

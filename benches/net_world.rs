@@ -48,8 +48,8 @@ use bevy_chisel::terrain::{
 };
 use net::world::{world_hash, world_settled};
 use net::{
-    Answers, Rng, Seen, WorldsSeen, light_client, request_world, run_until, world_client, world_of,
-    world_server,
+    Answers, Rng, Seen, WorldsSeen, burst_rate, light_client, request_world, run_until,
+    world_client, world_of, world_server,
 };
 
 /// Chunks of 32 grid units of 1 m, samples 4 apart, heights 8..=20.
@@ -504,37 +504,16 @@ fn eight_clients() -> (f64, usize) {
         clients.iter_mut().for_each(App::update);
         std::thread::sleep(Duration::from_millis(1));
     }
-    const PER_CLIENT: usize = 50;
     let mut rng = Rng(8);
-    let start = Instant::now();
-    for (n, app) in clients.iter_mut().enumerate() {
-        for i in 0..PER_CLIENT {
-            let (tool, edit) = random_carve(&mut rng, 2.0, 126.0);
-            app.world_mut()
-                .write_message(ClientPacket::Request(ClientRequest::CarveWorld {
-                    request: (n * PER_CLIENT + i) as u64,
-                    world: 1,
-                    tool: WireTool::from(&tool),
-                    edit,
-                }));
+    burst_rate(&mut server, &mut clients, 50, |n, i| {
+        let (tool, edit) = random_carve(&mut rng, 2.0, 126.0);
+        ClientRequest::CarveWorld {
+            request: (n * 50 + i) as u64,
+            world: 1,
+            tool: WireTool::from(&tool),
+            edit,
         }
-    }
-    loop {
-        server.update();
-        clients.iter_mut().for_each(App::update);
-        let answered: usize = clients
-            .iter()
-            .map(|app| app.world().resource::<Answers>().0)
-            .sum();
-        if answered >= 8 * PER_CLIENT {
-            break;
-        }
-    }
-    let applied: usize = clients
-        .iter()
-        .map(|app| app.world().resource::<Answers>().1)
-        .sum();
-    (applied as f64 / start.elapsed().as_secs_f64(), applied)
+    })
 }
 
 fn main() {

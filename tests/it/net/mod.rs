@@ -12,10 +12,10 @@ use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
-    NetCarveRequest, NetCarveResult, NetClientPlugin, NetKey, NetLimits, NetProtocolPlugin,
-    NetServerPlugin, NetTerrain, NetWorld, NetWorldCarveRequest, Outcome, ServerPacket,
-    TerrainSynced, WireTool, WorldDesynced, WorldSynced, start_client, start_secure_server,
-    start_server,
+    ClientPacket, ClientRequest, NetCarveRequest, NetCarveResult, NetClientPlugin, NetKey,
+    NetLimits, NetProtocolPlugin, NetServerPlugin, NetTerrain, NetWorld, NetWorldCarveRequest,
+    Outcome, ServerPacket, TerrainSynced, WireTool, WorldDesynced, WorldSynced, start_client,
+    start_secure_server, start_server,
 };
 use bevy_chisel::terrain::{
     CarveTool, CellOutput, Terrain, TerrainBase, TerrainFocus, TerrainPlugin, TerrainSettings,
@@ -160,6 +160,41 @@ pub fn light_client(addr: SocketAddr, id: u64) -> App {
     app.cleanup();
     start_client(app.world_mut(), addr, id).expect("client starts");
     app
+}
+
+/// Light clients ([`light_client`]) each send `per_client` requests
+/// (`request(client, i)`) in the same frame; runs the server and them
+/// until every request is answered. Returns the requests applied per
+/// second and how many were applied.
+#[allow(dead_code, reason = "a figure of the net benches")]
+pub fn burst_rate(
+    server: &mut App,
+    clients: &mut [App],
+    per_client: usize,
+    mut request: impl FnMut(usize, usize) -> ClientRequest,
+) -> (f64, usize) {
+    let start = std::time::Instant::now();
+    for (n, app) in clients.iter_mut().enumerate() {
+        for i in 0..per_client {
+            let packet = ClientPacket::Request(request(n, i));
+            app.world_mut().write_message(packet);
+        }
+    }
+    let asked = clients.len() * per_client;
+    loop {
+        server.update();
+        clients.iter_mut().for_each(App::update);
+        let answered: usize = (clients.iter())
+            .map(|app| app.world().resource::<Answers>().0)
+            .sum();
+        if answered >= asked {
+            break;
+        }
+    }
+    let applied: usize = (clients.iter())
+        .map(|app| app.world().resource::<Answers>().1)
+        .sum();
+    (applied as f64 / start.elapsed().as_secs_f64(), applied)
 }
 
 /// Updates every app once.
