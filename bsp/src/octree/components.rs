@@ -52,6 +52,27 @@ impl CubeSide {
         axis: 1,
         upper: false,
     };
+
+    /// The four vertical sides (x and z, lower and upper): the sides a
+    /// chunk of a horizontal grid shares with its neighbours.
+    pub const HORIZONTAL: [CubeSide; 4] = [
+        CubeSide {
+            axis: 0,
+            upper: false,
+        },
+        CubeSide {
+            axis: 0,
+            upper: true,
+        },
+        CubeSide {
+            axis: 2,
+            upper: false,
+        },
+        CubeSide {
+            axis: 2,
+            upper: true,
+        },
+    ];
 }
 
 /// What holds solid in place: a component is anchored when one of its

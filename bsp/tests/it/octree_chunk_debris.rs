@@ -38,26 +38,6 @@ fn cube(min: [i64; 3], max: [i64; 3]) -> CellBox {
     CellBox { min, max }
 }
 
-/// A chunk's four vertical sides: open where no chunk lies across.
-const OPEN: [CubeSide; 4] = [
-    CubeSide {
-        axis: 0,
-        upper: false,
-    },
-    CubeSide {
-        axis: 0,
-        upper: true,
-    },
-    CubeSide {
-        axis: 2,
-        upper: false,
-    },
-    CubeSide {
-        axis: 2,
-        upper: true,
-    },
-];
-
 /// A chunk's anchors: the bottom and its four vertical sides, as a
 /// world's chunks list them.
 fn chunk_anchors() -> Anchors {
@@ -144,7 +124,8 @@ fn carve_world(
     // sides that held what stays.
     let mut plain_chunks = chunks.to_vec();
     let plain = detach_across_chunks(&mut plain_chunks, &near, limits);
-    let across = detach_across_chunks_with_open_sides(chunks, &near, limits, &OPEN)?;
+    let across =
+        detach_across_chunks_with_open_sides(chunks, &near, limits, &CubeSide::HORIZONTAL)?;
     let plain = plain.expect("the same outcome without open sides");
     assert!(plain.held_at_open_sides.is_empty());
     assert_eq!(bytes(&plain_chunks), bytes(chunks), "the same chunks");

@@ -302,26 +302,6 @@ pub fn detach_across_borders(
     }
 }
 
-/// A chunk's four sides towards its neighbours in the world's grid.
-const HORIZONTAL_SIDES: [CubeSide; 4] = [
-    CubeSide {
-        axis: 0,
-        upper: false,
-    },
-    CubeSide {
-        axis: 0,
-        upper: true,
-    },
-    CubeSide {
-        axis: 2,
-        upper: false,
-    },
-    CubeSide {
-        axis: 2,
-        upper: true,
-    },
-];
-
 /// Puts a dropped search's seeds back into their chunks.
 fn give_back_seeds(search: DebrisSearch, terrains: &mut Query<&mut Terrain>) {
     for (entity, seeds) in search.seeds {
@@ -626,7 +606,7 @@ pub(super) fn launch(
     // A server looks past the sides towards chunks it did not load, to
     // build them when only those hold what it found (`debris_order`).
     let open: &[CubeSide] = if world.debris_role == DebrisRole::Serve && ordered.is_none() {
-        &HORIZONTAL_SIDES
+        &CubeSide::HORIZONTAL
     } else {
         &[]
     };
