@@ -13,7 +13,12 @@
 //!
 //! Runs in a window when a display exists; otherwise renders headless,
 //! streams within smaller radii, flies a fixed 12 m path and writes PNG
-//! screenshots to `screenshots/` (about 30 s on two cores).
+//! screenshots to `screenshots/` (about 30 s on two cores). Headless with
+//! `-- --horizon`, it keeps the window's radii (coarse chunks to 320 m)
+//! and its camera draws only a few frames: three once the world first
+//! settles (so that every pipeline is ready) and the one it captures, so
+//! that a software renderer can take the picture of the README
+//! (`screenshots/world-0012.png`; a few minutes on two cores).
 //!
 //! `cargo run --release --all-features --example world`
 
@@ -62,11 +67,25 @@ const HEADLESS_RADII: (f32, f32) = (16.0, 24.0);
 /// with coarse terrain to the horizon takes seconds).
 const FAR_RADIUS: f32 = 320.0;
 const HEADLESS_FAR_RADIUS: f32 = 30.0;
+/// Window radii (m): full-detail chunks stream in within the first and
+/// out beyond the second.
+const WINDOW_RADII: (f32, f32) = (30.0, 45.0);
+/// Headless `--horizon`: frames the camera draws once the world first
+/// settles, before any is counted, so that every pipeline is ready for
+/// the capture.
+const HORIZON_WARM_UP_FRAMES: u32 = 3;
 
 fn main() -> AppExit {
+    let horizon = std::env::args().any(|a| a == "--horizon");
     let presentation = match Presentation::detect("world") {
         Presentation::Headless(config) => Presentation::Headless(HeadlessConfig {
-            capture_frames: HEADLESS_CAPTURES.to_vec(),
+            // The horizon's frames are slow on a software renderer: only
+            // the last is captured.
+            capture_frames: if horizon {
+                vec![HEADLESS_CAPTURES[1]]
+            } else {
+                HEADLESS_CAPTURES.to_vec()
+            },
             max_frames: 3000,
             // The terrain fills most of the view; sky alone fails.
             min_foreground: 0.3,
@@ -81,6 +100,7 @@ fn main() -> AppExit {
         .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
         .insert_resource(Flight {
             headless,
+            horizon: headless && horizon,
             ..default()
         })
         .add_systems(Startup, spawn_scene)
@@ -149,10 +169,10 @@ fn spawn_scene(
         // Grass 25 cm deep over 1.2 m of dirt, in grid units.
         layers: vec![(120, DIRT), (25, GRASS)],
     };
-    let (load_radius, unload_radius) = if flight.headless {
+    let (load_radius, unload_radius) = if flight.headless && !flight.horizon {
         HEADLESS_RADII
     } else {
-        (30.0, 45.0)
+        WINDOW_RADII
     };
     let world = TerrainWorld::new(layout, landscape())?.with_streaming(StreamSettings {
         load_radius,
@@ -160,7 +180,7 @@ fn spawn_scene(
         max_building: 4,
     })?;
     let lod = WorldLod::new(LodSettings {
-        far_radius: if flight.headless {
+        far_radius: if flight.headless && !flight.horizon {
             HEADLESS_FAR_RADIUS
         } else {
             FAR_RADIUS
@@ -210,6 +230,11 @@ fn give_chunks_materials(add: On<Add, WorldChunk>, palette: Res<Palette>, mut co
 #[derive(Resource, Default)]
 struct Flight {
     headless: bool,
+    /// Headless with the window's radii, drawing only the warm-up frames
+    /// and the captured one.
+    horizon: bool,
+    /// Headless `--horizon`: warm-up frames drawn so far.
+    drawn: u32,
     distance: f32,
     next_crater: f32,
     craters: usize,
@@ -221,14 +246,16 @@ struct Flight {
 
 /// Flies the camera and blasts a crater ahead of it every few metres. In
 /// a headless run the camera moves a fixed step per frame, and only once
-/// every chunk in reach is built and meshed (the captures wait as well).
+/// every chunk in reach is built and meshed (the captures wait as well);
+/// with `--horizon` the camera draws only its warm-up frames and the
+/// captured one.
 fn fly(
     time: Res<Time>,
     mut flight: ResMut<Flight>,
     mut hold: Option<ResMut<HoldCaptures>>,
     worlds: Query<(Entity, &TerrainWorld, &WorldLod)>,
     terrains: Query<&Terrain>,
-    mut camera: Query<&mut Transform, With<TerrainFocus>>,
+    mut camera: Query<(&mut Transform, &mut Camera), With<TerrainFocus>>,
     mut carves: MessageWriter<WorldCarve>,
 ) {
     let Ok((world_entity, world, lod)) = worlds.single() else {
@@ -241,10 +268,19 @@ fn fly(
             && world
                 .live_chunks()
                 .all(|(_, e)| terrains.get(e).is_ok_and(Terrain::is_idle));
-        if let Some(hold) = hold.as_mut() {
-            hold.0 = !settled;
+        let warming_up = flight.horizon && flight.drawn < HORIZON_WARM_UP_FRAMES;
+        if flight.horizon
+            && let Ok((_, mut camera)) = camera.single_mut()
+        {
+            // Drawn: the warm-up frames, then only the captured one.
+            let capture = flight.counted + 1 == HEADLESS_CAPTURES[1];
+            camera.is_active = settled && (warming_up || capture);
+            flight.drawn += u32::from(settled && warming_up);
         }
-        if !settled {
+        if let Some(hold) = hold.as_mut() {
+            hold.0 = !settled || warming_up;
+        }
+        if !settled || warming_up {
             debug!(
                 "waiting: world settled {}, coarse {:?}, {} live",
                 world.is_settled(),
@@ -262,7 +298,7 @@ fn fly(
         SPEED * time.delta_secs()
     };
     flight.distance += step;
-    if let Ok(mut transform) = camera.single_mut() {
+    if let Ok((mut transform, _)) = camera.single_mut() {
         *transform = camera_at(flight.distance);
     }
     if flight.distance >= flight.next_crater {
