@@ -139,6 +139,16 @@ pub enum TerrainError {
         /// The chunk (x, z).
         chunk: [i64; 2],
     },
+    /// A save of this terrain world ([`super::SaveWorld`]) is still being
+    /// written; ask again once its [`super::WorldSaved`] or
+    /// [`super::WorldSaveFailed`] is read.
+    #[error(
+        "terrain world save to {folder} is still being written; save again once it is reported"
+    )]
+    WorldSaveRunning {
+        /// The folder of the save being written.
+        folder: String,
+    },
 }
 
 impl From<chisel_bsp::Error> for TerrainError {

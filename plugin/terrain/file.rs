@@ -80,44 +80,27 @@ impl Terrain {
     /// The terrain as file bytes.
     #[must_use]
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut w = Writer::new();
-        w.bytes(&MAGIC);
-        w.u32(FORMAT_VERSION);
-        w.f64(self.quantization.unit());
-        for o in self.quantization.origin() {
-            w.f64(o);
+        write_terrain(
+            &self.quantization,
+            &self.base,
+            &self.journal,
+            self.max_undo,
+            &self.history,
+            &self.octree,
+        )
+    }
+
+    /// What [`Terrain::to_bytes`] writes, taken out of the terrain to be
+    /// written later or on another thread ([`TerrainRecord::to_bytes`]).
+    pub(crate) fn record_for_file(&self) -> TerrainRecord {
+        TerrainRecord {
+            quantization: self.quantization,
+            base: self.base.clone(),
+            journal: self.journal.clone(),
+            max_undo: self.max_undo,
+            history: self.history.clone(),
+            octree: self.octree.clone(),
         }
-        write_base(&mut w, &self.base);
-        w.count(self.journal.len());
-        for entry in &self.journal {
-            let (tag, label) = match entry.edit {
-                Edit::Subtract => (0, 0),
-                Edit::Add(l) => (1, l),
-                Edit::Paint(l) => (2, l),
-                Edit::Intersect => (3, 0),
-            };
-            w.u8(tag);
-            w.u8(label);
-            w.count(entry.tool.pieces.len());
-            for piece in &entry.tool.pieces {
-                w.count(piece.len());
-                piece.iter().for_each(|&p| w.point(p));
-            }
-        }
-        w.u64(self.max_undo as u64);
-        w.count(self.history.len());
-        for step in &self.history {
-            w.keys(&step.changes.changed);
-            w.keys(&step.changes.removed);
-        }
-        let mut octrees: Vec<&Octree> = self.history.iter().map(|step| &step.before).collect();
-        octrees.push(&self.octree);
-        let snapshots = snapshots_to_bytes(&octrees);
-        w.u64(snapshots.len() as u64);
-        w.bytes(&snapshots);
-        let sum = checksum(w.as_bytes());
-        w.u64(sum);
-        w.into_bytes()
     }
 
     /// Writes the terrain to a file, whole or not at all: the bytes go to
@@ -253,6 +236,86 @@ impl Terrain {
     pub fn load(path: impl AsRef<Path>) -> Result<Terrain, TerrainError> {
         Terrain::from_bytes(&std::fs::read(path)?)
     }
+}
+
+/// What a terrain file holds, owned: the octrees are persistent and
+/// shared with the terrain (a clone copies no cell), the base is shared,
+/// the journal and the undo steps' lists of changed cells are copied. So
+/// taking it costs little on the main thread, and its bytes
+/// ([`TerrainRecord::to_bytes`]) are those of [`Terrain::to_bytes`] at the
+/// moment it was taken, wherever and whenever they are written.
+#[derive(Clone)]
+pub(crate) struct TerrainRecord {
+    quantization: Quantization,
+    base: std::sync::Arc<TerrainBase>,
+    journal: Vec<JournalEntry>,
+    max_undo: usize,
+    history: VecDeque<UndoStep>,
+    octree: Octree,
+}
+
+impl TerrainRecord {
+    /// The file bytes, as [`Terrain::to_bytes`] gave them when the record
+    /// was taken.
+    pub(crate) fn to_bytes(&self) -> Vec<u8> {
+        write_terrain(
+            &self.quantization,
+            &self.base,
+            &self.journal,
+            self.max_undo,
+            &self.history,
+            &self.octree,
+        )
+    }
+}
+
+/// The terrain file bytes of these parts (the layout in the module notes).
+fn write_terrain(
+    quantization: &Quantization,
+    base: &TerrainBase,
+    journal: &[JournalEntry],
+    max_undo: usize,
+    history: &VecDeque<UndoStep>,
+    octree: &Octree,
+) -> Vec<u8> {
+    let mut w = Writer::new();
+    w.bytes(&MAGIC);
+    w.u32(FORMAT_VERSION);
+    w.f64(quantization.unit());
+    for o in quantization.origin() {
+        w.f64(o);
+    }
+    write_base(&mut w, base);
+    w.count(journal.len());
+    for entry in journal {
+        let (tag, label) = match entry.edit {
+            Edit::Subtract => (0, 0),
+            Edit::Add(l) => (1, l),
+            Edit::Paint(l) => (2, l),
+            Edit::Intersect => (3, 0),
+        };
+        w.u8(tag);
+        w.u8(label);
+        w.count(entry.tool.pieces.len());
+        for piece in &entry.tool.pieces {
+            w.count(piece.len());
+            piece.iter().for_each(|&p| w.point(p));
+        }
+    }
+    w.u64(max_undo as u64);
+    w.count(history.len());
+    for step in history {
+        w.keys(&step.changes.changed);
+        w.keys(&step.changes.removed);
+    }
+    let mut octrees: Vec<&Octree> = history.iter().map(|step| &step.before).collect();
+    octrees.push(octree);
+    let snapshots = snapshots_to_bytes(&octrees);
+    w.u64(snapshots.len() as u64);
+    w.bytes(&snapshots);
+    let sum = checksum(w.as_bytes());
+    w.u64(sum);
+    w.into_bytes()
 }
 
 /// Writes `path` atomically with what `fill` writes into a new temporary
@@ -572,6 +635,45 @@ mod tests {
             label: 1,
         };
         Terrain::from_base(grid, base, OctreeConfig::default()).expect("valid box")
+    }
+
+    /// A grid box tool from `min` to `max`.
+    fn box_tool(min: [i64; 3], max: [i64; 3]) -> GridTool {
+        let corners = (0..8)
+            .map(|i| {
+                let pick = |a: usize| if i >> a & 1 == 0 { min[a] } else { max[a] };
+                [pick(0), pick(1), pick(2)]
+            })
+            .collect();
+        GridTool {
+            pieces: vec![corners],
+        }
+    }
+
+    #[test]
+    fn a_record_writes_the_bytes_of_the_moment_it_was_taken() {
+        let mut terrain = terrain(8);
+        let carve = |t: &mut Terrain, x: i64| {
+            let tool = box_tool([x, 2, 2], [x + 3, 6, 6]);
+            t.apply_now(&tool, Edit::Subtract).expect("carve applies");
+        };
+        carve(&mut terrain, 1);
+        carve(&mut terrain, 6);
+        let then = terrain.to_bytes();
+        let record = terrain.record_for_file();
+        // Later carves and an undo change the terrain, not the record.
+        carve(&mut terrain, 11);
+        terrain.undo_now().expect("undoes");
+        terrain.undo_now().expect("undoes");
+        assert!(terrain.to_bytes() != then);
+        assert!(record.to_bytes() == then);
+        let back = Terrain::from_bytes(&record.to_bytes()).expect("loads");
+        assert_eq!(back.journal().len(), 2);
+        assert_eq!(back.undo_depth(), 2);
+        assert_eq!(
+            back.state_hash(),
+            Terrain::from_bytes(&then).expect("loads").state_hash()
+        );
     }
 
     #[test]

@@ -166,9 +166,10 @@ pub use tool::{
     MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
 };
 pub use world::{
-    ChunkCoord, ChunkOffstage, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave,
+    ChunkCoord, ChunkOffstage, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave, SaveWorld,
     StreamSettings, TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk, WorldLayout,
-    WorldLod, WorldSource, WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
+    WorldLod, WorldSaveFailed, WorldSaved, WorldSource, WorldStats, WorldUndo, WorldUndoRefusal,
+    WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
@@ -254,6 +255,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_message::<WorldUndo>()
         .add_message::<WorldUndone>()
         .add_message::<WorldUndoRejected>()
+        .add_message::<SaveWorld>()
+        .add_message::<WorldSaved>()
+        .add_message::<WorldSaveFailed>()
         .register_type::<Terrain>()
         .register_type::<TerrainCell>()
         .register_type::<TerrainDebris>()
@@ -276,6 +280,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<WorldUndo>()
         .register_type::<WorldUndone>()
         .register_type::<WorldUndoRejected>()
+        .register_type::<SaveWorld>()
+        .register_type::<WorldSaved>()
+        .register_type::<WorldSaveFailed>()
         .register_type::<CarveTool>()
         .register_type::<Heightfield>()
         .register_type::<TerrainSource>()
@@ -300,6 +307,10 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
                     .chain()
                     .in_set(TerrainSystems::Carve),
                 upload::upload_meshes.in_set(TerrainSystems::Mesh),
+                // After the carves of the frame, before its meshes.
+                world::store::save_worlds
+                    .after(TerrainSystems::Carve)
+                    .before(TerrainSystems::Mesh),
                 events::trigger_events.after(TerrainSystems::Mesh),
                 asset::spawn_from_assets.before(TerrainSystems::Carve),
                 (

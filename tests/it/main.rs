@@ -93,6 +93,8 @@ mod terrain_world_offstage;
 #[cfg(feature = "terrain")]
 mod terrain_world_seams;
 #[cfg(feature = "terrain")]
+mod world_save;
+#[cfg(feature = "terrain")]
 mod world_undo;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.

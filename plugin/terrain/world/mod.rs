@@ -40,6 +40,8 @@
 //!    file per edited chunk (`chunk_X_Z.chiselterrain`, atomically, as
 //!    [`Terrain::save`]); [`TerrainWorld::load_edits`] reads them back,
 //!    checking that each belongs to this world (same grid, same base).
+//!    A [`SaveWorld`] message saves in the background instead, writing
+//!    only the chunks changed since the last save to that folder.
 //! 5. **Multiplayer** (feature `net`, module `net::world`): the server
 //!    numbers world carves and every peer routes them to its own chunks
 //!    in that order ([`TerrainWorld::chunks_reached`], with the carve's
@@ -162,6 +164,7 @@ use super::tool::{CarveTool, GridTool};
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
+pub use store::{SaveWorld, WorldSaveFailed, WorldSaved};
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
 /// A chunk's position in its world's grid of chunks (x and z).
@@ -288,8 +291,8 @@ pub(crate) struct Built {
 /// carried out or refused, a detach across chunk borders applied, the chunks replaced
 /// from a snapshot (feature `net`), and any write of the game's own
 /// through `&mut TerrainWorld`. Frames that only poll builds, seams and
-/// debris searches mark nothing, so a settled world with still foci is
-/// never marked. The chunks' own content is each chunk's
+/// debris searches, or start or finish a save ([`SaveWorld`]), mark
+/// nothing, so a settled world with still foci is never marked. The chunks' own content is each chunk's
 /// `Changed<Terrain>` ([`Terrain`], "Change detection"): a world carve
 /// marks exactly the chunks it reached, each in the frame it lands there.
 #[derive(Component)]
@@ -345,6 +348,8 @@ pub struct TerrainWorld {
     /// The world carves that can be undone and the undos waiting
     /// ([`undo`]).
     pub(crate) history: undo::WorldHistory,
+    /// What the folders saved to hold and the save being written ([`store`]).
+    pub(crate) saves: store::WorldSaves,
 }
 
 impl TerrainWorld {
@@ -376,6 +381,7 @@ impl TerrainWorld {
             detach_ordered: None,
             detaches_applied: Vec::new(),
             history: undo::WorldHistory::default(),
+            saves: store::WorldSaves::default(),
         })
     }
 

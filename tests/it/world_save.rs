@@ -1,0 +1,540 @@
+//! Saving a streamed world in the background (`MinimalPlugins`): a
+//! [`SaveWorld`] writes every chunk as it was in the frame it was read,
+//! while carves go on; later saves write only the chunks that changed (a
+//! chunk streamed out or back in unchanged is not written again); an undo
+//! back to the base removes the chunk's file; a failed save names the path
+//! and leaves the record as it was; a second request while one is written
+//! is refused; and the request frame costs far less than a synchronous
+//! [`TerrainWorld::save`] (figures printed).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use bevy::prelude::*;
+use bevy_chisel::terrain::world::store::save_worlds;
+use bevy_chisel::terrain::{
+    ChunkCoord, SaveWorld, StreamSettings, Terrain, TerrainError, TerrainSystems, TerrainWorld,
+    WorldSaveFailed, WorldSaved, WorldUndo,
+};
+
+use super::terrain_world::{
+    app_with, carve, dodecahedron, settle, terrain, the_world, world as new_world,
+};
+
+const fn at(x: i64, z: i64) -> ChunkCoord {
+    ChunkCoord { x, z }
+}
+
+/// A point inside chunk `c` under its surface (heights 8..=20), moved
+/// by `step` so that repeated carves there differ.
+fn inside(c: ChunkCoord, step: u32) -> Vec3 {
+    let s = step as f32;
+    Vec3::new(
+        c.x as f32 * 32.0 + 10.0 + 1.5 * (s % 8.0),
+        12.0,
+        c.z as f32 * 32.0 + 16.0,
+    )
+}
+
+/// What the save messages said so far, and the frames in which the world
+/// was marked changed.
+#[derive(Resource, Default)]
+struct Heard {
+    saved: Vec<WorldSaved>,
+    failed: Vec<WorldSaveFailed>,
+    world_changed: usize,
+}
+
+fn hear(
+    mut saved: MessageReader<WorldSaved>,
+    mut failed: MessageReader<WorldSaveFailed>,
+    worlds: Query<Ref<TerrainWorld>>,
+    mut heard: ResMut<Heard>,
+) {
+    heard.saved.extend(saved.read().cloned());
+    heard.failed.extend(failed.read().cloned());
+    heard.world_changed += worlds.iter().filter(|w| w.is_changed()).count();
+}
+
+fn save_app(world: TerrainWorld) -> (App, Entity, Entity) {
+    save_app_at(world, Vec3::new(16.0, 30.0, 16.0))
+}
+
+fn save_app_at(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
+    let (mut app, world, focus) = app_with(world, focus);
+    app.init_resource::<Heard>()
+        .add_systems(Update, hear.after(TerrainSystems::Mesh));
+    (app, world, focus)
+}
+
+fn heard(app: &App) -> &Heard {
+    app.world().resource::<Heard>()
+}
+
+fn temp_folder(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "bevy_chisel-world-save-{tag}-{}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_file(&dir);
+    dir
+}
+
+/// Sends a [`SaveWorld`] and runs frames until it is answered; `each`
+/// runs before every frame after the request frame.
+fn save_with(
+    app: &mut App,
+    world: Entity,
+    folder: &Path,
+    mut each: impl FnMut(&mut App, u32),
+) -> Result<WorldSaved, WorldSaveFailed> {
+    let (saved, failed) = (heard(app).saved.len(), heard(app).failed.len());
+    app.world_mut().write_message(SaveWorld {
+        world,
+        folder: folder.to_path_buf(),
+    });
+    for frame in 0..20_000 {
+        if frame > 0 {
+            each(app, frame);
+        }
+        app.update();
+        let h = heard(app);
+        if let Some(done) = h.saved.get(saved) {
+            assert_eq!(h.failed.len(), failed, "one answer");
+            return Ok(done.clone());
+        }
+        if let Some(error) = h.failed.get(failed) {
+            return Err(error.clone());
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    panic!("the save was not answered");
+}
+
+fn save(app: &mut App, world: Entity, folder: &Path) -> Result<WorldSaved, WorldSaveFailed> {
+    save_with(app, world, folder, |_, _| {})
+}
+
+/// The file bytes of every edited chunk now (live ones serialized, stored
+/// ones as kept).
+fn edited_bytes(app: &App, world: Entity) -> BTreeMap<ChunkCoord, Vec<u8>> {
+    let w = the_world(app, world);
+    let mut bytes: BTreeMap<ChunkCoord, Vec<u8>> = w
+        .live_chunks()
+        .filter_map(|(coord, e)| {
+            let t = app.world().get::<Terrain>(e)?;
+            w.chunk_edited(coord, t).then(|| (coord, t.to_bytes()))
+        })
+        .collect();
+    for coord in w.stored_chunks() {
+        let stored = w.stored_chunk(coord).expect("stored bytes");
+        bytes.insert(coord, stored.to_vec());
+    }
+    bytes
+}
+
+/// The chunk files in `dir`, sorted.
+fn chunk_files(dir: &Path) -> Vec<String> {
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .expect("folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with("chunk_"))
+        .collect();
+    files.sort();
+    files
+}
+
+fn names(coords: &[ChunkCoord]) -> Vec<String> {
+    let mut names: Vec<String> = coords
+        .iter()
+        .map(|&c| TerrainWorld::chunk_file_name(c))
+        .collect();
+    names.sort();
+    names
+}
+
+fn move_focus(app: &mut App, world: Entity, focus: Entity, to: Vec3) {
+    app.world_mut()
+        .get_mut::<Transform>(focus)
+        .expect("focus")
+        .translation = to;
+    settle(app, world);
+}
+
+#[test]
+fn a_background_save_writes_the_request_frame_while_carves_go_on() {
+    let (mut app, world, _focus) = save_app(new_world());
+    let live = [at(0, 0), at(1, 0), at(0, 1), at(-1, -1)];
+    let far = at(-5, 3);
+    for (i, &c) in live.iter().chain([&far]).enumerate() {
+        carve(&mut app, world, dodecahedron(4.0, inside(c, i as u32)));
+    }
+    settle(&mut app, world);
+    assert_eq!(
+        the_world(&app, world).stored_chunks().collect::<Vec<_>>(),
+        [far]
+    );
+    let at_save = edited_bytes(&app, world);
+    let mut all: Vec<ChunkCoord> = at_save.keys().copied().collect();
+    all.sort();
+    assert_eq!(all.len(), 5);
+
+    // Carve on in every frame after the request frame until it is saved.
+    let dir = temp_folder("frame");
+    let mut carves = 0;
+    let done = save_with(&mut app, world, &dir, |app, frame| {
+        let c = live[frame as usize % 2];
+        carve(app, world, dodecahedron(3.0, inside(c, frame + 7)));
+        carves += 1;
+    })
+    .expect("saves");
+    assert!(carves > 0, "carves were sent while it wrote");
+    assert_eq!(done.world, world);
+    assert_eq!(done.folder, dir);
+    assert_eq!(done.written, all);
+    assert_eq!(done.unchanged, 0);
+    assert_eq!(done.bytes, at_save.values().map(Vec::len).sum::<usize>());
+    assert_eq!(chunk_files(&dir), names(&all));
+    settle(&mut app, world);
+    let later = edited_bytes(&app, world);
+    assert!(
+        live[..2].iter().any(|c| later[c] != at_save[c]),
+        "the later carves landed"
+    );
+
+    // A fresh world from the folder holds exactly the request frame's
+    // chunks: the same file bytes, so the same octrees, journals, undo
+    // histories and state hashes.
+    let loaded = new_world().load_edits(&dir).expect("loads");
+    for (coord, bytes) in &at_save {
+        let stored = loaded.stored_chunk(*coord).expect("loaded chunk");
+        assert!(
+            stored == bytes.as_slice(),
+            "chunk {coord:?} is the saved one"
+        );
+        let hash = Terrain::from_bytes(bytes).expect("valid").state_hash();
+        let back = Terrain::from_bytes(stored).expect("valid");
+        assert_eq!(back.state_hash(), hash);
+        assert_eq!(
+            bevy_chisel::bsp::octree::StateHash::of(back.octree()).value(),
+            hash
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn later_saves_write_only_the_chunks_that_changed() {
+    let (mut app, world, focus) = save_app(new_world());
+    let chunks = [at(-1, 0), at(0, 0), at(1, 1)];
+    for (i, &c) in chunks.iter().enumerate() {
+        carve(&mut app, world, dodecahedron(4.0, inside(c, i as u32)));
+    }
+    settle(&mut app, world);
+    let dir = temp_folder("changed");
+    let first = save(&mut app, world, &dir).expect("saves");
+    assert_eq!(first.written, chunks);
+
+    // One more carve in one chunk: only its file is written.
+    carve(&mut app, world, dodecahedron(3.0, inside(chunks[1], 5)));
+    settle(&mut app, world);
+    let want = edited_bytes(&app, world);
+    heard_reset(&mut app);
+    let second = save(&mut app, world, &dir).expect("saves");
+    assert_eq!(second.written, [chunks[1]]);
+    assert_eq!(second.unchanged, 2);
+    assert_eq!(second.bytes, want[&chunks[1]].len());
+    for (coord, bytes) in &want {
+        let file = std::fs::read(dir.join(TerrainWorld::chunk_file_name(*coord))).expect("file");
+        assert!(file == *bytes, "chunk {coord:?} on disk is the chunk now");
+    }
+
+    // Nothing changed: nothing written, and the world is never marked
+    // changed by saving.
+    let third = save(&mut app, world, &dir).expect("saves");
+    assert_eq!(
+        (third.written.len(), third.unchanged, third.bytes),
+        (0, 3, 0)
+    );
+    assert_eq!(heard(&app).world_changed, 0, "saving marks no change");
+
+    // Streamed out (stored) and back in (new entities), unchanged: not
+    // written again.
+    let away = Vec3::new(16.0 + 32.0 * 8.0, 30.0, 16.0);
+    move_focus(&mut app, world, focus, away);
+    assert_eq!(the_world(&app, world).stored_chunks().count(), 3);
+    let out = save(&mut app, world, &dir).expect("saves");
+    assert_eq!((out.written.len(), out.unchanged), (0, 3));
+    move_focus(&mut app, world, focus, Vec3::new(16.0, 30.0, 16.0));
+    assert_eq!(the_world(&app, world).stored_chunks().count(), 0);
+    let back = save(&mut app, world, &dir).expect("saves");
+    assert_eq!((back.written.len(), back.unchanged), (0, 3));
+
+    // A synchronous save writes everything and keeps the record: the
+    // background save after it writes nothing.
+    let sync = the_world(&app, world)
+        .save(&dir, |e| app.world().get::<Terrain>(e))
+        .expect("saves");
+    assert_eq!(sync, chunks);
+    let after_sync = save(&mut app, world, &dir).expect("saves");
+    assert_eq!((after_sync.written.len(), after_sync.unchanged), (0, 3));
+    assert_eq!(edited_bytes(&app, world), want);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn heard_reset(app: &mut App) {
+    app.world_mut().resource_mut::<Heard>().world_changed = 0;
+}
+
+#[test]
+fn an_undo_back_to_the_base_removes_the_chunk_file() {
+    let (mut app, world, _focus) = save_app(new_world());
+    let (kept, undone) = (at(0, 0), at(1, 0));
+    carve(&mut app, world, dodecahedron(4.0, inside(kept, 0)));
+    settle(&mut app, world);
+    carve(&mut app, world, dodecahedron(4.0, inside(undone, 1)));
+    settle(&mut app, world);
+    let dir = temp_folder("undo");
+    std::fs::create_dir_all(&dir).expect("folder");
+    std::fs::write(dir.join("notes.txt"), b"not a chunk").expect("writes");
+    let first = save(&mut app, world, &dir).expect("saves");
+    assert_eq!(first.written, [kept, undone]);
+    assert_eq!(chunk_files(&dir), names(&[kept, undone]));
+
+    app.world_mut().write_message(WorldUndo { world });
+    settle(&mut app, world);
+    assert!(terrain(&app, world, undone).journal().is_empty());
+    let second = save(&mut app, world, &dir).expect("saves");
+    assert_eq!((second.written.len(), second.unchanged), (0, 1));
+    assert_eq!(chunk_files(&dir), names(&[kept]));
+    assert!(dir.join("notes.txt").exists(), "other files stay");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_failed_save_names_the_path_and_leaves_the_record_as_it_was() {
+    let (mut app, world, _focus) = save_app(new_world());
+    let (a, b) = (at(0, 0), at(1, 0));
+    for (i, c) in [a, b].into_iter().enumerate() {
+        carve(&mut app, world, dodecahedron(4.0, inside(c, i as u32)));
+    }
+    settle(&mut app, world);
+
+    // The folder path is a regular file: refused, naming it, nothing
+    // written beside it.
+    let parent = temp_folder("failed-parent");
+    std::fs::create_dir_all(&parent).expect("folder");
+    let file = parent.join("not-a-folder");
+    std::fs::write(&file, b"a file").expect("writes");
+    let failed = save(&mut app, world, &file).expect_err("a file is no folder");
+    assert_eq!((failed.world, &failed.folder), (world, &file));
+    let TerrainError::Io { message } = &failed.error else {
+        panic!("an i/o error, got {:?}", failed.error);
+    };
+    assert!(message.contains(&file.display().to_string()), "{message}");
+    assert_eq!(std::fs::read(&file).expect("file"), b"a file");
+    assert_eq!(std::fs::read_dir(&parent).expect("folder").count(), 1);
+
+    // A save that fails half way (chunk b's file is a folder): a is
+    // written, b is not, no stale file is removed, and the next save
+    // writes both again.
+    let dir = temp_folder("failed");
+    assert_eq!(save(&mut app, world, &dir).expect("saves").written, [a, b]);
+    for (i, c) in [a, b].into_iter().enumerate() {
+        carve(&mut app, world, dodecahedron(3.0, inside(c, i as u32 + 3)));
+    }
+    settle(&mut app, world);
+    let b_path = dir.join(TerrainWorld::chunk_file_name(b));
+    std::fs::remove_file(&b_path).expect("removes");
+    std::fs::create_dir_all(b_path.join("inside")).expect("a folder in the way");
+    let stale = dir.join(TerrainWorld::chunk_file_name(at(9, 9)));
+    std::fs::copy(dir.join(TerrainWorld::chunk_file_name(a)), &stale).expect("copies");
+    let failed = save(&mut app, world, &dir).expect_err("b cannot be written");
+    let TerrainError::Io { message } = &failed.error else {
+        panic!("an i/o error, got {:?}", failed.error);
+    };
+    assert!(message.contains(&b_path.display().to_string()), "{message}");
+    assert!(stale.exists(), "nothing removed after a failure");
+    std::fs::remove_dir_all(&b_path).expect("removes");
+    let retried = save(&mut app, world, &dir).expect("saves");
+    assert_eq!(retried.written, [a, b], "the failure advanced nothing");
+    assert!(
+        !stale.exists(),
+        "the stale file goes with a save that succeeds"
+    );
+    assert_eq!(chunk_files(&dir), names(&[a, b]));
+    let now = edited_bytes(&app, world);
+    for (coord, bytes) in &now {
+        let file = std::fs::read(dir.join(TerrainWorld::chunk_file_name(*coord))).expect("file");
+        assert!(file == *bytes, "chunk {coord:?} on disk is the chunk now");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&parent);
+}
+
+#[test]
+fn a_request_while_a_save_is_written_is_refused() {
+    let (mut app, world, _focus) = save_app(new_world());
+    carve(&mut app, world, dodecahedron(4.0, inside(at(0, 0), 0)));
+    settle(&mut app, world);
+    let (dir, other) = (temp_folder("twice"), temp_folder("twice-other"));
+    for folder in [&dir, &other] {
+        app.world_mut().write_message(SaveWorld {
+            world,
+            folder: folder.clone(),
+        });
+    }
+    app.update();
+    // The first is being written (its outcome is read in a later frame).
+    assert!(the_world(&app, world).is_saving());
+    let sync = the_world(&app, world).save(&other, |e| app.world().get::<Terrain>(e));
+    let running = TerrainError::WorldSaveRunning {
+        folder: dir.display().to_string(),
+    };
+    assert_eq!(sync, Err(running.clone()));
+    let h = heard(&app);
+    assert_eq!(h.failed.len(), 1);
+    assert_eq!(h.failed[0].folder, other);
+    assert_eq!(h.failed[0].error, running);
+    for _ in 0..20_000 {
+        if !heard(&app).saved.is_empty() {
+            break;
+        }
+        app.update();
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert_eq!(heard(&app).saved.len(), 1);
+    assert_eq!(heard(&app).saved[0].folder, dir);
+    assert!(!the_world(&app, world).is_saving());
+    assert!(!other.exists(), "the refused save wrote nothing");
+
+    // A request in the frame a carve starts is refused (the chunk's
+    // state is not whole yet), and one for an entity with no world.
+    carve(&mut app, world, dodecahedron(3.0, inside(at(0, 0), 4)));
+    let busy = save(&mut app, world, &dir).expect_err("a carve is in progress");
+    assert_eq!(busy.error, TerrainError::WorldNotIdle { chunk: [0, 0] });
+    let nobody = app.world_mut().spawn_empty().id();
+    let none = save(&mut app, nobody, &dir).expect_err("no world");
+    assert!(matches!(none.error, TerrainError::InvalidWorld { .. }));
+    settle(&mut app, world);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// When the save system last started, and how long its last run took
+/// (with whatever the executor ran between the two stamps: an upper bound).
+#[derive(Resource, Default)]
+struct SaveSystemTime {
+    start: Option<Instant>,
+    last: Duration,
+}
+
+fn stamp_start(mut time: ResMut<SaveSystemTime>) {
+    time.start = Some(Instant::now());
+}
+
+fn stamp_end(mut time: ResMut<SaveSystemTime>) {
+    if let Some(start) = time.start.take() {
+        time.last = start.elapsed();
+    }
+}
+
+/// The median of `samples`.
+fn median(mut samples: Vec<Duration>) -> Duration {
+    samples.sort();
+    samples[samples.len() / 2]
+}
+
+#[test]
+fn the_request_frame_costs_less_than_a_synchronous_save() {
+    for side in [4i64, 8] {
+        let world = new_world()
+            .with_streaming(StreamSettings {
+                load_radius: 32.0 * side as f32 / 2.0 + 16.0,
+                unload_radius: 32.0 * side as f32,
+                max_building: 8,
+            })
+            .expect("valid settings");
+        // The focus at the middle of the edited chunks: all are live.
+        let (mut app, world, _focus) = save_app_at(world, Vec3::new(0.0, 30.0, 0.0));
+        app.init_resource::<SaveSystemTime>().add_systems(
+            Update,
+            (
+                stamp_start.after(TerrainSystems::Carve).before(save_worlds),
+                stamp_end.after(save_worlds).before(TerrainSystems::Mesh),
+            ),
+        );
+        let system_time = |app: &App| app.world().resource::<SaveSystemTime>().last;
+        let centre = side / 2;
+        let mut chunks = Vec::new();
+        for x in 0..side {
+            for z in 0..side {
+                chunks.push(at(x - centre, z - centre));
+            }
+        }
+        for (i, &c) in chunks.iter().enumerate() {
+            carve(&mut app, world, dodecahedron(4.0, inside(c, i as u32)));
+        }
+        settle(&mut app, world);
+        let edited = edited_bytes(&app, world);
+        assert_eq!(edited.len(), chunks.len());
+        assert_eq!(the_world(&app, world).stored_chunks().count(), 0);
+        let total: usize = edited.values().map(Vec::len).sum();
+
+        let runs = 9;
+        let (mut sync, mut idle, mut request, mut whole) = (vec![], vec![], vec![], vec![]);
+        let (mut idle_system, mut request_system) = (vec![], vec![]);
+        for run in 0..runs {
+            let dir = temp_folder(&format!("timed-sync-{side}-{run}"));
+            let t = Instant::now();
+            let written = the_world(&app, world)
+                .save(&dir, |e| app.world().get::<Terrain>(e))
+                .expect("saves");
+            sync.push(t.elapsed());
+            assert_eq!(written.len(), chunks.len());
+            let _ = std::fs::remove_dir_all(&dir);
+
+            let t = Instant::now();
+            app.update();
+            idle.push(t.elapsed());
+            idle_system.push(system_time(&app));
+
+            // A new folder each time: every chunk is written.
+            let dir = temp_folder(&format!("timed-bg-{side}-{run}"));
+            let before = heard(&app).saved.len();
+            app.world_mut().write_message(SaveWorld {
+                world,
+                folder: dir.clone(),
+            });
+            let t = Instant::now();
+            app.update();
+            request.push(t.elapsed());
+            request_system.push(system_time(&app));
+            while heard(&app).saved.len() == before {
+                assert!(heard(&app).failed.is_empty(), "{:?}", heard(&app).failed);
+                std::thread::sleep(Duration::from_micros(200));
+                app.update();
+            }
+            whole.push(t.elapsed());
+            let done = heard(&app).saved.last().expect("saved").clone();
+            assert_eq!((done.written.len(), done.bytes), (chunks.len(), total));
+            let _ = std::fs::remove_dir_all(&dir);
+        }
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        println!(
+            "{{\"bench\":\"world_save\",\"edited_chunks\":{},\"bytes\":{},\
+             \"sync_save_ms\":{:.3},\"request_frame_ms\":{:.3},\"idle_frame_ms\":{:.3},\
+             \"request_system_ms\":{:.3},\"idle_system_ms\":{:.3},\
+             \"background_save_ms\":{:.3},\"runs\":{runs}}}",
+            chunks.len(),
+            total,
+            ms(median(sync)),
+            ms(median(request)),
+            ms(median(idle)),
+            ms(median(request_system)),
+            ms(median(idle_system)),
+            ms(median(whole)),
+        );
+    }
+}
