@@ -124,7 +124,7 @@ struct ClientLedger {
 pub struct NetClientStats {
     /// Server carves handed to the terrains.
     pub carves: u64,
-    /// Hash checks that matched.
+    /// Hash checks that matched (a world's: one per chunk checked).
     pub checks_passed: u64,
     /// Hash checks that did not (each led to a snapshot).
     pub desyncs: u64,

@@ -223,6 +223,13 @@ fn world_carves_leave_every_held_chunk_identical_on_every_peer() {
     assert_eq!(sa.desyncs, 0);
     assert_eq!(sc.desyncs, 0);
     assert!(sb.desyncs >= 1, "the damaged client noticed");
+    let noticed = &b.world().resource::<WorldsSeen>().desynced[0];
+    assert_eq!(
+        noticed.chunk,
+        ChunkCoord { x: 2, z: 1 },
+        "the check of the damaged chunk failed: {noticed:?}"
+    );
+    assert_ne!(noticed.local, Some(noticed.server));
     assert!(sb.snapshots >= 2, "and resynced from the world's snapshot");
     assert!(sa.checks_passed > 0 && sc.checks_passed > 0);
     let joined = &c.world().resource::<WorldsSeen>().synced[0];
