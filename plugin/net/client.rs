@@ -130,6 +130,10 @@ pub struct NetClientStats {
     pub desyncs: u64,
     /// Snapshots installed.
     pub snapshots: u64,
+    /// Chunk checks of networked worlds kept now until their chunks
+    /// report the op named (chunks whose carves wait deferred, far from
+    /// every focus).
+    pub world_checks_waiting: u64,
 }
 
 /// The client side of networked carving; connect with

@@ -23,11 +23,21 @@
 //!    to every client as [`NetWorldCarve`]s. Every peer routes carve `seq`
 //!    to the chunks its grid tool reaches ([`TerrainWorld::chunks_reached`],
 //!    a function of the integer tool only), in `seq` order, with `seq` as
-//!    the chunks' request id. A chunk that is not live is built (restored
-//!    when edited) and holds the carve until it is, as for a local
-//!    [`WorldCarve`](crate::terrain::WorldCarve). So each chunk receives the
-//!    same carves in the same order on every peer whatever is streamed in,
-//!    and exact carving makes its octree the same.
+//!    the chunks' request id. A chunk that is not live keeps the carve
+//!    waiting, in order. On the server it is built (restored when edited)
+//!    at once, as for a local [`WorldCarve`](crate::terrain::WorldCarve),
+//!    since the server answers every carve. On a client a chunk beyond
+//!    every focus's unload radius is *deferred*: its carves wait
+//!    ([`TerrainWorld::deferred_chunks`]) until it streams in, a detach
+//!    names it (see **Debris**), more than
+//!    [`TerrainWorld::with_max_deferred_carves`] wait (it is then built out
+//!    of sight, carved and stored again) or
+//!    [`TerrainWorld::build_deferred`] asks; a resync drops them with the
+//!    chunks. Then it is built and handed them in order, as it would have
+//!    been at once, so a client's CPU follows the carving near its foci,
+//!    not the whole server's. So each chunk receives the same carves in
+//!    the same order on every peer whatever is streamed in, whenever it
+//!    receives them, and exact carving makes its octree the same.
 //! 3. **Edited chunks and checks.** A chunk is *edited* once a world
 //!    carve applied to it (its [`CarveApplied`] report) or a detach
 //!    across chunk borders took solid out of it (see **Debris**); the
@@ -46,7 +56,8 @@
 //!    on its own, whenever this client holds it, whatever the others do.
 //!    The *world hash* ([`world_state_hash`]) is the wrapping sum over the
 //!    edited chunks of XXH64 of `(x, z, chunk hash)`, independent of order
-//!    and of which chunks are live: tests compare peers with it.
+//!    and of which chunks are live: tests compare peers with it. The check
+//!    of a deferred chunk waits until the chunk is built, and passes then.
 //! 4. **Joining.** A client that joins (or resyncs) gets the world's
 //!    snapshot: every edited chunk's exact terrain snapshot
 //!    ([`Terrain::to_snapshot_bytes`]) with the last carve it holds, cut
@@ -62,7 +73,8 @@
 //! drops its carves as in a local world; it counts as reported.
 //!
 //! **Debris.** Each chunk detaches what a carve cuts loose within it, the
-//! same on every peer. A piece over a chunk border is detached by a pass
+//! same on every peer; in a deferred chunk it falls when the chunk is
+//! built and carved. A piece over a chunk border is detached by a pass
 //! over live chunks together ([`crate::terrain::world::debris`]), whose
 //! result depends on which chunks are live: so only the server's pass
 //! runs ([`crate::terrain::world::debris_order`]). When it applies a

@@ -508,6 +508,12 @@ fn compare_world_hashes(
             hash: local.unwrap_or(0),
         }));
     }
+    let waiting = follower
+        .worlds
+        .values()
+        .map(|f| f.checks.len())
+        .sum::<usize>();
+    stats.world_checks_waiting = waiting as u64;
 }
 
 /// Compares every waiting check whose chunk reported every op up to the

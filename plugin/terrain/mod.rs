@@ -166,9 +166,10 @@ pub use tool::{
     MIN_DEFAULT_TOLERANCE_STEPS, ToolPiece,
 };
 pub use world::{
-    ChunkCoord, ChunkOffstage, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave,
-    StreamSettings, TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk, WorldLayout,
-    WorldLod, WorldSource, WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
+    ChunkCoord, ChunkOffstage, DEFAULT_MAX_DEFERRED_CARVES, HeightArray, LodMesh, LodSettings,
+    LodStats, NoiseOctave, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise, WorldCarve,
+    WorldChunk, WorldLayout, WorldLod, WorldSource, WorldStats, WorldUndo, WorldUndoRefusal,
+    WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]

@@ -42,7 +42,8 @@ impl TerrainWorld {
     /// does not give keeps its file. Other files are left alone.
     ///
     /// # Errors
-    /// [`TerrainError::WorldNotIdle`] while a carve waits for a chunk or
+    /// [`TerrainError::WorldNotIdle`] while a carve waits for a chunk
+    /// (deferred ones too: [`TerrainWorld::build_deferred`]) or
     /// an edited chunk has work in progress (nothing is written then);
     /// [`TerrainError::Io`] naming the file that could not be written or
     /// removed (files written before it stay, and nothing is removed
