@@ -6,14 +6,15 @@
 //! applied in order, their octrees and state hashes exactly the
 //! server's, and the waiting checks pass. A far chunk with as many
 //! carves waiting as the world allows is built in the background, carved,
-//! checked and stored again.
+//! checked and stored again. A detach across chunk borders far away builds
+//! the chunks it names, and the same piece falls as on the server.
 
 use std::collections::BTreeSet;
 
 use bevy::prelude::*;
-use bevy_chisel::bsp::octree::Edit;
+use bevy_chisel::bsp::octree::{Edit, ExactVolume};
 use bevy_chisel::net::NetClientStats;
-use bevy_chisel::terrain::{CarveTool, ChunkCoord, WorldChunk};
+use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, WorldChunk};
 
 use crate::ONE_APP_AT_A_TIME;
 use crate::net::world::{build_deferred, chunk_builds, edited_chunks, move_focus};
@@ -247,4 +248,104 @@ fn a_far_chunk_with_the_most_carves_waiting_is_built_and_checked() {
     assert_as_server(&mut server, &mut client, &only);
     assert_eq!(chunk_builds(&mut client), builds + 2, "restored once more");
     assert_eq!(stats(&client).desyncs, 0);
+}
+
+/// The exact volumes of the pieces an app saw fall.
+#[derive(Resource, Default)]
+struct Fallen(Vec<ExactVolume>);
+
+fn record_fallen(mut fallen: ResMut<Fallen>, mut detached: MessageReader<DebrisDetached>) {
+    fallen
+        .0
+        .extend(detached.read().map(|d| d.exact_volume.clone()));
+}
+
+fn fallen(app: &App) -> Vec<ExactVolume> {
+    app.world().resource::<Fallen>().0.clone()
+}
+
+/// A box tool with grid corners `min` and `max` (grid unit 1).
+fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
+    let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
+    let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
+    CarveTool::new(
+        CarveShape::Cuboid {
+            half_size: (hi - lo) / 2.0,
+        },
+        Transform::from_translation((lo + hi) / 2.0),
+    )
+}
+
+fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
+    ExactVolume::from_integer((0..3).map(|a| i128::from(max[a] - min[a])).product())
+}
+
+#[test]
+fn a_far_detach_builds_its_chunks_and_the_same_piece_falls() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (mut server, mut client, builds) = start(world());
+    for app in [&mut server, &mut client] {
+        app.init_resource::<Fallen>()
+            .add_systems(Last, record_fallen);
+    }
+    // A slab over the border x = 224 of chunks (6, 0) and (7, 0), on a
+    // pillar in (6, 0), 176 m from the client's focus.
+    let pillar = ([218, 4, 10], [221, 25, 13]);
+    let slab = ([218, 24, 10], [230, 28, 14]);
+    let cut = ([217, 21, 9], [222, 23, 14]);
+    let build = [
+        (cuboid(pillar.0, pillar.1), Edit::Add(1)),
+        (cuboid(slab.0, slab.1), Edit::Add(1)),
+    ];
+    send(&mut server, &mut client, 1, &build);
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        stats(apps[1]).world_checks_waiting == 2
+    });
+    let pair = BTreeSet::from([at(6, 0), at(7, 0)]);
+    assert_eq!(chunk_builds(&mut client), builds, "nothing built yet");
+    assert_eq!(
+        world_of(&mut client)
+            .1
+            .deferred_chunks()
+            .collect::<BTreeSet<_>>(),
+        pair
+    );
+
+    // The cut: the server's detach across the border names the chunks,
+    // and the client builds them for it, carves and searches them.
+    send(
+        &mut server,
+        &mut client,
+        3,
+        &[(cuboid(cut.0, cut.1), Edit::Subtract)],
+    );
+    let falling = box_volume([218, 23, 10], [221, 24, 13]) + box_volume(slab.0, slab.1);
+    run_until(&mut [&mut server, &mut client], 50_000, |apps| {
+        !fallen(apps[0]).is_empty()
+            && !fallen(apps[1]).is_empty()
+            && settled(apps[0])
+            && settled(apps[1])
+            && stats(apps[1]).world_checks_waiting == 0
+    });
+    assert_eq!(fallen(&server), vec![falling.clone()], "server: one piece");
+    assert_eq!(fallen(&client), vec![falling], "client: the same piece");
+    let (_, world) = world_of(&mut client);
+    assert_eq!(world.deferred_chunks().count(), 0, "the detach needed both");
+    assert!(chunk_builds(&mut client) > builds);
+    let reference = edited_chunks(&mut server);
+    assert!(
+        reference
+            .keys()
+            .copied()
+            .collect::<BTreeSet<_>>()
+            .is_superset(&pair)
+    );
+    assert!(
+        edited_chunks(&mut client) == reference,
+        "the client holds every edited chunk as the server does"
+    );
+    assert_eq!(stats(&client).desyncs, 0);
+    assert!(client.world().resource::<WorldsSeen>().desynced.is_empty());
 }
