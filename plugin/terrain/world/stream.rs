@@ -78,7 +78,7 @@ impl TerrainWorld {
 /// overlaps (the grid boxes of its pieces, open: a piece that only
 /// touches a chunk's side does not reach it). Chunks that are not live
 /// keep the carve until they are ([`stream_chunks`] builds them, but the
-/// far ones of a networked world's client: [`defer_far_chunks`]).
+/// far ones of a networked world's client: `defer_far_chunks`).
 pub fn route_world_carves(
     mut carves: MessageReader<WorldCarve>,
     mut worlds: Query<&mut TerrainWorld>,
