@@ -17,10 +17,11 @@
 //!   cells each changed on a client (what replicating meshes would send);
 //! - what one remote carve costs a client (wall and process CPU time, the
 //!   only app running being that client) when it lands in chunks the
-//!   client holds, against far from its focus, where the client builds
-//!   the chunks from the source, carves them and stores them again: every
-//!   client does that for every carve anywhere in the world (there is no
-//!   interest management);
+//!   client holds, against far from its focus (beyond its unload radius),
+//!   where the client defers it: the carve waits, unbuilt, until the chunk
+//!   streams in or too many carves wait for it
+//!   ([`TerrainWorld::with_max_deferred_carves`]); at the end the client
+//!   builds every deferred chunk and holds the server's chunks;
 //! - a client joining a world after 1,000 carves over 16 chunks: the
 //!   snapshot's bytes and the time until it holds every edited chunk as
 //!   the server does (world hash equal) and has meshed the live ones;
@@ -390,7 +391,7 @@ fn remote_carves(
 }
 
 /// Near carves (in chunks the client holds) against far ones (chunks 4
-/// to 12 away from its focus, which it builds and stores).
+/// to 12 away from its focus, whose carves it defers).
 fn near_against_far() -> (RemoteCost, RemoteCost, usize, f64) {
     let (mut server, addr) = world_server(world(), unlimited());
     let mut o = watching_client(addr, 1, FOCUS);
@@ -428,8 +429,10 @@ fn near_against_far() -> (RemoteCost, RemoteCost, usize, f64) {
     let idle_ms = (support::process_cpu() - cpu).as_secs_f64() * 1e3 / f64::from(frames);
     let near_cost = remote_carves(&mut server, &mut sender, &mut o, 0, &near);
     let far_cost = remote_carves(&mut server, &mut sender, &mut o, 1_000, &far);
-    // The client holds every chunk it was sent as the server does.
+    // Once it builds its deferred chunks, the client holds every chunk
+    // it was sent as the server does.
     run_until(&mut [&mut server, &mut o, &mut sender], 200_000, |apps| {
+        net::world::build_deferred(apps[1]);
         world_settled(apps[0]) && world_settled(apps[1])
     });
     assert_eq!(world_hash(&mut o), world_hash(&mut server));

@@ -124,12 +124,16 @@ struct ClientLedger {
 pub struct NetClientStats {
     /// Server carves handed to the terrains.
     pub carves: u64,
-    /// Hash checks that matched.
+    /// Hash checks that matched (a world's: one per chunk checked).
     pub checks_passed: u64,
     /// Hash checks that did not (each led to a snapshot).
     pub desyncs: u64,
     /// Snapshots installed.
     pub snapshots: u64,
+    /// Chunk checks of networked worlds kept now until their chunks
+    /// report the op named (chunks whose carves wait deferred, far from
+    /// every focus).
+    pub world_checks_waiting: u64,
 }
 
 /// The client side of networked carving; connect with

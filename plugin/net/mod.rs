@@ -59,8 +59,8 @@
 //!   snapshots, hash comparison.
 //! - [`secure`] — connect tokens and the secure transport.
 //! - [`world`] — streamed worlds ([`crate::terrain::TerrainWorld`]) with a
-//!   [`NetWorld`]: world carves in order, edited chunks in snapshots, a
-//!   world hash ([`world_state_hash`]); [`world_server`] and
+//!   [`NetWorld`]: world carves in order, edited chunks in snapshots,
+//!   each chunk's hash checked; [`world_server`] and
 //!   [`world_client`] are its two sides.
 
 pub mod client;
@@ -93,16 +93,16 @@ pub use secure::{
 };
 pub use server::{DesyncReported, NetLimits, NetServerPlugin, NetServerStats, RequestRejected};
 pub use wire::{
-    ChunkSnapshotPart, ClientPacket, ClientRequest, NetCarve, NetTerrain, NetWorld, NetWorldCarve,
-    Outcome, RejectReason, ServerPacket, SnapshotPart, TerrainId, WirePiece, WirePose, WireShape,
-    WireTool, WorldId, WorldSnapshotPart,
+    ChunkCheck, ChunkSnapshotPart, ClientPacket, ClientRequest, NetCarve, NetTerrain, NetWorld,
+    NetWorldCarve, Outcome, RejectReason, ServerPacket, SnapshotPart, TerrainId, WirePiece,
+    WirePose, WireShape, WireTool, WorldId, WorldSnapshotPart,
 };
 pub use world::world_state_hash;
 pub use world_client::{NetWorldCarveRequest, WorldDesynced, WorldSynced};
 
 /// The netcode protocol id of this wire format: peers with another id do
 /// not connect.
-pub const PROTOCOL_ID: u64 = 0xC415_E100_0000_0002;
+pub const PROTOCOL_ID: u64 = 0xC415_E100_0000_0003;
 
 /// Most bytes a peer keeps in flight on one channel (snapshots and large
 /// hull requests are single messages of a few megabytes at most).

@@ -330,14 +330,14 @@ pub enum ClientRequest {
         /// What to do inside it.
         edit: Edit,
     },
-    /// The client's world hash after world carve `seq` differs from the
-    /// server's: send the world's snapshot.
+    /// The client's hash of a chunk after world op `seq` differs from the
+    /// server's ([`ServerPacket::WorldCheck`]): send the world's snapshot.
     WorldDesync {
         /// The world.
         world: WorldId,
-        /// The carve after which the hashes were compared.
+        /// The op after which the hashes were compared.
         seq: u64,
-        /// The client's world hash there.
+        /// The client's hash of the chunk there.
         hash: u64,
     },
 }
@@ -593,6 +593,54 @@ pub struct ChunkSnapshotPart {
     pub bytes: Vec<u8>,
 }
 
+/// Most chunks one [`ServerPacket::WorldCheck`] names.
+pub const MAX_CHECK_CHUNKS: usize = 1024;
+
+/// A chunk's state hash in a [`ServerPacket::WorldCheck`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ChunkCheck {
+    /// The chunk (x, z).
+    pub coord: [i64; 2],
+    /// The last op of the world's order applied to it.
+    pub seq: u64,
+    /// Its state hash after that op.
+    pub hash: u64,
+}
+
+/// Decodes the chunks of a world check, refusing more than
+/// [`MAX_CHECK_CHUNKS`] before reading them.
+fn bounded_checks<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> std::result::Result<Vec<ChunkCheck>, D::Error> {
+    struct Bounded;
+    impl<'de> serde::de::Visitor<'de> for Bounded {
+        type Value = Vec<ChunkCheck>;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "at most {MAX_CHECK_CHUNKS} chunk checks")
+        }
+
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(
+            self,
+            mut seq: A,
+        ) -> std::result::Result<Self::Value, A::Error> {
+            let too_many = |n| serde::de::Error::invalid_length(n, &Bounded);
+            if let Some(n) = seq.size_hint().filter(|&n| n > MAX_CHECK_CHUNKS) {
+                return Err(too_many(n));
+            }
+            let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0));
+            while let Some(check) = seq.next_element()? {
+                if out.len() == MAX_CHECK_CHUNKS {
+                    return Err(too_many(MAX_CHECK_CHUNKS + 1));
+                }
+                out.push(check);
+            }
+            Ok(out)
+        }
+    }
+    deserializer.deserialize_seq(Bounded)
+}
+
 /// Snapshot `bytes` cut into parts of at most `part_bytes` each: the
 /// offset of each part and its bytes.
 pub(crate) fn snapshot_parts(
@@ -635,15 +683,20 @@ pub enum ServerPacket {
     /// An accepted world carve, to every client (variants are only ever
     /// appended).
     WorldCarve(NetWorldCarve),
-    /// The server's world hash ([`super::world::world_state_hash`]) after
-    /// world carve `seq`.
+    /// The server's state hashes of the world's chunks changed since its
+    /// previous check, once every op up to `seq` is applied there (one
+    /// check may come as several packets with the same `seq`, each naming
+    /// at most [`MAX_CHECK_CHUNKS`] chunks).
     WorldCheck {
         /// The world.
         world: WorldId,
-        /// The carve.
+        /// Every op up to this one is in the hashes.
         seq: u64,
-        /// The world hash after it.
-        hash: u64,
+        /// Each chunk changed since the previous check, with the last op
+        /// applied to it and its hash after that op; a client refuses a
+        /// check naming more than [`MAX_CHECK_CHUNKS`].
+        #[serde(deserialize_with = "bounded_checks")]
+        chunks: Vec<ChunkCheck>,
     },
     /// Part of a world snapshot.
     WorldSnapshot(WorldSnapshotPart),
@@ -741,6 +794,36 @@ mod tests {
         })
         .unwrap();
         assert_eq!(capsule[0], 6);
+    }
+
+    /// A world check names at most [`MAX_CHECK_CHUNKS`] chunks: one more
+    /// is refused when decoded, also when the length prefix lies.
+    #[test]
+    fn a_world_check_naming_too_many_chunks_is_refused() {
+        let check = |n: usize| ServerPacket::WorldCheck {
+            world: 3,
+            seq: 77,
+            chunks: (0..n)
+                .map(|i| ChunkCheck {
+                    coord: [i as i64, -(i as i64)],
+                    seq: 70 + i as u64 % 7,
+                    hash: i as u64 * 0x9E37_79B9,
+                })
+                .collect(),
+        };
+        let decode = |bytes: &[u8]| postcard::from_bytes::<ServerPacket>(bytes);
+        for n in [0, 1, MAX_CHECK_CHUNKS] {
+            let packet = check(n);
+            let bytes = postcard::to_allocvec(&packet).unwrap();
+            assert_eq!(decode(&bytes).unwrap(), packet, "{n} chunks");
+        }
+        let bytes = postcard::to_allocvec(&check(MAX_CHECK_CHUNKS + 1)).unwrap();
+        assert!(decode(&bytes).is_err(), "one chunk too many");
+        // A length prefix of u32::MAX and no chunks behind it.
+        let mut lying = postcard::to_allocvec(&check(0)).unwrap();
+        lying.pop();
+        lying.extend_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF, 0x0F]);
+        assert!(decode(&lying).is_err(), "a lying length");
     }
 
     #[test]

@@ -23,23 +23,41 @@
 //!    to every client as [`NetWorldCarve`]s. Every peer routes carve `seq`
 //!    to the chunks its grid tool reaches ([`TerrainWorld::chunks_reached`],
 //!    a function of the integer tool only), in `seq` order, with `seq` as
-//!    the chunks' request id. A chunk that is not live is built (restored
-//!    when edited) and holds the carve until it is, as for a local
-//!    [`WorldCarve`](crate::terrain::WorldCarve). So each chunk receives the
-//!    same carves in the same order on every peer whatever is streamed in,
-//!    and exact carving makes its octree the same.
-//! 3. **Edited chunks and the world hash.** A chunk is *edited* once a
-//!    world carve applied to it (its [`CarveApplied`] report) or a detach
+//!    the chunks' request id. A chunk that is not live keeps the carve
+//!    waiting, in order. On the server it is built (restored when edited)
+//!    at once, as for a local [`WorldCarve`](crate::terrain::WorldCarve),
+//!    since the server answers every carve. On a client a chunk beyond
+//!    every focus's unload radius is *deferred*: its carves wait
+//!    ([`TerrainWorld::deferred_chunks`]) until it streams in, a detach
+//!    names it (see **Debris**), more than
+//!    [`TerrainWorld::with_max_deferred_carves`] wait (it is then built out
+//!    of sight, carved and stored again) or
+//!    [`TerrainWorld::build_deferred`] asks; a resync drops them with the
+//!    chunks. Then it is built and handed them in order, as it would have
+//!    been at once, so a client's CPU follows the carving near its foci,
+//!    not the whole server's. So each chunk receives the same carves in
+//!    the same order on every peer whatever is streamed in, whenever it
+//!    receives them, and exact carving makes its octree the same.
+//! 3. **Edited chunks and checks.** A chunk is *edited* once a world
+//!    carve applied to it (its [`CarveApplied`] report) or a detach
 //!    across chunk borders took solid out of it (see **Debris**); the
-//!    reports give each edited chunk's state hash after each op. The world hash
-//!    after carve `s` ([`world_state_hash`]) is the wrapping sum, over the
-//!    chunks edited by then, of XXH64 of `(x, z, chunk hash after s)`:
-//!    independent of order and of which chunks are live. A peer knows it
-//!    once every carve up to `s` is reported by every chunk it reached.
-//!    The server sends its world hash ([`ServerPacket::WorldCheck`]) every
-//!    [`NetLimits::check_interval`](super::NetLimits::check_interval); a
-//!    client that computes another one after the same carve reports it and
-//!    gets the world's snapshot again.
+//!    reports give each edited chunk's state hash after each op. Every
+//!    [`NetLimits::check_interval`](super::NetLimits::check_interval) the
+//!    server sends a [`ServerPacket::WorldCheck`]: once every op up to its
+//!    *done* op `s` is reported by every chunk it reached, each chunk
+//!    changed since the previous check with the last op `t ≤ s` applied to
+//!    it and its hash after `t` (at most
+//!    [`MAX_CHECK_CHUNKS`](super::wire::MAX_CHECK_CHUNKS) a packet, more in
+//!    several). A client keeps the latest check of each chunk until that
+//!    chunk has reported every op up to `t` that reached it, then compares
+//!    its hash after `t` (none if it never changed here); a difference
+//!    is a [`WorldDesynced`](super::WorldDesynced) naming the chunk, and
+//!    the client gets the world's snapshot again. So each chunk is checked
+//!    on its own, whenever this client holds it, whatever the others do.
+//!    The *world hash* ([`world_state_hash`]) is the wrapping sum over the
+//!    edited chunks of XXH64 of `(x, z, chunk hash)`, independent of order
+//!    and of which chunks are live: tests compare peers with it. The check
+//!    of a deferred chunk waits until the chunk is built, and passes then.
 //! 4. **Joining.** A client that joins (or resyncs) gets the world's
 //!    snapshot: every edited chunk's exact terrain snapshot
 //!    ([`Terrain::to_snapshot_bytes`]) with the last carve it holds, cut
@@ -55,7 +73,8 @@
 //! drops its carves as in a local world; it counts as reported.
 //!
 //! **Debris.** Each chunk detaches what a carve cuts loose within it, the
-//! same on every peer. A piece over a chunk border is detached by a pass
+//! same on every peer; in a deferred chunk it falls when the chunk is
+//! built and carved. A piece over a chunk border is detached by a pass
 //! over live chunks together ([`crate::terrain::world::debris`]), whose
 //! result depends on which chunks are live: so only the server's pass
 //! runs ([`crate::terrain::world::debris_order`]). When it applies a
@@ -75,9 +94,9 @@
 //! skipped with a warning; the next world check then resyncs the client.
 //! Spawn the world and its [`NetWorld`] together.
 //!
-//! Limits: the world hash is made of the hashes the chunks report after
-//! networked carves, so a local change to a chunk shows only once a later
-//! world carve reaches that chunk. A resync replaces every chunk of the
+//! Limits: the checks compare the hashes the chunks report after
+//! networked ops, so a local change to a chunk shows only once a later
+//! world op reaches that chunk. A resync replaces every chunk of the
 //! client's world (live ones stream in again). A networked world is
 //! carved only through the server: a local [`WorldCarve`] on any peer's
 //! networked world is outside its order and makes it differ.
@@ -87,7 +106,7 @@
 //! - [`super::world_server`]: validation, order, broadcast, hashes and
 //!   snapshots on the server.
 //! - [`super::world_client`]: [`NetWorldCarveRequest`], ordered routing,
-//!   snapshots and hash comparison on a client.
+//!   snapshots and the comparison of chunk hashes on a client.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -96,7 +115,9 @@ use bevy::prelude::*;
 use super::wire::WorldId;
 use crate::terrain::{CarveApplied, CarveRejected, ChunkCoord, TerrainWorld, WorldChunk};
 
-use super::wire::{MAX_DETACH_CHUNKS, MAX_DETACH_SEEDS, NetWorld, NetWorldDetach, WireSeed};
+use super::wire::{
+    ChunkCheck, MAX_DETACH_CHUNKS, MAX_DETACH_SEEDS, NetWorld, NetWorldDetach, WireSeed,
+};
 #[cfg(doc)]
 use super::wire::{NetWorldCarve, ServerPacket};
 #[cfg(doc)]
@@ -229,6 +250,8 @@ pub(crate) struct WorldBook {
     pub(crate) chunks: BTreeMap<ChunkCoord, BTreeMap<u64, u64>>,
     /// Carves routed but not yet reported by every chunk they reach.
     pub(crate) outstanding: BTreeMap<u64, BTreeSet<ChunkCoord>>,
+    /// The same by chunk: the ops each chunk has still to report.
+    pub(crate) unreported: BTreeMap<ChunkCoord, BTreeSet<u64>>,
     /// The last carve routed.
     pub(crate) routed: u64,
     /// The world hash is not known after carves before this one (pruned,
@@ -244,6 +267,9 @@ impl WorldBook {
                 .entry(seq)
                 .or_default()
                 .extend(coords.iter().copied());
+            for &coord in coords {
+                self.unreported.entry(coord).or_default().insert(seq);
+            }
         }
         self.routed = self.routed.max(seq);
     }
@@ -257,6 +283,12 @@ impl WorldBook {
         };
         if !waiting.remove(&coord) {
             return false;
+        }
+        if let Some(seqs) = self.unreported.get_mut(&coord) {
+            seqs.remove(&seq);
+            if seqs.is_empty() {
+                self.unreported.remove(&coord);
+            }
         }
         if let Some(hash) = hash {
             self.chunks.entry(coord).or_default().insert(seq, hash);
@@ -278,6 +310,7 @@ impl WorldBook {
     }
 
     /// The world hash after carve `seq`, when known.
+    #[cfg(test)]
     pub(crate) fn hash_at(&self, seq: u64) -> Option<u64> {
         if seq < self.floor || seq > self.done() {
             return None;
@@ -285,6 +318,39 @@ impl WorldBook {
         Some(world_state_hash(self.chunks.iter().filter_map(
             |(&coord, hashes)| hashes.range(..=seq).next_back().map(|(_, &h)| (coord, h)),
         )))
+    }
+
+    /// Each chunk changed by an op after `after` up to `upto`, with the
+    /// last such op and its hash after it, in coordinate order.
+    pub(crate) fn changed_chunks(&self, after: u64, upto: u64) -> Vec<ChunkCheck> {
+        let Some(range) = after.checked_add(1).filter(|&from| from <= upto) else {
+            return Vec::new();
+        };
+        (self.chunks.iter())
+            .filter_map(|(coord, hashes)| {
+                let (&seq, &hash) = hashes.range(range..=upto).next_back()?;
+                Some(ChunkCheck {
+                    coord: [coord.x, coord.z],
+                    seq,
+                    hash,
+                })
+            })
+            .collect()
+    }
+
+    /// Chunk `coord`'s state hash after op `seq`, once known: every op up
+    /// to `seq` is routed and every one that reached the chunk reported.
+    /// `Some(None)`: the chunk was not edited by then (or not since a
+    /// snapshot older than `seq`); `None`: not known yet.
+    pub(crate) fn chunk_hash_at(&self, coord: ChunkCoord, seq: u64) -> Option<Option<u64>> {
+        let waits = (self.unreported.get(&coord))
+            .and_then(|seqs| seqs.first())
+            .is_some_and(|&first| first <= seq);
+        if seq > self.routed || waits {
+            return None;
+        }
+        let hashes = self.chunks.get(&coord);
+        Some(hashes.and_then(|h| h.range(..=seq).next_back().map(|(_, &hash)| hash)))
     }
 
     /// Forgets the hashes that no world hash after `seq` or later needs.
@@ -297,15 +363,24 @@ impl WorldBook {
         self.floor = self.floor.max(seq);
     }
 
+    /// Forgets chunk `coord`'s hashes that no check at `seq` or later
+    /// needs.
+    pub(crate) fn prune_chunk(&mut self, coord: ChunkCoord, seq: u64) {
+        if let Some(hashes) = self.chunks.get_mut(&coord)
+            && let Some(&last) = hashes.range(..=seq).next_back().map(|(s, _)| s)
+        {
+            *hashes = hashes.split_off(&last);
+        }
+    }
+
     /// Counts chunks that failed to build as having reported (refused) the
     /// carves they were routed; returns the carves that became complete.
     pub(crate) fn settle_failed(&mut self, world: &TerrainWorld) -> Vec<u64> {
-        let failed: Vec<(u64, ChunkCoord)> = self
-            .outstanding
-            .iter()
-            .flat_map(|(&seq, coords)| coords.iter().map(move |&c| (seq, c)))
-            .filter(|&(_, c)| world.chunk_failed(c))
+        let mut failed: Vec<(u64, ChunkCoord)> = (self.unreported.iter())
+            .filter(|&(&c, _)| world.chunk_failed(c))
+            .flat_map(|(&c, seqs)| seqs.iter().map(move |&seq| (seq, c)))
             .collect();
+        failed.sort_unstable();
         failed
             .into_iter()
             .filter(|&(seq, coord)| self.note_report(coord, seq, None))
@@ -413,6 +488,56 @@ mod tests {
         assert_eq!(book.hash_at(2), None, "pruned");
         assert_eq!(book.hash_at(3), Some(after_3));
         assert_eq!(book.chunks[&c(1, 0)].len(), 1, "only the latest kept");
+    }
+
+    /// A chunk's hash after an op is known once the chunk reported every
+    /// op up to it, whatever other chunks still owe; the server names each
+    /// chunk changed since its previous check with its last op.
+    #[test]
+    fn each_chunk_is_checked_on_its_own() {
+        let mut book = WorldBook::default();
+        book.note_routed(1, &[c(0, 0), c(9, 9)]);
+        book.note_routed(2, &[c(0, 0)]);
+        book.note_routed(3, &[c(9, 9), c(0, 1)]);
+        assert!(!book.note_report(c(0, 0), 1, Some(10)));
+        assert!(book.note_report(c(0, 0), 2, Some(20)));
+        assert_eq!(book.chunk_hash_at(c(0, 0), 1), Some(Some(10)));
+        assert_eq!(book.chunk_hash_at(c(0, 0), 2), Some(Some(20)));
+        assert_eq!(
+            book.chunk_hash_at(c(0, 0), 3),
+            Some(Some(20)),
+            "not reached"
+        );
+        assert_eq!(book.chunk_hash_at(c(0, 0), 4), None, "not routed yet");
+        assert_eq!(book.chunk_hash_at(c(9, 9), 1), None, "(9, 9) owes op 1");
+        assert_eq!(
+            book.chunk_hash_at(c(0, 1), 2),
+            Some(None),
+            "unedited by op 2"
+        );
+        assert_eq!(book.chunk_hash_at(c(0, 1), 3), None, "(0, 1) owes op 3");
+        assert_eq!(book.done(), 0, "no world hash after op 1 yet");
+        assert!(!book.note_report(c(0, 1), 3, None));
+        assert_eq!(book.chunk_hash_at(c(0, 1), 3), Some(None), "refused");
+        assert!(book.note_report(c(9, 9), 1, Some(91)));
+        assert!(book.note_report(c(9, 9), 3, Some(93)));
+        assert!(book.unreported.is_empty());
+        assert_eq!(book.chunk_hash_at(c(9, 9), 3), Some(Some(93)));
+        let check = |coord: ChunkCoord, seq, hash| ChunkCheck {
+            coord: [coord.x, coord.z],
+            seq,
+            hash,
+        };
+        assert_eq!(
+            book.changed_chunks(0, 3),
+            [check(c(0, 0), 2, 20), check(c(9, 9), 3, 93)]
+        );
+        assert_eq!(book.changed_chunks(2, 3), [check(c(9, 9), 3, 93)]);
+        assert_eq!(book.changed_chunks(0, 1).len(), 2);
+        assert!(book.changed_chunks(3, 3).is_empty());
+        book.prune_chunk(c(9, 9), 3);
+        assert_eq!(book.chunks[&c(9, 9)].len(), 1);
+        assert_eq!(book.chunks[&c(0, 0)].len(), 2, "other chunks keep theirs");
     }
 
     fn applied() -> AppliedDetach {

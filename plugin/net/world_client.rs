@@ -1,6 +1,7 @@
 //! The client side of networked worlds ([`super::world`]): sends world
 //! carve requests, installs world snapshots, routes the server's carves to
-//! its chunks strictly in order, and compares world hashes.
+//! its chunks strictly in order, and compares its chunks' hashes with the
+//! server's checks.
 //! As in [`super::client`], requests work in every role and the rest only
 //! while connected.
 
@@ -15,8 +16,8 @@ use super::client::{
     Assembled, NetCarveResult, NetClientStats, addressee, assemble, nowhere_to_send,
 };
 use super::wire::{
-    ClientPacket, ClientRequest, NetWorld, NetWorldCarve, NetWorldDetach, ServerPacket, WireTool,
-    WorldId, WorldSnapshotPart,
+    ClientPacket, ClientRequest, MAX_CHECK_CHUNKS, NetWorld, NetWorldCarve, NetWorldDetach,
+    ServerPacket, WireTool, WorldId, WorldSnapshotPart,
 };
 use super::world::{WorldBook, chunk_reports, claim_debris, ordered_detach};
 use crate::terrain::world::debris_order::DebrisRole;
@@ -59,16 +60,20 @@ pub struct WorldSynced {
     pub bytes: usize,
 }
 
-/// The world hash after carve `seq` differs from the server's; the client
-/// asked for the world's snapshot.
+/// A chunk's state hash after world op `seq` differs from the server's
+/// ([`ServerPacket::WorldCheck`]); the client asked for the world's
+/// snapshot.
 #[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct WorldDesynced {
     /// The local world entity.
     pub world: Entity,
-    /// The carve after which the hashes differ.
+    /// The chunk whose hashes differ.
+    pub chunk: ChunkCoord,
+    /// The op after which they differ: the last one the server applied
+    /// to the chunk.
     pub seq: u64,
-    /// This client's world hash.
-    pub local: u64,
+    /// This client's hash of the chunk (`None`: not edited here).
+    pub local: Option<u64>,
     /// The server's.
     pub server: u64,
 }
@@ -109,8 +114,9 @@ struct FollowWorld {
     held: BTreeMap<ChunkCoord, u64>,
     incoming: Option<Incoming>,
     ready: Option<Received>,
-    /// The server's latest world hash not yet compared: (seq, hash).
-    check: Option<(u64, u64)>,
+    /// The server's latest hash of each chunk not yet compared: the last
+    /// op applied to it and the hash after it.
+    checks: BTreeMap<ChunkCoord, (u64, u64)>,
     /// Waiting for a snapshot after a desync.
     resyncing: bool,
 }
@@ -209,8 +215,20 @@ fn receive_world_packets(
                         .or_insert_with(|| WorldOp::Detach(detach.clone()));
                 }
             }
-            ServerPacket::WorldCheck { world, seq, hash } => {
-                follower.worlds.entry(*world).or_default().check = Some((*seq, *hash));
+            ServerPacket::WorldCheck { world, chunks, .. } => {
+                let follow = follower.worlds.entry(*world).or_default();
+                for check in chunks.iter().take(MAX_CHECK_CHUNKS) {
+                    let coord = ChunkCoord {
+                        x: check.coord[0],
+                        z: check.coord[1],
+                    };
+                    // Only the latest of each chunk is kept.
+                    let newer =
+                        (follow.checks.get(&coord)).is_none_or(|&(seq, _)| seq <= check.seq);
+                    if newer {
+                        follow.checks.insert(coord, (check.seq, check.hash));
+                    }
+                }
             }
             ServerPacket::WorldSnapshot(part) => {
                 let follow = follower.worlds.entry(part.world).or_default();
@@ -409,6 +427,7 @@ fn install(
     follow.book = WorldBook {
         chunks: hashes,
         outstanding: BTreeMap::new(),
+        unreported: BTreeMap::new(),
         routed: received.seq,
         floor,
     };
@@ -417,12 +436,15 @@ fn install(
     follow.held = held;
     follow.synced = true;
     follow.resyncing = false;
-    follow.check = None;
+    // Checks of states older than the snapshot's cannot be compared.
+    follow.checks.retain(|_, &mut (seq, _)| seq >= floor);
     Ok((received.chunks.len(), bytes))
 }
 
 /// Reads the chunks' reports of world carves and detaches and compares
-/// the world hash with the server's checks; a difference asks for the world's snapshot.
+/// each chunk the server's checks name once it reported every op up to
+/// the one named (checks of chunks not there yet wait, the latest of each
+/// chunk kept); a difference asks for the world's snapshot.
 #[allow(clippy::too_many_arguments)]
 fn compare_world_hashes(
     mut applied: MessageReader<CarveApplied>,
@@ -458,32 +480,24 @@ fn compare_world_hashes(
             }
         }
         follow.book.settle_failed(&world);
-        let Some((seq, server)) = follow.check else {
-            continue;
-        };
-        if !follow.synced || follow.resyncing || seq < follow.book.floor {
-            follow.check = None;
+        if !follow.synced || follow.resyncing {
+            follow.checks.clear();
             continue;
         }
-        // Not known yet: kept until known or replaced by a newer check.
-        let Some(local) = follow.book.hash_at(seq) else {
+        let Some((chunk, seq, local, server)) = compare_chunks(follow, &mut stats) else {
             continue;
         };
-        follow.check = None;
-        follow.book.prune(seq);
-        if local == server {
-            stats.checks_passed += 1;
-            continue;
-        }
         stats.desyncs += 1;
         follow.resyncing = true;
+        follow.checks.clear();
         warn!(
-            "world {}: hash {local:#018x} after carve {seq}, server has {server:#018x}; \
-             asking for the world's snapshot",
-            id.0
+            "world {}: chunk ({}, {}) has hash {local:#018x?} after op {seq}, the server \
+             {server:#018x}; asking for the world's snapshot",
+            id.0, chunk.x, chunk.z
         );
         desynced.write(WorldDesynced {
             world: entity,
+            chunk,
             seq,
             local,
             server,
@@ -491,7 +505,47 @@ fn compare_world_hashes(
         packets.write(ClientPacket::Request(ClientRequest::WorldDesync {
             world: id.0,
             seq,
-            hash: local,
+            hash: local.unwrap_or(0),
         }));
     }
+    let waiting = follower
+        .worlds
+        .values()
+        .map(|f| f.checks.len())
+        .sum::<usize>();
+    stats.world_checks_waiting = waiting as u64;
+}
+
+/// Compares every waiting check whose chunk reported every op up to the
+/// one named, and forgets them (and the hashes no later check needs);
+/// checks older than the installed snapshot are dropped. Returns the
+/// first chunk whose hash differs: its coordinates, the op, this
+/// client's hash and the server's.
+fn compare_chunks(
+    follow: &mut FollowWorld,
+    stats: &mut NetClientStats,
+) -> Option<(ChunkCoord, u64, Option<u64>, u64)> {
+    let mut decided = Vec::new();
+    let mut differs = None;
+    for (&coord, &(seq, server)) in &follow.checks {
+        if seq < follow.book.floor {
+            decided.push((coord, seq));
+            continue;
+        }
+        // Not known yet: kept until known or replaced by a newer check.
+        let Some(local) = follow.book.chunk_hash_at(coord, seq) else {
+            continue;
+        };
+        decided.push((coord, seq));
+        if local == Some(server) {
+            stats.checks_passed += 1;
+        } else if differs.is_none() {
+            differs = Some((coord, seq, local, server));
+        }
+    }
+    for (coord, seq) in decided {
+        follow.checks.remove(&coord);
+        follow.book.prune_chunk(coord, seq);
+    }
+    differs
 }

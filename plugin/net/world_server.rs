@@ -1,7 +1,7 @@
 //! The server side of networked worlds ([`super::world`]): validates world
 //! carve requests, numbers them per world, routes them to its own chunks,
 //! broadcasts them, answers each request once every chunk it reached
-//! reported, sends world hashes, and world snapshots to clients that join
+//! reported, sends the hashes of the chunks changed, and world snapshots to clients that join
 //! or fall out of step. Like [`super::server`], it runs whenever the app
 //! is no connected client, and a host's own world carves are ordered here
 //! once and broadcast to the remote clients only.
@@ -18,8 +18,8 @@ use super::server::{
     invalid, round_tool,
 };
 use super::wire::{
-    ChunkSnapshotPart, ClientPacket, ClientRequest, NetWorld, NetWorldCarve, Outcome, RejectReason,
-    ServerPacket, WireTool, WorldId, WorldSnapshotPart, snapshot_parts,
+    ChunkSnapshotPart, ClientPacket, ClientRequest, MAX_CHECK_CHUNKS, NetWorld, NetWorldCarve,
+    Outcome, RejectReason, ServerPacket, WireTool, WorldId, WorldSnapshotPart, snapshot_parts,
 };
 use super::world::{WorldBook, chunk_reports, claim_debris, wire_detach};
 use crate::terrain::world::debris_order::DebrisRole;
@@ -46,7 +46,7 @@ struct ServedWorld {
     /// carve, as sent.
     log: BTreeMap<u64, ServerPacket>,
     answers: HashMap<u64, Answer>,
-    /// The last carve whose world hash was sent.
+    /// The op up to which the chunks' hashes were sent.
     checked: u64,
 }
 
@@ -247,7 +247,8 @@ fn receive_world_requests(
 
 /// Reads the chunks' reports of world carves: answers each request once
 /// every chunk it reached reported, forgets the carves every chunk has,
-/// and sends each world's hash every check interval.
+/// and every check interval sends the hashes of each world's chunks
+/// changed since the previous check.
 #[allow(clippy::too_many_arguments)]
 fn report_world_carves(
     mut applied: MessageReader<CarveApplied>,
@@ -339,15 +340,16 @@ fn report_world_carves(
         if done <= served.checked {
             continue;
         }
-        if let Some(hash) = served.book.hash_at(done) {
-            served.checked = done;
-            served.book.prune(done);
+        let changed = served.book.changed_chunks(served.checked, done);
+        served.checked = done;
+        served.book.prune(done);
+        for chunks in changed.chunks(MAX_CHECK_CHUNKS) {
             out.write(ToClients {
                 targets: SendTargets::CLIENTS_ONLY,
                 message: ServerPacket::WorldCheck {
                     world,
                     seq: done,
-                    hash,
+                    chunks: chunks.to_vec(),
                 },
             });
         }

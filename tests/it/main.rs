@@ -109,4 +109,6 @@ mod net_world;
 #[cfg(feature = "net")]
 mod net_world_debris;
 #[cfg(feature = "net")]
+mod net_world_interest;
+#[cfg(feature = "net")]
 mod net_worlds;

@@ -13,6 +13,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::net::{Ipv4Addr, SocketAddr};
 
+use crate::net::world::build_deferred;
 use crate::net_worlds::{
     edited_chunks, edited_terrains, streamed_world as world, world_settled, world_tool,
 };
@@ -104,8 +105,11 @@ fn answers(app: &App) -> &[NetCarveResult] {
     &app.world().resource::<Answers>().results
 }
 
-/// Whether the terrain (if any) is idle and the world settled.
+/// Whether the terrain (if any) is idle and the world settled; asks the
+/// world to build the far chunks whose carves a client deferred, so that
+/// a settled peer holds every edited chunk.
 fn settled(app: &mut App) -> bool {
+    build_deferred(app);
     terrain_of(app).is_none_or(|(_, t)| t.is_idle()) && world_settled(app)
 }
 

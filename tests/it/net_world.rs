@@ -11,6 +11,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use crate::net::world::build_deferred;
 use crate::net_worlds::{
     edited_chunks, edited_terrains, streamed_world as world, world_settled as settled, world_tool,
 };
@@ -63,8 +64,10 @@ fn live(app: &mut App) -> BTreeSet<ChunkCoord> {
 
 /// Runs until every peer is settled and holds the same edited chunks as
 /// the first (by world hash), then a few frames more for the hash checks.
+/// The clients build the far chunks whose carves they deferred.
 fn converge(apps: &mut [&mut App], done: impl Fn(&mut [&mut App]) -> bool) -> usize {
     let frames = run_until(apps, 200_000, |apps| {
+        apps.iter_mut().for_each(|app| build_deferred(app));
         if !done(apps) || !apps.iter_mut().all(|app| settled(app)) {
             return false;
         }
@@ -223,6 +226,13 @@ fn world_carves_leave_every_held_chunk_identical_on_every_peer() {
     assert_eq!(sa.desyncs, 0);
     assert_eq!(sc.desyncs, 0);
     assert!(sb.desyncs >= 1, "the damaged client noticed");
+    let noticed = &b.world().resource::<WorldsSeen>().desynced[0];
+    assert_eq!(
+        noticed.chunk,
+        ChunkCoord { x: 2, z: 1 },
+        "the check of the damaged chunk failed: {noticed:?}"
+    );
+    assert_ne!(noticed.local, Some(noticed.server));
     assert!(sb.snapshots >= 2, "and resynced from the world's snapshot");
     assert!(sa.checks_passed > 0 && sc.checks_passed > 0);
     let joined = &c.world().resource::<WorldsSeen>().synced[0];

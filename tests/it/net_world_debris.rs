@@ -17,7 +17,7 @@ use bevy_chisel::net::wire::{NetWorldDetach, WireSeed};
 use bevy_chisel::net::{NetClientStats, Outcome, ServerPacket};
 use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, Terrain};
 
-use crate::net::world::world_hash;
+use crate::net::world::{build_deferred, world_hash};
 use crate::net::{
     Seen, WorldsSeen, request_world, run_until, unlimited, update_all, world_client, world_of,
     world_server,
@@ -123,9 +123,11 @@ fn carve_and_converge(
 }
 
 /// Runs until every peer is settled with the first one's world hash,
-/// then a few frames more for the world checks.
+/// then a few frames more for the world checks. The clients build the far
+/// chunks whose carves they deferred.
 fn converge(apps: &mut [&mut App]) -> usize {
     let frames = run_until(apps, 100_000, |apps| {
+        apps.iter_mut().for_each(|app| build_deferred(app));
         if !apps.iter_mut().all(|app| settled(app)) {
             return false;
         }

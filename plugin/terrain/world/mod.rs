@@ -35,7 +35,12 @@
 //!    rounded to the grid once and sent to every chunk its tool overlaps
 //!    (as a [`GridCarve`](super::GridCarve)); a chunk that is not live
 //!    then is built at once, whatever its distance, and holds the carve
-//!    until it is.
+//!    until it is. On a networked world's client (feature `net`) a chunk
+//!    beyond every focus's unload radius instead keeps the carves waiting,
+//!    in order, until it streams in, a detach across chunk borders needs
+//!    it, [`TerrainWorld::with_max_deferred_carves`] of them wait, or
+//!    [`TerrainWorld::build_deferred`] is called: a client then spends
+//!    nothing on the carving far from it.
 //! 4. **Files** ([`store`]): [`TerrainWorld::save`] writes one terrain
 //!    file per edited chunk (`chunk_X_Z.chiselterrain`, atomically, as
 //!    [`Terrain::save`]); [`TerrainWorld::load_edits`] reads them back,
@@ -165,6 +170,7 @@ pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 pub use store::{SaveWorld, WorldSaveFailed, WorldSaved};
+pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
 /// A chunk's position in its world's grid of chunks (x and z).
@@ -194,8 +200,9 @@ pub struct WorldChunk {
 
 /// A live chunk that no focus has come near: built beyond every focus's
 /// unload radius, only for work there (a carve routed to it, an undo, a
-/// search for debris across borders, or a networked world's carve from
-/// another player), and released once that is done. Its cells get no
+/// search for debris across borders; on a networked world's client, its
+/// deferred carves once too many wait or [`TerrainWorld::build_deferred`]
+/// asks), and released once that is done. Its cells get no
 /// render meshes (colliders still, where the [`CellOutput`] and a
 /// physics backend build them), and coarse chunks ([`WorldLod`]) stand in
 /// for it. The marker is taken away, for good, once a focus comes within
@@ -310,6 +317,13 @@ pub struct TerrainWorld {
     /// Carves for chunks that are not live yet, in order, each with the
     /// request id of its world carve.
     pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit, u64)>>,
+    /// The chunks of `pending` that streaming left unbuilt in its last
+    /// pass: far chunks of a networked world's client (`stream`).
+    pub(crate) deferred: BTreeSet<ChunkCoord>,
+    /// Deferred chunks [`TerrainWorld::build_deferred`] asked to build.
+    pub(crate) deferred_wanted: BTreeSet<ChunkCoord>,
+    /// Most carves a deferred chunk keeps waiting before it is built.
+    pub(crate) max_deferred_carves: usize,
     /// Chunks kept as edited whatever their journal says: chunks installed
     /// from a snapshot (no journal, yet not the source's).
     pub(crate) kept: BTreeSet<ChunkCoord>,
@@ -367,6 +381,9 @@ impl TerrainWorld {
             chunks: BTreeMap::new(),
             stored: BTreeMap::new(),
             pending: BTreeMap::new(),
+            deferred: BTreeSet::new(),
+            deferred_wanted: BTreeSet::new(),
+            max_deferred_carves: DEFAULT_MAX_DEFERRED_CARVES,
             kept: BTreeSet::new(),
             stats: WorldStats::default(),
             next_request: 0,
@@ -666,6 +683,8 @@ impl TerrainWorld {
             }
         }
         self.pending.clear();
+        self.deferred.clear();
+        self.deferred_wanted.clear();
         self.debris_search = None;
         self.debris_keep.clear();
         self.debris_wanted.clear();
@@ -679,13 +698,14 @@ impl TerrainWorld {
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
     }
 
-    /// Whether no chunk is building, no carve waits for a chunk, no
-    /// [`WorldUndo`] waits, and no search for debris across chunk borders
-    /// runs, waits to be applied or waits to start (seeds in a chunk; nor,
-    /// in a networked world, a detach its server ordered).
+    /// Whether no chunk is building, no carve waits for a chunk (but the
+    /// deferred ones, [`TerrainWorld::deferred_chunks`], which wait by
+    /// design), no [`WorldUndo`] waits, and no search for debris across
+    /// chunk borders runs, waits to be applied or waits to start (seeds in
+    /// a chunk; nor, in a networked world, a detach its server ordered).
     #[must_use]
     pub fn is_settled(&self) -> bool {
-        self.pending.is_empty()
+        self.pending.keys().all(|c| self.deferred.contains(c))
             && !self.history.holds_carves()
             && self.debris_search.is_none()
             && !self.debris_seeded

@@ -49,7 +49,9 @@
 //! What is written is every edited chunk as it was in the frame the
 //! request was read: carves, undos and streaming may go on while it
 //! writes. The request is refused ([`WorldSaveFailed`]) when that frame
-//! does not hold a whole state: a carve waits for a chunk, a
+//! does not hold a whole state: a carve waits for a chunk (also a far
+//! chunk's deferred carves on a networked world's client: call
+//! [`TerrainWorld::build_deferred`] first), a
 //! [`WorldUndo`](super::WorldUndo) waits, or a live chunk has a carve,
 //! undo or detach queued or running ([`TerrainError::WorldNotIdle`]; ask
 //! again in a later frame), so a saved world never holds half of a world
@@ -233,7 +235,8 @@ impl TerrainWorld {
     /// that changed since.
     ///
     /// # Errors
-    /// [`TerrainError::WorldNotIdle`] while a carve waits for a chunk or
+    /// [`TerrainError::WorldNotIdle`] while a carve waits for a chunk
+    /// (deferred ones too: [`TerrainWorld::build_deferred`]) or
     /// an edited chunk has work in progress (nothing is written then);
     /// [`TerrainError::WorldSaveRunning`] while a [`SaveWorld`] of this
     /// world is being written;

@@ -18,15 +18,67 @@ use bevy::tasks::futures::check_ready;
 use super::super::carve::{CarveRejected, GridCarve};
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
+use super::debris_order::DebrisRole;
 use super::{
     Built, Chunk, ChunkCoord, ChunkOffstage, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk,
 };
 use super::{generate, restore};
 
+/// Most carves a far chunk of a networked world's client keeps waiting
+/// before it is built ([`TerrainWorld::with_max_deferred_carves`]).
+pub const DEFAULT_MAX_DEFERRED_CARVES: usize = 64;
+
+impl TerrainWorld {
+    /// On a networked world's client (feature `net`), builds a chunk
+    /// beyond every focus's unload radius once `carves` carves wait for it
+    /// (at least 1; [`DEFAULT_MAX_DEFERRED_CARVES`] by default): it is
+    /// built out of sight, carved in order and streamed out again, so that
+    /// no far chunk keeps more than that many carves waiting. Elsewhere
+    /// every chunk a carve reaches is built at once.
+    #[must_use]
+    pub fn with_max_deferred_carves(mut self, carves: usize) -> Self {
+        self.max_deferred_carves = carves.max(1);
+        self
+    }
+
+    /// Most carves a far chunk of a networked world's client keeps
+    /// waiting ([`TerrainWorld::with_max_deferred_carves`]).
+    #[must_use]
+    pub fn max_deferred_carves(&self) -> usize {
+        self.max_deferred_carves
+    }
+
+    /// The chunks whose carves wait, deferred, until they stream in (far
+    /// chunks of a networked world's client), as of the last streaming
+    /// pass, in coordinate order.
+    pub fn deferred_chunks(&self) -> impl Iterator<Item = ChunkCoord> + '_ {
+        self.deferred.iter().copied()
+    }
+
+    /// How many carves wait for chunk `coord` (it is not live yet, or its
+    /// carves are deferred).
+    #[must_use]
+    pub fn waiting_carves(&self, coord: ChunkCoord) -> usize {
+        self.pending.get(&coord).map_or(0, Vec::len)
+    }
+
+    /// Builds every chunk whose carves wait deferred (out of sight, in
+    /// the background, as streaming builds others), carves it and streams
+    /// it out again: afterwards the world holds every edited chunk, for
+    /// [`TerrainWorld::save`] (which refuses while a carve waits) or to
+    /// read every chunk. Carves that reach far chunks later are deferred
+    /// again.
+    pub fn build_deferred(&mut self) {
+        self.deferred_wanted.extend(self.pending.keys().copied());
+        self.deferred.clear();
+    }
+}
+
 /// Splits every [`WorldCarve`] into grid carves of the chunks its tool
 /// overlaps (the grid boxes of its pieces, open: a piece that only
 /// touches a chunk's side does not reach it). Chunks that are not live
-/// keep the carve until they are ([`stream_chunks`] builds them).
+/// keep the carve until they are ([`stream_chunks`] builds them, but the
+/// far ones of a networked world's client: `defer_far_chunks`).
 pub fn route_world_carves(
     mut carves: MessageReader<WorldCarve>,
     mut worlds: Query<&mut TerrainWorld>,
@@ -74,8 +126,9 @@ fn chunks_of(
 
 /// Streams every world's chunks: collects finished builds as terrain
 /// entities, hands waiting carves to live chunks, starts builds of the
-/// wanted chunks nearest first (chunks with waiting carves, and those kept
-/// for debris across borders in a networked world, before all),
+/// wanted chunks nearest first (chunks with waiting carves that are not
+/// deferred, and those kept for debris across borders in a networked
+/// world, before all),
 /// and releases chunks beyond the unload radius, keeping the state of
 /// edited ones. A world is marked changed in the frames its chunks change
 /// (a build starts or is collected, a chunk is handed its waiting carves
@@ -115,9 +168,14 @@ pub fn stream_chunks(
         // queues fill only when the terrain systems read the messages.
         let just_carved = send_pending(world, &terrains, &mut grid_carves);
         let mut chunks_changed = !just_built.is_empty() || !just_carved.is_empty();
+        defer_far_chunks(world, out_of_sight);
 
-        // Wanted chunks, nearest first; those with waiting carves first.
-        let mut wanted: Vec<(f64, ChunkCoord)> = (world.pending.keys().copied())
+        // Wanted chunks, nearest first; those with waiting carves first
+        // (but deferred ones).
+        let deferred = &world.deferred;
+        let mut wanted: Vec<(f64, ChunkCoord)> = (world.pending.keys())
+            .filter(|c| !deferred.contains(c))
+            .copied()
             .chain(world.debris_keep.iter().copied())
             .chain(world.history.wanted())
             .map(|c| (f64::NEG_INFINITY, c))
@@ -187,6 +245,33 @@ pub fn stream_chunks(
             world_mut.set_changed();
         }
     }
+}
+
+/// Notes the chunks whose carves wait deferred: on a networked world's
+/// client, a chunk that is not live nor building, beyond every focus's
+/// unload radius (`out_of_sight`), that no detach across chunk borders
+/// needs, with fewer than the world's most deferred carves waiting and
+/// not asked for by [`TerrainWorld::build_deferred`]. Every other chunk
+/// with carves waiting is built. Elsewhere nothing is deferred.
+fn defer_far_chunks(world: &mut TerrainWorld, out_of_sight: impl Fn(ChunkCoord) -> bool) {
+    let pending = &world.pending;
+    world.deferred_wanted.retain(|c| pending.contains_key(c));
+    if world.debris_role != DebrisRole::Follow {
+        world.deferred.clear();
+        return;
+    }
+    let deferred = pending
+        .iter()
+        .filter(|&(c, carves)| {
+            carves.len() < world.max_deferred_carves
+                && !world.chunks.contains_key(c)
+                && !world.debris_keep.contains(c)
+                && !world.deferred_wanted.contains(c)
+                && out_of_sight(*c)
+        })
+        .map(|(c, _)| *c)
+        .collect();
+    world.deferred = deferred;
 }
 
 /// The foci's positions in the world's grid units, horizontally (x, z):

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use bevy::prelude::*;
 use bevy_chisel::net::{WirePiece, WirePose, WireShape, WireTool, world_state_hash};
-use bevy_chisel::terrain::{ChunkCoord, Terrain, TerrainWorld};
+use bevy_chisel::terrain::{ChunkCoord, Terrain, TerrainFocus, TerrainWorld};
 
 use super::world_of;
 
@@ -21,6 +21,30 @@ pub fn world_settled(app: &mut App) -> bool {
         && world
             .live_chunks()
             .all(|(_, e)| ecs.get::<Terrain>(e).is_some_and(Terrain::is_idle))
+}
+
+/// Asks the app's world to build the chunks whose carves wait deferred
+/// (far chunks of a client), so that it holds every edited chunk.
+pub fn build_deferred(app: &mut App) {
+    let (entity, _) = world_of(app);
+    if let Some(mut world) = app.world_mut().get_mut::<TerrainWorld>(entity) {
+        world.build_deferred();
+    }
+}
+
+/// Moves the app's focus (there is one) to `to`.
+pub fn move_focus(app: &mut App, to: Vec3) {
+    let ecs = app.world_mut();
+    let mut foci = ecs.query_filtered::<&mut Transform, With<TerrainFocus>>();
+    for mut transform in foci.iter_mut(ecs) {
+        transform.translation = to;
+    }
+}
+
+/// Chunks the app's world built so far, from the source or restored.
+pub fn chunk_builds(app: &mut App) -> u64 {
+    let stats = world_of(app).1.stats();
+    stats.generated + stats.restored
 }
 
 /// Every edited chunk the app's world holds, live or stored, as a terrain.
