@@ -12,13 +12,14 @@
 //! `loading_a_saved_terrain_against_replaying_its_carves`,
 //! `carving_at_sixty_frames_per_second`,
 //! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`,
-//! `lod_of_a_world`, `debris_across_chunk_borders`). World: chunks of the `world` example's landscape
+//! `lod_of_a_world`, `debris_across_chunk_borders`, `saving_a_world`). World: chunks of the `world` example's landscape
 //! built one at a time, their size, the banded base built in one pass
 //! against painting its bands, and an app streaming them around a focus
 //! touring the world (a line, a loop or a lawnmower; `CHISEL_BENCH_TOUR`)
 //! at 50 m/s while blasting craters, with time to first frame and peak
 //! memory. Level of detail: what coarse chunks cost to build, and what the
-//! view to a far radius draws with and without.
+//! view to a far radius draws with and without. Saving: what a save
+//! costs the frame that asks for it, synchronous or in the background.
 //! Each prints its figures, then
 //! one JSON line of them. `cargo test` runs this binary without `--bench`:
 //! it then measures nothing (see `support`).
@@ -49,15 +50,18 @@ mod world;
 mod world_debris;
 #[path = "terrain/world_lod.rs"]
 mod world_lod;
+#[path = "terrain/world_save.rs"]
+mod world_save;
 use world::streaming_a_world;
 use world_debris::debris_across_chunk_borders;
 use world_lod::lod_of_a_world;
+use world_save::saving_a_world;
 
 fn main() {
     let Some(args) = Args::parse("terrain") else {
         return;
     };
-    let all: [(&str, fn()); 7] = [
+    let all: [(&str, fn()); 8] = [
         (
             "crater_carves_on_a_large_terrain",
             crater_carves_on_a_large_terrain,
@@ -77,6 +81,7 @@ fn main() {
         ("streaming_a_world", streaming_a_world),
         ("lod_of_a_world", lod_of_a_world),
         ("debris_across_chunk_borders", debris_across_chunk_borders),
+        ("saving_a_world", saving_a_world),
     ];
     for (name, measure) in all {
         if args.wants(name) {

@@ -4,18 +4,17 @@
 //! chunk streamed out or back in unchanged is not written again); an undo
 //! back to the base removes the chunk's file; a failed save names the path
 //! and leaves the record as it was; a second request while one is written
-//! is refused; and the request frame costs far less than a synchronous
-//! [`TerrainWorld::save`] (figures printed).
+//! is refused. What a request costs its frame: the `terrain` bench,
+//! `saving_a_world`.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use bevy::prelude::*;
-use bevy_chisel::terrain::world::store::save_worlds;
 use bevy_chisel::terrain::{
-    ChunkCoord, SaveWorld, StreamSettings, Terrain, TerrainError, TerrainSystems, TerrainWorld,
-    WorldSaveFailed, WorldSaved, WorldUndo,
+    ChunkCoord, SaveWorld, Terrain, TerrainError, TerrainSystems, TerrainWorld, WorldSaveFailed,
+    WorldSaved, WorldUndo,
 };
 
 use super::terrain_world::{
@@ -420,121 +419,4 @@ fn a_request_while_a_save_is_written_is_refused() {
     assert!(matches!(none.error, TerrainError::InvalidWorld { .. }));
     settle(&mut app, world);
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// When the save system last started, and how long its last run took
-/// (with whatever the executor ran between the two stamps: an upper bound).
-#[derive(Resource, Default)]
-struct SaveSystemTime {
-    start: Option<Instant>,
-    last: Duration,
-}
-
-fn stamp_start(mut time: ResMut<SaveSystemTime>) {
-    time.start = Some(Instant::now());
-}
-
-fn stamp_end(mut time: ResMut<SaveSystemTime>) {
-    if let Some(start) = time.start.take() {
-        time.last = start.elapsed();
-    }
-}
-
-/// The median of `samples`.
-fn median(mut samples: Vec<Duration>) -> Duration {
-    samples.sort();
-    samples[samples.len() / 2]
-}
-
-#[test]
-fn the_request_frame_costs_less_than_a_synchronous_save() {
-    for side in [4i64, 8] {
-        let world = new_world()
-            .with_streaming(StreamSettings {
-                load_radius: 32.0 * side as f32 / 2.0 + 16.0,
-                unload_radius: 32.0 * side as f32,
-                max_building: 8,
-            })
-            .expect("valid settings");
-        // The focus at the middle of the edited chunks: all are live.
-        let (mut app, world, _focus) = save_app_at(world, Vec3::new(0.0, 30.0, 0.0));
-        app.init_resource::<SaveSystemTime>().add_systems(
-            Update,
-            (
-                stamp_start.after(TerrainSystems::Carve).before(save_worlds),
-                stamp_end.after(save_worlds).before(TerrainSystems::Mesh),
-            ),
-        );
-        let system_time = |app: &App| app.world().resource::<SaveSystemTime>().last;
-        let centre = side / 2;
-        let mut chunks = Vec::new();
-        for x in 0..side {
-            for z in 0..side {
-                chunks.push(at(x - centre, z - centre));
-            }
-        }
-        for (i, &c) in chunks.iter().enumerate() {
-            carve(&mut app, world, dodecahedron(4.0, inside(c, i as u32)));
-        }
-        settle(&mut app, world);
-        let edited = edited_bytes(&app, world);
-        assert_eq!(edited.len(), chunks.len());
-        assert_eq!(the_world(&app, world).stored_chunks().count(), 0);
-        let total: usize = edited.values().map(Vec::len).sum();
-
-        let runs = 9;
-        let (mut sync, mut idle, mut request, mut whole) = (vec![], vec![], vec![], vec![]);
-        let (mut idle_system, mut request_system) = (vec![], vec![]);
-        for run in 0..runs {
-            let dir = temp_folder(&format!("timed-sync-{side}-{run}"));
-            let t = Instant::now();
-            let written = the_world(&app, world)
-                .save(&dir, |e| app.world().get::<Terrain>(e))
-                .expect("saves");
-            sync.push(t.elapsed());
-            assert_eq!(written.len(), chunks.len());
-            let _ = std::fs::remove_dir_all(&dir);
-
-            let t = Instant::now();
-            app.update();
-            idle.push(t.elapsed());
-            idle_system.push(system_time(&app));
-
-            // A new folder each time: every chunk is written.
-            let dir = temp_folder(&format!("timed-bg-{side}-{run}"));
-            let before = heard(&app).saved.len();
-            app.world_mut().write_message(SaveWorld {
-                world,
-                folder: dir.clone(),
-            });
-            let t = Instant::now();
-            app.update();
-            request.push(t.elapsed());
-            request_system.push(system_time(&app));
-            while heard(&app).saved.len() == before {
-                assert!(heard(&app).failed.is_empty(), "{:?}", heard(&app).failed);
-                std::thread::sleep(Duration::from_micros(200));
-                app.update();
-            }
-            whole.push(t.elapsed());
-            let done = heard(&app).saved.last().expect("saved").clone();
-            assert_eq!((done.written.len(), done.bytes), (chunks.len(), total));
-            let _ = std::fs::remove_dir_all(&dir);
-        }
-        let ms = |d: Duration| d.as_secs_f64() * 1e3;
-        println!(
-            "{{\"bench\":\"world_save\",\"edited_chunks\":{},\"bytes\":{},\
-             \"sync_save_ms\":{:.3},\"request_frame_ms\":{:.3},\"idle_frame_ms\":{:.3},\
-             \"request_system_ms\":{:.3},\"idle_system_ms\":{:.3},\
-             \"background_save_ms\":{:.3},\"runs\":{runs}}}",
-            chunks.len(),
-            total,
-            ms(median(sync)),
-            ms(median(request)),
-            ms(median(idle)),
-            ms(median(request_system)),
-            ms(median(idle_system)),
-            ms(median(whole)),
-        );
-    }
 }

@@ -501,6 +501,7 @@ pub fn save_worlds(
     mut saved: MessageWriter<WorldSaved>,
     mut failed: MessageWriter<WorldSaveFailed>,
 ) {
+    let _span = bevy::log::info_span!("chisel::world::save_worlds").entered();
     for (entity, mut world) in &mut worlds {
         // Bookkeeping: the world's chunks and edits are as they were.
         let Some((folder, result)) = world.bypass_change_detection().finish_save() else {
