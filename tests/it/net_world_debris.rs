@@ -27,9 +27,12 @@ use crate::{ONE_APP_AT_A_TIME, net, net_worlds::edited_terrains};
 
 /// The exact volumes of the pieces an app saw fall.
 #[derive(Resource, Default)]
-struct Fallen(Vec<ExactVolume>);
+pub(crate) struct Fallen(Vec<ExactVolume>);
 
-fn record_fallen(mut fallen: ResMut<Fallen>, mut detached: MessageReader<DebrisDetached>) {
+pub(crate) fn record_fallen(
+    mut fallen: ResMut<Fallen>,
+    mut detached: MessageReader<DebrisDetached>,
+) {
     fallen
         .0
         .extend(detached.read().map(|d| d.exact_volume.clone()));
@@ -41,12 +44,12 @@ fn watch(mut app: App) -> App {
     app
 }
 
-fn fallen(app: &App) -> Vec<ExactVolume> {
+pub(crate) fn fallen(app: &App) -> Vec<ExactVolume> {
     app.world().resource::<Fallen>().0.clone()
 }
 
 /// A box tool with grid corners `min` and `max` (grid unit 1).
-fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
+pub(crate) fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
     let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
     let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
     CarveTool::new(
@@ -57,7 +60,7 @@ fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
     )
 }
 
-fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
+pub(crate) fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
     ExactVolume::from_integer((0..3).map(|a| i128::from(max[a] - min[a])).product())
 }
 

@@ -12,15 +12,16 @@
 use std::collections::BTreeSet;
 
 use bevy::prelude::*;
-use bevy_chisel::bsp::octree::{Edit, ExactVolume};
+use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::NetClientStats;
-use bevy_chisel::terrain::{CarveShape, CarveTool, ChunkCoord, DebrisDetached, WorldChunk};
+use bevy_chisel::terrain::{CarveTool, ChunkCoord, WorldChunk};
 
 use crate::ONE_APP_AT_A_TIME;
 use crate::net::world::{build_deferred, chunk_builds, edited_chunks, move_focus};
 use crate::net::{
     Seen, WorldsSeen, request_world, run_until, unlimited, world_client, world_of, world_server,
 };
+use crate::net_world_debris::{Fallen, box_volume, cuboid, fallen, record_fallen};
 use crate::net_worlds::{streamed_world as world, world_settled as settled};
 
 /// The client's focus: over chunk (0, 0), 40 m (the unload radius) from
@@ -248,36 +249,6 @@ fn a_far_chunk_with_the_most_carves_waiting_is_built_and_checked() {
     assert_as_server(&mut server, &mut client, &only);
     assert_eq!(chunk_builds(&mut client), builds + 2, "restored once more");
     assert_eq!(stats(&client).desyncs, 0);
-}
-
-/// The exact volumes of the pieces an app saw fall.
-#[derive(Resource, Default)]
-struct Fallen(Vec<ExactVolume>);
-
-fn record_fallen(mut fallen: ResMut<Fallen>, mut detached: MessageReader<DebrisDetached>) {
-    fallen
-        .0
-        .extend(detached.read().map(|d| d.exact_volume.clone()));
-}
-
-fn fallen(app: &App) -> Vec<ExactVolume> {
-    app.world().resource::<Fallen>().0.clone()
-}
-
-/// A box tool with grid corners `min` and `max` (grid unit 1).
-fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
-    let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
-    let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
-    CarveTool::new(
-        CarveShape::Cuboid {
-            half_size: (hi - lo) / 2.0,
-        },
-        Transform::from_translation((lo + hi) / 2.0),
-    )
-}
-
-fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
-    ExactVolume::from_integer((0..3).map(|a| i128::from(max[a] - min[a])).product())
 }
 
 #[test]
