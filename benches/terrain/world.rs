@@ -445,19 +445,10 @@ pub(super) fn streaming_a_world() {
     json_line("streaming_a_world", serde_json::Value::Object(figures));
 }
 
-/// An app streaming the banded world of the `world` example (load 30 m,
-/// unload 45 m, 4 builds at a time) with render meshes but no renderer,
-/// coarse chunks out to `lod_far` metres when that is positive, and a
-/// focus at `focus_at`: the app, the world and the focus.
-pub(super) fn streaming_app(lod_far: f32, focus_at: Vec3) -> (App, Entity, Entity) {
+/// A headless app with the terrain plugin: no renderer, but the mesh and
+/// material assets its chunks make.
+pub(super) fn terrain_app() -> App {
     use bevy::transform::TransformPlugin;
-    let world = world_of_the_example(true)
-        .with_streaming(StreamSettings {
-            load_radius: 30.0,
-            unload_radius: 45.0,
-            max_building: 4,
-        })
-        .expect("valid settings");
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
@@ -467,6 +458,22 @@ pub(super) fn streaming_app(lod_far: f32, focus_at: Vec3) -> (App, Entity, Entit
     ))
     .init_asset::<Mesh>()
     .init_asset::<StandardMaterial>();
+    app
+}
+
+/// An app streaming the banded world of the `world` example (load 30 m,
+/// unload 45 m, 4 builds at a time) with render meshes but no renderer,
+/// coarse chunks out to `lod_far` metres when that is positive, and a
+/// focus at `focus_at`: the app, the world and the focus.
+pub(super) fn streaming_app(lod_far: f32, focus_at: Vec3) -> (App, Entity, Entity) {
+    let world = world_of_the_example(true)
+        .with_streaming(StreamSettings {
+            load_radius: 30.0,
+            unload_radius: 45.0,
+            max_building: 4,
+        })
+        .expect("valid settings");
+    let mut app = terrain_app();
     let world = if lod_far > 0.0 {
         let lod = WorldLod::new(LodSettings {
             far_radius: lod_far,

@@ -17,9 +17,8 @@
 //! five. `CHISEL_BENCH_BLOCKS` (metres, comma-separated; default
 //! `6,12,20`) sets the blocks' edges.
 
-use super::world::world_of_the_example;
+use super::world::{terrain_app, world_of_the_example};
 use super::*;
-use bevy::transform::TransformPlugin;
 use bevy_chisel::bsp::octree::{CellKey, ChunkOctree, DebrisLimits, detach_across_chunks};
 use bevy_chisel::terrain::world::chunk_debris;
 use bevy_chisel::terrain::{
@@ -53,15 +52,7 @@ fn corner_app() -> (App, Entity) {
             max_building: 4,
         })
         .expect("valid settings");
-    let mut app = App::new();
-    app.add_plugins((
-        MinimalPlugins,
-        TransformPlugin,
-        AssetPlugin::default(),
-        TerrainPlugin,
-    ))
-    .init_asset::<Mesh>()
-    .init_asset::<StandardMaterial>();
+    let mut app = terrain_app();
     let world = app.world_mut().spawn(world).id();
     app.world_mut().spawn((
         TerrainFocus,

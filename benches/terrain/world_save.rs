@@ -14,9 +14,8 @@
 
 use std::path::PathBuf;
 
-use super::world::world_of_the_example;
+use super::world::{terrain_app, world_of_the_example};
 use super::*;
-use bevy::transform::TransformPlugin;
 use bevy_chisel::terrain::{
     SaveWorld, StreamSettings, TerrainFocus, TerrainWorld, WorldCarve, WorldSaveFailed, WorldSaved,
 };
@@ -75,17 +74,9 @@ fn carved_block(side: i64) -> (App, Entity) {
             max_building: 4,
         })
         .expect("valid settings");
-    let mut app = App::new();
-    app.add_plugins((
-        MinimalPlugins,
-        TransformPlugin,
-        AssetPlugin::default(),
-        TerrainPlugin,
-    ))
-    .init_asset::<Mesh>()
-    .init_asset::<StandardMaterial>()
-    .init_resource::<Answers>()
-    .add_systems(Last, collect_answers);
+    let mut app = terrain_app();
+    app.init_resource::<Answers>()
+        .add_systems(Last, collect_answers);
     let world = app.world_mut().spawn(world).id();
     app.world_mut()
         .spawn((TerrainFocus, Transform::from_xyz(0.0, 10.0, 0.0)));
