@@ -574,3 +574,44 @@ fn a_networked_world_refuses_undo_on_server_and_client() {
     }
     assert_eq!((hashes(&mut server), hashes(&mut client)), before);
 }
+
+/// A chunk whose own undo took the world carve back answers a world undo
+/// of that carve the same whether it is still live or streamed out since
+/// (unedited again, so nothing of it is stored): the chunk changed since
+/// the carve, not lost; nothing changes.
+#[test]
+fn a_chunk_undone_on_its_own_refuses_alike_live_or_streamed_out() {
+    let mut reasons = Vec::new();
+    for stream_out in [false, true] {
+        let (mut app, world, focus) = undo_app(new_world(), Vec3::new(16.0, 30.0, 16.0));
+        carve(
+            &mut app,
+            world,
+            sphere(4.0, Vec3::new(12.0, 16.0, 12.0)),
+            Edit::Subtract,
+        );
+        let Some(entity) = the_world(&app, world).chunk_entity(at(0, 0)) else {
+            panic!("chunk (0, 0) is live");
+        };
+        app.world_mut().write_message(UndoCarve { terrain: entity });
+        settle(&mut app, world);
+        if stream_out {
+            app.world_mut()
+                .get_mut::<Transform>(focus)
+                .expect("focus")
+                .translation = Vec3::new(10.0 * 32.0, 30.0, 16.0);
+            settle(&mut app, world);
+            let w = the_world(&app, world);
+            assert!(w.chunk_entity(at(0, 0)).is_none(), "streamed out");
+            assert!(w.stored_chunks().next().is_none(), "unedited: not stored");
+        }
+        let before = states(&app, world);
+        undo(&mut app, world);
+        assert_eq!(states(&app, world), before, "nothing changed");
+        assert!(heard(&app).undone.is_empty());
+        let rejected = &heard(&app).rejected;
+        assert_eq!(rejected.len(), 1, "{rejected:?}");
+        reasons.push(rejected[0].reason.clone());
+    }
+    assert_eq!(reasons[1], reasons[0], "the same answer either way");
+}

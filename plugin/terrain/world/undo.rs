@@ -61,8 +61,9 @@
 //! state hash are again those before the carve. What counts as something
 //! else: a later per-chunk [`Carve`](crate::terrain::Carve),
 //! [`GridCarve`](crate::terrain::GridCarve) or
-//! [`UndoCarve`](crate::terrain::UndoCarve) to one of its chunks, or a
-//! detach that belongs to a later carve (refused: [`WorldUndoRefusal::ChunkChanged`]);
+//! [`UndoCarve`](crate::terrain::UndoCarve) to one of its chunks (live,
+//! or streamed out since, unedited again), or a detach that belongs to a
+//! later carve (refused: [`WorldUndoRefusal::ChunkChanged`]);
 //! a chunk whose undo history was cut by the depth limit or
 //! [`Terrain::clear_undo`] ([`WorldUndoRefusal::HistoryTrimmed`]); a chunk
 //! whose build failed ([`WorldUndoRefusal::ChunkLost`]). A chunk streamed
@@ -158,7 +159,7 @@ pub enum WorldUndoRefusal {
         /// The chunk.
         coord: ChunkCoord,
     },
-    /// This chunk cannot be built (its build failed) or its state is gone.
+    /// This chunk cannot be built: its build failed.
     #[error("chunk ({}, {}) cannot be built", coord.x, coord.z)]
     ChunkLost {
         /// The chunk.
@@ -688,7 +689,9 @@ fn hold_chunks(
             Some(Chunk::Failed) => return Err(WorldUndoRefusal::ChunkLost { coord }),
             Some(_) => {}
             None if world.stored.contains_key(&coord) || world.pending.contains_key(&coord) => {}
-            None => return Err(WorldUndoRefusal::ChunkLost { coord }),
+            // Neither live nor stored: unedited, the source's again, so its
+            // own undo took the carve back (as a live chunk would answer).
+            None => return Err(WorldUndoRefusal::ChunkChanged { coord }),
         }
     }
     world.history.undos[index].held.extend(newly);
