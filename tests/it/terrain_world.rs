@@ -480,7 +480,7 @@ fn saving_writes_only_edited_chunks_and_loading_is_exact() {
 }
 
 /// The chunk files in `dir`, sorted.
-fn chunk_files(dir: &std::path::Path) -> Vec<String> {
+pub(crate) fn chunk_files(dir: &std::path::Path) -> Vec<String> {
     let mut files: Vec<String> = std::fs::read_dir(dir)
         .expect("folder")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())

@@ -18,7 +18,7 @@ use bevy_chisel::terrain::{
 };
 
 use super::terrain_world::{
-    app_with, carve, dodecahedron, settle, terrain, the_world, world as new_world,
+    app_with, carve, chunk_files, dodecahedron, settle, terrain, the_world, world as new_world,
 };
 
 const fn at(x: i64, z: i64) -> ChunkCoord {
@@ -132,17 +132,6 @@ fn edited_bytes(app: &App, world: Entity) -> BTreeMap<ChunkCoord, Vec<u8>> {
         bytes.insert(coord, stored.to_vec());
     }
     bytes
-}
-
-/// The chunk files in `dir`, sorted.
-fn chunk_files(dir: &Path) -> Vec<String> {
-    let mut files: Vec<String> = std::fs::read_dir(dir)
-        .expect("folder")
-        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .filter(|name| name.starts_with("chunk_"))
-        .collect();
-    files.sort();
-    files
 }
 
 fn names(coords: &[ChunkCoord]) -> Vec<String> {
