@@ -9,11 +9,17 @@
 //! same on every machine); the chunks are 20.48 m cubes, each an ordinary
 //! destructible terrain. The HUD shows the chunk counts and build times.
 //!
-//! `U` takes the last crater back, in every chunk it reached.
+//! `U` takes the last crater back, in every chunk it reached. `F5` saves
+//! the world's edited chunks in the background (`SaveWorld`: only the
+//! chunks changed since the last save are written, off the main thread),
+//! a window autosaves every 30 s, and `F9` loads the last save (the world
+//! entity is spawned again and its chunks stream in from the files).
 //!
 //! Runs in a window when a display exists; otherwise renders headless,
 //! streams within smaller radii, flies a fixed 12 m path and writes PNG
-//! screenshots to `screenshots/` (about 30 s on two cores). Headless with
+//! screenshots to `screenshots/` (about 30 s on two cores); on the way it
+//! saves the world to a temporary folder and reads the save back, and
+//! fails unless every chunk edited at the save is in it. Headless with
 //! `-- --horizon`, it keeps the window's radii (coarse chunks to 320 m)
 //! and its camera draws only a few frames: three once the world first
 //! settles (so that every pipeline is ready) and the one it captures, so
@@ -22,6 +28,7 @@
 //!
 //! `cargo run --release --all-features --example world`
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use bevy::prelude::*;
@@ -29,10 +36,11 @@ use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
-    LodSettings, NoiseOctave, StreamSettings, Terrain, TerrainFocus, TerrainMaterials,
-    TerrainPlugin, TerrainSurface, TerrainSystems, TerrainWorld, TriplanarMaterial,
-    TriplanarMaterialPlugin, ValueNoise, WorldCarve, WorldChunk, WorldLayout, WorldLod,
-    WorldSource, WorldUndo, WorldUndoRejected, WorldUndone, surface_table,
+    LodSettings, NoiseOctave, SaveWorld, StreamSettings, Terrain, TerrainError, TerrainFocus,
+    TerrainMaterials, TerrainPlugin, TerrainSurface, TerrainSystems, TerrainWorld,
+    TriplanarMaterial, TriplanarMaterialPlugin, ValueNoise, WorldCarve, WorldChunk, WorldLayout,
+    WorldLod, WorldSaveFailed, WorldSaved, WorldSource, WorldUndo, WorldUndoRejected, WorldUndone,
+    surface_table,
 };
 use bevy_chisel::viewer::{Overlay, blast, overlay_text};
 
@@ -74,6 +82,11 @@ const WINDOW_RADII: (f32, f32) = (30.0, 45.0);
 /// settles, before any is counted, so that every pipeline is ready for
 /// the capture.
 const HORIZON_WARM_UP_FRAMES: u32 = 3;
+/// A window autosaves this often.
+const AUTOSAVE_EVERY: Duration = Duration::from_secs(30);
+/// Headless: the counted frame that saves the world (between the two
+/// captures, after a few craters); counting waits until it is written.
+const HEADLESS_SAVE_FRAME: u32 = 8;
 
 fn main() -> AppExit {
     let horizon = std::env::args().any(|a| a == "--horizon");
@@ -103,11 +116,12 @@ fn main() -> AppExit {
             horizon: headless && horizon,
             ..default()
         })
+        .insert_resource(Saves::new(headless))
         .add_systems(Startup, spawn_scene)
         .add_systems(
             Update,
             (
-                (fly, undo_crater).before(TerrainSystems::Carve),
+                (fly, undo_crater, save_and_load.after(fly)).before(TerrainSystems::Carve),
                 update_hud.after(TerrainSystems::Mesh),
             ),
         )
@@ -159,36 +173,8 @@ fn spawn_scene(
         ],
         TerrainSurface::Rock,
     );
-    commands.insert_resource(Palette(table.clone()));
-    let layout = WorldLayout {
-        quantization: Quantization::new(UNIT, [0.0; 3])?,
-        chunk_log2: CHUNK_LOG2,
-        spacing_log2: SPACING_LOG2,
-        floor: 0,
-        label: ROCK,
-        // Grass 25 cm deep over 1.2 m of dirt, in grid units.
-        layers: vec![(120, DIRT), (25, GRASS)],
-    };
-    let (load_radius, unload_radius) = if flight.headless && !flight.horizon {
-        HEADLESS_RADII
-    } else {
-        WINDOW_RADII
-    };
-    let world = TerrainWorld::new(layout, landscape())?.with_streaming(StreamSettings {
-        load_radius,
-        unload_radius,
-        max_building: 4,
-    })?;
-    let lod = WorldLod::new(LodSettings {
-        far_radius: if flight.headless && !flight.horizon {
-            HEADLESS_FAR_RADIUS
-        } else {
-            FAR_RADIUS
-        },
-        ..default()
-    })?;
-    // The coarse chunks take the world entity's material table.
-    commands.spawn((world, lod, table, Name::new("world")));
+    commands.spawn(world_bundle(&flight, &table, None)?);
+    commands.insert_resource(Palette(table));
     commands.spawn((
         DirectionalLight {
             illuminance: 11_000.0,
@@ -209,6 +195,51 @@ fn spawn_scene(
     ));
     commands.spawn(overlay_text());
     Ok(())
+}
+
+/// The world's grid, chunks and layers.
+fn layout() -> Result<WorldLayout, TerrainError> {
+    Ok(WorldLayout {
+        quantization: Quantization::new(UNIT, [0.0; 3])?,
+        chunk_log2: CHUNK_LOG2,
+        spacing_log2: SPACING_LOG2,
+        floor: 0,
+        label: ROCK,
+        // Grass 25 cm deep over 1.2 m of dirt, in grid units.
+        layers: vec![(120, DIRT), (25, GRASS)],
+    })
+}
+
+/// The world with its coarse chunks, its edited chunks read from the save
+/// in `edits` when given; the coarse chunks take the world entity's
+/// material table.
+fn world_bundle(
+    flight: &Flight,
+    table: &TerrainMaterials<TriplanarMaterial>,
+    edits: Option<&PathBuf>,
+) -> Result<impl Bundle> {
+    let (load_radius, unload_radius) = if flight.headless && !flight.horizon {
+        HEADLESS_RADII
+    } else {
+        WINDOW_RADII
+    };
+    let mut world = TerrainWorld::new(layout()?, landscape())?.with_streaming(StreamSettings {
+        load_radius,
+        unload_radius,
+        max_building: 4,
+    })?;
+    if let Some(folder) = edits {
+        world = world.load_edits(folder)?;
+    }
+    let lod = WorldLod::new(LodSettings {
+        far_radius: if flight.headless && !flight.horizon {
+            HEADLESS_FAR_RADIUS
+        } else {
+            FAR_RADIUS
+        },
+        ..default()
+    })?;
+    Ok((world, lod, table.clone(), Name::new("world")))
 }
 
 /// The camera `distance` metres along its path (+x), looking ahead and
@@ -257,9 +288,10 @@ fn fly(
     terrains: Query<&Terrain>,
     mut camera: Query<(&mut Transform, &mut Camera), With<TerrainFocus>>,
     mut carves: MessageWriter<WorldCarve>,
-) {
+    saves: Res<Saves>,
+) -> Result {
     let Ok((world_entity, world, lod)) = worlds.single() else {
-        return;
+        return Ok(());
     };
     let step = if flight.headless {
         let settled = world.is_settled()
@@ -267,7 +299,8 @@ fn fly(
             && world.live_chunks().count() > 0
             && world
                 .live_chunks()
-                .all(|(_, e)| terrains.get(e).is_ok_and(Terrain::is_idle));
+                .all(|(_, e)| terrains.get(e).is_ok_and(Terrain::is_idle))
+            && !saves.pending;
         let warming_up = flight.horizon && flight.drawn < HORIZON_WARM_UP_FRAMES;
         if flight.horizon
             && let Ok((_, mut camera)) = camera.single_mut()
@@ -287,11 +320,12 @@ fn fly(
                 lod.stats(),
                 world.live_chunks().count()
             );
-            return;
+            return Ok(());
         }
         flight.counted += 1;
         if flight.counted == HEADLESS_CAPTURES[1] {
             report(world, lod);
+            saves.read_back()?;
         }
         HEADLESS_STEP
     } else {
@@ -313,6 +347,138 @@ fn fly(
             edit: Edit::Subtract,
         });
         flight.craters += 1;
+    }
+    Ok(())
+}
+
+/// The world's saves: where, what was asked and answered.
+#[derive(Resource)]
+struct Saves {
+    folder: PathBuf,
+    /// Removed once read back (a headless run's temporary folder).
+    temporary: bool,
+    /// A save was asked for and is not answered yet.
+    pending: bool,
+    /// The world was busy: ask again next frame.
+    retry: bool,
+    next_autosave: Duration,
+    /// The answer to the last save that was written.
+    last: Option<WorldSaved>,
+    /// The last answer or load, for the HUD.
+    message: String,
+}
+
+impl Saves {
+    fn new(headless: bool) -> Self {
+        let folder = if headless {
+            std::env::temp_dir().join(format!("bevy_chisel-world-{}", std::process::id()))
+        } else {
+            std::env::temp_dir().join("bevy_chisel-world")
+        };
+        Self {
+            folder,
+            temporary: headless,
+            pending: false,
+            retry: false,
+            next_autosave: AUTOSAVE_EVERY,
+            last: None,
+            message: "nothing saved yet".to_owned(),
+        }
+    }
+
+    /// Headless: reads the scripted save back into a fresh world, which
+    /// must hold every chunk that was edited when the save was asked for.
+    fn read_back(&self) -> Result {
+        let saved = (self.last.as_ref()).ok_or("the scripted save was never written")?;
+        let edited = saved.written.len() + saved.unchanged;
+        let loaded = TerrainWorld::new(layout()?, landscape())?.load_edits(&self.folder)?;
+        let read = loaded.stored_chunks().count();
+        if saved.written.is_empty() || read != edited {
+            return Err(format!(
+                "save round trip: {} chunks written, {edited} edited, {read} read back",
+                saved.written.len()
+            )
+            .into());
+        }
+        info!(
+            "save round trip: {read} edited chunks, {} kB, read back from {}",
+            saved.bytes / 1024,
+            self.folder.display()
+        );
+        if self.temporary {
+            std::fs::remove_dir_all(&self.folder)?;
+        }
+        Ok(())
+    }
+}
+
+/// `F5` saves the world's edited chunks in the background and a window
+/// autosaves every [`AUTOSAVE_EVERY`]; a headless run saves once, at
+/// [`HEADLESS_SAVE_FRAME`]. `F9` spawns the world again from the last
+/// save. Answers go to the HUD and the log.
+fn save_and_load(
+    keys: Option<Res<ButtonInput<KeyCode>>>,
+    time: Res<Time>,
+    flight: Res<Flight>,
+    palette: Res<Palette>,
+    worlds: Query<Entity, With<TerrainWorld>>,
+    mut saves: ResMut<Saves>,
+    mut requests: MessageWriter<SaveWorld>,
+    mut saved: MessageReader<WorldSaved>,
+    mut failed: MessageReader<WorldSaveFailed>,
+    mut commands: Commands,
+) {
+    for answer in saved.read() {
+        saves.pending = false;
+        saves.message = format!(
+            "save: {} chunks written ({} kB), {} unchanged",
+            answer.written.len(),
+            answer.bytes / 1024,
+            answer.unchanged
+        );
+        info!("{} to {}", saves.message, answer.folder.display());
+        saves.last = Some(answer.clone());
+    }
+    for failure in failed.read() {
+        saves.pending = false;
+        if matches!(failure.error, TerrainError::WorldNotIdle { .. }) {
+            // A carve is in flight: the next frame may hold a whole state.
+            saves.retry = true;
+        } else {
+            saves.message = format!("save failed: {}", failure.error);
+            warn!("{}", saves.message);
+        }
+    }
+    let Ok(world) = worlds.single() else {
+        return;
+    };
+    let pressed = |key| keys.as_ref().is_some_and(|k| k.just_pressed(key));
+    let due = if flight.headless {
+        flight.counted == HEADLESS_SAVE_FRAME && saves.last.is_none()
+    } else {
+        pressed(KeyCode::F5) || time.elapsed() >= saves.next_autosave
+    };
+    if (due || saves.retry) && !saves.pending {
+        requests.write(SaveWorld {
+            world,
+            folder: saves.folder.clone(),
+        });
+        saves.pending = true;
+        saves.retry = false;
+        saves.next_autosave = time.elapsed() + AUTOSAVE_EVERY;
+    }
+    if pressed(KeyCode::F9) {
+        match world_bundle(&flight, &palette.0, Some(&saves.folder)) {
+            Ok(bundle) => {
+                // The chunks are the world's children: they go with it.
+                commands.entity(world).despawn();
+                commands.spawn(bundle);
+                saves.pending = false;
+                saves.message = format!("loaded {}", saves.folder.display());
+            }
+            Err(error) => saves.message = format!("load failed: {error}"),
+        }
+        info!("{}", saves.message);
     }
 }
 
@@ -371,6 +537,7 @@ fn report(world: &TerrainWorld, lod: &WorldLod) {
 
 fn update_hud(
     flight: Res<Flight>,
+    saves: Res<Saves>,
     worlds: Query<(&TerrainWorld, &WorldLod)>,
     terrains: Query<&Terrain>,
     mut hud: Query<&mut Text, With<Overlay>>,
@@ -392,6 +559,12 @@ fn update_hud(
         format!(
             "flown {:.0} m | craters {} ({} undone, U undoes the last) | triangles {triangles}",
             flight.distance, flight.craters, flight.undone
+        ),
+        format!(
+            "{}{} | F5 save, F9 load, autosave every {} s",
+            saves.message,
+            if saves.pending { " | saving..." } else { "" },
+            AUTOSAVE_EVERY.as_secs()
         ),
         format!(
             "chunks: {} live, {} building, {} edited stored ({} kB) | built {} ({} restored), {:.1} ms each",
