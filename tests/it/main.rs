@@ -111,4 +111,6 @@ mod net_world_debris;
 #[cfg(feature = "net")]
 mod net_world_interest;
 #[cfg(feature = "net")]
+mod net_world_restart;
+#[cfg(feature = "net")]
 mod net_worlds;
