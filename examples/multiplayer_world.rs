@@ -8,10 +8,17 @@
 //! cargo run --release --all-features --example multiplayer_world -- --host        # plays and serves
 //! cargo run --release --all-features --example multiplayer_world -- --client 127.0.0.1:5000
 //! cargo run --release --all-features --example multiplayer_world -- --server      # dedicated server
+//! cargo run --release --all-features --example multiplayer_world -- --server 0.0.0.0:5000 --save saves/world
 //! ```
 //!
 //! `--host [ADDR]` opens a window and listens (default `0.0.0.0:5000`),
-//! `--server [ADDR]` listens without a window, `--client ADDR` joins. Every
+//! `--server [ADDR]` listens without a window, `--client ADDR` joins. With
+//! `--save DIR` a dedicated server starts from the world saved in `DIR`
+//! (when there is one) and saves it there in the background every 10 s
+//! after carves (`SaveWorld`: only the chunks changed since the last save
+//! are written), so it can be stopped and started again without losing
+//! what the players dug; players joining get the saved chunks in the
+//! world's snapshot. Every
 //! peer spawns the same world (the landscape is code, not data) with the
 //! same [`NetWorld`] id; only the carves travel. In a window, left click
 //! blasts a crater, right click heaps up dirt, and `B` builds a stone
@@ -31,6 +38,7 @@
 
 use std::collections::BTreeMap;
 use std::net::{Ipv4Addr, SocketAddr};
+use std::path::PathBuf;
 use std::time::Duration;
 
 use bevy::app::ScheduleRunnerPlugin;
@@ -41,8 +49,9 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{NetServerPlugin, NetServerStats, NetWorld, start_client, start_server};
 use bevy_chisel::presentation::Presentation;
 use bevy_chisel::terrain::{
-    CarveShape, CarveTool, CellOutput, ChunkCoord, NoiseOctave, StreamSettings, Terrain,
-    TerrainPlugin, TerrainSettings, TerrainWorld, ValueNoise, WorldLayout, WorldSource,
+    CarveShape, CarveTool, CellOutput, ChunkCoord, NoiseOctave, SaveWorld, StreamSettings, Terrain,
+    TerrainError, TerrainPlugin, TerrainSettings, TerrainWorld, ValueNoise, WorldLayout,
+    WorldSaveFailed, WorldSaved, WorldSource,
 };
 
 #[path = "multiplayer_world/headless.rs"]
@@ -78,12 +87,27 @@ const CAMERA_PITCH: f32 = 0.9;
 const FALL_FRAMES: u32 = 1500;
 /// Where the headless players' cameras are: at the site, and 80 m away.
 const FAR: Vec2 = Vec2::new(90.0, 50.0);
+/// A dedicated server with `--save` saves this long after the first carve
+/// since its last save.
+const SAVE_EVERY: Duration = Duration::from_secs(10);
 
 fn main() -> AppExit {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let save = match args.iter().position(|a| a == "--save") {
+        Some(at) if at + 1 < args.len() => {
+            let dir = PathBuf::from(args.remove(at + 1));
+            args.remove(at);
+            Some(dir)
+        }
+        Some(_) => return fail("--save needs a folder, e.g. --save saves/world"),
+        None => None,
+    };
+    if save.is_some() && args.first().map(String::as_str) != Some("--server") {
+        return fail("--save is for a dedicated server (--server)");
+    }
     match args.first().map(String::as_str) {
         Some("--server") => match listen_addr(args.get(1)) {
-            Ok(addr) => run_server(addr),
+            Ok(addr) => run_server(addr, save),
             Err(e) => fail(&format!("bad server address: {e}")),
         },
         Some("--host") => match listen_addr(args.get(1)) {
@@ -251,8 +275,9 @@ fn settled(world: &TerrainWorld, idle: impl Fn(Entity) -> bool) -> bool {
 // The dedicated server
 
 /// A server app (no window, no renderer, no camera): it holds the chunks
-/// carves reach while they work and stores the edited ones.
-fn server_app() -> Result<App, BevyError> {
+/// carves reach while they work and stores the edited ones; its world
+/// starts from the chunks saved in `save` when that folder exists.
+fn server_app(save: Option<&PathBuf>) -> Result<App, BevyError> {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins.set(ScheduleRunnerPlugin::run_loop(Duration::from_secs_f64(
@@ -269,14 +294,23 @@ fn server_app() -> Result<App, BevyError> {
         output: CellOutput::Nothing,
         ..TerrainSettings::default()
     });
-    app.world_mut().spawn((new_world(0.0)?, NetWorld(1)));
+    let mut world = new_world(0.0)?;
+    if let Some(dir) = save.filter(|dir| dir.exists()) {
+        world = world.load_edits(dir)?;
+        println!(
+            "loaded {} edited chunks from {}",
+            world.stored_chunks().count(),
+            dir.display()
+        );
+    }
+    app.world_mut().spawn((world, NetWorld(1)));
     app.finish();
     app.cleanup();
     Ok(app)
 }
 
-fn run_server(addr: SocketAddr) -> AppExit {
-    let mut app = match server_app() {
+fn run_server(addr: SocketAddr, save: Option<PathBuf>) -> AppExit {
+    let mut app = match server_app(save.as_ref()) {
         Ok(app) => app,
         Err(e) => return fail(&format!("world: {e}")),
     };
@@ -285,7 +319,81 @@ fn run_server(addr: SocketAddr) -> AppExit {
         Err(e) => return fail(&format!("cannot listen on {addr}: {e}")),
     }
     app.add_systems(Update, log_server);
+    if let Some(folder) = save {
+        app.insert_resource(Autosave {
+            folder,
+            saved_at: 0,
+            since: None,
+            pending: false,
+            retry: false,
+        })
+        .add_systems(Update, autosave);
+    }
     app.run()
+}
+
+/// A dedicated server's saves (`--save`).
+#[derive(Resource)]
+struct Autosave {
+    folder: PathBuf,
+    /// Carves accepted when the last save was asked for.
+    saved_at: u64,
+    /// When the first carve since then was seen.
+    since: Option<Duration>,
+    /// A save was asked for and is not answered yet.
+    pending: bool,
+    /// The world was busy with a carve: ask again at the next tick.
+    retry: bool,
+}
+
+/// Saves the world [`SAVE_EVERY`] after the first carve since the last
+/// save, in the background; a world busy with a carve is asked again.
+fn autosave(
+    time: Res<Time>,
+    stats: Res<NetServerStats>,
+    worlds: Query<Entity, With<TerrainWorld>>,
+    mut save: ResMut<Autosave>,
+    mut requests: MessageWriter<SaveWorld>,
+    mut saved: MessageReader<WorldSaved>,
+    mut failed: MessageReader<WorldSaveFailed>,
+) {
+    for answer in saved.read() {
+        save.pending = false;
+        println!(
+            "saved {} changed chunks ({} kB; {} unchanged) to {}",
+            answer.written.len(),
+            answer.bytes / 1024,
+            answer.unchanged,
+            answer.folder.display()
+        );
+    }
+    for failure in failed.read() {
+        save.pending = false;
+        if matches!(failure.error, TerrainError::WorldNotIdle { .. }) {
+            save.retry = true;
+        } else {
+            // Tried again after another SAVE_EVERY.
+            eprintln!("save failed: {}", failure.error);
+            save.since = Some(time.elapsed());
+        }
+    }
+    if stats.accepted > save.saved_at && save.since.is_none() {
+        save.since = Some(time.elapsed());
+    }
+    let due = save.retry || save.since.is_some_and(|t| time.elapsed() >= t + SAVE_EVERY);
+    if let Ok(world) = worlds.single()
+        && due
+        && !save.pending
+    {
+        requests.write(SaveWorld {
+            world,
+            folder: save.folder.clone(),
+        });
+        save.pending = true;
+        save.retry = false;
+        save.saved_at = stats.accepted;
+        save.since = None;
+    }
 }
 
 fn log_server(stats: Res<NetServerStats>, mut last: Local<u64>) {

@@ -243,7 +243,7 @@ pub fn run_headless(config: HeadlessConfig) -> AppExit {
     {
         let (stop, state) = (stop.clone(), server_state.clone());
         threads.push(std::thread::spawn(move || {
-            let mut app = match server_app() {
+            let mut app = match server_app(None) {
                 Ok(app) => app,
                 Err(e) => {
                     let _ = tx.send(Err(e.to_string()));
