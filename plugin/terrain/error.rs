@@ -149,6 +149,39 @@ pub enum TerrainError {
         /// The folder of the save being written.
         folder: String,
     },
+    /// A file could not be read as a terrain ([`super::Terrain::load`]) or
+    /// a world's chunk ([`super::TerrainWorld::load_edits`]): `path` names
+    /// it, `error` is why ([`TerrainError::BadMagic`],
+    /// [`TerrainError::UnsupportedVersion`], [`TerrainError::Truncated`],
+    /// [`TerrainError::Corrupt`] or another error of the terrain it holds;
+    /// also [`TerrainError::in_file`]).
+    #[error("{path}: {error}")]
+    InFile {
+        /// The file.
+        path: String,
+        /// What is wrong with it.
+        error: Box<TerrainError>,
+    },
+}
+
+impl TerrainError {
+    /// What is wrong, without the file it was found in: the `error` of a
+    /// [`TerrainError::InFile`], else this error.
+    #[must_use]
+    pub fn in_file(&self) -> &TerrainError {
+        match self {
+            TerrainError::InFile { error, .. } => error.in_file(),
+            other => other,
+        }
+    }
+
+    /// This error, found in the file at `path`.
+    pub(crate) fn at_path(self, path: &std::path::Path) -> TerrainError {
+        TerrainError::InFile {
+            path: path.display().to_string(),
+            error: Box::new(self),
+        }
+    }
 }
 
 impl From<chisel_bsp::Error> for TerrainError {

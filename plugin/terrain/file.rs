@@ -232,9 +232,15 @@ impl Terrain {
     /// Reads a terrain file.
     ///
     /// # Errors
-    /// [`TerrainError::Io`] or as [`Terrain::from_bytes`].
+    /// [`TerrainError::Io`] naming the file when it cannot be read;
+    /// [`TerrainError::InFile`] naming it, with the error of
+    /// [`Terrain::from_bytes`], when it is no valid terrain.
     pub fn load(path: impl AsRef<Path>) -> Result<Terrain, TerrainError> {
-        Terrain::from_bytes(&std::fs::read(path)?)
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|e| TerrainError::Io {
+            message: format!("cannot read {}: {e}", path.display()),
+        })?;
+        Terrain::from_bytes(&bytes).map_err(|e| e.at_path(path))
     }
 }
 

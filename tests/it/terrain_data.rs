@@ -298,10 +298,22 @@ fn damaged_files_give_typed_errors() {
         Terrain::from_bytes(&flipped),
         Err(TerrainError::Corrupt { .. })
     ));
-    assert!(matches!(
-        Terrain::load("/nonexistent/terrain.chisel"),
-        Err(TerrainError::Io { .. })
-    ));
+    match Terrain::load("/nonexistent/terrain.chisel") {
+        Err(TerrainError::Io { message }) => {
+            assert!(message.contains("/nonexistent/terrain.chisel"), "{message}");
+        }
+        other => panic!("expected Io, got {:?}", other.err()),
+    }
+    // A bad file's error names it.
+    let path = std::env::temp_dir().join(format!("bevy_chisel-bad-{}.chisel", std::process::id()));
+    std::fs::write(&path, &magic).expect("writes");
+    let error = Terrain::load(&path).err().expect("a bad file");
+    assert_eq!(error.in_file(), &TerrainError::BadMagic);
+    assert!(
+        error.to_string().starts_with(&path.display().to_string()),
+        "{error}"
+    );
+    let _ = std::fs::remove_file(&path);
 
     // Damage inside the octree snapshot behind a valid outer checksum is
     // found by the kernel's own checks.

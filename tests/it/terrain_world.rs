@@ -476,6 +476,21 @@ fn saving_writes_only_edited_chunks_and_loading_is_exact() {
     // A chunk file of another world is refused.
     let other = TerrainWorld::new(layout(), |i: i64, j: i64| height(i, j) + 1).expect("valid");
     assert!(other.load_edits(&dir).is_err());
+    // A damaged chunk file is refused by name; the world is not loaded.
+    let damaged = dir.join(&chunk_files(&dir)[0]);
+    std::fs::write(&damaged, b"not a terrain").expect("writes");
+    let error = self::world().load_edits(&dir).err().expect("refused");
+    assert!(
+        matches!(
+            error.in_file(),
+            TerrainError::BadMagic | TerrainError::Truncated { .. }
+        ),
+        "{error:?}"
+    );
+    assert!(
+        error.to_string().contains(&*damaged.to_string_lossy()),
+        "{error}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -445,8 +445,9 @@ impl TerrainWorld {
     /// Files whose names are not chunk files are ignored.
     ///
     /// # Errors
-    /// [`TerrainError::Io`] when the folder or a file cannot be read; as
-    /// [`Terrain::from_bytes`] for a bad file; [`TerrainError::InvalidWorld`]
+    /// [`TerrainError::Io`] when the folder or a file cannot be read;
+    /// [`TerrainError::InFile`] naming a bad file, with the error of
+    /// [`Terrain::from_bytes`]; [`TerrainError::InvalidWorld`]
     /// for a chunk file of another world (another grid or base). The world
     /// is unchanged then.
     pub fn load_edits(mut self, folder: impl AsRef<Path>) -> Result<Self, TerrainError> {
@@ -466,7 +467,7 @@ impl TerrainWorld {
             let bytes = fs::read(&path).map_err(|e| TerrainError::Io {
                 message: format!("cannot read {}: {e}", path.display()),
             })?;
-            let terrain = Terrain::from_bytes(&bytes)?;
+            let terrain = Terrain::from_bytes(&bytes).map_err(|e| e.at_path(&path))?;
             let base = self.layout.chunk_base(&*self.source, coord)?;
             if *terrain.quantization() != self.layout.quantization || *terrain.base() != base {
                 return Err(TerrainError::InvalidWorld {
