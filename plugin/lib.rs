@@ -28,7 +28,9 @@
 //!   `CarveTool::from_prop` carves with a convex quadric prop's shape.
 //!   Large worlds (`TerrainWorld`) are grids of terrain chunks streamed
 //!   around `TerrainFocus` entities from a procedural source, with coarse
-//!   chunks to the horizon (`WorldLod`).
+//!   chunks to the horizon (`WorldLod`), carves and undos across chunk
+//!   borders (`WorldCarve`, `WorldUndo`), and background saves of only
+//!   the chunks changed since the last one (`SaveWorld`).
 //! - `splat` (feature `props`) draws quadric CSG props: a `QuadricProp`
 //!   component (a `*.quadric.ron` scene file or an in-memory scene),
 //!   sampled on the async compute pool, rendered by a splat pass with
@@ -39,7 +41,8 @@
 //!   cursor. They are not part of the API a game needs.
 //! - `net` (feature `net`) replicates carves from one authoritative server
 //!   to its clients: integer carves in sequence order, state hashes and
-//!   snapshots, never meshes.
+//!   snapshots, never meshes; for single terrains (`NetTerrain`) and
+//!   streamed worlds (`NetWorld`), each peer streaming its own chunks.
 //!
 //! ## Features
 //!
