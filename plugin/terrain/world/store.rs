@@ -22,8 +22,9 @@
 //!
 //! 1. In the frame it starts (the frame it is read, or a later one when
 //!    that frame holds no whole state, see below; after the carve
-//!    systems, so the carves applied that frame are in), the world takes of each edited chunk
-//!    that changed since the last save to that folder what its file needs:
+//!    systems, so the carves applied that frame are in), the world takes
+//!    of each edited chunk that changed since the last save to that
+//!    folder what its file needs:
 //!    a live chunk's octrees are persistent, so taking them copies no
 //!    cell (its journal and the undo steps' cell lists are copied); a
 //!    stored chunk's bytes are shared. A chunk counts as unchanged when
@@ -68,7 +69,8 @@
 //! - A request for a folder that already has a request waiting (one read
 //!   in an earlier frame, or in the same frame) is merged into it: it
 //!   keeps the earlier one's place and both get its one answer (the state
-//!   saved is that of the frame the save starts, as new as both requests). A request while a save to the same folder is being
+//!   saved is that of the frame the save starts, as new as both
+//!   requests). A request while a save to the same folder is being
 //!   written is not merged: it waits, and gets its own answer after that
 //!   save's, writing what changed since.
 //! - Saving never holds back a carve: carves, undos and streaming go on
@@ -80,8 +82,8 @@
 //!   second), answered by [`WorldSaveFailed`] with
 //!   [`TerrainError::WorldNotIdle`] naming a busy chunk of the last frame
 //!   it tried. Frames spent behind a save being written or another request
-//!   do not count. With a bound of 0 a request is refused in the frame it
-//!   is read unless it can start then.
+//!   do not count. With a bound of 0 a request gives up in the first frame
+//!   of its turn unless it can start then.
 //! - Despawning the world drops its waiting requests, unanswered.
 //!
 //! [`TerrainWorld::save`] does not wait: it refuses a world that is not
@@ -294,9 +296,11 @@ impl TerrainWorld {
     /// state in `frames` frames of its turn: frames (runs of the save
     /// system) in which it is the oldest waiting request and no save of the
     /// world is being written ([module docs](self)).
-    /// [`DEFAULT_MAX_SAVE_WAIT`] by default; 0 refuses a request at once
-    /// when the frame it is read in holds no whole state. Carves never
-    /// wait for a save, so a world carved in every frame fails its saves.
+    /// [`DEFAULT_MAX_SAVE_WAIT`] by default; with 0 a request gives up in
+    /// the first frame of its turn (the frame it is read in, unless a save
+    /// runs or another request waits) when that frame holds no whole
+    /// state. Carves never wait for a save, so a world carved in every
+    /// frame fails its saves.
     #[must_use]
     pub fn with_max_save_wait(mut self, frames: u32) -> Self {
         self.saves.max_wait = frames;
