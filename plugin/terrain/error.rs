@@ -132,16 +132,22 @@ pub enum TerrainError {
         /// What is wrong.
         reason: String,
     },
-    /// A terrain world cannot be saved now: a carve waits for a chunk or
-    /// an edited chunk has work in progress; save once it is settled.
+    /// A terrain world holds no whole state: a carve or undo waits for a
+    /// chunk or a live chunk has a carve, undo or detach queued or
+    /// running. [`super::TerrainWorld::save`] refuses such a world at
+    /// once; a [`super::SaveWorld`] waits for a whole state and reports
+    /// this only when none came in
+    /// [`super::TerrainWorld::max_save_wait`] frames of its turn.
     #[error("terrain world chunk {chunk:?} has carves in progress; save when the world is settled")]
     WorldNotIdle {
-        /// The chunk (x, z).
+        /// A busy chunk (x, z).
         chunk: [i64; 2],
     },
-    /// A save of this terrain world ([`super::SaveWorld`]) is still being
-    /// written; ask again once its [`super::WorldSaved`] or
-    /// [`super::WorldSaveFailed`] is read.
+    /// [`super::TerrainWorld::save`] was called while a save of this
+    /// terrain world ([`super::SaveWorld`]) is being written; call it
+    /// again once its [`super::WorldSaved`] or [`super::WorldSaveFailed`]
+    /// is read. A [`super::SaveWorld`] is never refused for this: it
+    /// waits for the save being written.
     #[error(
         "terrain world save to {folder} is still being written; save again once it is reported"
     )]

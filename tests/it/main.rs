@@ -95,6 +95,8 @@ mod terrain_world_seams;
 #[cfg(feature = "terrain")]
 mod world_save;
 #[cfg(feature = "terrain")]
+mod world_save_wait;
+#[cfg(feature = "terrain")]
 mod world_undo;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.

@@ -3,15 +3,18 @@
 //! while carves go on; later saves write only the chunks that changed (a
 //! chunk streamed out or back in unchanged is not written again); an undo
 //! back to the base removes the chunk's file; a failed save names the path
-//! and leaves the record as it was; a second request while one is written
-//! is refused. What a request costs its frame: the `terrain` bench,
-//! `saving_a_world`.
+//! and leaves the record as it was; requests while one is written wait
+//! their turn (waiting for a whole state: `world_save_wait`). What a
+//! request costs its frame: the `terrain` bench, `saving_a_world`.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use bevy::prelude::*;
+use bevy::tasks::IoTaskPool;
 use bevy_chisel::terrain::{
     ChunkCoord, SaveWorld, Terrain, TerrainError, TerrainSystems, TerrainWorld, WorldSaveFailed,
     WorldSaved, WorldUndo,
@@ -21,13 +24,13 @@ use super::terrain_world::{
     app_with, carve, chunk_files, dodecahedron, settle, terrain, the_world, world as new_world,
 };
 
-const fn at(x: i64, z: i64) -> ChunkCoord {
+pub(super) const fn at(x: i64, z: i64) -> ChunkCoord {
     ChunkCoord { x, z }
 }
 
 /// A point inside chunk `c` under its surface (heights 8..=20), moved
 /// by `step` so that repeated carves there differ.
-fn inside(c: ChunkCoord, step: u32) -> Vec3 {
+pub(super) fn inside(c: ChunkCoord, step: u32) -> Vec3 {
     let s = step as f32;
     Vec3::new(
         c.x as f32 * 32.0 + 10.0 + 1.5 * (s % 8.0),
@@ -39,10 +42,10 @@ fn inside(c: ChunkCoord, step: u32) -> Vec3 {
 /// What the save messages said so far, and the frames in which the world
 /// was marked changed.
 #[derive(Resource, Default)]
-struct Heard {
-    saved: Vec<WorldSaved>,
-    failed: Vec<WorldSaveFailed>,
-    world_changed: usize,
+pub(super) struct Heard {
+    pub(super) saved: Vec<WorldSaved>,
+    pub(super) failed: Vec<WorldSaveFailed>,
+    pub(super) world_changed: usize,
 }
 
 fn hear(
@@ -56,22 +59,22 @@ fn hear(
     heard.world_changed += worlds.iter().filter(|w| w.is_changed()).count();
 }
 
-fn save_app(world: TerrainWorld) -> (App, Entity, Entity) {
+pub(super) fn save_app(world: TerrainWorld) -> (App, Entity, Entity) {
     save_app_at(world, Vec3::new(16.0, 30.0, 16.0))
 }
 
-fn save_app_at(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
+pub(super) fn save_app_at(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
     let (mut app, world, focus) = app_with(world, focus);
     app.init_resource::<Heard>()
         .add_systems(Update, hear.after(TerrainSystems::Mesh));
     (app, world, focus)
 }
 
-fn heard(app: &App) -> &Heard {
+pub(super) fn heard(app: &App) -> &Heard {
     app.world().resource::<Heard>()
 }
 
-fn temp_folder(tag: &str) -> PathBuf {
+pub(super) fn temp_folder(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(
         "bevy_chisel-world-save-{tag}-{}",
         std::process::id()
@@ -83,7 +86,7 @@ fn temp_folder(tag: &str) -> PathBuf {
 
 /// Sends a [`SaveWorld`] and runs frames until it is answered; `each`
 /// runs before every frame after the request frame.
-fn save_with(
+pub(super) fn save_with(
     app: &mut App,
     world: Entity,
     folder: &Path,
@@ -112,13 +115,17 @@ fn save_with(
     panic!("the save was not answered");
 }
 
-fn save(app: &mut App, world: Entity, folder: &Path) -> Result<WorldSaved, WorldSaveFailed> {
+pub(super) fn save(
+    app: &mut App,
+    world: Entity,
+    folder: &Path,
+) -> Result<WorldSaved, WorldSaveFailed> {
     save_with(app, world, folder, |_, _| {})
 }
 
 /// The file bytes of every edited chunk now (live ones serialized, stored
 /// ones as kept).
-fn edited_bytes(app: &App, world: Entity) -> BTreeMap<ChunkCoord, Vec<u8>> {
+pub(super) fn edited_bytes(app: &App, world: Entity) -> BTreeMap<ChunkCoord, Vec<u8>> {
     let w = the_world(app, world);
     let mut bytes: BTreeMap<ChunkCoord, Vec<u8>> = w
         .live_chunks()
@@ -134,7 +141,7 @@ fn edited_bytes(app: &App, world: Entity) -> BTreeMap<ChunkCoord, Vec<u8>> {
     bytes
 }
 
-fn names(coords: &[ChunkCoord]) -> Vec<String> {
+pub(super) fn names(coords: &[ChunkCoord]) -> Vec<String> {
     let mut names: Vec<String> = coords
         .iter()
         .map(|&c| TerrainWorld::chunk_file_name(c))
@@ -362,50 +369,129 @@ fn a_failed_save_names_the_path_and_leaves_the_record_as_it_was() {
     let _ = std::fs::remove_dir_all(&parent);
 }
 
-#[test]
-fn a_request_while_a_save_is_written_is_refused() {
-    let (mut app, world, _focus) = save_app(new_world());
-    carve(&mut app, world, dodecahedron(4.0, inside(at(0, 0), 0)));
-    settle(&mut app, world);
-    let (dir, other) = (temp_folder("twice"), temp_folder("twice-other"));
-    for folder in [&dir, &other] {
-        app.world_mut().write_message(SaveWorld {
-            world,
-            folder: folder.clone(),
-        });
+/// Holds every thread of the I/O task pool until dropped, so that a save
+/// started meanwhile is surely still being written in the next frames.
+struct IoPoolHeld(Arc<AtomicBool>);
+
+impl IoPoolHeld {
+    fn new() -> Self {
+        let released = Arc::new(AtomicBool::new(false));
+        let pool = IoTaskPool::get();
+        for _ in 0..pool.thread_num().max(1) {
+            let released = released.clone();
+            pool.spawn(async move {
+                while !released.load(Ordering::Acquire) {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+            })
+            .detach();
+        }
+        Self(released)
     }
-    app.update();
-    // The first is being written (its outcome is read in a later frame).
-    assert!(the_world(&app, world).is_saving());
-    let sync = the_world(&app, world).save(&other, |e| app.world().get::<Terrain>(e));
-    let running = TerrainError::WorldSaveRunning {
-        folder: dir.display().to_string(),
-    };
-    assert_eq!(sync, Err(running.clone()));
-    let h = heard(&app);
-    assert_eq!(h.failed.len(), 1);
-    assert_eq!(h.failed[0].folder, other);
-    assert_eq!(h.failed[0].error, running);
+}
+
+impl Drop for IoPoolHeld {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
+    }
+}
+
+/// Runs frames until `count` saves are answered (successes and
+/// failures together).
+pub(super) fn until_answered(app: &mut App, count: usize) {
     for _ in 0..20_000 {
-        if !heard(&app).saved.is_empty() {
-            break;
+        let h = heard(app);
+        if h.saved.len() + h.failed.len() >= count {
+            return;
         }
         app.update();
         std::thread::sleep(Duration::from_millis(1));
     }
-    assert_eq!(heard(&app).saved.len(), 1);
-    assert_eq!(heard(&app).saved[0].folder, dir);
-    assert!(!the_world(&app, world).is_saving());
-    assert!(!other.exists(), "the refused save wrote nothing");
+    panic!("the saves were not answered");
+}
 
-    // A request in the frame a carve starts is refused (the chunk's
-    // state is not whole yet), and one for an entity with no world.
-    carve(&mut app, world, dodecahedron(3.0, inside(at(0, 0), 4)));
-    let busy = save(&mut app, world, &dir).expect_err("a carve is in progress");
-    assert_eq!(busy.error, TerrainError::WorldNotIdle { chunk: [0, 0] });
+#[test]
+fn requests_while_a_save_is_written_wait_their_turn() {
+    let (mut app, world, _focus) = save_app(new_world());
+    let chunks = [at(0, 0), at(1, 0)];
+    for (i, &c) in chunks.iter().enumerate() {
+        carve(&mut app, world, dodecahedron(4.0, inside(c, i as u32)));
+    }
+    settle(&mut app, world);
+    let (dir, other) = (temp_folder("twice"), temp_folder("twice-other"));
+    let send = |app: &mut App, folder: &PathBuf| {
+        app.world_mut().write_message(SaveWorld {
+            world,
+            folder: folder.clone(),
+        });
+    };
+    // The first starts at once (the world is settled); the second, for
+    // another folder, waits for it.
+    let held = IoPoolHeld::new();
+    send(&mut app, &dir);
+    send(&mut app, &other);
+    app.update();
+    // The first is being written (its outcome is read in a later frame).
+    let w = the_world(&app, world);
+    assert!(w.is_saving());
+    assert_eq!(w.waiting_saves().collect::<Vec<_>>(), [other.as_path()]);
+    // The synchronous save does not wait: it is refused meanwhile.
+    let sync = w.save(&other, |e| app.world().get::<Terrain>(e));
+    let running = TerrainError::WorldSaveRunning {
+        folder: dir.display().to_string(),
+    };
+    assert_eq!(sync, Err(running));
+
+    // A carve, and a request for the folder being written: not merged
+    // into that save, it waits behind the other folder's and writes only
+    // the carved chunk; the save to `other` writes every chunk.
+    carve(&mut app, world, dodecahedron(3.0, inside(chunks[1], 5)));
+    send(&mut app, &dir);
+    app.update();
+    let w = the_world(&app, world);
+    assert!(w.is_saving(), "the first is still being written");
+    assert_eq!(
+        w.waiting_saves().collect::<Vec<_>>(),
+        [other.as_path(), dir.as_path()]
+    );
+    assert!(heard(&app).failed.is_empty(), "nothing refused");
+    drop(held);
+    until_answered(&mut app, 3);
+    let h = heard(&app);
+    assert!(h.failed.is_empty(), "{:?}", h.failed);
+    let folders: Vec<&PathBuf> = h.saved.iter().map(|s| &s.folder).collect();
+    assert_eq!(folders, [&dir, &other, &dir], "in the order they were read");
+    assert_eq!(h.saved[0].written, chunks);
+    assert_eq!(
+        (h.saved[1].written.as_slice(), h.saved[1].unchanged),
+        (&chunks[..], 0)
+    );
+    assert_eq!(
+        (h.saved[2].written.as_slice(), h.saved[2].unchanged),
+        (&chunks[1..], 1)
+    );
+    let w = the_world(&app, world);
+    assert!(!w.is_saving() && !w.save_waiting());
+    settle(&mut app, world);
+    let now = edited_bytes(&app, world);
+    for folder in [&dir, &other] {
+        assert_eq!(chunk_files(folder), names(&chunks));
+        for (coord, bytes) in &now {
+            let file =
+                std::fs::read(folder.join(TerrainWorld::chunk_file_name(*coord))).expect("file");
+            assert!(
+                file == *bytes,
+                "chunk {coord:?} in {folder:?} is the chunk now"
+            );
+        }
+    }
+    assert_eq!(heard(&app).saved.len(), 3, "one answer each");
+
+    // A request for an entity with no world is refused in its frame.
     let nobody = app.world_mut().spawn_empty().id();
     let none = save(&mut app, nobody, &dir).expect_err("no world");
     assert!(matches!(none.error, TerrainError::InvalidWorld { .. }));
-    settle(&mut app, world);
-    let _ = std::fs::remove_dir_all(&dir);
+    for folder in [&dir, &other] {
+        let _ = std::fs::remove_dir_all(folder);
+    }
 }

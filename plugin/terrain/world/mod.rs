@@ -46,7 +46,8 @@
 //!    [`Terrain::save`]); [`TerrainWorld::load_edits`] reads them back,
 //!    checking that each belongs to this world (same grid, same base).
 //!    A [`SaveWorld`] message saves in the background instead, writing
-//!    only the chunks changed since the last save to that folder.
+//!    only the chunks changed since the last save to that folder; asked
+//!    while the world is busy, it waits for a whole state.
 //! 5. **Multiplayer** (feature `net`, module `net::world`): the server
 //!    numbers world carves and every peer routes them to its own chunks
 //!    in that order ([`TerrainWorld::chunks_reached`], with the carve's
@@ -150,6 +151,7 @@ pub mod lod_mesh;
 pub mod seams;
 pub mod source;
 pub mod store;
+mod store_files;
 pub mod stream;
 pub mod undo;
 
@@ -169,7 +171,7 @@ use super::tool::{CarveTool, GridTool};
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
-pub use store::{SaveWorld, WorldSaveFailed, WorldSaved};
+pub use store::{DEFAULT_MAX_SAVE_WAIT, SaveWorld, WorldSaveFailed, WorldSaved};
 pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 

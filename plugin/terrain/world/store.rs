@@ -20,9 +20,11 @@
 //! frame for as long as that takes. A [`SaveWorld`] message does the same
 //! off the main thread, and only for what changed:
 //!
-//! 1. In the frame it is read (after the carve systems, so the carves
-//!    applied that frame are in), the world takes of each edited chunk
-//!    that changed since the last save to that folder what its file needs:
+//! 1. In the frame it starts (the frame it is read, or a later one when
+//!    that frame holds no whole state, see below; after the carve
+//!    systems, so the carves applied that frame are in), the world takes
+//!    of each edited chunk that changed since the last save to that
+//!    folder what its file needs:
 //!    a live chunk's octrees are persistent, so taking them copies no
 //!    cell (its journal and the undo steps' cell lists are copied); a
 //!    stored chunk's bytes are shared. A chunk counts as unchanged when
@@ -46,25 +48,53 @@
 //!    chunk it meant to write or remove, so the next save to that folder
 //!    writes them all again.
 //!
-//! What is written is every edited chunk as it was in the frame the
-//! request was read: carves, undos and streaming may go on while it
-//! writes. The request is refused ([`WorldSaveFailed`]) when that frame
-//! does not hold a whole state: a carve waits for a chunk (also a far
-//! chunk's deferred carves on a networked world's client: call
-//! [`TerrainWorld::build_deferred`] first), a
-//! [`WorldUndo`](super::WorldUndo) waits, or a live chunk has a carve,
-//! undo or detach queued or running ([`TerrainError::WorldNotIdle`]; ask
-//! again in a later frame), so a saved world never holds half of a world
-//! carve. A request while a save of the same world is being written is
-//! refused too ([`TerrainError::WorldSaveRunning`]), not queued: the game
-//! decides whether a newer state should be saved once it is done; so is a
-//! [`TerrainWorld::save`] then. The world is not marked changed by any of
+//! What is written is every edited chunk as it was in the frame the save
+//! started: carves, undos and streaming may go on while it writes.
+//!
+//! ## Waiting for a whole state
+//!
+//! A save starts only in a frame that holds a whole state, so a saved
+//! world never holds half of a world carve. A frame does not when a carve
+//! waits for a chunk (also a far chunk's deferred carves on a networked
+//! world's client: [`TerrainWorld::build_deferred`] builds them), a
+//! [`WorldUndo`](super::WorldUndo) waits for a chunk, or a live chunk has
+//! a carve, undo or detach queued or running. A request read in such a
+//! frame, or while a save of the same world is being written, is not
+//! refused: the world keeps it, oldest first, and starts it in the first
+//! later frame that holds a whole state with no save of the world running
+//! (requests for several folders one after the other, in the order they
+//! were read), saving the state of *that* frame.
+//! [`TerrainWorld::waiting_saves`] lists them, for a game's "saving…".
+//!
+//! - A request for a folder that already has a request waiting (one read
+//!   in an earlier frame, or in the same frame) is merged into it: it
+//!   keeps the earlier one's place and both get its one answer (the state
+//!   saved is that of the frame the save starts, as new as both
+//!   requests). A request while a save to the same folder is being
+//!   written is not merged: it waits, and gets its own answer after that
+//!   save's, writing what changed since.
+//! - Saving never holds back a carve: carves, undos and streaming go on
+//!   while a request waits. So a world carved in every frame may never be
+//!   whole; a request gives up once the world held no whole state in
+//!   [`TerrainWorld::max_save_wait`] frames of its turn (frames in which it
+//!   is the oldest request and no save of the world runs;
+//!   [`DEFAULT_MAX_SAVE_WAIT`], 300 by default, 5 s at 60 frames a
+//!   second), answered by [`WorldSaveFailed`] with
+//!   [`TerrainError::WorldNotIdle`] naming a busy chunk of the last frame
+//!   it tried. Frames spent behind a save being written or another request
+//!   do not count. With a bound of 0 a request gives up in the first frame
+//!   of its turn unless it can start then.
+//! - Despawning the world drops its waiting requests, unanswered.
+//!
+//! [`TerrainWorld::save`] does not wait: it refuses a world that is not
+//! whole ([`TerrainError::WorldNotIdle`]) or while a [`SaveWorld`] of it is
+//! being written ([`TerrainError::WorldSaveRunning`]); waiting requests do
+//! not hold it back. The world is not marked changed by any of
 //! this (bookkeeping, [`TerrainWorld`], "Change detection"). The record
 //! assumes that nothing else writes the folder's chunk files.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -76,12 +106,23 @@ use bevy::tasks::{IoTaskPool, Task};
 use super::super::asset::TERRAIN_EXTENSION;
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::super::file::{TerrainRecord, write_atomic};
+use super::store_files::{
+    ChunkBytes, FileOutcome, PlannedFile, file_checksum, parse_chunk_name, write_chunk_files,
+};
 use super::{Chunk, ChunkCoord, TerrainWorld};
+
+/// The frames a [`SaveWorld`] waits, by default, for its world to hold a
+/// whole state before it gives up ([`TerrainWorld::with_max_save_wait`]):
+/// 5 s at 60 frames a second.
+pub const DEFAULT_MAX_SAVE_WAIT: u32 = 300;
 
 /// Save a world's edited chunks into `folder` off the main thread, only
 /// those that changed since the last save to that folder ([module
-/// docs](self)). Answered, a frame or more later, by [`WorldSaved`] or
+/// docs](self)). It starts in the first frame, from the one it is read
+/// on, that holds a whole state with no save of the world being written
+/// (it waits for that, at most [`TerrainWorld::max_save_wait`] frames of
+/// its turn; a second request for a folder whose request waits is merged
+/// into it). Answered, a frame or more later, by one [`WorldSaved`] or
 /// [`WorldSaveFailed`].
 #[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct SaveWorld {
@@ -92,7 +133,7 @@ pub struct SaveWorld {
 }
 
 /// A [`SaveWorld`] was written: `folder` holds every chunk edited in the
-/// frame the request was read, as it was then, and no other chunk file.
+/// frame the save started, as it was then, and no other chunk file.
 #[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct WorldSaved {
     /// The world entity.
@@ -107,7 +148,7 @@ pub struct WorldSaved {
     pub bytes: usize,
 }
 
-/// A [`SaveWorld`] was refused (nothing written) or failed: the files
+/// A [`SaveWorld`] gave up (nothing written) or failed: the files
 /// written before the failure stay, each whole; stale chunk files are
 /// removed only once every file is written (as [`TerrainWorld::save`]);
 /// and the next save to that folder writes every chunk this one meant to.
@@ -118,23 +159,48 @@ pub struct WorldSaveFailed {
     pub world: Entity,
     /// The folder.
     pub folder: PathBuf,
-    /// Why: [`TerrainError::Io`] naming the file or folder,
-    /// [`TerrainError::WorldNotIdle`], [`TerrainError::WorldSaveRunning`],
-    /// or [`TerrainError::InvalidWorld`] for an entity without a
-    /// [`TerrainWorld`].
+    /// Why: [`TerrainError::Io`] naming the file or folder;
+    /// [`TerrainError::WorldNotIdle`] when the world held no whole state in
+    /// [`TerrainWorld::max_save_wait`] frames of the request's turn (it
+    /// waited, then gave up, nothing written; [module docs](self)); or
+    /// [`TerrainError::InvalidWorld`] for an entity without a
+    /// [`TerrainWorld`] (in the frame the request is read).
     #[reflect(ignore)]
     pub error: TerrainError,
 }
 
 /// A world's saves: what each folder's chunk files hold, as the last save
-/// to it left them, and the background save being written.
-#[derive(Default)]
+/// to it left them, the background save being written and the requests
+/// waiting for their turn.
 pub(crate) struct WorldSaves {
     /// Per folder path, the chunk files known to hold what they were
     /// written with. Behind a lock so that [`TerrainWorld::save`] (`&self`)
     /// keeps it too.
     folders: Mutex<BTreeMap<PathBuf, FolderRecord>>,
     running: Option<RunningSave>,
+    /// The [`SaveWorld`] requests not started yet, oldest first, at most
+    /// one per folder.
+    waiting: VecDeque<WaitingSave>,
+    /// Frames of its turn a request waits for a whole state.
+    max_wait: u32,
+}
+
+impl Default for WorldSaves {
+    fn default() -> Self {
+        Self {
+            folders: Mutex::default(),
+            running: None,
+            waiting: VecDeque::new(),
+            max_wait: DEFAULT_MAX_SAVE_WAIT,
+        }
+    }
+}
+
+/// A [`SaveWorld`] request waiting for its turn and a whole state.
+struct WaitingSave {
+    folder: PathBuf,
+    /// The frames of its turn in which the world held no whole state.
+    refused: u32,
 }
 
 /// What a folder's chunk files hold, by chunk.
@@ -166,30 +232,6 @@ struct RunningSave {
     task: Task<Result<Vec<FileOutcome>, TerrainError>>,
 }
 
-/// What the task did with one planned chunk file.
-struct FileOutcome {
-    coord: ChunkCoord,
-    len: usize,
-    checksum: u64,
-    written: bool,
-}
-
-/// Where a planned chunk file's bytes come from.
-enum ChunkBytes {
-    /// A live chunk, serialized by the task.
-    Live(Box<TerrainRecord>),
-    /// A stored chunk's bytes.
-    Stored(Arc<Vec<u8>>),
-}
-
-/// One chunk file to write unless the file holds it already.
-struct PlannedFile {
-    coord: ChunkCoord,
-    bytes: ChunkBytes,
-    /// Length and checksum of what the file is known to hold.
-    known: Option<(usize, u64)>,
-}
-
 impl WorldSaves {
     fn folders(&self) -> MutexGuard<'_, BTreeMap<PathBuf, FolderRecord>> {
         // The record is replaced whole under the lock: a panic elsewhere
@@ -208,6 +250,17 @@ impl WorldSaves {
             None => Ok(()),
         }
     }
+
+    /// Keeps a request for `folder` until it can start, merged into the
+    /// one waiting for the same folder if there is one.
+    fn enqueue(&mut self, folder: &Path) {
+        if !self.waiting.iter().any(|w| w.folder == folder) {
+            self.waiting.push_back(WaitingSave {
+                folder: folder.to_path_buf(),
+                refused: 0,
+            });
+        }
+    }
 }
 
 impl TerrainWorld {
@@ -222,6 +275,43 @@ impl TerrainWorld {
     #[must_use]
     pub fn is_saving(&self) -> bool {
         self.saves.running.is_some()
+    }
+
+    /// The folders of the [`SaveWorld`] requests waiting to start (for a
+    /// whole state, or for the save being written), in the order they
+    /// will start ([module docs](self)). A game shows "saving…" while
+    /// this is not empty or [`TerrainWorld::is_saving`].
+    pub fn waiting_saves(&self) -> impl Iterator<Item = &Path> + '_ {
+        self.saves.waiting.iter().map(|w| w.folder.as_path())
+    }
+
+    /// Whether a [`SaveWorld`] request of this world waits to start.
+    #[must_use]
+    pub fn save_waiting(&self) -> bool {
+        !self.saves.waiting.is_empty()
+    }
+
+    /// A [`SaveWorld`] request gives up, answered by [`WorldSaveFailed`]
+    /// with [`TerrainError::WorldNotIdle`], once the world held no whole
+    /// state in `frames` frames of its turn: frames (runs of the save
+    /// system) in which it is the oldest waiting request and no save of the
+    /// world is being written ([module docs](self)).
+    /// [`DEFAULT_MAX_SAVE_WAIT`] by default; with 0 a request gives up in
+    /// the first frame of its turn (the frame it is read in, unless a save
+    /// runs or another request waits) when that frame holds no whole
+    /// state. Carves never wait for a save, so a world carved in every
+    /// frame fails its saves.
+    #[must_use]
+    pub fn with_max_save_wait(mut self, frames: u32) -> Self {
+        self.saves.max_wait = frames;
+        self
+    }
+
+    /// The frames a [`SaveWorld`] request waits for a whole state
+    /// ([`TerrainWorld::with_max_save_wait`]).
+    #[must_use]
+    pub fn max_save_wait(&self) -> u32 {
+        self.saves.max_wait
     }
 
     /// Writes every edited chunk (live ones through `terrain_of`, which
@@ -303,22 +393,73 @@ impl TerrainWorld {
         Ok(outcome?.into_iter().map(|f| f.coord).collect())
     }
 
+    /// Whether this frame holds a whole state ([module docs](self)): no
+    /// carve waits for a chunk, no undo waits for one, and every live chunk
+    /// readable here is settled.
+    ///
+    /// # Errors
+    /// [`TerrainError::WorldNotIdle`] naming a busy chunk.
+    fn check_whole(&self, terrains: &Query<Ref<Terrain>>) -> Result<(), TerrainError> {
+        // A carve waiting for a chunk, or a chunk of a waiting undo.
+        let waiting =
+            (self.pending.keys().next().copied()).or_else(|| self.history.wanted().next());
+        let busy = waiting.or_else(|| {
+            self.live_chunks()
+                .find(|&(_, entity)| terrains.get(entity).is_ok_and(|t| !content_settled(&t)))
+                .map(|(coord, _)| coord)
+        });
+        match busy {
+            Some(coord) => Err(TerrainError::WorldNotIdle {
+                chunk: [coord.x, coord.z],
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Starts the waiting [`SaveWorld`] requests' saves in turn, oldest
+    /// first, while none is being written and this frame holds a whole
+    /// state; counts the frame against the oldest otherwise ([module
+    /// docs](self)). Returns the requests that gave up, with why.
+    fn start_waiting_saves(
+        &mut self,
+        terrains: &Query<Ref<Terrain>>,
+    ) -> Vec<(PathBuf, TerrainError)> {
+        let mut gave_up = Vec::new();
+        while self.saves.running.is_none() {
+            let Some(mut next) = self.saves.waiting.pop_front() else {
+                break;
+            };
+            match self.start_save(&next.folder, terrains) {
+                Ok(()) => {}
+                Err(error @ TerrainError::WorldNotIdle { .. }) => {
+                    next.refused += 1;
+                    if next.refused > self.saves.max_wait {
+                        gave_up.push((next.folder, error));
+                    } else {
+                        self.saves.waiting.push_front(next);
+                        break;
+                    }
+                }
+                Err(error) => gave_up.push((next.folder, error)),
+            }
+        }
+        gave_up
+    }
+
     /// Plans a background save into `folder` ([module docs](self)) and
     /// starts its task.
+    ///
+    /// # Errors
+    /// [`TerrainError::WorldSaveRunning`] while a save is being written,
+    /// [`TerrainError::WorldNotIdle`] when this frame holds no whole state;
+    /// nothing is started then.
     fn start_save(
         &mut self,
         folder: &Path,
         terrains: &Query<Ref<Terrain>>,
     ) -> Result<(), TerrainError> {
         self.saves.check_not_running()?;
-        // A carve waiting for a chunk, or a chunk of a waiting undo.
-        let waiting =
-            (self.pending.keys().next().copied()).or_else(|| self.history.wanted().next());
-        if let Some(coord) = waiting {
-            return Err(TerrainError::WorldNotIdle {
-                chunk: [coord.x, coord.z],
-            });
-        }
+        self.check_whole(terrains)?;
         let record = self
             .saves
             .folders()
@@ -342,11 +483,6 @@ impl TerrainWorld {
                 keep.insert(coord);
                 continue;
             };
-            if !content_settled(&terrain) {
-                return Err(TerrainError::WorldNotIdle {
-                    chunk: [coord.x, coord.z],
-                });
-            }
             if !self.chunk_edited(coord, &terrain) {
                 continue;
             }
@@ -492,9 +628,10 @@ impl TerrainWorld {
     }
 }
 
-/// Reads [`SaveWorld`]s and starts their background saves, and reports
-/// the saves whose tasks are done ([module docs](self)). Runs after the
-/// carve systems.
+/// Reports the saves whose tasks are done, reads [`SaveWorld`]s into
+/// their worlds' waiting requests and starts those whose turn it is in a
+/// frame that holds a whole state, or gives them up ([module docs](self)).
+/// Runs after the carve systems.
 pub fn save_worlds(
     mut requests: MessageReader<SaveWorld>,
     mut worlds: Query<(Entity, &mut TerrainWorld)>,
@@ -503,8 +640,9 @@ pub fn save_worlds(
     mut failed: MessageWriter<WorldSaveFailed>,
 ) {
     let _span = bevy::log::info_span!("chisel::world::save_worlds").entered();
+    // Bookkeeping, all of it: the worlds' chunks and edits are as they
+    // were, so no world is marked changed.
     for (entity, mut world) in &mut worlds {
-        // Bookkeeping: the world's chunks and edits are as they were.
         let Some((folder, result)) = world.bypass_change_detection().finish_save() else {
             continue;
         };
@@ -529,19 +667,37 @@ pub fn save_worlds(
         }
     }
     for request in requests.read() {
-        let started = match worlds.get_mut(request.world) {
+        match worlds.get_mut(request.world) {
             Ok((_, mut world)) => {
-                let _span = bevy::log::info_span!("chisel::world::save_request").entered();
-                (world.bypass_change_detection()).start_save(&request.folder, &terrains)
+                (world.bypass_change_detection().saves).enqueue(&request.folder);
             }
-            Err(_) => Err(TerrainError::InvalidWorld {
-                reason: format!("entity {} has no TerrainWorld to save", request.world),
-            }),
-        };
-        if let Err(error) = started {
+            Err(_) => {
+                failed.write(WorldSaveFailed {
+                    world: request.world,
+                    folder: request.folder.clone(),
+                    error: TerrainError::InvalidWorld {
+                        reason: format!("entity {} has no TerrainWorld to save", request.world),
+                    },
+                });
+            }
+        }
+    }
+    for (entity, mut world) in &mut worlds {
+        if !world.save_waiting() || world.is_saving() {
+            continue;
+        }
+        let _span = bevy::log::info_span!("chisel::world::save_request").entered();
+        for (folder, error) in world
+            .bypass_change_detection()
+            .start_waiting_saves(&terrains)
+        {
+            warn!(
+                "terrain world: save to {} gave up: {error}",
+                folder.display()
+            );
             failed.write(WorldSaveFailed {
-                world: request.world,
-                folder: request.folder.clone(),
+                world: entity,
+                folder,
                 error,
             });
         }
@@ -550,62 +706,13 @@ pub fn save_worlds(
 
 /// Whether a live chunk's octree, journal and undo history are at rest:
 /// nothing queued or running would change them (sealing again at a
-/// neighbour's points and building meshes do not).
+/// neighbour's points does not). A finished job waiting to show its cells
+/// and write its reports and debris (its upload) counts as at rest: it
+/// swapped its octree, journal and undo step in when it was collected.
 fn content_settled(terrain: &Terrain) -> bool {
     let runtime = &terrain.runtime;
     (runtime.queue.iter()).all(|job| matches!(job, crate::terrain::jobs::Job::Reseal { .. }))
         && (runtime.task.is_none() || runtime.resealing)
-        && (runtime.uploads.iter()).all(|u| u.reports.is_empty() && u.debris.is_empty())
-}
-
-/// The checksum a terrain file ends with (the XXH64 of the bytes before
-/// it), `None` for bytes too short to hold one.
-fn file_checksum(bytes: &[u8]) -> Option<u64> {
-    let tail = bytes.get(bytes.len().checked_sub(8)?..)?;
-    Some(u64::from_le_bytes(tail.try_into().ok()?))
-}
-
-/// Writes the `planned` chunk files into `folder` (created if missing),
-/// each atomically unless it is known to hold those bytes already, then
-/// removes the chunk files of chunks neither planned nor in `keep` and
-/// syncs the folder. Stops at the first error: the files written before
-/// it stay, and nothing is removed.
-fn write_chunk_files(
-    folder: &Path,
-    planned: Vec<PlannedFile>,
-    keep: &BTreeSet<ChunkCoord>,
-) -> Result<Vec<FileOutcome>, TerrainError> {
-    fs::create_dir_all(folder).map_err(|e| TerrainError::Io {
-        message: format!("cannot create {}: {e}", folder.display()),
-    })?;
-    let mut keep = keep.clone();
-    let mut outcome = Vec::with_capacity(planned.len());
-    for file in planned {
-        let bytes = match file.bytes {
-            ChunkBytes::Live(record) => Arc::new(record.to_bytes()),
-            ChunkBytes::Stored(bytes) => bytes,
-        };
-        let checksum = file_checksum(&bytes).ok_or_else(|| TerrainError::Io {
-            message: format!("chunk {:?} has no terrain file bytes", file.coord),
-        })?;
-        let written = file.known != Some((bytes.len(), checksum));
-        if written {
-            let path = folder.join(TerrainWorld::chunk_file_name(file.coord));
-            write_atomic(&path, |f| f.write_all(&bytes)).map_err(|e| TerrainError::Io {
-                message: format!("cannot save {}: {e}", path.display()),
-            })?;
-        }
-        keep.insert(file.coord);
-        outcome.push(FileOutcome {
-            coord: file.coord,
-            len: bytes.len(),
-            checksum,
-            written,
-        });
-    }
-    remove_stale_chunk_files(folder, &keep)?;
-    outcome.sort_by_key(|f| f.coord);
-    Ok(outcome)
 }
 
 /// A folder's record after a save that succeeded: `kept` and the files
@@ -625,73 +732,4 @@ fn record_of(
         record.insert(file.coord, saved);
     }
     record
-}
-
-/// Removes the chunk files in `folder` of chunks not in `keep`, then syncs
-/// the folder so that the removals survive a crash.
-fn remove_stale_chunk_files(
-    folder: &Path,
-    keep: &BTreeSet<ChunkCoord>,
-) -> Result<(), TerrainError> {
-    let io = |what: &Path, e: std::io::Error| TerrainError::Io {
-        message: format!("cannot clean {}: {e}", what.display()),
-    };
-    let mut stale = Vec::new();
-    for entry in fs::read_dir(folder).map_err(|e| io(folder, e))? {
-        let entry = entry.map_err(|e| io(folder, e))?;
-        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
-        let coord = entry.file_name().to_str().and_then(parse_chunk_name);
-        if let Some(coord) = coord
-            && is_file
-            && !keep.contains(&coord)
-        {
-            stale.push(entry.path());
-        }
-    }
-    if stale.is_empty() {
-        return Ok(());
-    }
-    stale.sort();
-    for path in &stale {
-        fs::remove_file(path).map_err(|e| io(path, e))?;
-    }
-    fs::File::open(folder)
-        .and_then(|dir| dir.sync_all())
-        .map_err(|e| io(folder, e))
-}
-
-/// The chunk of a file name `chunk_X_Z.chiselterrain`.
-fn parse_chunk_name(name: &str) -> Option<ChunkCoord> {
-    let rest = name
-        .strip_prefix("chunk_")?
-        .strip_suffix(TERRAIN_EXTENSION)?
-        .strip_suffix('.')?;
-    let (x, z) = rest.split_once('_')?;
-    Some(ChunkCoord {
-        x: x.parse().ok()?,
-        z: z.parse().ok()?,
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn chunk_file_names_round_trip() {
-        for coord in [
-            ChunkCoord { x: 0, z: 0 },
-            ChunkCoord { x: -3, z: 12 },
-            ChunkCoord {
-                x: i64::MIN,
-                z: i64::MAX,
-            },
-        ] {
-            let name = TerrainWorld::chunk_file_name(coord);
-            assert_eq!(parse_chunk_name(&name), Some(coord), "{name}");
-        }
-        assert_eq!(parse_chunk_name("chunk_1.chiselterrain"), None);
-        assert_eq!(parse_chunk_name("chunk_1_2.png"), None);
-        assert_eq!(parse_chunk_name(".chunk_1_2.chiselterrain.9.0.tmp"), None);
-    }
 }
