@@ -50,8 +50,8 @@ use bevy_chisel::net::{NetServerPlugin, NetServerStats, NetWorld, start_client, 
 use bevy_chisel::presentation::Presentation;
 use bevy_chisel::terrain::{
     CarveShape, CarveTool, CellOutput, ChunkCoord, NoiseOctave, SaveWorld, StreamSettings, Terrain,
-    TerrainError, TerrainPlugin, TerrainSettings, TerrainWorld, ValueNoise, WorldLayout,
-    WorldSaveFailed, WorldSaved, WorldSource,
+    TerrainPlugin, TerrainSettings, TerrainWorld, ValueNoise, WorldLayout, WorldSaveFailed,
+    WorldSaved, WorldSource,
 };
 
 #[path = "multiplayer_world/headless.rs"]
@@ -325,7 +325,6 @@ fn run_server(addr: SocketAddr, save: Option<PathBuf>) -> AppExit {
             saved_at: 0,
             since: None,
             pending: false,
-            retry: false,
         })
         .add_systems(Update, autosave);
     }
@@ -342,12 +341,11 @@ struct Autosave {
     since: Option<Duration>,
     /// A save was asked for and is not answered yet.
     pending: bool,
-    /// The world was busy with a carve: ask again at the next tick.
-    retry: bool,
 }
 
 /// Saves the world [`SAVE_EVERY`] after the first carve since the last
-/// save, in the background; a world busy with a carve is asked again.
+/// save, in the background (the save itself waits for a frame between
+/// carves); a failed save is tried again [`SAVE_EVERY`] later.
 fn autosave(
     time: Res<Time>,
     stats: Res<NetServerStats>,
@@ -369,18 +367,15 @@ fn autosave(
     }
     for failure in failed.read() {
         save.pending = false;
-        if matches!(failure.error, TerrainError::WorldNotIdle { .. }) {
-            save.retry = true;
-        } else {
-            // Tried again after another SAVE_EVERY.
-            eprintln!("save failed: {}", failure.error);
-            save.since = Some(time.elapsed());
-        }
+        // Tried again after another SAVE_EVERY (a world carved without a
+        // pause for `max_save_wait` frames reports WorldNotIdle).
+        eprintln!("save failed: {}", failure.error);
+        save.since = Some(time.elapsed());
     }
     if stats.accepted > save.saved_at && save.since.is_none() {
         save.since = Some(time.elapsed());
     }
-    let due = save.retry || save.since.is_some_and(|t| time.elapsed() >= t + SAVE_EVERY);
+    let due = save.since.is_some_and(|t| time.elapsed() >= t + SAVE_EVERY);
     if let Ok(world) = worlds.single()
         && due
         && !save.pending
@@ -390,7 +385,6 @@ fn autosave(
             folder: save.folder.clone(),
         });
         save.pending = true;
-        save.retry = false;
         save.saved_at = stats.accepted;
         save.since = None;
     }

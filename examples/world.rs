@@ -359,8 +359,6 @@ struct Saves {
     temporary: bool,
     /// A save was asked for and is not answered yet.
     pending: bool,
-    /// The world was busy: ask again next frame.
-    retry: bool,
     next_autosave: Duration,
     /// The answer to the last save that was written.
     last: Option<WorldSaved>,
@@ -379,7 +377,6 @@ impl Saves {
             folder,
             temporary: headless,
             pending: false,
-            retry: false,
             next_autosave: AUTOSAVE_EVERY,
             last: None,
             message: "nothing saved yet".to_owned(),
@@ -441,13 +438,10 @@ fn save_and_load(
     }
     for failure in failed.read() {
         saves.pending = false;
-        if matches!(failure.error, TerrainError::WorldNotIdle { .. }) {
-            // A carve is in flight: the next frame may hold a whole state.
-            saves.retry = true;
-        } else {
-            saves.message = format!("save failed: {}", failure.error);
-            warn!("{}", saves.message);
-        }
+        // A world carved without a pause for `max_save_wait` frames
+        // (300 by default) is not saved: the next autosave tries again.
+        saves.message = format!("save failed: {}", failure.error);
+        warn!("{}", saves.message);
     }
     let Ok(world) = worlds.single() else {
         return;
@@ -458,13 +452,12 @@ fn save_and_load(
     } else {
         pressed(KeyCode::F5) || time.elapsed() >= saves.next_autosave
     };
-    if (due || saves.retry) && !saves.pending {
+    if due && !saves.pending {
         requests.write(SaveWorld {
             world,
             folder: saves.folder.clone(),
         });
         saves.pending = true;
-        saves.retry = false;
         saves.next_autosave = time.elapsed() + AUTOSAVE_EVERY;
     }
     if pressed(KeyCode::F9) {
