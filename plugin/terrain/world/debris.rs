@@ -40,10 +40,14 @@
 //!   settled ([`TerrainWorld::is_settled`]): a search is still to come.
 //! - **Carves beside the seeds first.** While a chunk with seeds, or a
 //!   neighbour of one across a side, has a job running or a carve or undo
-//!   waiting, no search starts: a carve that reaches several chunks
+//!   waiting, its seeds wait: a carve that reaches several chunks
 //!   finishes in each at its own frame, and a search over the half-done
 //!   carve would have to run again (`debris_across_chunk_borders`: one
-//!   search per block instead of two).
+//!   search per block instead of two). The other chunks' seeds are
+//!   searched without them, so that carves elsewhere in the world never
+//!   hold a piece back (`debris_latency_across_borders`: with a crater
+//!   carved every frame in chunks far away, a block fell 4 frames after
+//!   its cut instead of a median 127).
 //! - **Stale results.** A search depends on the chunks it takes solid from
 //!   and on their neighbours across a side (whose solid could hold the
 //!   piece, or whose absence anchors it); on every chunk when it failed.
@@ -538,16 +542,24 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
     if seeded.is_empty() {
         return;
     }
-    // A carve still running beside the seeds (one that reaches several
-    // chunks finishes in each at its own frame) would change what the
-    // search finds: wait for it rather than search twice.
-    let waiting = live.iter().any(|&(coord, e)| {
-        (seeded.contains(&coord) || side_neighbours(coord).any(|n| seeded.contains(&n)))
-            && terrains.get(e).is_ok_and(busy)
-    });
+    // A carve still running beside a chunk's seeds (one that reaches
+    // several chunks finishes in each at its own frame) would change what
+    // the search finds: those seeds wait for it rather than search twice.
+    // The other chunks' seeds are searched now, so that carves elsewhere
+    // in the world never hold them back.
+    let busy_chunks: BTreeSet<ChunkCoord> = (live.iter())
+        .filter(|&&(_, e)| terrains.get(e).is_ok_and(busy))
+        .map(|&(coord, _)| coord)
+        .collect();
+    let ready: BTreeSet<ChunkCoord> = (seeded.iter())
+        .filter(|&&c| {
+            !busy_chunks.contains(&c) && !side_neighbours(c).any(|n| busy_chunks.contains(&n))
+        })
+        .copied()
+        .collect();
     // A server whose last search stopped on a side towards a chunk it did
     // not load searches again once that chunk is built.
-    if waiting || !debris_order::wanted_built(world) {
+    if ready.is_empty() || !debris_order::wanted_built(world) {
         return;
     }
     let _span = bevy::log::info_span!("chisel::world::detach_across_borders").entered();
@@ -559,7 +571,11 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
         };
         // Taking the seeds is bookkeeping, not a change of the chunk.
         let terrain = terrain.bypass_change_detection();
-        let taken = std::mem::take(&mut terrain.runtime.border_seeds);
+        let taken = if ready.contains(&coord) {
+            std::mem::take(&mut terrain.runtime.border_seeds)
+        } else {
+            Vec::new()
+        };
         // A chunk without debris detection is left out: it anchors what
         // touches it, as a chunk not loaded does.
         let Some(config) = &terrain.debris else {
@@ -583,7 +599,7 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
             seeds.push((entity, taken));
         }
     }
-    world.debris_seeded = false;
+    world.debris_seeded = seeded.len() > ready.len();
     if near.is_empty() {
         return;
     }
