@@ -48,12 +48,15 @@ mod frame_steps;
 mod world;
 #[path = "terrain/world_debris.rs"]
 mod world_debris;
+#[path = "terrain/world_debris_latency.rs"]
+mod world_debris_latency;
 #[path = "terrain/world_lod.rs"]
 mod world_lod;
 #[path = "terrain/world_save.rs"]
 mod world_save;
 use world::streaming_a_world;
 use world_debris::debris_across_chunk_borders;
+use world_debris_latency::debris_latency_across_borders;
 use world_lod::lod_of_a_world;
 use world_save::saving_a_world;
 
@@ -61,7 +64,7 @@ fn main() {
     let Some(args) = Args::parse("terrain") else {
         return;
     };
-    let all: [(&str, fn()); 8] = [
+    let all: [(&str, fn()); 9] = [
         (
             "crater_carves_on_a_large_terrain",
             crater_carves_on_a_large_terrain,
@@ -81,6 +84,10 @@ fn main() {
         ("streaming_a_world", streaming_a_world),
         ("lod_of_a_world", lod_of_a_world),
         ("debris_across_chunk_borders", debris_across_chunk_borders),
+        (
+            "debris_latency_across_borders",
+            debris_latency_across_borders,
+        ),
         ("saving_a_world", saving_a_world),
     ];
     for (name, measure) in all {

@@ -119,6 +119,7 @@ mod jobs;
 pub mod material;
 pub mod mesh;
 pub mod physics;
+mod pool_order;
 #[cfg(feature = "props")]
 pub mod prop_tool;
 pub mod queue;

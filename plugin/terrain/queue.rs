@@ -23,6 +23,7 @@ use super::jobs::{
     on_pool, remesh,
 };
 use super::physics::TerrainPhysicsBackend;
+use super::pool_order::spawn_first;
 use super::world::ChunkOffstage;
 
 /// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
@@ -284,7 +285,9 @@ fn start_next(
         Some(Job::Detached { keys, pieces }) => {
             let octree = terrain.octree.clone();
             let mesher = std::mem::take(&mut terrain.runtime.mesher);
-            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+            // Debris across chunk borders, floating until this job runs:
+            // ahead of the chunk builds waiting on the pool.
+            terrain.runtime.task = Some(spawn_first(async move {
                 on_pool(pool, || {
                     detached_batch(octree, mesher, &context, keys, pieces)
                 })

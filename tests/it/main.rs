@@ -84,6 +84,7 @@ mod terrain_seams_render;
 mod terrain_world;
 #[cfg(feature = "terrain")]
 mod terrain_world_debris;
+mod terrain_world_debris_busy;
 #[cfg(feature = "terrain")]
 mod terrain_world_lod;
 #[cfg(feature = "terrain")]

@@ -33,6 +33,7 @@ use chisel_bsp::tree::Label;
 
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
+use super::super::pool_order::after_first;
 use super::lod_mesh::{LodBasis, LodPyramid, edited_pyramid, source_pyramid};
 use super::{ChunkCoord, TerrainFocus, TerrainWorld, restore};
 
@@ -498,6 +499,7 @@ pub fn update_lod(
                 Job::Source => {
                     let source = world.source.clone();
                     pool.spawn(async move {
+                        after_first().await;
                         let start = Instant::now();
                         let pyramid = source_pyramid(&layout, &*source, coord);
                         Built {
@@ -509,6 +511,7 @@ pub fn update_lod(
                 Job::Octree(hash, Some(octree)) => {
                     let source = world.source.clone();
                     pool.spawn(async move {
+                        after_first().await;
                         let start = Instant::now();
                         let pyramid = edited_pyramid(&layout, &*source, coord, &octree, hash);
                         Built {
@@ -521,6 +524,7 @@ pub fn update_lod(
                 Job::Bytes(_, bytes) => {
                     let source = world.source.clone();
                     pool.spawn(async move {
+                        after_first().await;
                         let start = Instant::now();
                         let pyramid = restore(&bytes, &labels).and_then(|t| {
                             edited_pyramid(&layout, &*source, coord, t.octree(), t.state_hash())

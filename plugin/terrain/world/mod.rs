@@ -224,7 +224,11 @@ pub struct StreamSettings {
     /// Chunks farther than this from every focus are streamed out (at
     /// least `load_radius`; the gap is the hysteresis).
     pub unload_radius: f32,
-    /// Most chunk builds on the async compute pool at once.
+    /// Most chunk builds on the async compute pool at once. A build that
+    /// has not started yet steps back behind the debris work waiting
+    /// there (a search for debris across chunk borders, a chunk's job
+    /// that takes its pieces out), so a piece cut loose does not float
+    /// while chunks stream in: see [`debris`], *Priority on the pool*.
     pub max_building: usize,
 }
 

@@ -18,6 +18,7 @@ use bevy::tasks::futures::check_ready;
 use super::super::carve::{CarveRejected, GridCarve};
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
+use super::super::pool_order::after_first;
 use super::debris_order::DebrisRole;
 use super::{
     Built, Chunk, ChunkCoord, ChunkOffstage, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk,
@@ -342,6 +343,7 @@ fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     let labels = world.labels.clone();
     let task = if let Some(bytes) = world.stored.get(&coord).cloned() {
         AsyncComputeTaskPool::get().spawn(async move {
+            after_first().await;
             let start = Instant::now();
             let terrain = restore(&bytes, &labels);
             Built {
@@ -353,6 +355,7 @@ fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     } else {
         let (layout, source) = (world.layout.clone(), world.source.clone());
         AsyncComputeTaskPool::get().spawn(async move {
+            after_first().await;
             let start = Instant::now();
             let terrain = generate(&layout, &*source, &labels, coord);
             Built {
