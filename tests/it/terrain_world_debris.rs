@@ -17,7 +17,7 @@ use bevy_chisel::terrain::{
 use super::terrain_world::{app_with, settle, terrain, the_world, world};
 
 /// A box tool with grid corners `min` and `max` (grid unit 1).
-fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
+pub(crate) fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
     let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
     let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
     CarveTool::new(
@@ -62,7 +62,7 @@ const fn at(x: i64, z: i64) -> ChunkCoord {
 /// The surface is at most 20 high: pillars stand from 4 up to 25, the
 /// slab lies at 24..28, and the cut at 21..23 meets only the pillar.
 const PILLAR: ([i64; 3], [i64; 3]) = ([26, 4, 10], [29, 25, 13]);
-const CUT: ([i64; 3], [i64; 3]) = ([25, 21, 9], [30, 23, 14]);
+pub(crate) const CUT: ([i64; 3], [i64; 3]) = ([25, 21, 9], [30, 23, 14]);
 
 /// A world with a slab from x = 26 to 38 over the border x = 32 on a
 /// pillar in chunk (0, 0), and also one in chunk (1, 0) when `held`.
@@ -73,23 +73,19 @@ fn slab_world(held: bool) -> (App, Entity) {
 /// [`slab_world`] in `world`.
 fn slab_in(world: TerrainWorld, held: bool) -> (App, Entity) {
     let (mut app, world, _) = app_with(world, Vec3::new(32.0, 30.0, 16.0));
-    edit(&mut app, world, cuboid(PILLAR.0, PILLAR.1), Edit::Add(1));
-    if held {
-        edit(
-            &mut app,
-            world,
-            cuboid([35, 4, 10], [38, 25, 13]),
-            Edit::Add(1),
-        );
-    }
-    edit(
-        &mut app,
-        world,
-        cuboid([26, 24, 10], [38, 28, 14]),
-        Edit::Add(1),
-    );
-    assert!(debris(&mut app).is_empty(), "the slab rests on its pillar");
+    build_slab(&mut app, world, held);
     (app, world)
+}
+
+/// Builds [`slab_world`]'s pillar (or pillars) and slab in `app`'s
+/// `world`, whose focus is near (32, 16).
+pub(crate) fn build_slab(app: &mut App, world: Entity, held: bool) {
+    edit(app, world, cuboid(PILLAR.0, PILLAR.1), Edit::Add(1));
+    if held {
+        edit(app, world, cuboid([35, 4, 10], [38, 25, 13]), Edit::Add(1));
+    }
+    edit(app, world, cuboid([26, 24, 10], [38, 28, 14]), Edit::Add(1));
+    assert!(debris(app).is_empty(), "the slab rests on its pillar");
 }
 
 /// What falls when the pillar is cut: the pillar above the cut, 3×1×3,

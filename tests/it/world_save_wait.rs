@@ -1,6 +1,7 @@
 //! A [`SaveWorld`] that finds its world busy waits for a whole state
 //! (`MinimalPlugins`): a request in a frame with a world carve in flight
-//! saves the world with that carve in every chunk it reached; a world
+//! saves the world with that carve in every chunk it reached, and one
+//! as a slab is cut loose over a chunk border saves it fallen; a world
 //! carved in every frame makes a request give up after the bound, and the
 //! next one in a settled world writes every edited chunk; two requests
 //! for one folder get one answer; despawning the world drops its waiting
@@ -21,6 +22,7 @@ use bevy_chisel::terrain::{
 use super::terrain_world::{
     carve, chunk_files, dodecahedron, settle, terrain, the_world, world as new_world,
 };
+use super::terrain_world_debris::{CUT, build_slab, cuboid};
 use super::world_save::{
     at, edited_bytes, heard, inside, names, save, save_app, save_app_at, temp_folder,
     until_answered,
@@ -93,6 +95,32 @@ fn a_save_asked_while_a_world_carve_is_in_flight_saves_it_whole() {
     );
     assert!(loaded == now, "the same files");
     assert_eq!(terrain(&app, world, right).journal().len(), 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_save_asked_as_a_slab_is_cut_loose_across_a_border_saves_it_fallen() {
+    let (mut app, world, _focus) = save_app_at(new_world(), Vec3::new(32.0, 30.0, 16.0));
+    build_slab(&mut app, world, false);
+    // The cut and the request in the same frame: the chunks' jobs finish,
+    // then a search over both chunks finds the slab and takes it out.
+    carve(&mut app, world, cuboid(CUT.0, CUT.1));
+    let dir = temp_folder("wait-debris");
+    request(&mut app, world, &dir);
+    until_answered(&mut app, 1);
+    assert!(heard(&app).failed.is_empty(), "{:?}", heard(&app).failed);
+    settle(&mut app, world);
+    assert_eq!(the_world(&app, world).stats().detached_across, 1, "it fell");
+    let now = edited_bytes(&app, world);
+    let loaded = new_world().load_edits(&dir).expect("loads");
+    let loaded: BTreeMap<ChunkCoord, Vec<u8>> = (loaded.stored_chunks())
+        .map(|c| (c, loaded.stored_chunk(c).expect("stored").to_vec()))
+        .collect();
+    assert_eq!(
+        hashes(&loaded),
+        hashes(&now),
+        "saved with the slab taken out, not hanging"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -57,8 +57,12 @@
 //! world never holds half of a world carve. A frame does not when a carve
 //! waits for a chunk (also a far chunk's deferred carves on a networked
 //! world's client: [`TerrainWorld::build_deferred`] builds them), a
-//! [`WorldUndo`](super::WorldUndo) waits for a chunk, or a live chunk has
-//! a carve, undo or detach queued or running. A request read in such a
+//! [`WorldUndo`](super::WorldUndo) waits for a chunk, a live chunk has
+//! a carve, undo or detach queued or running, or a piece cut loose across
+//! chunk borders is still to be taken out (seeds wait for a search, a
+//! search runs or waits to be applied, or a networked server's detach
+//! waits to be carried out): a save never holds a piece that a carve
+//! already freed still in place. A request read in such a
 //! frame, or while a save of the same world is being written, is not
 //! refused: the world keeps it, oldest first, and starts it in the first
 //! later frame that holds a whole state with no save of the world running
@@ -394,8 +398,9 @@ impl TerrainWorld {
     }
 
     /// Whether this frame holds a whole state ([module docs](self)): no
-    /// carve waits for a chunk, no undo waits for one, and every live chunk
-    /// readable here is settled.
+    /// carve waits for a chunk, no undo waits for one, every live chunk
+    /// readable here is settled, and no fall across chunk borders is on
+    /// its way.
     ///
     /// # Errors
     /// [`TerrainError::WorldNotIdle`] naming a busy chunk.
@@ -408,6 +413,22 @@ impl TerrainWorld {
                 .find(|&(_, entity)| terrains.get(entity).is_ok_and(|t| !content_settled(&t)))
                 .map(|(coord, _)| coord)
         });
+        // A fall across chunk borders on its way: a chunk's seeds for the
+        // next search, a search running or waiting to be applied, or a
+        // detach a networked server ordered.
+        let falling = || {
+            let seeded = self.live_chunks().find(|&(_, entity)| {
+                terrains
+                    .get(entity)
+                    .is_ok_and(|t| !t.runtime.border_seeds.is_empty())
+            });
+            let searching =
+                self.debris_search.is_some() || self.debris_seeded || self.detach_ordered.is_some();
+            (seeded.or_else(|| searching.then(|| self.live_chunks().next()).flatten()))
+                .map(|(coord, _)| coord)
+                .or_else(|| searching.then_some(ChunkCoord { x: 0, z: 0 }))
+        };
+        let busy = busy.or_else(falling);
         match busy {
             Some(coord) => Err(TerrainError::WorldNotIdle {
                 chunk: [coord.x, coord.z],
