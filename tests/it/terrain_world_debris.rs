@@ -34,7 +34,7 @@ fn edit(app: &mut App, world: Entity, tool: CarveTool, edit: Edit) {
     settle(app, world);
 }
 
-fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
+pub(crate) fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
     ExactVolume::from_integer((0..3).map(|a| i128::from(max[a] - min[a])).product())
 }
 
@@ -46,7 +46,7 @@ fn volumes(app: &App, world: Entity, coords: &[ChunkCoord]) -> Vec<ExactVolume> 
         .collect()
 }
 
-fn debris(app: &mut App) -> Vec<TerrainDebris> {
+pub(crate) fn debris(app: &mut App) -> Vec<TerrainDebris> {
     let mut query = app.world_mut().query::<&TerrainDebris>();
     query.iter(app.world()).cloned().collect()
 }
@@ -90,7 +90,7 @@ pub(crate) fn build_slab(app: &mut App, world: Entity, held: bool) {
 
 /// What falls when the pillar is cut: the pillar above the cut, 3×1×3,
 /// and the slab, 12×4×4.
-fn falling() -> ExactVolume {
+pub(crate) fn falling() -> ExactVolume {
     box_volume([26, 23, 10], [29, 24, 13]) + box_volume([26, 24, 10], [38, 28, 14])
 }
 

@@ -7,10 +7,11 @@
 //! focus keeps moving so that chunks keep building.
 
 use bevy::prelude::*;
-use bevy_chisel::bsp::octree::{Edit, ExactVolume};
-use bevy_chisel::terrain::{CarveShape, CarveTool, TerrainDebris, TerrainFocus, WorldCarve};
+use bevy_chisel::bsp::octree::Edit;
+use bevy_chisel::terrain::{CarveTool, TerrainFocus, WorldCarve};
 
 use super::terrain_world::{app_with, settle, the_world, world};
+use super::terrain_world_debris::{CUT, build_slab, cuboid, debris, falling};
 
 /// Most frames (1 ms apart) from the cut to the debris. Measured on one
 /// async compute thread: 4 in an idle world, 7 with a far chunk carved
@@ -20,30 +21,9 @@ use super::terrain_world::{app_with, settle, the_world, world};
 /// is for slower machines.
 const MOST_FRAMES: u64 = 100;
 
-/// A box tool with grid corners `min` and `max` (grid unit 1).
-fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
-    let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
-    let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
-    CarveTool::new(
-        CarveShape::Cuboid {
-            half_size: (hi - lo) / 2.0,
-        },
-        Transform::from_translation((lo + hi) / 2.0),
-    )
-}
-
 fn carve(app: &mut App, world: Entity, tool: CarveTool, edit: Edit) {
     app.world_mut()
         .write_message(WorldCarve { world, tool, edit });
-}
-
-fn box_volume(min: [i64; 3], max: [i64; 3]) -> ExactVolume {
-    ExactVolume::from_integer((0..3).map(|a| i128::from(max[a] - min[a])).product())
-}
-
-fn debris(app: &mut App) -> Vec<TerrainDebris> {
-    let mut query = app.world_mut().query::<&TerrainDebris>();
-    query.iter(app.world()).cloned().collect()
 }
 
 /// The slab of 12×4×4 from x = 26 to 38 over the border x = 32 on a
@@ -51,20 +31,7 @@ fn debris(app: &mut App) -> Vec<TerrainDebris> {
 /// chunks are built too: the app, the world and the second focus.
 fn slab_and_far_focus(far_x: f32) -> (App, Entity, Entity) {
     let (mut app, world, _) = app_with(world(), Vec3::new(32.0, 30.0, 16.0));
-    carve(
-        &mut app,
-        world,
-        cuboid([26, 4, 10], [29, 25, 13]),
-        Edit::Add(1),
-    );
-    settle(&mut app, world);
-    carve(
-        &mut app,
-        world,
-        cuboid([26, 24, 10], [38, 28, 14]),
-        Edit::Add(1),
-    );
-    settle(&mut app, world);
+    build_slab(&mut app, world, false);
     let far = app
         .world_mut()
         .spawn((
@@ -95,21 +62,11 @@ fn slab_and_far_focus(far_x: f32) -> (App, Entity, Entity) {
     (app, world, far)
 }
 
-/// What falls when the pillar is cut: its top above the cut and the slab.
-fn falling() -> ExactVolume {
-    box_volume([26, 23, 10], [29, 24, 13]) + box_volume([26, 24, 10], [38, 28, 14])
-}
-
 /// Cuts the pillar, then runs frames (1 ms apart), calling `busy` before
 /// each, until the slab's debris is spawned: the frames it took. Then
 /// stops the business, settles and checks that exactly the slab fell.
 fn cut_to_debris(app: &mut App, world: Entity, mut busy: impl FnMut(&mut App, u64)) -> u64 {
-    carve(
-        app,
-        world,
-        cuboid([25, 21, 9], [30, 23, 14]),
-        Edit::Subtract,
-    );
+    carve(app, world, cuboid(CUT.0, CUT.1), Edit::Subtract);
     let mut frames = 0;
     while debris(app).is_empty() {
         frames += 1;

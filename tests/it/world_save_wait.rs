@@ -35,6 +35,15 @@ fn request(app: &mut App, world: Entity, folder: &Path) {
     });
 }
 
+/// The terrain file bytes of every chunk of the world saved in `dir`, as
+/// a fresh world loads them.
+fn loaded_bytes(dir: &Path) -> BTreeMap<ChunkCoord, Vec<u8>> {
+    let loaded = new_world().load_edits(dir).expect("loads");
+    (loaded.stored_chunks())
+        .map(|c| (c, loaded.stored_chunk(c).expect("stored").to_vec()))
+        .collect()
+}
+
 /// The state hash of every chunk in `bytes` (terrain file bytes).
 fn hashes(bytes: &BTreeMap<ChunkCoord, Vec<u8>>) -> BTreeMap<ChunkCoord, u64> {
     (bytes.iter())
@@ -84,10 +93,7 @@ fn a_save_asked_while_a_world_carve_is_in_flight_saves_it_whole() {
     assert_eq!(done.written, all);
     assert_ne!(hashes(&now)[&left], before[&left], "the carve reached left");
     assert_eq!(chunk_files(&dir), names(&all));
-    let loaded = new_world().load_edits(&dir).expect("loads");
-    let loaded: BTreeMap<ChunkCoord, Vec<u8>> = (loaded.stored_chunks())
-        .map(|c| (c, loaded.stored_chunk(c).expect("stored").to_vec()))
-        .collect();
+    let loaded = loaded_bytes(&dir);
     assert_eq!(
         hashes(&loaded),
         hashes(&now),
@@ -112,10 +118,7 @@ fn a_save_asked_as_a_slab_is_cut_loose_across_a_border_saves_it_fallen() {
     settle(&mut app, world);
     assert_eq!(the_world(&app, world).stats().detached_across, 1, "it fell");
     let now = edited_bytes(&app, world);
-    let loaded = new_world().load_edits(&dir).expect("loads");
-    let loaded: BTreeMap<ChunkCoord, Vec<u8>> = (loaded.stored_chunks())
-        .map(|c| (c, loaded.stored_chunk(c).expect("stored").to_vec()))
-        .collect();
+    let loaded = loaded_bytes(&dir);
     assert_eq!(
         hashes(&loaded),
         hashes(&now),
