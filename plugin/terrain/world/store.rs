@@ -424,9 +424,13 @@ impl TerrainWorld {
             });
             let searching =
                 self.debris_search.is_some() || self.debris_seeded || self.detach_ordered.is_some();
-            (seeded.or_else(|| searching.then(|| self.live_chunks().next()).flatten()))
-                .map(|(coord, _)| coord)
-                .or_else(|| searching.then_some(ChunkCoord { x: 0, z: 0 }))
+            // A search is the world's: it names any live chunk.
+            let any = || {
+                self.live_chunks()
+                    .next()
+                    .map_or(ChunkCoord { x: 0, z: 0 }, |c| c.0)
+            };
+            (seeded.map(|(coord, _)| coord)).or_else(|| searching.then(any))
         };
         let busy = busy.or_else(falling);
         match busy {
