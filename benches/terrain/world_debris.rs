@@ -45,6 +45,14 @@ fn searches(app: &App, world: Entity) -> (u64, u64) {
 /// An app with the example's world (no bands) and a focus over the
 /// corner that keeps exactly the four chunks around it live, settled.
 fn corner_app() -> (App, Entity) {
+    let (mut app, world) = corner_world_app();
+    settle(&mut app, world);
+    assert_eq!(the_world(&app, world).live_chunks().count(), 4);
+    (app, world)
+}
+
+/// [`corner_app`] before any frame ran (nothing built yet).
+pub(super) fn corner_world_app() -> (App, Entity) {
     let world = world_of_the_example(false)
         .with_streaming(StreamSettings {
             load_radius: 15.0,
@@ -58,8 +66,6 @@ fn corner_app() -> (App, Entity) {
         TerrainFocus,
         Transform::from_translation(Vec3::new(20.48, 10.0, 20.48)),
     ));
-    settle(&mut app, world);
-    assert_eq!(the_world(&app, world).live_chunks().count(), 4);
     (app, world)
 }
 

@@ -18,10 +18,10 @@
 //! search back), over `CHISEL_BENCH_REPS` blocks (default 6, at most 12). It also prints the number of threads of the async compute
 //! pool, which runs the chunk builds, the carve jobs and the search.
 
-use super::world::{terrain_app, world_of_the_example};
+use super::world_debris::corner_world_app;
 use super::*;
 use bevy::tasks::AsyncComputeTaskPool;
-use bevy_chisel::terrain::{StreamSettings, TerrainDebris, TerrainFocus, TerrainWorld, WorldCarve};
+use bevy_chisel::terrain::{TerrainDebris, TerrainFocus, TerrainWorld, WorldCarve};
 
 /// One frame at 60 frames per second.
 const FRAME: Duration = Duration::from_micros(16_667);
@@ -71,19 +71,7 @@ struct Bench {
 
 impl Bench {
     fn new(case: Case) -> Self {
-        let world = world_of_the_example(false)
-            .with_streaming(StreamSettings {
-                load_radius: 15.0,
-                unload_radius: 18.0,
-                max_building: 4,
-            })
-            .expect("valid settings");
-        let mut app = terrain_app();
-        let world = app.world_mut().spawn(world).id();
-        app.world_mut().spawn((
-            TerrainFocus,
-            Transform::from_translation(Vec3::new(20.48, 10.0, 20.48)),
-        ));
+        let (mut app, world) = corner_world_app();
         let far_focus = app
             .world_mut()
             .spawn((

@@ -8,35 +8,17 @@
 //! back without losing what its players dug.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::{NetClientStats, Outcome};
-use bevy_chisel::terrain::{CarveTool, ChunkCoord, SaveWorld, WorldSaveFailed, WorldSaved};
+use bevy_chisel::terrain::{CarveTool, ChunkCoord, SaveWorld};
 
 use crate::net::world::build_deferred;
 use crate::net_worlds::{edited_chunks, streamed_world as world, world_settled as settled};
+use crate::world_save::{Heard, hear, temp_folder};
 use crate::{ONE_APP_AT_A_TIME, net};
 use net::{Rng, Seen, WorldsSeen, request_world, run_until, world_client, world_of, world_server};
-
-/// The answers to the saves a server asked for.
-#[derive(Resource, Default)]
-struct Saves {
-    saved: Vec<WorldSaved>,
-    failed: Vec<String>,
-}
-
-fn hear_saves(
-    mut saves: ResMut<Saves>,
-    mut saved: MessageReader<WorldSaved>,
-    mut failed: MessageReader<WorldSaveFailed>,
-) {
-    saves.saved.extend(saved.read().cloned());
-    saves
-        .failed
-        .extend(failed.read().map(|f| f.error.to_string()));
-}
 
 /// Blasts and heaps around the chunk borders at x = 32 and z = 32, so
 /// that most of them reach two or four chunks.
@@ -86,28 +68,17 @@ fn let_checks_run(apps: &mut [&mut App]) {
     }
 }
 
-fn temp_folder() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "bevy_chisel-net-world-restart-{}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
 #[test]
 fn a_restarted_server_serves_its_saved_world_bit_identical() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let folder = temp_folder();
+    let folder = temp_folder("net-restart");
     let mut rng = Rng(4242);
 
     // The first server, carved by one client.
     let (mut server, addr) = world_server(world(), net::unlimited());
-    server
-        .init_resource::<Saves>()
-        .add_systems(Last, hear_saves);
+    server.init_resource::<Heard>().add_systems(Last, hear);
     let mut a = world_client(addr, 1, world(), Vec3::new(32.0, 30.0, 32.0));
     run_until(&mut [&mut server, &mut a], 20_000, |apps| {
         !apps[1].world().resource::<WorldsSeen>().synced.is_empty() && settled(apps[1])
@@ -125,13 +96,13 @@ fn a_restarted_server_serves_its_saved_world_bit_identical() {
         folder: folder.clone(),
     });
     run_until(&mut [&mut server, &mut a], 10_000, |apps| {
-        let saves = apps[0].world().resource::<Saves>();
-        !saves.saved.is_empty() || !saves.failed.is_empty()
+        let heard = apps[0].world().resource::<Heard>();
+        !heard.saved.is_empty() || !heard.failed.is_empty()
     });
-    let saves = server.world().resource::<Saves>();
-    assert_eq!(saves.failed, Vec::<String>::new(), "the save failed");
+    let failed = &server.world().resource::<Heard>().failed;
+    assert!(failed.is_empty(), "the save failed: {failed:?}");
     let saved_chunks = edited_chunks(&mut server);
-    let written = server.world().resource::<Saves>().saved[0].written.clone();
+    let written = server.world().resource::<Heard>().saved[0].written.clone();
     assert_eq!(
         written,
         saved_chunks.keys().copied().collect::<Vec<_>>(),

@@ -48,7 +48,7 @@ pub(super) struct Heard {
     pub(super) world_changed: usize,
 }
 
-fn hear(
+pub(super) fn hear(
     mut saved: MessageReader<WorldSaved>,
     mut failed: MessageReader<WorldSaveFailed>,
     worlds: Query<Ref<TerrainWorld>>,
