@@ -295,8 +295,9 @@ impl Octree {
     }
 }
 
-/// The exact volume per label of one leaf inside `cell`.
-fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, ExactVolume)> {
+/// The exact volume per label of one leaf inside `cell` (the part of the
+/// leaf's regions in `cell`, when `cell` lies inside the leaf's own).
+pub(super) fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, ExactVolume)> {
     match leaf {
         Leaf::Uniform(EMPTY) => Vec::new(),
         Leaf::Uniform(label) => vec![(*label, ExactVolume::of_box(cell))],

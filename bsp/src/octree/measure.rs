@@ -9,7 +9,8 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
-use super::tree::Octree;
+use super::cell::CellBox;
+use super::tree::{Leaf, Octree};
 use crate::convex::{ConvexArena, PolyId};
 use crate::tree::{EMPTY, Label};
 
@@ -20,18 +21,7 @@ impl Octree {
         let per_leaf: Vec<Vec<(Label, f64)>> = self
             .leaves()
             .par_iter()
-            .map(|&(key, leaf)| {
-                let bsp = leaf.to_bsp();
-                let mut arena = ConvexArena::new();
-                let Ok(bounds) = self.cell_box(key).add_to(&mut arena) else {
-                    return Vec::new();
-                };
-                bsp.cells(&mut arena, bounds)
-                    .into_iter()
-                    .filter(|c| c.label != EMPTY)
-                    .map(|c| (c.label, polyhedron_volume(&arena, c.poly)))
-                    .collect()
-            })
+            .map(|&(key, leaf)| leaf_volumes(leaf, &self.cell_box(key)))
             .collect();
         let mut out = BTreeMap::new();
         for (label, v) in per_leaf.into_iter().flatten() {
@@ -45,6 +35,22 @@ impl Octree {
     pub fn solid_volume(&self) -> f64 {
         self.volumes().values().sum()
     }
+}
+
+/// The volume per label of one leaf's convex cells inside `cell` (the
+/// part of the leaf's regions in `cell`, when `cell` lies inside the
+/// leaf's own), one entry per convex cell.
+pub(super) fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, f64)> {
+    let bsp = leaf.to_bsp();
+    let mut arena = ConvexArena::new();
+    let Ok(bounds) = cell.add_to(&mut arena) else {
+        return Vec::new();
+    };
+    bsp.cells(&mut arena, bounds)
+        .into_iter()
+        .filter(|c| c.label != EMPTY)
+        .map(|c| (c.label, polyhedron_volume(&arena, c.poly)))
+        .collect()
 }
 
 fn polyhedron_volume(arena: &ConvexArena, poly: PolyId) -> f64 {

@@ -19,7 +19,8 @@
 //!   [`import_layers`] — from a heightfield with material bands by depth,
 //!   every band labelled in the same pass.
 //! - [`measure`] — material volumes for reports; [`exact_volume`] — the
-//!   same, exactly, as rationals.
+//!   same, exactly, as rationals; [`volume_change`] — what an edit changed
+//!   of each material, exactly, from the cells it names.
 //! - [`components`] — connected components of the solid (cells sharing
 //!   faces of positive area) and what anchors them.
 //! - [`debris`] — after an edit, finding the solid no anchor holds and
@@ -83,6 +84,7 @@ pub mod store;
 pub mod surface;
 pub mod tool;
 pub mod tree;
+pub mod volume_change;
 
 pub use apply::{Changes, Edit};
 pub use cell::{CellBox, CellKey};

@@ -48,6 +48,7 @@ mod octree_shading;
 mod octree_shading_outside;
 mod octree_split;
 mod octree_store;
+mod octree_volume_change;
 
 // Property-based fuzzing of the kernel's inputs.
 mod fuzz_inputs;
