@@ -28,10 +28,12 @@
 //!    each carve's [`CarveApplied`]. Only the first full build of a terrain
 //!    is spread over frames, within [`TerrainSettings::mesh_budget`].
 
+use std::collections::BTreeMap;
 use std::time::Duration;
 
 use bevy::prelude::*;
 use chisel_bsp::octree::{CellKey, Edit};
+use chisel_bsp::tree::Label;
 
 use super::debris::DEFAULT_DEBRIS_DENSITY;
 use super::debris_hulls::DEFAULT_MAX_DEBRIS_HULLS;
@@ -104,6 +106,19 @@ pub struct CarveApplied {
     /// Leaf cells this carve (or undo) changed, split or merged: their
     /// meshes were rebuilt or removed.
     pub cells: usize,
+    /// What this carve changed of each material, in cubic world units:
+    /// negative where it removed material, positive where it added some (a
+    /// paint moves volume from the materials it covers to its own).
+    /// Materials it left as they were are not listed. The regions are
+    /// exact and only their volumes' sums rounded, so the changes of a
+    /// terrain's carves add up to its volumes after less before
+    /// ([`Terrain::volumes`](super::Terrain::volumes)) to about 1e-15 of
+    /// the cells they changed. A piece the carve cut loose is not counted
+    /// here: it has its volumes ([`TerrainDebris`](super::TerrainDebris)).
+    /// An undo lists what it gave back, the pieces it brought back
+    /// included. Measuring it costs the job about a tenth of a crater's
+    /// kernel time (`crater_job`: 0.13 ms against 1.1 ms).
+    pub volume_change: BTreeMap<Label, f64>,
     /// Time in the exact kernel (off the main thread).
     pub apply_time: Duration,
     /// Time building the cell meshes (off the main thread), shared by the
@@ -115,6 +130,26 @@ pub struct CarveApplied {
     /// From reading the request to the last changed mesh and collider
     /// being in place.
     pub latency: Duration,
+}
+
+impl CarveApplied {
+    /// The material this carve took out, all materials together, in cubic
+    /// world units (the negative part of [`CarveApplied::volume_change`]).
+    #[must_use]
+    pub fn removed_volume(&self) -> f64 {
+        -self
+            .volume_change
+            .values()
+            .filter(|v| **v < 0.0)
+            .sum::<f64>()
+    }
+
+    /// The material this carve put in, all materials together, in cubic
+    /// world units (the positive part of [`CarveApplied::volume_change`]).
+    #[must_use]
+    pub fn added_volume(&self) -> f64 {
+        self.volume_change.values().filter(|v| **v > 0.0).sum()
+    }
 }
 
 /// A carve or undo that was refused; the terrain is unchanged.

@@ -9,7 +9,7 @@
 //! [`super::upload`]; [`Terrain::apply_now`] is the synchronous twin for
 //! code outside the ECS.
 
-use std::collections::{BTreeSet, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::sync::Arc;
 
 use bevy::prelude::*;
@@ -273,6 +273,18 @@ impl Terrain {
         self.last_request
     }
 
+    /// The volume of each material in the terrain, in cubic world units
+    /// (exact regions, their volumes summed in `f64`). It walks every leaf:
+    /// milliseconds for a large terrain; to follow what carves take out,
+    /// add up their [`CarveApplied::volume_change`](super::CarveApplied::volume_change) instead.
+    #[must_use]
+    pub fn volumes(&self) -> BTreeMap<Label, f64> {
+        let unit = self.quantization.unit();
+        let cube = unit * unit * unit;
+        let volumes = self.octree.volumes();
+        volumes.into_iter().map(|(l, v)| (l, v * cube)).collect()
+    }
+
     /// The grid: unit and origin.
     #[must_use]
     pub fn quantization(&self) -> &Quantization {
@@ -384,15 +396,20 @@ impl Terrain {
     /// # Errors
     /// [`TerrainError::NothingToUndo`].
     pub fn undo_now(&mut self) -> Result<Vec<CellKey>, TerrainError> {
+        self.undo_now_from().map(|(_, keys)| keys)
+    }
+
+    /// [`Terrain::undo_now`], also handing back the octree it undid.
+    pub(crate) fn undo_now_from(&mut self) -> Result<(Octree, Vec<CellKey>), TerrainError> {
         let step = self.history.pop_back().ok_or(TerrainError::NothingToUndo)?;
         self.journal.pop();
-        self.octree = step.before;
+        let undone = std::mem::replace(&mut self.octree, step.before);
         let mut keys = step.changes.changed;
         keys.extend(step.changes.removed);
         keys.sort_unstable();
         keys.dedup();
         self.hash.update(&self.octree, &keys);
-        Ok(keys)
+        Ok((undone, keys))
     }
 
     pub(crate) fn record(&mut self, before: Octree, changes: Changes, tool: GridTool, edit: Edit) {

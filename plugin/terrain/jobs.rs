@@ -235,6 +235,8 @@ pub(crate) enum StepOutcome {
         changes: Changes,
         tool: GridTool,
         edit: Edit,
+        /// What the carve changed of each material, in cubic world units.
+        volume_change: BTreeMap<Label, f64>,
         apply_time: Duration,
         requested: Instant,
         request: Option<u64>,
@@ -246,12 +248,12 @@ pub(crate) enum StepOutcome {
     },
     Undone {
         cells: usize,
+        /// What the undo changed of each material, in cubic world units.
+        volume_change: BTreeMap<Label, f64>,
         requested: Instant,
     },
     /// Pieces cut loose across chunk borders, built to spawn.
-    Detached {
-        debris: Vec<BuiltDebris>,
-    },
+    Detached { debris: Vec<BuiltDebris> },
 }
 
 /// One material's mesh of a cell, built off the main thread, with its
@@ -354,10 +356,14 @@ pub(crate) fn carve_batch(
         let start = Instant::now();
         let carved =
             apply_carve_with_faces(&mut octree, &tool, edit).and_then(|(changes, faces)| {
-                detach(&mut octree, changes, context).map(|(c, pieces)| (c, faces, pieces))
+                // The carve's own change, before any piece it cut loose
+                // is taken out (the pieces report their own volumes).
+                let volume_change = world_volumes(changes.volume_change(&before, &octree), context);
+                detach(&mut octree, changes, context)
+                    .map(|(c, pieces)| (c, faces, pieces, volume_change))
             });
         match carved {
-            Ok((changes, faces, pieces)) => {
+            Ok((changes, faces, pieces, volume_change)) => {
                 for key in changes.changed.iter().chain(&changes.removed) {
                     fresh.remove(key);
                 }
@@ -379,6 +385,7 @@ pub(crate) fn carve_batch(
                     changes,
                     tool,
                     edit,
+                    volume_change,
                     apply_time,
                     requested,
                     request,
@@ -392,6 +399,33 @@ pub(crate) fn carve_batch(
         }
     }
     remesh(octree, context, steps, keys, fresh, mesher, false)
+}
+
+/// A change per material in cubic grid units, in cubic world units.
+fn world_volumes(grid: BTreeMap<Label, f64>, context: &JobContext) -> BTreeMap<Label, f64> {
+    let unit = context.quantization.unit();
+    let cube = unit * unit * unit;
+    grid.into_iter().map(|(l, v)| (l, v * cube)).collect()
+}
+
+/// The step of an undo that turned `before` into `after`, changing the
+/// cells `keys`.
+pub(crate) fn undone_step(
+    before: &Octree,
+    after: &Octree,
+    keys: &[CellKey],
+    context: &JobContext,
+    requested: Instant,
+) -> StepOutcome {
+    let changes = Changes {
+        changed: keys.to_vec(),
+        removed: Vec::new(),
+    };
+    StepOutcome::Undone {
+        cells: keys.len(),
+        volume_change: world_volumes(changes.volume_change(before, after), context),
+        requested,
+    }
 }
 
 /// Builds the pieces a detach across chunk borders cut loose (each as

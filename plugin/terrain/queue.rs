@@ -19,8 +19,8 @@ use super::carve::{Carve, CarveRejected, CellOutput, GridCarve, TerrainSettings,
 use super::component::Terrain;
 use super::error::TerrainError;
 use super::jobs::{
-    CellUpdate, Job, JobContext, StepOutcome, Upload, Workers, carve_batch, detached_batch,
-    on_pool, remesh,
+    CellUpdate, Job, JobContext, Upload, Workers, carve_batch, detached_batch, on_pool, remesh,
+    undone_step,
 };
 use super::physics::TerrainPhysicsBackend;
 use super::pool_order::spawn_first;
@@ -231,16 +231,13 @@ fn start_next(
             // The world carries it out and takes it away.
             terrain.runtime.queue.push_front(hold);
         }
-        Some(Job::Undo { requested }) => match terrain.undo_now() {
-            Ok(keys) => {
+        Some(Job::Undo { requested }) => match terrain.undo_now_from() {
+            Ok((before, keys)) => {
                 let octree = terrain.octree.clone();
-                let steps = vec![StepOutcome::Undone {
-                    cells: keys.len(),
-                    requested,
-                }];
                 let mesher = std::mem::take(&mut terrain.runtime.mesher);
                 terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
                     on_pool(pool, || {
+                        let steps = vec![undone_step(&before, &octree, &keys, &context, requested)];
                         remesh(
                             octree,
                             &context,

@@ -54,12 +54,13 @@ fn finish_job(
     terrain.runtime.resealing = false;
     let mut reports = Vec::new();
     let mut debris = Vec::new();
-    let report = |edit, request, hash, cells, apply_time| CarveApplied {
+    let report = |edit, request, hash, cells, volume_change, apply_time| CarveApplied {
         terrain: entity,
         edit,
         request,
         hash,
         cells,
+        volume_change,
         apply_time,
         mesh_time: output.mesh_time,
         collider_time: output.collider_time,
@@ -88,6 +89,7 @@ fn finish_job(
                 changes,
                 tool,
                 edit,
+                volume_change,
                 apply_time,
                 requested,
                 request,
@@ -110,7 +112,7 @@ fn finish_job(
                 }
                 let hash = terrain.hash.value();
                 reports.push((
-                    report(Some(edit), request, hash, cells, apply_time),
+                    report(Some(edit), request, hash, cells, volume_change, apply_time),
                     requested,
                 ));
                 terrain.record(before, changes, tool, edit);
@@ -123,9 +125,14 @@ fn finish_job(
                 }
             }
             StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
-            StepOutcome::Undone { cells, requested } => {
+            StepOutcome::Undone {
+                cells,
+                volume_change,
+                requested,
+            } => {
                 let hash = terrain.hash.value();
-                reports.push((report(None, None, hash, cells, Duration::ZERO), requested));
+                let undone = report(None, None, hash, cells, volume_change, Duration::ZERO);
+                reports.push((undone, requested));
             }
             StepOutcome::Rejected { error, request } => {
                 if request.is_some() {

@@ -81,9 +81,12 @@ mod terrain_round_tools;
 #[cfg(feature = "viewer")]
 mod terrain_seams_render;
 #[cfg(feature = "terrain")]
+mod terrain_volume_change;
+#[cfg(feature = "terrain")]
 mod terrain_world;
 #[cfg(feature = "terrain")]
 mod terrain_world_debris;
+#[cfg(feature = "terrain")]
 mod terrain_world_debris_busy;
 #[cfg(feature = "terrain")]
 mod terrain_world_lod;

@@ -1,0 +1,250 @@
+//! Each [`CarveApplied`] says what its carve changed of each material
+//! (`volume_change`, cubic world units): checked against the exact volumes
+//! of the whole octree before and after every carve, for subtractions,
+//! additions, paints and an undo, on a grid whose unit is not 1; the
+//! changes add up to the terrain's volumes after less before, and a piece
+//! cut loose is left out of its carve's change and counted by its
+//! [`TerrainDebris`] instead.
+
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use bevy::prelude::*;
+use bevy_chisel::bsp::octree::{CellBox, Edit, Octree, OctreeConfig};
+use bevy_chisel::bsp::tools::Quantization;
+use bevy_chisel::bsp::tree::Label;
+use bevy_chisel::terrain::{
+    Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainBase, TerrainDebris, TerrainPlugin,
+    TerrainSystems, UndoCarve,
+};
+
+/// Grid units per world unit: a grid unit is half a metre.
+const UNIT: f64 = 0.5;
+
+#[derive(Resource, Default)]
+struct Seen(Vec<CarveApplied>);
+
+fn record(mut seen: ResMut<Seen>, mut applied: MessageReader<CarveApplied>) {
+    seen.0.extend(applied.read().cloned());
+}
+
+/// Rock (1) filling the lower 24 m of a 32 m cube; sand (2) and ore (3)
+/// may be carved in.
+fn app_with_block() -> (App, Entity) {
+    let grid = Quantization::new(UNIT, [0.0; 3]).expect("valid unit");
+    let base = TerrainBase::Box {
+        origin: [0; 3],
+        size_log2: 6,
+        solid: CellBox {
+            min: [0; 3],
+            max: [64, 48, 64],
+        },
+        label: 1,
+    };
+    let config = OctreeConfig {
+        max_bsp_nodes: 24,
+        ..OctreeConfig::default()
+    };
+    let terrain = Terrain::from_base(grid, base, config)
+        .expect("valid block")
+        .with_labels([2, 3]);
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, TerrainPlugin))
+        .init_resource::<Seen>()
+        .add_systems(Update, record.after(TerrainSystems::Mesh));
+    let entity = app.world_mut().spawn(terrain).id();
+    settle(&mut app, entity);
+    (app, entity)
+}
+
+fn settle(app: &mut App, entity: Entity) {
+    for _ in 0..20_000 {
+        app.update();
+        if app
+            .world()
+            .get::<Terrain>(entity)
+            .expect("terrain")
+            .is_idle()
+        {
+            app.update();
+            return;
+        }
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    panic!("terrain did not settle");
+}
+
+fn octree(app: &App, entity: Entity) -> Octree {
+    app.world()
+        .get::<Terrain>(entity)
+        .expect("terrain")
+        .octree()
+        .clone()
+}
+
+/// The exact change of each material from `before` to `after`, in cubic
+/// world units (rounded once, at the end).
+fn exact_change(before: &Octree, after: &Octree) -> BTreeMap<Label, f64> {
+    let (before, after) = (before.exact_volumes(), after.exact_volumes());
+    let mut out = BTreeMap::new();
+    for label in before.keys().chain(after.keys()) {
+        let b = before.get(label).cloned().unwrap_or_default();
+        let a = after.get(label).cloned().unwrap_or_default();
+        let change = &a - &b;
+        if !change.is_zero() {
+            out.insert(*label, change.to_f64() * UNIT * UNIT * UNIT);
+        }
+    }
+    out
+}
+
+/// `a` and `b` agree per material to `1e-12` of the block's volume.
+fn assert_close(a: &BTreeMap<Label, f64>, b: &BTreeMap<Label, f64>, what: &str) {
+    let scale = 32.0 * 24.0 * 32.0;
+    for label in a.keys().chain(b.keys()) {
+        let (x, y) = (a.get(label).copied(), b.get(label).copied());
+        let (x0, y0) = (x.unwrap_or(0.0), y.unwrap_or(0.0));
+        assert!(
+            (x0 - y0).abs() <= 1e-12 * scale,
+            "{what}: material {label}: {x:?} against {y:?}"
+        );
+    }
+}
+
+fn carve(app: &mut App, entity: Entity, tool: CarveTool, edit: Edit) -> CarveApplied {
+    app.world_mut().write_message(Carve {
+        terrain: entity,
+        tool,
+        edit,
+    });
+    settle(app, entity);
+    app.world_mut()
+        .resource_mut::<Seen>()
+        .0
+        .pop()
+        .expect("the carve is applied")
+}
+
+#[test]
+fn each_carve_reports_its_exact_change_of_each_material() {
+    let (mut app, entity) = app_with_block();
+    let start = octree(&app, entity);
+    let crater = |x: f32, z: f32, r: f32| CarveTool::dodecahedron(r, Vec3::new(x, 24.0, z));
+    let steps = [
+        (crater(10.0, 10.0, 4.0), Edit::Subtract),
+        (crater(13.0, 12.0, 3.0), Edit::Add(2)),
+        (crater(11.0, 9.0, 3.5), Edit::Paint(3)),
+        (crater(20.0, 18.0, 5.0), Edit::Subtract),
+        (crater(12.0, 11.0, 2.5), Edit::Subtract),
+    ];
+    let mut total: BTreeMap<Label, f64> = BTreeMap::new();
+    let mut last = None;
+    for (i, (tool, edit)) in steps.into_iter().enumerate() {
+        let before = octree(&app, entity);
+        let report = carve(&mut app, entity, tool, edit);
+        let after = octree(&app, entity);
+        assert_close(
+            &report.volume_change,
+            &exact_change(&before, &after),
+            &format!("carve {i}, {edit:?}"),
+        );
+        match edit {
+            Edit::Subtract => {
+                assert!(report.removed_volume() > 1.0 && report.added_volume() == 0.0);
+            }
+            Edit::Add(label) => {
+                assert_eq!(report.volume_change.keys().collect::<Vec<_>>(), [&label]);
+                assert!(report.added_volume() > 1.0);
+            }
+            Edit::Paint(_) => {
+                let sum: f64 = report.volume_change.values().sum();
+                assert!(sum.abs() < 1e-9 && report.removed_volume() > 1.0);
+            }
+            Edit::Intersect => {}
+        }
+        for (label, v) in &report.volume_change {
+            *total.entry(*label).or_default() += v;
+        }
+        last = Some((before, report));
+    }
+    // What the carves reported adds up to what the terrain lost and gained.
+    let terrain = app.world().get::<Terrain>(entity).expect("terrain");
+    let now = terrain.volumes();
+    let mut lost = BTreeMap::new();
+    for label in 1..=3 {
+        let start_volume = start.volumes().get(&label).copied().unwrap_or(0.0);
+        let start_volume = start_volume * UNIT * UNIT * UNIT;
+        lost.insert(
+            label,
+            now.get(&label).copied().unwrap_or(0.0) - start_volume,
+        );
+    }
+    assert_close(&total, &lost, "the run");
+
+    // An undo reports the change it makes: back to the last carve's before.
+    let (before, last_report) = last.expect("carved");
+    let after = octree(&app, entity);
+    app.world_mut().write_message(UndoCarve { terrain: entity });
+    settle(&mut app, entity);
+    let undo = app
+        .world_mut()
+        .resource_mut::<Seen>()
+        .0
+        .pop()
+        .expect("an undo report");
+    assert!(undo.edit.is_none());
+    assert_close(
+        &undo.volume_change,
+        &exact_change(&after, &before),
+        "the undo",
+    );
+    let negated = last_report
+        .volume_change
+        .iter()
+        .map(|(l, v)| (*l, -v))
+        .collect();
+    assert_close(&undo.volume_change, &negated, "the undo against the carve");
+}
+
+#[test]
+fn a_piece_cut_loose_is_counted_by_its_debris_not_by_the_carve() {
+    let (mut app, entity) = app_with_block();
+    // A sand table on one leg, on the rock's top (24 m).
+    let sand = |min: Vec3, max: Vec3| {
+        let centre = (min + max) / 2.0;
+        let shape = CarveShape::Cuboid {
+            half_size: (max - min) / 2.0,
+        };
+        CarveTool::new(shape, Transform::from_translation(centre))
+    };
+    let leg = sand(Vec3::new(4.0, 24.0, 4.0), Vec3::new(6.0, 28.0, 6.0));
+    let top = sand(Vec3::new(4.0, 28.0, 4.0), Vec3::new(14.0, 29.0, 14.0));
+    carve(&mut app, entity, leg, Edit::Add(2));
+    carve(&mut app, entity, top, Edit::Add(2));
+    let before = octree(&app, entity);
+    // Cutting the leg below the top frees the table.
+    let cut = sand(Vec3::new(3.0, 25.0, 3.0), Vec3::new(7.0, 27.0, 7.0));
+    let report = carve(&mut app, entity, cut, Edit::Subtract);
+    let after = octree(&app, entity);
+    let debris: Vec<&TerrainDebris> = app
+        .world_mut()
+        .query::<&TerrainDebris>()
+        .iter(app.world())
+        .collect();
+    assert_eq!(debris.len(), 1, "the table falls");
+    let piece: f64 = debris[0].exact_volume.to_f64() * UNIT * UNIT * UNIT;
+    // The table: 10 × 1 × 10 m and the leg's metre above the cut.
+    assert!((piece - (100.0 + 4.0)).abs() < 1e-9, "piece {piece}");
+    // The carve took out the leg's 2 × 2 × 2 m, only.
+    assert_close(
+        &report.volume_change,
+        &BTreeMap::from([(2, -8.0)]),
+        "the cut",
+    );
+    // The terrain lost both.
+    assert_close(
+        &exact_change(&before, &after),
+        &BTreeMap::from([(2, -8.0 - piece)]),
+        "the terrain",
+    );
+}
