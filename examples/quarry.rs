@@ -28,8 +28,8 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::presentation::{HeadlessConfig, Presentation};
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, HeightLayer, Heightfield, Terrain,
-    TerrainMaterials, TerrainPlugin, TerrainSurface, TerrainSystems, TriplanarMaterial,
-    TriplanarMaterialPlugin, surface_table,
+    TerrainMaterials, TerrainPlugin, TerrainSettings, TerrainSurface, TerrainSystems,
+    TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
 };
 use bevy_chisel::viewer::{
     CARVING_HELP, ClickCarving, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
@@ -59,6 +59,11 @@ fn main() -> AppExit {
     presentation.add_default_plugins(&mut app, "bevy_chisel — quarry");
     app.add_plugins((TerrainPlugin, TriplanarMaterialPlugin, ViewerPlugin))
         .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+        // Each carve reports the rock, dirt, grass and ore it took out.
+        .insert_resource(TerrainSettings {
+            measure_volumes: true,
+            ..default()
+        })
         .insert_resource(ClickCarving {
             blast_radius: BLAST_RADIUS,
             heap_radius: HEAP_RADIUS,
@@ -266,7 +271,7 @@ fn update_hud(
     mut hud: Query<&mut Text, With<Overlay>>,
 ) {
     for report in applied.read() {
-        for (label, change) in &report.volume_change {
+        for (label, change) in report.volume_change.iter().flatten() {
             *stats.taken_out.entry(*label).or_default() -= change;
         }
         stats.last = Some(report.clone());

@@ -214,6 +214,8 @@ pub(crate) struct JobContext {
     pub output: CellOutput,
     /// Whether to hand back the wall points on the cube's sides.
     pub publish_border: bool,
+    /// Whether to measure what each carve changed of each material.
+    pub measure_volumes: bool,
 }
 
 impl JobContext {
@@ -235,8 +237,9 @@ pub(crate) enum StepOutcome {
         changes: Changes,
         tool: GridTool,
         edit: Edit,
-        /// What the carve changed of each material, in cubic world units.
-        volume_change: BTreeMap<Label, f64>,
+        /// What the carve changed of each material, in cubic world units
+        /// (`None` when not measured).
+        volume_change: Option<BTreeMap<Label, f64>>,
         apply_time: Duration,
         requested: Instant,
         request: Option<u64>,
@@ -248,8 +251,9 @@ pub(crate) enum StepOutcome {
     },
     Undone {
         cells: usize,
-        /// What the undo changed of each material, in cubic world units.
-        volume_change: BTreeMap<Label, f64>,
+        /// What the undo changed of each material, in cubic world units
+        /// (`None` when not measured).
+        volume_change: Option<BTreeMap<Label, f64>>,
         requested: Instant,
     },
     /// Pieces cut loose across chunk borders, built to spawn.
@@ -358,7 +362,8 @@ pub(crate) fn carve_batch(
             apply_carve_with_faces(&mut octree, &tool, edit).and_then(|(changes, faces)| {
                 // The carve's own change, before any piece it cut loose
                 // is taken out (the pieces report their own volumes).
-                let volume_change = world_volumes(changes.volume_change(&before, &octree), context);
+                let volume_change = (context.measure_volumes)
+                    .then(|| world_volumes(changes.volume_change(&before, &octree), context));
                 detach(&mut octree, changes, context)
                     .map(|(c, pieces)| (c, faces, pieces, volume_change))
             });
@@ -423,7 +428,8 @@ pub(crate) fn undone_step(
     };
     StepOutcome::Undone {
         cells: keys.len(),
-        volume_change: world_volumes(changes.volume_change(before, after), context),
+        volume_change: (context.measure_volumes)
+            .then(|| world_volumes(changes.volume_change(before, after), context)),
         requested,
     }
 }

@@ -164,6 +164,7 @@ fn start_next(
         max_debris_hulls: settings.max_debris_hulls,
         output,
         publish_border: terrain.runtime.publishes_border,
+        measure_volumes: settings.measure_volumes,
     };
     terrain.runtime.builds_cells = context.builds_cells();
     if terrain.runtime.builds_cells

@@ -4,7 +4,8 @@
 //! additions, paints and an undo, on a grid whose unit is not 1; the
 //! changes add up to the terrain's volumes after less before, and a piece
 //! cut loose is left out of its carve's change and counted by its
-//! [`TerrainDebris`] instead.
+//! [`TerrainDebris`] instead. Nothing is measured unless
+//! `TerrainSettings::measure_volumes` asks for it.
 
 use std::collections::BTreeMap;
 use std::time::Duration;
@@ -15,7 +16,7 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::bsp::tree::Label;
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainBase, TerrainDebris, TerrainPlugin,
-    TerrainSystems, UndoCarve,
+    TerrainSettings, TerrainSystems, UndoCarve,
 };
 
 /// Grid units per world unit: a grid unit is half a metre.
@@ -30,7 +31,7 @@ fn record(mut seen: ResMut<Seen>, mut applied: MessageReader<CarveApplied>) {
 
 /// Rock (1) filling the lower 24 m of a 32 m cube; sand (2) and ore (3)
 /// may be carved in.
-fn app_with_block() -> (App, Entity) {
+fn app_with_block(measure_volumes: bool) -> (App, Entity) {
     let grid = Quantization::new(UNIT, [0.0; 3]).expect("valid unit");
     let base = TerrainBase::Box {
         origin: [0; 3],
@@ -50,6 +51,10 @@ fn app_with_block() -> (App, Entity) {
         .with_labels([2, 3]);
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, TerrainPlugin))
+        .insert_resource(TerrainSettings {
+            measure_volumes,
+            ..TerrainSettings::default()
+        })
         .init_resource::<Seen>()
         .add_systems(Update, record.after(TerrainSystems::Mesh));
     let entity = app.world_mut().spawn(terrain).id();
@@ -111,23 +116,29 @@ fn assert_close(a: &BTreeMap<Label, f64>, b: &BTreeMap<Label, f64>, what: &str) 
     }
 }
 
-fn carve(app: &mut App, entity: Entity, tool: CarveTool, edit: Edit) -> CarveApplied {
+/// Carves and returns the carve's report and its change of each material.
+fn carve(
+    app: &mut App,
+    entity: Entity,
+    tool: CarveTool,
+    edit: Edit,
+) -> (CarveApplied, BTreeMap<Label, f64>) {
     app.world_mut().write_message(Carve {
         terrain: entity,
         tool,
         edit,
     });
     settle(app, entity);
-    app.world_mut()
-        .resource_mut::<Seen>()
-        .0
+    let report = (app.world_mut().resource_mut::<Seen>().0)
         .pop()
-        .expect("the carve is applied")
+        .expect("the carve is applied");
+    let change = report.volume_change.clone().expect("measured");
+    (report, change)
 }
 
 #[test]
 fn each_carve_reports_its_exact_change_of_each_material() {
-    let (mut app, entity) = app_with_block();
+    let (mut app, entity) = app_with_block(true);
     let start = octree(&app, entity);
     let crater = |x: f32, z: f32, r: f32| CarveTool::dodecahedron(r, Vec3::new(x, 24.0, z));
     let steps = [
@@ -141,31 +152,32 @@ fn each_carve_reports_its_exact_change_of_each_material() {
     let mut last = None;
     for (i, (tool, edit)) in steps.into_iter().enumerate() {
         let before = octree(&app, entity);
-        let report = carve(&mut app, entity, tool, edit);
+        let (report, change) = carve(&mut app, entity, tool, edit);
         let after = octree(&app, entity);
         assert_close(
-            &report.volume_change,
+            &change,
             &exact_change(&before, &after),
             &format!("carve {i}, {edit:?}"),
         );
         match edit {
             Edit::Subtract => {
-                assert!(report.removed_volume() > 1.0 && report.added_volume() == 0.0);
+                assert!(report.removed_volume() > Some(1.0));
+                assert_eq!(report.added_volume(), Some(0.0));
             }
             Edit::Add(label) => {
-                assert_eq!(report.volume_change.keys().collect::<Vec<_>>(), [&label]);
-                assert!(report.added_volume() > 1.0);
+                assert_eq!(change.keys().collect::<Vec<_>>(), [&label]);
+                assert!(report.added_volume() > Some(1.0));
             }
             Edit::Paint(_) => {
-                let sum: f64 = report.volume_change.values().sum();
-                assert!(sum.abs() < 1e-9 && report.removed_volume() > 1.0);
+                let sum: f64 = change.values().sum();
+                assert!(sum.abs() < 1e-9 && report.removed_volume() > Some(1.0));
             }
             Edit::Intersect => {}
         }
-        for (label, v) in &report.volume_change {
+        for (label, v) in &change {
             *total.entry(*label).or_default() += v;
         }
-        last = Some((before, report));
+        last = Some((before, change));
     }
     // What the carves reported adds up to what the terrain lost and gained.
     let terrain = app.world().get::<Terrain>(entity).expect("terrain");
@@ -182,7 +194,7 @@ fn each_carve_reports_its_exact_change_of_each_material() {
     assert_close(&total, &lost, "the run");
 
     // An undo reports the change it makes: back to the last carve's before.
-    let (before, last_report) = last.expect("carved");
+    let (before, last_change) = last.expect("carved");
     let after = octree(&app, entity);
     app.world_mut().write_message(UndoCarve { terrain: entity });
     settle(&mut app, entity);
@@ -193,22 +205,15 @@ fn each_carve_reports_its_exact_change_of_each_material() {
         .pop()
         .expect("an undo report");
     assert!(undo.edit.is_none());
-    assert_close(
-        &undo.volume_change,
-        &exact_change(&after, &before),
-        "the undo",
-    );
-    let negated = last_report
-        .volume_change
-        .iter()
-        .map(|(l, v)| (*l, -v))
-        .collect();
-    assert_close(&undo.volume_change, &negated, "the undo against the carve");
+    let undone = undo.volume_change.expect("measured");
+    assert_close(&undone, &exact_change(&after, &before), "the undo");
+    let negated = last_change.iter().map(|(l, v)| (*l, -v)).collect();
+    assert_close(&undone, &negated, "the undo against the carve");
 }
 
 #[test]
 fn a_piece_cut_loose_is_counted_by_its_debris_not_by_the_carve() {
-    let (mut app, entity) = app_with_block();
+    let (mut app, entity) = app_with_block(true);
     // A sand table on one leg, on the rock's top (24 m).
     let sand = |min: Vec3, max: Vec3| {
         let centre = (min + max) / 2.0;
@@ -224,7 +229,7 @@ fn a_piece_cut_loose_is_counted_by_its_debris_not_by_the_carve() {
     let before = octree(&app, entity);
     // Cutting the leg below the top frees the table.
     let cut = sand(Vec3::new(3.0, 25.0, 3.0), Vec3::new(7.0, 27.0, 7.0));
-    let report = carve(&mut app, entity, cut, Edit::Subtract);
+    let (_, change) = carve(&mut app, entity, cut, Edit::Subtract);
     let after = octree(&app, entity);
     let debris: Vec<&TerrainDebris> = app
         .world_mut()
@@ -236,15 +241,29 @@ fn a_piece_cut_loose_is_counted_by_its_debris_not_by_the_carve() {
     // The table: 10 × 1 × 10 m and the leg's metre above the cut.
     assert!((piece - (100.0 + 4.0)).abs() < 1e-9, "piece {piece}");
     // The carve took out the leg's 2 × 2 × 2 m, only.
-    assert_close(
-        &report.volume_change,
-        &BTreeMap::from([(2, -8.0)]),
-        "the cut",
-    );
+    assert_close(&change, &BTreeMap::from([(2, -8.0)]), "the cut");
     // The terrain lost both.
     assert_close(
         &exact_change(&before, &after),
         &BTreeMap::from([(2, -8.0 - piece)]),
         "the terrain",
     );
+}
+
+/// Off by default: reports say nothing was measured.
+#[test]
+fn reports_measure_nothing_unless_asked() {
+    let (mut app, entity) = app_with_block(false);
+    let crater = CarveTool::dodecahedron(4.0, Vec3::new(10.0, 24.0, 10.0));
+    app.world_mut().write_message(Carve {
+        terrain: entity,
+        tool: crater,
+        edit: Edit::Subtract,
+    });
+    settle(&mut app, entity);
+    let report = (app.world_mut().resource_mut::<Seen>().0)
+        .pop()
+        .expect("the carve is applied");
+    assert_eq!(report.volume_change, None);
+    assert_eq!(report.removed_volume(), None);
 }

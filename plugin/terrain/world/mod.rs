@@ -780,7 +780,9 @@ pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, Terrain
 /// Carve a world: the tool (in the world entity's local frame) is rounded
 /// to the grid once and applied to every chunk it overlaps, each reporting
 /// its own [`CarveApplied`](super::CarveApplied) or
-/// [`CarveRejected`](super::CarveRejected) for its terrain entity. A tool
+/// [`CarveRejected`](super::CarveRejected) for its terrain entity (their
+/// `volume_change`s add up to what the carve changed of each material in
+/// the world). A tool
 /// that reaches no chunk's cube, or adds or paints a material the world
 /// does not know, is rejected for the world entity. A chunk that is not
 /// live is built for the carve; if its build fails (a bad source sample)
