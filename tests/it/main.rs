@@ -61,6 +61,8 @@ mod change_detection;
 #[cfg(feature = "terrain")]
 mod terrain_assets;
 #[cfg(feature = "terrain")]
+mod terrain_common;
+#[cfg(feature = "terrain")]
 mod terrain_data;
 #[cfg(feature = "terrain")]
 mod terrain_ecs;

@@ -4,7 +4,6 @@
 //! carves are rejected without changing anything.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::time::Duration;
 
 use bevy::asset::AssetPlugin;
 use bevy::mesh::{Indices, VertexAttributeValues};
@@ -15,6 +14,8 @@ use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, Terrain, TerrainBase, TerrainCell,
     TerrainCellChanged, TerrainError, TerrainPlugin, UndoCarve, apply_carve,
 };
+
+use crate::terrain_common::settle;
 
 /// Messages seen by the test.
 #[derive(Resource, Default)]
@@ -71,19 +72,6 @@ fn app_with(terrain: Terrain) -> (App, Entity) {
     let entity = app.world_mut().spawn(terrain).id();
     settle(&mut app, entity);
     (app, entity)
-}
-
-fn settle(app: &mut App, entity: Entity) {
-    for _ in 0..20_000 {
-        app.update();
-        if terrain(app, entity).is_idle() {
-            // One more frame so that the recorder sees the last messages.
-            app.update();
-            return;
-        }
-        std::thread::sleep(Duration::from_micros(200));
-    }
-    panic!("terrain did not settle");
 }
 
 fn terrain(app: &App, entity: Entity) -> &Terrain {

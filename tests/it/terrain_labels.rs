@@ -4,8 +4,6 @@
 //! ([`GridCarve`]) are not refused for it, because every peer must apply
 //! what the server accepted.
 
-use std::time::Duration;
-
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
@@ -13,6 +11,8 @@ use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveTool, GridCarve, Terrain, TerrainBase,
     TerrainCarveRejected, TerrainError, TerrainMaterials, TerrainPlugin, TerrainSystems,
 };
+
+use crate::terrain_common::settle;
 
 #[derive(Resource, Default)]
 struct Seen {
@@ -45,23 +45,6 @@ fn block() -> Terrain {
     Terrain::from_base(grid, base, OctreeConfig::default())
         .expect("valid block")
         .with_labels([2, 3])
-}
-
-fn settle(app: &mut App, entity: Entity) {
-    for _ in 0..20_000 {
-        app.update();
-        if app
-            .world()
-            .get::<Terrain>(entity)
-            .expect("terrain")
-            .is_idle()
-        {
-            app.update();
-            return;
-        }
-        std::thread::sleep(Duration::from_micros(200));
-    }
-    panic!("terrain did not settle");
 }
 
 fn terrain(app: &App, entity: Entity) -> &Terrain {

@@ -4,8 +4,6 @@
 //! entities, and shows every cell once it is asked for meshes again; with
 //! colliders only (avian), cell entities carry colliders and no mesh.
 
-use std::time::Duration;
-
 use avian3d::prelude::*;
 use bevy::asset::AssetPlugin;
 use bevy::mesh::{Indices, MeshPlugin, VertexAttributeValues};
@@ -17,6 +15,8 @@ use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveTool, CellOutput, Terrain, TerrainBase, TerrainCell, TerrainPlugin,
     TerrainSettings, TerrainSystems,
 };
+
+use crate::terrain_common::settle;
 
 #[derive(Resource, Default)]
 struct Applied(Vec<CarveApplied>);
@@ -69,18 +69,6 @@ fn app_with(output: CellOutput, physics: bool) -> (App, Entity) {
     let entity = app.world_mut().spawn(block()).id();
     settle(&mut app, entity);
     (app, entity)
-}
-
-fn settle(app: &mut App, entity: Entity) {
-    for _ in 0..20_000 {
-        app.update();
-        if terrain(app, entity).is_idle() {
-            app.update();
-            return;
-        }
-        std::thread::sleep(Duration::from_micros(200));
-    }
-    panic!("terrain did not settle");
 }
 
 fn terrain(app: &App, entity: Entity) -> &Terrain {

@@ -8,7 +8,6 @@
 //! `TerrainSettings::measure_volumes` asks for it.
 
 use std::collections::BTreeMap;
-use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, Edit, Octree, OctreeConfig};
@@ -18,6 +17,8 @@ use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveShape, CarveTool, Terrain, TerrainBase, TerrainDebris, TerrainPlugin,
     TerrainSettings, TerrainSystems, UndoCarve,
 };
+
+use crate::terrain_common::settle;
 
 /// Grid units per world unit: a grid unit is half a metre.
 const UNIT: f64 = 0.5;
@@ -60,23 +61,6 @@ fn app_with_block(measure_volumes: bool) -> (App, Entity) {
     let entity = app.world_mut().spawn(terrain).id();
     settle(&mut app, entity);
     (app, entity)
-}
-
-fn settle(app: &mut App, entity: Entity) {
-    for _ in 0..20_000 {
-        app.update();
-        if app
-            .world()
-            .get::<Terrain>(entity)
-            .expect("terrain")
-            .is_idle()
-        {
-            app.update();
-            return;
-        }
-        std::thread::sleep(Duration::from_micros(200));
-    }
-    panic!("terrain did not settle");
 }
 
 fn octree(app: &App, entity: Entity) -> Octree {

@@ -132,22 +132,6 @@ fn app_with_slab<E: Engine>() -> (App, Entity) {
     (app, entity)
 }
 
-fn settle(app: &mut App, entity: Entity) {
-    for _ in 0..20_000 {
-        app.update();
-        let idle = app
-            .world()
-            .get::<Terrain>(entity)
-            .is_some_and(Terrain::is_idle);
-        if idle {
-            app.update();
-            return;
-        }
-        std::thread::sleep(Duration::from_micros(200));
-    }
-    panic!("terrain did not settle");
-}
-
 fn step(app: &mut App, frames: usize) {
     for _ in 0..frames {
         app.update();
@@ -478,3 +462,5 @@ macro_rules! prop_physics_tests {
 }
 #[cfg(feature = "props")]
 use prop_physics_tests;
+
+use crate::terrain_common::settle;
