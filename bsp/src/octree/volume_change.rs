@@ -35,7 +35,8 @@ impl Octree {
     /// The exact volume of every non-empty material inside the union of
     /// the cells `keys`, in cubic grid units (each point counted once,
     /// however the cells nest; keys may name leaves, inner cells or cells
-    /// inside a leaf).
+    /// inside a leaf). A key that names no cell of the cube (deeper than
+    /// the cube's edge allows, or a position past `2^depth`) adds nothing.
     #[must_use]
     pub fn exact_volumes_in(&self, keys: &[CellKey]) -> BTreeMap<Label, ExactVolume> {
         let keys = outermost(keys.iter().copied());
@@ -60,7 +61,10 @@ impl Octree {
     /// them in: their own, or the key's where it lies inside a leaf.
     fn parts_in(&self, keys: &[CellKey]) -> Vec<(CellKey, &Leaf)> {
         let mut out = Vec::new();
-        for &key in keys {
+        let in_cube = |key: &CellKey| {
+            key.depth <= self.size_log2() && key.pos.iter().all(|&p| u64::from(p) >> key.depth == 0)
+        };
+        for &key in keys.iter().filter(|k| in_cube(k)) {
             let mut stack = vec![(key, self.node_at(key))];
             while let Some((key, node)) = stack.pop() {
                 match node {

@@ -208,4 +208,16 @@ fn volumes_in_cells_count_each_point_once() {
         sum,
         "a cell and its eight children hold the same"
     );
+    // Keys outside the cube measure nothing.
+    let outside = [
+        CellKey {
+            depth: 1,
+            pos: [2, 0, 0],
+        },
+        CellKey {
+            depth: K + 1,
+            pos: [0; 3],
+        },
+    ];
+    assert!(octree.exact_volumes_in(&outside).is_empty());
 }
