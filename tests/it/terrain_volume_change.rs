@@ -4,7 +4,8 @@
 //! additions, paints and an undo, on a grid whose unit is not 1; the
 //! changes add up to the terrain's volumes after less before, and a piece
 //! cut loose is left out of its carve's change and counted by its
-//! [`TerrainDebris`] instead. Nothing is measured unless
+//! [`TerrainDebris`] instead; a world carve's chunk reports add up to
+//! what its chunks lost. Nothing is measured unless
 //! `TerrainSettings::measure_volumes` asks for it.
 
 use std::collections::BTreeMap;
@@ -250,4 +251,56 @@ fn reports_measure_nothing_unless_asked() {
         .expect("the carve is applied");
     assert_eq!(report.volume_change, None);
     assert_eq!(report.removed_volume(), None);
+}
+
+/// A world carve across a chunk border: the chunks' reports add up to
+/// what both chunks lost, exactly as measured on their octrees.
+#[test]
+fn a_world_carve_across_a_border_reports_each_chunks_part() {
+    use crate::terrain_world::{app_with, carve as carve_world, dodecahedron, settle, terrain};
+    use bevy_chisel::terrain::ChunkCoord;
+
+    let (mut app, world, _) = app_with(crate::terrain_world::world(), Vec3::new(32.0, 30.0, 16.0));
+    app.insert_resource(TerrainSettings {
+        measure_volumes: true,
+        ..TerrainSettings::default()
+    })
+    .init_resource::<Seen>()
+    .add_systems(Update, record.after(TerrainSystems::Mesh));
+    let chunks = [ChunkCoord { x: 0, z: 0 }, ChunkCoord { x: 1, z: 0 }];
+    let before = chunks.map(|c| terrain(&app, world, c).octree().clone());
+    carve_world(
+        &mut app,
+        world,
+        dodecahedron(6.0, Vec3::new(32.0, 13.0, 16.0)),
+    );
+    settle(&mut app, world);
+    let reports = &app.world().resource::<Seen>().0;
+    assert_eq!(reports.len(), 2, "one report per chunk");
+    let mut reported = 0.0;
+    for (c, before) in chunks.into_iter().zip(&before) {
+        let chunk = terrain(&app, world, c);
+        let entity = crate::terrain_world::the_world(&app, world)
+            .chunk_entity(c)
+            .expect("live chunk");
+        let report = reports
+            .iter()
+            .find(|r| r.terrain == entity)
+            .expect("reported");
+        let change = report.volume_change.clone().expect("measured");
+        // The world's grid unit is 1: world and grid volumes agree.
+        let exact = &before.exact_volumes()[&1] - &chunk.octree().exact_volumes()[&1];
+        let lost = -change[&1];
+        assert!(
+            (lost - exact.to_f64()).abs() <= 1e-9 * exact.to_f64(),
+            "{c:?}: {lost} against {exact}"
+        );
+        assert!(lost > 1.0, "{c:?} loses");
+        reported += lost;
+    }
+    let removed: f64 = reports
+        .iter()
+        .filter_map(CarveApplied::removed_volume)
+        .sum();
+    assert_eq!(removed, reported);
 }
