@@ -62,6 +62,12 @@ fn a_save_taken_before_a_slab_cut_loose_falls_makes_it_fall_after_loading() {
     let saved = hashes(&loaded_bytes(&dir));
     assert_ne!(saved, fallen, "saved before the fall");
     assert_ne!(saved, standing, "saved after the cut");
+    let cut_chunk = &loaded_bytes(&dir)[&at(0, 0)];
+    let seeds = Terrain::from_bytes(cut_chunk).expect("valid");
+    assert!(
+        !seeds.border_seeds().is_empty(),
+        "the cut's seeds are saved"
+    );
     let pieces = debris(&mut app);
     assert_eq!(pieces.len(), 1);
     assert_eq!(pieces[0].exact_volume, falling());
