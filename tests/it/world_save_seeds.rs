@@ -4,9 +4,11 @@
 //! them. A world cratered every other frame saves within a few frames; a
 //! save taken while a slab cut loose over a border has not fallen yet,
 //! loaded into a fresh world, makes the slab fall there, leaving the
-//! chunks exactly as the original world's fall left them; chunk files of
-//! the format before seeds (version 2) still load, with none; bad seeds
-//! are an error naming the file.
+//! chunks exactly as the original world's fall left them; a chunk saved
+//! with seeds is written again once they are searched, though its
+//! terrain did not change; chunk files of the format before seeds
+//! (version 2) still load, with none; bad seeds are an error naming the
+//! file.
 
 use std::path::Path;
 
@@ -87,6 +89,34 @@ fn a_save_taken_before_a_slab_cut_loose_falls_makes_it_fall_after_loading() {
         let volume = |app: &App, world| terrain(app, world, c).octree().exact_solid_volume();
         assert_eq!(volume(&again, reloaded), volume(&app, world), "{c:?}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_chunk_saved_with_seeds_is_written_again_once_they_are_searched() {
+    let (mut app, world, _focus) = save_app(new_world());
+    let c = at(0, 0);
+    // The crater and the request in the same frame: the save starts in
+    // the frame whose search takes the crater's seeds.
+    carve(&mut app, world, dodecahedron(3.0, inside(c, 0)));
+    let dir = temp_folder("seeds-again");
+    request(&mut app, world, &dir);
+    until_answered(&mut app, 1);
+    assert!(heard(&app).failed.is_empty(), "{:?}", heard(&app).failed);
+    let file = loaded_bytes(&dir)[&c].clone();
+    let saved = Terrain::from_bytes(&file).expect("valid");
+    assert!(!saved.border_seeds().is_empty(), "saved with the seeds");
+    settle(&mut app, world);
+    let now = edited_bytes(&app, world);
+    assert_eq!(now.keys().copied().collect::<Vec<_>>(), [c]);
+    assert!(without_seeds(&file) == now[&c], "nothing fell");
+    // Its terrain did not change since, but its seeds went: written
+    // again, then left alone.
+    let again = save(&mut app, world, &dir).expect("saves");
+    assert_eq!((again.written.as_slice(), again.unchanged), (&[c][..], 0));
+    assert!(loaded_bytes(&dir) == now, "the file is the chunk now");
+    let third = save(&mut app, world, &dir).expect("saves");
+    assert_eq!((third.written.len(), third.unchanged), (0, 1));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
