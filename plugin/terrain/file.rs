@@ -93,12 +93,19 @@ impl Terrain {
     /// The terrain as file bytes.
     #[must_use]
     pub fn to_bytes(&self) -> Vec<u8> {
-        self.record_for_file().to_bytes()
+        write_terrain(
+            &self.quantization,
+            &self.base,
+            &self.journal,
+            self.max_undo,
+            &self.history,
+            &self.octree,
+            &file_seeds(&self.runtime.border_seeds, &[]),
+        )
     }
 
-    /// The cells this terrain's carves changed whose fall across chunk
-    /// borders its world has still to search (a world's chunk; none
-    /// elsewhere), but those a running search took: written in its file.
+    /// The cells whose fall across chunk borders this world chunk has
+    /// still to search, but those a running search took (in its file).
     #[must_use]
     pub fn border_seeds(&self) -> &[CellKey] {
         &self.runtime.border_seeds
@@ -144,7 +151,7 @@ impl Terrain {
     /// [`TerrainError::Truncated`] or [`TerrainError::Corrupt`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Terrain, TerrainError> {
         let (mut record, version) =
-            open_record_of_versions(bytes, MAGIC, OLDEST_READ_VERSION..=FORMAT_VERSION)?;
+            open_record(bytes, MAGIC, OLDEST_READ_VERSION..=FORMAT_VERSION)?;
         let r = &mut record;
         let unit = r.f64()?;
         let origin = [r.f64()?, r.f64()?, r.f64()?];
@@ -288,64 +295,75 @@ impl TerrainRecord {
     /// that a search across chunk borders took out of it and has not
     /// applied yet (`world::debris`), still pending.
     pub(crate) fn with_seeds_taken(mut self, taken: &[CellKey]) -> Self {
-        if !taken.is_empty() {
-            self.seeds = file_seeds(&self.seeds, taken);
-        }
+        self.seeds = file_seeds(&self.seeds, taken);
         self
     }
 
     /// The file bytes, as [`Terrain::to_bytes`] gave them when the record
     /// was taken (with the seeds added since).
     pub(crate) fn to_bytes(&self) -> Vec<u8> {
-        let TerrainRecord {
-            quantization,
-            base,
-            journal,
-            max_undo,
-            history,
-            octree,
-            seeds,
-        } = self;
-        let mut w = Writer::new();
-        w.bytes(&MAGIC);
-        w.u32(FORMAT_VERSION);
-        w.f64(quantization.unit());
-        for o in quantization.origin() {
-            w.f64(o);
-        }
-        write_base(&mut w, base);
-        w.count(journal.len());
-        for entry in journal {
-            let (tag, label) = match entry.edit {
-                Edit::Subtract => (0, 0),
-                Edit::Add(l) => (1, l),
-                Edit::Paint(l) => (2, l),
-                Edit::Intersect => (3, 0),
-            };
-            w.u8(tag);
-            w.u8(label);
-            w.count(entry.tool.pieces.len());
-            for piece in &entry.tool.pieces {
-                w.count(piece.len());
-                piece.iter().for_each(|&p| w.point(p));
-            }
-        }
-        w.u64(*max_undo as u64);
-        w.count(history.len());
-        for step in history {
-            w.keys(&step.changes.changed);
-            w.keys(&step.changes.removed);
-        }
-        let mut octrees: Vec<&Octree> = history.iter().map(|step| &step.before).collect();
-        octrees.push(octree);
-        let snapshots = snapshots_to_bytes(&octrees);
-        w.u64(snapshots.len() as u64);
-        w.bytes(&snapshots);
-        w.keys(seeds);
-        let sum = checksum(w.as_bytes());
-        w.u64(sum);
-        w.into_bytes()
+        write_terrain(
+            &self.quantization,
+            &self.base,
+            &self.journal,
+            self.max_undo,
+            &self.history,
+            &self.octree,
+            &self.seeds,
+        )
     }
+}
+
+/// The terrain file bytes of these parts (the layout in the module notes);
+/// `seeds` sorted, each once.
+fn write_terrain(
+    quantization: &Quantization,
+    base: &TerrainBase,
+    journal: &[JournalEntry],
+    max_undo: usize,
+    history: &VecDeque<UndoStep>,
+    octree: &Octree,
+    seeds: &[CellKey],
+) -> Vec<u8> {
+    let mut w = Writer::new();
+    w.bytes(&MAGIC);
+    w.u32(FORMAT_VERSION);
+    w.f64(quantization.unit());
+    for o in quantization.origin() {
+        w.f64(o);
+    }
+    write_base(&mut w, base);
+    w.count(journal.len());
+    for entry in journal {
+        let (tag, label) = match entry.edit {
+            Edit::Subtract => (0, 0),
+            Edit::Add(l) => (1, l),
+            Edit::Paint(l) => (2, l),
+            Edit::Intersect => (3, 0),
+        };
+        w.u8(tag);
+        w.u8(label);
+        w.count(entry.tool.pieces.len());
+        for piece in &entry.tool.pieces {
+            w.count(piece.len());
+            piece.iter().for_each(|&p| w.point(p));
+        }
+    }
+    w.u64(max_undo as u64);
+    w.count(history.len());
+    for step in history {
+        w.keys(&step.changes.changed);
+        w.keys(&step.changes.removed);
+    }
+    let mut octrees: Vec<&Octree> = history.iter().map(|step| &step.before).collect();
+    octrees.push(octree);
+    let snapshots = snapshots_to_bytes(&octrees);
+    w.u64(snapshots.len() as u64);
+    w.bytes(&snapshots);
+    w.keys(seeds);
+    let sum = checksum(w.as_bytes());
+    w.u64(sum);
+    w.into_bytes()
 }
 
 /// Seeds as a file holds them: those of `a` and `b`, sorted, each once.
@@ -412,19 +430,10 @@ fn create_temp(folder: &Path, name: &str) -> io::Result<(PathBuf, File)> {
 }
 
 /// The body of a record `magic, version u32, body, checksum u64`: checks
-/// the magic, the version and the checksum (XXH64 of every byte before
-/// it), and reads on from the body's first byte.
+/// the magic, the version (one of `versions`; an unsupported one names
+/// the newest as supported) and the checksum (XXH64 of every byte before
+/// it); reads on from the body's first byte, and gives the version.
 pub(super) fn open_record(
-    bytes: &[u8],
-    magic: [u8; 8],
-    version: u32,
-) -> Result<Reader<'_>, TerrainError> {
-    open_record_of_versions(bytes, magic, version..=version).map(|(r, _)| r)
-}
-
-/// [`open_record`] for a record of any of `versions`; also gives the
-/// version found. An unsupported one names the newest as supported.
-fn open_record_of_versions(
     bytes: &[u8],
     magic: [u8; 8],
     versions: std::ops::RangeInclusive<u32>,
