@@ -17,12 +17,18 @@
 //!   have, up to the same depth; the previous octrees share their unchanged
 //!   cells with the current one, in the file and after loading, so a deep
 //!   history costs only the cells that the carves replaced;
-//! - the undo depth limit ([`Terrain::with_max_undo`]).
+//! - the undo depth limit ([`Terrain::with_max_undo`]);
+//! - a world chunk's *seeds*: the cells its carves changed whose fall
+//!   across chunk borders is still to be searched ([`super::world`],
+//!   debris across chunk borders), sorted, each once. Loading puts them
+//!   back, so a world that loads the chunk searches from them and a piece
+//!   cut loose before the save falls after the load. A terrain outside a
+//!   world has none.
 //!
 //! Not saved: carves still queued or running (save an idle terrain, see
 //! [`Terrain::is_idle`]), meshes and cell entities (rebuilt on spawn).
 //!
-//! Layout (version 2, little-endian):
+//! Layout (version 3, little-endian):
 //!
 //! ```text
 //! magic    8 bytes  "CHISELTR"
@@ -37,9 +43,12 @@
 //! octrees  u64 length, then a kernel octree file of count + 1 snapshots:
 //!          the octree before each undo step, oldest first, then the
 //!          current octree
+//! seeds    u32 count of keys (depth u8, pos 3×u32)
 //! checksum u64      XXH64 of every byte before it
 //!          (chisel_bsp::octree::store::checksum)
 //! ```
+//!
+//! Version 2 files, the same without the seeds, load with none.
 //!
 //! Loading checks the magic, the version and the checksum first, then every
 //! record; the octree snapshots are checked by the kernel (bit budgets of
@@ -68,9 +77,13 @@ use super::tool::GridTool;
 
 /// The first bytes of every terrain file.
 pub const MAGIC: [u8; 8] = *b"CHISELTR";
-/// The format version written and read by this build. Version 1 stored
-/// the carves only and rebuilt the octree on load.
-pub const FORMAT_VERSION: u32 = 2;
+/// The format version written by this build. Version 2, without the
+/// seeds, is read too (with none); version 1 stored the carves only and
+/// rebuilt the octree on load, and is not read.
+pub const FORMAT_VERSION: u32 = 3;
+
+/// The oldest format version read.
+const OLDEST_READ_VERSION: u32 = 2;
 
 /// Most points, triangles or carves accepted in one list (guards against
 /// allocation bombs in corrupt files).
@@ -87,7 +100,15 @@ impl Terrain {
             self.max_undo,
             &self.history,
             &self.octree,
+            &file_seeds(&self.runtime.border_seeds, &[]),
         )
+    }
+
+    /// The cells whose fall across chunk borders this world chunk has
+    /// still to search, but those a running search took (in its file).
+    #[must_use]
+    pub fn border_seeds(&self) -> &[CellKey] {
+        &self.runtime.border_seeds
     }
 
     /// What [`Terrain::to_bytes`] writes, taken out of the terrain to be
@@ -100,6 +121,7 @@ impl Terrain {
             max_undo: self.max_undo,
             history: self.history.clone(),
             octree: self.octree.clone(),
+            seeds: file_seeds(&self.runtime.border_seeds, &[]),
         }
     }
 
@@ -128,7 +150,9 @@ impl Terrain {
     /// [`TerrainError::BadMagic`], [`TerrainError::UnsupportedVersion`],
     /// [`TerrainError::Truncated`] or [`TerrainError::Corrupt`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Terrain, TerrainError> {
-        let r = &mut open_record(bytes, MAGIC, FORMAT_VERSION)?;
+        let (mut record, version) =
+            open_record(bytes, MAGIC, OLDEST_READ_VERSION..=FORMAT_VERSION)?;
+        let r = &mut record;
         let unit = r.f64()?;
         let origin = [r.f64()?, r.f64()?, r.f64()?];
         let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
@@ -171,9 +195,10 @@ impl Terrain {
         }
         let length = usize::try_from(r.u64()?).unwrap_or(usize::MAX);
         let snapshot_bytes = r.bytes(length)?;
+        let seeds = if version >= 3 { r.keys()? } else { Vec::new() };
         if r.remaining() != 0 {
             return Err(corrupt(format!(
-                "{} unexpected bytes after the octrees",
+                "{} unexpected bytes after the seeds",
                 r.remaining()
             )));
         }
@@ -224,7 +249,10 @@ impl Terrain {
             journal,
             history,
             max_undo,
-            runtime: Runtime::default(),
+            runtime: Runtime {
+                border_seeds: seeds,
+                ..Runtime::default()
+            },
             detached_across: false,
         })
     }
@@ -258,11 +286,21 @@ pub(crate) struct TerrainRecord {
     max_undo: usize,
     history: VecDeque<UndoStep>,
     octree: Octree,
+    /// The seeds, sorted, each once.
+    seeds: Vec<CellKey>,
 }
 
 impl TerrainRecord {
+    /// The record with `taken` among its seeds too: seeds of the chunk
+    /// that a search across chunk borders took out of it and has not
+    /// applied yet (`world::debris`), still pending.
+    pub(crate) fn with_seeds_taken(mut self, taken: &[CellKey]) -> Self {
+        self.seeds = file_seeds(&self.seeds, taken);
+        self
+    }
+
     /// The file bytes, as [`Terrain::to_bytes`] gave them when the record
-    /// was taken.
+    /// was taken (with the seeds added since).
     pub(crate) fn to_bytes(&self) -> Vec<u8> {
         write_terrain(
             &self.quantization,
@@ -271,11 +309,13 @@ impl TerrainRecord {
             self.max_undo,
             &self.history,
             &self.octree,
+            &self.seeds,
         )
     }
 }
 
-/// The terrain file bytes of these parts (the layout in the module notes).
+/// The terrain file bytes of these parts (the layout in the module notes);
+/// `seeds` sorted, each once.
 fn write_terrain(
     quantization: &Quantization,
     base: &TerrainBase,
@@ -283,6 +323,7 @@ fn write_terrain(
     max_undo: usize,
     history: &VecDeque<UndoStep>,
     octree: &Octree,
+    seeds: &[CellKey],
 ) -> Vec<u8> {
     let mut w = Writer::new();
     w.bytes(&MAGIC);
@@ -319,9 +360,18 @@ fn write_terrain(
     let snapshots = snapshots_to_bytes(&octrees);
     w.u64(snapshots.len() as u64);
     w.bytes(&snapshots);
+    w.keys(seeds);
     let sum = checksum(w.as_bytes());
     w.u64(sum);
     w.into_bytes()
+}
+
+/// Seeds as a file holds them: those of `a` and `b`, sorted, each once.
+fn file_seeds(a: &[CellKey], b: &[CellKey]) -> Vec<CellKey> {
+    let mut seeds: Vec<CellKey> = a.iter().chain(b).copied().collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    seeds
 }
 
 /// Writes `path` atomically with what `fill` writes into a new temporary
@@ -380,22 +430,23 @@ fn create_temp(folder: &Path, name: &str) -> io::Result<(PathBuf, File)> {
 }
 
 /// The body of a record `magic, version u32, body, checksum u64`: checks
-/// the magic, the version and the checksum (XXH64 of every byte before
-/// it), and reads on from the body's first byte.
+/// the magic, the version (one of `versions`; an unsupported one names
+/// the newest as supported) and the checksum (XXH64 of every byte before
+/// it); reads on from the body's first byte, and gives the version.
 pub(super) fn open_record(
     bytes: &[u8],
     magic: [u8; 8],
-    version: u32,
-) -> Result<Reader<'_>, TerrainError> {
+    versions: std::ops::RangeInclusive<u32>,
+) -> Result<(Reader<'_>, u32), TerrainError> {
     if bytes.len() < magic.len() || bytes[..magic.len()] != magic {
         return Err(TerrainError::BadMagic);
     }
     let mut r = Reader::new(bytes, magic.len());
     let found = r.u32()?;
-    if found != version {
+    if !versions.contains(&found) {
         return Err(TerrainError::UnsupportedVersion {
             found,
-            supported: version,
+            supported: *versions.end(),
         });
     }
     let body = bytes
@@ -413,7 +464,7 @@ pub(super) fn open_record(
             reason: "checksum mismatch".into(),
         });
     }
-    Ok(Reader::new(&bytes[..body], r.at()))
+    Ok((Reader::new(&bytes[..body], r.at()), found))
 }
 
 pub(super) fn corrupt(e: impl ToString) -> TerrainError {

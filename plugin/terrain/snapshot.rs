@@ -87,7 +87,7 @@ impl Terrain {
     /// [`TerrainError::BadMagic`], [`TerrainError::UnsupportedVersion`],
     /// [`TerrainError::Truncated`] or [`TerrainError::Corrupt`].
     pub fn from_snapshot_bytes(bytes: &[u8]) -> Result<Terrain, TerrainError> {
-        let r = &mut open_record(bytes, SNAPSHOT_MAGIC, SNAPSHOT_VERSION)?;
+        let r = &mut open_record(bytes, SNAPSHOT_MAGIC, SNAPSHOT_VERSION..=SNAPSHOT_VERSION)?.0;
         let unit = r.f64()?;
         let origin = [r.f64()?, r.f64()?, r.f64()?];
         let quantization = Quantization::new(unit, origin).map_err(corrupt)?;

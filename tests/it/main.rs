@@ -101,6 +101,8 @@ mod terrain_world_seams;
 #[cfg(feature = "terrain")]
 mod world_save;
 #[cfg(feature = "terrain")]
+mod world_save_seeds;
+#[cfg(feature = "terrain")]
 mod world_save_wait;
 #[cfg(feature = "terrain")]
 mod world_undo;

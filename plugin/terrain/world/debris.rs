@@ -98,8 +98,16 @@
 //!   back, in every chunk.
 //! - **Streaming and files.** A chunk that lost a part counts as edited
 //!   even with no carve of its own: it is kept while streamed out and
-//!   saved with the world. A chunk that streams out while a search that
-//!   depends on it runs makes it stale; its seeds go with it.
+//!   saved with the world. A chunk's seeds are part of its file
+//!   ([`crate::terrain::file`]): a save writes those still in the chunk
+//!   and those the world's search took out of it and has not applied,
+//!   so a save need not wait for a fall
+//!   on its way, and a world loaded from the files searches from them
+//!   and lets the piece fall ([`super::store`]). A chunk streamed out
+//!   keeps the seeds still in it in its stored bytes and searches from
+//!   them when it streams back in; one that streams out while a search
+//!   that depends on it runs makes the search stale, and the seeds the
+//!   search took from it are dropped with it.
 //! - **Determinism.** The chunks' octrees, the seeds and the kernel's
 //!   search are exact, and a result is applied only to the state it was
 //!   found in, so the same carves give the same pieces and the same
@@ -188,6 +196,21 @@ impl DebrisSearch {
             last = Some(i);
             new.then_some(i)
         })
+    }
+
+    /// The seeds it took out of the chunk of terrain `entity`, pending
+    /// until it is applied (or given back when it is dropped): a save
+    /// writes them with the chunk ([`super::store`]).
+    pub(super) fn seeds_taken(&self, entity: Entity) -> &[CellKey] {
+        (self.seeds.iter())
+            .find(|(e, _)| *e == entity)
+            .map_or(&[], |(_, seeds)| seeds.as_slice())
+    }
+
+    /// Whether it carries out a detach of a networked world's order (a
+    /// follower's search).
+    pub(super) fn is_ordered(&self) -> bool {
+        self.ordered.is_some()
     }
 
     /// What it found, once it is done and did not fail.

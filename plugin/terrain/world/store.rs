@@ -57,12 +57,28 @@
 //! world never holds half of a world carve. A frame does not when a carve
 //! waits for a chunk (also a far chunk's deferred carves on a networked
 //! world's client: [`TerrainWorld::build_deferred`] builds them), a
-//! [`WorldUndo`](super::WorldUndo) waits for a chunk, a live chunk has
-//! a carve, undo or detach queued or running, or a piece cut loose across
-//! chunk borders is still to be taken out (seeds wait for a search, a
-//! search runs or waits to be applied, or a networked server's detach
-//! waits to be carried out): a save never holds a piece that a carve
-//! already freed still in place. A request read in such a
+//! [`WorldUndo`](super::WorldUndo) waits for a chunk, or a live chunk has
+//! a carve, undo or detach queued or running.
+//!
+//! A fall across chunk borders on its way does not keep a frame from
+//! being whole: it is saved. Each chunk file holds the chunk's *seeds*
+//! ([`super::super::file`]), the cells its carves changed whose search for
+//! debris across borders ([`super::debris`]) is still to come: those in
+//! the chunk and those a search running or waiting to be applied took
+//! out of it. A world loaded from the files puts them back into their
+//! chunks as they stream in, searches from them and the piece falls there
+//! as in the saved world (the same search, over the chunks live then),
+//! so a saved world never holds forever a piece that a carve already
+//! freed. Two such falls still make a frame not whole, as no file
+//! holds them: seeds in a live chunk that is not edited (it has no file;
+//! rare: a [`WorldUndo`](super::WorldUndo) back to the base gives a
+//! detach's seeds back), and on a networked world's client a detach its
+//! server ordered, still to be carried out. A detach being applied
+//! (its chunks' jobs rebuilding the cells, already taken out of the
+//! octrees) is a chunk job as any: the frame waits for it, a frame or
+//! two. So a world cratered every other frame saves within a frame or
+//! two (`world_save_seeds`), where before it waited for seeds and
+//! searches it never was without. A request read in such a
 //! frame, or while a save of the same world is being written, is not
 //! refused: the world keeps it, oldest first, and starts it in the first
 //! later frame that holds a whole state with no save of the world running
@@ -78,8 +94,8 @@
 //!   written is not merged: it waits, and gets its own answer after that
 //!   save's, writing what changed since.
 //! - Saving never holds back a carve: carves, undos and streaming go on
-//!   while a request waits. So a world carved in every frame may never be
-//!   whole; a request gives up once the world held no whole state in
+//!   while a request waits. So a world carved in every frame (a carve job
+//!   running in each) may never be whole; a request gives up once the world held no whole state in
 //!   [`TerrainWorld::max_save_wait`] frames of its turn (frames in which it
 //!   is the oldest request and no save of the world runs;
 //!   [`DEFAULT_MAX_SAVE_WAIT`], 300 by default, 5 s at 60 frames a
@@ -106,6 +122,7 @@ use bevy::ecs::change_detection::Tick;
 use bevy::prelude::*;
 use bevy::tasks::futures::check_ready;
 use bevy::tasks::{IoTaskPool, Task};
+use chisel_bsp::octree::CellKey;
 
 use super::super::asset::TERRAIN_EXTENSION;
 use super::super::component::Terrain;
@@ -123,11 +140,14 @@ pub const DEFAULT_MAX_SAVE_WAIT: u32 = 300;
 /// Save a world's edited chunks into `folder` off the main thread, only
 /// those that changed since the last save to that folder ([module
 /// docs](self)). It starts in the first frame, from the one it is read
-/// on, that holds a whole state with no save of the world being written
+/// on, that holds a whole state (no carve, undo or detach in flight in a
+/// chunk or waiting for one) with no save of the world being written
 /// (it waits for that, at most [`TerrainWorld::max_save_wait`] frames of
 /// its turn; a second request for a folder whose request waits is merged
-/// into it). Answered, a frame or more later, by one [`WorldSaved`] or
-/// [`WorldSaveFailed`].
+/// into it). Falls across chunk borders still on their way are saved with
+/// the chunks (their seeds), so a world loaded from the files lets those
+/// pieces fall: a save does not wait for them. Answered, a frame or more
+/// later, by one [`WorldSaved`] or [`WorldSaveFailed`].
 #[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct SaveWorld {
     /// The world entity.
@@ -218,8 +238,10 @@ struct SavedChunk {
     len: usize,
     checksum: u64,
     /// The live chunk it was taken from: its entity and the tick of its
-    /// terrain's last change then (`None` for bytes of a stored chunk or
-    /// a [`TerrainWorld::save`]).
+    /// terrain's last change then (`None` for bytes of a stored chunk, a
+    /// [`TerrainWorld::save`], or a chunk saved with seeds: seeds come and
+    /// go without a change of the terrain, so such a chunk is serialized
+    /// again and compared by its bytes).
     live: Option<(Entity, Tick)>,
 }
 
@@ -229,8 +251,9 @@ struct RunningSave {
     /// The records of the edited chunks left as they were (and of live
     /// chunks whose terrain could not be read), kept whatever the outcome.
     kept: FolderRecord,
-    /// The live chunk each planned file comes from, for the record.
-    live: BTreeMap<ChunkCoord, (Entity, Tick)>,
+    /// The live chunk each planned file comes from, for the record (no
+    /// mark for a chunk saved with seeds, see [`SavedChunk::live`]).
+    live: BTreeMap<ChunkCoord, Option<(Entity, Tick)>>,
     /// Edited chunks found unchanged when the save was planned.
     unchanged: usize,
     task: Task<Result<Vec<FileOutcome>, TerrainError>>,
@@ -331,7 +354,9 @@ impl TerrainWorld {
     /// # Errors
     /// [`TerrainError::WorldNotIdle`] while a carve waits for a chunk
     /// (deferred ones too: [`TerrainWorld::build_deferred`]) or
-    /// an edited chunk has work in progress (nothing is written then);
+    /// an edited chunk has work in progress (nothing is written then).
+    /// Falls across chunk borders on their way are written as
+    /// [`SaveWorld`] writes them (each chunk's seeds, [module docs](self));
     /// [`TerrainError::WorldSaveRunning`] while a [`SaveWorld`] of this
     /// world is being written;
     /// [`TerrainError::Io`] naming the file that could not be written or
@@ -368,7 +393,8 @@ impl TerrainWorld {
                     chunk: [coord.x, coord.z],
                 });
             }
-            files.push((*coord, Arc::new(terrain.to_bytes())));
+            let record = (terrain.record_for_file()).with_seeds_taken(self.seeds_taken(*entity));
+            files.push((*coord, Arc::new(record.to_bytes())));
         }
         for (coord, bytes) in &self.stored {
             if !files.iter().any(|(c, _)| c == coord) {
@@ -397,10 +423,18 @@ impl TerrainWorld {
         Ok(outcome?.into_iter().map(|f| f.coord).collect())
     }
 
+    /// The seeds the world's search across chunk borders took out of the
+    /// chunk of terrain `entity` and has not applied: pending, saved with
+    /// the chunk.
+    fn seeds_taken(&self, entity: Entity) -> &[CellKey] {
+        (self.debris_search.as_ref()).map_or(&[], |search| search.seeds_taken(entity))
+    }
+
     /// Whether this frame holds a whole state ([module docs](self)): no
     /// carve waits for a chunk, no undo waits for one, every live chunk
     /// readable here is settled, and no fall across chunk borders is on
-    /// its way.
+    /// its way that the files cannot hold (seeds are saved with their
+    /// chunks).
     ///
     /// # Errors
     /// [`TerrainError::WorldNotIdle`] naming a busy chunk.
@@ -413,24 +447,26 @@ impl TerrainWorld {
                 .find(|&(_, entity)| terrains.get(entity).is_ok_and(|t| !content_settled(&t)))
                 .map(|(coord, _)| coord)
         });
-        // A fall across chunk borders on its way: a chunk's seeds for the
-        // next search, a search running or waiting to be applied, or a
-        // detach a networked server ordered.
+        // A fall across chunk borders that no file would hold: seeds of a
+        // chunk that is not edited (it has no file), or a detach a
+        // networked server ordered (its seeds are the server's).
         let falling = || {
-            let seeded = self.live_chunks().find(|&(_, entity)| {
-                terrains
-                    .get(entity)
-                    .is_ok_and(|t| !t.runtime.border_seeds.is_empty())
+            let unsaved = self.live_chunks().find(|&(coord, entity)| {
+                terrains.get(entity).is_ok_and(|t| {
+                    let seeded =
+                        !t.runtime.border_seeds.is_empty() || !self.seeds_taken(entity).is_empty();
+                    seeded && !self.chunk_edited(coord, &t)
+                })
             });
-            let searching =
-                self.debris_search.is_some() || self.debris_seeded || self.detach_ordered.is_some();
-            // A search is the world's: it names any live chunk.
+            let ordered = self.detach_ordered.is_some()
+                || (self.debris_search.as_ref()).is_some_and(|s| s.is_ordered());
+            // An order is the world's: it names any live chunk.
             let any = || {
                 self.live_chunks()
                     .next()
                     .map_or(ChunkCoord { x: 0, z: 0 }, |c| c.0)
             };
-            (seeded.map(|(coord, _)| coord)).or_else(|| searching.then(any))
+            (unsaved.map(|(coord, _)| coord)).or_else(|| ordered.then(any))
         };
         let busy = busy.or_else(falling);
         match busy {
@@ -512,17 +548,20 @@ impl TerrainWorld {
                 continue;
             }
             let mark = (entity, terrain.last_changed());
+            let taken = self.seeds_taken(entity);
+            let seeded = !taken.is_empty() || !terrain.runtime.border_seeds.is_empty();
             match record.get(&coord) {
-                Some(saved) if saved.live == Some(mark) => {
+                Some(saved) if saved.live == Some(mark) && !seeded => {
                     kept.insert(coord, *saved);
                     keep.insert(coord);
                     unchanged_live += 1;
                 }
                 saved => {
-                    live.insert(coord, mark);
+                    live.insert(coord, (!seeded).then_some(mark));
+                    let file = terrain.record_for_file().with_seeds_taken(taken);
                     planned.push(PlannedFile {
                         coord,
-                        bytes: ChunkBytes::Live(Box::new(terrain.record_for_file())),
+                        bytes: ChunkBytes::Live(Box::new(file)),
                         known: saved.map(|s| (s.len, s.checksum)),
                     });
                 }
@@ -745,14 +784,14 @@ fn content_settled(terrain: &Terrain) -> bool {
 fn record_of(
     kept: FolderRecord,
     files: &[FileOutcome],
-    live: &BTreeMap<ChunkCoord, (Entity, Tick)>,
+    live: &BTreeMap<ChunkCoord, Option<(Entity, Tick)>>,
 ) -> FolderRecord {
     let mut record = kept;
     for file in files {
         let saved = SavedChunk {
             len: file.len,
             checksum: file.checksum,
-            live: live.get(&file.coord).copied(),
+            live: live.get(&file.coord).copied().flatten(),
         };
         record.insert(file.coord, saved);
     }
