@@ -104,8 +104,9 @@ impl Terrain {
         )
     }
 
-    /// The cells whose fall across chunk borders this world chunk has
-    /// still to search, but those a running search took (in its file).
+    /// The cells of this world chunk whose fall across chunk borders is
+    /// still to be searched, not counting those a running search has
+    /// taken (its file holds both).
     #[must_use]
     pub fn border_seeds(&self) -> &[CellKey] {
         &self.runtime.border_seeds
