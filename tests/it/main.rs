@@ -83,6 +83,8 @@ mod terrain_seams_render;
 #[cfg(feature = "terrain")]
 mod terrain_world;
 #[cfg(feature = "terrain")]
+mod terrain_world_carve_busy;
+#[cfg(feature = "terrain")]
 mod terrain_world_debris;
 mod terrain_world_debris_busy;
 #[cfg(feature = "terrain")]
