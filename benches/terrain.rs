@@ -12,7 +12,9 @@
 //! `loading_a_saved_terrain_against_replaying_its_carves`,
 //! `carving_at_sixty_frames_per_second`,
 //! `crater_latency_to_meshes_and_colliders`, `streaming_a_world`,
-//! `lod_of_a_world`, `debris_across_chunk_borders`, `saving_a_world`). World: chunks of the `world` example's landscape
+//! `lod_of_a_world`, `debris_across_chunk_borders`,
+//! `debris_latency_across_borders`, `saving_a_world`,
+//! `carve_latency_while_streaming`). World: chunks of the `world` example's landscape
 //! built one at a time, their size, the banded base built in one pass
 //! against painting its bands, and an app streaming them around a focus
 //! touring the world (a line, a loop or a lawnmower; `CHISEL_BENCH_TOUR`)
@@ -46,6 +48,8 @@ use support::{Args, env_or, json_line, percentile};
 mod frame_steps;
 #[path = "terrain/world.rs"]
 mod world;
+#[path = "terrain/world_carve_latency.rs"]
+mod world_carve_latency;
 #[path = "terrain/world_debris.rs"]
 mod world_debris;
 #[path = "terrain/world_debris_latency.rs"]
@@ -55,6 +59,7 @@ mod world_lod;
 #[path = "terrain/world_save.rs"]
 mod world_save;
 use world::streaming_a_world;
+use world_carve_latency::carve_latency_while_streaming;
 use world_debris::debris_across_chunk_borders;
 use world_debris_latency::debris_latency_across_borders;
 use world_lod::lod_of_a_world;
@@ -64,7 +69,7 @@ fn main() {
     let Some(args) = Args::parse("terrain") else {
         return;
     };
-    let all: [(&str, fn()); 9] = [
+    let all: [(&str, fn()); 10] = [
         (
             "crater_carves_on_a_large_terrain",
             crater_carves_on_a_large_terrain,
@@ -89,6 +94,10 @@ fn main() {
             debris_latency_across_borders,
         ),
         ("saving_a_world", saving_a_world),
+        (
+            "carve_latency_while_streaming",
+            carve_latency_while_streaming,
+        ),
     ];
     for (name, measure) in all {
         if args.wants(name) {

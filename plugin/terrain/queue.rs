@@ -6,6 +6,11 @@
 //! messages into jobs, and [`start_jobs`] runs the next one on the async
 //! compute pool, where the job runtime (module `jobs`) applies it and
 //! builds the changed cells. [`super::upload`] collects the result.
+//!
+//! A world chunk's carve, undo and detach jobs go before the world's
+//! builds that have not started (module `pool_order`); a first full build
+//! and a border reseal keep their place, and a single terrain's jobs
+//! spawn plainly.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -23,8 +28,8 @@ use super::jobs::{
     undone_step,
 };
 use super::physics::TerrainPhysicsBackend;
-use super::pool_order::spawn_first;
-use super::world::ChunkOffstage;
+use super::pool_order::{PoolOrder, spawn_in_order};
+use super::world::{ChunkOffstage, TerrainWorld, WorldChunk};
 
 /// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
 /// queues.
@@ -112,11 +117,17 @@ pub fn start_jobs(
     settings: Res<TerrainSettings>,
     physics: Res<TerrainPhysicsBackend>,
     mut workers: Local<Workers>,
-    mut terrains: Query<(Entity, &mut Terrain, Has<ChunkOffstage>)>,
+    mut terrains: Query<(
+        Entity,
+        &mut Terrain,
+        Has<ChunkOffstage>,
+        Option<&WorldChunk>,
+    )>,
+    worlds: Query<&TerrainWorld>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
     let _span = bevy::log::info_span!("chisel::queue::start_jobs").entered();
-    for (entity, mut terrain, offstage) in &mut terrains {
+    for (entity, mut terrain, offstage, chunk) in &mut terrains {
         let pool = workers.pool(settings.worker_threads);
         if terrain.runtime.task.is_some() {
             continue;
@@ -129,9 +140,14 @@ pub fn start_jobs(
         } else {
             settings.output
         };
+        // A world's chunk: its carves go before the world's builds.
+        let order = chunk
+            .and_then(|c| worlds.get(c.world).ok())
+            .map(|w| &w.pool_order);
         if start_next(
             entity,
             terrain_now,
+            order,
             output,
             &settings,
             &physics,
@@ -149,6 +165,7 @@ pub fn start_jobs(
 fn start_next(
     entity: Entity,
     terrain: &mut Terrain,
+    order: Option<&PoolOrder>,
     output: CellOutput,
     settings: &TerrainSettings,
     physics: &TerrainPhysicsBackend,
@@ -236,7 +253,8 @@ fn start_next(
             Ok((before, keys)) => {
                 let octree = terrain.octree.clone();
                 let mesher = std::mem::take(&mut terrain.runtime.mesher);
-                terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+                // Ahead of the world's builds waiting on the pool, as a carve.
+                terrain.runtime.task = Some(spawn_in_order(order, async move {
                     on_pool(pool, || {
                         let steps = vec![undone_step(&before, &octree, &keys, &context, requested)];
                         remesh(
@@ -285,7 +303,7 @@ fn start_next(
             let mesher = std::mem::take(&mut terrain.runtime.mesher);
             // Debris across chunk borders, floating until this job runs:
             // ahead of the chunk builds waiting on the pool.
-            terrain.runtime.task = Some(spawn_first(async move {
+            terrain.runtime.task = Some(spawn_in_order(order, async move {
                 on_pool(pool, || {
                     detached_batch(octree, mesher, &context, keys, pieces)
                 })
@@ -313,7 +331,9 @@ fn start_next(
             }
             let octree = terrain.octree.clone();
             let mesher = std::mem::take(&mut terrain.runtime.mesher);
-            terrain.runtime.task = Some(AsyncComputeTaskPool::get().spawn(async move {
+            // The hole shows as soon as this job is done: ahead of the
+            // world's builds waiting on the pool (`pool_order`).
+            terrain.runtime.task = Some(spawn_in_order(order, async move {
                 on_pool(pool, || carve_batch(octree, mesher, &context, batch))
             }));
         }

@@ -87,6 +87,8 @@ mod terrain_volume_change;
 #[cfg(feature = "terrain")]
 mod terrain_world;
 #[cfg(feature = "terrain")]
+mod terrain_world_carve_busy;
+#[cfg(feature = "terrain")]
 mod terrain_world_debris;
 #[cfg(feature = "terrain")]
 mod terrain_world_debris_busy;

@@ -68,18 +68,19 @@
 //!   in the order they came, on one thread on a machine with up to seven
 //!   cores, and a streaming world keeps up to
 //!   [`StreamSettings::max_building`](super::StreamSettings::max_building)
-//!   chunk builds there. The search, and each chunk's job that takes a
-//!   result's pieces out and builds them, go before every chunk build and
-//!   coarse chunk build that has not started: such a build, coming to run
-//!   while one of them waits, steps back behind it (builds already running
-//!   finish; carves and other tasks keep their place). Builds still start
-//!   as before, so chunks keep streaming in. With a second focus streaming
-//!   a chunk in every four frames, a block cut loose fell 6–7 frames after
-//!   its cut (median of each of five runs) against 6–14 (median 9.5 over
-//!   eight runs) without the rule, 4 in an idle world
-//!   (`debris_latency_across_borders`, one pool thread, 60 frames per
-//!   second, a shared machine); the chunks' own carve jobs, before the
-//!   search, keep their place behind the builds.
+//!   chunk builds there. The search, each chunk's job that takes a
+//!   result's pieces out and builds them, and the chunks' carve and undo
+//!   jobs go before every chunk build and coarse chunk build of the world
+//!   that has not started: such a build, coming to run while one of them
+//!   waits, steps back behind it (builds already running finish; other
+//!   tasks keep their place). A build steps back for at most eight of them
+//!   spawned after it came to run, so chunks keep streaming in. With a
+//!   second focus streaming a chunk in every four frames, a block cut
+//!   loose fell 6–7 frames after its cut (median of each of five runs)
+//!   against 6–14 (median 9.5 over eight runs) without the rule, 4 in an
+//!   idle world (`debris_latency_across_borders`, one pool thread, 60
+//!   frames per second, a shared machine); the carve jobs that come
+//!   before the search no longer wait behind the builds either.
 //! - **Limits.** [`TerrainWorld::with_debris_limits`] bounds what one
 //!   search takes out across borders, all pieces in all chunks together.
 //!   The carves that cut them loose are already applied, each in its own
@@ -160,7 +161,6 @@ use super::undo::DetachedChunk;
 use super::{ChunkCoord, TerrainWorld};
 use crate::terrain::component::Terrain;
 use crate::terrain::jobs::Job;
-use crate::terrain::pool_order::spawn_first;
 
 /// A search for debris across chunk borders, on the async compute pool
 /// or finished and waiting to be applied (at most one per world).
@@ -666,7 +666,7 @@ pub(super) fn launch(
     } else {
         &[]
     };
-    let task = spawn_first(async move {
+    let task = world.pool_order.spawn_first(async move {
         let _span = bevy::log::info_span!("chisel::world::debris_search").entered();
         let detached = detach_across_chunks_with_open_sides(&mut chunks, &near, limits, open);
         Searched {

@@ -33,7 +33,6 @@ use chisel_bsp::tree::Label;
 
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::super::pool_order::after_first;
 use super::lod_mesh::{LodBasis, LodPyramid, edited_pyramid, source_pyramid};
 use super::{ChunkCoord, TerrainFocus, TerrainWorld, restore};
 
@@ -495,11 +494,13 @@ pub fn update_lod(
             let layout = layout.clone();
             let labels = world.labels.clone();
             let pool = AsyncComputeTaskPool::get();
+            // Behind the world's carves and debris work (`pool_order`).
+            let order = world.pool_order.clone();
             let task = match job {
                 Job::Source => {
                     let source = world.source.clone();
                     pool.spawn(async move {
-                        after_first().await;
+                        order.after_first().await;
                         let start = Instant::now();
                         let pyramid = source_pyramid(&layout, &*source, coord);
                         Built {
@@ -511,7 +512,7 @@ pub fn update_lod(
                 Job::Octree(hash, Some(octree)) => {
                     let source = world.source.clone();
                     pool.spawn(async move {
-                        after_first().await;
+                        order.after_first().await;
                         let start = Instant::now();
                         let pyramid = edited_pyramid(&layout, &*source, coord, &octree, hash);
                         Built {
@@ -524,7 +525,7 @@ pub fn update_lod(
                 Job::Bytes(_, bytes) => {
                     let source = world.source.clone();
                     pool.spawn(async move {
-                        after_first().await;
+                        order.after_first().await;
                         let start = Instant::now();
                         let pyramid = restore(&bytes, &labels).and_then(|t| {
                             edited_pyramid(&layout, &*source, coord, t.octree(), t.state_hash())

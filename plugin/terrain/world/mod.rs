@@ -166,6 +166,7 @@ use chisel_bsp::tree::Label;
 
 use super::component::Terrain;
 use super::error::TerrainError;
+use super::pool_order::PoolOrder;
 use super::tool::{CarveTool, GridTool};
 
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
@@ -224,11 +225,13 @@ pub struct StreamSettings {
     /// Chunks farther than this from every focus are streamed out (at
     /// least `load_radius`; the gap is the hysteresis).
     pub unload_radius: f32,
-    /// Most chunk builds on the async compute pool at once. A build that
-    /// has not started yet steps back behind the debris work waiting
-    /// there (a search for debris across chunk borders, a chunk's job
-    /// that takes its pieces out), so a piece cut loose does not float
-    /// while chunks stream in: see [`debris`], *Priority on the pool*.
+    /// Most chunk builds on the async compute pool at once (as many more
+    /// coarse chunk builds of a [`WorldLod`]). A build that has not
+    /// started steps back behind the world's carve, undo and debris work
+    /// waiting there, for at most eight such tasks spawned after it came
+    /// to run: craters show and pieces fall without waiting for the
+    /// builds, and chunks keep streaming in under a constant stream of
+    /// carves. See [`debris`], *Priority on the pool*.
     pub max_building: usize,
 }
 
@@ -370,6 +373,8 @@ pub struct TerrainWorld {
     pub(crate) history: undo::WorldHistory,
     /// What the folders saved to hold and the save being written ([`store`]).
     pub(crate) saves: store::WorldSaves,
+    /// Its carves and debris work before its builds (`pool_order`).
+    pub(crate) pool_order: PoolOrder,
 }
 
 impl TerrainWorld {
@@ -405,6 +410,7 @@ impl TerrainWorld {
             detaches_applied: Vec::new(),
             history: undo::WorldHistory::default(),
             saves: store::WorldSaves::default(),
+            pool_order: PoolOrder::default(),
         })
     }
 

@@ -18,7 +18,6 @@ use bevy::tasks::futures::check_ready;
 use super::super::carve::{CarveRejected, GridCarve};
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::super::pool_order::after_first;
 use super::debris_order::DebrisRole;
 use super::{
     Built, Chunk, ChunkCoord, ChunkOffstage, TerrainFocus, TerrainWorld, WorldCarve, WorldChunk,
@@ -341,9 +340,11 @@ pub(super) fn chunks_within(
 
 fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     let labels = world.labels.clone();
+    // Behind the world's carves and debris work waiting (`pool_order`).
+    let order = world.pool_order.clone();
     let task = if let Some(bytes) = world.stored.get(&coord).cloned() {
         AsyncComputeTaskPool::get().spawn(async move {
-            after_first().await;
+            order.after_first().await;
             let start = Instant::now();
             let terrain = restore(&bytes, &labels);
             Built {
@@ -355,7 +356,7 @@ fn start_build(world: &mut TerrainWorld, coord: ChunkCoord) {
     } else {
         let (layout, source) = (world.layout.clone(), world.source.clone());
         AsyncComputeTaskPool::get().spawn(async move {
-            after_first().await;
+            order.after_first().await;
             let start = Instant::now();
             let terrain = generate(&layout, &*source, &labels, coord);
             Built {
