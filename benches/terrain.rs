@@ -44,6 +44,8 @@ use serde_json::json;
 
 mod support;
 use support::{Args, env_or, json_line, percentile};
+#[path = "terrain/corner_latency.rs"]
+mod corner_latency;
 #[path = "support/frame_steps.rs"]
 mod frame_steps;
 #[path = "terrain/world.rs"]
