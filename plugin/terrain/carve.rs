@@ -87,6 +87,40 @@ pub struct UndoCarve {
 
 /// A carve (or undo) is applied and every mesh and collider it changed is
 /// in place.
+///
+/// A mining game paying out the ore each carve digs up (material 4 here),
+/// with [`TerrainSettings::measure_volumes`] on:
+///
+/// ```
+/// use bevy::prelude::*;
+/// use bevy_chisel::terrain::{CarveApplied, TerrainPlugin, TerrainSettings};
+///
+/// const ORE: u8 = 4;
+///
+/// #[derive(Resource, Default)]
+/// struct Wallet {
+///     /// Cubic metres of ore dug up.
+///     ore: f64,
+/// }
+///
+/// fn pay_out_ore(mut applied: MessageReader<CarveApplied>, mut wallet: ResMut<Wallet>) {
+///     for carve in applied.read() {
+///         let change = carve.volume_change.as_ref().and_then(|c| c.get(&ORE));
+///         // Negative where the carve took ore out; an undo gives it back.
+///         wallet.ore -= change.copied().unwrap_or(0.0);
+///     }
+/// }
+///
+/// let mut app = App::new();
+/// app.add_plugins((MinimalPlugins, TerrainPlugin))
+///     .insert_resource(TerrainSettings {
+///         measure_volumes: true,
+///         ..default()
+///     })
+///     .init_resource::<Wallet>()
+///     .add_systems(Update, pay_out_ore);
+/// app.update();
+/// ```
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct CarveApplied {
