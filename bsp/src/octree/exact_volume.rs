@@ -24,7 +24,7 @@ use num_integer::Integer;
 use num_traits::{One, Signed, ToPrimitive, Zero};
 use rayon::prelude::*;
 
-use super::cell::CellBox;
+use super::cell::{CellBox, CellKey};
 use super::tree::{Leaf, Octree};
 use crate::convex::{ConvexArena, PolyId};
 use crate::exact::Point4;
@@ -273,8 +273,17 @@ impl Octree {
     /// (leaves run in parallel; the result does not depend on the order).
     #[must_use]
     pub fn exact_volumes(&self) -> BTreeMap<Label, ExactVolume> {
-        let per_leaf: Vec<Vec<(Label, ExactVolume)>> = self
-            .leaves()
+        self.exact_volumes_of(&self.leaves())
+    }
+
+    /// The exact volume of every non-empty material of `leaves`, each
+    /// measured inside its cell (the octree's leaves, or the parts of them
+    /// in smaller cells).
+    pub(super) fn exact_volumes_of(
+        &self,
+        leaves: &[(CellKey, &Leaf)],
+    ) -> BTreeMap<Label, ExactVolume> {
+        let per_leaf: Vec<Vec<(Label, ExactVolume)>> = leaves
             .par_iter()
             .map(|&(key, leaf)| leaf_volumes(leaf, &self.cell_box(key)))
             .collect();
@@ -297,7 +306,7 @@ impl Octree {
 
 /// The exact volume per label of one leaf inside `cell` (the part of the
 /// leaf's regions in `cell`, when `cell` lies inside the leaf's own).
-pub(super) fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, ExactVolume)> {
+fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, ExactVolume)> {
     match leaf {
         Leaf::Uniform(EMPTY) => Vec::new(),
         Leaf::Uniform(label) => vec![(*label, ExactVolume::of_box(cell))],

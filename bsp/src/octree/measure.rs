@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
-use super::cell::CellBox;
+use super::cell::{CellBox, CellKey};
 use super::tree::{Leaf, Octree};
 use crate::convex::{ConvexArena, PolyId};
 use crate::tree::{EMPTY, Label};
@@ -18,8 +18,14 @@ impl Octree {
     /// The volume of every non-empty material, in cubic grid units.
     #[must_use]
     pub fn volumes(&self) -> BTreeMap<Label, f64> {
-        let per_leaf: Vec<Vec<(Label, f64)>> = self
-            .leaves()
+        self.volumes_of(&self.leaves())
+    }
+
+    /// The volume of every non-empty material of `leaves`, each measured
+    /// inside its cell (the octree's leaves, or the parts of them in
+    /// smaller cells).
+    pub(super) fn volumes_of(&self, leaves: &[(CellKey, &Leaf)]) -> BTreeMap<Label, f64> {
+        let per_leaf: Vec<Vec<(Label, f64)>> = leaves
             .par_iter()
             .map(|&(key, leaf)| leaf_volumes(leaf, &self.cell_box(key)))
             .collect();
@@ -40,7 +46,7 @@ impl Octree {
 /// The volume per label of one leaf's convex cells inside `cell` (the
 /// part of the leaf's regions in `cell`, when `cell` lies inside the
 /// leaf's own), one entry per convex cell.
-pub(super) fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, f64)> {
+fn leaf_volumes(leaf: &Leaf, cell: &CellBox) -> Vec<(Label, f64)> {
     let bsp = leaf.to_bsp();
     let mut arena = ConvexArena::new();
     let Ok(bounds) = cell.add_to(&mut arena) else {

@@ -22,12 +22,9 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
-use rayon::prelude::*;
-
 use super::apply::Changes;
 use super::cell::CellKey;
-use super::exact_volume::{self, ExactVolume};
-use super::measure;
+use super::exact_volume::ExactVolume;
 use super::tree::{Leaf, OctNode, Octree};
 use crate::tree::Label;
 
@@ -40,7 +37,7 @@ impl Octree {
     #[must_use]
     pub fn exact_volumes_in(&self, keys: &[CellKey]) -> BTreeMap<Label, ExactVolume> {
         let keys = outermost(keys.iter().copied());
-        exact_sum(self, &keys)
+        self.exact_volumes_of(&self.parts_in(&keys))
     }
 
     /// The node at `key`, or the leaf `key` lies inside.
@@ -94,8 +91,8 @@ impl Changes {
         after: &Octree,
     ) -> BTreeMap<Label, ExactVolume> {
         let keys = self.edited_cells(before, after);
-        let mut change = exact_sum(after, &keys);
-        for (label, v) in exact_sum(before, &keys) {
+        let mut change = after.exact_volumes_of(&after.parts_in(&keys));
+        for (label, v) in before.exact_volumes_of(&before.parts_in(&keys)) {
             let entry = change.entry(label).or_default();
             *entry = &*entry - &v;
         }
@@ -111,20 +108,8 @@ impl Changes {
     #[must_use]
     pub fn volume_change(&self, before: &Octree, after: &Octree) -> BTreeMap<Label, f64> {
         let keys = self.edited_cells(before, after);
-        let sum = |octree: &Octree| {
-            let per_leaf: Vec<Vec<(Label, f64)>> = octree
-                .parts_in(&keys)
-                .par_iter()
-                .map(|&(key, leaf)| measure::leaf_volumes(leaf, &octree.cell_box(key)))
-                .collect();
-            let mut out: BTreeMap<Label, f64> = BTreeMap::new();
-            for (label, v) in per_leaf.into_iter().flatten() {
-                *out.entry(label).or_insert(0.0) += v;
-            }
-            out
-        };
-        let mut change = sum(after);
-        for (label, v) in sum(before) {
+        let mut change = after.volumes_of(&after.parts_in(&keys));
+        for (label, v) in before.volumes_of(&before.parts_in(&keys)) {
             *change.entry(label).or_insert(0.0) -= v;
         }
         change.retain(|_, v| *v != 0.0);
@@ -151,23 +136,6 @@ fn same_content(a: &OctNode, b: &OctNode) -> bool {
         (OctNode::Inner(x), OctNode::Inner(y)) => Arc::ptr_eq(x, y),
         _ => false,
     }
-}
-
-/// The exact volumes per label of `octree`'s leaves in `keys`.
-fn exact_sum(octree: &Octree, keys: &[CellKey]) -> BTreeMap<Label, ExactVolume> {
-    let per_leaf: Vec<Vec<(Label, ExactVolume)>> = octree
-        .parts_in(keys)
-        .par_iter()
-        .map(|&(key, leaf)| exact_volume::leaf_volumes(leaf, &octree.cell_box(key)))
-        .collect();
-    let mut by_label: BTreeMap<Label, Vec<ExactVolume>> = BTreeMap::new();
-    for (label, v) in per_leaf.into_iter().flatten() {
-        by_label.entry(label).or_default().push(v);
-    }
-    by_label
-        .into_iter()
-        .map(|(label, parts)| (label, ExactVolume::sum_balanced(parts)))
-        .collect()
 }
 
 /// The keys that lie inside no other of them, sorted and without repeats.
