@@ -279,10 +279,7 @@ impl Terrain {
     /// add up their [`CarveApplied::volume_change`](super::CarveApplied::volume_change) instead.
     #[must_use]
     pub fn volumes(&self) -> BTreeMap<Label, f64> {
-        let unit = self.quantization.unit();
-        let cube = unit * unit * unit;
-        let volumes = self.octree.volumes();
-        volumes.into_iter().map(|(l, v)| (l, v * cube)).collect()
+        self.quantization.to_world_volumes(self.octree.volumes())
     }
 
     /// The grid: unit and origin.

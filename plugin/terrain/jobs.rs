@@ -362,8 +362,11 @@ pub(crate) fn carve_batch(
             apply_carve_with_faces(&mut octree, &tool, edit).and_then(|(changes, faces)| {
                 // The carve's own change, before any piece it cut loose
                 // is taken out (the pieces report their own volumes).
-                let volume_change = (context.measure_volumes)
-                    .then(|| world_volumes(changes.volume_change(&before, &octree), context));
+                let volume_change = (context.measure_volumes).then(|| {
+                    context
+                        .quantization
+                        .to_world_volumes(changes.volume_change(&before, &octree))
+                });
                 detach(&mut octree, changes, context)
                     .map(|(c, pieces)| (c, faces, pieces, volume_change))
             });
@@ -406,13 +409,6 @@ pub(crate) fn carve_batch(
     remesh(octree, context, steps, keys, fresh, mesher, false)
 }
 
-/// A change per material in cubic grid units, in cubic world units.
-fn world_volumes(grid: BTreeMap<Label, f64>, context: &JobContext) -> BTreeMap<Label, f64> {
-    let unit = context.quantization.unit();
-    let cube = unit * unit * unit;
-    grid.into_iter().map(|(l, v)| (l, v * cube)).collect()
-}
-
 /// The step of an undo that turned `before` into `after`, changing the
 /// cells `keys`.
 pub(crate) fn undone_step(
@@ -428,8 +424,11 @@ pub(crate) fn undone_step(
     };
     StepOutcome::Undone {
         cells: keys.len(),
-        volume_change: (context.measure_volumes)
-            .then(|| world_volumes(changes.volume_change(before, after), context)),
+        volume_change: (context.measure_volumes).then(|| {
+            context
+                .quantization
+                .to_world_volumes(changes.volume_change(before, after))
+        }),
         requested,
     }
 }

@@ -4,6 +4,8 @@
 //! Notation: `u` — the unit, world length of one grid step; `o` — the world
 //! position of grid point 0. A world point `p` maps to `round((p − o) / u)`.
 
+use std::collections::BTreeMap;
+
 use crate::Error;
 use crate::exact::IntPoint;
 
@@ -76,5 +78,12 @@ impl Quantization {
     #[must_use]
     pub fn to_world(&self, g: [f64; 3]) -> [f64; 3] {
         [0, 1, 2].map(|a| self.origin[a] + g[a] * self.unit)
+    }
+
+    /// Volumes per material in cubic grid units, in cubic world units.
+    #[must_use]
+    pub fn to_world_volumes<K: Ord>(&self, grid: BTreeMap<K, f64>) -> BTreeMap<K, f64> {
+        let cube = self.unit * self.unit * self.unit;
+        grid.into_iter().map(|(k, v)| (k, v * cube)).collect()
     }
 }
