@@ -63,11 +63,16 @@
 //!    ([`Terrain::to_snapshot_bytes`]) with the last carve it holds, cut
 //!    into parts as terrain snapshots are, with `seq` the server's *done*
 //!    carve (every carve up to it reported by every chunk), then the
-//!    carves after `seq`. The client replaces all its chunks with these
-//!    (live chunks are despawned and stream in again from them or the
-//!    source), keeps them as edited whatever their empty journals say, and
-//!    routes each later carve to every chunk it reaches but those whose
-//!    snapshot already holds it.
+//!    carves after `seq`. The client replaces all its chunks with these,
+//!    keeps them as edited whatever their empty journals say, and routes
+//!    each later carve to every chunk it reaches but those whose snapshot
+//!    already holds it. A live chunk that already holds its state stays
+//!    as it is (an idle chunk whose snapshot bytes are the received ones,
+//!    or an unedited one the snapshot does not name:
+//!    [`WorldSynced::kept`](super::WorldSynced::kept)); the others are
+//!    despawned and stream in again from the snapshot or the source. So a
+//!    client that streamed chunks in while it joined builds again only
+//!    those the server edited, and a resync only the chunks that differ.
 //!
 //! A chunk whose build fails (a bad source sample, the same on every peer)
 //! drops its carves as in a local world; it counts as reported.
@@ -96,8 +101,8 @@
 //!
 //! Limits: the checks compare the hashes the chunks report after
 //! networked ops, so a local change to a chunk shows only once a later
-//! world op reaches that chunk. A resync replaces every chunk of the
-//! client's world (live ones stream in again). A networked world is
+//! world op reaches that chunk. A resync sends every edited chunk again,
+//! though the client builds again only those that differ. A networked world is
 //! carved only through the server: a local [`WorldCarve`] on any peer's
 //! networked world is outside its order and makes it differ.
 //!

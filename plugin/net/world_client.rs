@@ -58,6 +58,9 @@ pub struct WorldSynced {
     pub chunks: usize,
     /// Their snapshot bytes.
     pub bytes: usize,
+    /// Live chunks kept as they were, since they already held their state
+    /// in the snapshot (the rest stream in again from it or the source).
+    pub kept: usize,
 }
 
 /// A chunk's state hash after world op `seq` differs from the server's
@@ -308,6 +311,7 @@ fn receive_part(follow: &mut FollowWorld, part: &WorldSnapshotPart) {
 fn install_and_route(
     mut commands: Commands,
     mut worlds: Query<(Entity, &NetWorld, &mut TerrainWorld)>,
+    terrains: Query<&Terrain>,
     mut follower: ResMut<WorldFollower>,
     mut stats: ResMut<NetClientStats>,
     mut synced: MessageWriter<WorldSynced>,
@@ -319,15 +323,16 @@ fn install_and_route(
         };
         if let Some(received) = follow.ready.take() {
             let seq = received.seq;
-            match install(&mut commands, &mut world, follow, received) {
-                Ok((chunks, bytes)) => {
+            match install(&mut commands, &mut world, &terrains, follow, received) {
+                Ok(installed) => {
                     stats.snapshots += 1;
                     synced.write(WorldSynced {
                         world: entity,
                         id: id.0,
                         seq,
-                        chunks,
-                        bytes,
+                        chunks: installed.chunks,
+                        bytes: installed.bytes,
+                        kept: installed.kept,
                     });
                 }
                 Err(why) => error!("world {} snapshot refused: {why}", id.0),
@@ -393,18 +398,30 @@ fn route_detach(
     }
 }
 
-/// Replaces the world's chunks with a received snapshot's; returns the
-/// chunks and bytes installed.
+/// What installing a snapshot did.
+struct Installed {
+    /// Edited chunks in the snapshot.
+    chunks: usize,
+    /// Their snapshot bytes.
+    bytes: usize,
+    /// Live chunks kept as they were.
+    kept: usize,
+}
+
+/// Replaces the world's chunks with a received snapshot's, keeping the
+/// live chunks that already hold their state in it ([`unchanged_live`]).
 fn install(
     commands: &mut Commands,
     world: &mut TerrainWorld,
+    terrains: &Query<&Terrain>,
     follow: &mut FollowWorld,
     received: Received,
-) -> Result<(usize, usize), String> {
+) -> Result<Installed, String> {
     let layout = world.layout().clone();
     let mut edited = BTreeMap::new();
     let mut hashes = BTreeMap::new();
     let mut held = BTreeMap::new();
+    let mut snapshots = BTreeMap::new();
     let mut bytes = 0;
     for (coord, seq, snapshot) in &received.chunks {
         let terrain =
@@ -420,9 +437,11 @@ fn install(
         hashes.insert(*coord, BTreeMap::from([(*seq, terrain.state_hash())]));
         held.insert(*coord, *seq);
         edited.insert(*coord, Arc::new(terrain.to_bytes()));
+        snapshots.insert(*coord, terrain);
         bytes += snapshot.len();
     }
-    world.reset_chunks(commands, edited);
+    let keep = unchanged_live(world, terrains, &snapshots);
+    world.reset_chunks(commands, edited, &keep);
     let floor = held.values().copied().fold(received.seq, u64::max);
     follow.book = WorldBook {
         chunks: hashes,
@@ -438,7 +457,40 @@ fn install(
     follow.resyncing = false;
     // Checks of states older than the snapshot's cannot be compared.
     follow.checks.retain(|_, &mut (seq, _)| seq >= floor);
-    Ok((received.chunks.len(), bytes))
+    Ok(Installed {
+        chunks: received.chunks.len(),
+        bytes,
+        kept: keep.len(),
+    })
+}
+
+/// The live chunks that already hold exactly their state in the received
+/// `snapshots`, so a snapshot need not despawn and build them again (at a
+/// join, the chunks the client streamed in while it waited; at a resync,
+/// all but the chunks that differ): an idle chunk the snapshot names
+/// whose octree is the received one, byte for byte, or an idle chunk the
+/// snapshot does not name that holds the source's state (not edited).
+/// The chunk keeps its own settings (debris rules, undo depth), which are
+/// this world's. Idle but
+/// for sealing at its neighbours' points, which a kept chunk goes on with.
+fn unchanged_live(
+    world: &TerrainWorld,
+    terrains: &Query<&Terrain>,
+    snapshots: &BTreeMap<ChunkCoord, Terrain>,
+) -> BTreeMap<ChunkCoord, Entity> {
+    let unchanged = |coord: ChunkCoord, terrain: &Terrain| {
+        terrain.is_idle_but_for_seams()
+            && match snapshots.get(&coord) {
+                Some(sent) => {
+                    terrain.state_hash() == sent.state_hash()
+                        && terrain.octree().to_bytes() == sent.octree().to_bytes()
+                }
+                None => !world.chunk_edited(coord, terrain),
+            }
+    };
+    (world.live_chunks())
+        .filter(|&(coord, entity)| terrains.get(entity).is_ok_and(|t| unchanged(coord, t)))
+        .collect()
 }
 
 /// Reads the chunks' reports of world carves and detaches and compares

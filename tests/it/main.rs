@@ -125,4 +125,6 @@ mod net_world_interest;
 #[cfg(feature = "net")]
 mod net_world_restart;
 #[cfg(feature = "net")]
+mod net_world_resync;
+#[cfg(feature = "net")]
 mod net_worlds;

@@ -80,6 +80,14 @@ fn start(client_world: bevy_chisel::terrain::TerrainWorld) -> (App, App, u64) {
         let synced = !apps[1].world().resource::<WorldsSeen>().synced.is_empty();
         synced && world_of(apps[1]).1.live_chunks().count() > 0 && settled(apps[1])
     });
+    // The snapshot keeps the chunks already streamed in, so the world can
+    // be settled before all around the focus are: a missing one starts
+    // building within a frame, so settled for 20 frames in a row is done.
+    let mut calm = 0;
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        calm = if settled(apps[1]) { calm + 1 } else { 0 };
+        calm >= 20
+    });
     let builds = chunk_builds(&mut client);
     assert!(builds > 0, "the client streamed in the chunks around it");
     (server, client, builds)

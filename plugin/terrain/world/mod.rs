@@ -679,20 +679,34 @@ impl TerrainWorld {
 
     /// Replaces every chunk's state with `edited` (terrain file bytes of
     /// the edited chunks; every other chunk is the source's): live chunks
-    /// are despawned, builds dropped and waiting carves cleared, and the
-    /// chunks stream in again from `edited` or the source. The chunks in
-    /// `edited` count as edited whatever their journals say.
+    /// are despawned but those in `keep` (live chunks that already hold
+    /// their new state), builds dropped and waiting carves cleared, and
+    /// the chunks stream in again from `edited` or the source. The chunks
+    /// in `edited` count as edited whatever their journals say.
     #[cfg(feature = "net")]
     pub(crate) fn reset_chunks(
         &mut self,
         commands: &mut Commands,
-        edited: BTreeMap<ChunkCoord, Arc<Vec<u8>>>,
+        mut edited: BTreeMap<ChunkCoord, Arc<Vec<u8>>>,
+        keep: &BTreeMap<ChunkCoord, Entity>,
     ) {
-        for state in std::mem::take(&mut self.chunks).into_values() {
+        for (coord, state) in std::mem::take(&mut self.chunks) {
             if let Chunk::Live(entity) = state {
-                commands.entity(entity).try_despawn();
-                self.stats.released += 1;
+                if keep.get(&coord) == Some(&entity) {
+                    self.chunks.insert(coord, Chunk::Live(entity));
+                } else {
+                    commands.entity(entity).try_despawn();
+                    self.stats.released += 1;
+                }
             }
+        }
+        let kept_edited: Vec<ChunkCoord> = (edited.keys())
+            .filter(|c| self.chunks.contains_key(c))
+            .copied()
+            .collect();
+        self.kept = edited.keys().copied().collect();
+        for coord in kept_edited {
+            edited.remove(&coord);
         }
         self.pending.clear();
         self.deferred.clear();
@@ -704,7 +718,6 @@ impl TerrainWorld {
         self.detach_ordered = None;
         self.detaches_applied.clear();
         self.history.clear();
-        self.kept = edited.keys().copied().collect();
         self.stored = edited;
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
