@@ -104,7 +104,10 @@
 //! world op reaches that chunk. A resync sends every edited chunk again,
 //! though the client builds again only those that differ. A networked world is
 //! carved only through the server: a local [`WorldCarve`] on any peer's
-//! networked world is outside its order and makes it differ.
+//! networked world would be outside its order, so it is refused
+//! ([`TerrainError::NetworkedWorld`](crate::terrain::TerrainError::NetworkedWorld));
+//! every peer sends [`NetWorldCarveRequest`]s, a listen-server host's own
+//! ordered as any client's ([`super`], "Roles").
 //!
 //! [`WorldCarve`]: crate::terrain::WorldCarve
 //!

@@ -132,6 +132,13 @@ pub enum TerrainError {
         /// What is wrong.
         reason: String,
     },
+    /// A [`super::WorldCarve`] names a networked world (feature `net`):
+    /// its server orders every carve, so one applied here alone would
+    /// leave this peer out of step. Send a `NetWorldCarveRequest` instead:
+    /// the server orders it as any other (a listen-server host's own
+    /// included; the `net` module's "Roles").
+    #[error("a networked terrain world is carved through its server (NetWorldCarveRequest)")]
+    NetworkedWorld,
     /// A terrain world holds no whole state: a carve or undo waits for a
     /// chunk or a live chunk has a carve, undo or detach queued or
     /// running. [`super::TerrainWorld::save`] refuses such a world at

@@ -16,13 +16,15 @@ use crate::net_worlds::{
     edited_chunks, edited_terrains, streamed_world as world, world_settled as settled, world_tool,
 };
 use crate::{ONE_APP_AT_A_TIME, net};
+use bevy::ecs::message::Messages;
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::Edit;
 use bevy_chisel::net::{
     ClientPacket, ClientRequest, NetClientStats, NetLimits, NetServerStats, Outcome, RejectReason,
     WireShape, world_state_hash,
 };
-use bevy_chisel::terrain::{Carve, CarveTool, ChunkCoord};
+use bevy_chisel::terrain::{Carve, CarveRejected, CarveTool, ChunkCoord, TerrainError, WorldCarve};
+use net::world::world_hash;
 use net::{Rng, Seen, WorldsSeen, request_world, run_until, world_client, world_of, world_server};
 
 const CARVES: usize = 160;
@@ -357,4 +359,38 @@ fn hostile_world_requests_are_refused_and_honest_carves_go_on() {
     for app in [&mut honest, &mut hostile] {
         assert!(edited_chunks(app) == reference, "a client's chunks differ");
     }
+}
+
+#[test]
+fn a_local_world_carve_on_a_networked_world_is_refused() {
+    let _guard = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (mut server, addr) = world_server(world(), net::unlimited());
+    let mut client = world_client(addr, 1, world(), Vec3::new(16.0, 30.0, 16.0));
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        synced(apps[1]) && settled(apps[1])
+    });
+    let before = [world_hash(&mut server), world_hash(&mut client)];
+    // Outside the server's order on either side: refused, nothing carved.
+    for app in [&mut server, &mut client] {
+        let (world, _) = world_of(app);
+        app.world_mut().write_message(WorldCarve {
+            world,
+            tool: CarveTool::dodecahedron(3.0, Vec3::new(16.0, 14.0, 16.0)),
+            edit: Edit::Subtract,
+        });
+        app.update();
+        let messages = app.world().resource::<Messages<CarveRejected>>();
+        let refused = (messages.get_cursor().read(messages))
+            .filter(|r| r.terrain == world && matches!(r.error, TerrainError::NetworkedWorld))
+            .count();
+        assert_eq!(refused, 1, "the local world carve is refused");
+    }
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        apps.iter_mut().all(|app| settled(app))
+    });
+    assert_eq!([world_hash(&mut server), world_hash(&mut client)], before);
+    let stats = client.world().resource::<NetClientStats>();
+    assert_eq!(stats.desyncs, 0);
 }

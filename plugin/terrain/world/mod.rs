@@ -806,7 +806,9 @@ pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, Terrain
 /// does not know, is rejected for the world entity. A chunk that is not
 /// live is built for the carve; if its build fails (a bad source sample)
 /// its waiting carves are dropped with a warning in the log. [`WorldUndo`]
-/// takes the last one back in every chunk.
+/// takes the last one back in every chunk. A networked world (feature
+/// `net`) refuses it ([`TerrainError::NetworkedWorld`]): its server orders
+/// every carve.
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct WorldCarve {

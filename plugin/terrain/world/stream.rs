@@ -118,6 +118,9 @@ fn chunks_of(
     world: &TerrainWorld,
     carve: &WorldCarve,
 ) -> Result<(super::super::tool::GridTool, Vec<ChunkCoord>), TerrainError> {
+    if world.debris_role != DebrisRole::Local {
+        return Err(TerrainError::NetworkedWorld);
+    }
     world.check_edit(carve.edit)?;
     let tool = carve.tool.to_grid(&world.layout.quantization)?;
     let coords = world.chunks_reached(&tool)?;
