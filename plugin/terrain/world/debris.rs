@@ -142,7 +142,9 @@
 //!   records each result it applies, which the server numbers in the
 //!   world's order. A client drops its own seeds and carries out each
 //!   ordered detach at its place: the same search over the chunks it
-//!   names from the seeds it names ([`super::debris_order`]).
+//!   names from the seeds it names ([`super::debris_order`]). A world
+//!   that becomes networked drops the search its own pass runs, giving
+//!   the seeds back to their chunks for the server's pass.
 //!
 //! Cost on the frame (`debris_across_chunk_borders` in the terrain bench:
 //! 1 cm grid, 20.48 m chunks, the four chunks around a corner live):
@@ -357,6 +359,15 @@ pub fn detach_across_borders(
         if detached {
             world_mut.set_changed();
         }
+    }
+}
+
+/// Drops the world's search, putting the seeds it took back into their
+/// chunks (a world that becomes networked: its role changes).
+#[cfg(feature = "net")]
+pub(crate) fn drop_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
+    if let Some(search) = world.debris_search.take() {
+        give_back_seeds(search, terrains);
     }
 }
 
