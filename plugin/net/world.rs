@@ -130,17 +130,27 @@ use super::wire::{
 use super::wire::{NetWorldCarve, ServerPacket};
 #[cfg(doc)]
 use super::world_client::NetWorldCarveRequest;
-#[cfg(doc)]
 use crate::terrain::Terrain;
+use crate::terrain::world::debris::drop_search;
 use crate::terrain::world::debris_order::{AppliedDetach, DebrisRole, OrderedDetach};
 use chisel_bsp::octree::CellKey;
 
 /// A world that becomes networked follows its server's detaches across
-/// chunk borders until the server side claims it ([`claim_debris`]).
-pub(super) fn networked_debris(add: On<Add, NetWorld>, mut worlds: Query<&mut TerrainWorld>) {
+/// chunk borders until the server side claims it ([`claim_debris`]). The
+/// search of its own pass, if one runs, is dropped and gives its seeds
+/// back to their chunks: a server searches them again.
+pub(super) fn networked_debris(
+    add: On<Add, NetWorld>,
+    mut worlds: Query<&mut TerrainWorld>,
+    mut terrains: Query<&mut Terrain>,
+) {
     if let Ok(mut world) = worlds.get_mut(add.entity) {
         // Who decides debris is bookkeeping, not a change of the world.
-        world.bypass_change_detection().debris_role = DebrisRole::Follow;
+        let world = world.bypass_change_detection();
+        if world.debris_role == DebrisRole::Local {
+            drop_search(world, &mut terrains);
+        }
+        world.debris_role = DebrisRole::Follow;
     }
 }
 

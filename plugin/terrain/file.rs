@@ -93,6 +93,13 @@ impl Terrain {
     /// The terrain as file bytes.
     #[must_use]
     pub fn to_bytes(&self) -> Vec<u8> {
+        self.to_bytes_with_seeds_taken(&[])
+    }
+
+    /// [`Terrain::to_bytes`] with `taken` among the seeds too: seeds of
+    /// this world chunk that a search across chunk borders took out of it
+    /// and has not applied yet (`world::debris`), still pending.
+    pub(crate) fn to_bytes_with_seeds_taken(&self, taken: &[CellKey]) -> Vec<u8> {
         write_terrain(
             &self.quantization,
             &self.base,
@@ -100,7 +107,7 @@ impl Terrain {
             self.max_undo,
             &self.history,
             &self.octree,
-            &file_seeds(&self.runtime.border_seeds, &[]),
+            &file_seeds(&self.runtime.border_seeds, taken),
         )
     }
 

@@ -93,6 +93,8 @@ mod terrain_world_debris;
 #[cfg(feature = "terrain")]
 mod terrain_world_debris_busy;
 #[cfg(feature = "terrain")]
+mod terrain_world_debris_stream;
+#[cfg(feature = "terrain")]
 mod terrain_world_lod;
 #[cfg(feature = "terrain")]
 mod terrain_world_normals;

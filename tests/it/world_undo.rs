@@ -615,3 +615,63 @@ fn a_chunk_undone_on_its_own_refuses_alike_live_or_streamed_out() {
     }
     assert_eq!(reasons[1], reasons[0], "the same answer either way");
 }
+
+/// A world carve over chunks (1, 0) and (2, 0), with the focus near
+/// (0, 0): chunk (2, 0), beyond the load radius, is built for the carve,
+/// but the source fails inside it, so its build fails and its carve is
+/// dropped. The world undo of that carve is refused naming the chunk, it
+/// changes nothing, and the chunks it held are free again: a later carve
+/// lands there.
+#[test]
+fn a_chunk_whose_build_failed_refuses_the_world_undo_and_changes_nothing() {
+    use super::terrain_world::{height, layout};
+    use bevy_chisel::terrain::StreamSettings;
+
+    let lost = at(2, 0);
+    // Samples 16..=24 along x and 0..=8 along z are chunk (2, 0)'s; only
+    // it has those inside, and there the source gives the floor.
+    let source = |i: i64, j: i64| {
+        let inside = (17..=23).contains(&i) && (1..=7).contains(&j);
+        if inside { 0 } else { height(i, j) }
+    };
+    let failing = TerrainWorld::new(layout(), source)
+        .expect("valid layout")
+        .with_streaming(StreamSettings {
+            load_radius: 40.0,
+            unload_radius: 72.0,
+            max_building: 4,
+        })
+        .expect("valid settings");
+    let (mut app, world, _) = undo_app(failing, Vec3::new(16.0, 30.0, 16.0));
+    assert!(the_world(&app, world).chunk_entity(at(1, 0)).is_some());
+    let first = states(&app, world);
+    carve(
+        &mut app,
+        world,
+        cuboid([50, 10, 10], [70, 22, 14]),
+        Edit::Subtract,
+    );
+    let carved = states(&app, world);
+    assert_eq!(differ(&first, &carved), vec![at(1, 0)]);
+    let w = the_world(&app, world);
+    assert_eq!(w.stats().failed, 1, "chunk (2, 0) did not build");
+    assert!(w.chunk_entity(lost).is_none() && w.waiting_carves(lost) == 0);
+    assert_eq!(w.undo_depth(), 1);
+
+    undo(&mut app, world);
+    assert_eq!(states(&app, world), carved, "nothing changed");
+    assert!(heard(&app).undone.is_empty());
+    let reasons: Vec<_> = (heard(&app).rejected.iter())
+        .map(|r| r.reason.clone())
+        .collect();
+    assert_eq!(reasons, vec![WorldUndoRefusal::ChunkLost { coord: lost }]);
+    assert_eq!(the_world(&app, world).undo_depth(), 1, "the step is kept");
+    // No hold of the refused undo is left in chunk (1, 0): it carves on.
+    carve(
+        &mut app,
+        world,
+        sphere(3.0, Vec3::new(44.0, 16.0, 20.0)),
+        Edit::Subtract,
+    );
+    assert_eq!(differ(&carved, &states(&app, world)), vec![at(1, 0)]);
+}

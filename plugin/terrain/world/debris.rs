@@ -48,12 +48,17 @@
 //!   hold a piece back (`debris_latency_across_borders`: with a crater
 //!   carved every frame in chunks far away, a block fell 4–6 frames after
 //!   its cut, median of each run, instead of 54–204, largest 1014).
+//!   Seeds beside a chunk that streaming wants and has not made live yet
+//!   (building, or waiting for its build to start) wait for it too: its
+//!   side would anchor a piece leaning on it, and the seeds, searched,
+//!   would be gone before the chunk is in.
 //! - **Stale results.** A search depends on the chunks it takes solid from
 //!   and on their neighbours across a side (whose solid could hold the
 //!   piece, or whose absence anchors it); on every chunk when it failed.
 //!   When one of them left or its state hash changed since the search
 //!   started (a carve or undo landed there), the result is dropped, its
-//!   seeds go back to their chunks and a new search starts in the same
+//!   seeds go back to their chunks (a chunk streamed out took its own
+//!   into its stored bytes) and a new search starts in the same
 //!   frame, over the chunks as they are now: it finds what a single pass
 //!   over that state finds. [`WorldStats::debris_searches_dropped`]
 //!   counts them.
@@ -105,10 +110,19 @@
 //!   so a save need not wait for a fall
 //!   on its way, and a world loaded from the files searches from them
 //!   and lets the piece fall ([`super::store`]). A chunk streamed out
-//!   keeps the seeds still in it in its stored bytes and searches from
-//!   them when it streams back in; one that streams out while a search
-//!   that depends on it runs makes the search stale, and the seeds the
-//!   search took from it are dropped with it.
+//!   keeps its seeds in its stored bytes the same way, those still in it
+//!   and those the world's search took out of it and has not applied,
+//!   and searches from them when it streams back in (once its side
+//!   neighbours that streaming wants are live too): a chunk that streams
+//!   out while a search that depends on it runs makes the search stale,
+//!   the search gives the seeds of the chunks still live back to them,
+//!   and the piece cut loose falls when the chunk is back. So no seed is
+//!   lost to streaming; an unedited chunk with seeds (a
+//!   [`super::WorldUndo`] back to its base gives seeds back) has no
+//!   stored bytes, and streams out only once they are searched. A
+//!   search that fails (over the world's limits) drops its seeds, as
+//!   the limits say; a chunk despawned by the game loses them with its
+//!   state.
 //! - **Determinism.** The chunks' octrees, the seeds and the kernel's
 //!   search are exact, and a result is applied only to the state it was
 //!   found in, so the same carves give the same pieces and the same
@@ -128,7 +142,9 @@
 //!   records each result it applies, which the server numbers in the
 //!   world's order. A client drops its own seeds and carries out each
 //!   ordered detach at its place: the same search over the chunks it
-//!   names from the seeds it names ([`super::debris_order`]).
+//!   names from the seeds it names ([`super::debris_order`]). A world
+//!   that becomes networked drops the search its own pass runs, giving
+//!   the seeds back to their chunks for the server's pass.
 //!
 //! Cost on the frame (`debris_across_chunk_borders` in the terrain bench:
 //! 1 cm grid, 20.48 m chunks, the four chunks around a corner live):
@@ -343,6 +359,15 @@ pub fn detach_across_borders(
         if detached {
             world_mut.set_changed();
         }
+    }
+}
+
+/// Drops the world's search, putting the seeds it took back into their
+/// chunks (a world that becomes networked: its role changes).
+#[cfg(feature = "net")]
+pub(crate) fn drop_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
+    if let Some(search) = world.debris_search.take() {
+        give_back_seeds(search, terrains);
     }
 }
 
@@ -587,9 +612,12 @@ fn start_search(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) {
     // the search finds: those seeds wait for it rather than search twice.
     // The other chunks' seeds are searched now, so that carves elsewhere
     // in the world never hold them back.
+    // So do seeds beside a chunk streaming in: its side would anchor
+    // what leans on it until it is live, and the piece never fall.
     let busy_chunks: BTreeSet<ChunkCoord> = (live.iter())
         .filter(|&&(_, e)| terrains.get(e).is_ok_and(busy))
         .map(|&(coord, _)| coord)
+        .chain(world.loading.iter().copied())
         .collect();
     let ready: BTreeSet<ChunkCoord> = (seeded.iter())
         .filter(|&&c| {

@@ -30,10 +30,11 @@
 //! 3. **Sparse edits**: a chunk nobody carved is never stored; it is
 //!    rebuilt from the source when it streams in again. An edited chunk is
 //!    kept as its terrain file bytes ([`Terrain::to_bytes`]: octree, undo
-//!    history and journal, exact) when it streams out, and restored from
-//!    them bit-identically when it streams back in. A [`WorldCarve`] is
-//!    rounded to the grid once and sent to every chunk its tool overlaps
-//!    (as a [`GridCarve`](super::GridCarve)); a chunk that is not live
+//!    history and journal, exact; with the seeds of a fall across chunk
+//!    borders still on its way, [`debris`]) when it streams out, and
+//!    restored from them bit-identically when it streams back in. A
+//!    [`WorldCarve`] is rounded to the grid once and sent to every chunk
+//!    its tool overlaps (as a [`GridCarve`](super::GridCarve)); a chunk that is not live
 //!    then is built at once, whatever its distance, and holds the carve
 //!    until it is. On a networked world's client (feature `net`) a chunk
 //!    beyond every focus's unload radius instead keeps the carves waiting,
@@ -359,6 +360,10 @@ pub struct TerrainWorld {
     /// across the open sides where its last search stopped
     /// ([`debris_order`]).
     pub(crate) debris_wanted: BTreeSet<ChunkCoord>,
+    /// The chunks streaming wants that are not live yet (building, or
+    /// waiting for a build to start), as of its last pass: seeds beside
+    /// them wait for them ([`debris`]).
+    pub(crate) loading: BTreeSet<ChunkCoord>,
     /// Whether a live chunk held seeds that no search took when the pass
     /// last looked ([`debris`]): a search is still to come.
     pub(crate) debris_seeded: bool,
@@ -405,6 +410,7 @@ impl TerrainWorld {
             debris_role: debris_order::DebrisRole::Local,
             debris_keep: BTreeSet::new(),
             debris_wanted: BTreeSet::new(),
+            loading: BTreeSet::new(),
             debris_seeded: false,
             detach_ordered: None,
             detaches_applied: Vec::new(),
@@ -714,6 +720,7 @@ impl TerrainWorld {
         self.debris_search = None;
         self.debris_keep.clear();
         self.debris_wanted.clear();
+        self.loading.clear();
         self.debris_seeded = false;
         self.detach_ordered = None;
         self.detaches_applied.clear();

@@ -65,9 +65,11 @@
 //! ([`super::super::file`]), the cells its carves changed whose search for
 //! debris across borders ([`super::debris`]) is still to come: those in
 //! the chunk and those a search running or waiting to be applied took
-//! out of it. A world loaded from the files puts them back into their
-//! chunks as they stream in, searches from them and the piece falls there
-//! as in the saved world (the same search, over the chunks live then),
+//! out of it (a chunk streamed out keeps both in its stored bytes, which
+//! a save writes as they are). A world loaded from the files puts them
+//! back into their chunks as they stream in, searches from them (once
+//! the neighbours streaming in beside them are live) and the piece falls
+//! there as in the saved world (the same search, over the chunks live then),
 //! so a saved world never holds forever a piece that a carve already
 //! freed. Two such falls still make a frame not whole, as no file
 //! holds them: seeds in a live chunk that is not edited (it has no file;
@@ -425,8 +427,8 @@ impl TerrainWorld {
 
     /// The seeds the world's search across chunk borders took out of the
     /// chunk of terrain `entity` and has not applied: pending, saved with
-    /// the chunk.
-    fn seeds_taken(&self, entity: Entity) -> &[CellKey] {
+    /// the chunk (and stored with it when it streams out, `stream`).
+    pub(super) fn seeds_taken(&self, entity: Entity) -> &[CellKey] {
         (self.debris_search.as_ref()).map_or(&[], |search| search.seeds_taken(entity))
     }
 

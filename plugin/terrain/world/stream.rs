@@ -192,7 +192,7 @@ pub fn stream_chunks(
             .values()
             .filter(|c| matches!(c, Chunk::Building(_)))
             .count();
-        for (_, coord) in wanted {
+        for &(_, coord) in &wanted {
             if building >= world.settings.max_building {
                 break;
             }
@@ -203,6 +203,11 @@ pub fn stream_chunks(
             building += 1;
             chunks_changed = true;
         }
+        // Seeds beside the wanted chunks not live yet wait for them
+        // (`debris`): a piece over the border falls once both are in.
+        world.loading = (wanted.iter().map(|&(_, c)| c))
+            .filter(|c| !matches!(world.chunks.get(c), Some(Chunk::Live(_) | Chunk::Failed)))
+            .collect();
 
         // Release chunks beyond the unload radius.
         let far: Vec<(ChunkCoord, Option<Entity>)> = world
@@ -234,7 +239,21 @@ pub fn stream_chunks(
                 Ok(terrain) if !terrain.is_idle_but_for_seams() => continue,
                 Ok(terrain) if world.chunk_edited(coord, terrain) => {
                     let _span = bevy::log::info_span!("chisel::stream::to_bytes").entered();
-                    world.stored.insert(coord, Arc::new(terrain.to_bytes()));
+                    // With the seeds the world's search took out of it and
+                    // has not applied: a search that depends on the chunk
+                    // goes stale and drops them, and the chunk searches
+                    // them when it streams back in (`debris`).
+                    let taken = world.seeds_taken(entity);
+                    let bytes = terrain.to_bytes_with_seeds_taken(taken);
+                    world.stored.insert(coord, Arc::new(bytes));
+                }
+                // An unedited chunk has no stored bytes to hold seeds (those
+                // a world undo gave back): it stays until they are searched.
+                Ok(terrain)
+                    if !terrain.runtime.border_seeds.is_empty()
+                        || !world.seeds_taken(entity).is_empty() =>
+                {
+                    continue;
                 }
                 _ => {}
             }

@@ -662,8 +662,8 @@ fn refuse_first(
 }
 
 /// Puts the hold of waiting undo `index` in every chunk of its step that
-/// is live with no world carve waiting for it; fails for a chunk that
-/// cannot come back.
+/// is live with no world carve waiting for it; fails, holding none, for a
+/// chunk that cannot come back.
 fn hold_chunks(
     world: &mut TerrainWorld,
     terrains: &mut Query<&mut Terrain>,
@@ -673,18 +673,15 @@ fn hold_chunks(
     let Some(step) = world.history.steps.iter().find(|s| s.request == request) else {
         return Ok(());
     };
-    let mut newly = Vec::new();
-    for (&coord, chunk) in &step.chunks {
-        if !chunk.needs_hold() || world.history.undos[index].held.contains(&coord) {
-            continue;
-        }
+    let held = &world.history.undos[index].held;
+    let chunks = (step.chunks.iter()).filter(|&(c, chunk)| chunk.needs_hold() && !held.contains(c));
+    let mut live = Vec::new();
+    // Every chunk is looked at before any is held: a refused undo takes
+    // out only the holds it noted (`release_holds`), so it notes them all.
+    for (&coord, _) in chunks {
         match world.chunks.get(&coord) {
             Some(Chunk::Live(entity)) if !world.pending.contains_key(&coord) => {
-                if let Ok(mut terrain) = terrains.get_mut(*entity) {
-                    (terrain.bypass_change_detection().runtime.queue)
-                        .push_back(Job::HoldForWorldUndo { request });
-                    newly.push(coord);
-                }
+                live.push((coord, *entity));
             }
             Some(Chunk::Failed) => return Err(WorldUndoRefusal::ChunkLost { coord }),
             Some(_) => {}
@@ -694,7 +691,13 @@ fn hold_chunks(
             None => return Err(WorldUndoRefusal::ChunkChanged { coord }),
         }
     }
-    world.history.undos[index].held.extend(newly);
+    for (coord, entity) in live {
+        if let Ok(mut terrain) = terrains.get_mut(entity) {
+            (terrain.bypass_change_detection().runtime.queue)
+                .push_back(Job::HoldForWorldUndo { request });
+            world.history.undos[index].held.insert(coord);
+        }
+    }
     Ok(())
 }
 
