@@ -151,6 +151,7 @@ pub mod lod_mesh;
 pub mod seams;
 pub mod source;
 pub mod store;
+mod store_cut;
 mod store_files;
 pub mod stream;
 pub mod undo;
@@ -173,6 +174,7 @@ pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 pub use store::{DEFAULT_MAX_SAVE_WAIT, SaveWorld, WorldSaveFailed, WorldSaved};
+pub use store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
 pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
@@ -373,6 +375,9 @@ pub struct TerrainWorld {
     pub(crate) history: undo::WorldHistory,
     /// What the folders saved to hold and the save being written ([`store`]).
     pub(crate) saves: store::WorldSaves,
+    /// The world carves of several chunks that may be in flight in one
+    /// of them, for a save of a busy world ([`store`]).
+    pub(crate) routed: store_cut::RoutedCarves,
     /// Its carves and debris work before its builds (`pool_order`).
     pub(crate) pool_order: PoolOrder,
 }
@@ -410,6 +415,7 @@ impl TerrainWorld {
             detaches_applied: Vec::new(),
             history: undo::WorldHistory::default(),
             saves: store::WorldSaves::default(),
+            routed: store_cut::RoutedCarves::default(),
             pool_order: PoolOrder::default(),
         })
     }
@@ -666,6 +672,7 @@ impl TerrainWorld {
                 .push((tool.clone(), edit, request));
         }
         self.next_request = self.next_request.max(request.saturating_add(1));
+        self.routed.route(request, coords);
         if self.debris_role == debris_order::DebrisRole::Local {
             self.history.push_step(request, coords);
         }
@@ -704,6 +711,7 @@ impl TerrainWorld {
         self.detach_ordered = None;
         self.detaches_applied.clear();
         self.history.clear();
+        self.routed.clear();
         self.kept = edited.keys().copied().collect();
         self.stored = edited;
         self.stats.stored = self.stored.len();
