@@ -47,7 +47,8 @@
 //!    checking that each belongs to this world (same grid, same base).
 //!    A [`SaveWorld`] message saves in the background instead, writing
 //!    only the chunks changed since the last save to that folder; asked
-//!    while the world is busy, it waits for a whole state.
+//!    while the world is busy, it waits for a whole state, and after a few
+//!    frames saves a consistent one (a world carved in every frame).
 //! 5. **Multiplayer** (feature `net`, module `net::world`): the server
 //!    numbers world carves and every peer routes them to its own chunks
 //!    in that order ([`TerrainWorld::chunks_reached`], with the carve's

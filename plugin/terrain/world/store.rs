@@ -187,7 +187,8 @@ pub const DEFAULT_MAX_SAVE_WAIT: u32 = 300;
 /// chunk or waiting for one) with no save of the world being written;
 /// after [`TerrainWorld::save_settle_frames`] frames of its turn without
 /// one, in the first that holds a consistent state (every world carve in
-/// all of its chunks or in none), saving the chunks as they were before
+/// all of its chunks or in none; the chunks hold back later carves a few
+/// frames for one if need be), saving the chunks as they were before
 /// their carves in flight. It waits at most
 /// [`TerrainWorld::max_save_wait`] frames of its turn; a second request
 /// for a folder whose request waits is merged into it. Falls across chunk borders still on their way are saved with
@@ -500,32 +501,6 @@ impl TerrainWorld {
         (self.debris_search.as_ref()).map_or(&[], |search| search.seeds_taken(entity))
     }
 
-    /// Whether this frame holds a whole state ([module docs](self)): no
-    /// carve waits for a chunk, no undo waits for one, every live chunk
-    /// readable here is settled, and no fall across chunk borders is on
-    /// its way that the files cannot hold (seeds are saved with their
-    /// chunks).
-    ///
-    /// # Errors
-    /// [`TerrainError::WorldNotIdle`] naming a busy chunk.
-    fn check_whole(&self, terrains: &Query<Ref<Terrain>>) -> Result<(), TerrainError> {
-        // A carve waiting for a chunk, or a chunk of a waiting undo.
-        let waiting =
-            (self.pending.keys().next().copied()).or_else(|| self.history.wanted().next());
-        let busy = waiting.or_else(|| {
-            self.live_chunks()
-                .find(|&(_, entity)| terrains.get(entity).is_ok_and(|t| !content_settled(&t)))
-                .map(|(coord, _)| coord)
-        });
-        let busy = busy.or_else(|| self.unsaved_fall(terrains));
-        match busy {
-            Some(coord) => Err(TerrainError::WorldNotIdle {
-                chunk: [coord.x, coord.z],
-            }),
-            None => Ok(()),
-        }
-    }
-
     /// Starts the waiting [`SaveWorld`] requests' saves in turn, oldest
     /// first, while none is being written and this frame holds a whole
     /// state (or, after the settle frames, a consistent one); counts the
@@ -781,17 +756,6 @@ pub fn save_worlds(
             });
         }
     }
-}
-
-/// Whether a live chunk's octree, journal and undo history are at rest:
-/// nothing queued or running would change them (sealing again at a
-/// neighbour's points does not). A finished job waiting to show its cells
-/// and write its reports and debris (its upload) counts as at rest: it
-/// swapped its octree, journal and undo step in when it was collected.
-fn content_settled(terrain: &Terrain) -> bool {
-    let runtime = &terrain.runtime;
-    (runtime.queue.iter()).all(|job| matches!(job, crate::terrain::jobs::Job::Reseal { .. }))
-        && (runtime.task.is_none() || runtime.resealing)
 }
 
 /// A folder's record after a save that succeeded: `kept` and the files

@@ -1,7 +1,7 @@
-//! Consistent states of a busy world, for a [`SaveWorld`](super::SaveWorld)
-//! that found no whole one ([`super::store`], "Saving a busy world"): the
-//! world carves routed to several chunks, and whether the chunks hold each
-//! of them in all of those chunks or in none.
+//! The states of a world a [`SaveWorld`](super::SaveWorld) may save
+//! ([`super::store`]): whole ones, and for a busy world consistent ones
+//! ("Saving a busy world"): the world carves routed to several chunks, and
+//! whether the chunks hold each of them in all of those chunks or in none.
 //!
 //! A live chunk's [`Terrain`] fields are its state before its queued and
 //! running jobs (a job's octree, journal and undo step are swapped in when
@@ -129,6 +129,32 @@ impl TerrainWorld {
     #[must_use]
     pub fn save_settle_frames(&self) -> u32 {
         self.saves.settle
+    }
+
+    /// Whether this frame holds a whole state ([`super::store`]): no
+    /// carve waits for a chunk, no undo waits for one, every live chunk
+    /// readable here is settled, and no fall across chunk borders is on
+    /// its way that the files cannot hold (seeds are saved with their
+    /// chunks).
+    ///
+    /// # Errors
+    /// [`TerrainError::WorldNotIdle`] naming a busy chunk.
+    pub(super) fn check_whole(&self, terrains: &Query<Ref<Terrain>>) -> Result<(), TerrainError> {
+        // A carve waiting for a chunk, or a chunk of a waiting undo.
+        let waiting =
+            (self.pending.keys().next().copied()).or_else(|| self.history.wanted().next());
+        let busy = waiting.or_else(|| {
+            self.live_chunks()
+                .find(|&(_, entity)| terrains.get(entity).is_ok_and(|t| !content_settled(&t)))
+                .map(|(coord, _)| coord)
+        });
+        let busy = busy.or_else(|| self.unsaved_fall(terrains));
+        match busy {
+            Some(coord) => Err(TerrainError::WorldNotIdle {
+                chunk: [coord.x, coord.z],
+            }),
+            None => Ok(()),
+        }
     }
 
     /// A fall across chunk borders on its way that no file would hold:
@@ -259,4 +285,15 @@ impl TerrainWorld {
         }
         Ok(flight.count())
     }
+}
+
+/// Whether a live chunk's octree, journal and undo history are at rest:
+/// nothing queued or running would change them (sealing again at a
+/// neighbour's points does not). A finished job waiting to show its cells
+/// and write its reports and debris (its upload) counts as at rest: it
+/// swapped its octree, journal and undo step in when it was collected.
+fn content_settled(terrain: &Terrain) -> bool {
+    let runtime = &terrain.runtime;
+    (runtime.queue.iter()).all(|job| matches!(job, crate::terrain::jobs::Job::Reseal { .. }))
+        && (runtime.task.is_none() || runtime.resealing)
 }
