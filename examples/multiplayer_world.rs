@@ -367,8 +367,9 @@ fn autosave(
     }
     for failure in failed.read() {
         save.pending = false;
-        // Tried again after another SAVE_EVERY (a world carved without a
-        // pause for `max_save_wait` frames reports WorldNotIdle).
+        // Tried again after another SAVE_EVERY (a world that held no
+        // consistent state for `max_save_wait` frames reports
+        // WorldNotIdle).
         eprintln!("save failed: {}", failure.error);
         save.since = Some(time.elapsed());
     }

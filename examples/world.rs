@@ -428,18 +428,20 @@ fn save_and_load(
     for answer in saved.read() {
         saves.pending = false;
         saves.message = format!(
-            "save: {} chunks written ({} kB), {} unchanged",
+            "save: {} chunks written ({} kB), {} unchanged, {} carves in flight left out",
             answer.written.len(),
             answer.bytes / 1024,
-            answer.unchanged
+            answer.unchanged,
+            answer.left_out
         );
         info!("{} to {}", saves.message, answer.folder.display());
         saves.last = Some(answer.clone());
     }
     for failure in failed.read() {
         saves.pending = false;
-        // A world carved without a pause for `max_save_wait` frames
+        // A world with a world undo waiting for `max_save_wait` frames
         // (300 by default) is not saved: the next autosave tries again.
+        // One carved in every frame saves the carves that landed.
         saves.message = format!("save failed: {}", failure.error);
         warn!("{}", saves.message);
     }

@@ -142,8 +142,10 @@ pub enum TerrainError {
     /// A terrain world holds no whole state: a carve or undo waits for a
     /// chunk or a live chunk has a carve, undo or detach queued or
     /// running. [`super::TerrainWorld::save`] refuses such a world at
-    /// once; a [`super::SaveWorld`] waits for a whole state and reports
-    /// this only when none came in
+    /// once; a [`super::SaveWorld`] waits for a whole state, or after
+    /// [`super::TerrainWorld::save_settle_frames`] a consistent one (no
+    /// world carve landed in some of its chunks and not in others), and
+    /// reports this only when neither came in
     /// [`super::TerrainWorld::max_save_wait`] frames of its turn.
     #[error("terrain world chunk {chunk:?} has carves in progress; save when the world is settled")]
     WorldNotIdle {

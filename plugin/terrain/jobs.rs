@@ -76,11 +76,15 @@ pub(crate) struct Runtime {
     /// Leaves that carves of a chunk changed since the last detach across
     /// chunk borders (`world::debris`), sorted on use.
     pub(crate) border_seeds: Vec<CellKey>,
-    /// Whether tracked carves are noted in `landed` (a chunk of a world
-    /// that keeps undo steps, `world::undo`).
+    /// Whether tracked carves are noted in `landed` (a chunk of a world:
+    /// its undo steps, `world::undo`, and its saves, `world::store`).
     pub(crate) records_landed: bool,
     /// Tracked carves applied or refused since the world last looked.
     pub(crate) landed: Vec<super::world::undo::Landed>,
+    /// The request ids of the carves in the running job (`None` for an
+    /// untracked one); empty while no carve job runs. Not in the octree
+    /// yet: a world's save may leave them out (`world::store`).
+    pub(crate) running_carves: Vec<Option<u64>>,
 }
 
 /// A request waiting for its turn.
@@ -135,6 +139,7 @@ impl Default for Runtime {
             border_seeds: Vec::new(),
             records_landed: false,
             landed: Vec::new(),
+            running_carves: Vec::new(),
         }
     }
 }

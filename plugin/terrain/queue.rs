@@ -28,7 +28,7 @@ use super::jobs::{
     undone_step,
 };
 use super::physics::TerrainPhysicsBackend;
-use super::pool_order::{PoolOrder, spawn_in_order};
+use super::pool_order::spawn_in_order;
 use super::world::{ChunkOffstage, TerrainWorld, WorldChunk};
 
 /// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
@@ -140,14 +140,13 @@ pub fn start_jobs(
         } else {
             settings.output
         };
-        // A world's chunk: its carves go before the world's builds.
-        let order = chunk
-            .and_then(|c| worlds.get(c.world).ok())
-            .map(|w| &w.pool_order);
+        // A world's chunk: its carves go before the world's builds, and
+        // wait while a save holds them back.
+        let world = chunk.and_then(|c| worlds.get(c.world).ok());
         if start_next(
             entity,
             terrain_now,
-            order,
+            world,
             output,
             &settings,
             &physics,
@@ -165,7 +164,7 @@ pub fn start_jobs(
 fn start_next(
     entity: Entity,
     terrain: &mut Terrain,
-    order: Option<&PoolOrder>,
+    world: Option<&TerrainWorld>,
     output: CellOutput,
     settings: &TerrainSettings,
     physics: &TerrainPhysicsBackend,
@@ -243,6 +242,14 @@ fn start_next(
         }));
         return false;
     }
+    let order = world.map(|w| &w.pool_order);
+    // Carves a world's save waiting for a consistent state holds back.
+    let held = |request: Option<u64>| world.is_some_and(|w| w.holds_back(request));
+    if let Some(Job::Carve { request, .. }) = terrain.runtime.queue.front()
+        && held(*request)
+    {
+        return false;
+    }
     match terrain.runtime.queue.pop_front() {
         None => {}
         Some(hold @ Job::HoldForWorldUndo { .. }) => {
@@ -317,7 +324,10 @@ fn start_next(
         }) => {
             let mut batch = vec![(tool, edit, requested, request)];
             while batch.len() < settings.max_batch.max(1)
-                && matches!(terrain.runtime.queue.front(), Some(Job::Carve { .. }))
+                && matches!(
+                    terrain.runtime.queue.front(),
+                    Some(Job::Carve { request, .. }) if !held(*request)
+                )
             {
                 if let Some(Job::Carve {
                     tool,
@@ -329,6 +339,7 @@ fn start_next(
                     batch.push((tool, edit, requested, request));
                 }
             }
+            terrain.runtime.running_carves = batch.iter().map(|carve| carve.3).collect();
             let octree = terrain.octree.clone();
             let mesher = std::mem::take(&mut terrain.runtime.mesher);
             // The hole shows as soon as this job is done: ahead of the

@@ -52,6 +52,7 @@ fn finish_job(
     let mut content_changed = false;
     terrain.runtime.task = None;
     terrain.runtime.resealing = false;
+    terrain.runtime.running_carves.clear();
     let mut reports = Vec::new();
     let mut debris = Vec::new();
     let report = |edit, request, hash, cells, volume_change, apply_time| CarveApplied {

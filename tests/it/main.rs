@@ -105,6 +105,8 @@ mod terrain_world_seams;
 #[cfg(feature = "terrain")]
 mod world_save;
 #[cfg(feature = "terrain")]
+mod world_save_cut;
+#[cfg(feature = "terrain")]
 mod world_save_seeds;
 #[cfg(feature = "terrain")]
 mod world_save_wait;

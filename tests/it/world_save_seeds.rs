@@ -48,7 +48,10 @@ fn a_world_cratered_every_other_frame_saves_within_a_few_frames() {
 
 #[test]
 fn a_save_taken_before_a_slab_cut_loose_falls_makes_it_fall_after_loading() {
-    let (mut app, world, _focus) = save_app_at(new_world(), SLAB_FOCUS);
+    // Waiting for a whole state however long the cut's jobs take (after
+    // the settle frames a save could leave the cut out).
+    let whole = new_world().with_save_settle_frames(u32::MAX);
+    let (mut app, world, _focus) = save_app_at(whole, SLAB_FOCUS);
     build_slab(&mut app, world, false);
     let standing = hashes(&edited_bytes(&app, world));
     // The cut and the request in the same frame: the first whole frame is

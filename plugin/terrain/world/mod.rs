@@ -48,7 +48,8 @@
 //!    checking that each belongs to this world (same grid, same base).
 //!    A [`SaveWorld`] message saves in the background instead, writing
 //!    only the chunks changed since the last save to that folder; asked
-//!    while the world is busy, it waits for a whole state.
+//!    while the world is busy, it waits for a whole state, and after a few
+//!    frames saves a consistent one (a world carved in every frame).
 //! 5. **Multiplayer** (feature `net`, module `net::world`): the server
 //!    numbers world carves and every peer routes them to its own chunks
 //!    in that order ([`TerrainWorld::chunks_reached`], with the carve's
@@ -152,6 +153,7 @@ pub mod lod_mesh;
 pub mod seams;
 pub mod source;
 pub mod store;
+mod store_cut;
 mod store_files;
 pub mod stream;
 pub mod undo;
@@ -174,6 +176,7 @@ pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 pub use store::{DEFAULT_MAX_SAVE_WAIT, SaveWorld, WorldSaveFailed, WorldSaved};
+pub use store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
 pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
@@ -378,6 +381,9 @@ pub struct TerrainWorld {
     pub(crate) history: undo::WorldHistory,
     /// What the folders saved to hold and the save being written ([`store`]).
     pub(crate) saves: store::WorldSaves,
+    /// The world carves of several chunks that may be in flight in one
+    /// of them, for a save of a busy world ([`store`]).
+    pub(crate) routed: store_cut::RoutedCarves,
     /// Its carves and debris work before its builds (`pool_order`).
     pub(crate) pool_order: PoolOrder,
 }
@@ -416,6 +422,7 @@ impl TerrainWorld {
             detaches_applied: Vec::new(),
             history: undo::WorldHistory::default(),
             saves: store::WorldSaves::default(),
+            routed: store_cut::RoutedCarves::default(),
             pool_order: PoolOrder::default(),
         })
     }
@@ -672,6 +679,7 @@ impl TerrainWorld {
                 .push((tool.clone(), edit, request));
         }
         self.next_request = self.next_request.max(request.saturating_add(1));
+        self.routed.route(request, coords);
         if self.debris_role == debris_order::DebrisRole::Local {
             self.history.push_step(request, coords);
         }
@@ -725,6 +733,7 @@ impl TerrainWorld {
         self.detach_ordered = None;
         self.detaches_applied.clear();
         self.history.clear();
+        self.routed.clear();
         self.stored = edited;
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();

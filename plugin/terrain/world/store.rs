@@ -43,22 +43,23 @@
 //!    pool should not wait behind that.
 //! 3. A later frame reads the task's outcome and reports [`WorldSaved`]
 //!    (the chunks written, the edited chunks left as they were, the bytes
-//!    written) or [`WorldSaveFailed`]. Only a save that succeeded moves
+//!    written, the carves in flight left out) or [`WorldSaveFailed`]. Only a save that succeeded moves
 //!    the folder's record on; one that failed forgets the record of every
 //!    chunk it meant to write or remove, so the next save to that folder
 //!    writes them all again.
 //!
 //! What is written is every edited chunk as it was in the frame the save
-//! started: carves, undos and streaming may go on while it writes.
+//! started (before the jobs in flight then, see below): carves, undos and
+//! streaming may go on while it writes.
 //!
 //! ## Waiting for a whole state
 //!
-//! A save starts only in a frame that holds a whole state, so a saved
-//! world never holds half of a world carve. A frame does not when a carve
-//! waits for a chunk (also a far chunk's deferred carves on a networked
-//! world's client: [`TerrainWorld::build_deferred`] builds them), a
-//! [`WorldUndo`](super::WorldUndo) waits for a chunk, or a live chunk has
-//! a carve, undo or detach queued or running.
+//! A save starts in a frame that holds a whole state when one comes, so
+//! that it holds every carve asked for before it. A frame does not when a
+//! carve waits for a chunk (also a far chunk's deferred carves on a
+//! networked world's client: [`TerrainWorld::build_deferred`] builds
+//! them), a [`WorldUndo`](super::WorldUndo) waits for a chunk, or a live
+//! chunk has a carve, undo or detach queued or running.
 //!
 //! A fall across chunk borders on its way does not keep a frame from
 //! being whole: it is saved. Each chunk file holds the chunk's *seeds*
@@ -80,13 +81,55 @@
 //! octrees) is a chunk job as any: the frame waits for it, a frame or
 //! two. So a world cratered every other frame saves within a frame or
 //! two (`world_save_seeds`), where before it waited for seeds and
-//! searches it never was without. A request read in such a
-//! frame, or while a save of the same world is being written, is not
-//! refused: the world keeps it, oldest first, and starts it in the first
-//! later frame that holds a whole state with no save of the world running
-//! (requests for several folders one after the other, in the order they
-//! were read), saving the state of *that* frame.
-//! [`TerrainWorld::waiting_saves`] lists them, for a game's "saving…".
+//! searches it never was without.
+//!
+//! ## Saving a busy world
+//!
+//! A world carved in every frame (a player holding a drill) has a carve
+//! job running in every frame and may never be whole. Its chunks still
+//! hold a state worth saving: a live chunk's [`Terrain`] (octree, journal,
+//! undo history, seeds) is its state *before* its queued and running
+//! jobs, whose results are swapped in when they are collected. That state
+//! is *consistent* when every world carve has landed (been applied or
+//! refused) in all of the chunks it was routed to or in none of them; a
+//! carve waiting for a chunk that is not live has not landed there.
+//! Carves of one chunk, detaches across chunk borders and world undos
+//! (each changes all its chunks in one frame) never split it; a waiting
+//! [`WorldUndo`](super::WorldUndo) and the two falls above make a frame
+//! neither whole nor consistent. The world notes, per world carve routed
+//! to several chunks, those chunks until each has reported it
+//! (`store_cut`).
+//!
+//! A request whose turn has seen no whole state in
+//! [`TerrainWorld::save_settle_frames`] frames
+//! ([`DEFAULT_SAVE_SETTLE_FRAMES`], 10 by default) saves the first
+//! consistent state: each chunk as it was before its jobs in flight. Those
+//! land after it and are written by the next save (the chunks they change
+//! are marked changed then); [`WorldSaved::left_out`] counts them, a world
+//! carve once, 0 for a whole state.
+//!
+//! Each chunk runs its own jobs, so chunks that share carves need not come
+//! to the same carve in the same frame. When a request finds no consistent
+//! state after its settle frames, the chunks start no carve routed after
+//! that frame (a request id above the last one routed) until one comes,
+//! for at most 15 frames per request (not while carves wait deferred for
+//! far chunks of a networked world's client): each finishes the carves
+//! it has,
+//! the carves after wait queued in all of their chunks, and the state is
+//! consistent once the slowest chunk's job is in. A world carved in every
+//! frame across chunk borders thus saves a few frames after the settle
+//! frames (`world_save_cut`); the carves held back show those frames
+//! later.
+//!
+//! ## Waiting requests
+//!
+//! A request read in a frame that holds no state it may save, or while a
+//! save of the same world is being written, is not refused: the world
+//! keeps it, oldest first, and starts it in the first later frame that
+//! holds such a state with no save of the world running (requests for
+//! several folders one after the other, in the order they were read),
+//! saving the state of *that* frame. [`TerrainWorld::waiting_saves`]
+//! lists them, for a game's "saving…".
 //!
 //! - A request for a folder that already has a request waiting (one read
 //!   in an earlier frame, or in the same frame) is merged into it: it
@@ -95,28 +138,28 @@
 //!   requests). A request while a save to the same folder is being
 //!   written is not merged: it waits, and gets its own answer after that
 //!   save's, writing what changed since.
-//! - Saving never holds back a carve: carves, undos and streaming go on
-//!   while a request waits. So a world carved in every frame (a carve job
-//!   running in each) may never be whole; a request gives up once the world held no whole state in
-//!   [`TerrainWorld::max_save_wait`] frames of its turn (frames in which it
-//!   is the oldest request and no save of the world runs;
+//! - Saving holds back no carve but as above: carves, undos and streaming
+//!   go on while a request waits. A request gives up once the world held
+//!   neither a whole state nor, after the settle frames, a consistent one
+//!   in [`TerrainWorld::max_save_wait`] frames of its turn (frames in
+//!   which it is the oldest request and no save of the world runs;
 //!   [`DEFAULT_MAX_SAVE_WAIT`], 300 by default, 5 s at 60 frames a
 //!   second), answered by [`WorldSaveFailed`] with
 //!   [`TerrainError::WorldNotIdle`] naming a busy chunk of the last frame
-//!   it tried. Frames spent behind a save being written or another request
-//!   do not count. With a bound of 0 a request gives up in the first frame
-//!   of its turn unless it can start then.
+//!   it tried (a world undo waiting all that time, say). Frames spent
+//!   behind a save being written or another request do not count. With a
+//!   bound of 0 a request gives up in the first frame of its turn unless
+//!   it can start then (with settle frames 0, on a consistent state).
 //! - Despawning the world drops its waiting requests, unanswered.
 //!
-//! [`TerrainWorld::save`] does not wait: it refuses a world that is not
-//! whole ([`TerrainError::WorldNotIdle`]) or while a [`SaveWorld`] of it is
+//! [`TerrainWorld::save`] does not wait, nor take a consistent state: it
+//! refuses a world that is not whole ([`TerrainError::WorldNotIdle`]) or while a [`SaveWorld`] of it is
 //! being written ([`TerrainError::WorldSaveRunning`]); waiting requests do
 //! not hold it back. The world is not marked changed by any of
 //! this (bookkeeping, [`TerrainWorld`], "Change detection"). The record
 //! assumes that nothing else writes the folder's chunk files.
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
-use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -129,24 +172,28 @@ use chisel_bsp::octree::CellKey;
 use super::super::asset::TERRAIN_EXTENSION;
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::store_files::{
-    ChunkBytes, FileOutcome, PlannedFile, file_checksum, parse_chunk_name, write_chunk_files,
-};
+use super::store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
+use super::store_files::{ChunkBytes, FileOutcome, PlannedFile, file_checksum, write_chunk_files};
 use super::{Chunk, ChunkCoord, TerrainWorld};
 
 /// The frames a [`SaveWorld`] waits, by default, for its world to hold a
-/// whole state before it gives up ([`TerrainWorld::with_max_save_wait`]):
-/// 5 s at 60 frames a second.
+/// state it may save (whole, or after the settle frames consistent) before
+/// it gives up ([`TerrainWorld::with_max_save_wait`]): 5 s at 60 frames a
+/// second.
 pub const DEFAULT_MAX_SAVE_WAIT: u32 = 300;
 
 /// Save a world's edited chunks into `folder` off the main thread, only
 /// those that changed since the last save to that folder ([module
 /// docs](self)). It starts in the first frame, from the one it is read
 /// on, that holds a whole state (no carve, undo or detach in flight in a
-/// chunk or waiting for one) with no save of the world being written
-/// (it waits for that, at most [`TerrainWorld::max_save_wait`] frames of
-/// its turn; a second request for a folder whose request waits is merged
-/// into it). Falls across chunk borders still on their way are saved with
+/// chunk or waiting for one) with no save of the world being written;
+/// after [`TerrainWorld::save_settle_frames`] frames of its turn without
+/// one, in the first that holds a consistent state (every world carve in
+/// all of its chunks or in none; the chunks hold back later carves a few
+/// frames for one if need be), saving the chunks as they were before
+/// their carves in flight. It waits at most
+/// [`TerrainWorld::max_save_wait`] frames of its turn; a second request
+/// for a folder whose request waits is merged into it. Falls across chunk borders still on their way are saved with
 /// the chunks (their seeds), so a world loaded from the files lets those
 /// pieces fall: a save does not wait for them. Answered, a frame or more
 /// later, by one [`WorldSaved`] or [`WorldSaveFailed`].
@@ -159,7 +206,8 @@ pub struct SaveWorld {
 }
 
 /// A [`SaveWorld`] was written: `folder` holds every chunk edited in the
-/// frame the save started, as it was then, and no other chunk file.
+/// frame the save started, as it was then (before the carves in flight
+/// then, when `left_out` is not 0), and no other chunk file.
 #[derive(Message, Reflect, Clone, Debug, PartialEq, Eq)]
 pub struct WorldSaved {
     /// The world entity.
@@ -172,6 +220,13 @@ pub struct WorldSaved {
     pub unchanged: usize,
     /// The bytes written (the files' lengths).
     pub bytes: usize,
+    /// The carves and undos that were in flight in the chunks (queued,
+    /// running or waiting for a chunk) when the save started and are not
+    /// in the files: a world carve counts once, however many chunks it
+    /// reaches. 0 when the save found a whole state. They land after the
+    /// save, and the next save to the folder writes the chunks they
+    /// change ([module docs](self), "Saving a busy world").
+    pub left_out: usize,
 }
 
 /// A [`SaveWorld`] gave up (nothing written) or failed: the files
@@ -186,7 +241,8 @@ pub struct WorldSaveFailed {
     /// The folder.
     pub folder: PathBuf,
     /// Why: [`TerrainError::Io`] naming the file or folder;
-    /// [`TerrainError::WorldNotIdle`] when the world held no whole state in
+    /// [`TerrainError::WorldNotIdle`] when the world held no whole state,
+    /// nor after the settle frames a consistent one, in
     /// [`TerrainWorld::max_save_wait`] frames of the request's turn (it
     /// waited, then gave up, nothing written; [module docs](self)); or
     /// [`TerrainError::InvalidWorld`] for an entity without a
@@ -207,8 +263,15 @@ pub(crate) struct WorldSaves {
     /// The [`SaveWorld`] requests not started yet, oldest first, at most
     /// one per folder.
     waiting: VecDeque<WaitingSave>,
-    /// Frames of its turn a request waits for a whole state.
+    /// Frames of its turn a request waits before it gives up.
     max_wait: u32,
+    /// Frames of its turn a request waits for a whole state before it
+    /// takes a consistent one.
+    pub(super) settle: u32,
+    /// While the oldest request waits for a consistent state: the last
+    /// world carve routed when it began to; the chunks start no carve
+    /// routed after it (`store_cut`).
+    pub(super) barrier: Option<u64>,
 }
 
 impl Default for WorldSaves {
@@ -218,6 +281,8 @@ impl Default for WorldSaves {
             running: None,
             waiting: VecDeque::new(),
             max_wait: DEFAULT_MAX_SAVE_WAIT,
+            settle: DEFAULT_SAVE_SETTLE_FRAMES,
+            barrier: None,
         }
     }
 }
@@ -227,6 +292,8 @@ struct WaitingSave {
     folder: PathBuf,
     /// The frames of its turn in which the world held no whole state.
     refused: u32,
+    /// The frames it held carves back for a consistent state.
+    held: u32,
 }
 
 /// What a folder's chunk files hold, by chunk.
@@ -258,6 +325,8 @@ struct RunningSave {
     live: BTreeMap<ChunkCoord, Option<(Entity, Tick)>>,
     /// Edited chunks found unchanged when the save was planned.
     unchanged: usize,
+    /// Carves and undos in flight left out of the files.
+    left_out: usize,
     task: Task<Result<Vec<FileOutcome>, TerrainError>>,
 }
 
@@ -287,6 +356,7 @@ impl WorldSaves {
             self.waiting.push_back(WaitingSave {
                 folder: folder.to_path_buf(),
                 refused: 0,
+                held: 0,
             });
         }
     }
@@ -322,21 +392,22 @@ impl TerrainWorld {
 
     /// A [`SaveWorld`] request gives up, answered by [`WorldSaveFailed`]
     /// with [`TerrainError::WorldNotIdle`], once the world held no whole
-    /// state in `frames` frames of its turn: frames (runs of the save
+    /// state, nor after [`TerrainWorld::save_settle_frames`] a consistent
+    /// one, in `frames` frames of its turn: frames (runs of the save
     /// system) in which it is the oldest waiting request and no save of the
     /// world is being written ([module docs](self)).
     /// [`DEFAULT_MAX_SAVE_WAIT`] by default; with 0 a request gives up in
     /// the first frame of its turn (the frame it is read in, unless a save
-    /// runs or another request waits) when that frame holds no whole
-    /// state. Carves never wait for a save, so a world carved in every
-    /// frame fails its saves.
+    /// runs or another request waits) when that frame holds no state it
+    /// may save. Carves never wait for a save; a world carved in every
+    /// frame saves a consistent state after the settle frames.
     #[must_use]
     pub fn with_max_save_wait(mut self, frames: u32) -> Self {
         self.saves.max_wait = frames;
         self
     }
 
-    /// The frames a [`SaveWorld`] request waits for a whole state
+    /// The frames a [`SaveWorld`] request waits before it gives up
     /// ([`TerrainWorld::with_max_save_wait`]).
     #[must_use]
     pub fn max_save_wait(&self) -> u32 {
@@ -432,73 +503,32 @@ impl TerrainWorld {
         (self.debris_search.as_ref()).map_or(&[], |search| search.seeds_taken(entity))
     }
 
-    /// Whether this frame holds a whole state ([module docs](self)): no
-    /// carve waits for a chunk, no undo waits for one, every live chunk
-    /// readable here is settled, and no fall across chunk borders is on
-    /// its way that the files cannot hold (seeds are saved with their
-    /// chunks).
-    ///
-    /// # Errors
-    /// [`TerrainError::WorldNotIdle`] naming a busy chunk.
-    fn check_whole(&self, terrains: &Query<Ref<Terrain>>) -> Result<(), TerrainError> {
-        // A carve waiting for a chunk, or a chunk of a waiting undo.
-        let waiting =
-            (self.pending.keys().next().copied()).or_else(|| self.history.wanted().next());
-        let busy = waiting.or_else(|| {
-            self.live_chunks()
-                .find(|&(_, entity)| terrains.get(entity).is_ok_and(|t| !content_settled(&t)))
-                .map(|(coord, _)| coord)
-        });
-        // A fall across chunk borders that no file would hold: seeds of a
-        // chunk that is not edited (it has no file), or a detach a
-        // networked server ordered (its seeds are the server's).
-        let falling = || {
-            let unsaved = self.live_chunks().find(|&(coord, entity)| {
-                terrains.get(entity).is_ok_and(|t| {
-                    let seeded =
-                        !t.runtime.border_seeds.is_empty() || !self.seeds_taken(entity).is_empty();
-                    seeded && !self.chunk_edited(coord, &t)
-                })
-            });
-            let ordered = self.detach_ordered.is_some()
-                || (self.debris_search.as_ref()).is_some_and(|s| s.is_ordered());
-            // An order is the world's: it names any live chunk.
-            let any = || {
-                self.live_chunks()
-                    .next()
-                    .map_or(ChunkCoord { x: 0, z: 0 }, |c| c.0)
-            };
-            (unsaved.map(|(coord, _)| coord)).or_else(|| ordered.then(any))
-        };
-        let busy = busy.or_else(falling);
-        match busy {
-            Some(coord) => Err(TerrainError::WorldNotIdle {
-                chunk: [coord.x, coord.z],
-            }),
-            None => Ok(()),
-        }
-    }
-
     /// Starts the waiting [`SaveWorld`] requests' saves in turn, oldest
     /// first, while none is being written and this frame holds a whole
-    /// state; counts the frame against the oldest otherwise ([module
+    /// state (or, after the settle frames, a consistent one); counts the
+    /// frame against the oldest otherwise ([module
     /// docs](self)). Returns the requests that gave up, with why.
     fn start_waiting_saves(
         &mut self,
         terrains: &Query<Ref<Terrain>>,
     ) -> Vec<(PathBuf, TerrainError)> {
         let mut gave_up = Vec::new();
+        let mut holding = false;
         while self.saves.running.is_none() {
             let Some(mut next) = self.saves.waiting.pop_front() else {
                 break;
             };
-            match self.start_save(&next.folder, terrains) {
+            // After `settle` frames of its turn with no whole state, a
+            // consistent one does.
+            let cut = next.refused >= self.saves.settle;
+            match self.start_save(&next.folder, terrains, cut) {
                 Ok(()) => {}
                 Err(error @ TerrainError::WorldNotIdle { .. }) => {
                     next.refused += 1;
                     if next.refused > self.saves.max_wait {
                         gave_up.push((next.folder, error));
                     } else {
+                        holding = cut && self.hold_for_cut(&mut next.held);
                         self.saves.waiting.push_front(next);
                         break;
                     }
@@ -506,23 +536,32 @@ impl TerrainWorld {
                 Err(error) => gave_up.push((next.folder, error)),
             }
         }
+        if !holding {
+            self.saves.barrier = None;
+        }
         gave_up
     }
 
     /// Plans a background save into `folder` ([module docs](self)) and
-    /// starts its task.
+    /// starts its task: of a whole state, or with `cut` of a consistent
+    /// one when this frame holds no whole state.
     ///
     /// # Errors
     /// [`TerrainError::WorldSaveRunning`] while a save is being written,
-    /// [`TerrainError::WorldNotIdle`] when this frame holds no whole state;
-    /// nothing is started then.
+    /// [`TerrainError::WorldNotIdle`] when this frame holds no whole state
+    /// (with `cut`, no consistent one); nothing is started then.
     fn start_save(
         &mut self,
         folder: &Path,
         terrains: &Query<Ref<Terrain>>,
+        cut: bool,
     ) -> Result<(), TerrainError> {
         self.saves.check_not_running()?;
-        self.check_whole(terrains)?;
+        let left_out = match self.check_whole(terrains) {
+            Ok(()) => 0,
+            Err(_) if cut => self.check_consistent(terrains)?,
+            Err(error) => return Err(error),
+        };
         let record = self
             .saves
             .folders()
@@ -605,6 +644,7 @@ impl TerrainWorld {
             kept,
             live,
             unchanged,
+            left_out,
             task,
         });
         Ok(())
@@ -627,6 +667,7 @@ impl TerrainWorld {
                         .collect(),
                     unchanged: running.unchanged + files.iter().filter(|f| !f.written).count(),
                     bytes: (files.iter().filter(|f| f.written)).map(|f| f.len).sum(),
+                    left_out: running.left_out,
                 };
                 let record = record_of(running.kept, &files, &running.live);
                 folders.insert(running.folder.clone(), record);
@@ -641,62 +682,11 @@ impl TerrainWorld {
         };
         Some((running.folder, result))
     }
-
-    /// Reads the edited chunks saved in `folder` ([`TerrainWorld::save`])
-    /// into this world's store: they stream in from them exactly as saved.
-    /// Files whose names are not chunk files are ignored.
-    ///
-    /// # Errors
-    /// [`TerrainError::Io`] when the folder or a file cannot be read;
-    /// [`TerrainError::InFile`] naming a bad file, with the error of
-    /// [`Terrain::from_bytes`]; [`TerrainError::InvalidWorld`]
-    /// for a chunk file of another world (another grid or base). The world
-    /// is unchanged then.
-    pub fn load_edits(mut self, folder: impl AsRef<Path>) -> Result<Self, TerrainError> {
-        let folder = folder.as_ref();
-        let io = |e: std::io::Error| TerrainError::Io {
-            message: format!("cannot read {}: {e}", folder.display()),
-        };
-        let mut found = Vec::new();
-        let mut kept = Vec::new();
-        for entry in fs::read_dir(folder).map_err(io)? {
-            let entry = entry.map_err(io)?;
-            let name = entry.file_name();
-            let Some(coord) = name.to_str().and_then(parse_chunk_name) else {
-                continue;
-            };
-            let path = entry.path();
-            let bytes = fs::read(&path).map_err(|e| TerrainError::Io {
-                message: format!("cannot read {}: {e}", path.display()),
-            })?;
-            let terrain = Terrain::from_bytes(&bytes).map_err(|e| e.at_path(&path))?;
-            let base = self.layout.chunk_base(&*self.source, coord)?;
-            if *terrain.quantization() != self.layout.quantization || *terrain.base() != base {
-                return Err(TerrainError::InvalidWorld {
-                    reason: format!(
-                        "{} is not a chunk of this world (another grid or base)",
-                        path.display()
-                    ),
-                });
-            }
-            if terrain.journal().is_empty() && terrain.undo_depth() == 0 {
-                // Saved though it has no journal: a chunk installed from a
-                // networked world's snapshot, edited all the same.
-                kept.push(coord);
-            }
-            found.push((coord, Arc::new(bytes)));
-        }
-        self.kept.extend(kept);
-        self.stored.extend(found);
-        self.stats.stored = self.stored.len();
-        self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
-        Ok(self)
-    }
 }
 
 /// Reports the saves whose tasks are done, reads [`SaveWorld`]s into
 /// their worlds' waiting requests and starts those whose turn it is in a
-/// frame that holds a whole state, or gives them up ([module docs](self)).
+/// frame that holds a whole (or consistent) state, or gives them up ([module docs](self)).
 /// Runs after the carve systems.
 pub fn save_worlds(
     mut requests: MessageReader<SaveWorld>,
@@ -768,17 +758,6 @@ pub fn save_worlds(
             });
         }
     }
-}
-
-/// Whether a live chunk's octree, journal and undo history are at rest:
-/// nothing queued or running would change them (sealing again at a
-/// neighbour's points does not). A finished job waiting to show its cells
-/// and write its reports and debris (its upload) counts as at rest: it
-/// swapped its octree, journal and undo step in when it was collected.
-fn content_settled(terrain: &Terrain) -> bool {
-    let runtime = &terrain.runtime;
-    (runtime.queue.iter()).all(|job| matches!(job, crate::terrain::jobs::Job::Reseal { .. }))
-        && (runtime.task.is_none() || runtime.resealing)
 }
 
 /// A folder's record after a save that succeeded: `kept` and the files

@@ -1,6 +1,6 @@
 //! The chunk files of a saved world on disk ([`super::store`]): writing
-//! the planned files, each atomically, removing the stale ones, and the
-//! file names.
+//! the planned files, each atomically, removing the stale ones, the
+//! file names, and reading a saved world's files back.
 
 use std::collections::BTreeSet;
 use std::fs;
@@ -9,6 +9,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::super::asset::TERRAIN_EXTENSION;
+use super::super::component::Terrain;
 use super::super::error::TerrainError;
 use super::super::file::{TerrainRecord, write_atomic};
 use super::{ChunkCoord, TerrainWorld};
@@ -131,6 +132,59 @@ pub(super) fn parse_chunk_name(name: &str) -> Option<ChunkCoord> {
         x: x.parse().ok()?,
         z: z.parse().ok()?,
     })
+}
+
+impl TerrainWorld {
+    /// Reads the edited chunks saved in `folder` ([`TerrainWorld::save`])
+    /// into this world's store: they stream in from them exactly as saved.
+    /// Files whose names are not chunk files are ignored.
+    ///
+    /// # Errors
+    /// [`TerrainError::Io`] when the folder or a file cannot be read;
+    /// [`TerrainError::InFile`] naming a bad file, with the error of
+    /// [`Terrain::from_bytes`]; [`TerrainError::InvalidWorld`]
+    /// for a chunk file of another world (another grid or base). The world
+    /// is unchanged then.
+    pub fn load_edits(mut self, folder: impl AsRef<Path>) -> Result<Self, TerrainError> {
+        let folder = folder.as_ref();
+        let io = |e: std::io::Error| TerrainError::Io {
+            message: format!("cannot read {}: {e}", folder.display()),
+        };
+        let mut found = Vec::new();
+        let mut kept = Vec::new();
+        for entry in fs::read_dir(folder).map_err(io)? {
+            let entry = entry.map_err(io)?;
+            let name = entry.file_name();
+            let Some(coord) = name.to_str().and_then(parse_chunk_name) else {
+                continue;
+            };
+            let path = entry.path();
+            let bytes = fs::read(&path).map_err(|e| TerrainError::Io {
+                message: format!("cannot read {}: {e}", path.display()),
+            })?;
+            let terrain = Terrain::from_bytes(&bytes).map_err(|e| e.at_path(&path))?;
+            let base = self.layout.chunk_base(&*self.source, coord)?;
+            if *terrain.quantization() != self.layout.quantization || *terrain.base() != base {
+                return Err(TerrainError::InvalidWorld {
+                    reason: format!(
+                        "{} is not a chunk of this world (another grid or base)",
+                        path.display()
+                    ),
+                });
+            }
+            if terrain.journal().is_empty() && terrain.undo_depth() == 0 {
+                // Saved though it has no journal: a chunk installed from a
+                // networked world's snapshot, edited all the same.
+                kept.push(coord);
+            }
+            found.push((coord, Arc::new(bytes)));
+        }
+        self.kept.extend(kept);
+        self.stored.extend(found);
+        self.stats.stored = self.stored.len();
+        self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
+        Ok(self)
+    }
 }
 
 #[cfg(test)]

@@ -380,6 +380,7 @@ pub(crate) fn note_detach(
     let history = &mut world.history;
     let mut chunks = chunks;
     for chunk in &mut chunks {
+        world.routed.land(chunk.coord, &chunk.landed);
         history.land(chunk.coord, std::mem::take(&mut chunk.landed));
     }
     if world.debris_role != DebrisRole::Local {
@@ -447,8 +448,11 @@ pub fn undo_world_carves(
         for (coord, entity) in live {
             if let Ok(mut terrain) = terrains.get_mut(entity) {
                 let terrain = terrain.bypass_change_detection();
-                terrain.runtime.records_landed = local;
+                // Every world notes them for its saves; a local one for
+                // its undo steps too.
+                terrain.runtime.records_landed = true;
                 let landed = std::mem::take(&mut terrain.runtime.landed);
+                world.routed.land(coord, &landed);
                 if local && !landed.is_empty() {
                     world.history.land(coord, landed);
                 }
