@@ -146,6 +146,7 @@
 //! borders there can be apart (full-detail chunks have walls there), so no
 //! crack opens between chunks of different levels, full detail included.
 
+mod chunk;
 pub mod debris;
 pub mod debris_order;
 pub mod lod;
@@ -163,8 +164,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bevy::prelude::*;
-use bevy::tasks::Task;
-use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig, DebrisLimits, Edit};
+use chisel_bsp::octree::{DebrisLimits, Edit};
 use chisel_bsp::tree::Label;
 
 use super::component::Terrain;
@@ -172,6 +172,8 @@ use super::error::TerrainError;
 use super::pool_order::PoolOrder;
 use super::tool::{CarveTool, GridTool};
 
+pub(crate) use chunk::{Built, Chunk, generate, restore};
+pub use chunk::{ChunkCoord, ChunkOffstage, WorldChunk, chunk_debris};
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
@@ -180,45 +182,11 @@ pub use store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
 pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
-/// A chunk's position in its world's grid of chunks (x and z).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Reflect)]
-pub struct ChunkCoord {
-    /// Chunk index along x.
-    pub x: i64,
-    /// Chunk index along z.
-    pub z: i64,
-}
-
 /// Marks an entity (camera, player) around which a world's chunks are
 /// streamed in.
 #[derive(Component, Reflect, Clone, Copy, Debug, Default)]
 #[reflect(Component, Default)]
 pub struct TerrainFocus;
-
-/// A chunk entity of a [`TerrainWorld`] (it also has its [`Terrain`]).
-#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq)]
-#[reflect(Component)]
-pub struct WorldChunk {
-    /// The world entity.
-    pub world: Entity,
-    /// Its place in the world.
-    pub coord: ChunkCoord,
-}
-
-/// A live chunk that no focus has come near: built beyond every focus's
-/// unload radius, only for work there (a carve routed to it, an undo, a
-/// search for debris across borders; on a networked world's client, its
-/// deferred carves once too many wait or [`TerrainWorld::build_deferred`]
-/// asks), and released once that is done. Its cells get no
-/// render meshes (colliders still, where the [`CellOutput`] and a
-/// physics backend build them), and coarse chunks ([`WorldLod`]) stand in
-/// for it. The marker is taken away, for good, once a focus comes within
-/// the unload radius; the chunk then builds its meshes.
-///
-/// [`CellOutput`]: crate::terrain::CellOutput
-#[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[reflect(Component, Default)]
-pub struct ChunkOffstage;
 
 /// How far around the foci chunks are kept, and how many build at once.
 #[derive(Clone, Debug, PartialEq)]
@@ -278,24 +246,6 @@ pub struct WorldStats {
     /// Of those, the searches dropped because a chunk they depend on
     /// changed or streamed out while they ran (each searched again).
     pub debris_searches_dropped: u64,
-}
-
-/// The state of one chunk the world knows.
-pub(crate) enum Chunk {
-    /// Being built or restored on the async compute pool.
-    Building(Task<Built>),
-    /// A terrain entity.
-    Live(Entity),
-    /// The build failed; not retried.
-    Failed,
-}
-
-/// A chunk build's result, from the async compute pool.
-pub(crate) struct Built {
-    pub(crate) terrain: Result<Terrain, TerrainError>,
-    pub(crate) time: Duration,
-    /// Restored from stored bytes rather than generated.
-    pub(crate) restored: bool,
 }
 
 /// A streamed world of terrain chunks. Spawn it with a
@@ -765,51 +715,6 @@ impl TerrainWorld {
     pub fn generate_chunk(&self, coord: ChunkCoord) -> Result<Terrain, TerrainError> {
         generate(&self.layout, &*self.source, &self.labels, coord)
     }
-}
-
-/// The debris settings of a chunk: anchored by the cube's bottom and its
-/// four sides (solid on a side continues into the neighbouring chunk), and
-/// by the base's floor.
-#[must_use]
-pub fn chunk_debris(floor: chisel_bsp::octree::CellBox) -> DebrisConfig {
-    let side = |axis, upper| CubeSide { axis, upper };
-    DebrisConfig {
-        anchors: Anchors {
-            sides: vec![
-                CubeSide::BOTTOM,
-                side(0, false),
-                side(0, true),
-                side(2, false),
-                side(2, true),
-            ],
-            boxes: vec![floor],
-        },
-        max_volume: None,
-        max_cells: None,
-    }
-}
-
-pub(crate) fn generate(
-    layout: &WorldLayout,
-    source: &dyn WorldSource,
-    labels: &[Label],
-    coord: ChunkCoord,
-) -> Result<Terrain, TerrainError> {
-    let base = layout.chunk_base(source, coord)?;
-    let floor = base.floor();
-    Ok(
-        Terrain::from_base(layout.quantization, base, super::terrain_octree_config())?
-            .with_labels(labels.iter().copied())
-            .with_debris(Some(chunk_debris(floor))),
-    )
-}
-
-pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, TerrainError> {
-    let terrain = Terrain::from_bytes(bytes)?;
-    let floor = terrain.base().floor();
-    Ok(terrain
-        .with_labels(labels.iter().copied())
-        .with_debris(Some(chunk_debris(floor))))
 }
 
 /// Carve a world: the tool (in the world entity's local frame) is rounded
