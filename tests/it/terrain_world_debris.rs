@@ -64,6 +64,23 @@ const fn at(x: i64, z: i64) -> ChunkCoord {
 const PILLAR: ([i64; 3], [i64; 3]) = ([26, 4, 10], [29, 25, 13]);
 pub(crate) const CUT: ([i64; 3], [i64; 3]) = ([25, 21, 9], [30, 23, 14]);
 
+/// Sends the cut that frees the slab and runs until the search for
+/// debris across borders it seeds is running.
+pub(super) fn cut_until_searching(app: &mut App, world: Entity) {
+    app.world_mut().write_message(WorldCarve {
+        world,
+        tool: cuboid(CUT.0, CUT.1),
+        edit: Edit::Subtract,
+    });
+    let mut frames = 0;
+    while !the_world(app, world).debris_searching() {
+        app.update();
+        frames += 1;
+        assert!(frames < 20_000, "the cut starts a search");
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+}
+
 /// A world with a slab from x = 26 to 38 over the border x = 32 on a
 /// pillar in chunk (0, 0), and also one in chunk (1, 0) when `held`.
 fn slab_world(held: bool) -> (App, Entity) {
@@ -258,18 +275,7 @@ fn a_carve_landing_during_the_search_makes_it_search_again() {
     let (mut app, world) = slab_world(false);
     let dropped = |app: &App| the_world(app, world).stats().debris_searches_dropped;
     let before = dropped(&app);
-    app.world_mut().write_message(WorldCarve {
-        world,
-        tool: cuboid(CUT.0, CUT.1),
-        edit: Edit::Subtract,
-    });
-    let mut frames = 0;
-    while !the_world(&app, world).debris_searching() {
-        app.update();
-        frames += 1;
-        assert!(frames < 20_000, "the cut starts a search");
-        std::thread::sleep(std::time::Duration::from_millis(1));
-    }
+    cut_until_searching(&mut app, world);
     assert!(debris(&mut app).is_empty(), "nothing fell yet");
     edit(&mut app, world, cuboid(NOTCH.0, NOTCH.1), Edit::Subtract);
     assert_eq!(dropped(&app), before + 1, "the first search was dropped");

@@ -15,7 +15,7 @@ use bevy_chisel::bsp::octree::{Edit, ExactVolume, StateHash};
 use bevy_chisel::terrain::{ChunkCoord, StreamSettings, Terrain, TerrainWorld, WorldCarve};
 
 use super::terrain_world::{app_with, settle, terrain, the_world, world};
-use super::terrain_world_debris::{CUT, build_slab, cuboid, debris, falling};
+use super::terrain_world_debris::{CUT, build_slab, cuboid, cut_until_searching, debris, falling};
 
 /// The focus the slab is built around, on the border of its chunks.
 const SLAB_FOCUS: Vec3 = Vec3::new(32.0, 30.0, 16.0);
@@ -80,18 +80,7 @@ fn falls_after_streaming(
     let (mut app, world, focus) = app_with(new_world(), SLAB_FOCUS);
     build_slab(&mut app, world, false);
     let dropped = the_world(&app, world).stats().debris_searches_dropped;
-    app.world_mut().write_message(WorldCarve {
-        world,
-        tool: cuboid(CUT.0, CUT.1),
-        edit: Edit::Subtract,
-    });
-    let mut frames = 0;
-    while !the_world(&app, world).debris_searching() {
-        app.update();
-        frames += 1;
-        assert!(frames < 20_000, "the cut starts a search");
-        std::thread::sleep(std::time::Duration::from_millis(1));
-    }
+    cut_until_searching(&mut app, world);
     assert!(
         terrain(&app, world, at(0, 0)).border_seeds().is_empty(),
         "the search took the cut's seeds"
