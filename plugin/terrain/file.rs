@@ -60,15 +60,15 @@
 //! a file cut short is [`TerrainError::Truncated`], never a panic.
 
 use std::collections::VecDeque;
-use std::fs::{self, File, OpenOptions};
-use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::Path;
 
 use chisel_bsp::octree::store::bytes::{ReadError, Reader, Writer};
 use chisel_bsp::octree::store::{checksum, snapshots_from_bytes, snapshots_to_bytes};
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree};
 use chisel_bsp::tools::Quantization;
 
+use super::atomic_write::write_atomic;
 use super::base::{GridHeightfield, TerrainBase};
 use super::component::{JournalEntry, Terrain, UndoStep};
 use super::error::TerrainError;
@@ -382,61 +382,6 @@ fn file_seeds(a: &[CellKey], b: &[CellKey]) -> Vec<CellKey> {
     seeds
 }
 
-/// Writes `path` atomically with what `fill` writes into a new temporary
-/// file beside it: `fill`, then a sync, then a rename over `path`, then a
-/// sync of the folder (so the rename itself survives a crash). On any
-/// error before the rename the temporary file is removed and `path` is
-/// untouched.
-pub(super) fn write_atomic(
-    path: &Path,
-    fill: impl FnOnce(&mut File) -> io::Result<()>,
-) -> io::Result<()> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?
-        .to_string_lossy()
-        .into_owned();
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let (temp, mut file) = create_temp(&folder, &name)?;
-    let written = fill(&mut file)
-        .and_then(|()| file.sync_all())
-        .and_then(|()| {
-            drop(file);
-            fs::rename(&temp, path)
-        });
-    if let Err(e) = written {
-        // The error that matters is the write's; a temporary file that
-        // cannot be removed either is left for the user to see.
-        let _ = fs::remove_file(&temp);
-        return Err(e);
-    }
-    // The new file is in place; syncing the folder makes the rename
-    // durable. Folders cannot be opened for syncing everywhere (Windows),
-    // and the data itself is already synced, so a failure here is not an
-    // error of the save.
-    if let Ok(dir) = File::open(&folder) {
-        let _ = dir.sync_all();
-    }
-    Ok(())
-}
-
-/// A new temporary file `.NAME.PID.N.tmp` in `folder`, created only where
-/// no such file exists.
-fn create_temp(folder: &Path, name: &str) -> io::Result<(PathBuf, File)> {
-    let mut n = 0u32;
-    loop {
-        let temp = folder.join(format!(".{name}.{}.{n}.tmp", std::process::id()));
-        match OpenOptions::new().write(true).create_new(true).open(&temp) {
-            Ok(file) => return Ok((temp, file)),
-            Err(e) if e.kind() == io::ErrorKind::AlreadyExists && n < 1000 => n += 1,
-            Err(e) => return Err(e),
-        }
-    }
-}
-
 /// The body of a record `magic, version u32, body, checksum u64`: checks
 /// the magic, the version (one of `versions`; an unsupported one names
 /// the newest as supported) and the checksum (XXH64 of every byte before
@@ -667,6 +612,10 @@ impl ReadTerrain for Reader<'_> {
 
 #[cfg(test)]
 mod tests {
+    use std::fs;
+    use std::io;
+    use std::path::PathBuf;
+
     use super::*;
     use chisel_bsp::octree::OctreeConfig;
 

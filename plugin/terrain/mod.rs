@@ -104,6 +104,7 @@
 //! ```
 
 pub mod asset;
+mod atomic_write;
 #[cfg(feature = "avian")]
 pub mod avian;
 pub mod base;

@@ -9,9 +9,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::super::asset::TERRAIN_EXTENSION;
+use super::super::atomic_write::write_atomic;
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::super::file::{TerrainRecord, write_atomic};
+use super::super::file::TerrainRecord;
 use super::{ChunkCoord, TerrainWorld};
 
 /// What the task did with one planned chunk file.
