@@ -169,10 +169,10 @@ pub use tool::{
 };
 pub use world::{
     ChunkCoord, ChunkOffstage, DEFAULT_MAX_DEFERRED_CARVES, DEFAULT_MAX_SAVE_WAIT,
-    DEFAULT_SAVE_SETTLE_FRAMES, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave,
-    SaveWorld, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk,
-    WorldLayout, WorldLod, WorldSaveFailed, WorldSaved, WorldSource, WorldStats, WorldUndo,
-    WorldUndoRefusal, WorldUndoRejected, WorldUndone,
+    DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES, HeightArray, LodMesh, LodSettings,
+    LodStats, NoiseOctave, SaveWorld, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise,
+    WorldCarve, WorldChunk, WorldLayout, WorldLod, WorldSaveFailed, WorldSaved, WorldSource,
+    WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]

@@ -178,7 +178,7 @@ pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 pub use store::{DEFAULT_MAX_SAVE_WAIT, SaveWorld, WorldSaveFailed, WorldSaved};
-pub use store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
+pub use store_cut::{DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES};
 pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
