@@ -115,6 +115,7 @@ pub mod debris_hulls;
 pub mod error;
 pub mod events;
 pub mod file;
+mod file_values;
 mod jobs;
 #[cfg(feature = "render")]
 pub mod material;

@@ -112,6 +112,8 @@ mod world_save_seeds;
 mod world_save_wait;
 #[cfg(feature = "terrain")]
 mod world_undo;
+#[cfg(feature = "terrain")]
+mod world_undo_seeds;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]
