@@ -29,6 +29,8 @@
 //!   [`debris_hulls`] merges a piece's convex cells into a few hulls for
 //!   its collider.
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
+//! - [`probe`] — [`Terrain::material_at`] and [`TerrainWorld::material_at`]:
+//!   the material at a point, exactly.
 //! - [`file`](mod@file) — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
 //! - [`snapshot`] — the terrain as it is now, without journal or undo
 //!   history ([`Terrain::to_snapshot_bytes`]), for a peer that joins.
@@ -123,6 +125,7 @@ pub mod mesh;
 pub mod physics;
 mod pool_order;
 #[cfg(feature = "props")]
+pub mod probe;
 pub mod prop_tool;
 pub mod queue;
 #[cfg(feature = "rapier")]

@@ -103,6 +103,8 @@ mod terrain_world_offstage;
 #[cfg(feature = "terrain")]
 mod terrain_world_seams;
 #[cfg(feature = "terrain")]
+mod world_probe;
+#[cfg(feature = "terrain")]
 mod world_save;
 #[cfg(feature = "terrain")]
 mod world_save_cut;
