@@ -147,3 +147,32 @@ fn an_undo_gives_seeds_back_to_a_chunk_streamed_out_and_the_slab_falls() {
         "the chunks are as if nothing streamed out"
     );
 }
+
+/// The undo asked in the frame the cut's chunk starts to stream back in:
+/// the chunk is being restored from its stored bytes when the undo gives
+/// its seeds back, and gets them when its build is collected. Here the
+/// seeds given back to the slab's chunk wait for it too (streaming wants
+/// it) and would find the slab alone: this checks that the path gives
+/// the same chunks and the one fall, not that it is needed.
+#[test]
+fn an_undo_while_the_chunk_streams_back_in_lets_the_slab_fall() {
+    let (mut app, world, focus) = propped_slab();
+    move_focus(&mut app, focus, Vec3::new(110.0, 30.0, 16.0));
+    settle(&mut app, world);
+    assert!(the_world(&app, world).chunk_entity(CUT_CHUNK).is_none());
+
+    move_focus(&mut app, focus, SLAB_FOCUS);
+    app.world_mut().write_message(WorldUndo { world });
+    app.update();
+    let w = the_world(&app, world);
+    assert!(w.chunk_entity(CUT_CHUNK).is_none(), "not live yet");
+    assert!(w.stats().building > 0, "streaming back in");
+    settle(&mut app, world);
+    let undone = &app.world().resource::<Undone>().0;
+    assert_eq!(undone.len(), 1);
+    assert_eq!(undone[0].chunks, vec![SLAB_CHUNK]);
+    let fell = bodies(&mut app);
+    assert_eq!(fell.len(), 1, "the slab falls once the chunk is back");
+    assert_eq!(fell[0].1.exact_volume, falling());
+    assert_eq!(states(&app, world), reference());
+}
