@@ -4,8 +4,8 @@
 //! A carve goes through the terrain modules in this order, each once:
 //!
 //! 1. [`super::carve`] — the [`Carve`](super::Carve),
-//!    [`GridCarve`](super::GridCarve) and [`UndoCarve`](super::UndoCarve)
-//!    messages.
+//!    [`GridCarve`](super::GridCarve), [`UndoCarve`](super::UndoCarve)
+//!    and [`RedoCarve`](super::RedoCarve) messages.
 //! 2. [`super::queue`] — reads them into the terrain's queue of [`Job`]s
 //!    (in its [`Runtime`]) and starts the next job on a snapshot of the
 //!    octree (a cheap persistent clone).
@@ -96,6 +96,9 @@ pub(crate) enum Job {
         request: Option<u64>,
     },
     Undo {
+        requested: Instant,
+    },
+    Redo {
         requested: Instant,
     },
     /// Holds the queue until the world's undo of world step `request` is
@@ -254,7 +257,10 @@ pub(crate) enum StepOutcome {
         error: TerrainError,
         request: Option<u64>,
     },
+    /// An undo, or a redo (with the edit redone, `None` where the journal
+    /// had lost it).
     Undone {
+        redone: Option<Option<Edit>>,
         cells: usize,
         /// What the undo changed of each material, in cubic world units
         /// (`None` when not measured).
@@ -414,20 +420,22 @@ pub(crate) fn carve_batch(
     remesh(octree, context, steps, keys, fresh, mesher, false)
 }
 
-/// The step of an undo that turned `before` into `after`, changing the
-/// cells `keys`.
+/// The step of an undo (or of a redo, `redone`) that turned `before`
+/// into `after`, changing the cells `keys`.
 pub(crate) fn undone_step(
     before: &Octree,
     after: &Octree,
     keys: &[CellKey],
     context: &JobContext,
     requested: Instant,
+    redone: Option<Option<Edit>>,
 ) -> StepOutcome {
     let changes = Changes {
         changed: keys.to_vec(),
         removed: Vec::new(),
     };
     StepOutcome::Undone {
+        redone,
         cells: keys.len(),
         volume_change: (context.measure_volumes).then(|| {
             context

@@ -55,9 +55,10 @@ fn finish_job(
     terrain.runtime.running_carves.clear();
     let mut reports = Vec::new();
     let mut debris = Vec::new();
-    let report = |edit, request, hash, cells, volume_change, apply_time| CarveApplied {
+    let report = |edit, redo, request, hash, cells, volume_change, apply_time| CarveApplied {
         terrain: entity,
         edit,
+        redo,
         request,
         hash,
         cells,
@@ -113,7 +114,15 @@ fn finish_job(
                 }
                 let hash = terrain.hash.value();
                 reports.push((
-                    report(Some(edit), request, hash, cells, volume_change, apply_time),
+                    report(
+                        Some(edit),
+                        false,
+                        request,
+                        hash,
+                        cells,
+                        volume_change,
+                        apply_time,
+                    ),
                     requested,
                 ));
                 terrain.record(before, changes, tool, edit);
@@ -127,12 +136,14 @@ fn finish_job(
             }
             StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
             StepOutcome::Undone {
+                redone,
                 cells,
                 volume_change,
                 requested,
             } => {
                 let hash = terrain.hash.value();
-                let undone = report(None, None, hash, cells, volume_change, Duration::ZERO);
+                let (edit, redo) = (redone.flatten(), redone.is_some());
+                let undone = report(edit, redo, None, hash, cells, volume_change, Duration::ZERO);
                 reports.push((undone, requested));
             }
             StepOutcome::Rejected { error, request } => {
@@ -157,7 +168,8 @@ fn finish_job(
         reports,
         debris,
     });
-    // For an undo or a full build this is the octree already in place.
+    // For an undo, a redo or a full build this is the octree already in
+    // place.
     terrain.octree = output.octree;
     terrain.runtime.mesher = output.mesher;
     if output.border.is_some() {
