@@ -6,7 +6,8 @@
 //! forgets what was undone; undo, redo and undo again are exact; a piece
 //! the carve cut loose is taken out of the terrain again by the redo
 //! (without a second body). [`Terrain::redo_now`] does the same outside
-//! the ECS.
+//! the ECS. A world chunk redoes its own undo; a [`WorldUndo`] leaves it
+//! nothing to redo.
 
 use std::collections::BTreeSet;
 
@@ -16,10 +17,13 @@ use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::{
     Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, DebrisDetached, JournalEntry,
     RedoCarve, Terrain, TerrainBase, TerrainCell, TerrainDebris, TerrainError, TerrainPlugin,
-    TerrainSettings, TerrainSystems, UndoCarve,
+    TerrainSettings, TerrainSystems, UndoCarve, WorldCarve, WorldUndo,
 };
 
 use crate::terrain_common::settle;
+use crate::terrain_world::{
+    app_with as world_app, settle as settle_world, the_world, world as new_world,
+};
 
 /// World units per grid unit.
 const UNIT: f64 = 0.5;
@@ -369,4 +373,44 @@ fn redo_now_matches_the_carves_outside_the_ecs() {
     terrain.clear_undo();
     assert_eq!(terrain.redo_now(), Err(TerrainError::NothingToRedo));
     assert_eq!(snap(&terrain), after[2]);
+}
+
+#[test]
+fn a_chunk_redoes_its_own_undo_and_a_world_undo_leaves_nothing_to_redo() {
+    let (mut app, world, _) = world_app(new_world(), Vec3::new(16.0, 30.0, 16.0));
+    let chunk = the_world(&app, world)
+        .chunk_entity(bevy_chisel::terrain::ChunkCoord { x: 0, z: 0 })
+        .expect("chunk (0, 0) is live");
+    let snap = |app: &App| {
+        let t = terrain(app, chunk);
+        let depths = (t.journal().len(), t.undo_depth(), t.redo_depth());
+        (t.octree().to_bytes(), t.state_hash(), depths)
+    };
+    let fresh = snap(&app);
+    // A world carve inside chunk (0, 0).
+    let tool = CarveTool::dodecahedron(5.0, Vec3::new(12.0, 12.0, 12.0));
+    let edit = Edit::Subtract;
+    app.world_mut()
+        .write_message(WorldCarve { world, tool, edit });
+    settle_world(&mut app, world);
+    let carved = snap(&app);
+    assert_eq!(carved.2, (1, 1, 0));
+    // The chunk's own undo and redo.
+    app.world_mut().write_message(UndoCarve { terrain: chunk });
+    settle_world(&mut app, world);
+    assert_eq!(snap(&app).1, fresh.1);
+    assert_eq!(snap(&app).2, (0, 0, 1));
+    app.world_mut().write_message(RedoCarve { terrain: chunk });
+    settle_world(&mut app, world);
+    assert_eq!(snap(&app), carved);
+    // The world undo finds the chunk as its carve left it, and undoes it;
+    // the chunk has nothing to redo after it.
+    app.world_mut().write_message(WorldUndo { world });
+    settle_world(&mut app, world);
+    assert_eq!(snap(&app).1, fresh.1);
+    assert_eq!(snap(&app).2, (0, 0, 0));
+    app.world_mut().write_message(RedoCarve { terrain: chunk });
+    settle_world(&mut app, world);
+    assert_eq!(snap(&app).1, fresh.1);
+    assert_eq!(snap(&app).2, (0, 0, 0));
 }
