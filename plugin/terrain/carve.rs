@@ -90,9 +90,12 @@ pub struct UndoCarve {
 /// octree and state hash become bit-identical to those right after that
 /// carve, and the carve goes back on the journal and the undo history
 /// (undo it again with [`UndoCarve`]). Undos since the last carve are
-/// redone latest first; a new carve, a load, or a detach across chunk
-/// borders ([`super::TerrainWorld`]) forgets them. With nothing to redo
-/// the terrain is unchanged and a [`CarveRejected`] says
+/// redone latest first; a new carve,
+/// [`Terrain::clear_undo`](super::Terrain::clear_undo), a load, a detach
+/// across chunk borders ([`super::TerrainWorld`]) or a
+/// [`super::WorldUndo`] of the chunk forgets them. Undos and redos sent in
+/// the same frame are queued undos first. With nothing to redo the
+/// terrain is unchanged and a [`CarveRejected`] says
 /// [`TerrainError::NothingToRedo`].
 ///
 /// A piece of debris the carve cut loose is taken out of the terrain
@@ -102,11 +105,13 @@ pub struct UndoCarve {
 /// [`DebrisDetached`](super::DebrisDetached); its
 /// [`CarveApplied::volume_change`] counts the piece in what it took out.
 ///
-/// On a replicated terrain (`NetTerrain`, feature `net`) a client's redo, as its undo, is applied locally and not sent: the
-/// server's next hash check finds the terrain out of step and the client
-/// asks for a snapshot. Undo and redo there through the server's own
-/// carves. A [`super::WorldUndo`] forgets the redo steps of the chunks
-/// it undoes: a world has no redo.
+/// On a replicated terrain (`NetTerrain`, feature `net`) a redo is what an
+/// undo is there: nothing refuses it, and it is not replicated. On a
+/// client it changes the local octree only, so the hash check of the next
+/// replicated carve finds the client out of step and it asks for a
+/// snapshot (`Desynced`); on the server, the clients' next hash check
+/// does the same, and the snapshot carries the redo to them. A world has
+/// no redo: a [`super::WorldUndo`] is not redone.
 #[derive(Message, Reflect, Clone, Copy, Debug)]
 pub struct RedoCarve {
     /// The terrain entity.
