@@ -389,7 +389,8 @@ impl Terrain {
     }
 
     /// Applies a carve synchronously to the octree and records it (journal
-    /// and undo), without touching meshes: for tools, tests and benchmarks
+    /// and undo; the carves undone before it can no longer be redone),
+    /// without touching meshes: for tools, tests and benchmarks
     /// outside the ECS. In an app, send [`super::Carve`] instead. Pieces
     /// the carve cuts loose are removed as in the app (without spawning
     /// anything), so the octree is the one the app would have.
@@ -413,7 +414,8 @@ impl Terrain {
     }
 
     /// Undoes the last carve synchronously (no meshes touched); returns the
-    /// cells whose surface may differ.
+    /// cells whose surface may differ. The carve becomes the next one
+    /// [`Terrain::redo_now`] (or [`super::RedoCarve`]) redoes.
     ///
     /// # Errors
     /// [`TerrainError::NothingToUndo`].
