@@ -115,7 +115,7 @@ pub mod debris_hulls;
 pub mod error;
 pub mod events;
 pub mod file;
-mod jobs;
+pub(crate) mod jobs;
 #[cfg(feature = "render")]
 pub mod material;
 pub mod mesh;

@@ -55,10 +55,11 @@ fn finish_job(
     terrain.runtime.running_carves.clear();
     let mut reports = Vec::new();
     let mut debris = Vec::new();
-    let report = |edit, request, hash, cells, volume_change, apply_time| CarveApplied {
+    let report = |edit, request, predicted, hash, cells, volume_change, apply_time| CarveApplied {
         terrain: entity,
         edit,
         request,
+        predicted,
         hash,
         cells,
         volume_change,
@@ -94,6 +95,7 @@ fn finish_job(
                 apply_time,
                 requested,
                 request,
+                predicted,
                 debris: pieces,
             } => {
                 content_changed = true;
@@ -113,10 +115,18 @@ fn finish_job(
                 }
                 let hash = terrain.hash.value();
                 reports.push((
-                    report(Some(edit), request, hash, cells, volume_change, apply_time),
+                    report(
+                        Some(edit),
+                        request,
+                        predicted,
+                        hash,
+                        cells,
+                        volume_change,
+                        apply_time,
+                    ),
                     requested,
                 ));
-                terrain.record(before, changes, tool, edit);
+                terrain.record(before, changes, tool, edit, predicted);
                 if let (Some(request), true) = (request, terrain.runtime.records_landed) {
                     let journal = terrain.journal.len();
                     terrain
@@ -130,12 +140,25 @@ fn finish_job(
                 cells,
                 volume_change,
                 requested,
+                predicted,
             } => {
                 let hash = terrain.hash.value();
-                let undone = report(None, None, hash, cells, volume_change, Duration::ZERO);
+                let undone = report(
+                    None,
+                    None,
+                    predicted,
+                    hash,
+                    cells,
+                    volume_change,
+                    Duration::ZERO,
+                );
                 reports.push((undone, requested));
             }
-            StepOutcome::Rejected { error, request } => {
+            StepOutcome::Rejected {
+                error,
+                request,
+                predicted,
+            } => {
                 if request.is_some() {
                     content_changed |= terrain.last_request != request;
                     terrain.last_request = request;
@@ -146,6 +169,7 @@ fn finish_job(
                 rejected.write(CarveRejected {
                     terrain: entity,
                     request,
+                    predicted,
                     error,
                 });
             }
