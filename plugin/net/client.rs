@@ -182,6 +182,7 @@ impl Plugin for NetClientPlugin {
         app.init_resource::<ClientLedger>()
             .init_resource::<NetClientStats>()
             .init_resource::<NetClientSettings>()
+            .init_resource::<predict::PredictedDebris>()
             .register_type::<NetClientSettings>()
             .add_message::<NetCarveRequest>()
             .add_message::<NetCarveResult>()
@@ -205,6 +206,7 @@ impl Plugin for NetClientPlugin {
                     .chain()
                     .before(TerrainSystems::Carve),
                 compare_hashes.after(TerrainSystems::Mesh).run_if(connected),
+                predict::take_back_debris.after(TerrainSystems::Mesh),
             ),
         )
         .add_systems(OnExit(ClientState::Connected), stop_following);

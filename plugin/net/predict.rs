@@ -30,13 +30,13 @@
 //! every prediction (a snapshot replaces the terrain).
 //!
 //! Debris: a prediction's carve may cut pieces loose, which spawn as
-//! [`crate::terrain::TerrainDebris`] bodies like any carve's. An undo
-//! puts the solid back in the octree but does not despawn bodies already
-//! spawned, so a rolled-back prediction that cut a piece loose leaves its
-//! body in the scene (and when applied again, cuts a second one). A game
-//! that predicts carves that cut debris despawns the bodies of a
-//! prediction's [`crate::terrain::DebrisDetached`] when that prediction's
-//! undo is reported ([`CarveApplied::predicted`]).
+//! [`crate::terrain::TerrainDebris`] bodies like any carve's, their
+//! [`DebrisDetached::predicted`] naming the prediction. An undo puts the
+//! solid back in the octree but despawns nothing by itself, so when a roll
+//! back undoes a prediction, the client despawns the bodies that
+//! prediction cut loose; applied again, it cuts them loose anew. A body
+//! that fell or moved meanwhile disappears where it is.
+//! A confirmed prediction's bodies stay: they are the server's carve's.
 //!
 //! The game tells predictions apart through [`CarveApplied::predicted`]:
 //! `Some` on a prediction's carve and on the undo of a roll back.
@@ -51,7 +51,7 @@ use chisel_bsp::octree::Edit;
 
 use super::wire::NetCarve;
 use crate::terrain::jobs::Job;
-use crate::terrain::{CarveRejected, GridTool, Terrain};
+use crate::terrain::{CarveApplied, CarveRejected, DebrisDetached, GridTool, Terrain};
 
 /// How a client treats its own requests.
 #[derive(Resource, Reflect, Clone, Debug, Default)]
@@ -64,6 +64,41 @@ pub struct NetClientSettings {
     /// craters without the round trip. A host and a single player never
     /// predict: their own server applies their carves at once.
     pub predict_own_carves: bool,
+}
+
+/// Most predictions whose debris bodies are remembered for a roll back.
+const KEPT_DEBRIS: usize = 256;
+
+/// The debris bodies each recent prediction cut loose.
+#[derive(Resource, Default)]
+pub(super) struct PredictedDebris(BTreeMap<u64, Vec<Entity>>);
+
+/// Despawns the debris bodies of predictions a roll back undid.
+pub(super) fn take_back_debris(
+    mut detached: MessageReader<DebrisDetached>,
+    mut applied: MessageReader<CarveApplied>,
+    mut bodies: ResMut<PredictedDebris>,
+    mut commands: Commands,
+) {
+    for piece in detached.read() {
+        if let Some(number) = piece.predicted {
+            bodies.0.entry(number).or_default().push(piece.entity);
+        }
+    }
+    for report in applied.read() {
+        if let (None, Some(number)) = (report.edit, report.predicted)
+            && let Some(entities) = bodies.0.remove(&number)
+        {
+            for entity in entities {
+                if let Ok(mut body) = commands.get_entity(entity) {
+                    body.try_despawn();
+                }
+            }
+        }
+    }
+    while bodies.0.len() > KEPT_DEBRIS {
+        bodies.0.pop_first();
+    }
 }
 
 /// A carve applied ahead of the server.

@@ -160,8 +160,9 @@ pub(crate) struct Upload {
     pub(crate) spread: bool,
     /// The reports to write once every cell is in place.
     pub(crate) reports: Vec<(CarveApplied, Instant)>,
-    /// The pieces to spawn then.
-    pub(crate) debris: Vec<BuiltDebris>,
+    /// The pieces to spawn then, with the prediction that cut each loose
+    /// ([`Job::Carve`]).
+    pub(crate) debris: Vec<(BuiltDebris, Option<u64>)>,
 }
 
 /// Applies `tool` with `edit` to `octree`: builds the exact tool, checks

@@ -99,7 +99,7 @@ fn finish_job(
                 debris: pieces,
             } => {
                 content_changed = true;
-                debris.extend(pieces);
+                debris.extend(pieces.into_iter().map(|piece| (piece, predicted)));
                 if terrain.runtime.publishes_border && terrain.debris.is_some() {
                     // A chunk's carve: seeds of the detach across
                     // chunk borders (`world::debris`).
@@ -135,7 +135,9 @@ fn finish_job(
                         .push((request, Some((hash, journal))));
                 }
             }
-            StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
+            StepOutcome::Detached { debris: pieces } => {
+                debris.extend(pieces.into_iter().map(|piece| (piece, None)));
+            }
             StepOutcome::Undone {
                 cells,
                 volume_change,
@@ -241,13 +243,14 @@ pub fn upload_meshes(
                 runtime.uploads.push_front(upload);
                 break;
             }
-            for piece in upload.debris {
+            for (piece, predicted) in upload.debris {
                 detached.write(spawn_debris(
                     &mut commands,
                     &mut meshes,
                     entity,
                     &placed,
                     piece,
+                    predicted,
                 ));
             }
             for (mut report, requested) in upload.reports {
@@ -266,6 +269,7 @@ fn spawn_debris(
     terrain: Entity,
     placed: &GlobalTransform,
     piece: BuiltDebris,
+    predicted: Option<u64>,
 ) -> DebrisDetached {
     let main_label = piece.main_label();
     let at = placed.compute_transform() * Transform::from_translation(piece.centre);
@@ -303,6 +307,7 @@ fn spawn_debris(
         volume: piece.volume,
         exact_volume: piece.exact_volume,
         main_label,
+        predicted,
     }
 }
 

@@ -372,11 +372,10 @@ fn two_predicting_clients_end_identical() {
 }
 
 /// A prediction that cuts a piece loose, rolled back: the undo puts the
-/// solid back in the octree but leaves the body spawned, and applying the
-/// prediction again spawns a second one (what the module docs of
-/// `bevy_chisel::net::predict` tell a game to clean up).
+/// solid back in the octree and the client despawns the body; applied
+/// again, the prediction cuts it loose anew: one body, as on B.
 #[test]
-fn a_rolled_back_prediction_leaves_its_debris_body() {
+fn a_rolled_back_prediction_takes_its_debris_body_back() {
     let _guard = ONE_APP_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -407,7 +406,7 @@ fn a_rolled_back_prediction_leaves_its_debris_body() {
     assert_identical(&mut server, &mut [("a", &mut a), ("b", &mut b)]);
     let s = stats(&a);
     assert_eq!((s.rollbacks, s.predictions_confirmed), (1, 1));
-    assert_eq!(bodies(&mut a), 2, "the undo left the first body");
+    assert_eq!(bodies(&mut a), 1, "the first body went with the undo");
     assert_eq!(bodies(&mut b), 1, "B cut it loose once");
 }
 
