@@ -134,7 +134,8 @@ struct ClientLedger {
 #[derive(Resource, Reflect, Clone, Debug, Default)]
 #[reflect(Resource, Default)]
 pub struct NetClientStats {
-    /// Server carves handed to the terrains.
+    /// Server carves handed to the terrains (a confirmed prediction is
+    /// not handed over again: [`NetClientStats::predictions_confirmed`]).
     pub carves: u64,
     /// Hash checks that matched (a world's: one per chunk checked).
     pub checks_passed: u64,
