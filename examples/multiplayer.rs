@@ -59,6 +59,9 @@ const DIRT: u8 = 2;
 const GRASS: u8 = 3;
 const BLAST_RADIUS: f32 = 1.2;
 const HEAP_RADIUS: f32 = 0.8;
+/// Undo steps a terrain keeps: more than the predictions a client has
+/// pending at once.
+const PREDICTION_UNDO: usize = 16;
 /// Craters each scripted player blasts in the headless run.
 const SCRIPTED: usize = 6;
 /// Craters the host blasts in the headless run.
@@ -133,7 +136,11 @@ fn slab() -> Result<Terrain, BevyError> {
         );
         terrain.apply_now(&layer.to_grid(terrain.quantization())?, Edit::Paint(label))?;
     }
-    Ok(terrain)
+    // The layers are no undo steps; carves keep a few, which the snapshot
+    // hands to the clients: a client takes back the predictions another
+    // player's carve overtook by undo (with too few steps it would ask for
+    // a snapshot instead).
+    Ok(terrain.with_max_undo(PREDICTION_UNDO))
 }
 
 /// A server app (no window, no renderer): the terrain and the plugins.
