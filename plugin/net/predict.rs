@@ -26,7 +26,8 @@
 //!
 //! A [`RejectReason`](super::RejectReason) answer for a request whose
 //! prediction is pending rolls the predictions back the same way, without
-//! that one. A snapshot (join or resync) and leaving `Connected` drop
+//! that one (the oldest pending prediction of that request id: a game
+//! that predicts gives its requests distinct ids). A snapshot (join or resync) and leaving `Connected` drop
 //! every prediction (a snapshot replaces the terrain).
 //!
 //! Debris: a prediction's carve may cut pieces loose, which spawn as
