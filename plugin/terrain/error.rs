@@ -164,6 +164,18 @@ pub enum TerrainError {
         /// The folder of the save being written.
         folder: String,
     },
+    /// A point query of a terrain world
+    /// ([`super::TerrainWorld::material_at`]) fell in a chunk that is not
+    /// live (streamed out, being built or never built), whose material is
+    /// not in memory. Ask near a [`super::TerrainFocus`], or read the
+    /// chunk's [`super::Terrain`] once it streams in.
+    #[error(
+        "terrain world chunk {chunk:?} is not loaded; ask for points in chunks a focus keeps live"
+    )]
+    ChunkNotLoaded {
+        /// The chunk (x, z).
+        chunk: [i64; 2],
+    },
     /// A file could not be read as a terrain ([`super::Terrain::load`]) or
     /// a world's chunk ([`super::TerrainWorld::load_edits`]): `path` names
     /// it, `error` is why ([`TerrainError::BadMagic`],

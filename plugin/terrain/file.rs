@@ -63,7 +63,7 @@ use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
 
-use chisel_bsp::octree::store::bytes::{ReadError, Reader, Writer};
+use chisel_bsp::octree::store::bytes::{Reader, Writer};
 use chisel_bsp::octree::store::{checksum, snapshots_from_bytes, snapshots_to_bytes};
 use chisel_bsp::octree::{CellBox, CellKey, Changes, Edit, Octree};
 use chisel_bsp::tools::Quantization;
@@ -72,6 +72,7 @@ use super::atomic_write::write_atomic;
 use super::base::{GridHeightfield, TerrainBase};
 use super::component::{JournalEntry, Terrain, UndoStep};
 use super::error::TerrainError;
+pub(super) use super::file_values::{ReadTerrain, WriteTerrain};
 use super::jobs::Runtime;
 use super::tool::GridTool;
 
@@ -87,7 +88,7 @@ const OLDEST_READ_VERSION: u32 = 2;
 
 /// Most points, triangles or carves accepted in one list (guards against
 /// allocation bombs in corrupt files).
-const MAX_LIST: u32 = 1 << 28;
+pub(super) const MAX_LIST: u32 = 1 << 28;
 
 impl Terrain {
     /// The terrain as file bytes.
@@ -161,48 +162,14 @@ impl Terrain {
         let (mut record, version) =
             open_record(bytes, MAGIC, OLDEST_READ_VERSION..=FORMAT_VERSION)?;
         let r = &mut record;
-        let unit = r.f64()?;
-        let origin = [r.f64()?, r.f64()?, r.f64()?];
-        let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
-        let base = read_base(r)?;
-        let carves = r.list_len()?;
-        let mut journal = Vec::with_capacity(carves.min(1 << 16));
-        for _ in 0..carves {
-            let tag = r.u8()?;
-            let label = r.u8()?;
-            let edit = match tag {
-                0 => Edit::Subtract,
-                1 => Edit::Add(label),
-                2 => Edit::Paint(label),
-                3 => Edit::Intersect,
-                _ => return Err(corrupt(format!("unknown edit tag {tag}"))),
-            };
-            let pieces = r.list_len()?;
-            let mut tool = GridTool {
-                pieces: Vec::with_capacity(pieces.min(1 << 10)),
-            };
-            for _ in 0..pieces {
-                let points = r.list_len()?;
-                let mut piece = Vec::with_capacity(points.min(1 << 12));
-                for _ in 0..points {
-                    piece.push(r.point()?);
-                }
-                tool.pieces.push(piece);
-            }
-            journal.push(JournalEntry { tool, edit });
-        }
-        let max_undo = usize::try_from(r.u64()?)
-            .map_err(|_| corrupt("the undo depth limit is beyond this machine's range"))?;
-        let steps = r.list_len()?;
-        let mut changes = Vec::with_capacity(steps.min(1 << 10));
-        for _ in 0..steps {
-            changes.push(Changes {
-                changed: r.keys()?,
-                removed: r.keys()?,
-            });
-        }
-        let length = usize::try_from(r.u64()?).unwrap_or(usize::MAX);
-        let snapshot_bytes = r.bytes(length)?;
+        let Head {
+            quantization,
+            base,
+            journal,
+            max_undo,
+            changes,
+            snapshots: snapshot_bytes,
+        } = read_head(r)?;
         let seeds = if version >= 3 { r.keys()? } else { Vec::new() };
         if r.remaining() != 0 {
             return Err(corrupt(format!(
@@ -282,6 +249,72 @@ impl Terrain {
         })?;
         Terrain::from_bytes(&bytes).map_err(|e| e.at_path(path))
     }
+}
+
+/// A terrain file's records before its seeds.
+pub(super) struct Head<'a> {
+    quantization: Quantization,
+    base: TerrainBase,
+    journal: Vec<JournalEntry>,
+    max_undo: usize,
+    changes: Vec<Changes>,
+    /// The kernel octree file, not read yet.
+    snapshots: &'a [u8],
+}
+
+/// Reads a terrain file's records from the grid up to its seeds (the
+/// octree snapshots are taken as bytes), leaving `r` at the seeds.
+pub(super) fn read_head<'a>(r: &mut Reader<'a>) -> Result<Head<'a>, TerrainError> {
+    let unit = r.f64()?;
+    let origin = [r.f64()?, r.f64()?, r.f64()?];
+    let quantization = Quantization::new(unit, origin).map_err(corrupt)?;
+    let base = read_base(r)?;
+    let carves = r.list_len()?;
+    let mut journal = Vec::with_capacity(carves.min(1 << 16));
+    for _ in 0..carves {
+        let tag = r.u8()?;
+        let label = r.u8()?;
+        let edit = match tag {
+            0 => Edit::Subtract,
+            1 => Edit::Add(label),
+            2 => Edit::Paint(label),
+            3 => Edit::Intersect,
+            _ => return Err(corrupt(format!("unknown edit tag {tag}"))),
+        };
+        let pieces = r.list_len()?;
+        let mut tool = GridTool {
+            pieces: Vec::with_capacity(pieces.min(1 << 10)),
+        };
+        for _ in 0..pieces {
+            let points = r.list_len()?;
+            let mut piece = Vec::with_capacity(points.min(1 << 12));
+            for _ in 0..points {
+                piece.push(r.point()?);
+            }
+            tool.pieces.push(piece);
+        }
+        journal.push(JournalEntry { tool, edit });
+    }
+    let max_undo = usize::try_from(r.u64()?)
+        .map_err(|_| corrupt("the undo depth limit is beyond this machine's range"))?;
+    let steps = r.list_len()?;
+    let mut changes = Vec::with_capacity(steps.min(1 << 10));
+    for _ in 0..steps {
+        changes.push(Changes {
+            changed: r.keys()?,
+            removed: r.keys()?,
+        });
+    }
+    let length = usize::try_from(r.u64()?).unwrap_or(usize::MAX);
+    let snapshots = r.bytes(length)?;
+    Ok(Head {
+        quantization,
+        base,
+        journal,
+        max_undo,
+        changes,
+        snapshots,
+    })
 }
 
 /// What a terrain file holds, owned: the octrees are persistent and
@@ -384,6 +417,38 @@ fn file_seeds(a: &[CellKey], b: &[CellKey]) -> Vec<CellKey> {
     seeds.sort_unstable();
     seeds.dedup();
     seeds
+}
+
+/// Terrain file `bytes` with `seeds` among its seeds too: the bytes
+/// [`Terrain::to_bytes_with_seeds_taken`] gives for the terrain they hold
+/// with `seeds` taken (a version 2 file comes back as this version, which
+/// only adds the seeds). Only the seeds and the checksum are written anew:
+/// the octrees are not read.
+///
+/// # Errors
+/// As [`Terrain::from_bytes`] for bytes that are not a terrain file.
+pub(crate) fn bytes_with_seeds(bytes: &[u8], seeds: &[CellKey]) -> Result<Vec<u8>, TerrainError> {
+    let (mut record, version) = open_record(bytes, MAGIC, OLDEST_READ_VERSION..=FORMAT_VERSION)?;
+    read_head(&mut record)?;
+    let at = record.at();
+    let held = if version >= 3 {
+        record.keys()?
+    } else {
+        Vec::new()
+    };
+    if record.remaining() != 0 {
+        return Err(corrupt(format!(
+            "{} unexpected bytes after the seeds",
+            record.remaining()
+        )));
+    }
+    let mut w = Writer::new();
+    w.bytes(&bytes[..at]);
+    w.overwrite(MAGIC.len(), &FORMAT_VERSION.to_le_bytes());
+    w.keys(&file_seeds(&held, seeds));
+    let sum = checksum(w.as_bytes());
+    w.u64(sum);
+    Ok(w.into_bytes())
 }
 
 /// The body of a record `magic, version u32, body, checksum u64`: checks
@@ -533,87 +598,6 @@ pub(super) fn read_base(r: &mut Reader) -> Result<TerrainBase, TerrainError> {
     }
 }
 
-/// A read of the shared byte reader that failed, as a terrain error: a
-/// value past the end is [`TerrainError::Truncated`] at the value's offset.
-impl From<ReadError> for TerrainError {
-    fn from(e: ReadError) -> Self {
-        match e {
-            ReadError::Truncated { at, .. } => TerrainError::Truncated { at },
-            ReadError::CountTooLarge { .. } => corrupt(e),
-        }
-    }
-}
-
-/// The terrain files' values on top of the kernel's byte writer.
-pub(super) trait WriteTerrain {
-    /// An `f64` as its bits.
-    fn f64(&mut self, v: f64);
-    /// A grid point.
-    fn point(&mut self, p: [i64; 3]);
-    /// A list of cell keys, counted.
-    fn keys(&mut self, keys: &[CellKey]);
-}
-
-impl WriteTerrain for Writer {
-    fn f64(&mut self, v: f64) {
-        self.u64(v.to_bits());
-    }
-    fn point(&mut self, p: [i64; 3]) {
-        p.iter().for_each(|&c| self.i64(c));
-    }
-    fn keys(&mut self, keys: &[CellKey]) {
-        self.count(keys.len());
-        for key in keys {
-            self.u8(key.depth);
-            key.pos.iter().for_each(|&p| self.u32(p));
-        }
-    }
-}
-
-/// The terrain files' values on top of the kernel's byte reader.
-pub(super) trait ReadTerrain {
-    /// An `f64` from its bits.
-    fn f64(&mut self) -> Result<f64, TerrainError>;
-    /// The length of a list, at most [`MAX_LIST`].
-    fn list_len(&mut self) -> Result<usize, TerrainError>;
-    /// A grid point.
-    fn point(&mut self) -> Result<[i64; 3], TerrainError>;
-    /// Cell keys; each must name a cell of a cube (position below
-    /// `2^depth`, depth at most 27, the largest cube).
-    fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError>;
-}
-
-impl ReadTerrain for Reader<'_> {
-    fn f64(&mut self) -> Result<f64, TerrainError> {
-        Ok(f64::from_bits(self.u64()?))
-    }
-    fn list_len(&mut self) -> Result<usize, TerrainError> {
-        let n = self.u32()?;
-        if n > MAX_LIST {
-            return Err(corrupt(format!("list of {n} entries is implausibly long")));
-        }
-        Ok(n as usize)
-    }
-    fn point(&mut self) -> Result<[i64; 3], TerrainError> {
-        Ok([self.i64()?, self.i64()?, self.i64()?])
-    }
-    fn keys(&mut self) -> Result<Vec<CellKey>, TerrainError> {
-        let n = self.list_len()?;
-        let mut keys = Vec::with_capacity(n.min(1 << 16));
-        for _ in 0..n {
-            let key = CellKey {
-                depth: self.u8()?,
-                pos: [self.u32()?, self.u32()?, self.u32()?],
-            };
-            if key.depth > 27 || key.pos.iter().any(|&p| u64::from(p) >> key.depth != 0) {
-                return Err(corrupt(format!("{key:?} names no cell")));
-            }
-            keys.push(key);
-        }
-        Ok(keys)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use std::fs;
@@ -692,6 +676,45 @@ mod tests {
             back.state_hash(),
             Terrain::from_bytes(&then).expect("loads").state_hash()
         );
+    }
+
+    #[test]
+    fn seeds_added_to_file_bytes_are_the_bytes_of_the_terrain_with_them() {
+        let mut terrain = terrain(8);
+        let tool = box_tool([1, 2, 2], [4, 6, 6]);
+        terrain
+            .apply_now(&tool, Edit::Subtract)
+            .expect("carve applies");
+        let key = |depth, x| CellKey {
+            depth,
+            pos: [x, 0, 0],
+        };
+        let plain = terrain.to_bytes();
+        terrain.runtime.border_seeds = vec![key(3, 1), key(2, 0)];
+        let more = [key(2, 0), key(4, 9)];
+        let bytes = terrain.to_bytes();
+        assert!(
+            bytes_with_seeds(&bytes, &more).expect("a file")
+                == terrain.to_bytes_with_seeds_taken(&more)
+        );
+        assert!(bytes_with_seeds(&bytes, &[]).expect("a file") == bytes);
+        // Version 2, without the seeds' count, comes back as version 3.
+        let mut old = plain[..plain.len() - 12].to_vec();
+        old[8..12].copy_from_slice(&2u32.to_le_bytes());
+        let sum = checksum(&old);
+        old.extend_from_slice(&sum.to_le_bytes());
+        terrain.runtime.border_seeds.clear();
+        assert!(Terrain::from_bytes(&old).is_ok());
+        assert!(
+            bytes_with_seeds(&old, &more).expect("a file")
+                == terrain.to_bytes_with_seeds_taken(&more)
+        );
+        let mut bad = bytes.clone();
+        bad[40] ^= 1;
+        assert!(matches!(
+            bytes_with_seeds(&bad, &more),
+            Err(TerrainError::Corrupt { .. })
+        ));
     }
 
     #[test]

@@ -29,6 +29,8 @@
 //!   [`debris_hulls`] merges a piece's convex cells into a few hulls for
 //!   its collider.
 //! - [`raycast`] — [`Terrain::ray_cast`] for aiming.
+//! - [`probe`] — [`Terrain::material_at`] and [`TerrainWorld::material_at`]:
+//!   the material at a point, exactly.
 //! - [`file`](mod@file) — versioned terrain files ([`Terrain::save`], [`Terrain::load`]).
 //! - [`snapshot`] — the terrain as it is now, without journal or undo
 //!   history ([`Terrain::to_snapshot_bytes`]), for a peer that joins.
@@ -115,6 +117,7 @@ pub mod debris_hulls;
 pub mod error;
 pub mod events;
 pub mod file;
+mod file_values;
 pub(crate) mod jobs;
 #[cfg(feature = "render")]
 pub mod material;
@@ -122,6 +125,7 @@ pub mod mesh;
 pub mod physics;
 mod pool_order;
 #[cfg(feature = "props")]
+pub mod probe;
 pub mod prop_tool;
 pub mod queue;
 #[cfg(feature = "rapier")]
@@ -169,10 +173,10 @@ pub use tool::{
 };
 pub use world::{
     ChunkCoord, ChunkOffstage, DEFAULT_MAX_DEFERRED_CARVES, DEFAULT_MAX_SAVE_WAIT,
-    DEFAULT_SAVE_SETTLE_FRAMES, HeightArray, LodMesh, LodSettings, LodStats, NoiseOctave,
-    SaveWorld, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise, WorldCarve, WorldChunk,
-    WorldLayout, WorldLod, WorldSaveFailed, WorldSaved, WorldSource, WorldStats, WorldUndo,
-    WorldUndoRefusal, WorldUndoRejected, WorldUndone,
+    DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES, HeightArray, LodMesh, LodSettings,
+    LodStats, NoiseOctave, SaveWorld, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise,
+    WorldCarve, WorldChunk, WorldLayout, WorldLod, WorldSaveFailed, WorldSaved, WorldSource,
+    WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]

@@ -103,6 +103,8 @@ mod terrain_world_offstage;
 #[cfg(feature = "terrain")]
 mod terrain_world_seams;
 #[cfg(feature = "terrain")]
+mod world_probe;
+#[cfg(feature = "terrain")]
 mod world_save;
 #[cfg(feature = "terrain")]
 mod world_save_cut;
@@ -112,6 +114,8 @@ mod world_save_seeds;
 mod world_save_wait;
 #[cfg(feature = "terrain")]
 mod world_undo;
+#[cfg(feature = "terrain")]
+mod world_undo_seeds;
 
 // Multiplayer over renet's netcode UDP transport on 127.0.0.1.
 #[cfg(feature = "net")]

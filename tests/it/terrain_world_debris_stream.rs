@@ -43,7 +43,7 @@ fn states(app: &App, world: Entity, coords: &[ChunkCoord]) -> Vec<(u64, u64, Exa
 
 /// Moves the focus to `to`, its global transform too: streaming sees it
 /// in the next frame, not after the next frame's transform propagation.
-fn move_focus(app: &mut App, focus: Entity, to: Vec3) {
+pub(super) fn move_focus(app: &mut App, focus: Entity, to: Vec3) {
     let mut entity = app.world_mut().entity_mut(focus);
     entity.get_mut::<Transform>().expect("focus").translation = to;
     *entity.get_mut::<GlobalTransform>().expect("placed") = GlobalTransform::from_translation(to);

@@ -4,14 +4,15 @@
 //! world carve in all of its chunks or in none; [`WorldSaved::left_out`]
 //! counts the carves left out, and the next save writes the chunks they
 //! changed. With no settle frames a request saves at once; a bound below
-//! the settle frames still gives up.
+//! the settle frames still gives up. With no hold frames no carve is held
+//! back for a save, which still comes.
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use bevy::prelude::*;
 use bevy_chisel::terrain::{
-    CarveApplied, CarveRejected, ChunkCoord, DEFAULT_SAVE_SETTLE_FRAMES, TerrainError,
-    TerrainSystems, WorldChunk, WorldSaved,
+    CarveApplied, CarveRejected, ChunkCoord, DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES,
+    TerrainError, TerrainSystems, TerrainWorld, WorldChunk, WorldSaved,
 };
 
 use super::terrain_world::{carve, dodecahedron, settle, the_world, world as new_world};
@@ -103,6 +104,38 @@ fn requests_in_files(
     held
 }
 
+/// Checks that each file holds its chunk as it was after some carve, and
+/// every world carve (`carving` of them, each over two or four chunks) is
+/// in all of its chunks' files or in none; returns which carve each
+/// chunk's file holds and the carves in the files.
+fn carves_in_files(
+    files: &BTreeMap<ChunkCoord, Vec<u8>>,
+    landed: &Landed,
+    carving: u32,
+) -> (BTreeMap<ChunkCoord, Option<u64>>, BTreeSet<u64>) {
+    let held = requests_in_files(&hashes(files), landed);
+    let mut routed: BTreeMap<u64, BTreeSet<ChunkCoord>> = BTreeMap::new();
+    for &(coord, request, _) in &landed.applied {
+        routed.entry(request).or_default().insert(coord);
+    }
+    assert_eq!(routed.len(), carving as usize, "every carve landed");
+    let mut in_files = BTreeSet::new();
+    let mut corners = 0;
+    for (&request, chunks) in &routed {
+        assert!(chunks.len() >= 2, "carve {request} reached {chunks:?}");
+        corners += usize::from(chunks.len() == 4);
+        let holds: BTreeSet<bool> = (chunks.iter())
+            .map(|c| held[c].is_some_and(|r| r >= request))
+            .collect();
+        assert_eq!(holds.len(), 1, "carve {request} split: {chunks:?} {held:?}");
+        if holds.contains(&true) {
+            in_files.insert(request);
+        }
+    }
+    assert!(corners > 0);
+    (held, in_files)
+}
+
 #[test]
 fn a_world_carved_in_every_frame_across_borders_saves_a_consistent_cut() {
     const ASK: u32 = 3;
@@ -112,6 +145,11 @@ fn a_world_carved_in_every_frame_across_borders_saves_a_consistent_cut() {
         .add_systems(Update, note_landed.after(TerrainSystems::Mesh));
     let settle_frames = the_world(&app, world).save_settle_frames();
     assert_eq!(settle_frames, DEFAULT_SAVE_SETTLE_FRAMES);
+    assert_eq!(
+        the_world(&app, world).save_hold_frames(),
+        DEFAULT_SAVE_HOLD_FRAMES
+    );
+    let mut holding = 0;
     let craters = cavities();
     assert!(craters.len() >= CARVING as usize);
     let dir = temp_folder("cut-drill");
@@ -135,6 +173,7 @@ fn a_world_carved_in_every_frame_across_borders_saves_a_consistent_cut() {
         if frame >= ASK && started.is_none() && !the_world(&app, world).save_waiting() {
             started = Some(frame);
         }
+        holding += u32::from(the_world(&app, world).save_holds_carves());
         if first.is_none()
             && let Some(done) = heard(&app).saved.first()
         {
@@ -147,7 +186,11 @@ fn a_world_carved_in_every_frame_across_borders_saves_a_consistent_cut() {
     }
     let started = started.expect("the save started while carving went on");
     let waited = started - ASK;
-    println!("save started {waited} frames after the request, carved in every frame");
+    println!(
+        "save started {waited} frames after the request, carved in every frame, \
+         carves held back in {holding} frames"
+    );
+    assert!(holding <= DEFAULT_SAVE_HOLD_FRAMES, "held {holding} frames");
     assert!(
         waited >= settle_frames && waited <= settle_frames + 12,
         "waited {waited} frames, settle {settle_frames}"
@@ -165,28 +208,7 @@ fn a_world_carved_in_every_frame_across_borders_saves_a_consistent_cut() {
     assert_eq!(landed.refused, 0);
     assert_eq!(the_world(&app, world).stats().detached_across, 0);
 
-    // Each file holds its chunk as it was after some carve r, and every
-    // world carve is in all of its chunks' files or in none.
-    let held = requests_in_files(&hashes(&files), landed);
-    let mut routed: BTreeMap<u64, BTreeSet<ChunkCoord>> = BTreeMap::new();
-    for &(coord, request, _) in &landed.applied {
-        routed.entry(request).or_default().insert(coord);
-    }
-    assert_eq!(routed.len(), CARVING as usize, "every carve landed");
-    let mut in_files = BTreeSet::new();
-    let mut corners = 0;
-    for (&request, chunks) in &routed {
-        assert!(chunks.len() >= 2, "carve {request} reached {chunks:?}");
-        corners += usize::from(chunks.len() == 4);
-        let holds: BTreeSet<bool> = (chunks.iter())
-            .map(|c| held[c].is_some_and(|r| r >= request))
-            .collect();
-        assert_eq!(holds.len(), 1, "carve {request} split: {chunks:?} {held:?}");
-        if holds.contains(&true) {
-            in_files.insert(request);
-        }
-    }
-    assert!(corners > 0);
+    let (held, in_files) = carves_in_files(&files, landed, CARVING);
     // The carves up to the save's frame are in the files but those left
     // out; none after it is.
     let started = u64::from(started);
@@ -279,4 +301,124 @@ fn a_bound_below_the_settle_frames_gives_up_on_a_busy_world() {
         h.failed[0].error
     );
     assert!(!dir.exists(), "nothing written");
+}
+
+/// A world carved across chunk borders in every frame for `carving`
+/// frames, a [`SaveWorld`] asked in frame `ask`; then settled. Returns the
+/// frame the save started in (`None`: not while carving), the frames in
+/// which carves were held back, the first answer with the files it wrote
+/// (read before another save could write the folder) and what landed.
+fn drill(
+    world: TerrainWorld,
+    ask: u32,
+    carving: u32,
+    dir: &std::path::Path,
+) -> (
+    Option<u32>,
+    u32,
+    WorldSaved,
+    BTreeMap<ChunkCoord, Vec<u8>>,
+    App,
+    Entity,
+) {
+    let (mut app, world, _focus) = save_app(world);
+    app.init_resource::<Landed>()
+        .add_systems(Update, note_landed.after(TerrainSystems::Mesh));
+    let craters = cavities();
+    assert!(craters.len() >= carving as usize);
+    let (mut started, mut holding, mut first) = (None, 0, None);
+    let pace = std::time::Duration::from_micros(16_667);
+    for frame in 0..carving {
+        let start = std::time::Instant::now();
+        carve(
+            &mut app,
+            world,
+            dodecahedron(CAVITY, craters[frame as usize]),
+        );
+        if frame == ask {
+            request(&mut app, world, dir);
+        }
+        app.update();
+        if frame >= ask && started.is_none() && !the_world(&app, world).save_waiting() {
+            started = Some(frame);
+        }
+        holding += u32::from(the_world(&app, world).save_holds_carves());
+        if first.is_none()
+            && let Some(done) = heard(&app).saved.first()
+        {
+            first = Some((done.clone(), loaded_bytes(dir)));
+        }
+        if let Some(rest) = pace.checked_sub(start.elapsed()) {
+            std::thread::sleep(rest);
+        }
+    }
+    while the_world(&app, world).save_waiting() {
+        app.update();
+        holding += u32::from(the_world(&app, world).save_holds_carves());
+    }
+    until_answered(&mut app, 1);
+    let (done, files) = first.unwrap_or_else(|| {
+        let done = heard(&app).saved.first().cloned().expect("saved");
+        (done, loaded_bytes(dir))
+    });
+    assert!(heard(&app).failed.is_empty(), "{:?}", heard(&app).failed);
+    settle(&mut app, world);
+    (started, holding, done, files, app, world)
+}
+
+#[test]
+fn with_no_hold_frames_no_carve_is_held_back_and_the_save_still_comes() {
+    const ASK: u32 = 3;
+    const CARVING: u32 = 40;
+    let dir = temp_folder("cut-no-hold");
+    let world = new_world().with_max_save_wait(200).with_save_hold_frames(0);
+    assert_eq!(world.save_hold_frames(), 0);
+    let (started, holding, done, files, app, _) = drill(world, ASK, CARVING, &dir);
+    println!(
+        "no hold frames: save started in frame {started:?} (asked in {ASK}, carving \
+         until {CARVING}), {} carves left out",
+        done.left_out
+    );
+    assert_eq!(holding, 0, "no carve held back");
+    let landed = app.world().resource::<Landed>();
+    assert_eq!(landed.refused, 0);
+    // Whether a consistent state came while carving or the whole one
+    // after it, the files hold every world carve whole or not at all.
+    let (_, in_files) = carves_in_files(&files, landed, CARVING);
+    match started {
+        Some(frame) => {
+            let frame = u64::from(frame);
+            assert!(frame >= u64::from(ASK + DEFAULT_SAVE_SETTLE_FRAMES) || done.left_out == 0);
+            assert!(in_files.iter().all(|&r| r <= frame), "{in_files:?}");
+            let out = (0..=frame).filter(|r| !in_files.contains(r)).count();
+            assert_eq!(out, done.left_out, "left out: {in_files:?}");
+        }
+        None => {
+            assert_eq!(done.left_out, 0, "a whole state after the carving");
+            assert_eq!(in_files.len(), CARVING as usize);
+        }
+    }
+    assert!(!in_files.is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_hold_frames_default_and_bound_the_frames_carves_are_held_back() {
+    const ASK: u32 = 3;
+    const CARVING: u32 = 50;
+    let dir = temp_folder("cut-hold-2");
+    let world = new_world().with_max_save_wait(200).with_save_hold_frames(2);
+    let (started, holding, done, files, app, _) = drill(world, ASK, CARVING, &dir);
+    println!("hold 2: save started in frame {started:?}, carves held back {holding} frames");
+    assert!(holding <= 2, "held {holding} frames");
+    let landed = app.world().resource::<Landed>();
+    let (_, in_files) = carves_in_files(&files, landed, CARVING);
+    assert!(!in_files.is_empty());
+    let _ = (done, std::fs::remove_dir_all(&dir));
+    assert_eq!(
+        new_world().save_hold_frames(),
+        DEFAULT_SAVE_HOLD_FRAMES,
+        "15 by default"
+    );
+    assert_eq!(DEFAULT_SAVE_HOLD_FRAMES, 15);
 }

@@ -2,18 +2,20 @@
 //! markers on the chunk entity, its state in the world, and how it is
 //! built from the world's source or restored from its stored bytes.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy::tasks::Task;
-use chisel_bsp::octree::{Anchors, CubeSide, DebrisConfig};
+use chisel_bsp::octree::{Anchors, CellKey, CubeSide, DebrisConfig};
 use chisel_bsp::tree::Label;
 
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
+use super::super::file::bytes_with_seeds;
 #[cfg(doc)]
-use super::{TerrainWorld, WorldLod};
-use super::{WorldLayout, WorldSource};
+use super::WorldLod;
+use super::{TerrainWorld, WorldLayout, WorldSource};
 
 /// A chunk's position in its world's grid of chunks (x and z).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Reflect)]
@@ -112,4 +114,45 @@ pub(crate) fn restore(bytes: &[u8], labels: &[Label]) -> Result<Terrain, Terrain
     Ok(terrain
         .with_labels(labels.iter().copied())
         .with_debris(Some(chunk_debris(floor))))
+}
+
+impl TerrainWorld {
+    /// Gives `seeds` (cells to search for debris across borders from,
+    /// `super::debris`) back to chunk `coord`, live or not (a world undo's,
+    /// `super::undo`): into a live chunk's terrain; into the stored bytes
+    /// of an edited chunk streamed out (and, while it is being restored,
+    /// into its terrain once collected); into the terrain of a chunk being
+    /// built from the source, or unedited and not live, once its build is
+    /// collected. A chunk whose build failed drops them.
+    pub(crate) fn give_seeds_back(
+        &mut self,
+        coord: ChunkCoord,
+        seeds: Vec<CellKey>,
+        terrains: &mut Query<&mut Terrain>,
+    ) {
+        let building = match self.chunks.get(&coord) {
+            Some(Chunk::Live(entity)) => {
+                if let Ok(mut terrain) = terrains.get_mut(*entity) {
+                    (terrain.bypass_change_detection().runtime.border_seeds).extend(seeds);
+                }
+                return;
+            }
+            Some(Chunk::Failed) => return,
+            Some(Chunk::Building(_)) => true,
+            None => false,
+        };
+        if let Some(bytes) = self.stored.get_mut(&coord) {
+            match bytes_with_seeds(bytes, &seeds) {
+                Ok(with_seeds) => *bytes = Arc::new(with_seeds),
+                Err(error) => warn!(
+                    "terrain world chunk ({}, {}): seeds not stored: {error}",
+                    coord.x, coord.z
+                ),
+            }
+            if !building {
+                return;
+            }
+        }
+        self.seeds_back.entry(coord).or_default().extend(seeds);
+    }
 }

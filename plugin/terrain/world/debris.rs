@@ -120,6 +120,9 @@
 //!   lost to streaming; an unedited chunk with seeds (a
 //!   [`super::WorldUndo`] back to its base gives seeds back) has no
 //!   stored bytes, and streams out only once they are searched. A
+//!   [`super::WorldUndo`] gives seeds back to chunks that are not live
+//!   too: into a stored chunk's bytes, or into a chunk built later
+//!   ([`super::undo`], "Debris and searches"). A
 //!   search that fails (over the world's limits) drops its seeds, as
 //!   the limits say; a chunk despawned by the game loses them with its
 //!   state.

@@ -164,7 +164,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bevy::prelude::*;
-use chisel_bsp::octree::{DebrisLimits, Edit};
+use chisel_bsp::octree::{CellKey, DebrisLimits, Edit};
 use chisel_bsp::tree::Label;
 
 use super::component::Terrain;
@@ -178,7 +178,7 @@ pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 pub use store::{DEFAULT_MAX_SAVE_WAIT, SaveWorld, WorldSaveFailed, WorldSaved};
-pub use store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
+pub use store_cut::{DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES};
 pub use stream::DEFAULT_MAX_DEFERRED_CARVES;
 pub use undo::{WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone};
 
@@ -277,6 +277,10 @@ pub struct TerrainWorld {
     pub(crate) chunks: BTreeMap<ChunkCoord, Chunk>,
     /// Terrain file bytes of edited chunks that are not live.
     pub(crate) stored: BTreeMap<ChunkCoord, Arc<Vec<u8>>>,
+    /// Seeds a [`WorldUndo`] gave back to chunks being built or not built
+    /// and not stored, put into each chunk's terrain when its build is
+    /// collected ([`undo`]).
+    pub(crate) seeds_back: BTreeMap<ChunkCoord, Vec<CellKey>>,
     /// Carves for chunks that are not live yet, in order, each with the
     /// request id of its world carve.
     pub(crate) pending: BTreeMap<ChunkCoord, Vec<(GridTool, Edit, u64)>>,
@@ -352,6 +356,7 @@ impl TerrainWorld {
             labels: Vec::new(),
             chunks: BTreeMap::new(),
             stored: BTreeMap::new(),
+            seeds_back: BTreeMap::new(),
             pending: BTreeMap::new(),
             deferred: BTreeSet::new(),
             deferred_wanted: BTreeSet::new(),
@@ -685,6 +690,7 @@ impl TerrainWorld {
         self.history.clear();
         self.routed.clear();
         self.stored = edited;
+        self.seeds_back.clear();
         self.stats.stored = self.stored.len();
         self.stats.stored_bytes = self.stored.values().map(|b| b.len()).sum();
     }

@@ -112,11 +112,14 @@
 //! to the same carve in the same frame. When a request finds no consistent
 //! state after its settle frames, the chunks start no carve routed after
 //! that frame (a request id above the last one routed) until one comes,
-//! for at most 15 frames per request (not while carves wait deferred for
-//! far chunks of a networked world's client): each finishes the carves
-//! it has,
-//! the carves after wait queued in all of their chunks, and the state is
-//! consistent once the slowest chunk's job is in. A world carved in every
+//! for at most [`TerrainWorld::save_hold_frames`] frames per request
+//! ([`DEFAULT_SAVE_HOLD_FRAMES`], 15 by default; not while carves wait
+//! deferred for far chunks of a networked world's client): each finishes
+//! the carves it has, the carves after wait queued in all of their
+//! chunks, and the state is consistent once the slowest chunk's job is
+//! in. With 0 hold frames no carve is held back: the request saves only
+//! a consistent state the chunks come to by themselves, and gives up as
+//! below when none comes. A world carved in every
 //! frame across chunk borders thus saves a few frames after the settle
 //! frames (`world_save_cut`); the carves held back show those frames
 //! later.
@@ -172,7 +175,7 @@ use chisel_bsp::octree::CellKey;
 use super::super::asset::TERRAIN_EXTENSION;
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
-use super::store_cut::DEFAULT_SAVE_SETTLE_FRAMES;
+use super::store_cut::{DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES};
 use super::store_files::{ChunkBytes, FileOutcome, PlannedFile, file_checksum, write_chunk_files};
 use super::{Chunk, ChunkCoord, TerrainWorld};
 
@@ -272,6 +275,8 @@ pub(crate) struct WorldSaves {
     /// world carve routed when it began to; the chunks start no carve
     /// routed after it (`store_cut`).
     pub(super) barrier: Option<u64>,
+    /// The most frames a request holds carves back for a consistent state.
+    pub(super) hold: u32,
 }
 
 impl Default for WorldSaves {
@@ -283,6 +288,7 @@ impl Default for WorldSaves {
             max_wait: DEFAULT_MAX_SAVE_WAIT,
             settle: DEFAULT_SAVE_SETTLE_FRAMES,
             barrier: None,
+            hold: DEFAULT_SAVE_HOLD_FRAMES,
         }
     }
 }

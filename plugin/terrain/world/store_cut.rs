@@ -29,9 +29,10 @@ use super::{Chunk, ChunkCoord, TerrainWorld};
 /// ([`TerrainWorld::with_save_settle_frames`]).
 pub const DEFAULT_SAVE_SETTLE_FRAMES: u32 = 10;
 
-/// The most frames a request waiting for a consistent state holds back
-/// the carves routed after it began to (module docs).
-pub(super) const CUT_HOLD_FRAMES: u32 = 15;
+/// The most frames, by default, a [`SaveWorld`](super::SaveWorld) waiting
+/// for a consistent state holds back the world carves routed after it
+/// began to ([`TerrainWorld::with_save_hold_frames`]).
+pub const DEFAULT_SAVE_HOLD_FRAMES: u32 = 15;
 
 /// The world carves routed to more than one chunk that may still be in
 /// flight in one of them. A carve routed to one chunk never splits and is
@@ -131,6 +132,43 @@ impl TerrainWorld {
         self.saves.settle
     }
 
+    /// A [`SaveWorld`](super::SaveWorld) that found no consistent state
+    /// after its settle frames ([`TerrainWorld::with_save_settle_frames`])
+    /// holds back the world carves routed after that frame for at most
+    /// `frames` frames, until the chunks come to a consistent state: each
+    /// chunk finishes the carves it has while the later ones wait queued
+    /// in all of their chunks ([`super::store`], "Saving a busy world").
+    /// Those carves show as many frames later. [`DEFAULT_SAVE_HOLD_FRAMES`]
+    /// by default. With 0 no carve is ever held back for a save: the
+    /// request takes a consistent state only when the chunks come to one
+    /// by themselves (a frame in which no world carve has landed in some
+    /// of its chunks and not in others), and gives up as any request
+    /// after [`TerrainWorld::max_save_wait`] frames of its turn. Every
+    /// value is valid; a request holds carves back only within its bound
+    /// of [`TerrainWorld::max_save_wait`] frames.
+    #[must_use]
+    pub fn with_save_hold_frames(mut self, frames: u32) -> Self {
+        self.saves.hold = frames;
+        self
+    }
+
+    /// The most frames a [`SaveWorld`](super::SaveWorld) holds back later
+    /// carves for a consistent state
+    /// ([`TerrainWorld::with_save_hold_frames`]).
+    #[must_use]
+    pub fn save_hold_frames(&self) -> u32 {
+        self.saves.hold
+    }
+
+    /// Whether a [`SaveWorld`](super::SaveWorld) waiting for a consistent
+    /// state holds back the world carves routed after it began to, as of
+    /// the last run of the save system
+    /// ([`TerrainWorld::with_save_hold_frames`]).
+    #[must_use]
+    pub fn save_holds_carves(&self) -> bool {
+        self.saves.barrier.is_some()
+    }
+
     /// Whether this frame holds a whole state ([`super::store`]): no
     /// carve waits for a chunk, no undo waits for one, every live chunk
     /// readable here is settled, and no fall across chunk borders is on
@@ -182,21 +220,23 @@ impl TerrainWorld {
 
     /// Whether a chunk of this world holds back carve `request` (not
     /// started yet): a save waiting for a consistent state holds back the
-    /// world carves routed after it began to wait ([`CUT_HOLD_FRAMES`]).
+    /// world carves routed after it began to wait
+    /// ([`TerrainWorld::with_save_hold_frames`]).
     pub(crate) fn holds_back(&self, request: Option<u64>) -> bool {
         matches!((self.saves.barrier, request), (Some(last), Some(r)) if r > last)
     }
 
     /// A request that found no consistent state this frame: holds back
     /// the carves routed after now (in its first such frame) until a
-    /// consistent state comes, for at most [`CUT_HOLD_FRAMES`] frames
-    /// (`held` counts them); returns whether it holds them. Not while
+    /// consistent state comes, for at most
+    /// [`TerrainWorld::save_hold_frames`] frames (`held` counts them; none
+    /// with 0); returns whether it holds them. Not while
     /// carves wait deferred for far chunks (a networked world's client):
     /// those land only when the chunks are built, holding back would not
     /// bring them.
     pub(super) fn hold_for_cut(&mut self, held: &mut u32) -> bool {
         let deferred = self.pending.keys().any(|c| self.deferred.contains(c));
-        if *held >= CUT_HOLD_FRAMES || deferred {
+        if *held >= self.saves.hold || deferred {
             return false;
         }
         if *held == 0 {

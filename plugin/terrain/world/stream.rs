@@ -416,6 +416,10 @@ fn collect_builds(
         match built.terrain {
             Ok(terrain) => {
                 let mut terrain = terrain.with_max_undo(world.history.max);
+                // Seeds a world undo gave back while it was not live.
+                if let Some(seeds) = world.seeds_back.remove(&coord) {
+                    terrain.runtime.border_seeds.extend(seeds);
+                }
                 if built.restored {
                     // Stored with no carve of its own: it lost solid to a
                     // detach across chunk borders (`debris`).
@@ -446,6 +450,7 @@ fn collect_builds(
                 warn!("terrain world chunk ({}, {}): {error}", coord.x, coord.z);
                 world.stats.failed += 1;
                 world.chunks.insert(coord, Chunk::Failed);
+                world.seeds_back.remove(&coord);
                 if let Some(dropped) = world.pending.remove(&coord) {
                     warn!("{} carves of that chunk are dropped", dropped.len());
                 }

@@ -79,7 +79,14 @@
 //! then ([`super::debris`]). The seeds the step's detaches searched from
 //! go back to their chunks: a piece cut loose by an earlier carve that
 //! fell only after this one (its search waited for this carve) is searched
-//! for again, and falls again, as it would have before this carve.
+//! for again, and falls again, as it would have before this carve. A
+//! chunk the step did not change may have streamed out meanwhile: an
+//! edited one gets the seeds in its stored bytes (only their seeds and
+//! checksum are written anew), which a save writes as they are and which
+//! it searches from when it streams back in; one being built, or
+//! unedited and not live, gets them when its build is collected (an
+//! unedited chunk has no file: a save does not hold these). So the piece
+//! falls once the chunk is back, as if it had stayed.
 //!
 //! ## Networked worlds
 //!
@@ -641,13 +648,10 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
         }
         changed.push(coord);
     }
-    // The seeds its detaches searched from go back to their chunks.
+    // The seeds its detaches searched from go back to their chunks, live
+    // or not.
     for (coord, seeds) in step.seeds {
-        if let Some(mut terrain) =
-            (world.chunk_entity(coord)).and_then(|e| terrains.get_mut(e).ok())
-        {
-            (terrain.bypass_change_detection().runtime.border_seeds).extend(seeds);
-        }
+        world.give_seeds_back(coord, seeds, terrains);
     }
     Progress::Undone((request, changed))
 }
