@@ -36,6 +36,9 @@ pub struct JournalEntry {
 pub(crate) struct UndoStep {
     pub(crate) before: Octree,
     pub(crate) changes: Changes,
+    /// The number of the networked client's prediction this carve was
+    /// (`None` for any other carve).
+    pub(crate) predicted: Option<u64>,
 }
 
 /// Destructible terrain: a persistent octree of exact BSPs on an integer
@@ -383,7 +386,7 @@ impl Terrain {
         let before = std::mem::replace(&mut self.octree, octree);
         self.hash
             .update(&self.octree, changes.changed.iter().chain(&changes.removed));
-        self.record(before, changes.clone(), tool.clone(), edit);
+        self.record(before, changes.clone(), tool.clone(), edit, None);
         Ok(changes)
     }
 
@@ -394,6 +397,18 @@ impl Terrain {
     /// [`TerrainError::NothingToUndo`].
     pub fn undo_now(&mut self) -> Result<Vec<CellKey>, TerrainError> {
         self.undo_now_from().map(|(_, keys)| keys)
+    }
+
+    /// The prediction number of the last undo step (`None` when that step
+    /// is no prediction, or there is none).
+    pub(crate) fn top_prediction(&self) -> Option<u64> {
+        self.history.back().and_then(|step| step.predicted)
+    }
+
+    /// The most undo steps kept ([`Terrain::with_max_undo`]).
+    #[must_use]
+    pub fn max_undo(&self) -> usize {
+        self.max_undo
     }
 
     /// [`Terrain::undo_now`], also handing back the octree it undid.
@@ -409,10 +424,21 @@ impl Terrain {
         Ok((undone, keys))
     }
 
-    pub(crate) fn record(&mut self, before: Octree, changes: Changes, tool: GridTool, edit: Edit) {
+    pub(crate) fn record(
+        &mut self,
+        before: Octree,
+        changes: Changes,
+        tool: GridTool,
+        edit: Edit,
+        predicted: Option<u64>,
+    ) {
         self.journal.push(JournalEntry { tool, edit });
         if self.max_undo > 0 {
-            self.history.push_back(UndoStep { before, changes });
+            self.history.push_back(UndoStep {
+                before,
+                changes,
+                predicted,
+            });
             while self.history.len() > self.max_undo {
                 self.history.pop_front();
             }

@@ -118,7 +118,7 @@ pub mod error;
 pub mod events;
 pub mod file;
 mod file_values;
-mod jobs;
+pub(crate) mod jobs;
 #[cfg(feature = "render")]
 pub mod material;
 pub mod mesh;

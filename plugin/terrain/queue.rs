@@ -24,8 +24,8 @@ use super::carve::{Carve, CarveRejected, CellOutput, GridCarve, TerrainSettings,
 use super::component::Terrain;
 use super::error::TerrainError;
 use super::jobs::{
-    CellUpdate, Job, JobContext, Upload, Workers, carve_batch, detached_batch, on_pool, remesh,
-    undone_step,
+    BatchCarve, CellUpdate, Job, JobContext, Upload, Workers, carve_batch, detached_batch, on_pool,
+    remesh, undone_step,
 };
 use super::physics::TerrainPhysicsBackend;
 use super::pool_order::spawn_in_order;
@@ -55,6 +55,7 @@ pub fn read_requests(
                     edit: carve.edit,
                     requested: now,
                     request,
+                    predicted: None,
                 });
                 Ok(())
             });
@@ -62,6 +63,7 @@ pub fn read_requests(
             rejected.write(CarveRejected {
                 terrain: carve.terrain,
                 request,
+                predicted: None,
                 error,
             });
         }
@@ -71,6 +73,7 @@ pub fn read_requests(
             rejected.write(CarveRejected {
                 terrain: carve.terrain,
                 request: None,
+                predicted: None,
                 error: TerrainError::NoSuchTerrain,
             });
             continue;
@@ -86,12 +89,14 @@ pub fn read_requests(
                     edit: carve.edit,
                     requested: now,
                     request: None,
+                    predicted: None,
                 });
             }
             Err(error) => {
                 rejected.write(CarveRejected {
                     terrain: carve.terrain,
                     request: None,
+                    predicted: None,
                     error,
                 });
             }
@@ -99,12 +104,17 @@ pub fn read_requests(
     }
     for undo in undos.read() {
         match terrains.get_mut(undo.terrain) {
-            Ok(mut terrain) => (terrain.bypass_change_detection().runtime.queue)
-                .push_back(Job::Undo { requested: now }),
+            Ok(mut terrain) => {
+                (terrain.bypass_change_detection().runtime.queue).push_back(Job::Undo {
+                    requested: now,
+                    predicted: None,
+                })
+            }
             Err(_) => {
                 rejected.write(CarveRejected {
                     terrain: undo.terrain,
                     request: None,
+                    predicted: None,
                     error: TerrainError::NoSuchTerrain,
                 });
             }
@@ -256,14 +266,25 @@ fn start_next(
             // The world carries it out and takes it away.
             terrain.runtime.queue.push_front(hold);
         }
-        Some(Job::Undo { requested }) => match terrain.undo_now_from() {
+        Some(Job::Undo {
+            predicted: Some(prediction),
+            ..
+        }) if terrain.top_prediction() != Some(prediction) => {
+            // The kernel refused that prediction: it left no step to undo.
+        }
+        Some(Job::Undo {
+            requested,
+            predicted,
+        }) => match terrain.undo_now_from() {
             Ok((before, keys)) => {
                 let octree = terrain.octree.clone();
                 let mesher = std::mem::take(&mut terrain.runtime.mesher);
                 // Ahead of the world's builds waiting on the pool, as a carve.
                 terrain.runtime.task = Some(spawn_in_order(order, async move {
                     on_pool(pool, || {
-                        let steps = vec![undone_step(&before, &octree, &keys, &context, requested)];
+                        let steps = vec![undone_step(
+                            &before, &octree, &keys, &context, requested, predicted,
+                        )];
                         remesh(
                             octree,
                             &context,
@@ -281,6 +302,7 @@ fn start_next(
                 rejected.write(CarveRejected {
                     terrain: entity,
                     request: None,
+                    predicted: None,
                     error,
                 });
             }
@@ -321,8 +343,15 @@ fn start_next(
             edit,
             requested,
             request,
+            predicted,
         }) => {
-            let mut batch = vec![(tool, edit, requested, request)];
+            let mut batch = vec![BatchCarve {
+                tool,
+                edit,
+                requested,
+                request,
+                predicted,
+            }];
             while batch.len() < settings.max_batch.max(1)
                 && matches!(
                     terrain.runtime.queue.front(),
@@ -334,12 +363,19 @@ fn start_next(
                     edit,
                     requested,
                     request,
+                    predicted,
                 }) = terrain.runtime.queue.pop_front()
                 {
-                    batch.push((tool, edit, requested, request));
+                    batch.push(BatchCarve {
+                        tool,
+                        edit,
+                        requested,
+                        request,
+                        predicted,
+                    });
                 }
             }
-            terrain.runtime.running_carves = batch.iter().map(|carve| carve.3).collect();
+            terrain.runtime.running_carves = batch.iter().map(|carve| carve.request).collect();
             let octree = terrain.octree.clone();
             let mesher = std::mem::take(&mut terrain.runtime.mesher);
             // The hole shows as soon as this job is done: ahead of the

@@ -55,10 +55,11 @@ fn finish_job(
     terrain.runtime.running_carves.clear();
     let mut reports = Vec::new();
     let mut debris = Vec::new();
-    let report = |edit, request, hash, cells, volume_change, apply_time| CarveApplied {
+    let report = |edit, request, predicted, hash, cells, volume_change, apply_time| CarveApplied {
         terrain: entity,
         edit,
         request,
+        predicted,
         hash,
         cells,
         volume_change,
@@ -94,10 +95,11 @@ fn finish_job(
                 apply_time,
                 requested,
                 request,
+                predicted,
                 debris: pieces,
             } => {
                 content_changed = true;
-                debris.extend(pieces);
+                debris.extend(pieces.into_iter().map(|piece| (piece, predicted)));
                 if terrain.runtime.publishes_border && terrain.debris.is_some() {
                     // A chunk's carve: seeds of the detach across
                     // chunk borders (`world::debris`).
@@ -113,10 +115,18 @@ fn finish_job(
                 }
                 let hash = terrain.hash.value();
                 reports.push((
-                    report(Some(edit), request, hash, cells, volume_change, apply_time),
+                    report(
+                        Some(edit),
+                        request,
+                        predicted,
+                        hash,
+                        cells,
+                        volume_change,
+                        apply_time,
+                    ),
                     requested,
                 ));
-                terrain.record(before, changes, tool, edit);
+                terrain.record(before, changes, tool, edit, predicted);
                 if let (Some(request), true) = (request, terrain.runtime.records_landed) {
                     let journal = terrain.journal.len();
                     terrain
@@ -125,17 +135,32 @@ fn finish_job(
                         .push((request, Some((hash, journal))));
                 }
             }
-            StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
+            StepOutcome::Detached { debris: pieces } => {
+                debris.extend(pieces.into_iter().map(|piece| (piece, None)));
+            }
             StepOutcome::Undone {
                 cells,
                 volume_change,
                 requested,
+                predicted,
             } => {
                 let hash = terrain.hash.value();
-                let undone = report(None, None, hash, cells, volume_change, Duration::ZERO);
+                let undone = report(
+                    None,
+                    None,
+                    predicted,
+                    hash,
+                    cells,
+                    volume_change,
+                    Duration::ZERO,
+                );
                 reports.push((undone, requested));
             }
-            StepOutcome::Rejected { error, request } => {
+            StepOutcome::Rejected {
+                error,
+                request,
+                predicted,
+            } => {
                 if request.is_some() {
                     content_changed |= terrain.last_request != request;
                     terrain.last_request = request;
@@ -146,6 +171,7 @@ fn finish_job(
                 rejected.write(CarveRejected {
                     terrain: entity,
                     request,
+                    predicted,
                     error,
                 });
             }
@@ -217,13 +243,14 @@ pub fn upload_meshes(
                 runtime.uploads.push_front(upload);
                 break;
             }
-            for piece in upload.debris {
+            for (piece, predicted) in upload.debris {
                 detached.write(spawn_debris(
                     &mut commands,
                     &mut meshes,
                     entity,
                     &placed,
                     piece,
+                    predicted,
                 ));
             }
             for (mut report, requested) in upload.reports {
@@ -242,6 +269,7 @@ fn spawn_debris(
     terrain: Entity,
     placed: &GlobalTransform,
     piece: BuiltDebris,
+    predicted: Option<u64>,
 ) -> DebrisDetached {
     let main_label = piece.main_label();
     let at = placed.compute_transform() * Transform::from_translation(piece.centre);
@@ -279,6 +307,7 @@ fn spawn_debris(
         volume: piece.volume,
         exact_volume: piece.exact_volume,
         main_label,
+        predicted,
     }
 }
 
