@@ -124,8 +124,8 @@ pub mod material;
 pub mod mesh;
 pub mod physics;
 mod pool_order;
-#[cfg(feature = "props")]
 pub mod probe;
+#[cfg(feature = "props")]
 pub mod prop_tool;
 pub mod queue;
 #[cfg(feature = "rapier")]
