@@ -18,7 +18,10 @@
 //!
 //! A player's app adds both `NetServerPlugin` and `NetClientPlugin` and
 //! picks its role at run time; it writes the same `NetCarveRequest`s as a
-//! host or a client (`bevy_chisel::net`, "Roles").
+//! host or a client (`bevy_chisel::net`, "Roles"). A client predicts its
+//! own carves (`NetClientSettings::predict_own_carves`): its craters show
+//! without waiting for the server, and are rolled back and applied again
+//! in the server's order when another player's carve came first.
 //!
 //! With no arguments and no display (or `CHISEL_HEADLESS=1`), one process
 //! runs a host and two scripted players on 127.0.0.1 (each in its own
@@ -39,8 +42,8 @@ use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
-    NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientStats, NetServerPlugin,
-    NetServerStats, NetTerrain, Outcome, WireTool, start_client, start_server,
+    NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientSettings, NetClientStats,
+    NetServerPlugin, NetServerStats, NetTerrain, Outcome, WireTool, start_client, start_server,
 };
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
@@ -56,6 +59,9 @@ const DIRT: u8 = 2;
 const GRASS: u8 = 3;
 const BLAST_RADIUS: f32 = 1.2;
 const HEAP_RADIUS: f32 = 0.8;
+/// Undo steps a terrain keeps: more than the predictions a client has
+/// pending at once.
+const PREDICTION_UNDO: usize = 16;
 /// Craters each scripted player blasts in the headless run.
 const SCRIPTED: usize = 6;
 /// Craters the host blasts in the headless run.
@@ -130,7 +136,11 @@ fn slab() -> Result<Terrain, BevyError> {
         );
         terrain.apply_now(&layer.to_grid(terrain.quantization())?, Edit::Paint(label))?;
     }
-    Ok(terrain)
+    // The layers are no undo steps; carves keep a few, which the snapshot
+    // hands to the clients: a client takes back the predictions another
+    // player's carve overtook by undo (with too few steps it would ask for
+    // a snapshot instead).
+    Ok(terrain.with_max_undo(PREDICTION_UNDO))
 }
 
 /// A server app (no window, no renderer): the terrain and the plugins.
@@ -259,6 +269,11 @@ fn player_app(presentation: Presentation, player: Player) -> App {
         NetClientPlugin,
     ))
     .insert_resource(ClearColor(Color::srgb(0.53, 0.68, 0.84)))
+    // A client shows its own craters at once (a host applies them at once
+    // anyway).
+    .insert_resource(NetClientSettings {
+        predict_own_carves: true,
+    })
     .insert_resource(player)
     .add_observer(dress_terrain)
     .add_systems(Startup, spawn_view)
@@ -456,7 +471,10 @@ fn hud(
             served.accepted, served.rejected, served.snapshots
         )
     } else {
-        format!("{} hash checks passed", stats.checks_passed)
+        format!(
+            "{} hash checks passed | {} own carves predicted, {} confirmed, {} roll backs",
+            stats.checks_passed, stats.predictions, stats.predictions_confirmed, stats.rollbacks
+        )
     };
     text.0 = format!(
         "multiplayer | {state}\n{role}\n\

@@ -2,10 +2,17 @@
 //! strictly in sequence order per terrain, builds terrains from snapshots,
 //! compares hashes and asks for a snapshot when its terrain differs.
 //!
-//! A client never rounds a tool: it sends the request's floats
-//! ([`super::wire::WireTool::World`]) and applies only the integer
-//! [`NetCarve`]s the server sends back, through [`GridCarve`]s whose
-//! request id is the carve's sequence number.
+//! A client sends the request's floats ([`super::wire::WireTool::World`])
+//! and keeps only the integer [`NetCarve`]s the server sends back: it
+//! queues each on the terrain as a carve tracked by its sequence number
+//! (what a [`GridCarve`](crate::terrain::GridCarve) with that request id
+//! queues), directly, so that it keeps its place among the client's
+//! predictions.
+//!
+//! With [`super::NetClientSettings::predict_own_carves`] a connected
+//! client also rounds its own requests with the server's rounding and
+//! applies them at once, ahead of the server, then reconciles them with
+//! the server's order (module [`super::predict`]).
 //!
 //! Requests and answers work in every role; following the server (its
 //! carves, checks and snapshots) only while connected
@@ -24,11 +31,12 @@ use bevy::prelude::*;
 use bevy_replicon::prelude::ClientState;
 use chisel_bsp::octree::Edit;
 
+use super::predict::{self, NetClientSettings, Predictions};
 use super::wire::{
     ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, RejectReason, ServerPacket,
     TerrainId, WireTool,
 };
-use crate::terrain::{CarveApplied, GridCarve, Terrain, TerrainCell, TerrainSystems};
+use crate::terrain::{CarveApplied, CarveRejected, Terrain, TerrainCell, TerrainSystems};
 
 /// Ask the server to carve a terrain, in any role: sent to the server by a
 /// connected client, ordered by the app's own server on a host or in
@@ -111,18 +119,23 @@ struct Follow {
     check: Option<(u64, u64)>,
     /// Waiting for a snapshot after a desync.
     resyncing: bool,
+    /// This client's own carves applied ahead of the server.
+    predictions: Predictions,
 }
 
 #[derive(Resource, Default)]
 struct ClientLedger {
     terrains: HashMap<TerrainId, Follow>,
+    /// The number of the latest prediction applied.
+    predicted: u64,
 }
 
 /// Counters of a client, for reports and tests.
 #[derive(Resource, Reflect, Clone, Debug, Default)]
 #[reflect(Resource, Default)]
 pub struct NetClientStats {
-    /// Server carves handed to the terrains.
+    /// Server carves handed to the terrains (a confirmed prediction is
+    /// not handed over again: [`NetClientStats::predictions_confirmed`]).
     pub carves: u64,
     /// Hash checks that matched (a world's: one per chunk checked).
     pub checks_passed: u64,
@@ -134,6 +147,23 @@ pub struct NetClientStats {
     /// report the op named (chunks whose carves wait deferred, far from
     /// every focus).
     pub world_checks_waiting: u64,
+    /// Own carves applied ahead of the server
+    /// ([`NetClientSettings::predict_own_carves`]).
+    pub predictions: u64,
+    /// Predictions the server's order confirmed: its carve was not
+    /// applied again.
+    pub predictions_confirmed: u64,
+    /// Predictions the server refused, taken back.
+    pub predictions_refused: u64,
+    /// Roll backs: another carve came first, or a request was refused,
+    /// and the pending predictions were taken back (and those still
+    /// pending applied again on top).
+    pub rollbacks: u64,
+    /// Predictions taken back in those roll backs.
+    pub predictions_rolled_back: u64,
+    /// Times the undo history could not hold the predictions to take
+    /// back, so that they were dropped and a snapshot asked for.
+    pub prediction_resyncs: u64,
 }
 
 /// The client side of networked carving; connect with
@@ -152,6 +182,9 @@ impl Plugin for NetClientPlugin {
         }
         app.init_resource::<ClientLedger>()
             .init_resource::<NetClientStats>()
+            .init_resource::<NetClientSettings>()
+            .init_resource::<predict::PredictedDebris>()
+            .register_type::<NetClientSettings>()
             .add_message::<NetCarveRequest>()
             .add_message::<NetCarveResult>()
             .add_message::<TerrainSynced>()
@@ -174,6 +207,7 @@ impl Plugin for NetClientPlugin {
                     .chain()
                     .before(TerrainSystems::Carve),
                 compare_hashes.after(TerrainSystems::Mesh).run_if(connected),
+                predict::take_back_debris.after(TerrainSystems::Mesh),
             ),
         )
         .add_systems(OnExit(ClientState::Connected), stop_following);
@@ -229,18 +263,25 @@ pub(super) fn addressee<T>(
 /// Sends each request to the server: over the connection, or to the app's
 /// own server side when not connected (bevy_replicon writes client
 /// messages locally then). One with no server to go to
-/// ([`nowhere_to_send`]) is answered [`RejectReason::NotConnected`].
+/// ([`nowhere_to_send`]) is answered [`RejectReason::NotConnected`]. A
+/// connected client that predicts its carves also queues each one on its
+/// terrain ([`super::predict`]).
+#[allow(clippy::too_many_arguments)]
 fn send_requests(
     mut requests: MessageReader<NetCarveRequest>,
-    terrains: Query<&NetTerrain>,
+    mut terrains: Query<(&NetTerrain, Option<&mut Terrain>)>,
     state: Res<State<ClientState>>,
     server_side: Option<Res<super::server::ServerLedger>>,
+    settings: Res<NetClientSettings>,
+    mut ledger: ResMut<ClientLedger>,
+    mut stats: ResMut<NetClientStats>,
     mut packets: MessageWriter<ClientPacket>,
     mut results: MessageWriter<NetCarveResult>,
 ) {
     let unsent = nowhere_to_send(state.get(), server_side.is_some());
+    let predicting = settings.predict_own_carves && *state.get() == ClientState::Connected;
     for request in requests.read() {
-        let target = terrains.get(request.terrain).ok();
+        let target = terrains.get(request.terrain).ok().map(|(id, _)| *id);
         let Some(id) = addressee(request.request, unsent, target, "terrain", &mut results) else {
             continue;
         };
@@ -250,6 +291,38 @@ fn send_requests(
             tool: request.tool.clone(),
             edit: request.edit,
         }));
+        if !predicting {
+            continue;
+        }
+        let ledger = &mut *ledger;
+        let (Ok((_, Some(mut terrain))), Some(follow)) = (
+            terrains.get_mut(request.terrain),
+            ledger.terrains.get_mut(&id.0),
+        ) else {
+            continue;
+        };
+        if follow.entity != Some(request.terrain) || follow.resyncing {
+            continue;
+        }
+        // The server's own rounding; a tool it would refuse to round, or
+        // an edit the terrain refuses, is not predicted.
+        let Ok(tool) = request.tool.to_grid(terrain.quantization()) else {
+            continue;
+        };
+        if terrain.check_edit(request.edit).is_err() {
+            continue;
+        }
+        ledger.predicted += 1;
+        // A request, not a change of the terrain's content yet.
+        predict::predict(
+            terrain.bypass_change_detection(),
+            &mut follow.predictions,
+            ledger.predicted,
+            request.request,
+            tool,
+            request.edit,
+        );
+        stats.predictions += 1;
     }
 }
 
@@ -284,6 +357,16 @@ fn receive_packets(
                 }
             }
             ServerPacket::Result { request, outcome } => {
+                if let (true, Some(request), Outcome::Rejected(_)) = (following, request, outcome) {
+                    // A refused request whose prediction is pending: the
+                    // hand over takes it back.
+                    let predicted = ledger.terrains.values_mut().find(|follow| {
+                        (follow.predictions.pending.iter()).any(|p| p.request == *request)
+                    });
+                    if let Some(follow) = predicted {
+                        follow.predictions.refused.push(*request);
+                    }
+                }
                 results.write(NetCarveResult {
                     request: *request,
                     outcome: outcome.clone(),
@@ -344,6 +427,8 @@ fn receive_packets(
                 follow.hashes.clear();
                 follow.hashes.insert(seq, hash);
                 follow.resyncing = false;
+                // The snapshot replaces the terrain, predictions and all.
+                follow.predictions = Predictions::default();
                 stats.snapshots += 1;
                 synced.write(TerrainSynced {
                     terrain: entity,
@@ -403,29 +488,67 @@ pub(super) fn assemble(
 }
 
 /// Hands the waiting carves to their terrains, in sequence order and
-/// without gaps.
+/// without gaps, reconciled with the client's predictions
+/// ([`predict::hand_over`]).
 fn hand_over(
     mut ledger: ResMut<ClientLedger>,
     mut stats: ResMut<NetClientStats>,
-    terrains: Query<(), With<Terrain>>,
-    mut carves: MessageWriter<GridCarve>,
+    mut terrains: Query<&mut Terrain>,
+    mut rejected: MessageWriter<CarveRejected>,
+    mut packets: MessageWriter<ClientPacket>,
 ) {
-    for follow in ledger.terrains.values_mut() {
+    let ClientLedger {
+        terrains: follows,
+        predicted,
+    } = &mut *ledger;
+    for (&id, follow) in follows.iter_mut() {
         let Some(entity) = follow.entity else {
             continue;
         };
-        if follow.resyncing || terrains.get(entity).is_err() {
+        if follow.resyncing {
             continue;
         }
-        while let Some(carve) = follow.waiting.remove(&follow.next_seq) {
-            carves.write(GridCarve {
-                terrain: entity,
-                tool: carve.tool,
-                edit: carve.edit,
-                request: carve.seq,
-            });
-            stats.carves += 1;
-            follow.next_seq += 1;
+        let Ok(mut terrain) = terrains.get_mut(entity) else {
+            continue;
+        };
+        if follow.waiting.first_key_value().map(|(&s, _)| s) != Some(follow.next_seq)
+            && follow.predictions.refused.is_empty()
+        {
+            continue;
+        }
+        // Queued carves are requests, not changes of the content yet.
+        let done = predict::hand_over(
+            entity,
+            terrain.bypass_change_detection(),
+            &mut follow.waiting,
+            &mut follow.next_seq,
+            &mut follow.hashes,
+            &mut follow.predictions,
+            predicted,
+            &mut rejected,
+        );
+        stats.carves += done.carves;
+        stats.predictions_confirmed += done.confirmed;
+        stats.predictions_refused += done.refused;
+        stats.rollbacks += done.rollbacks;
+        stats.predictions_rolled_back += done.rolled_back;
+        if done.confirmed > 0 {
+            // A confirmed prediction may move the last request on.
+            terrain.set_changed();
+        }
+        if done.needs_snapshot {
+            stats.prediction_resyncs += 1;
+            follow.resyncing = true;
+            let seq = follow.next_seq.saturating_sub(1);
+            warn!(
+                "terrain {id}: more predictions to take back than its undo history holds; \
+                 asking for a snapshot"
+            );
+            packets.write(ClientPacket::Request(ClientRequest::Desync {
+                terrain: id,
+                seq,
+                hash: terrain.state_hash(),
+            }));
         }
     }
 }
@@ -434,18 +557,46 @@ fn hand_over(
 /// server's checks; a difference asks for a snapshot.
 fn compare_hashes(
     mut applied: MessageReader<CarveApplied>,
+    mut refused: MessageReader<CarveRejected>,
     mut ledger: ResMut<ClientLedger>,
     mut stats: ResMut<NetClientStats>,
-    terrains: Query<&NetTerrain>,
+    mut terrains: Query<(&NetTerrain, &mut Terrain)>,
     mut packets: MessageWriter<ClientPacket>,
     mut desynced: MessageWriter<Desynced>,
 ) {
-    for report in applied.read() {
-        let (Some(seq), Ok(id)) = (report.request, terrains.get(report.terrain)) else {
+    let predicted = refused
+        .read()
+        .filter_map(|r| Some((r.terrain, r.predicted?, None)));
+    let reports: Vec<(Entity, Option<u64>, Option<u64>, Option<u64>)> = applied
+        .read()
+        .filter(|r| r.edit.is_some() || r.predicted.is_none())
+        .map(|r| (r.terrain, r.request, r.predicted, Some(r.hash)))
+        .chain(predicted.map(|(e, n, h)| (e, None, Some(n), h)))
+        .collect();
+    for (entity, request, number, hash) in reports {
+        let Ok((id, mut terrain)) = terrains.get_mut(entity) else {
             continue;
         };
-        if let Some(follow) = ledger.terrains.get_mut(&id.0) {
-            follow.hashes.insert(seq, report.hash);
+        let Some(follow) = ledger.terrains.get_mut(&id.0) else {
+            continue;
+        };
+        let seq_hash = match (request, number) {
+            (Some(seq), _) => hash.map(|h| (seq, h)),
+            (None, Some(number)) => {
+                // A prediction's job: its hash is the server carve's once
+                // confirmed.
+                let confirmed = predict::reported(
+                    terrain.bypass_change_detection(),
+                    &mut follow.predictions,
+                    number,
+                    hash,
+                );
+                confirmed.and_then(|(seq, hash)| Some((seq, hash?)))
+            }
+            (None, None) => None,
+        };
+        if let Some((seq, hash)) = seq_hash {
+            follow.hashes.insert(seq, hash);
             while follow.hashes.len() > KEPT_HASHES {
                 follow.hashes.pop_first();
             }

@@ -57,6 +57,8 @@
 //!   checks, snapshots.
 //! - [`client`] — [`NetClientPlugin`]: requests, ordered application,
 //!   snapshots, hash comparison.
+//! - [`predict`] — [`NetClientSettings`]: a client's own carves applied
+//!   ahead of the server, confirmed or rolled back when its order comes.
 //! - [`secure`] — connect tokens and the secure transport.
 //! - [`world`] — streamed worlds ([`crate::terrain::TerrainWorld`]) with a
 //!   [`NetWorld`]: world carves in order, edited chunks in snapshots,
@@ -64,6 +66,7 @@
 //!   [`world_client`] are its two sides.
 
 pub mod client;
+pub mod predict;
 pub mod secure;
 pub mod server;
 pub mod wire;
@@ -87,6 +90,7 @@ use bevy_replicon_renet::{RenetChannelsExt, RenetClient, RenetServer, RepliconRe
 pub use client::{
     Desynced, NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientStats, TerrainSynced,
 };
+pub use predict::NetClientSettings;
 pub use secure::{
     ConnectTokenError, NetKey, connect_token, read_connect_token, start_secure_client,
     start_secure_server,
@@ -245,6 +249,7 @@ mod tests {
             (TypeId::of::<NetLimits>(), "NetLimits"),
             (TypeId::of::<NetServerStats>(), "NetServerStats"),
             (TypeId::of::<NetClientStats>(), "NetClientStats"),
+            (TypeId::of::<NetClientSettings>(), "NetClientSettings"),
             (TypeId::of::<NetCarveRequest>(), "NetCarveRequest"),
             (TypeId::of::<NetCarveResult>(), "NetCarveResult"),
             (TypeId::of::<TerrainSynced>(), "TerrainSynced"),

@@ -249,20 +249,13 @@ pub(super) fn check_size(tool: &WireTool, limits: &NetLimits) -> Result<(), Reje
     Ok(())
 }
 
-/// The request's tool on `grid`: a float tool rounded (the one rounding
-/// of a carve), a grid tool as sent.
+/// The request's tool on `grid` ([`WireTool::to_grid`]: the one rounding
+/// of a carve, shared with a predicting client).
 pub(super) fn round_tool(
     tool: &WireTool,
     grid: &chisel_bsp::tools::Quantization,
 ) -> Result<GridTool, RejectReason> {
-    match tool {
-        WireTool::Grid(grid_tool) => Ok(grid_tool.clone()),
-        WireTool::World(_) => tool
-            .to_carve_tool()
-            .ok_or_else(|| RejectReason::Invalid("no tool".into()))?
-            .to_grid(grid)
-            .map_err(invalid),
-    }
+    tool.to_grid(grid)
 }
 
 /// Checks a grid tool's extent against the limit (`unit`: world units per

@@ -168,6 +168,17 @@ pub struct CarveApplied {
     /// The request id of a [`GridCarve`] (`None` for a [`Carve`], an undo
     /// or a redo).
     pub request: Option<u64>,
+    /// `Some` for a carve a networked client applied ahead of the server,
+    /// as a prediction of its own request (feature `net`,
+    /// `NetClientSettings::predict_own_carves`), and for the undo that
+    /// takes such a carve back when the server ordered another carve
+    /// first or refused the request (a roll back); `None` for every
+    /// other carve and undo. The number is the client's, one per
+    /// application of a prediction (a prediction applied again after a
+    /// roll back gets a new one); `request` is then `None`. A prediction
+    /// the server confirms reports nothing more: the server's carve is
+    /// not applied a second time.
+    pub predicted: Option<u64>,
     /// The terrain's state hash right after this carve
     /// ([`Terrain::state_hash`](super::Terrain::state_hash); later carves
     /// of the same batch may already be in the octree when this message is
@@ -233,6 +244,9 @@ pub struct CarveRejected {
     /// The request id of a [`GridCarve`] (`None` for a [`Carve`], an undo
     /// or a redo).
     pub request: Option<u64>,
+    /// The number of a networked client's prediction the kernel refused
+    /// ([`CarveApplied::predicted`]); `None` otherwise.
+    pub predicted: Option<u64>,
     /// Why.
     #[reflect(ignore)]
     pub error: TerrainError,

@@ -36,6 +36,9 @@ pub struct JournalEntry {
 pub(crate) struct UndoStep {
     pub(crate) before: Octree,
     pub(crate) changes: Changes,
+    /// The number of the networked client's prediction this carve was
+    /// (`None` for any other carve).
+    pub(crate) predicted: Option<u64>,
 }
 
 /// The state after one undone carve, kept for redo: the octree the undo
@@ -409,7 +412,7 @@ impl Terrain {
         let before = std::mem::replace(&mut self.octree, octree);
         self.hash
             .update(&self.octree, changes.changed.iter().chain(&changes.removed));
-        self.record(before, changes.clone(), tool.clone(), edit);
+        self.record(before, changes.clone(), tool.clone(), edit, None);
         Ok(changes)
     }
 
@@ -423,19 +426,38 @@ impl Terrain {
         self.undo_now_from().map(|(_, keys)| keys)
     }
 
+    /// The prediction number of the last undo step (`None` when that step
+    /// is no prediction, or there is none).
+    pub(crate) fn top_prediction(&self) -> Option<u64> {
+        self.history.back().and_then(|step| step.predicted)
+    }
+
+    /// The most undo steps kept ([`Terrain::with_max_undo`]).
+    #[must_use]
+    pub fn max_undo(&self) -> usize {
+        self.max_undo
+    }
+
     /// [`Terrain::undo_now`], also handing back the octree it undid. The
-    /// undone carve becomes the next one to redo.
+    /// undone carve becomes the next one to redo; a networked client's
+    /// prediction taken back leaves nothing to redo.
     pub(crate) fn undo_now_from(&mut self) -> Result<(Octree, Vec<CellKey>), TerrainError> {
         let step = self.history.pop_back().ok_or(TerrainError::NothingToUndo)?;
         let entry = self.journal.pop();
         let undone = std::mem::replace(&mut self.octree, step.before);
         let keys = changed_keys(&step.changes);
         self.hash.update(&self.octree, &keys);
-        self.redo.push(RedoStep {
-            after: undone.clone(),
-            changes: step.changes,
-            entry,
-        });
+        if step.predicted.is_some() {
+            // A prediction rolled back is not redone: the server's carves
+            // follow.
+            self.redo.clear();
+        } else {
+            self.redo.push(RedoStep {
+                after: undone.clone(),
+                changes: step.changes,
+                entry,
+            });
+        }
         Ok((undone, keys))
     }
 
@@ -465,22 +487,35 @@ impl Terrain {
         if let Some(entry) = step.entry {
             self.journal.push(entry);
         }
-        self.push_undo(before.clone(), step.changes);
+        self.push_undo(before.clone(), step.changes, None);
         Ok((before, keys, edit))
     }
 
-    /// Records a new carve: journal and undo step; what was undone before
-    /// it can no longer be redone.
-    pub(crate) fn record(&mut self, before: Octree, changes: Changes, tool: GridTool, edit: Edit) {
+    /// Records a new carve: journal and undo step (of prediction
+    /// `predicted`, if any); what was undone before it can no longer be
+    /// redone.
+    pub(crate) fn record(
+        &mut self,
+        before: Octree,
+        changes: Changes,
+        tool: GridTool,
+        edit: Edit,
+        predicted: Option<u64>,
+    ) {
         self.journal.push(JournalEntry { tool, edit });
         self.redo.clear();
-        self.push_undo(before, changes);
+        self.push_undo(before, changes, predicted);
     }
 
-    /// Keeps an undo step, within the depth limit.
-    fn push_undo(&mut self, before: Octree, changes: Changes) {
+    /// Keeps an undo step (of prediction `predicted`, if any), within the
+    /// depth limit.
+    fn push_undo(&mut self, before: Octree, changes: Changes, predicted: Option<u64>) {
         if self.max_undo > 0 {
-            self.history.push_back(UndoStep { before, changes });
+            self.history.push_back(UndoStep {
+                before,
+                changes,
+                predicted,
+            });
             while self.history.len() > self.max_undo {
                 self.history.pop_front();
             }

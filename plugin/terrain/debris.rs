@@ -83,6 +83,11 @@ pub struct DebrisDetached {
     pub exact_volume: ExactVolume,
     /// The material with the largest volume in it.
     pub main_label: Label,
+    /// The number of the networked client's prediction whose carve cut
+    /// it loose ([`super::CarveApplied::predicted`]); `None` for any
+    /// other carve. The client despawns it when a roll back undoes that
+    /// prediction (`bevy_chisel::net::predict`).
+    pub predicted: Option<u64>,
 }
 
 /// A piece built on the worker, ready to spawn.

@@ -204,7 +204,11 @@ impl Terrain {
         let history: VecDeque<UndoStep> = octrees
             .into_iter()
             .zip(changes)
-            .map(|(before, changes)| UndoStep { before, changes })
+            .map(|(before, changes)| UndoStep {
+                before,
+                changes,
+                predicted: None,
+            })
             .collect();
         Ok(Terrain {
             hash: chisel_bsp::octree::StateHash::of(&octree),

@@ -94,9 +94,17 @@ pub(crate) enum Job {
         edit: Edit,
         requested: Instant,
         request: Option<u64>,
+        /// The number of a networked client's prediction (`net`): the
+        /// carve is applied ahead of the server, untracked, and its undo
+        /// step remembers the number.
+        predicted: Option<u64>,
     },
     Undo {
         requested: Instant,
+        /// Undo only the step of this prediction, if it is the last
+        /// step (a prediction the kernel refused left none); `None`:
+        /// the last step, whatever it is.
+        predicted: Option<u64>,
     },
     Redo {
         requested: Instant,
@@ -157,8 +165,9 @@ pub(crate) struct Upload {
     pub(crate) spread: bool,
     /// The reports to write once every cell is in place.
     pub(crate) reports: Vec<(CarveApplied, Instant)>,
-    /// The pieces to spawn then.
-    pub(crate) debris: Vec<BuiltDebris>,
+    /// The pieces to spawn then, with the prediction that cut each loose
+    /// ([`Job::Carve`]).
+    pub(crate) debris: Vec<(BuiltDebris, Option<u64>)>,
 }
 
 /// Applies `tool` with `edit` to `octree`: builds the exact tool, checks
@@ -251,11 +260,13 @@ pub(crate) enum StepOutcome {
         apply_time: Duration,
         requested: Instant,
         request: Option<u64>,
+        predicted: Option<u64>,
         debris: Vec<BuiltDebris>,
     },
     Rejected {
         error: TerrainError,
         request: Option<u64>,
+        predicted: Option<u64>,
     },
     /// An undo, or a redo (with the edit redone, `None` where the journal
     /// had lost it).
@@ -266,6 +277,8 @@ pub(crate) enum StepOutcome {
         /// (`None` when not measured).
         volume_change: Option<BTreeMap<Label, f64>>,
         requested: Instant,
+        /// The prediction it took back (`None` for a plain undo).
+        predicted: Option<u64>,
     },
     /// Pieces cut loose across chunk borders, built to spawn.
     Detached { debris: Vec<BuiltDebris> },
@@ -352,13 +365,23 @@ where
     }
 }
 
+/// One carve of a batch: the tool, the edit, when it was asked for, its
+/// request id and its prediction number ([`Job::Carve`]).
+pub(crate) struct BatchCarve {
+    pub tool: GridTool,
+    pub edit: Edit,
+    pub requested: Instant,
+    pub request: Option<u64>,
+    pub predicted: Option<u64>,
+}
+
 /// Applies a batch of carves in order to `octree` and builds the cells
 /// they changed.
 pub(crate) fn carve_batch(
     mut octree: Octree,
     mesher: SeamedMesher,
     context: &JobContext,
-    batch: Vec<(GridTool, Edit, Instant, Option<u64>)>,
+    batch: Vec<BatchCarve>,
 ) -> JobOutput {
     let mut steps = Vec::with_capacity(batch.len());
     let mut keys = Vec::new();
@@ -366,7 +389,14 @@ pub(crate) fn carve_batch(
     // the batch replaced; a later carve that changes the cell otherwise
     // (relabels it, splits it, or only touches it) drops them.
     let mut fresh: BTreeMap<CellKey, Vec<BoundaryFace>> = BTreeMap::new();
-    for (tool, edit, requested, request) in batch {
+    for carve in batch {
+        let BatchCarve {
+            tool,
+            edit,
+            requested,
+            request,
+            predicted,
+        } = carve;
         let before = octree.clone();
         let start = Instant::now();
         let carved =
@@ -408,12 +438,17 @@ pub(crate) fn carve_batch(
                     apply_time,
                     requested,
                     request,
+                    predicted,
                     debris,
                 });
             }
             Err(error) => {
                 octree = before;
-                steps.push(StepOutcome::Rejected { error, request });
+                steps.push(StepOutcome::Rejected {
+                    error,
+                    request,
+                    predicted,
+                });
             }
         }
     }
@@ -421,7 +456,8 @@ pub(crate) fn carve_batch(
 }
 
 /// The step of an undo (or of a redo, `redone`) that turned `before`
-/// into `after`, changing the cells `keys`.
+/// into `after`, changing the cells `keys` (taking back prediction
+/// `predicted`, if any).
 pub(crate) fn undone_step(
     before: &Octree,
     after: &Octree,
@@ -429,6 +465,7 @@ pub(crate) fn undone_step(
     context: &JobContext,
     requested: Instant,
     redone: Option<Option<Edit>>,
+    predicted: Option<u64>,
 ) -> StepOutcome {
     let changes = Changes {
         changed: keys.to_vec(),
@@ -443,6 +480,7 @@ pub(crate) fn undone_step(
                 .to_world_volumes(changes.volume_change(before, after))
         }),
         requested,
+        predicted,
     }
 }
 

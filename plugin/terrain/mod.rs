@@ -118,14 +118,14 @@ pub mod error;
 pub mod events;
 pub mod file;
 mod file_values;
-mod jobs;
+pub(crate) mod jobs;
 #[cfg(feature = "render")]
 pub mod material;
 pub mod mesh;
 pub mod physics;
 mod pool_order;
-#[cfg(feature = "props")]
 pub mod probe;
+#[cfg(feature = "props")]
 pub mod prop_tool;
 pub mod queue;
 #[cfg(feature = "rapier")]

@@ -26,8 +26,8 @@ use super::carve::{
 use super::component::Terrain;
 use super::error::TerrainError;
 use super::jobs::{
-    CellUpdate, Job, JobContext, Upload, Workers, carve_batch, detached_batch, on_pool, remesh,
-    undone_step,
+    BatchCarve, CellUpdate, Job, JobContext, Upload, Workers, carve_batch, detached_batch, on_pool,
+    remesh, undone_step,
 };
 use super::physics::TerrainPhysicsBackend;
 use super::pool_order::spawn_in_order;
@@ -58,6 +58,7 @@ pub fn read_requests(
                     edit: carve.edit,
                     requested: now,
                     request,
+                    predicted: None,
                 });
                 Ok(())
             });
@@ -65,6 +66,7 @@ pub fn read_requests(
             rejected.write(CarveRejected {
                 terrain: carve.terrain,
                 request,
+                predicted: None,
                 error,
             });
         }
@@ -74,6 +76,7 @@ pub fn read_requests(
             rejected.write(CarveRejected {
                 terrain: carve.terrain,
                 request: None,
+                predicted: None,
                 error: TerrainError::NoSuchTerrain,
             });
             continue;
@@ -89,20 +92,26 @@ pub fn read_requests(
                     edit: carve.edit,
                     requested: now,
                     request: None,
+                    predicted: None,
                 });
             }
             Err(error) => {
                 rejected.write(CarveRejected {
                     terrain: carve.terrain,
                     request: None,
+                    predicted: None,
                     error,
                 });
             }
         }
     }
-    let undos = undos
-        .read()
-        .map(|u| (u.terrain, Job::Undo { requested: now }));
+    let undos = undos.read().map(|u| {
+        let job = Job::Undo {
+            requested: now,
+            predicted: None,
+        };
+        (u.terrain, job)
+    });
     let redos = redos
         .read()
         .map(|r| (r.terrain, Job::Redo { requested: now }));
@@ -113,6 +122,7 @@ pub fn read_requests(
                 rejected.write(CarveRejected {
                     terrain: entity,
                     request: None,
+                    predicted: None,
                     error: TerrainError::NoSuchTerrain,
                 });
             }
@@ -265,16 +275,27 @@ fn start_next(
             // The world carries it out and takes it away.
             terrain.runtime.queue.push_front(hold);
         }
-        Some(job @ (Job::Undo { requested } | Job::Redo { requested })) => {
-            match undo_or_redo(terrain, matches!(job, Job::Redo { .. })) {
+        Some(Job::Undo {
+            predicted: Some(prediction),
+            ..
+        }) if terrain.top_prediction() != Some(prediction) => {
+            // The kernel refused that prediction: it left no step to undo.
+        }
+        Some(job @ (Job::Undo { requested, .. } | Job::Redo { requested })) => {
+            let (redo, predicted) = match job {
+                Job::Undo { predicted, .. } => (false, predicted),
+                _ => (true, None),
+            };
+            match undo_or_redo(terrain, redo) {
                 Ok((before, keys, redone)) => {
                     let octree = terrain.octree.clone();
                     let mesher = std::mem::take(&mut terrain.runtime.mesher);
                     // Ahead of the world's builds waiting on the pool, as a carve.
                     terrain.runtime.task = Some(spawn_in_order(order, async move {
                         on_pool(pool, || {
-                            let step =
-                                undone_step(&before, &octree, &keys, &context, requested, redone);
+                            let step = undone_step(
+                                &before, &octree, &keys, &context, requested, redone, predicted,
+                            );
                             remesh(
                                 octree,
                                 &context,
@@ -292,6 +313,7 @@ fn start_next(
                     rejected.write(CarveRejected {
                         terrain: entity,
                         request: None,
+                        predicted: None,
                         error,
                     });
                 }
@@ -333,8 +355,15 @@ fn start_next(
             edit,
             requested,
             request,
+            predicted,
         }) => {
-            let mut batch = vec![(tool, edit, requested, request)];
+            let mut batch = vec![BatchCarve {
+                tool,
+                edit,
+                requested,
+                request,
+                predicted,
+            }];
             while batch.len() < settings.max_batch.max(1)
                 && matches!(
                     terrain.runtime.queue.front(),
@@ -346,12 +375,19 @@ fn start_next(
                     edit,
                     requested,
                     request,
+                    predicted,
                 }) = terrain.runtime.queue.pop_front()
                 {
-                    batch.push((tool, edit, requested, request));
+                    batch.push(BatchCarve {
+                        tool,
+                        edit,
+                        requested,
+                        request,
+                        predicted,
+                    });
                 }
             }
-            terrain.runtime.running_carves = batch.iter().map(|carve| carve.3).collect();
+            terrain.runtime.running_carves = batch.iter().map(|carve| carve.request).collect();
             let octree = terrain.octree.clone();
             let mesher = std::mem::take(&mut terrain.runtime.mesher);
             // The hole shows as soon as this job is done: ahead of the

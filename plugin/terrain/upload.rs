@@ -55,19 +55,21 @@ fn finish_job(
     terrain.runtime.running_carves.clear();
     let mut reports = Vec::new();
     let mut debris = Vec::new();
-    let report = |edit, redo, request, hash, cells, volume_change, apply_time| CarveApplied {
-        terrain: entity,
-        edit,
-        redo,
-        request,
-        hash,
-        cells,
-        volume_change,
-        apply_time,
-        mesh_time: output.mesh_time,
-        collider_time: output.collider_time,
-        latency: Duration::ZERO,
-    };
+    let report =
+        |edit, redo, request, predicted, hash, cells, volume_change, apply_time| CarveApplied {
+            terrain: entity,
+            edit,
+            redo,
+            request,
+            predicted,
+            hash,
+            cells,
+            volume_change,
+            apply_time,
+            mesh_time: output.mesh_time,
+            collider_time: output.collider_time,
+            latency: Duration::ZERO,
+        };
     // The octree after each applied step: the next applied step's
     // `before`, or the job's octree after the last.
     let afters: Vec<Octree> = {
@@ -95,10 +97,11 @@ fn finish_job(
                 apply_time,
                 requested,
                 request,
+                predicted,
                 debris: pieces,
             } => {
                 content_changed = true;
-                debris.extend(pieces);
+                debris.extend(pieces.into_iter().map(|piece| (piece, predicted)));
                 if terrain.runtime.publishes_border && terrain.debris.is_some() {
                     // A chunk's carve: seeds of the detach across
                     // chunk borders (`world::debris`).
@@ -118,6 +121,7 @@ fn finish_job(
                         Some(edit),
                         false,
                         request,
+                        predicted,
                         hash,
                         cells,
                         volume_change,
@@ -125,7 +129,7 @@ fn finish_job(
                     ),
                     requested,
                 ));
-                terrain.record(before, changes, tool, edit);
+                terrain.record(before, changes, tool, edit, predicted);
                 if let (Some(request), true) = (request, terrain.runtime.records_landed) {
                     let journal = terrain.journal.len();
                     terrain
@@ -134,19 +138,35 @@ fn finish_job(
                         .push((request, Some((hash, journal))));
                 }
             }
-            StepOutcome::Detached { debris: pieces } => debris.extend(pieces),
+            StepOutcome::Detached { debris: pieces } => {
+                debris.extend(pieces.into_iter().map(|piece| (piece, None)));
+            }
             StepOutcome::Undone {
                 redone,
                 cells,
                 volume_change,
                 requested,
+                predicted,
             } => {
                 let hash = terrain.hash.value();
                 let (edit, redo) = (redone.flatten(), redone.is_some());
-                let undone = report(edit, redo, None, hash, cells, volume_change, Duration::ZERO);
+                let undone = report(
+                    edit,
+                    redo,
+                    None,
+                    predicted,
+                    hash,
+                    cells,
+                    volume_change,
+                    Duration::ZERO,
+                );
                 reports.push((undone, requested));
             }
-            StepOutcome::Rejected { error, request } => {
+            StepOutcome::Rejected {
+                error,
+                request,
+                predicted,
+            } => {
                 if request.is_some() {
                     content_changed |= terrain.last_request != request;
                     terrain.last_request = request;
@@ -157,6 +177,7 @@ fn finish_job(
                 rejected.write(CarveRejected {
                     terrain: entity,
                     request,
+                    predicted,
                     error,
                 });
             }
@@ -229,13 +250,14 @@ pub fn upload_meshes(
                 runtime.uploads.push_front(upload);
                 break;
             }
-            for piece in upload.debris {
+            for (piece, predicted) in upload.debris {
                 detached.write(spawn_debris(
                     &mut commands,
                     &mut meshes,
                     entity,
                     &placed,
                     piece,
+                    predicted,
                 ));
             }
             for (mut report, requested) in upload.reports {
@@ -254,6 +276,7 @@ fn spawn_debris(
     terrain: Entity,
     placed: &GlobalTransform,
     piece: BuiltDebris,
+    predicted: Option<u64>,
 ) -> DebrisDetached {
     let main_label = piece.main_label();
     let at = placed.compute_transform() * Transform::from_translation(piece.centre);
@@ -291,6 +314,7 @@ fn spawn_debris(
         volume: piece.volume,
         exact_volume: piece.exact_volume,
         main_label,
+        predicted,
     }
 }
 

@@ -125,6 +125,8 @@ mod net_host;
 #[cfg(feature = "net")]
 mod net_hostile;
 #[cfg(feature = "net")]
+mod net_predict;
+#[cfg(feature = "net")]
 mod net_replication;
 #[cfg(feature = "net")]
 mod net_world;

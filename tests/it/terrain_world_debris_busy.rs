@@ -15,11 +15,16 @@ use super::terrain_world_debris::{CUT, build_slab, cuboid, debris, falling};
 
 /// Most frames (1 ms apart) from the cut to the debris. Measured on one
 /// async compute thread: 4 in an idle world, 7 with a far chunk carved
-/// every frame (never, while the carves go on, when any chunk's busy
-/// neighbour held back every search), 11 to 12 while chunks keep
-/// building; up to 23 with the whole suite running beside it. The margin
-/// is for slower machines.
+/// every frame, 11 to 12 while chunks keep building; up to 23 with the
+/// whole suite running beside it. The margin is for slower machines.
 const MOST_FRAMES: u64 = 100;
+
+/// The same with a far chunk carved every frame, whose carve jobs share
+/// the loaded machine's cores with the search: over 100 once with the
+/// whole suite and a build beside it. The rule this test guards against
+/// (any chunk's busy neighbour held back every search) never let the
+/// slab fall while the carves went on, so a wider margin still tells.
+const MOST_FRAMES_CARVING: u64 = 400;
 
 fn carve(app: &mut App, world: Entity, tool: CarveTool, edit: Edit) {
     app.world_mut()
@@ -65,14 +70,19 @@ fn slab_and_far_focus(far_x: f32) -> (App, Entity, Entity) {
 /// Cuts the pillar, then runs frames (1 ms apart), calling `busy` before
 /// each, until the slab's debris is spawned: the frames it took. Then
 /// stops the business, settles and checks that exactly the slab fell.
-fn cut_to_debris(app: &mut App, world: Entity, mut busy: impl FnMut(&mut App, u64)) -> u64 {
+fn cut_to_debris(
+    app: &mut App,
+    world: Entity,
+    most_frames: u64,
+    mut busy: impl FnMut(&mut App, u64),
+) -> u64 {
     carve(app, world, cuboid(CUT.0, CUT.1), Edit::Subtract);
     let mut frames = 0;
     while debris(app).is_empty() {
         frames += 1;
         assert!(
-            frames <= MOST_FRAMES,
-            "no debris {MOST_FRAMES} frames after the cut"
+            frames <= most_frames,
+            "no debris {most_frames} frames after the cut"
         );
         busy(app, frames);
         app.update();
@@ -89,7 +99,7 @@ fn cut_to_debris(app: &mut App, world: Entity, mut busy: impl FnMut(&mut App, u6
 #[test]
 fn the_slab_falls_promptly_in_an_idle_world() {
     let (mut app, world, _) = slab_and_far_focus(272.0);
-    cut_to_debris(&mut app, world, |_, _| {});
+    cut_to_debris(&mut app, world, MOST_FRAMES, |_, _| {});
 }
 
 /// The second slab's part in chunk (8, 0), far from the first slab, is
@@ -101,7 +111,7 @@ fn the_slab_falls_promptly_in_an_idle_world() {
 fn carves_beside_a_far_border_every_frame_do_not_hold_the_slab() {
     let (mut app, world, _) = slab_and_far_focus(272.0);
     let spot = cuboid([283, 26, 9], [285, 29, 15]);
-    cut_to_debris(&mut app, world, |app, frame| {
+    cut_to_debris(&mut app, world, MOST_FRAMES_CARVING, |app, frame| {
         let edit = if frame % 2 == 1 {
             Edit::Subtract
         } else {
@@ -117,7 +127,7 @@ fn carves_beside_a_far_border_every_frame_do_not_hold_the_slab() {
 fn the_slab_falls_promptly_while_chunks_keep_building() {
     let (mut app, world, far) = slab_and_far_focus(272.0);
     let built = the_world(&app, world).stats().generated;
-    cut_to_debris(&mut app, world, |app, frame| {
+    cut_to_debris(&mut app, world, MOST_FRAMES, |app, frame| {
         let x = 272.0 + 32.0 * frame.div_ceil(2) as f32;
         app.world_mut()
             .get_mut::<Transform>(far)

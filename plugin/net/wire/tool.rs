@@ -198,6 +198,28 @@ impl WireTool {
         }
     }
 
+    /// The tool on `grid`: a float tool rounded, a grid tool as sent. The
+    /// one rounding of a carve: the server's, and the one a client that
+    /// predicts its own carves applies ([`super::super::NetClientSettings`]),
+    /// so that its prediction is the carve the server orders.
+    ///
+    /// # Errors
+    /// [`super::RejectReason::Invalid`] for a float tool with no pieces or
+    /// one that does not round (non-finite numbers, a degenerate shape).
+    pub fn to_grid(
+        &self,
+        grid: &chisel_bsp::tools::Quantization,
+    ) -> Result<GridTool, super::RejectReason> {
+        match self {
+            WireTool::Grid(grid_tool) => Ok(grid_tool.clone()),
+            WireTool::World(_) => self
+                .to_carve_tool()
+                .ok_or_else(|| super::RejectReason::Invalid("no tool".into()))?
+                .to_grid(grid)
+                .map_err(|e| super::RejectReason::Invalid(e.to_string())),
+        }
+    }
+
     /// The float tool of a [`WireTool::World`] (`None` for a grid tool).
     #[must_use]
     pub fn to_carve_tool(&self) -> Option<CarveTool> {

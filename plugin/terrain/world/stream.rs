@@ -89,6 +89,7 @@ pub fn route_world_carves(
             rejected.write(CarveRejected {
                 terrain: carve.world,
                 request: None,
+                predicted: None,
                 error: TerrainError::NoSuchTerrain,
             });
             continue;
@@ -106,6 +107,7 @@ pub fn route_world_carves(
                 rejected.write(CarveRejected {
                     terrain: carve.world,
                     request: None,
+                    predicted: None,
                     error,
                 });
             }
