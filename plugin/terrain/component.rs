@@ -547,3 +547,58 @@ pub struct TerrainCell {
     /// The material shown.
     pub label: Label,
 }
+
+#[cfg(test)]
+mod tests {
+    use chisel_bsp::octree::CellBox;
+
+    use super::*;
+
+    /// An 8-high block in a 32³ cube with one box carved out of it, that
+    /// carve recorded as prediction `predicted` (if any).
+    fn carved(predicted: Option<u64>) -> Terrain {
+        let grid = Quantization::new(1.0, [0.0; 3]).expect("valid unit");
+        let base = TerrainBase::Box {
+            origin: [0; 3],
+            size_log2: 5,
+            solid: CellBox {
+                min: [0; 3],
+                max: [16, 8, 16],
+            },
+            label: 1,
+        };
+        let mut terrain =
+            Terrain::from_base(grid, base, OctreeConfig::default()).expect("valid box");
+        let corners = (0..8)
+            .map(|i: usize| {
+                let pick = |a: usize, lo: i64, hi: i64| if i >> a & 1 == 0 { lo } else { hi };
+                [pick(0, 2, 5), pick(1, 2, 6), pick(2, 2, 6)]
+            })
+            .collect();
+        let tool = GridTool {
+            pieces: vec![corners],
+        };
+        let mut octree = terrain.octree.clone();
+        let changes = apply_carve(&mut octree, &tool, Edit::Subtract).expect("carves");
+        let before = std::mem::replace(&mut terrain.octree, octree);
+        terrain.hash = StateHash::of(&terrain.octree);
+        terrain.record(before, changes, tool, Edit::Subtract, predicted);
+        terrain
+    }
+
+    #[test]
+    fn a_rolled_back_prediction_leaves_nothing_to_redo() {
+        // A plain carve undone is redone exactly.
+        let mut plain = carved(None);
+        let after = (plain.octree.to_bytes(), plain.state_hash());
+        plain.undo_now().expect("undoes");
+        assert_eq!(plain.redo_depth(), 1);
+        plain.redo_now().expect("redoes");
+        assert_eq!((plain.octree.to_bytes(), plain.state_hash()), after);
+        // A prediction taken back is not.
+        let mut predicted = carved(Some(7));
+        predicted.undo_now().expect("undoes");
+        assert_eq!(predicted.redo_depth(), 0);
+        assert_eq!(predicted.redo_now(), Err(TerrainError::NothingToRedo));
+    }
+}
