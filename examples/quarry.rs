@@ -3,12 +3,12 @@
 //! A heightfield (`assets/terrain/quarry_height.png`) becomes layered
 //! terrain — grass and dirt following the surface, rock below, veins of
 //! ore — stored as an octree of exact BSPs. Click to blast craters with
-//! dodecahedra, right-click to heap up dirt, Z to undo, F5 to save the
-//! terrain and F9 to load it back; only the cells a blast reaches are
-//! re-meshed, on the async compute pool. The HUD shows each carve's time
-//! in the kernel and in re-meshing, the triangle count, and how much rock,
-//! dirt, grass and ore the carves have taken out (each carve's exact
-//! `volume_change`, as a mining game would tally it).
+//! dodecahedra, right-click to heap up dirt, Z to undo, Y to redo, F5 to
+//! save the terrain and F9 to load it back; only the cells a blast
+//! reaches are re-meshed, on the async compute pool. The HUD shows each
+//! carve's time in the kernel and in re-meshing, the triangle count, and
+//! how much rock, dirt, grass and ore the carves have taken out (each
+//! carve's exact `volume_change`, as a mining game would tally it).
 //!
 //! Camera: WASD and Q/E move the focus, the arrow keys or a middle-button
 //! drag orbit, the wheel zooms.
@@ -70,6 +70,7 @@ fn main() -> AppExit {
             heap_label: DIRT,
             reach: 500.0,
             undo_key: Some(KeyCode::KeyZ),
+            redo_key: Some(KeyCode::KeyY),
         })
         .init_resource::<Stats>()
         .add_systems(Startup, spawn_scene)

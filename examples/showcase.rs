@@ -9,7 +9,7 @@
 //! pass and sharing the depth buffer with the terrain's meshes.
 //!
 //! Controls: left click blasts a crater, right click heaps up dirt, `Z`
-//! undoes; `1` splats on surface-aligned boxes, `2` screen-aligned splats,
+//! undoes, `Y` redoes; `1` splats on surface-aligned boxes, `2` screen-aligned splats,
 //! `3` global per-fragment ray tracing; arrow keys or a middle-button drag
 //! orbit, the wheel zooms, WASD and Q/E move the camera's focus.
 //!
@@ -104,6 +104,7 @@ fn main() -> AppExit {
             heap_label: DIRT,
             reach: 500.0,
             undo_key: Some(KeyCode::KeyZ),
+            redo_key: Some(KeyCode::KeyY),
         })
         .init_resource::<LastCarve>()
         .add_systems(Startup, spawn_scene)

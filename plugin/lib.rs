@@ -164,10 +164,10 @@ pub mod prelude {
     #[cfg(feature = "terrain")]
     pub use crate::terrain::{
         Carve, CarveApplied, CarveRejected, CarveShape, CarveTool, CellOutput, DebrisDetached,
-        HeightLayer, Heightfield, Terrain, TerrainCarveRejected, TerrainCarved, TerrainCell,
-        TerrainCellChanged, TerrainCellRebuilt, TerrainDebris, TerrainError, TerrainHit,
-        TerrainPlugin, TerrainSettings, TerrainSystems, TerrainWorld, UndoCarve, WorldCarve,
-        WorldUndo, WorldUndoRejected, WorldUndone,
+        HeightLayer, Heightfield, RedoCarve, Terrain, TerrainCarveRejected, TerrainCarved,
+        TerrainCell, TerrainCellChanged, TerrainCellRebuilt, TerrainDebris, TerrainError,
+        TerrainHit, TerrainPlugin, TerrainSettings, TerrainSystems, TerrainWorld, UndoCarve,
+        WorldCarve, WorldUndo, WorldUndoRejected, WorldUndone,
     };
     #[cfg(all(feature = "terrain", feature = "render"))]
     pub use crate::terrain::{

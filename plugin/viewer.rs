@@ -6,7 +6,8 @@
 //! the focus unless [`OrbitCamera::move_keys`] is off) and, when a
 //! [`ClickCarving`] resource exists, carves the terrain under the cursor:
 //! left click blasts a crater, right click heaps up material, and
-//! [`ClickCarving::undo_key`] (Z in the examples) undoes the last carve.
+//! [`ClickCarving::undo_key`] (Z in the examples) undoes the last carve,
+//! [`ClickCarving::redo_key`] (Y) redoes it.
 
 use bevy::ecs::system::SystemParam;
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
@@ -15,7 +16,7 @@ use chisel_bsp::octree::Edit;
 use chisel_bsp::tree::Label;
 
 use crate::terrain::{
-    Carve, CarveShape, CarveTool, Terrain, TerrainHit, TerrainSystems, UndoCarve,
+    Carve, CarveShape, CarveTool, RedoCarve, Terrain, TerrainHit, TerrainSystems, UndoCarve,
 };
 
 /// Orbit cameras, text overlays and (with [`ClickCarving`]) mouse carving.
@@ -222,7 +223,8 @@ pub fn blast(centre: Vec3, radius: f32, count: usize) -> CarveTool {
 
 /// Mouse carving: with this resource present, [`ViewerPlugin`] blasts a
 /// crater ([`blast`]) where a left click hits a terrain, heaps up material
-/// where a right click hits, and undoes the last carve on `undo_key`.
+/// where a right click hits, undoes the last carve on `undo_key` and redoes
+/// the last undone one on `redo_key`.
 #[derive(Resource, Reflect, Clone, Debug)]
 #[reflect(Resource)]
 pub struct ClickCarving {
@@ -237,10 +239,12 @@ pub struct ClickCarving {
     pub reach: f32,
     /// The undo key, if any.
     pub undo_key: Option<KeyCode>,
+    /// The redo key, if any ([`RedoCarve`]).
+    pub redo_key: Option<KeyCode>,
 }
 
 /// The controls of [`ClickCarving`], for the help overlays.
-pub const CARVING_HELP: &str = "LMB blast crater | RMB heap material | Z undo";
+pub const CARVING_HELP: &str = "LMB blast crater | RMB heap material | Z undo | Y redo";
 
 fn click_carving(
     settings: Res<ClickCarving>,
@@ -250,10 +254,16 @@ fn click_carving(
     terrains: Query<(Entity, &Terrain)>,
     mut carves: MessageWriter<Carve>,
     mut undo: MessageWriter<UndoCarve>,
+    mut redo: MessageWriter<RedoCarve>,
 ) {
     if settings.undo_key.is_some_and(|k| keys.just_pressed(k)) {
         for (terrain, _) in &terrains {
             undo.write(UndoCarve { terrain });
+        }
+    }
+    if settings.redo_key.is_some_and(|k| keys.just_pressed(k)) {
+        for (terrain, _) in &terrains {
+            redo.write(RedoCarve { terrain });
         }
     }
     let left = buttons.just_pressed(MouseButton::Left);

@@ -74,6 +74,7 @@ impl TerrainAsset {
             base: t.base.clone(),
             journal: t.journal.clone(),
             history: t.history.clone(),
+            redo: Vec::new(),
             max_undo: t.max_undo,
             debris: t.debris.clone(),
             labels: t.labels.clone(),

@@ -1,5 +1,5 @@
 //! Carving in the ECS, the vocabulary: the messages in ([`Carve`],
-//! [`GridCarve`], [`UndoCarve`]) and out ([`CarveApplied`],
+//! [`GridCarve`], [`UndoCarve`], [`RedoCarve`]) and out ([`CarveApplied`],
 //! [`CarveRejected`], [`TerrainCellChanged`]), and the
 //! [`TerrainSettings`] of the systems that run them.
 //!
@@ -7,7 +7,7 @@
 //! one job at a time and in request order:
 //!
 //! 1. Here, a [`Carve`] or [`GridCarve`] message ([`UndoCarve`] for an
-//!    undo).
+//!    undo, [`RedoCarve`] for a redo).
 //! 2. In [`super::queue`], [`read_requests`](super::queue::read_requests)
 //!    turns the messages into jobs on the terrain's queue (tools are
 //!    rounded to the grid there; a bad tool is rejected at once with
@@ -15,7 +15,8 @@
 //!    the consecutive carves at the head of the queue and starts them as
 //!    one job on a snapshot of the octree (a cheap persistent clone), on
 //!    the async compute pool. An undo swaps the previous snapshot in and
-//!    rebuilds the cells its carve had changed.
+//!    rebuilds the cells its carve had changed; a redo swaps the snapshot
+//!    the undo took back in again, and rebuilds the same cells.
 //! 3. In the job runtime (module `jobs`), the job applies the exact
 //!    carves and builds the meshes and colliders of every cell they
 //!    changed, in parallel, off the main thread.
@@ -85,8 +86,41 @@ pub struct UndoCarve {
     pub terrain: Entity,
 }
 
-/// A carve (or undo) is applied and every mesh and collider it changed is
-/// in place.
+/// Redo the carve the last [`UndoCarve`] of a terrain took back: its
+/// octree and state hash become bit-identical to those right after that
+/// carve, and the carve goes back on the journal and the undo history
+/// (undo it again with [`UndoCarve`]). Undos since the last carve are
+/// redone latest first; a new carve,
+/// [`Terrain::clear_undo`](super::Terrain::clear_undo), a load, a detach
+/// across chunk borders ([`super::TerrainWorld`]) or a
+/// [`super::WorldUndo`] of the chunk forgets them. Undos and redos sent in
+/// the same frame are queued undos first. With nothing to redo the
+/// terrain is unchanged and a [`CarveRejected`] says
+/// [`TerrainError::NothingToRedo`].
+///
+/// A piece of debris the carve cut loose is taken out of the terrain
+/// again, as after the carve. As an undo leaves the piece's body alone
+/// (its solid comes back into the terrain, the body stays where the game
+/// left it), a redo spawns no new body and writes no
+/// [`DebrisDetached`](super::DebrisDetached); its
+/// [`CarveApplied::volume_change`] counts the piece in what it took out.
+///
+/// On a replicated terrain (`NetTerrain`, feature `net`) a redo is what an
+/// undo is there: nothing refuses it, and it is not replicated. On a
+/// client it changes the local octree only, so the hash check of the next
+/// replicated carve finds the client out of step and it asks for a
+/// snapshot (`Desynced`); on the server, the clients' next hash check
+/// does the same, and the snapshot carries the redo to them. A world has
+/// no redo: a [`super::WorldUndo`] is not redone.
+#[derive(Message, Reflect, Clone, Copy, Debug)]
+pub struct RedoCarve {
+    /// The terrain entity.
+    pub terrain: Entity,
+}
+
+/// A carve (or undo, or redo) is applied and every mesh and collider it
+/// changed is in place. A carve has its edit and `redo: false`, an undo
+/// no edit, a redo the edit it redid and `redo: true`.
 ///
 /// A mining game paying out the ore each carve digs up (material 4 here),
 /// with [`TerrainSettings::measure_volumes`] on:
@@ -126,11 +160,13 @@ pub struct UndoCarve {
 pub struct CarveApplied {
     /// The terrain entity.
     pub terrain: Entity,
-    /// The edit (`None` for an undo).
+    /// The edit (`None` for an undo; for a redo, the edit redone).
     #[reflect(ignore)]
     pub edit: Option<Edit>,
-    /// The request id of a [`GridCarve`] (`None` for a [`Carve`] or an
-    /// undo).
+    /// Whether this is a [`RedoCarve`] rather than a carve.
+    pub redo: bool,
+    /// The request id of a [`GridCarve`] (`None` for a [`Carve`], an undo
+    /// or a redo).
     pub request: Option<u64>,
     /// `Some` for a carve a networked client applied ahead of the server,
     /// as a prediction of its own request (feature `net`,
@@ -163,7 +199,8 @@ pub struct CarveApplied {
     /// 1e-15 of the cells they changed. A piece the carve cut loose is not
     /// counted here: it has its volumes
     /// ([`TerrainDebris`](super::TerrainDebris)). An undo lists what it
-    /// gave back, the pieces it brought back included.
+    /// gave back, the pieces it brought back included; a redo what it took
+    /// out again, those pieces included.
     pub volume_change: Option<BTreeMap<Label, f64>>,
     /// Time in the exact kernel (off the main thread).
     pub apply_time: Duration,
@@ -198,14 +235,14 @@ impl CarveApplied {
     }
 }
 
-/// A carve or undo that was refused; the terrain is unchanged.
+/// A carve, undo or redo that was refused; the terrain is unchanged.
 #[derive(Message, Reflect, Clone, Debug)]
 #[reflect(from_reflect = false)]
 pub struct CarveRejected {
     /// The terrain entity.
     pub terrain: Entity,
-    /// The request id of a [`GridCarve`] (`None` for a [`Carve`] or an
-    /// undo).
+    /// The request id of a [`GridCarve`] (`None` for a [`Carve`], an undo
+    /// or a redo).
     pub request: Option<u64>,
     /// The number of a networked client's prediction the kernel refused
     /// ([`CarveApplied::predicted`]); `None` otherwise.

@@ -41,13 +41,24 @@ pub(crate) struct UndoStep {
     pub(crate) predicted: Option<u64>,
 }
 
+/// The state after one undone carve, kept for redo: the octree the undo
+/// took back (bit-identical to the one after the carve), the cells it
+/// changed and the journal entry it took out.
+#[derive(Clone, Debug)]
+pub(crate) struct RedoStep {
+    pub(crate) after: Octree,
+    pub(crate) changes: Changes,
+    pub(crate) entry: Option<JournalEntry>,
+}
+
 /// Destructible terrain: a persistent octree of exact BSPs on an integer
 /// grid, with one child entity per (leaf cell, material) that has a
 /// visible surface ([`TerrainCell`]).
 ///
 /// Coordinates of tools, rays and meshes are in the terrain's local frame;
 /// the [`Quantization`] maps them to the grid. Carve with the
-/// [`super::Carve`] message; undo with [`super::UndoCarve`].
+/// [`super::Carve`] message; undo with [`super::UndoCarve`] and redo what
+/// was undone with [`super::RedoCarve`].
 ///
 /// # Change detection
 ///
@@ -63,8 +74,8 @@ pub(crate) struct UndoStep {
 /// ([`Terrain::cells`], [`Terrain::triangle_count`], [`Terrain::is_idle`]
 /// follow [`super::TerrainCellChanged`] and [`super::CarveApplied`]
 /// instead), seams sealed again. A settled terrain is never marked; a
-/// carve marks the frame its octree is swapped in, an undo the frame it
-/// is applied, before their meshes are shown (the same or a later frame).
+/// carve marks the frame its octree is swapped in, an undo or redo the
+/// frame it is applied, before their meshes are shown (the same or a later frame).
 #[derive(Component, Reflect)]
 #[reflect(Component, from_reflect = false)]
 #[require(Transform)]
@@ -80,6 +91,9 @@ pub struct Terrain {
     pub(crate) journal: Vec<JournalEntry>,
     #[reflect(ignore)]
     pub(crate) history: VecDeque<UndoStep>,
+    /// The carves undone since the last carve, the latest last.
+    #[reflect(ignore)]
+    pub(crate) redo: Vec<RedoStep>,
     #[reflect(ignore)]
     pub(crate) max_undo: usize,
     #[reflect(ignore)]
@@ -127,6 +141,7 @@ impl Terrain {
             base: Arc::new(base),
             journal: Vec::new(),
             history: VecDeque::new(),
+            redo: Vec::new(),
             max_undo: DEFAULT_MAX_UNDO,
             runtime: Runtime::default(),
             detached_across: false,
@@ -246,10 +261,12 @@ impl Terrain {
         self.debris.as_ref()
     }
 
-    /// Forgets every undo step (the carves stay in the journal): for edits
-    /// that are part of building a level, such as painting ore veins.
+    /// Forgets every undo step and every redo step (the carves stay in the
+    /// journal): for edits that are part of building a level, such as
+    /// painting ore veins.
     pub fn clear_undo(&mut self) {
         self.history.clear();
+        self.redo.clear();
     }
 
     /// The current octree (after every carve applied so far; meshes may lag
@@ -307,6 +324,14 @@ impl Terrain {
     #[must_use]
     pub fn undo_depth(&self) -> usize {
         self.history.len()
+    }
+
+    /// How many undone carves can be redone now ([`super::RedoCarve`]):
+    /// the undos since the last carve, none after a carve, a load or a
+    /// detach across chunk borders.
+    #[must_use]
+    pub fn redo_depth(&self) -> usize {
+        self.redo.len()
     }
 
     /// Whether every requested carve and undo is applied and every mesh is
@@ -367,7 +392,8 @@ impl Terrain {
     }
 
     /// Applies a carve synchronously to the octree and records it (journal
-    /// and undo), without touching meshes: for tools, tests and benchmarks
+    /// and undo; the carves undone before it can no longer be redone),
+    /// without touching meshes: for tools, tests and benchmarks
     /// outside the ECS. In an app, send [`super::Carve`] instead. Pieces
     /// the carve cuts loose are removed as in the app (without spawning
     /// anything), so the octree is the one the app would have.
@@ -391,7 +417,8 @@ impl Terrain {
     }
 
     /// Undoes the last carve synchronously (no meshes touched); returns the
-    /// cells whose surface may differ.
+    /// cells whose surface may differ. The carve becomes the next one
+    /// [`Terrain::redo_now`] (or [`super::RedoCarve`]) redoes.
     ///
     /// # Errors
     /// [`TerrainError::NothingToUndo`].
@@ -411,19 +438,62 @@ impl Terrain {
         self.max_undo
     }
 
-    /// [`Terrain::undo_now`], also handing back the octree it undid.
+    /// [`Terrain::undo_now`], also handing back the octree it undid. The
+    /// undone carve becomes the next one to redo; a networked client's
+    /// prediction taken back leaves nothing to redo.
     pub(crate) fn undo_now_from(&mut self) -> Result<(Octree, Vec<CellKey>), TerrainError> {
         let step = self.history.pop_back().ok_or(TerrainError::NothingToUndo)?;
-        self.journal.pop();
+        let entry = self.journal.pop();
         let undone = std::mem::replace(&mut self.octree, step.before);
-        let mut keys = step.changes.changed;
-        keys.extend(step.changes.removed);
-        keys.sort_unstable();
-        keys.dedup();
+        let keys = changed_keys(&step.changes);
         self.hash.update(&self.octree, &keys);
+        if step.predicted.is_some() {
+            // A prediction rolled back is not redone: the server's carves
+            // follow.
+            self.redo.clear();
+        } else {
+            self.redo.push(RedoStep {
+                after: undone.clone(),
+                changes: step.changes,
+                entry,
+            });
+        }
         Ok((undone, keys))
     }
 
+    /// Redoes the carve the last undo took back, synchronously (no meshes
+    /// touched): the octree and its state hash become bit-identical to
+    /// those right after that carve (the pieces it cut loose taken out
+    /// again), its journal entry and undo step come back. Returns the
+    /// cells whose surface may differ.
+    ///
+    /// # Errors
+    /// [`TerrainError::NothingToRedo`] when no undo since the last carve
+    /// is left to redo; the terrain is then unchanged.
+    pub fn redo_now(&mut self) -> Result<Vec<CellKey>, TerrainError> {
+        self.redo_now_from().map(|(_, keys, _)| keys)
+    }
+
+    /// [`Terrain::redo_now`], also handing back the octree it replaced and
+    /// the edit redone (`None` where the journal had lost its entry).
+    pub(crate) fn redo_now_from(
+        &mut self,
+    ) -> Result<(Octree, Vec<CellKey>, Option<Edit>), TerrainError> {
+        let step = self.redo.pop().ok_or(TerrainError::NothingToRedo)?;
+        let before = std::mem::replace(&mut self.octree, step.after);
+        let keys = changed_keys(&step.changes);
+        self.hash.update(&self.octree, &keys);
+        let edit = step.entry.as_ref().map(|entry| entry.edit);
+        if let Some(entry) = step.entry {
+            self.journal.push(entry);
+        }
+        self.push_undo(before.clone(), step.changes, None);
+        Ok((before, keys, edit))
+    }
+
+    /// Records a new carve: journal and undo step (of prediction
+    /// `predicted`, if any); what was undone before it can no longer be
+    /// redone.
     pub(crate) fn record(
         &mut self,
         before: Octree,
@@ -433,6 +503,13 @@ impl Terrain {
         predicted: Option<u64>,
     ) {
         self.journal.push(JournalEntry { tool, edit });
+        self.redo.clear();
+        self.push_undo(before, changes, predicted);
+    }
+
+    /// Keeps an undo step (of prediction `predicted`, if any), within the
+    /// depth limit.
+    fn push_undo(&mut self, before: Octree, changes: Changes, predicted: Option<u64>) {
         if self.max_undo > 0 {
             self.history.push_back(UndoStep {
                 before,
@@ -444,6 +521,17 @@ impl Terrain {
             }
         }
     }
+}
+
+/// The cells `changes` changed or removed, sorted, each once.
+fn changed_keys(changes: &Changes) -> Vec<CellKey> {
+    let mut keys: Vec<CellKey> = (changes.changed.iter())
+        .chain(&changes.removed)
+        .copied()
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys
 }
 
 /// One entity showing the surface of one material in one leaf cell; a
@@ -458,4 +546,59 @@ pub struct TerrainCell {
     pub key: CellKey,
     /// The material shown.
     pub label: Label,
+}
+
+#[cfg(test)]
+mod tests {
+    use chisel_bsp::octree::CellBox;
+
+    use super::*;
+
+    /// An 8-high block in a 32³ cube with one box carved out of it, that
+    /// carve recorded as prediction `predicted` (if any).
+    fn carved(predicted: Option<u64>) -> Terrain {
+        let grid = Quantization::new(1.0, [0.0; 3]).expect("valid unit");
+        let base = TerrainBase::Box {
+            origin: [0; 3],
+            size_log2: 5,
+            solid: CellBox {
+                min: [0; 3],
+                max: [16, 8, 16],
+            },
+            label: 1,
+        };
+        let mut terrain =
+            Terrain::from_base(grid, base, OctreeConfig::default()).expect("valid box");
+        let corners = (0..8)
+            .map(|i: usize| {
+                let pick = |a: usize, lo: i64, hi: i64| if i >> a & 1 == 0 { lo } else { hi };
+                [pick(0, 2, 5), pick(1, 2, 6), pick(2, 2, 6)]
+            })
+            .collect();
+        let tool = GridTool {
+            pieces: vec![corners],
+        };
+        let mut octree = terrain.octree.clone();
+        let changes = apply_carve(&mut octree, &tool, Edit::Subtract).expect("carves");
+        let before = std::mem::replace(&mut terrain.octree, octree);
+        terrain.hash = StateHash::of(&terrain.octree);
+        terrain.record(before, changes, tool, Edit::Subtract, predicted);
+        terrain
+    }
+
+    #[test]
+    fn a_rolled_back_prediction_leaves_nothing_to_redo() {
+        // A plain carve undone is redone exactly.
+        let mut plain = carved(None);
+        let after = (plain.octree.to_bytes(), plain.state_hash());
+        plain.undo_now().expect("undoes");
+        assert_eq!(plain.redo_depth(), 1);
+        plain.redo_now().expect("redoes");
+        assert_eq!((plain.octree.to_bytes(), plain.state_hash()), after);
+        // A prediction taken back is not.
+        let mut predicted = carved(Some(7));
+        predicted.undo_now().expect("undoes");
+        assert_eq!(predicted.redo_depth(), 0);
+        assert_eq!(predicted.redo_now(), Err(TerrainError::NothingToRedo));
+    }
 }

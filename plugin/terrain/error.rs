@@ -75,6 +75,11 @@ pub enum TerrainError {
     /// Undo was asked for, but no carve is left to undo.
     #[error("there is no carve left to undo")]
     NothingToUndo,
+    /// Redo was asked for ([`super::RedoCarve`]), but no undone carve is
+    /// left to redo: none was undone, or a carve, a load or a detach
+    /// across chunk borders came after the undo.
+    #[error("there is no undone carve left to redo")]
+    NothingToRedo,
     /// The entity named in a message has no [`super::Terrain`].
     #[error("the entity has no Terrain component; carve a terrain entity")]
     NoSuchTerrain,

@@ -227,6 +227,7 @@ impl Terrain {
             base: std::sync::Arc::new(base),
             journal,
             history,
+            redo: Vec::new(),
             max_undo,
             runtime: Runtime {
                 border_seeds: seeds,

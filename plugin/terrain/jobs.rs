@@ -4,8 +4,8 @@
 //! A carve goes through the terrain modules in this order, each once:
 //!
 //! 1. [`super::carve`] — the [`Carve`](super::Carve),
-//!    [`GridCarve`](super::GridCarve) and [`UndoCarve`](super::UndoCarve)
-//!    messages.
+//!    [`GridCarve`](super::GridCarve), [`UndoCarve`](super::UndoCarve)
+//!    and [`RedoCarve`](super::RedoCarve) messages.
 //! 2. [`super::queue`] — reads them into the terrain's queue of [`Job`]s
 //!    (in its [`Runtime`]) and starts the next job on a snapshot of the
 //!    octree (a cheap persistent clone).
@@ -106,10 +106,15 @@ pub(crate) enum Job {
         /// the last step, whatever it is.
         predicted: Option<u64>,
     },
+    Redo {
+        requested: Instant,
+    },
     /// Holds the queue until the world's undo of world step `request` is
     /// carried out in every chunk it changed (`world::undo`): the jobs
     /// behind it were asked for after that undo.
-    HoldForWorldUndo { request: u64 },
+    HoldForWorldUndo {
+        request: u64,
+    },
     /// Seal the cells again at new outside points (the wall points of
     /// neighbouring chunks on the cube's sides), and shade them again with
     /// new outside wedges (those chunks' surface around the points).
@@ -263,7 +268,10 @@ pub(crate) enum StepOutcome {
         request: Option<u64>,
         predicted: Option<u64>,
     },
+    /// An undo, or a redo (with the edit redone, `None` where the journal
+    /// had lost it).
     Undone {
+        redone: Option<Option<Edit>>,
         cells: usize,
         /// What the undo changed of each material, in cubic world units
         /// (`None` when not measured).
@@ -447,14 +455,16 @@ pub(crate) fn carve_batch(
     remesh(octree, context, steps, keys, fresh, mesher, false)
 }
 
-/// The step of an undo that turned `before` into `after`, changing the
-/// cells `keys` (taking back prediction `predicted`, if any).
+/// The step of an undo (or of a redo, `redone`) that turned `before`
+/// into `after`, changing the cells `keys` (taking back prediction
+/// `predicted`, if any).
 pub(crate) fn undone_step(
     before: &Octree,
     after: &Octree,
     keys: &[CellKey],
     context: &JobContext,
     requested: Instant,
+    redone: Option<Option<Edit>>,
     predicted: Option<u64>,
 ) -> StepOutcome {
     let changes = Changes {
@@ -462,6 +472,7 @@ pub(crate) fn undone_step(
         removed: Vec::new(),
     };
     StepOutcome::Undone {
+        redone,
         cells: keys.len(),
         volume_change: (context.measure_volumes).then(|| {
             context

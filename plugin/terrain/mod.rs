@@ -46,8 +46,8 @@
 //!
 //! A carve runs through four modules in order, each once:
 //!
-//! 1. [`carve`] — the messages and settings: [`Carve`] / [`UndoCarve`] in
-//!    ([`GridCarve`]: a carve already on the grid, with a request id),
+//! 1. [`carve`] — the messages and settings: [`Carve`] / [`UndoCarve`] /
+//!    [`RedoCarve`] in ([`GridCarve`]: a carve already on the grid, with a request id),
 //!    [`TerrainCellChanged`] and [`CarveApplied`] out, [`TerrainSettings`].
 //! 2. [`queue`] — the messages onto each terrain's queue, and the next job
 //!    started on the async compute pool.
@@ -148,8 +148,8 @@ pub use asset::{
 };
 pub use base::{GridHeightfield, TerrainBase};
 pub use carve::{
-    Carve, CarveApplied, CarveRejected, CellOutput, GridCarve, TerrainCellChanged, TerrainSettings,
-    UndoCarve,
+    Carve, CarveApplied, CarveRejected, CellOutput, GridCarve, RedoCarve, TerrainCellChanged,
+    TerrainSettings, UndoCarve,
 };
 pub use component::{JournalEntry, Terrain, TerrainCell};
 pub use debris::{DebrisConfig, DebrisDetached, DebrisLimits, DebrisPart, TerrainDebris};
@@ -184,8 +184,8 @@ pub use world::{
 /// another).
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TerrainSystems {
-    /// Reads [`Carve`] / [`UndoCarve`], collects finished background jobs
-    /// and starts new ones. Send carves before this set to have them start
+    /// Reads [`Carve`] / [`UndoCarve`] / [`RedoCarve`], collects finished
+    /// background jobs and starts new ones. Send carves before this set to have them start
     /// in the same frame.
     Carve,
     /// Turns finished cell meshes into assets and entities within the
@@ -254,6 +254,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_message::<Carve>()
         .add_message::<GridCarve>()
         .add_message::<UndoCarve>()
+        .add_message::<RedoCarve>()
         .add_message::<CarveApplied>()
         .add_message::<CarveRejected>()
         .add_message::<DebrisDetached>()
@@ -275,6 +276,7 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<Carve>()
         .register_type::<GridCarve>()
         .register_type::<UndoCarve>()
+        .register_type::<RedoCarve>()
         .register_type::<CarveApplied>()
         .register_type::<CarveRejected>()
         .register_type::<TerrainCellChanged>()

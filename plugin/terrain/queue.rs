@@ -1,9 +1,9 @@
-//! Requests in: carve and undo messages onto each terrain's queue, and
+//! Requests in: carve, undo and redo messages onto each terrain's queue, and
 //! the next job started.
 //!
 //! The second step of a carve (see [`super::carve`] for the whole path):
-//! [`read_requests`] turns [`Carve`], [`GridCarve`] and [`UndoCarve`]
-//! messages into jobs, and [`start_jobs`] runs the next one on the async
+//! [`read_requests`] turns [`Carve`], [`GridCarve`], [`UndoCarve`] and
+//! [`RedoCarve`] messages into jobs, and [`start_jobs`] runs the next one on the async
 //! compute pool, where the job runtime (module `jobs`) applies it and
 //! builds the changed cells. [`super::upload`] collects the result.
 //!
@@ -18,9 +18,11 @@ use std::time::Instant;
 
 use bevy::prelude::*;
 use bevy::tasks::AsyncComputeTaskPool;
-use chisel_bsp::octree::{CellKey, SeamedMesher};
+use chisel_bsp::octree::{CellKey, Edit, Octree, SeamedMesher};
 
-use super::carve::{Carve, CarveRejected, CellOutput, GridCarve, TerrainSettings, UndoCarve};
+use super::carve::{
+    Carve, CarveRejected, CellOutput, GridCarve, RedoCarve, TerrainSettings, UndoCarve,
+};
 use super::component::Terrain;
 use super::error::TerrainError;
 use super::jobs::{
@@ -31,12 +33,13 @@ use super::physics::TerrainPhysicsBackend;
 use super::pool_order::spawn_in_order;
 use super::world::{ChunkOffstage, TerrainWorld, WorldChunk};
 
-/// Reads [`GridCarve`], [`Carve`] and [`UndoCarve`] into the terrains'
-/// queues.
+/// Reads [`GridCarve`], [`Carve`], [`UndoCarve`] and [`RedoCarve`] into
+/// the terrains' queues (undos of one frame before its redos).
 pub fn read_requests(
     mut grid_carves: MessageReader<GridCarve>,
     mut carves: MessageReader<Carve>,
     mut undos: MessageReader<UndoCarve>,
+    mut redos: MessageReader<RedoCarve>,
     mut terrains: Query<&mut Terrain>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
@@ -102,17 +105,22 @@ pub fn read_requests(
             }
         }
     }
-    for undo in undos.read() {
-        match terrains.get_mut(undo.terrain) {
-            Ok(mut terrain) => {
-                (terrain.bypass_change_detection().runtime.queue).push_back(Job::Undo {
-                    requested: now,
-                    predicted: None,
-                })
-            }
+    let undos = undos.read().map(|u| {
+        let job = Job::Undo {
+            requested: now,
+            predicted: None,
+        };
+        (u.terrain, job)
+    });
+    let redos = redos
+        .read()
+        .map(|r| (r.terrain, Job::Redo { requested: now }));
+    for (entity, job) in undos.chain(redos) {
+        match terrains.get_mut(entity) {
+            Ok(mut terrain) => (terrain.bypass_change_detection().runtime.queue).push_back(job),
             Err(_) => {
                 rejected.write(CarveRejected {
-                    terrain: undo.terrain,
+                    terrain: entity,
                     request: None,
                     predicted: None,
                     error: TerrainError::NoSuchTerrain,
@@ -142,7 +150,8 @@ pub fn start_jobs(
         if terrain.runtime.task.is_some() {
             continue;
         }
-        // The plugin's bookkeeping; only an undo changes the content here.
+        // The plugin's bookkeeping; only an undo or a redo changes the
+        // content here.
         let terrain_now = terrain.bypass_change_detection();
         // A chunk built only for work out of sight draws nothing.
         let output = if offstage {
@@ -169,8 +178,8 @@ pub fn start_jobs(
 }
 
 /// Starts the next job of `terrain` (which has none running); returns
-/// whether its content changed: an undo is applied here, before its cells
-/// are rebuilt on the pool.
+/// whether its content changed: an undo or a redo is applied here, before
+/// its cells are rebuilt on the pool.
 fn start_next(
     entity: Entity,
     terrain: &mut Terrain,
@@ -272,41 +281,44 @@ fn start_next(
         }) if terrain.top_prediction() != Some(prediction) => {
             // The kernel refused that prediction: it left no step to undo.
         }
-        Some(Job::Undo {
-            requested,
-            predicted,
-        }) => match terrain.undo_now_from() {
-            Ok((before, keys)) => {
-                let octree = terrain.octree.clone();
-                let mesher = std::mem::take(&mut terrain.runtime.mesher);
-                // Ahead of the world's builds waiting on the pool, as a carve.
-                terrain.runtime.task = Some(spawn_in_order(order, async move {
-                    on_pool(pool, || {
-                        let steps = vec![undone_step(
-                            &before, &octree, &keys, &context, requested, predicted,
-                        )];
-                        remesh(
-                            octree,
-                            &context,
-                            steps,
-                            keys,
-                            BTreeMap::new(),
-                            mesher,
-                            false,
-                        )
-                    })
-                }));
-                return true;
+        Some(job @ (Job::Undo { requested, .. } | Job::Redo { requested })) => {
+            let (redo, predicted) = match job {
+                Job::Undo { predicted, .. } => (false, predicted),
+                _ => (true, None),
+            };
+            match undo_or_redo(terrain, redo) {
+                Ok((before, keys, redone)) => {
+                    let octree = terrain.octree.clone();
+                    let mesher = std::mem::take(&mut terrain.runtime.mesher);
+                    // Ahead of the world's builds waiting on the pool, as a carve.
+                    terrain.runtime.task = Some(spawn_in_order(order, async move {
+                        on_pool(pool, || {
+                            let step = undone_step(
+                                &before, &octree, &keys, &context, requested, redone, predicted,
+                            );
+                            remesh(
+                                octree,
+                                &context,
+                                vec![step],
+                                keys,
+                                BTreeMap::new(),
+                                mesher,
+                                false,
+                            )
+                        })
+                    }));
+                    return true;
+                }
+                Err(error) => {
+                    rejected.write(CarveRejected {
+                        terrain: entity,
+                        request: None,
+                        predicted: None,
+                        error,
+                    });
+                }
             }
-            Err(error) => {
-                rejected.write(CarveRejected {
-                    terrain: entity,
-                    request: None,
-                    predicted: None,
-                    error,
-                });
-            }
-        },
+        }
         Some(Job::Reseal { outside, wedges }) => {
             let octree = terrain.octree.clone();
             let mut mesher = std::mem::take(&mut terrain.runtime.mesher);
@@ -386,4 +398,16 @@ fn start_next(
         }
     }
     false
+}
+
+/// The octree before, the cells changed and (for a redo) the edit redone.
+type UndoneNow = (Octree, Vec<CellKey>, Option<Option<Edit>>);
+
+/// Applies an undo (or a redo) to `terrain` at once.
+fn undo_or_redo(terrain: &mut Terrain, redo: bool) -> Result<UndoneNow, TerrainError> {
+    if redo {
+        (terrain.redo_now_from()).map(|(before, keys, edit)| (before, keys, Some(edit)))
+    } else {
+        (terrain.undo_now_from()).map(|(before, keys)| (before, keys, None))
+    }
 }

@@ -129,6 +129,7 @@ impl Terrain {
             base: std::sync::Arc::new(base),
             journal: Vec::new(),
             history: VecDeque::new(),
+            redo: Vec::new(),
             max_undo,
             runtime: Runtime::default(),
             detached_across: false,

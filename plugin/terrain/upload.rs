@@ -55,19 +55,21 @@ fn finish_job(
     terrain.runtime.running_carves.clear();
     let mut reports = Vec::new();
     let mut debris = Vec::new();
-    let report = |edit, request, predicted, hash, cells, volume_change, apply_time| CarveApplied {
-        terrain: entity,
-        edit,
-        request,
-        predicted,
-        hash,
-        cells,
-        volume_change,
-        apply_time,
-        mesh_time: output.mesh_time,
-        collider_time: output.collider_time,
-        latency: Duration::ZERO,
-    };
+    let report =
+        |edit, redo, request, predicted, hash, cells, volume_change, apply_time| CarveApplied {
+            terrain: entity,
+            edit,
+            redo,
+            request,
+            predicted,
+            hash,
+            cells,
+            volume_change,
+            apply_time,
+            mesh_time: output.mesh_time,
+            collider_time: output.collider_time,
+            latency: Duration::ZERO,
+        };
     // The octree after each applied step: the next applied step's
     // `before`, or the job's octree after the last.
     let afters: Vec<Octree> = {
@@ -117,6 +119,7 @@ fn finish_job(
                 reports.push((
                     report(
                         Some(edit),
+                        false,
                         request,
                         predicted,
                         hash,
@@ -139,14 +142,17 @@ fn finish_job(
                 debris.extend(pieces.into_iter().map(|piece| (piece, None)));
             }
             StepOutcome::Undone {
+                redone,
                 cells,
                 volume_change,
                 requested,
                 predicted,
             } => {
                 let hash = terrain.hash.value();
+                let (edit, redo) = (redone.flatten(), redone.is_some());
                 let undone = report(
-                    None,
+                    edit,
+                    redo,
                     None,
                     predicted,
                     hash,
@@ -183,7 +189,8 @@ fn finish_job(
         reports,
         debris,
     });
-    // For an undo or a full build this is the octree already in place.
+    // For an undo, a redo or a full build this is the octree already in
+    // place.
     terrain.octree = output.octree;
     terrain.runtime.mesher = output.mesher;
     if output.border.is_some() {

@@ -1,6 +1,6 @@
 //! Bevy's change detection on terrains and worlds (`MinimalPlugins`): a
 //! settled terrain or world shows no change frame after frame, and a
-//! carve or undo marks `Changed<Terrain>` in exactly the frames a
+//! carve, undo or redo marks `Changed<Terrain>` in exactly the frames a
 //! terrain's content changed (its state hash, journal, undo depth or last
 //! request, read frame by frame as the reference), only on the chunks the
 //! carve reached; streaming marks the world and none of the chunks that
@@ -15,8 +15,8 @@ use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::terrain::{
-    Carve, CarveTool, ChunkCoord, Terrain, TerrainBase, TerrainPlugin, TerrainWorld, UndoCarve,
-    WorldCarve, WorldUndo,
+    Carve, CarveTool, ChunkCoord, RedoCarve, Terrain, TerrainBase, TerrainPlugin, TerrainWorld,
+    UndoCarve, WorldCarve, WorldUndo,
 };
 
 use super::terrain_world::{app_with as world_app, settle as settle_world, the_world, world};
@@ -177,7 +177,7 @@ fn contents(app: &mut App) -> BTreeMap<Entity, Content> {
 }
 
 #[test]
-fn a_terrain_is_changed_only_in_the_frames_its_carve_and_undo_land() {
+fn a_terrain_is_changed_only_in_the_frames_its_carve_undo_and_redo_land() {
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, AssetPlugin::default(), TerrainPlugin))
         .init_asset::<Mesh>()
@@ -214,6 +214,22 @@ fn a_terrain_is_changed_only_in_the_frames_its_carve_and_undo_land() {
     let terrain = app.world().get::<Terrain>(entity).expect("terrain");
     assert_eq!((terrain.journal().len(), terrain.undo_depth()), (0, 0));
     assert_quiet(&mut app, 30, "terrain after undo");
+
+    // A redo lands in one frame, as the undo did.
+    let before = contents(&mut app);
+    app.world_mut().write_message(RedoCarve { terrain: entity });
+    settle_terrain(&mut app, entity);
+    let frames = take_frames(&mut app);
+    let marked = assert_marks_follow_content(&before, &frames);
+    assert_eq!(marked, BTreeSet::from([entity]));
+    let landed = frames.iter().filter(|f| !f.changed.is_empty()).count();
+    assert_eq!(landed, 1, "one redo lands in one frame");
+    let terrain = app.world().get::<Terrain>(entity).expect("terrain");
+    assert_eq!((terrain.journal().len(), terrain.undo_depth()), (1, 1));
+    assert_quiet(&mut app, 30, "terrain after redo");
+    // A redo with nothing to redo is refused and marks nothing.
+    app.world_mut().write_message(RedoCarve { terrain: entity });
+    assert_quiet(&mut app, 30, "terrain after a refused redo");
 
     // A write through `&mut Terrain` by the game is a change, as Bevy has it.
     take_frames(&mut app);

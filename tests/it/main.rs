@@ -79,6 +79,8 @@ mod terrain_physics;
 #[cfg(all(feature = "terrain", feature = "props"))]
 mod terrain_prop_tools;
 #[cfg(feature = "terrain")]
+mod terrain_redo;
+#[cfg(feature = "terrain")]
 mod terrain_round_tools;
 #[cfg(feature = "viewer")]
 mod terrain_seams_render;

@@ -509,14 +509,17 @@ pub(super) fn side_neighbours(coord: ChunkCoord) -> impl Iterator<Item = ChunkCo
         .into_iter()
 }
 
-/// Whether a chunk has a job running, or a carve or undo waiting: its
+/// Whether a chunk has a job running, or a carve, undo or redo waiting: its
 /// octree is about to change.
 pub(super) fn busy(terrain: &Terrain) -> bool {
     terrain.runtime.task.is_some()
         || (terrain.runtime.queue.iter()).any(|job| {
             matches!(
                 job,
-                Job::Carve { .. } | Job::Undo { .. } | Job::HoldForWorldUndo { .. }
+                Job::Carve { .. }
+                    | Job::Undo { .. }
+                    | Job::Redo { .. }
+                    | Job::HoldForWorldUndo { .. }
             )
         })
 }
@@ -567,6 +570,8 @@ fn apply(
         if let Some(step) = terrain.history.back_mut() {
             step.changes = step.changes.then(&changes);
         }
+        // What was undone before cannot be redone over the detach.
+        terrain.redo.clear();
         terrain.detached_across = true;
         let mut keys: Vec<CellKey> = changes.changed.into_iter().chain(changes.removed).collect();
         keys.sort_unstable();

@@ -260,7 +260,7 @@ impl TerrainWorld {
             let runtime = &terrain.runtime;
             let queued = runtime.queue.iter().filter_map(|job| match job {
                 Job::Carve { request, .. } => Some(*request),
-                Job::Undo { .. } => Some(None),
+                Job::Undo { .. } | Job::Redo { .. } => Some(None),
                 _ => None,
             });
             for request in queued.chain(runtime.running_carves.iter().copied()) {

@@ -630,6 +630,8 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
                 Err(error) => warn!("terrain world: chunk undo: {error}"),
             }
         }
+        // A world has no redo: the chunk's undo is not redone on its own.
+        terrain.redo.clear();
         if let Some(before) = &chunk.detach {
             terrain.octree = before.octree.clone();
             terrain.hash.update(&terrain.octree, &before.keys);
