@@ -156,6 +156,7 @@ pub mod source;
 pub mod store;
 mod store_cut;
 mod store_files;
+mod store_save;
 pub mod stream;
 pub mod undo;
 
