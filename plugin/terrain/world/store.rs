@@ -33,7 +33,7 @@
 //!    [`Terrain`] was not changed since (its `Changed<Terrain>` tick, see
 //!    [`Terrain`], "Change detection"), a stored chunk when its bytes have
 //!    the length and checksum (the file's own XXH64) of that file.
-//! 2. A task on the [`IoTaskPool`] serializes the live chunks, skips those
+//! 2. A task on the [`IoTaskPool`](bevy::tasks::IoTaskPool) serializes the live chunks, skips those
 //!    whose bytes have the length and checksum of their file (a chunk that
 //!    streamed out or in since, unchanged), writes the others, each
 //!    atomically, then removes the stale chunk files and syncs the folder

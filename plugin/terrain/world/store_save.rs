@@ -56,7 +56,7 @@ impl TerrainWorld {
         gave_up
     }
 
-    /// Plans a background save into `folder` ([module docs](self)) and
+    /// Plans a background save into `folder` ([module docs](super::store)) and
     /// starts its task: of a whole state, or with `cut` of a consistent
     /// one when this frame holds no whole state.
     ///
@@ -200,7 +200,7 @@ impl TerrainWorld {
 
 /// Reports the saves whose tasks are done, reads [`SaveWorld`]s into
 /// their worlds' waiting requests and starts those whose turn it is in a
-/// frame that holds a whole (or consistent) state, or gives them up ([module docs](self)).
+/// frame that holds a whole (or consistent) state, or gives them up ([module docs](super::store)).
 /// Runs after the carve systems.
 pub fn save_worlds(
     mut requests: MessageReader<SaveWorld>,
