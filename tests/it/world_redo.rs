@@ -4,7 +4,8 @@
 //! corner, with a slab cut loose across a border, with the chunks
 //! streamed out and in), several redo in reverse order of their undos, a
 //! new carve forgets them, a chunk changed since refuses the redo and
-//! nothing changes; a chunk's own redo step survives streaming out and in.
+//! nothing changes; a chunk's own redo step survives streaming out and in;
+//! a networked world refuses it.
 
 use std::collections::BTreeMap;
 
@@ -343,4 +344,39 @@ fn a_redo_takes_a_slab_cut_loose_across_a_border_out_again() {
     undo(&mut app, world);
     assert_eq!(exact(&app, world), before);
     assert!(heard(&app).rejected.is_empty());
+}
+
+#[test]
+fn a_networked_world_refuses_redo_on_server_and_client() {
+    use crate::net::{run_until, unlimited, world_client, world_of, world_server};
+    use crate::net_worlds::{streamed_world, world_settled};
+
+    let _guard = crate::ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (mut server, addr) = world_server(streamed_world(), unlimited());
+    let mut client = world_client(addr, 1, streamed_world(), Vec3::new(32.0, 30.0, 16.0));
+    for app in [&mut server, &mut client] {
+        app.init_resource::<Heard>().add_systems(Update, hear);
+    }
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        !apps[1]
+            .world()
+            .resource::<crate::net::WorldsSeen>()
+            .synced
+            .is_empty()
+            && world_settled(apps[1])
+    });
+    for app in [&mut server, &mut client] {
+        let (entity, _) = world_of(app);
+        app.world_mut().write_message(WorldRedo { world: entity });
+    }
+    run_until(&mut [&mut server, &mut client], 20_000, |apps| {
+        apps.iter().all(|app| !heard(app).rejected.is_empty())
+    });
+    for app in [&server, &client] {
+        let reasons: Vec<_> = heard(app).rejected.iter().map(|r| &r.reason).collect();
+        assert_eq!(reasons, vec![&WorldRedoRefusal::Networked]);
+        assert!(heard(app).redone.is_empty());
+    }
 }

@@ -58,7 +58,8 @@
 //! that it holds every carve asked for before it. A frame does not when a
 //! carve waits for a chunk (also a far chunk's deferred carves on a
 //! networked world's client: [`TerrainWorld::build_deferred`] builds
-//! them), a [`WorldUndo`](super::WorldUndo) waits for a chunk, or a live
+//! them), a [`WorldUndo`](super::WorldUndo) or
+//! [`WorldRedo`](super::WorldRedo) waits for a chunk, or a live
 //! chunk has a carve, undo or detach queued or running.
 //!
 //! A fall across chunk borders on its way does not keep a frame from
