@@ -66,7 +66,7 @@
 //! world keeps them in memory (cheap persistent clones) with the chunk's
 //! state hash and journal length, and hands them back when the chunk
 //! streams in again with that same state; otherwise they are dropped
-//! (a debug message is logged). So streaming never drops a redo step: a
+//! with a warning in the log. So streaming alone drops no redo step: a
 //! chunk undone back to its source's state streams out and in and still
 //! redoes. A save does not hold them, nor a loaded world.
 //!
@@ -344,7 +344,7 @@ impl TerrainWorld {
         if terrain.hash.value() == kept.hash && terrain.journal.len() == kept.journal {
             terrain.redo = kept.steps;
         } else {
-            debug!(
+            warn!(
                 "terrain world chunk ({}, {}): changed while streamed out, its redo steps are dropped",
                 coord.x, coord.z
             );
