@@ -110,8 +110,10 @@ pub struct UndoCarve {
 /// client it changes the local octree only, so the hash check of the next
 /// replicated carve finds the client out of step and it asks for a
 /// snapshot (`Desynced`); on the server, the clients' next hash check
-/// does the same, and the snapshot carries the redo to them. A world has
-/// no redo: a [`super::WorldUndo`] is not redone.
+/// does the same, and the snapshot carries the redo to them. A
+/// [`super::WorldUndo`] is redone with [`super::WorldRedo`], not with
+/// this. A chunk of a world keeps its redo steps when it streams out and
+/// back in unchanged (`world::redo`, "Streaming").
 #[derive(Message, Reflect, Clone, Copy, Debug)]
 pub struct RedoCarve {
     /// The terrain entity.

@@ -10,8 +10,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use bevy::tasks::IoTaskPool;
@@ -375,19 +375,35 @@ fn a_failed_save_names_the_path_and_leaves_the_record_as_it_was() {
 struct IoPoolHeld(Arc<AtomicBool>);
 
 impl IoPoolHeld {
+    /// Returns once every thread of the pool runs one of its blockers: a
+    /// blocker only queued could run after a save spawned later (a busy
+    /// machine wakes the pool's threads late, and a thread may take the
+    /// save first), and the save would be written at once.
     fn new() -> Self {
         let released = Arc::new(AtomicBool::new(false));
+        let started = Arc::new(AtomicUsize::new(0));
         let pool = IoTaskPool::get();
-        for _ in 0..pool.thread_num().max(1) {
-            let released = released.clone();
+        let threads = pool.thread_num().max(1);
+        for _ in 0..threads {
+            let (released, started) = (released.clone(), started.clone());
             pool.spawn(async move {
+                started.fetch_add(1, Ordering::AcqRel);
                 while !released.load(Ordering::Acquire) {
                     std::thread::sleep(Duration::from_millis(1));
                 }
             })
             .detach();
         }
-        Self(released)
+        let held = Self(released);
+        let begun = Instant::now();
+        while started.load(Ordering::Acquire) < threads {
+            assert!(
+                begun.elapsed() < Duration::from_secs(60),
+                "the I/O pool's {threads} threads did not all take a blocker"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        held
     }
 }
 
