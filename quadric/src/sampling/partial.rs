@@ -32,9 +32,29 @@
 //! (they depend only on the quadric and the bounding sphere), so jobs are
 //! matched by `(a, b, k, region index)`.
 //!
-//! Edits that change the products, the options, or make a changed quadric
-//! coincide with another one (a shared surface, eq. 22's notes) fall back
-//! to a full sampling.
+//! Carves ([`Scene::carved`](crate::Scene::carved)). An edit that keeps
+//! every quadric and appends literals on new quadrics to products (a
+//! carve adds "outside `T`" to every product: `S' = ⋃ₐ (Pₐ ∩ Eₐ)`, `Eₐ`
+//! the literals appended to product `a`) keeps the jobs of the old
+//! literals, with the same heightfields, basic regions and keys, and adds
+//! the new literals' jobs, which all run. An old job is re-run unless the
+//! surface over `R` is shown clear of the edit, with the same balls and
+//! quarterings as above; a ball is clear when every appended literal `L`
+//! holds on all of it:
+//!
+//! `d(L, c) < −ρ`
+//!
+//! (`d(L, ·)` positive where `L` is false, as above: for "outside `T`",
+//! every point of `B` is outside `T`). Then every `Eₐ` is true on `B`, so
+//! `S' ∩ B = S ∩ B`: the solid, and with it the CSG surface, is the same in
+//! the ball, and the old job's samples stay valid and complete by the
+//! argument above. A small dent re-runs the old jobs whose surface comes
+//! near the tool, and the tool's own jobs, which find the CSG surface only
+//! where the tool cuts the solid.
+//!
+//! Edits that change the products otherwise, the options, or make a
+//! changed or added quadric coincide with another one (a shared surface,
+//! eq. 22's notes) fall back to a full sampling.
 
 use std::collections::HashMap;
 
@@ -104,6 +124,8 @@ pub struct RegionSamples {
 pub struct ResampleReport {
     /// The quadrics of the normal form whose coefficients changed.
     pub changed_quadrics: Vec<usize>,
+    /// The literals appended to products (a carve, see the module notes).
+    pub appended_literals: Vec<Literal>,
     /// Basic regions sampled again.
     pub regions_resampled: usize,
     /// Basic regions whose samples were kept.
@@ -123,9 +145,33 @@ fn job_key(patches: &[Patch], job: &Job) -> JobKey {
     (patch.product, patch.literal, job.heightfield, job.region)
 }
 
+/// What an edit changed, for the invalidation rule.
+enum Change {
+    /// A quadric's coefficients.
+    Coefficients(CoefficientChange),
+    /// A literal appended to products (a carve), as a signed bound
+    /// positive where the literal is false.
+    Appended(QuadricDistance),
+}
+
+impl Change {
+    /// Whether the solid may differ somewhere in the ball `(centre,
+    /// radius)` because of this change (the module notes).
+    fn may_differ_in(&self, centre: DVec3, radius: f64) -> bool {
+        match self {
+            Self::Coefficients(change) => change.may_differ_in(centre, radius),
+            Self::Appended(literal) => {
+                let reach = radius * (1.0 + BALL_PADDING);
+                // NaN fails the comparison: such a ball is re-sampled.
+                !(literal.distance(centre) < -reach)
+            }
+        }
+    }
+}
+
 /// A changed quadric's distance bounds, before and after, and the
 /// literals that can switch off the products it takes part in.
-struct Change {
+struct CoefficientChange {
     before: QuadricDistance,
     after: QuadricDistance,
     /// Per product holding the quadric: its literals on unchanged
@@ -133,7 +179,16 @@ struct Change {
     guards: Vec<Vec<QuadricDistance>>,
 }
 
-impl Change {
+/// The signed bound of `literal` of `dnf`, positive where it is false.
+fn literal_distance(dnf: &Dnf, literal: Literal) -> QuadricDistance {
+    let d = QuadricDistance::new(&dnf.quadrics()[literal.quadric].quadric);
+    match literal.side {
+        Side::Inside => d,
+        Side::Outside => d.complement(),
+    }
+}
+
+impl CoefficientChange {
     /// Whether the literals of this quadric may differ somewhere in the
     /// ball `(centre, radius)` (the invalidation rule).
     fn may_differ_in(&self, centre: DVec3, radius: f64) -> bool {
@@ -217,7 +272,11 @@ impl RegionSamples {
     ///
     /// Errors: those of [`sample`](crate::sample); `self` is unchanged.
     pub fn resample(&self, dnf: &Dnf) -> Result<(Self, ResampleReport)> {
-        let Some(changed) = self.changed_quadrics(dnf) else {
+        let (changed, appended) = if let Some(appended) = self.appended_literals(dnf) {
+            (Vec::new(), appended)
+        } else if let Some(changed) = self.changed_quadrics(dnf) {
+            (changed, Vec::new())
+        } else {
             let full = Self::sample(dnf, &self.options)?;
             let report = ResampleReport {
                 changed_quadrics: (0..dnf.quadrics().len()).collect(),
@@ -227,31 +286,32 @@ impl RegionSamples {
             };
             return Ok((full, report));
         };
-        let changes: Vec<Change> = changed
+        let mut changes: Vec<Change> = changed
             .iter()
-            .map(|&q| Change {
-                before: QuadricDistance::new(&self.quadrics[q]),
-                after: QuadricDistance::new(&dnf.quadrics()[q].quadric),
-                guards: dnf
-                    .products()
-                    .iter()
-                    .filter(|product| product.iter().any(|l| l.quadric == q))
-                    .map(|product| {
-                        product
-                            .iter()
-                            .filter(|l| !changed.contains(&l.quadric))
-                            .map(|l| {
-                                let d = QuadricDistance::new(&dnf.quadrics()[l.quadric].quadric);
-                                match l.side {
-                                    Side::Inside => d,
-                                    Side::Outside => d.complement(),
-                                }
-                            })
-                            .collect()
-                    })
-                    .collect(),
+            .map(|&q| {
+                Change::Coefficients(CoefficientChange {
+                    before: QuadricDistance::new(&self.quadrics[q]),
+                    after: QuadricDistance::new(&dnf.quadrics()[q].quadric),
+                    guards: dnf
+                        .products()
+                        .iter()
+                        .filter(|product| product.iter().any(|l| l.quadric == q))
+                        .map(|product| {
+                            product
+                                .iter()
+                                .filter(|l| !changed.contains(&l.quadric))
+                                .map(|&l| literal_distance(dnf, l))
+                                .collect()
+                        })
+                        .collect(),
+                })
             })
             .collect();
+        changes.extend(
+            appended
+                .iter()
+                .map(|&l| Change::Appended(literal_distance(dnf, l))),
+        );
         let old: HashMap<JobKey, usize> = self
             .jobs
             .iter()
@@ -274,6 +334,7 @@ impl RegionSamples {
         let slots = std::mem::take(&mut runs.samples);
         let mut report = ResampleReport {
             changed_quadrics: changed,
+            appended_literals: appended,
             ..ResampleReport::default()
         };
         let mut samples = Vec::with_capacity(runs.jobs.len());
@@ -314,6 +375,53 @@ impl RegionSamples {
             },
             report,
         ))
+    }
+
+    /// The distinct literals appended to products when `dnf` is a carve of
+    /// the sampled normal form (module notes): the same quadrics followed
+    /// by new ones, each product the old one followed by literals on new
+    /// quadrics only, at least one. `None` otherwise, or when a new quadric
+    /// coincides with another one or its negation.
+    fn appended_literals(&self, dnf: &Dnf) -> Option<Vec<Literal>> {
+        let old = self.quadrics.len();
+        let new = dnf.quadrics();
+        if new.len() <= old || dnf.products().len() != self.products.len() {
+            return None;
+        }
+        let bits = |q: &Quadric| q.coefficients().map(|c| (c + 0.0).to_bits());
+        let negated = |q: &Quadric| q.coefficients().map(|c| (0.0 - c).to_bits());
+        if self
+            .quadrics
+            .iter()
+            .zip(new)
+            .any(|(a, b)| bits(a) != bits(&b.quadric))
+        {
+            return None;
+        }
+        let mut appended: Vec<Literal> = Vec::new();
+        for (before, after) in self.products.iter().zip(dnf.products()) {
+            let tail = after.strip_prefix(before.as_slice())?;
+            if tail.iter().any(|l| l.quadric < old) {
+                return None;
+            }
+            appended.extend_from_slice(tail);
+        }
+        appended.sort_unstable();
+        appended.dedup();
+        if appended.is_empty() {
+            return None;
+        }
+        for (i, q) in new.iter().enumerate().skip(old) {
+            let coincides = new.iter().enumerate().any(|(j, other)| {
+                j != i
+                    && (bits(&other.quadric) == bits(&q.quadric)
+                        || bits(&other.quadric) == negated(&q.quadric))
+            });
+            if coincides {
+                return None;
+            }
+        }
+        Some(appended)
     }
 
     /// The quadrics whose coefficients differ in `dnf`, or `None` when the

@@ -110,7 +110,7 @@ fn a_new_structure_is_sampled_in_full() {
 /// Every region holds the full sampling's samples (re-sampled) or those
 /// of before (kept; patch indices renumbered). Returns the number of
 /// regions whose samples differ from the full sampling's (kept ones).
-fn compare_with_full(
+pub(crate) fn compare_with_full(
     name: &str,
     partial: &RegionSamples,
     before: &RegionSamples,
@@ -138,7 +138,7 @@ fn compare_with_full(
 /// Every traced point of `dnf`'s surface inside the bounds has a sample on
 /// the same quadric within the splat radius; every sample lies on the
 /// surface.
-fn assert_valid(name: &str, dnf: &Dnf, set: &SampleSet) {
+pub(crate) fn assert_valid(name: &str, dnf: &Dnf, set: &SampleSet) {
     let sphere = set.options.bounds;
     let (centre, bound) = (sphere.centre, sphere.radius);
     let grid = common::SampleGrid::new(set, set.options.radius);
