@@ -163,7 +163,8 @@ impl Change {
             Self::Appended(literal) => {
                 let reach = radius * (1.0 + BALL_PADDING);
                 // NaN fails the comparison: such a ball is re-sampled.
-                !(literal.distance(centre) < -reach)
+                let holds_on_ball = literal.distance(centre) < -reach;
+                !holds_on_ball
             }
         }
     }
