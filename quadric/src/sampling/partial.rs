@@ -52,6 +52,14 @@
 //! near the tool, and the tool's own jobs, which find the CSG surface only
 //! where the tool cuts the solid.
 //!
+//! An appended literal's job (`L` of product `a`, region `R`) samples the
+//! CSG surface on `L`'s quadric where the rest of product `a` holds. When
+//! some old literal `K` of product `a` is false on every ball of `R` (the
+//! same balls and quarterings, `d(K, c) > ρ`), no surface point over `R`
+//! is in product `a`: a full sampling finds nothing there, and the job is
+//! left empty without running (counted in `regions_empty`). A dent then
+//! runs only the tool's jobs of products that reach it.
+//!
 //! Edits that change the products otherwise, the options, or make a
 //! changed or added quadric coincide with another one (a shared surface,
 //! eq. 22's notes) fall back to a full sampling.
@@ -130,6 +138,9 @@ pub struct ResampleReport {
     pub regions_resampled: usize,
     /// Basic regions whose samples were kept.
     pub regions_kept: usize,
+    /// Basic regions of appended literals proven empty without sampling
+    /// (their product is false on all of the surface over them).
+    pub regions_empty: usize,
     /// Samples kept from before.
     pub samples_kept: usize,
     /// `true` when the edit needed a full sampling (see the module notes).
@@ -207,15 +218,16 @@ impl CoefficientChange {
     }
 }
 
-/// Whether no change can alter the solid near the surface over the plane
-/// box `[lo, hi]` of `heightfield`: the box's ball passes the invalidation
-/// rule, or else each of its four quarters does (recursively, down to
-/// [`MAX_QUARTERINGS`]). The surface over a box lies in the union of its
-/// quarters' balls, which hug a curved or tilted patch far closer than the
-/// one ball around a large basic region.
+/// Whether `clear` holds for the ball around the surface over the plane
+/// box `[lo, hi]` of `heightfield`, or else for each of its four quarters'
+/// (recursively, down to [`MAX_QUARTERINGS`]). The surface over a box lies
+/// in the union of its quarters' balls, which hug a curved or tilted patch
+/// far closer than the one ball around a large basic region. With the
+/// invalidation rule as `clear`: no change can alter the solid near the
+/// surface over the box.
 fn is_clear(
     heightfield: &Heightfield,
-    changes: &[Change],
+    clear: &dyn Fn(DVec3, f64) -> bool,
     lo: DVec2,
     hi: DVec2,
     depth: u32,
@@ -224,7 +236,7 @@ fn is_clear(
     let Some((centre, radius)) = heightfield.patch_ball(lo, hi) else {
         return true;
     };
-    if !changes.iter().any(|c| c.may_differ_in(centre, radius)) {
+    if clear(centre, radius) {
         return true;
     }
     if depth >= MAX_QUARTERINGS {
@@ -238,7 +250,7 @@ fn is_clear(
         (mid, hi),
     ]
     .into_iter()
-    .all(|(a, b)| is_clear(heightfield, changes, a, b, depth + 1))
+    .all(|(a, b)| is_clear(heightfield, clear, a, b, depth + 1))
 }
 
 impl RegionSamples {
@@ -320,16 +332,30 @@ impl RegionSamples {
             .map(|(i, job)| (job_key(&self.patches, job), i))
             .collect();
         let is_changed = |q: u32| changed.contains(&(q as usize));
+        let unchanged_in =
+            |centre: DVec3, radius: f64| !changes.iter().any(|c| c.may_differ_in(centre, radius));
+        let first_new = self.quadrics.len();
+        let guards = self.product_guards(dnf, &appended);
         let select = |patch: &Patch, job: &Job, region: &Region| -> bool {
             if is_changed(patch.quadric) {
                 return true;
             }
             let key = (patch.product, patch.literal, job.heightfield, job.region);
-            if !old.contains_key(&key) {
-                return true;
-            }
             let (lo, hi) = region.bounds();
-            !is_clear(&patch.heightfield, &changes, lo, hi, 0)
+            if !old.contains_key(&key) {
+                // An appended literal's job is empty where its product is
+                // false on the surface over the region (module notes).
+                let Some(guards) = guards.get(patch.product as usize) else {
+                    return true;
+                };
+                let product_off = |centre: DVec3, radius: f64| {
+                    let reach = radius * (1.0 + BALL_PADDING);
+                    guards.iter().any(|l| l.distance(centre) > reach)
+                };
+                return (patch.quadric as usize) < first_new
+                    || !is_clear(&patch.heightfield, &product_off, lo, hi, 0);
+            }
+            !is_clear(&patch.heightfield, &unchanged_in, lo, hi, 0)
         };
         let mut runs = sample_regions(dnf, &self.options, &select)?;
         let slots = std::mem::take(&mut runs.samples);
@@ -346,7 +372,12 @@ impl RegionSamples {
                 continue;
             }
             let key = job_key(&runs.patches, job);
-            let kept = old.get(&key).map_or_else(Vec::new, |&i| {
+            let Some(&i) = old.get(&key) else {
+                report.regions_empty += 1;
+                samples.push(Vec::new());
+                continue;
+            };
+            let kept = {
                 // The same literal and heightfield; only its patch index may
                 // have moved (a changed quadric's literals can have another
                 // number of heightfields).
@@ -356,8 +387,8 @@ impl RegionSamples {
                         patch: job.patch,
                         ..*s
                     })
-                    .collect()
-            });
+                    .collect::<Vec<_>>()
+            };
             report.regions_kept += 1;
             report.samples_kept += kept.len();
             samples.push(kept);
@@ -376,6 +407,30 @@ impl RegionSamples {
             },
             report,
         ))
+    }
+
+    /// Per product, the bounds of its literals on the sampled normal
+    /// form's quadrics, positive where the literal is false; empty when
+    /// nothing was `appended`.
+    fn product_guards(&self, dnf: &Dnf, appended: &[Literal]) -> Vec<Vec<QuadricDistance>> {
+        if appended.is_empty() {
+            return Vec::new();
+        }
+        let first_new = self.quadrics.len();
+        let bounds: Vec<QuadricDistance> = self.quadrics.iter().map(QuadricDistance::new).collect();
+        dnf.products()
+            .iter()
+            .map(|product| {
+                product
+                    .iter()
+                    .filter(|l| l.quadric < first_new)
+                    .map(|l| match l.side {
+                        Side::Inside => bounds[l.quadric],
+                        Side::Outside => bounds[l.quadric].complement(),
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// The distinct literals appended to products when `dnf` is a carve of

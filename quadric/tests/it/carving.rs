@@ -60,11 +60,13 @@ fn a_dent_resamples_a_small_fraction() {
         assert_eq!(partial.region_count(), full.region_count());
         assert_eq!(
             partial.region_count(),
-            report.regions_kept + report.regions_resampled
+            report.regions_kept + report.regions_resampled + report.regions_empty
         );
-        // Every old region is kept or re-sampled; the tool's are new.
+        // Every old region is kept or re-sampled; the tool's are new, and
+        // run or proven empty.
         let new_regions = partial.region_count() - old.region_count();
-        let old_resampled = report.regions_resampled - new_regions;
+        assert!(report.regions_empty > 0, "{name}: {report:?}");
+        let old_resampled = report.regions_resampled + report.regions_empty - new_regions;
         assert_eq!(report.regions_kept, old.region_count() - old_resampled);
         assert!(old_resampled > 0, "{name}: the dent touches the surface");
         assert!(
@@ -74,10 +76,11 @@ fn a_dent_resamples_a_small_fraction() {
         );
         let differ = compare_with_full(name, &partial, &old, &full);
         eprintln!(
-            "{name} carve r=R/{divisor}: {old_resampled} of {} old regions and {new_regions} \
-             tool regions re-sampled, {} kept ({differ} differ from the full sampling's), \
-             {} of {} samples kept",
+            "{name} carve r=R/{divisor}: {old_resampled} of {} old regions and {} of \
+             {new_regions} tool regions re-sampled, {} kept ({differ} differ from the full \
+             sampling's), {} of {} samples kept",
             old.region_count(),
+            new_regions - report.regions_empty,
             report.regions_kept,
             report.samples_kept,
             partial.to_sample_set().samples.len(),
@@ -189,5 +192,55 @@ fn a_carve_with_another_edit_is_sampled_in_full() {
         RegionSamples::sample(&dnf, &options)
             .unwrap()
             .to_sample_set()
+    );
+}
+
+/// Where a carve's partial re-sample spends its time (one thread):
+/// `--ignored --nocapture`.
+#[test]
+#[ignore = "timing"]
+fn carve_timing() {
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let (scene, options, old) = sampled("machine80", 30.0);
+    let same = scene.dnf().unwrap();
+    let tool = Quadric::sphere(surface_point(&old), options.bounds.radius / 12.0).unwrap();
+    let dnf = scene
+        .carved(&[Carve::new(tool, [0.2; 3])])
+        .unwrap()
+        .dnf()
+        .unwrap();
+    let time = |f: &dyn Fn()| {
+        let mut t: Vec<f64> = (0..15)
+            .map(|_| {
+                let s = std::time::Instant::now();
+                f();
+                s.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        t.sort_by(f64::total_cmp);
+        t[t.len() / 2]
+    };
+    let unchanged = time(&|| {
+        one.install(|| old.resample(&same).unwrap());
+    });
+    let carve = time(&|| {
+        one.install(|| old.resample(&dnf).unwrap());
+    });
+    let cost = time(&|| {
+        let _ = chisel_quadric::sampling_cost(&dnf, options.bounds);
+    });
+    let normal_form = time(&|| {
+        scene
+            .carved(&[Carve::new(tool, [0.2; 3])])
+            .unwrap()
+            .dnf()
+            .unwrap();
+    });
+    eprintln!(
+        "machine80 R/30 medians: resample unchanged {unchanged:.2} ms, carve {carve:.2} ms, \
+         regions/cost tables {cost:.2} ms, carved normal form {normal_form:.2} ms"
     );
 }
