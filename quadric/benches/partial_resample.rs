@@ -104,11 +104,12 @@ fn carve(c: &mut Criterion) {
                 .expect("dnf");
             let (new, report) = one.install(|| old.resample(&after)).expect("re-sampling");
             eprintln!(
-                "{name} carve {label} (r = {:.2}): {} of {} old regions kept, {} tool regions, \
-                 {} of {} samples kept",
+                "{name} carve {label} (r = {:.2}): {} of {} old regions kept, {} of {} tool \
+                 regions run, {} of {} samples kept",
                 options.radius,
                 report.regions_kept,
                 old.region_count(),
+                new.region_count() - old.region_count() - report.regions_empty,
                 new.region_count() - old.region_count(),
                 report.samples_kept,
                 new.to_sample_set().samples.len()
