@@ -308,3 +308,88 @@ fn bad_carves_are_refused_and_change_nothing() {
         (MAX_CARVES, MAX_CARVES)
     );
 }
+
+/// A carved prop, re-sampled partially from the uncarved one as the
+/// plugin does, drawn by the splat pass (quadric ids, headless) agrees
+/// with the CPU reference tracer of the carved solid, and the bite's
+/// faces are seen in both.
+#[cfg(feature = "viewer")]
+#[test]
+fn a_carved_prop_matches_the_reference_tracer() {
+    use crate::common::{
+        FOV_DEGREES, Pixel, Placement, SCALE, View, classify, compare_ids, eye, id_settings,
+        load_scene, reference, render_views_with, scene_entry,
+    };
+    use bevy_chisel::quadric::scene::carve::Carve;
+    use bevy_chisel::quadric::{Camera as RefCamera, NO_HIT, Quadric};
+    use bevy_chisel::splat::SplatMode;
+
+    const SIZE: u32 = 256;
+    let mut failures = Vec::new();
+    for name in ["classic", "machine80"] {
+        let (_, centre, radius) = scene_entry(name);
+        let scene = load_scene(name);
+        let eye = eye(centre, radius);
+        // A bite where the view ray through the middle pixel meets the
+        // solid.
+        let plain = reference(&scene, eye, centre, SIZE);
+        let middle = (SIZE / 2 * SIZE + SIZE / 2) as usize;
+        assert_ne!(
+            plain.quadric[middle], NO_HIT,
+            "{name}: the middle pixel sees the prop"
+        );
+        let camera = RefCamera::new(eye, centre, FOV_DEGREES, SIZE, SIZE).expect("camera");
+        let hit = camera.ray(SIZE / 2, SIZE / 2).at(plain.depth[middle]);
+        let tool = Quadric::sphere(hit, radius / 5.0).expect("tool");
+        let carved = scene.carved(&[Carve::new(tool, [0.2; 3])]).expect("carve");
+        let tool_id = u32::try_from(scene.dnf().expect("dnf").quadrics().len()).expect("id");
+        let expected = reference(&carved, eye, centre, SIZE);
+        let view = View {
+            eye: eye.as_vec3() * SCALE,
+            centre: centre.as_vec3() * SCALE,
+            settings: None,
+            msaa: Msaa::Off,
+        };
+        let bounds = PropBounds {
+            centre: centre.as_vec3(),
+            radius: radius as f32,
+        };
+        let splat_radius = (radius / 30.0) as f32;
+        let (_, regions) =
+            PropSplats::rebuild(&scene, bounds, splat_radius, None).expect("sampling");
+        let (splats, _) = PropSplats::rebuild(&carved, bounds, splat_radius, Some(&regions))
+            .expect("partial re-sampling");
+        let image = render_views_with(
+            splats,
+            Transform::from_scale(Vec3::splat(SCALE)),
+            id_settings(SplatMode::SurfaceBoxes),
+            &[view],
+            SIZE,
+            None,
+        );
+        let placement = Placement {
+            x_offset: 0,
+            mirrored: false,
+        };
+        let a = compare_ids(&expected, &image, placement);
+        let bite_reference = expected.quadric.iter().filter(|&&q| q == tool_id).count();
+        let mut bite_drawn = 0;
+        for y in 0..SIZE {
+            for x in 0..SIZE {
+                bite_drawn += usize::from(classify(&image, x, y) == Pixel::Quadric(tool_id));
+            }
+        }
+        println!(
+            "{name} carved: {:.3} % agree, {:.3} % holes; bite {bite_drawn} px drawn, \
+             {bite_reference} px in the reference",
+            100.0 * a.agree_fraction(),
+            100.0 * a.hole_fraction()
+        );
+        if !a.passes() || bite_reference < 200 || bite_drawn < bite_reference * 9 / 10 {
+            failures.push(format!(
+                "{name}: {a:?}, bite {bite_drawn} of {bite_reference}"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
