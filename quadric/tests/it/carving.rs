@@ -195,22 +195,15 @@ fn a_carve_with_another_edit_is_sampled_in_full() {
     );
 }
 
-/// Where a carve's partial re-sample spends its time (one thread):
-/// `--ignored --nocapture`.
+/// A dent's partial re-sample against a full sampling of the carved
+/// scene, medians of 15 runs on one thread (machine80, dent of radius
+/// `R / 12` on a surface point): `--ignored --nocapture`.
 #[test]
 #[ignore = "timing"]
 fn carve_timing() {
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
-        .unwrap();
-    let (scene, options, old) = sampled("machine80", 30.0);
-    let same = scene.dnf().unwrap();
-    let tool = Quadric::sphere(surface_point(&old), options.bounds.radius / 12.0).unwrap();
-    let dnf = scene
-        .carved(&[Carve::new(tool, [0.2; 3])])
-        .unwrap()
-        .dnf()
         .unwrap();
     let time = |f: &dyn Fn()| {
         let mut t: Vec<f64> = (0..15)
@@ -223,24 +216,36 @@ fn carve_timing() {
         t.sort_by(f64::total_cmp);
         t[t.len() / 2]
     };
-    let unchanged = time(&|| {
-        one.install(|| old.resample(&same).unwrap());
-    });
-    let carve = time(&|| {
-        one.install(|| old.resample(&dnf).unwrap());
-    });
-    let cost = time(&|| {
-        let _ = chisel_quadric::sampling_cost(&dnf, options.bounds);
-    });
-    let normal_form = time(&|| {
-        scene
+    for divisor in [30.0, 100.0] {
+        let (scene, options, old) = sampled("machine80", divisor);
+        let same = scene.dnf().unwrap();
+        let tool = Quadric::sphere(surface_point(&old), options.bounds.radius / 12.0).unwrap();
+        let dnf = scene
             .carved(&[Carve::new(tool, [0.2; 3])])
             .unwrap()
             .dnf()
             .unwrap();
-    });
-    eprintln!(
-        "machine80 R/30 medians: resample unchanged {unchanged:.2} ms, carve {carve:.2} ms, \
-         regions/cost tables {cost:.2} ms, carved normal form {normal_form:.2} ms"
-    );
+        let unchanged = time(&|| {
+            one.install(|| old.resample(&same).unwrap());
+        });
+        let partial = time(&|| {
+            one.install(|| old.resample(&dnf).unwrap());
+        });
+        let full = time(&|| {
+            one.install(|| RegionSamples::sample(&dnf, &options).unwrap());
+        });
+        let normal_form = time(&|| {
+            scene
+                .carved(&[Carve::new(tool, [0.2; 3])])
+                .unwrap()
+                .dnf()
+                .unwrap();
+        });
+        eprintln!(
+            "machine80 r=R/{divisor} medians: full {full:.2} ms, partial {partial:.2} ms \
+             ({:.1}x), resample of the unchanged scene {unchanged:.2} ms, carved normal form \
+             {normal_form:.3} ms",
+            full / partial
+        );
+    }
 }
