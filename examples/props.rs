@@ -4,11 +4,13 @@
 //!
 //! Keys: `1` splats (surface-aligned boxes), `2` splats (screen quads), `3`
 //! global ray tracing; `S` shaded, `B` splat bounds (the proxies
-//! themselves), `O` overdraw, `N` normals; left/right arrows orbit, up/down
-//! zoom. Without a
+//! themselves), `O` overdraw, `N` normals; `C` bites a sphere out of every
+//! prop where it is nearest the camera (`CarveProp`: props are
+//! destructible); left/right arrows orbit, up/down zoom. Without a
 //! display (or with `CHISEL_HEADLESS=1`) it renders offscreen and writes
 //! screenshots to `screenshots/props-*.png`: frame 40 shaded, frame 60 the
-//! splat bounds.
+//! splat bounds, frame 100 shaded with a bite out of each prop (carved at
+//! frame 70).
 //!
 //! ```sh
 //! cargo run --release --all-features --example props
@@ -18,8 +20,16 @@
 use bevy::prelude::*;
 use bevy_chisel::presentation::Presentation;
 use bevy_chisel::splat::{
-    ChiselSplatPlugin, QuadricProp, SplatMode, SplatOutput, SplatRadius, SplatSettings,
+    CarveProp, ChiselSplatPlugin, PropCarveRefused, PropCarved, PropSplats, QuadricProp, SplatMode,
+    SplatOutput, SplatRadius, SplatSettings,
 };
+
+/// The radius of a bite (`C`), in world units: 20 mm of the scenes.
+const BITE: f32 = 0.2;
+
+/// Headless: the props are carved at this frame.
+#[derive(Resource)]
+struct CarveAt(u32);
 
 /// World units per scene unit: the scenes are in millimetres, the world in
 /// metres at a tenth of the size (a 10 cm part is 1 unit).
@@ -65,7 +75,7 @@ fn main() -> AppExit {
     let mut presentation = Presentation::detect("props");
     if let Presentation::Headless(config) = &mut presentation {
         // Sampling runs on the async pool: give it some frames first.
-        config.capture_frames = vec![40, 60];
+        config.capture_frames = vec![40, 60, 100];
         config.max_frames = 300;
     }
     let headless = matches!(presentation, Presentation::Headless(_));
@@ -74,9 +84,10 @@ fn main() -> AppExit {
     app.add_plugins(ChiselSplatPlugin)
         .insert_resource(ClearColor(Color::srgb(0.55, 0.65, 0.8)))
         .add_systems(Startup, setup)
-        .add_systems(Update, (keys, orbit));
+        .add_systems(Update, (keys, orbit, carve, report_carves));
     if headless {
-        app.add_systems(Update, headless_tour);
+        app.insert_resource(CarveAt(70))
+            .add_systems(Update, headless_tour);
     }
     app.run()
 }
@@ -148,11 +159,57 @@ fn keys(input: Res<ButtonInput<KeyCode>>, mut settings: ResMut<SplatSettings>) {
     }
 }
 
-/// Headless: the splat bounds from frame 50 on (screenshots at 40 and 60).
+/// Headless: the splat bounds from frame 50 on, shaded again from frame 80
+/// (screenshots at 40, 60 and 100).
 fn headless_tour(mut frame: Local<u32>, mut settings: ResMut<SplatSettings>) {
     *frame += 1;
     if *frame == 50 {
         settings.output = SplatOutput::Bounds;
+    } else if *frame == 80 {
+        settings.output = SplatOutput::Shaded;
+    }
+}
+
+/// `C`: a bite out of every prop, centred on its splat nearest the camera
+/// (a point of its surface). Headless: at frame [`CarveAt`].
+fn carve(
+    input: Res<ButtonInput<KeyCode>>,
+    carve_at: Option<Res<CarveAt>>,
+    mut frame: Local<u32>,
+    cameras: Query<&GlobalTransform, With<Camera3d>>,
+    props: Query<(Entity, &GlobalTransform, &PropSplats)>,
+    mut carves: MessageWriter<CarveProp>,
+) {
+    *frame += 1;
+    let now = input.just_pressed(KeyCode::KeyC) || carve_at.is_some_and(|at| at.0 == *frame);
+    let Ok(eye) = cameras.single().map(GlobalTransform::translation) else {
+        return;
+    };
+    if !now {
+        return;
+    }
+    for (prop, transform, splats) in &props {
+        let nearest = splats
+            .0
+            .splats
+            .iter()
+            .map(|s| transform.transform_point(s.position))
+            .min_by(|a, b| a.distance_squared(eye).total_cmp(&b.distance_squared(eye)));
+        if let Some(centre) = nearest {
+            carves.write(CarveProp::sphere(prop, centre, BITE));
+        }
+    }
+}
+
+fn report_carves(
+    mut carved: MessageReader<PropCarved>,
+    mut refused: MessageReader<PropCarveRefused>,
+) {
+    for c in carved.read() {
+        info!("prop {}: drawn with {} carve(s)", c.prop, c.carves);
+    }
+    for r in refused.read() {
+        warn!("prop {}: carve refused: {}", r.prop, r.reason);
     }
 }
 

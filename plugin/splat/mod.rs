@@ -6,6 +6,9 @@
 //!   [`QuadricScene`] asset and its `.quadric.ron` loader, sampling on the async
 //!   compute pool into [`PropSplats`]; an edited scene re-samples only the
 //!   regions the edit can change (`chisel_quadric::sampling::partial`).
+//! - [`prop_carve`] — main world: [`CarveProp`] cuts a world-space sphere
+//!   from one prop instance (an ellipsoid in its local frame), re-sampled
+//!   near the bite only; [`PropCarved`] / [`PropCarveRefused`] report it.
 //! - [`material`] — [`PropMaterial`], a prop's metallic, roughness and
 //!   reflectance for Bevy's PBR lighting (base colours are the quadrics').
 //! - [`gpu`] — the GPU data layouts, declared once (`#[repr(C)]`,
@@ -91,6 +94,7 @@ mod light_visibility;
 pub mod material;
 pub mod pipeline;
 pub mod prop;
+pub mod prop_carve;
 #[cfg(any(feature = "avian", feature = "rapier"))]
 pub mod prop_collider;
 #[cfg(feature = "rapier")]
@@ -113,6 +117,9 @@ pub use material::PropMaterial;
 pub use prop::{
     PropBounds, PropGpuData, PropSampleError, PropSampling, PropSplats, QuadricProp, QuadricScene,
     SplatRadius,
+};
+pub use prop_carve::{
+    CarveProp, CarveRefusal, DEFAULT_CARVE_COLOR, PropCarveRefused, PropCarved, PropCarves,
 };
 
 /// How props are drawn.
@@ -243,9 +250,13 @@ pub struct SplatViewSettings(pub SplatSettings);
 /// The system sets of the main-world part, in order.
 #[derive(SystemSet, Clone, Debug, PartialEq, Eq, Hash)]
 pub enum SplatSystems {
-    /// Props whose component or scene changed are marked for re-sampling.
+    /// Props whose component or scene changed are marked for re-sampling,
+    /// and [`CarveProp`] messages are taken (send them before this set, or
+    /// in an earlier schedule, to have them taken in the same frame).
     Request,
-    /// Sampling tasks start and finished ones are swapped in.
+    /// Sampling tasks start and finished ones are swapped in
+    /// ([`PropCarved`] and [`PropCarveRefused`] for a sampling's carves are
+    /// sent here).
     Sample,
 }
 
@@ -265,6 +276,9 @@ impl Plugin for ChiselSplatPlugin {
             .register_type::<PropMaterial>()
             .register_type::<PropSplats>()
             .register_type::<prop::PropSampling>()
+            .add_message::<CarveProp>()
+            .add_message::<PropCarved>()
+            .add_message::<PropCarveRefused>()
             .configure_sets(
                 Update,
                 (SplatSystems::Request, SplatSystems::Sample).chain(),
@@ -272,7 +286,12 @@ impl Plugin for ChiselSplatPlugin {
             .add_systems(
                 Update,
                 (
-                    (prop::report_failed_edits, prop::request_sampling)
+                    (
+                        prop::report_failed_edits,
+                        prop::request_sampling,
+                        prop_carve::apply_carves,
+                    )
+                        .chain()
                         .in_set(SplatSystems::Request),
                     (prop::start_sampling, prop::finish_sampling)
                         .chain()

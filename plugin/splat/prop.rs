@@ -28,6 +28,7 @@ use chisel_quadric::sampling::partial::RegionSamples;
 use chisel_quadric::{BoundingSphere, SampleOptions, Scene, SplatSet, encode_normal_form};
 
 use super::gpu::{QuadricRecord, SplatRecord};
+use super::prop_carve::{CarveRefusal, PropCarveRefused, PropCarved, PropCarves};
 
 /// A quadric CSG scene as an asset, loaded from a RON scene file
 /// (`*.quadric.ron`, format in `quadric/SCENES.md`) or added in memory with
@@ -105,9 +106,11 @@ impl Default for SplatRadius {
 ///
 /// Changing the component (or the scene asset) re-samples it on the async
 /// compute pool; the previous splats are drawn until the new ones are in.
+/// Its [`PropCarves`] (carves of this instance, [`super::prop_carve`]) are
+/// cut from the scene's solid.
 #[derive(Component, Reflect, Clone, Debug)]
 #[reflect(Component)]
-#[require(Transform, Visibility)]
+#[require(Transform, Visibility, PropCarves)]
 pub struct QuadricProp {
     /// The scene.
     pub scene: Handle<QuadricScene>,
@@ -336,7 +339,7 @@ pub struct PropSampling {
     pending: bool,
     /// The running task.
     #[reflect(ignore)]
-    task: Option<Task<SamplingResult>>,
+    task: Option<Task<(SamplingResult, usize)>>,
     /// The scene failed to load, or has no bounds, and was reported.
     reported: bool,
     /// Sampling tasks started so far.
@@ -358,6 +361,11 @@ impl PropSampling {
     #[must_use]
     pub fn sampling_runs(&self) -> u64 {
         self.runs
+    }
+
+    /// Asks for a new sampling (a carve came in).
+    pub(crate) fn request(&mut self) {
+        self.pending = true;
     }
 
     /// Whether a sampling task is running or wanted.
@@ -436,9 +444,9 @@ pub(crate) fn report_failed_edits(
 pub(crate) fn start_sampling(
     scenes: Res<Assets<QuadricScene>>,
     asset_server: Res<AssetServer>,
-    mut props: Query<(Entity, &QuadricProp, &mut PropSampling)>,
+    mut props: Query<(Entity, &QuadricProp, &mut PropSampling, Option<&PropCarves>)>,
 ) {
-    for (entity, prop, mut state) in &mut props {
+    for (entity, prop, mut state, carves) in &mut props {
         if !state.pending || state.task.is_some() {
             continue;
         }
@@ -466,20 +474,28 @@ pub(crate) fn start_sampling(
         let scene = scene.0.clone();
         let radius = bounds.splat_radius(prop.radius);
         let previous = state.regions.clone();
+        let carves = carves.map(PropCarves::snapshot).unwrap_or_default();
         state.pending = false;
         state.runs += 1;
         state.task = Some(AsyncComputeTaskPool::get().spawn(async move {
-            PropSplats::rebuild(&scene, bounds, radius, previous.as_deref())
+            let result = scene
+                .carved(&carves)
+                .map_err(PropSampleError::NormalForm)
+                .and_then(|scene| PropSplats::rebuild(&scene, bounds, radius, previous.as_deref()));
+            (result, carves.len())
         }));
     }
 }
 
-/// Swaps finished samplings in.
+/// Swaps finished samplings in, and tells which carves came in or were
+/// taken back.
 pub(crate) fn finish_sampling(
     mut commands: Commands,
-    mut props: Query<(Entity, &mut PropSampling)>,
+    mut props: Query<(Entity, &mut PropSampling, Option<&mut PropCarves>)>,
+    mut carved: MessageWriter<PropCarved>,
+    mut refused: MessageWriter<PropCarveRefused>,
 ) {
-    for (entity, mut state) in &mut props {
+    for (entity, mut state, carves) in &mut props {
         // Polling is no change; a finished task is (`Changed<PropSampling>`).
         let Some(task) = state.bypass_change_detection().task.as_mut() else {
             continue;
@@ -488,14 +504,28 @@ pub(crate) fn finish_sampling(
             continue;
         };
         state.task = None;
+        let (result, carve_count) = result;
         match result {
             Ok((splats, regions)) => {
                 debug!("quadric prop {entity}: {} splats", splats.0.splat_count());
                 state.regions = Some(Arc::new(regions));
                 commands.entity(entity).insert(splats);
+                if let Some(carves) = carves.and_then(|mut c| c.sampled(carve_count)) {
+                    carved.write(PropCarved {
+                        prop: entity,
+                        carves,
+                    });
+                }
             }
             Err(message) => {
-                error!("quadric prop {entity}: {message}; the previous splats (if any) stay drawn")
+                error!("quadric prop {entity}: {message}; the previous splats (if any) stay drawn");
+                let taken_back = carves.map_or(0, |mut c| c.failed(carve_count));
+                for _ in 0..taken_back {
+                    refused.write(PropCarveRefused {
+                        prop: entity,
+                        reason: CarveRefusal::Sampling(message.clone()),
+                    });
+                }
             }
         }
     }

@@ -12,7 +12,9 @@
 //! resolution for such props.
 //!
 //! The voxels are computed on the async compute pool when a prop's splats
-//! come in (so a changed scene gets a new collider too); an engine's plugin
+//! come in (so a changed scene, or a carved prop, gets a new collider too:
+//! the voxels are those of the solid with the carves its splats include,
+//! [`super::prop_carve`]); an engine's plugin
 //! ([`super::avian::PropAvianPlugin`], [`super::rapier::PropRapierPlugin`])
 //! turns them into its static voxel collider.
 //!
@@ -36,6 +38,7 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use chisel_quadric::Dnf;
 
 use super::prop::{PropBounds, PropSplats, QuadricProp, QuadricScene};
+use super::prop_carve::PropCarves;
 
 /// Voxels along each edge of a prop's bounding cube, unless the engine's
 /// plugin says otherwise.
@@ -178,10 +181,10 @@ impl PropVoxels {
 fn start_colliders(
     settings: Res<PropColliderSettings>,
     scenes: Res<Assets<QuadricScene>>,
-    props: Query<(Entity, &QuadricProp), Changed<PropSplats>>,
+    props: Query<(Entity, &QuadricProp, Option<&PropCarves>), Changed<PropSplats>>,
     mut commands: Commands,
 ) {
-    for (entity, prop) in &props {
+    for (entity, prop, carves) in &props {
         let Some(scene) = scenes.get(&prop.scene) else {
             continue;
         };
@@ -189,9 +192,11 @@ fn start_colliders(
             continue;
         };
         let scene = scene.0.clone();
+        // The carves the new splats include.
+        let carves = carves.map_or_else(Vec::new, |c| c.carves()[..c.drawn()].to_vec());
         let resolution = settings.resolution;
         let task = AsyncComputeTaskPool::get().spawn(async move {
-            let dnf = scene.dnf()?;
+            let dnf = scene.carved(&carves)?.dnf()?;
             Ok(PropVoxels::of_solid(&dnf, bounds, resolution))
         });
         commands.entity(entity).insert(PropColliderTask(task));

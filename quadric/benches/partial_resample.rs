@@ -5,11 +5,17 @@
 //! (`RegionSamples::resample`). `cargo bench -p chisel_quadric --bench
 //! partial_resample`.
 //!
+//! Carves (`carve/…`): a sphere of radius `R / 12` centred on a surface
+//! point (the middle sample of the scene's sampling) cut from the scene
+//! (`Scene::carved`), then the carved scene sampled in full or with
+//! `RegionSamples::resample` from the uncarved sampling.
+//!
 //! Before the timings, one line per configuration on stderr gives the
 //! regions and samples kept.
 
 use chisel_quadric::sampling::partial::RegionSamples;
-use chisel_quadric::{SampleOptions, Scene, sample};
+use chisel_quadric::scene::carve::Carve;
+use chisel_quadric::{Quadric, SampleOptions, Scene, sample};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -68,5 +74,56 @@ fn partial(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, partial);
+fn carve(c: &mut Criterion) {
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    let mut group = c.benchmark_group("partial_resample");
+    group.sample_size(10);
+    for name in ["three_spheres", "machine80"] {
+        let path = format!(
+            "{}/../assets/scenes/{name}.quadric.ron",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let scene = Scene::load(path).expect("scene");
+        let sphere = scene.bounds.expect("shipped scenes give bounds");
+        let before = scene.dnf().expect("dnf");
+        for (label, divisor) in [("medium", 30.0), ("small", 100.0)] {
+            let options = SampleOptions::new(sphere.radius / divisor, sphere).expect("options");
+            let old = one
+                .install(|| RegionSamples::sample(&before, &options))
+                .expect("sampling");
+            let set = old.to_sample_set();
+            let centre = set.samples[set.samples.len() / 2].position.as_dvec3();
+            let tool = Quadric::sphere(centre, sphere.radius / 12.0).expect("tool");
+            let after = scene
+                .carved(&[Carve::new(tool, [0.2; 3])])
+                .expect("carve")
+                .dnf()
+                .expect("dnf");
+            let (new, report) = one.install(|| old.resample(&after)).expect("re-sampling");
+            eprintln!(
+                "{name} carve {label} (r = {:.2}): {} of {} old regions kept, {} of {} tool \
+                 regions run, {} of {} samples kept",
+                options.radius,
+                report.regions_kept,
+                old.region_count(),
+                new.region_count() - old.region_count() - report.regions_empty,
+                new.region_count() - old.region_count(),
+                report.samples_kept,
+                new.to_sample_set().samples.len()
+            );
+            group.bench_function(format!("carve/{name}/{label}/full"), |b| {
+                b.iter(|| one.install(|| sample(black_box(&after), &options)));
+            });
+            group.bench_function(format!("carve/{name}/{label}/partial"), |b| {
+                b.iter(|| one.install(|| old.resample(black_box(&after))));
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, partial, carve);
 criterion_main!(benches);

@@ -81,6 +81,19 @@ pub enum Error {
         /// The product limit that was hit.
         limit: usize,
     },
+    /// A scene was given more carve tools than its limit
+    /// ([`MAX_CARVES`](crate::scene::carve::MAX_CARVES) by default): every
+    /// carve adds a literal to every product of the normal form.
+    #[error(
+        "{given} carves asked for, more than the limit of {limit}; every carve adds a \
+         literal to every product of the normal form, so sampling and drawing grow with them"
+    )]
+    TooManyCarves {
+        /// The limit.
+        limit: usize,
+        /// Tools given.
+        given: usize,
+    },
     /// Sampling would emit more samples than
     /// [`SampleOptions::max_samples`](crate::SampleOptions::max_samples);
     /// nothing is returned.

@@ -39,6 +39,8 @@ mod headless_render;
 
 // Quadric props drawn as splats.
 #[cfg(feature = "props")]
+mod prop_carving;
+#[cfg(feature = "props")]
 mod prop_editing;
 #[cfg(feature = "props")]
 mod splat_culling;

@@ -32,9 +32,37 @@
 //! (they depend only on the quadric and the bounding sphere), so jobs are
 //! matched by `(a, b, k, region index)`.
 //!
-//! Edits that change the products, the options, or make a changed quadric
-//! coincide with another one (a shared surface, eq. 22's notes) fall back
-//! to a full sampling.
+//! Carves ([`Scene::carved`](crate::Scene::carved)). An edit that keeps
+//! every quadric and appends literals on new quadrics to products (a
+//! carve adds "outside `T`" to every product: `S' = ⋃ₐ (Pₐ ∩ Eₐ)`, `Eₐ`
+//! the literals appended to product `a`) keeps the jobs of the old
+//! literals, with the same heightfields, basic regions and keys, and adds
+//! the new literals' jobs, which all run. An old job is re-run unless the
+//! surface over `R` is shown clear of the edit, with the same balls and
+//! quarterings as above; a ball is clear when every appended literal `L`
+//! holds on all of it:
+//!
+//! `d(L, c) < −ρ`
+//!
+//! (`d(L, ·)` positive where `L` is false, as above: for "outside `T`",
+//! every point of `B` is outside `T`). Then every `Eₐ` is true on `B`, so
+//! `S' ∩ B = S ∩ B`: the solid, and with it the CSG surface, is the same in
+//! the ball, and the old job's samples stay valid and complete by the
+//! argument above. A small dent re-runs the old jobs whose surface comes
+//! near the tool, and the tool's own jobs, which find the CSG surface only
+//! where the tool cuts the solid.
+//!
+//! An appended literal's job (`L` of product `a`, region `R`) samples the
+//! CSG surface on `L`'s quadric where the rest of product `a` holds. When
+//! some old literal `K` of product `a` is false on every ball of `R` (the
+//! same balls and quarterings, `d(K, c) > ρ`), no surface point over `R`
+//! is in product `a`: a full sampling finds nothing there, and the job is
+//! left empty without running (counted in `regions_empty`). A dent then
+//! runs only the tool's jobs of products that reach it.
+//!
+//! Edits that change the products otherwise, the options, or make a
+//! changed or added quadric coincide with another one (a shared surface,
+//! eq. 22's notes) fall back to a full sampling.
 
 use std::collections::HashMap;
 
@@ -104,10 +132,15 @@ pub struct RegionSamples {
 pub struct ResampleReport {
     /// The quadrics of the normal form whose coefficients changed.
     pub changed_quadrics: Vec<usize>,
+    /// The literals appended to products (a carve, see the module notes).
+    pub appended_literals: Vec<Literal>,
     /// Basic regions sampled again.
     pub regions_resampled: usize,
     /// Basic regions whose samples were kept.
     pub regions_kept: usize,
+    /// Basic regions of appended literals proven empty without sampling
+    /// (their product is false on all of the surface over them).
+    pub regions_empty: usize,
     /// Samples kept from before.
     pub samples_kept: usize,
     /// `true` when the edit needed a full sampling (see the module notes).
@@ -123,9 +156,34 @@ fn job_key(patches: &[Patch], job: &Job) -> JobKey {
     (patch.product, patch.literal, job.heightfield, job.region)
 }
 
+/// What an edit changed, for the invalidation rule.
+enum Change {
+    /// A quadric's coefficients.
+    Coefficients(CoefficientChange),
+    /// A literal appended to products (a carve), as a signed bound
+    /// positive where the literal is false.
+    Appended(QuadricDistance),
+}
+
+impl Change {
+    /// Whether the solid may differ somewhere in the ball `(centre,
+    /// radius)` because of this change (the module notes).
+    fn may_differ_in(&self, centre: DVec3, radius: f64) -> bool {
+        match self {
+            Self::Coefficients(change) => change.may_differ_in(centre, radius),
+            Self::Appended(literal) => {
+                let reach = radius * (1.0 + BALL_PADDING);
+                // NaN fails the comparison: such a ball is re-sampled.
+                let holds_on_ball = literal.distance(centre) < -reach;
+                !holds_on_ball
+            }
+        }
+    }
+}
+
 /// A changed quadric's distance bounds, before and after, and the
 /// literals that can switch off the products it takes part in.
-struct Change {
+struct CoefficientChange {
     before: QuadricDistance,
     after: QuadricDistance,
     /// Per product holding the quadric: its literals on unchanged
@@ -133,7 +191,16 @@ struct Change {
     guards: Vec<Vec<QuadricDistance>>,
 }
 
-impl Change {
+/// The signed bound of `literal` of `dnf`, positive where it is false.
+fn literal_distance(dnf: &Dnf, literal: Literal) -> QuadricDistance {
+    let d = QuadricDistance::new(&dnf.quadrics()[literal.quadric].quadric);
+    match literal.side {
+        Side::Inside => d,
+        Side::Outside => d.complement(),
+    }
+}
+
+impl CoefficientChange {
     /// Whether the literals of this quadric may differ somewhere in the
     /// ball `(centre, radius)` (the invalidation rule).
     fn may_differ_in(&self, centre: DVec3, radius: f64) -> bool {
@@ -151,15 +218,16 @@ impl Change {
     }
 }
 
-/// Whether no change can alter the solid near the surface over the plane
-/// box `[lo, hi]` of `heightfield`: the box's ball passes the invalidation
-/// rule, or else each of its four quarters does (recursively, down to
-/// [`MAX_QUARTERINGS`]). The surface over a box lies in the union of its
-/// quarters' balls, which hug a curved or tilted patch far closer than the
-/// one ball around a large basic region.
+/// Whether `clear` holds for the ball around the surface over the plane
+/// box `[lo, hi]` of `heightfield`, or else for each of its four quarters'
+/// (recursively, down to [`MAX_QUARTERINGS`]). The surface over a box lies
+/// in the union of its quarters' balls, which hug a curved or tilted patch
+/// far closer than the one ball around a large basic region. With the
+/// invalidation rule as `clear`: no change can alter the solid near the
+/// surface over the box.
 fn is_clear(
     heightfield: &Heightfield,
-    changes: &[Change],
+    clear: &dyn Fn(DVec3, f64) -> bool,
     lo: DVec2,
     hi: DVec2,
     depth: u32,
@@ -168,7 +236,7 @@ fn is_clear(
     let Some((centre, radius)) = heightfield.patch_ball(lo, hi) else {
         return true;
     };
-    if !changes.iter().any(|c| c.may_differ_in(centre, radius)) {
+    if clear(centre, radius) {
         return true;
     }
     if depth >= MAX_QUARTERINGS {
@@ -182,7 +250,7 @@ fn is_clear(
         (mid, hi),
     ]
     .into_iter()
-    .all(|(a, b)| is_clear(heightfield, changes, a, b, depth + 1))
+    .all(|(a, b)| is_clear(heightfield, clear, a, b, depth + 1))
 }
 
 impl RegionSamples {
@@ -217,7 +285,11 @@ impl RegionSamples {
     ///
     /// Errors: those of [`sample`](crate::sample); `self` is unchanged.
     pub fn resample(&self, dnf: &Dnf) -> Result<(Self, ResampleReport)> {
-        let Some(changed) = self.changed_quadrics(dnf) else {
+        let (changed, appended) = if let Some(appended) = self.appended_literals(dnf) {
+            (Vec::new(), appended)
+        } else if let Some(changed) = self.changed_quadrics(dnf) {
+            (changed, Vec::new())
+        } else {
             let full = Self::sample(dnf, &self.options)?;
             let report = ResampleReport {
                 changed_quadrics: (0..dnf.quadrics().len()).collect(),
@@ -227,31 +299,32 @@ impl RegionSamples {
             };
             return Ok((full, report));
         };
-        let changes: Vec<Change> = changed
+        let mut changes: Vec<Change> = changed
             .iter()
-            .map(|&q| Change {
-                before: QuadricDistance::new(&self.quadrics[q]),
-                after: QuadricDistance::new(&dnf.quadrics()[q].quadric),
-                guards: dnf
-                    .products()
-                    .iter()
-                    .filter(|product| product.iter().any(|l| l.quadric == q))
-                    .map(|product| {
-                        product
-                            .iter()
-                            .filter(|l| !changed.contains(&l.quadric))
-                            .map(|l| {
-                                let d = QuadricDistance::new(&dnf.quadrics()[l.quadric].quadric);
-                                match l.side {
-                                    Side::Inside => d,
-                                    Side::Outside => d.complement(),
-                                }
-                            })
-                            .collect()
-                    })
-                    .collect(),
+            .map(|&q| {
+                Change::Coefficients(CoefficientChange {
+                    before: QuadricDistance::new(&self.quadrics[q]),
+                    after: QuadricDistance::new(&dnf.quadrics()[q].quadric),
+                    guards: dnf
+                        .products()
+                        .iter()
+                        .filter(|product| product.iter().any(|l| l.quadric == q))
+                        .map(|product| {
+                            product
+                                .iter()
+                                .filter(|l| !changed.contains(&l.quadric))
+                                .map(|&l| literal_distance(dnf, l))
+                                .collect()
+                        })
+                        .collect(),
+                })
             })
             .collect();
+        changes.extend(
+            appended
+                .iter()
+                .map(|&l| Change::Appended(literal_distance(dnf, l))),
+        );
         let old: HashMap<JobKey, usize> = self
             .jobs
             .iter()
@@ -259,21 +332,36 @@ impl RegionSamples {
             .map(|(i, job)| (job_key(&self.patches, job), i))
             .collect();
         let is_changed = |q: u32| changed.contains(&(q as usize));
+        let unchanged_in =
+            |centre: DVec3, radius: f64| !changes.iter().any(|c| c.may_differ_in(centre, radius));
+        let first_new = self.quadrics.len();
+        let guards = self.product_guards(dnf, &appended);
         let select = |patch: &Patch, job: &Job, region: &Region| -> bool {
             if is_changed(patch.quadric) {
                 return true;
             }
             let key = (patch.product, patch.literal, job.heightfield, job.region);
-            if !old.contains_key(&key) {
-                return true;
-            }
             let (lo, hi) = region.bounds();
-            !is_clear(&patch.heightfield, &changes, lo, hi, 0)
+            if !old.contains_key(&key) {
+                // An appended literal's job is empty where its product is
+                // false on the surface over the region (module notes).
+                let Some(guards) = guards.get(patch.product as usize) else {
+                    return true;
+                };
+                let product_off = |centre: DVec3, radius: f64| {
+                    let reach = radius * (1.0 + BALL_PADDING);
+                    guards.iter().any(|l| l.distance(centre) > reach)
+                };
+                return (patch.quadric as usize) < first_new
+                    || !is_clear(&patch.heightfield, &product_off, lo, hi, 0);
+            }
+            !is_clear(&patch.heightfield, &unchanged_in, lo, hi, 0)
         };
         let mut runs = sample_regions(dnf, &self.options, &select)?;
         let slots = std::mem::take(&mut runs.samples);
         let mut report = ResampleReport {
             changed_quadrics: changed,
+            appended_literals: appended,
             ..ResampleReport::default()
         };
         let mut samples = Vec::with_capacity(runs.jobs.len());
@@ -284,7 +372,12 @@ impl RegionSamples {
                 continue;
             }
             let key = job_key(&runs.patches, job);
-            let kept = old.get(&key).map_or_else(Vec::new, |&i| {
+            let Some(&i) = old.get(&key) else {
+                report.regions_empty += 1;
+                samples.push(Vec::new());
+                continue;
+            };
+            let kept = {
                 // The same literal and heightfield; only its patch index may
                 // have moved (a changed quadric's literals can have another
                 // number of heightfields).
@@ -294,8 +387,8 @@ impl RegionSamples {
                         patch: job.patch,
                         ..*s
                     })
-                    .collect()
-            });
+                    .collect::<Vec<_>>()
+            };
             report.regions_kept += 1;
             report.samples_kept += kept.len();
             samples.push(kept);
@@ -314,6 +407,77 @@ impl RegionSamples {
             },
             report,
         ))
+    }
+
+    /// Per product, the bounds of its literals on the sampled normal
+    /// form's quadrics, positive where the literal is false; empty when
+    /// nothing was `appended`.
+    fn product_guards(&self, dnf: &Dnf, appended: &[Literal]) -> Vec<Vec<QuadricDistance>> {
+        if appended.is_empty() {
+            return Vec::new();
+        }
+        let first_new = self.quadrics.len();
+        let bounds: Vec<QuadricDistance> = self.quadrics.iter().map(QuadricDistance::new).collect();
+        dnf.products()
+            .iter()
+            .map(|product| {
+                product
+                    .iter()
+                    .filter(|l| l.quadric < first_new)
+                    .map(|l| match l.side {
+                        Side::Inside => bounds[l.quadric],
+                        Side::Outside => bounds[l.quadric].complement(),
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The distinct literals appended to products when `dnf` is a carve of
+    /// the sampled normal form (module notes): the same quadrics followed
+    /// by new ones, each product the old one followed by literals on new
+    /// quadrics only, at least one. `None` otherwise, or when a new quadric
+    /// coincides with another one or its negation.
+    fn appended_literals(&self, dnf: &Dnf) -> Option<Vec<Literal>> {
+        let old = self.quadrics.len();
+        let new = dnf.quadrics();
+        if new.len() <= old || dnf.products().len() != self.products.len() {
+            return None;
+        }
+        let bits = |q: &Quadric| q.coefficients().map(|c| (c + 0.0).to_bits());
+        let negated = |q: &Quadric| q.coefficients().map(|c| (0.0 - c).to_bits());
+        if self
+            .quadrics
+            .iter()
+            .zip(new)
+            .any(|(a, b)| bits(a) != bits(&b.quadric))
+        {
+            return None;
+        }
+        let mut appended: Vec<Literal> = Vec::new();
+        for (before, after) in self.products.iter().zip(dnf.products()) {
+            let tail = after.strip_prefix(before.as_slice())?;
+            if tail.iter().any(|l| l.quadric < old) {
+                return None;
+            }
+            appended.extend_from_slice(tail);
+        }
+        appended.sort_unstable();
+        appended.dedup();
+        if appended.is_empty() {
+            return None;
+        }
+        for (i, q) in new.iter().enumerate().skip(old) {
+            let coincides = new.iter().enumerate().any(|(j, other)| {
+                j != i
+                    && (bits(&other.quadric) == bits(&q.quadric)
+                        || bits(&other.quadric) == negated(&q.quadric))
+            });
+            if coincides {
+                return None;
+            }
+        }
+        Some(appended)
     }
 
     /// The quadrics whose coefficients differ in `dnf`, or `None` when the

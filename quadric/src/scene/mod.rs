@@ -49,6 +49,7 @@
 //! unknown or duplicate name) at the name's first mention.
 
 mod build;
+pub mod carve;
 mod spec;
 
 use std::path::Path;

@@ -18,6 +18,7 @@ mod dnf_equivalence;
 mod reference_tracer;
 
 // Sampling into splats.
+mod carving;
 mod curved_regions;
 mod partial_resampling;
 mod sampling_guarantees;

@@ -91,7 +91,9 @@ fn an_unchanged_scene_keeps_every_region() {
 
 #[test]
 fn a_new_structure_is_sampled_in_full() {
-    // A fourth cylinder adds a literal to the product.
+    // A fourth cylinder adds a literal to the product: an appended literal
+    // on a new quadric, re-sampled as a carve (`carving.rs`). The reverse
+    // edit, a literal taken out, changes the products otherwise.
     let (before, _, options) = edited("classic", "", "", 30.0);
     let text = scene_text("classic")
         .replace(
@@ -99,18 +101,26 @@ fn a_new_structure_is_sampled_in_full() {
             "        (name: \"bore_w\", shape: Cylinder(point: (0, 0, 0), axis: (1, 1, 0), radius: 10)),\n    ],\n    root",
         )
         .replace("Ref(\"bore_z\"),", "Ref(\"bore_z\"),\n        Ref(\"bore_w\"),");
-    let after = Scene::from_ron(&text).unwrap().dnf().unwrap();
+    let (before, after) = (Scene::from_ron(&text).unwrap().dnf().unwrap(), before);
     assert_ne!(after.products(), before.products());
     let regions = RegionSamples::sample(&before, &options).unwrap();
     let (full, report) = regions.resample(&after).unwrap();
     assert!(report.full && report.regions_kept == 0);
     assert_eq!(full.to_sample_set(), sample(&after, &options).unwrap());
+    // Forwards: partial, and valid.
+    let regions = RegionSamples::sample(&after, &options).unwrap();
+    let (partial, report) = regions.resample(&before).unwrap();
+    assert!(
+        !report.full && report.appended_literals.len() == 1,
+        "{report:?}"
+    );
+    assert_valid("classic", &before, &partial.to_sample_set());
 }
 
 /// Every region holds the full sampling's samples (re-sampled) or those
 /// of before (kept; patch indices renumbered). Returns the number of
 /// regions whose samples differ from the full sampling's (kept ones).
-fn compare_with_full(
+pub(crate) fn compare_with_full(
     name: &str,
     partial: &RegionSamples,
     before: &RegionSamples,
@@ -138,7 +148,7 @@ fn compare_with_full(
 /// Every traced point of `dnf`'s surface inside the bounds has a sample on
 /// the same quadric within the splat radius; every sample lies on the
 /// surface.
-fn assert_valid(name: &str, dnf: &Dnf, set: &SampleSet) {
+pub(crate) fn assert_valid(name: &str, dnf: &Dnf, set: &SampleSet) {
     let sphere = set.options.bounds;
     let (centre, bound) = (sphere.centre, sphere.radius);
     let grid = common::SampleGrid::new(set, set.options.radius);

@@ -457,6 +457,14 @@ macro_rules! prop_physics_tests {
                     super::$engine,
                 >($scale);
             }
+
+            $(#[$attribute])*
+            #[test]
+            fn a_ball_falls_through_a_bite_carved_out_of_a_ring_prop() {
+                crate::terrain_physics::props::a_ball_falls_through_a_bite_carved_out_of_a_ring_prop::<
+                    super::$engine,
+                >($scale);
+            }
         }
     };
 }

@@ -15,7 +15,9 @@ use bevy::prelude::*;
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::quadric::Scene;
 use bevy_chisel::splat::prop_collider::{PropCollider, PropColliderShape};
-use bevy_chisel::splat::{ChiselSplatPlugin, PropBounds, QuadricProp, QuadricScene, SplatRadius};
+use bevy_chisel::splat::{
+    CarveProp, ChiselSplatPlugin, PropBounds, QuadricProp, QuadricScene, SplatRadius,
+};
 use bevy_chisel::terrain::Terrain;
 
 use super::{Engine, physics_app, settle, step};
@@ -249,5 +251,47 @@ pub(super) fn a_ring_prop_scaled_again_and_mirrored_holds_a_ball_at_its_new_size
         (rest.y - (ring.top() + radius)).abs() < CONTACT,
         "the ball should rest on the rescaled ring's top at y = {}, it is at {rest}",
         ring.top() + radius
+    );
+}
+
+pub(super) fn a_ball_falls_through_a_bite_carved_out_of_a_ring_prop<E: Engine>(scale: f32) {
+    // A sphere of radius 4 around the middle of the band cuts through its
+    // whole thickness (4) and width (5): the collider is voxelized again
+    // from the carved solid, and a ball that rested on the band (see
+    // above) falls through the gap onto the ground.
+    let _one = ONE_APP_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let ring = Ring { scale };
+    let (mut app, prop) = app_with_ring::<E>(ring);
+    let voxels = app
+        .world()
+        .get::<PropCollider>(prop)
+        .expect("a collider")
+        .voxels;
+    let middle = (ring.hole() + ring.outer()) / 2.0;
+    let centre = Vec3::new(middle, ring.centre_height(), 0.0);
+    app.world_mut()
+        .write_message(CarveProp::sphere(prop, centre, 4.0 * scale));
+    let mut carved = false;
+    for _ in 0..20_000 {
+        app.update();
+        if app
+            .world()
+            .get::<PropCollider>(prop)
+            .is_some_and(|c| c.voxels < voxels)
+        {
+            carved = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_micros(300));
+    }
+    assert!(carved, "the carved prop's collider did not come in");
+    step(&mut app, 1);
+    let radius = 1.0 * scale;
+    let rest = drop_ball_in::<E>(&mut app, ring, radius, middle, 0.0);
+    assert!(
+        (rest.y - radius).abs() < CONTACT,
+        "the ball should fall through the bite onto the ground at y = {radius}, it is at {rest}"
     );
 }
