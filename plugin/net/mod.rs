@@ -12,7 +12,11 @@
 //! octree and the rules a carve depends on, without the journal) and then
 //! the carves after it. The server sends its state hash ([`crate::terrain::Terrain::state_hash`])
 //! every [`NetLimits::check_interval`]; a client whose hash after the same
-//! carve differs reports it and gets a fresh snapshot.
+//! carve differs reports it and gets a fresh snapshot. Undos and redos
+//! ([`crate::terrain::UndoCarve`], [`crate::terrain::RedoCarve`]) of a
+//! networked terrain are ops of the same order ([`undo`]): the server's
+//! reach every client, a client's are requests the server's
+//! [`UndoPolicy`] allows or refuses.
 //!
 //! ## Roles
 //!

@@ -24,6 +24,14 @@
 //!   with [`Terrain::max_undo`] under `k` the client drops its
 //!   predictions and asks for a snapshot instead, as after a desync.
 //!
+//! The server's undo or redo (module [`super::undo`]) matches no
+//! prediction: the predictions are rolled back the same way, the undo
+//! applied, and they are queued again on top of it. A prediction's undo
+//! step keeps the redo steps its carve cleared, so that a roll back leaves
+//! them as they were for the server's redos; a confirmed prediction's
+//! step is undone (and redone) by the server's order like any carve's.
+//! The undo itself is never predicted.
+//!
 //! A [`RejectReason`](super::RejectReason) answer for a request whose
 //! prediction is pending rolls the predictions back the same way, without
 //! that one (the oldest pending prediction of that request id: a game

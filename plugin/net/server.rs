@@ -3,12 +3,14 @@
 //! carves with their sequence numbers, answers every request, sends hash
 //! checks, and snapshots to clients that join or fall out of step.
 //!
-//! Per terrain, accepted carves are numbered 1, 2, … in the order they are
-//! queued, which is the order the terrain applies them in. A carve is sent
-//! as a [`GridCarve`] whose request id is its sequence number, so the
-//! terrain's [`Terrain::last_request`] names the last carve in its octree:
-//! a snapshot taken at any moment holds exactly carves `1..=last_request`,
-//! and the carves after it are kept in a log until the terrain has them.
+//! Per terrain, accepted carves and undos (module [`super::undo`]) are
+//! numbered 1, 2, … and queued on the terrain as they are numbered, which
+//! is the order the terrain applies them in. A carve is queued as a
+//! [`GridCarve`](crate::terrain::GridCarve) whose request id is its
+//! sequence number would be, an undo with its number likewise, so the
+//! terrain's [`Terrain::last_request`] names the last op in its octree:
+//! a snapshot taken at any moment holds exactly ops `1..=last_request`,
+//! and the ops after it are kept in a log until the terrain has them.
 //!
 //! These systems hold the authority: they run while the app is no
 //! connected client (`ClientState::Disconnected`), on a dedicated server,
@@ -399,7 +401,7 @@ fn receive_requests(
                 terrain,
                 redo,
             }) => {
-                let request = Some(*request);
+                let (id, request) = (*request, Some(*request));
                 if !allow(&mut ledger, client, &limits) {
                     stats.rejected += 1;
                     reject(request, RejectReason::RateLimited, true);
@@ -431,7 +433,7 @@ fn receive_requests(
                 out.write(ToClients {
                     targets: SendTargets::Single(client),
                     message: ServerPacket::UndoResult {
-                        request: request.unwrap_or(0),
+                        request: id,
                         outcome: Outcome::Applied { seq: undo.seq },
                     },
                 });

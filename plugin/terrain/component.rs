@@ -290,7 +290,8 @@ impl Terrain {
 
     /// The request id of the latest tracked carve ([`super::GridCarve`])
     /// the octree includes, whether the kernel applied or refused it
-    /// (`None` before the first). A snapshot taken now ([`Terrain::to_bytes`])
+    /// (`None` before the first); on a replicated terrain (feature `net`),
+    /// of the latest op of its network order, carve or undo. A snapshot taken now ([`Terrain::to_bytes`])
     /// holds exactly the tracked carves up to this one.
     #[must_use]
     pub fn last_request(&self) -> Option<u64> {

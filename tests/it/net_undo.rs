@@ -296,9 +296,9 @@ fn undos_among_predicting_clients_keep_every_terrain_identical() {
     let mut b = player(addr, 2, true);
     let mut c = player(addr, 3, false);
     join(&mut [&mut server, &mut a, &mut b, &mut c]);
-    let mut rng = Rng(0x5EED_0D0);
+    let mut rng = Rng(0x5EED_00D0);
     let mut next = 0u64;
-    for round in 0..12 {
+    for round in 0..24 {
         for _ in 0..(1 + rng.next() % 3) {
             for app in [&mut a, &mut b] {
                 let (tool, edit) = random_carve(&mut rng);
@@ -332,7 +332,7 @@ fn undos_among_predicting_clients_keep_every_terrain_identical() {
     );
     let s = server_stats(&server);
     println!("server: {s:?}");
-    assert!(s.undos >= 6, "undos were ordered: {s:?}");
+    assert!(s.undos >= 12, "undos were ordered: {s:?}");
     for (name, app) in [("a", &a), ("b", &b), ("c", &c)] {
         let s = stats(app);
         println!("{name}: {s:?}");
