@@ -9,7 +9,8 @@ use crate::{ONE_APP_AT_A_TIME, net};
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{Edit, StateHash};
 use bevy_chisel::net::{
-    NetClientSettings, NetClientStats, NetServerStats, NetUndoResult, Outcome, RejectReason,
+    ClientPacket, ClientRequest, NetClientSettings, NetClientStats, NetLimits, NetServerStats,
+    NetUndoResult, Outcome, RejectReason, ServerPacket, UndoPolicy,
 };
 use bevy_chisel::terrain::{CarveTool, RedoCarve, Terrain, UndoCarve};
 use net::{Rng, client, random_carve, request, run_until, server, slab, terrain_of};
@@ -22,6 +23,18 @@ fn record_answers(mut seen: ResMut<UndoAnswers>, mut results: MessageReader<NetU
     seen.0.extend(results.read().cloned());
 }
 
+/// The answers to undo requests as they came over the wire.
+#[derive(Resource, Default)]
+struct WireAnswers(Vec<(u64, Outcome)>);
+
+fn record_wire(mut seen: ResMut<WireAnswers>, mut packets: MessageReader<ServerPacket>) {
+    for packet in packets.read() {
+        if let ServerPacket::UndoResult { request, outcome } = packet {
+            seen.0.push((*request, outcome.clone()));
+        }
+    }
+}
+
 /// A client connecting to `addr` that records its undo answers (and
 /// predicts its own carves, or not).
 fn player(addr: std::net::SocketAddr, id: u64, predict: bool) -> App {
@@ -30,7 +43,8 @@ fn player(addr: std::net::SocketAddr, id: u64, predict: bool) -> App {
         predict_own_carves: predict,
     })
     .init_resource::<UndoAnswers>()
-    .add_systems(Last, record_answers);
+    .init_resource::<WireAnswers>()
+    .add_systems(Last, (record_answers, record_wire));
     app
 }
 
@@ -242,6 +256,24 @@ fn a_client_undoes_and_redoes_its_own_carve_but_not_anothers() {
             "{name}: no snapshot after the join"
         );
     }
+    // A request naming no terrain gets a typed refusal.
+    b.world_mut()
+        .write_message(ClientPacket::Request(ClientRequest::Undo {
+            request: 99,
+            terrain: 42,
+            redo: false,
+        }));
+    run_until(&mut [&mut server, &mut a, &mut b], 20_000, |apps| {
+        (apps[2].world().resource::<WireAnswers>().0)
+            .iter()
+            .any(|(request, _)| *request == 99)
+    });
+    let wire = &b.world().resource::<WireAnswers>().0;
+    assert_eq!(
+        wire.last(),
+        Some(&(99, Outcome::Rejected(RejectReason::UnknownTerrain(42))))
+    );
+    assert!(state(&mut server) == carved, "nothing changed");
 }
 
 #[test]
@@ -291,7 +323,13 @@ fn undos_among_predicting_clients_keep_every_terrain_identical() {
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let mut terrain = slab();
     terrain = terrain.with_max_undo(32);
-    let (mut server, addr) = server(terrain, net::unlimited());
+    // Any client may undo the latest carve: the clients' undos meet
+    // their own and each other's predictions.
+    let limits = NetLimits {
+        undo: UndoPolicy::Anyone,
+        ..net::unlimited()
+    };
+    let (mut server, addr) = server(terrain, limits);
     let mut a = player(addr, 1, true);
     let mut b = player(addr, 2, true);
     let mut c = player(addr, 3, false);
@@ -340,9 +378,11 @@ fn undos_among_predicting_clients_keep_every_terrain_identical() {
     }
     let rolled: u64 = [&a, &b].iter().map(|app| stats(app).rollbacks).sum();
     assert!(rolled > 0, "undos met pending predictions");
-    assert!(
-        answers(&a)
+    for app in [&a, &b] {
+        let outcomes = answers(app);
+        let applied = outcomes
             .iter()
-            .any(|o| matches!(o, Outcome::Applied { .. }))
-    );
+            .filter(|o| matches!(o, Outcome::Applied { .. }));
+        assert!(applied.count() > 0, "the clients' undos were ordered");
+    }
 }

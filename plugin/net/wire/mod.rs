@@ -634,6 +634,51 @@ mod tests {
         assert!(decode(&lying).is_err(), "a lying length");
     }
 
+    /// The undo messages come after the older variants (postcard writes
+    /// the variant index first), so older encodings keep their meaning;
+    /// a truncated or unknown request is malformed, not a panic.
+    #[test]
+    fn undo_messages_are_appended_and_hostile_bytes_refused() {
+        let undo = ServerPacket::Undo(NetUndo {
+            terrain: 1,
+            seq: 2,
+            redo: true,
+        });
+        let bytes = postcard::to_allocvec(&undo).unwrap();
+        assert_eq!(bytes, [8, 1, 2, 1]);
+        assert_eq!(postcard::from_bytes::<ServerPacket>(&bytes).unwrap(), undo);
+        let answer = ServerPacket::UndoResult {
+            request: 3,
+            outcome: Outcome::Rejected(RejectReason::NotYourCarve { seq: 4 }),
+        };
+        let bytes = postcard::to_allocvec(&answer).unwrap();
+        assert_eq!(bytes, [9, 3, 1, 12, 4]);
+        assert_eq!(
+            postcard::from_bytes::<ServerPacket>(&bytes).unwrap(),
+            answer
+        );
+        let request = ClientRequest::Undo {
+            request: 5,
+            terrain: 6,
+            redo: false,
+        };
+        let bytes = postcard::to_allocvec(&request).unwrap();
+        assert_eq!(bytes, [4, 5, 6, 0]);
+        assert_eq!(
+            client_packet_from_bytes(&bytes),
+            ClientPacket::Request(request)
+        );
+        for hostile in [&bytes[..3], &[4, 5, 6, 2], &[5, 0]] {
+            assert!(
+                matches!(
+                    client_packet_from_bytes(hostile),
+                    ClientPacket::Malformed { .. }
+                ),
+                "{hostile:?}"
+            );
+        }
+    }
+
     #[test]
     fn a_round_shape_counts_its_most_corners() {
         let wire = WireTool::from(&CarveTool::capsule(1.0, 1.0, Transform::IDENTITY));
