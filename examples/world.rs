@@ -9,9 +9,10 @@
 //! same on every machine); the chunks are 20.48 m cubes, each an ordinary
 //! destructible terrain. The HUD shows the chunk counts and build times.
 //!
-//! `U` takes the last crater back, in every chunk it reached. `F5` saves
-//! the world's edited chunks in the background (`SaveWorld`: only the
-//! chunks changed since the last save are written, off the main thread),
+//! `U` takes the last crater back, in every chunk it reached, and `R` puts
+//! it back again. `F5` saves the world's edited chunks in the background
+//! (`SaveWorld`: only the chunks changed since the last save are written,
+//! off the main thread),
 //! a window autosaves every 30 s, and `F9` loads the last save (the world
 //! entity is spawned again and its chunks stream in from the files).
 //!
@@ -39,8 +40,8 @@ use bevy_chisel::terrain::{
     LodSettings, NoiseOctave, SaveWorld, StreamSettings, Terrain, TerrainError, TerrainFocus,
     TerrainMaterials, TerrainPlugin, TerrainSurface, TerrainSystems, TerrainWorld,
     TriplanarMaterial, TriplanarMaterialPlugin, ValueNoise, WorldCarve, WorldChunk, WorldLayout,
-    WorldLod, WorldSaveFailed, WorldSaved, WorldSource, WorldUndo, WorldUndoRejected, WorldUndone,
-    surface_table,
+    WorldLod, WorldRedo, WorldRedoRejected, WorldRedone, WorldSaveFailed, WorldSaved, WorldSource,
+    WorldUndo, WorldUndoRejected, WorldUndone, surface_table,
 };
 use bevy_chisel::viewer::{Overlay, blast, overlay_text};
 
@@ -271,6 +272,8 @@ struct Flight {
     craters: usize,
     /// Craters taken back with `U`.
     undone: usize,
+    /// Craters put back with `R`.
+    redone: usize,
     /// Headless: frames counted towards the captures.
     counted: u32,
 }
@@ -478,26 +481,40 @@ fn save_and_load(
 }
 
 /// `U` takes the last crater back in every chunk it reached
-/// ([`WorldUndo`]); the answer is logged.
+/// ([`WorldUndo`]), `R` puts the last one taken back there again
+/// ([`WorldRedo`]); the answers are logged.
 fn undo_crater(
     keys: Option<Res<ButtonInput<KeyCode>>>,
     worlds: Query<Entity, With<TerrainWorld>>,
     mut flight: ResMut<Flight>,
-    mut undos: MessageWriter<WorldUndo>,
-    mut undone: MessageReader<WorldUndone>,
-    mut refused: MessageReader<WorldUndoRejected>,
+    mut requests: (MessageWriter<WorldUndo>, MessageWriter<WorldRedo>),
+    mut undone: (MessageReader<WorldUndone>, MessageReader<WorldRedone>),
+    mut refused: (
+        MessageReader<WorldUndoRejected>,
+        MessageReader<WorldRedoRejected>,
+    ),
 ) {
-    if let (Some(keys), Ok(world)) = (keys, worlds.single())
-        && keys.just_pressed(KeyCode::KeyU)
-    {
-        undos.write(WorldUndo { world });
+    if let (Some(keys), Ok(world)) = (keys, worlds.single()) {
+        if keys.just_pressed(KeyCode::KeyU) {
+            requests.0.write(WorldUndo { world });
+        }
+        if keys.just_pressed(KeyCode::KeyR) {
+            requests.1.write(WorldRedo { world });
+        }
     }
-    for done in undone.read() {
+    for done in undone.0.read() {
         flight.undone += 1;
         info!("crater undone in chunks {:?}", done.chunks);
     }
-    for refusal in refused.read() {
+    for done in undone.1.read() {
+        flight.redone += 1;
+        info!("crater redone in chunks {:?}", done.chunks);
+    }
+    for refusal in refused.0.read() {
         warn!("undo refused: {}", refusal.reason);
+    }
+    for refusal in refused.1.read() {
+        warn!("redo refused: {}", refusal.reason);
     }
 }
 
@@ -552,8 +569,9 @@ fn update_hud(
     let lines = [
         "bevy_chisel world: streamed exact terrain chunks".to_owned(),
         format!(
-            "flown {:.0} m | craters {} ({} undone, U undoes the last) | triangles {triangles}",
-            flight.distance, flight.craters, flight.undone
+            "flown {:.0} m | craters {} ({} undone, {} redone; U undo, R redo) | triangles \
+             {triangles}",
+            flight.distance, flight.craters, flight.undone, flight.redone
         ),
         format!(
             "{}{} | F5 save, F9 load, autosave every {} s",

@@ -167,7 +167,8 @@ pub mod prelude {
         HeightLayer, Heightfield, RedoCarve, Terrain, TerrainCarveRejected, TerrainCarved,
         TerrainCell, TerrainCellChanged, TerrainCellRebuilt, TerrainDebris, TerrainError,
         TerrainHit, TerrainPlugin, TerrainSettings, TerrainSystems, TerrainWorld, UndoCarve,
-        WorldCarve, WorldUndo, WorldUndoRejected, WorldUndone,
+        WorldCarve, WorldRedo, WorldRedoRejected, WorldRedone, WorldUndo, WorldUndoRejected,
+        WorldUndone,
     };
     #[cfg(all(feature = "terrain", feature = "render"))]
     pub use crate::terrain::{

@@ -110,8 +110,10 @@ pub struct UndoCarve {
 /// are ops of the terrain's network order, like its carves (module
 /// `bevy_chisel::net::undo`): the server's go to every client, which
 /// applies them exactly; a client's are requests the server allows or
-/// refuses (`NetLimits::undo`), answered by a `NetUndoResult`. A world has
-/// no redo: a [`super::WorldUndo`] is not redone.
+/// refuses (`NetLimits::undo`), answered by a `NetUndoResult`. A
+/// [`super::WorldUndo`] is redone with [`super::WorldRedo`], not with
+/// this. A chunk of a world keeps its redo steps when it streams out and
+/// back in unchanged (`world::redo`, "Streaming").
 #[derive(Message, Reflect, Clone, Copy, Debug)]
 pub struct RedoCarve {
     /// The terrain entity.

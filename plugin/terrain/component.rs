@@ -332,8 +332,9 @@ impl Terrain {
     }
 
     /// How many undone carves can be redone now ([`super::RedoCarve`]):
-    /// the undos since the last carve, none after a carve, a load or a
-    /// detach across chunk borders.
+    /// the undos since the last carve, none after a carve, a load, a
+    /// detach across chunk borders or a world undo or redo of the chunk
+    /// (a world chunk keeps them while it streams out and in unchanged).
     #[must_use]
     pub fn redo_depth(&self) -> usize {
         self.redo.len()

@@ -80,7 +80,7 @@ pub(crate) struct Runtime {
     /// its undo steps, `world::undo`, and its saves, `world::store`).
     pub(crate) records_landed: bool,
     /// Tracked carves applied or refused since the world last looked.
-    pub(crate) landed: Vec<super::world::undo::Landed>,
+    pub(crate) landed: Vec<super::world::history::Landed>,
     /// The request ids of the carves in the running job (`None` for an
     /// untracked one); empty while no carve job runs. Not in the octree
     /// yet: a world's save may leave them out (`world::store`).
@@ -115,10 +115,12 @@ pub(crate) enum Job {
         /// As [`Job::Undo`]'s `request`.
         request: Option<u64>,
     },
-    /// Holds the queue until the world's undo of world step `request` is
-    /// carried out in every chunk it changed (`world::undo`): the jobs
-    /// behind it were asked for after that undo.
-    HoldForWorldUndo { request: u64 },
+    /// Holds the queue until the world's undo or redo whose hold is
+    /// `hold` is carried out in every chunk it changes (`world::undo`,
+    /// `world::redo`): the jobs behind it were asked for after it.
+    HoldForWorldUndo {
+        hold: u64,
+    },
     /// Seal the cells again at new outside points (the wall points of
     /// neighbouring chunks on the cube's sides), and shade them again with
     /// new outside wedges (those chunks' surface around the points).

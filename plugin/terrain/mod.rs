@@ -175,8 +175,9 @@ pub use world::{
     ChunkCoord, ChunkOffstage, DEFAULT_MAX_DEFERRED_CARVES, DEFAULT_MAX_SAVE_WAIT,
     DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES, HeightArray, LodMesh, LodSettings,
     LodStats, NoiseOctave, SaveWorld, StreamSettings, TerrainFocus, TerrainWorld, ValueNoise,
-    WorldCarve, WorldChunk, WorldLayout, WorldLod, WorldSaveFailed, WorldSaved, WorldSource,
-    WorldStats, WorldUndo, WorldUndoRefusal, WorldUndoRejected, WorldUndone,
+    WorldCarve, WorldChunk, WorldLayout, WorldLod, WorldRedo, WorldRedoRefusal, WorldRedoRejected,
+    WorldRedone, WorldSaveFailed, WorldSaved, WorldSource, WorldStats, WorldUndo, WorldUndoRefusal,
+    WorldUndoRejected, WorldUndone,
 };
 
 /// The terrain systems, in this order, in the schedule [`TerrainPlugin`]
@@ -263,6 +264,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .add_message::<WorldUndo>()
         .add_message::<WorldUndone>()
         .add_message::<WorldUndoRejected>()
+        .add_message::<WorldRedo>()
+        .add_message::<WorldRedone>()
+        .add_message::<WorldRedoRejected>()
         .add_message::<SaveWorld>()
         .add_message::<WorldSaved>()
         .add_message::<WorldSaveFailed>()
@@ -289,6 +293,9 @@ fn build_terrain(app: &mut App, schedule: InternedScheduleLabel) {
         .register_type::<WorldUndo>()
         .register_type::<WorldUndone>()
         .register_type::<WorldUndoRejected>()
+        .register_type::<WorldRedo>()
+        .register_type::<WorldRedone>()
+        .register_type::<WorldRedoRejected>()
         .register_type::<SaveWorld>()
         .register_type::<WorldSaved>()
         .register_type::<WorldSaveFailed>()

@@ -107,6 +107,8 @@ mod terrain_world_seams;
 #[cfg(feature = "terrain")]
 mod world_probe;
 #[cfg(feature = "terrain")]
+mod world_redo;
+#[cfg(feature = "terrain")]
 mod world_save;
 #[cfg(feature = "terrain")]
 mod world_save_cut;
@@ -114,7 +116,6 @@ mod world_save_cut;
 mod world_save_seeds;
 #[cfg(feature = "terrain")]
 mod world_save_wait;
-#[cfg(feature = "terrain")]
 mod world_undo;
 #[cfg(feature = "terrain")]
 mod world_undo_seeds;

@@ -9,9 +9,9 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
+use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
 use bevy::tasks::IoTaskPool;
@@ -65,8 +65,10 @@ pub(super) fn save_app(world: TerrainWorld) -> (App, Entity, Entity) {
 }
 
 pub(super) fn save_app_at(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
+    let share = IoPoolShare::take();
     let (mut app, world, focus) = app_with(world, focus);
-    app.init_resource::<Heard>()
+    app.insert_resource(share)
+        .init_resource::<Heard>()
         .add_systems(Update, hear.after(TerrainSystems::Mesh));
     (app, world, focus)
 }
@@ -370,30 +372,105 @@ fn a_failed_save_names_the_path_and_leaves_the_record_as_it_was() {
     let _ = std::fs::remove_dir_all(&parent);
 }
 
+/// Who uses Bevy's I/O task pool among the save tests. The pool is global
+/// to the test binary, so while one test holds all of its threads
+/// ([`IoPoolHeld`]) the saves of the tests running beside it would wait,
+/// and those that bound the frames a save may take would fail. Each save
+/// test's app keeps an [`IoPoolShare`]; holding the pool waits until no
+/// other test has one, and a share waits while the pool is held.
+struct IoPoolGate {
+    shares: usize,
+    held: bool,
+}
+
+static IO_POOL_GATE: Mutex<IoPoolGate> = Mutex::new(IoPoolGate {
+    shares: 0,
+    held: false,
+});
+static IO_POOL_TURN: Condvar = Condvar::new();
+
+/// The gate, also after a test panicked while it had it.
+fn io_pool_gate() -> MutexGuard<'static, IoPoolGate> {
+    IO_POOL_GATE.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// A save test's use of the I/O task pool, for as long as its app lives.
+#[derive(Resource)]
+pub(super) struct IoPoolShare;
+
+impl IoPoolShare {
+    /// Waits while another test holds the pool.
+    pub(super) fn take() -> Self {
+        let mut gate = io_pool_gate();
+        while gate.held {
+            gate = IO_POOL_TURN
+                .wait(gate)
+                .unwrap_or_else(PoisonError::into_inner);
+        }
+        gate.shares += 1;
+        Self
+    }
+}
+
+impl Drop for IoPoolShare {
+    fn drop(&mut self) {
+        io_pool_gate().shares -= 1;
+        IO_POOL_TURN.notify_all();
+    }
+}
+
 /// Holds every thread of the I/O task pool until dropped, so that a save
 /// started meanwhile is surely still being written in the next frames.
 struct IoPoolHeld(Arc<AtomicBool>);
 
 impl IoPoolHeld {
+    /// Waits until the calling test's app (one [`IoPoolShare`]) is the
+    /// pool's only user, then returns once every thread of the pool runs
+    /// one of its blockers: a blocker only queued could run after a save
+    /// spawned later (a busy machine wakes the pool's threads late, and a
+    /// thread may take the save first), and the save would be written at
+    /// once.
     fn new() -> Self {
+        let mut gate = io_pool_gate();
+        while gate.held || gate.shares > 1 {
+            gate = IO_POOL_TURN
+                .wait(gate)
+                .unwrap_or_else(PoisonError::into_inner);
+        }
+        gate.held = true;
+        drop(gate);
         let released = Arc::new(AtomicBool::new(false));
+        let started = Arc::new(AtomicUsize::new(0));
         let pool = IoTaskPool::get();
-        for _ in 0..pool.thread_num().max(1) {
-            let released = released.clone();
+        let threads = pool.thread_num().max(1);
+        for _ in 0..threads {
+            let (released, started) = (released.clone(), started.clone());
             pool.spawn(async move {
+                started.fetch_add(1, Ordering::AcqRel);
                 while !released.load(Ordering::Acquire) {
                     std::thread::sleep(Duration::from_millis(1));
                 }
             })
             .detach();
         }
-        Self(released)
+        let held = Self(released);
+        let begun = Instant::now();
+        while started.load(Ordering::Acquire) < threads {
+            assert!(
+                begun.elapsed() < Duration::from_secs(60),
+                "the I/O pool's {threads} threads did not all take a blocker"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        held
     }
 }
 
 impl Drop for IoPoolHeld {
     fn drop(&mut self) {
         self.0.store(true, Ordering::Release);
+        io_pool_gate().held = false;
+        IO_POOL_TURN.notify_all();
     }
 }
 

@@ -17,7 +17,7 @@ use bevy_chisel::terrain::{
 use super::terrain_world::{app_with, settle, the_world, world as new_world};
 
 /// A box tool with grid corners `min` and `max` (grid unit 1).
-fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
+pub(crate) fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
     let lo = Vec3::new(min[0] as f32, min[1] as f32, min[2] as f32);
     let hi = Vec3::new(max[0] as f32, max[1] as f32, max[2] as f32);
     CarveTool::new(
@@ -28,7 +28,7 @@ fn cuboid(min: [i64; 3], max: [i64; 3]) -> CarveTool {
     )
 }
 
-fn sphere(radius: f32, at: Vec3) -> CarveTool {
+pub(crate) fn sphere(radius: f32, at: Vec3) -> CarveTool {
     CarveTool::new(
         CarveShape::Sphere {
             radius,
@@ -38,7 +38,7 @@ fn sphere(radius: f32, at: Vec3) -> CarveTool {
     )
 }
 
-const fn at(x: i64, z: i64) -> ChunkCoord {
+pub(crate) const fn at(x: i64, z: i64) -> ChunkCoord {
     ChunkCoord { x, z }
 }
 
@@ -80,7 +80,7 @@ fn undo(app: &mut App, world: Entity) {
     settle(app, world);
 }
 
-fn chunk(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
+pub(crate) fn chunk(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
     let entity = the_world(app, world)
         .chunk_entity(coord)
         .unwrap_or_else(|| panic!("chunk {coord:?} is not live"));
@@ -89,9 +89,9 @@ fn chunk(app: &App, world: Entity, coord: ChunkCoord) -> &Terrain {
 
 /// Every live chunk's state: its kept hash, the hash of its octree
 /// computed afresh, its exact solid volume and its journal length.
-type States = BTreeMap<ChunkCoord, (u64, u64, ExactVolume, usize)>;
+pub(crate) type States = BTreeMap<ChunkCoord, (u64, u64, ExactVolume, usize)>;
 
-fn states(app: &App, world: Entity) -> States {
+pub(crate) fn states(app: &App, world: Entity) -> States {
     the_world(app, world)
         .live_chunks()
         .map(|(coord, entity)| {
@@ -108,14 +108,14 @@ fn states(app: &App, world: Entity) -> States {
 }
 
 /// The chunks whose state differs between `a` and `b`.
-fn differ(a: &States, b: &States) -> Vec<ChunkCoord> {
+pub(crate) fn differ(a: &States, b: &States) -> Vec<ChunkCoord> {
     a.iter()
         .filter(|(c, s)| b.get(c) != Some(s))
         .map(|(c, _)| *c)
         .collect()
 }
 
-fn debris(app: &mut App) -> usize {
+pub(crate) fn debris(app: &mut App) -> usize {
     let mut query = app.world_mut().query::<&TerrainDebris>();
     query.iter(app.world()).count()
 }
@@ -258,9 +258,9 @@ fn undos_and_carves_keep_their_order_however_long_the_jobs_take() {
 /// The surface is at most 20 high: a pillar stands from 4 up to 25 in
 /// chunk (0, 0), a slab lies on it at 24..28 over the border x = 32, and
 /// the cut at 21..23 meets only the pillar.
-const PILLAR: ([i64; 3], [i64; 3]) = ([26, 4, 10], [29, 25, 13]);
-const SLAB: ([i64; 3], [i64; 3]) = ([26, 24, 10], [38, 28, 14]);
-const CUT: ([i64; 3], [i64; 3]) = ([25, 21, 9], [30, 23, 14]);
+pub(crate) const PILLAR: ([i64; 3], [i64; 3]) = ([26, 4, 10], [29, 25, 13]);
+pub(crate) const SLAB: ([i64; 3], [i64; 3]) = ([26, 24, 10], [38, 28, 14]);
+pub(crate) const CUT: ([i64; 3], [i64; 3]) = ([25, 21, 9], [30, 23, 14]);
 
 /// Cutting the pillar drops the slab from both chunks as one body; one
 /// undo gives both chunks back, the neighbour's part included, though the

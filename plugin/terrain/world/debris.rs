@@ -176,7 +176,7 @@ use chisel_bsp::octree::{
 };
 
 use super::debris_order::{self, AppliedDetach, DebrisRole};
-use super::undo::DetachedChunk;
+use super::history::DetachedChunk;
 use super::{ChunkCoord, TerrainWorld};
 use crate::terrain::component::Terrain;
 use crate::terrain::jobs::Job;
@@ -589,7 +589,7 @@ fn apply(
     let seeds = (search.seeds.into_iter())
         .filter_map(|(e, keys)| Some((coord_of(e)?, keys)))
         .collect();
-    super::undo::note_detach(world, undo_chunks, seeds);
+    super::history::note_detach(world, undo_chunks, seeds);
     changed
 }
 

@@ -126,6 +126,10 @@
 //! and then changes all or none: a chunk changed since by anything else,
 //! or whose undo history was trimmed, refuses it with a
 //! [`WorldUndoRejected`] naming the chunk. A networked world refuses it.
+//! [`WorldRedo`] re-applies what the last world undo took back, in the
+//! same line and all or nothing, bit for bit ([`redo`]); a new
+//! [`WorldCarve`] forgets it. Streaming keeps every redo step: the
+//! world's own, and a chunk's (kept by the world while it is out).
 //!
 //! ## Level of detail
 //!
@@ -149,13 +153,16 @@
 mod chunk;
 pub mod debris;
 pub mod debris_order;
+pub(crate) mod history;
 pub mod lod;
 pub mod lod_mesh;
+pub mod redo;
 pub mod seams;
 pub mod source;
 pub mod store;
 mod store_cut;
 mod store_files;
+mod store_save;
 pub mod stream;
 pub mod undo;
 
@@ -176,6 +183,7 @@ pub(crate) use chunk::{Built, Chunk, generate, restore};
 pub use chunk::{ChunkCoord, ChunkOffstage, WorldChunk, chunk_debris};
 pub use lod::{LodMesh, LodSettings, LodStats, LodView, WorldLod, choose_level};
 pub use lod_mesh::{LevelMesh, LodBasis, LodPyramid};
+pub use redo::{WorldRedo, WorldRedoRefusal, WorldRedoRejected, WorldRedone};
 pub use source::{HeightArray, NoiseOctave, SharedSource, ValueNoise, WorldLayout, WorldSource};
 pub use store::{DEFAULT_MAX_SAVE_WAIT, SaveWorld, WorldSaveFailed, WorldSaved};
 pub use store_cut::{DEFAULT_SAVE_HOLD_FRAMES, DEFAULT_SAVE_SETTLE_FRAMES};
@@ -257,7 +265,7 @@ pub struct WorldStats {
 /// `Changed<TerrainWorld>` marks the frames in which the world's chunks or
 /// edits changed: a chunk build started or collected (a chunk goes live
 /// or fails), a chunk released or stored, waiting carves handed to a
-/// chunk, a [`WorldCarve`] routed, a [`WorldUndo`] accepted and then
+/// chunk, a [`WorldCarve`] routed, a [`WorldUndo`] or [`WorldRedo`] accepted and then
 /// carried out or refused, a detach across chunk borders applied, the chunks replaced
 /// from a snapshot (feature `net`), and any write of the game's own
 /// through `&mut TerrainWorld`. Frames that only poll builds, seams and
@@ -332,7 +340,7 @@ pub struct TerrainWorld {
     pub(crate) detaches_applied: Vec<debris_order::AppliedDetach>,
     /// The world carves that can be undone and the undos waiting
     /// ([`undo`]).
-    pub(crate) history: undo::WorldHistory,
+    pub(crate) history: history::WorldHistory,
     /// What the folders saved to hold and the save being written ([`store`]).
     pub(crate) saves: store::WorldSaves,
     /// The world carves of several chunks that may be in flight in one
@@ -375,7 +383,7 @@ impl TerrainWorld {
             debris_seeded: false,
             detach_ordered: None,
             detaches_applied: Vec::new(),
-            history: undo::WorldHistory::default(),
+            history: history::WorldHistory::default(),
             saves: store::WorldSaves::default(),
             routed: store_cut::RoutedCarves::default(),
             pool_order: PoolOrder::default(),
@@ -446,6 +454,14 @@ impl TerrainWorld {
     #[must_use]
     pub fn undo_depth(&self) -> usize {
         self.history.depth()
+    }
+
+    /// How many world undos a [`WorldRedo`] can re-apply now: the
+    /// [`WorldUndo`]s carried out since the last world carve, less the
+    /// [`WorldRedo`]s carried out since (waiting ones not counted).
+    #[must_use]
+    pub fn redo_depth(&self) -> usize {
+        self.history.redo_depth()
     }
 
     /// With these streaming radii and build limit.
@@ -697,7 +713,7 @@ impl TerrainWorld {
 
     /// Whether no chunk is building, no carve waits for a chunk (but the
     /// deferred ones, [`TerrainWorld::deferred_chunks`], which wait by
-    /// design), no [`WorldUndo`] waits, and no search for debris across
+    /// design), no [`WorldUndo`] or [`WorldRedo`] waits, and no search for debris across
     /// chunk borders runs, waits to be applied or waits to start (seeds in
     /// a chunk; nor, in a networked world, a detach its server ordered).
     #[must_use]
@@ -733,7 +749,8 @@ impl TerrainWorld {
 /// does not know, is rejected for the world entity. A chunk that is not
 /// live is built for the carve; if its build fails (a bad source sample)
 /// its waiting carves are dropped with a warning in the log. [`WorldUndo`]
-/// takes the last one back in every chunk. A networked world (feature
+/// takes the last one back in every chunk, [`WorldRedo`] re-applies it;
+/// a new one forgets what was undone before it. A networked world (feature
 /// `net`) refuses it ([`TerrainError::NetworkedWorld`]): its server orders
 /// every carve.
 #[derive(Message, Reflect, Clone, Debug)]

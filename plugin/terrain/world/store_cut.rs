@@ -21,7 +21,7 @@ use bevy::prelude::*;
 use super::super::component::Terrain;
 use super::super::error::TerrainError;
 use super::super::jobs::Job;
-use super::undo::Landed;
+use super::history::Landed;
 use super::{Chunk, ChunkCoord, TerrainWorld};
 
 /// The frames of its turn a [`SaveWorld`](super::SaveWorld) waits, by

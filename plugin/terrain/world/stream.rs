@@ -259,6 +259,10 @@ pub fn stream_chunks(
                 }
                 _ => {}
             }
+            // Its own redo steps are not in its bytes: the world keeps them.
+            if let Ok(terrain) = terrains.get(entity) {
+                world.keep_streamed_redo(coord, terrain);
+            }
             commands.entity(entity).try_despawn();
             world.chunks.remove(&coord);
             world.stats.released += 1;
@@ -430,6 +434,7 @@ fn collect_builds(
                 } else {
                     world.stats.generated += 1;
                 }
+                world.give_streamed_redo(coord, &mut terrain);
                 let entity = commands
                     .spawn((
                         terrain,
@@ -451,6 +456,7 @@ fn collect_builds(
                 world.stats.failed += 1;
                 world.chunks.insert(coord, Chunk::Failed);
                 world.seeds_back.remove(&coord);
+                world.drop_streamed_redo(coord);
                 if let Some(dropped) = world.pending.remove(&coord) {
                     warn!("{} carves of that chunk are dropped", dropped.len());
                 }

@@ -7,7 +7,7 @@
 //! Each chunk keeps its own undo steps ([`Terrain::undo_depth`]); the world
 //! keeps one *world step* per routed world carve, up to
 //! [`TerrainWorld::with_max_undo`] of them (the terrains' default,
-//! [`DEFAULT_MAX_UNDO`]; the chunks keep as many steps each). A world step
+//! [`DEFAULT_MAX_UNDO`](crate::terrain::component::DEFAULT_MAX_UNDO); the chunks keep as many steps each). A world step
 //! names, per chunk:
 //!
 //! - the chunks the carve was routed to, and for each, once its job
@@ -55,7 +55,10 @@
 //!    ([`Terrain::undo_now`]), each chunk a detach took from without its
 //!    own step gets its octree before the detach back, their state hashes
 //!    follow, the changed cells are rebuilt by a job at the head of each
-//!    queue, and [`WorldUndone`] lists the chunks.
+//!    queue, and [`WorldUndone`] lists the chunks. The chunks' own redo
+//!    steps are forgotten; the world keeps what it undid for a
+//!    [`WorldRedo`] ([`super::redo`]), which waits in the same line as
+//!    the undos.
 //!
 //! So when nothing else happened in between, every chunk's octree and
 //! state hash are again those before the carve. What counts as something
@@ -95,16 +98,16 @@
 //! the server out of that order, so a networked world records no steps and
 //! refuses [`WorldUndo`] with [`WorldUndoRefusal::Networked`].
 
-use std::collections::{BTreeMap, BTreeSet, VecDeque};
-
 use bevy::prelude::*;
-use chisel_bsp::octree::{CellKey, Edit, Octree};
 
 use super::debris_order::DebrisRole;
+use super::history::{CarveState, Waiting, WorldOp};
+use super::redo::{
+    RedoChunk, UndoneStep, WorldRedo, WorldRedoRefusal, WorldRedoRejected, WorldRedone,
+};
 use super::{Chunk, ChunkCoord, TerrainWorld};
-use crate::terrain::component::{DEFAULT_MAX_UNDO, Terrain};
+use crate::terrain::component::Terrain;
 use crate::terrain::jobs::Job;
-use crate::terrain::tool::GridTool;
 
 /// Undo a world's last [`WorldCarve`](super::WorldCarve) in every chunk it
 /// changed, with the parts of the pieces it cut loose across chunk
@@ -172,280 +175,50 @@ pub enum WorldUndoRefusal {
         /// The chunk.
         coord: ChunkCoord,
     },
-    /// An earlier [`WorldUndo`] of the same world was refused; this one
-    /// would undo an older carve before the newer one.
-    #[error("an earlier undo of this world was refused")]
+    /// An earlier [`WorldUndo`] or [`WorldRedo`] of the same world was
+    /// refused; this one would undo another carve than the one asked for.
+    #[error("an earlier undo or redo of this world was refused")]
     EarlierUndoRefused,
 }
 
-/// The world's undo steps and the undos waiting to be carried out.
-pub(crate) struct WorldHistory {
-    /// Most steps kept (and undo steps kept per chunk).
-    pub(crate) max: usize,
-    steps: VecDeque<WorldStep>,
-    /// Undos asked for and not yet carried out, oldest first.
-    undos: VecDeque<WaitingUndo>,
-    /// World carves asked for after a waiting undo, routed after it.
-    held: Vec<(GridTool, Edit, Vec<ChunkCoord>)>,
+/// The messages [`undo_world_carves`] writes.
+#[derive(bevy::ecs::system::SystemParam)]
+pub struct WorldUndoAnswers<'w> {
+    undone: MessageWriter<'w, WorldUndone>,
+    undo_rejected: MessageWriter<'w, WorldUndoRejected>,
+    redone: MessageWriter<'w, WorldRedone>,
+    redo_rejected: MessageWriter<'w, WorldRedoRejected>,
 }
 
-impl Default for WorldHistory {
-    fn default() -> Self {
-        Self {
-            max: DEFAULT_MAX_UNDO,
-            steps: VecDeque::new(),
-            undos: VecDeque::new(),
-            held: Vec::new(),
-        }
-    }
-}
-
-/// One world carve's record.
-struct WorldStep {
-    /// The request id of its chunk carves.
-    request: u64,
-    chunks: BTreeMap<ChunkCoord, StepChunk>,
-    /// Seeds its detaches searched from, given back on undo.
-    seeds: BTreeMap<ChunkCoord, Vec<CellKey>>,
-}
-
-/// What a world step did to one chunk.
-struct StepChunk {
-    carve: CarveState,
-    /// State hash and journal length of the chunk as the step left it.
-    after: u64,
-    journal: usize,
-    /// The chunk before a detach of the step that did not join its own
-    /// undo step.
-    detach: Option<BeforeDetach>,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum CarveState {
-    /// Routed, not applied yet.
-    Waiting,
-    /// Applied: the chunk's undo step holds its octree before.
-    Landed,
-    /// Refused by the chunk, or not routed to it.
-    None,
-}
-
-struct BeforeDetach {
-    octree: Octree,
-    keys: Vec<CellKey>,
-    detached_across: bool,
-}
-
-/// A [`WorldUndo`] waiting for its chunks to hold every earlier request.
-struct WaitingUndo {
-    request: u64,
-    /// Chunks whose queues hold it.
-    held: BTreeSet<ChunkCoord>,
-}
-
-/// A tracked carve a chunk's job applied or refused: its request id and,
-/// when applied, the chunk's state hash and journal length right after.
-pub(crate) type Landed = (u64, Option<(u64, usize)>);
-
-/// One chunk a detach across chunk borders changed, as the world's undo
-/// needs it ([`note_detach`]).
-pub(crate) struct DetachedChunk {
-    coord: ChunkCoord,
-    before: Octree,
-    hash_before: u64,
-    hash_after: u64,
-    journal: usize,
-    detached_across: bool,
-    keys: Vec<CellKey>,
-    landed: Vec<Landed>,
-}
-
-impl DetachedChunk {
-    /// `terrain` (chunk `coord`) right after a detach swapped in its
-    /// octree: `before` and `hash_before` are its octree and hash before,
-    /// `detached_across` its flag before, `keys` the cells changed.
-    pub(crate) fn new(
-        coord: ChunkCoord,
-        terrain: &mut Terrain,
-        before: Octree,
-        hash_before: u64,
-        detached_across: bool,
-        keys: &[CellKey],
-    ) -> Self {
-        Self {
-            coord,
-            before,
-            hash_before,
-            hash_after: terrain.hash.value(),
-            journal: terrain.journal.len(),
-            detached_across,
-            keys: keys.to_vec(),
-            landed: std::mem::take(&mut terrain.runtime.landed),
-        }
-    }
-}
-
-impl WorldHistory {
-    /// World steps that can be undone now.
-    pub(crate) fn depth(&self) -> usize {
-        self.steps.len()
-    }
-
-    /// Forgets every step and waiting undo (a networked world's reset).
-    #[cfg(feature = "net")]
-    pub(crate) fn clear(&mut self) {
-        self.steps.clear();
-        self.undos.clear();
-        self.held.clear();
-    }
-
-    /// Whether world carves wait for an undo ([`WorldHistory::hold`]).
-    pub(crate) fn holds_carves(&self) -> bool {
-        !self.undos.is_empty()
-    }
-
-    /// Keeps a world carve asked for while an undo waits.
-    pub(crate) fn hold(&mut self, tool: GridTool, edit: Edit, coords: Vec<ChunkCoord>) {
-        self.held.push((tool, edit, coords));
-    }
-
-    /// The chunks waiting undos need live.
-    pub(crate) fn wanted(&self) -> impl Iterator<Item = ChunkCoord> + '_ {
-        self.undos.iter().flat_map(|undo| {
-            (self.steps.iter())
-                .find(|s| s.request == undo.request)
-                .into_iter()
-                .flat_map(|s| s.chunks.iter())
-                .filter(|(_, c)| c.needs_hold())
-                .map(|(&coord, _)| coord)
-        })
-    }
-
-    /// Records a world carve routed to `coords` under `request`.
-    pub(crate) fn push_step(&mut self, request: u64, coords: &[ChunkCoord]) {
-        if self.max == 0 {
-            return;
-        }
-        let chunks = coords
-            .iter()
-            .map(|&coord| {
-                let chunk = StepChunk {
-                    carve: CarveState::Waiting,
-                    after: 0,
-                    journal: 0,
-                    detach: None,
-                };
-                (coord, chunk)
-            })
-            .collect();
-        self.steps.push_back(WorldStep {
-            request,
-            chunks,
-            seeds: BTreeMap::new(),
-        });
-        while self.steps.len() > self.max {
-            self.steps.pop_front();
-        }
-    }
-
-    /// Notes what chunk `coord`'s jobs applied or refused.
-    fn land(&mut self, coord: ChunkCoord, landed: Vec<Landed>) {
-        for (request, outcome) in landed {
-            let Some(step) = self.steps.iter_mut().rev().find(|s| s.request == request) else {
-                continue;
-            };
-            let Some(chunk) = step.chunks.get_mut(&coord) else {
-                continue;
-            };
-            match outcome {
-                Some((hash, journal)) => {
-                    chunk.carve = CarveState::Landed;
-                    chunk.after = hash;
-                    chunk.journal = journal;
-                }
-                None => chunk.carve = CarveState::None,
+impl WorldUndoAnswers<'_> {
+    /// Refuses a request of kind `op` for `reason` (a [`WorldUndoRefusal`],
+    /// told as the matching [`WorldRedoRefusal`] for a redo).
+    fn refuse(&mut self, world: Entity, op: WorldOp, reason: WorldUndoRefusal) {
+        match op {
+            WorldOp::Undo => {
+                self.undo_rejected
+                    .write(WorldUndoRejected { world, reason });
+            }
+            WorldOp::Redo => {
+                let reason = WorldRedoRefusal::from_undo(reason);
+                self.redo_rejected
+                    .write(WorldRedoRejected { world, reason });
             }
         }
     }
 }
 
-impl StepChunk {
-    /// Whether the undo has anything to do in this chunk (and so holds it).
-    fn needs_hold(&self) -> bool {
-        self.carve != CarveState::None || self.detach.is_some()
-    }
-}
-
-/// Records a detach across chunk borders in the world step it belongs to
-/// (the [module docs](self)): `chunks` are those it changed, `seeds` those
-/// it searched from, by chunk.
-pub(crate) fn note_detach(
-    world: &mut TerrainWorld,
-    chunks: Vec<DetachedChunk>,
-    seeds: Vec<(ChunkCoord, Vec<CellKey>)>,
-) {
-    let history = &mut world.history;
-    let mut chunks = chunks;
-    for chunk in &mut chunks {
-        world.routed.land(chunk.coord, &chunk.landed);
-        history.land(chunk.coord, std::mem::take(&mut chunk.landed));
-    }
-    if world.debris_role != DebrisRole::Local {
-        return;
-    }
-    let near: BTreeSet<ChunkCoord> = (chunks.iter().map(|c| c.coord))
-        .chain(seeds.iter().map(|(c, _)| *c))
-        .collect();
-    let Some(step) = history.steps.iter_mut().rev().find(|s| {
-        (s.chunks.iter()).any(|(c, chunk)| chunk.carve == CarveState::Landed && near.contains(c))
-    }) else {
-        return;
-    };
-    for chunk in chunks {
-        let entry = step.chunks.entry(chunk.coord).or_insert(StepChunk {
-            carve: CarveState::None,
-            after: chunk.hash_before,
-            journal: chunk.journal,
-            detach: None,
-        });
-        if entry.carve == CarveState::Landed || entry.detach.is_some() {
-            // Its own step of this carve holds it (the removal joined the
-            // chunk's last step), or an earlier detach of this step kept
-            // its state: move on with it unless something else changed
-            // the chunk in between (the undo then refuses).
-            if entry.after == chunk.hash_before && entry.journal == chunk.journal {
-                entry.after = chunk.hash_after;
-                if let Some(before) = &mut entry.detach {
-                    before.keys.extend(chunk.keys);
-                    before.keys.sort_unstable();
-                    before.keys.dedup();
-                }
-            }
-        } else {
-            entry.after = chunk.hash_after;
-            entry.journal = chunk.journal;
-            entry.detach = Some(BeforeDetach {
-                octree: chunk.before,
-                keys: chunk.keys,
-                detached_across: chunk.detached_across,
-            });
-        }
-    }
-    for (coord, keys) in seeds {
-        step.seeds.entry(coord).or_default().extend(keys);
-    }
-}
-
-/// Reads [`WorldUndo`]s, notes what the chunks' jobs applied, holds the
-/// chunks of waiting undos and carries out each undo whose chunks all
-/// reached its hold ([module docs](self)); routes the world carves held
-/// meanwhile once no undo waits.
+/// Reads [`WorldUndo`]s and then [`WorldRedo`]s, notes what the chunks'
+/// jobs applied, holds the chunks of waiting undos and redos and carries
+/// out each whose chunks all reached its hold ([module docs](self),
+/// [`super::redo`]); routes the world carves held meanwhile once none
+/// waits.
 pub fn undo_world_carves(
     mut undos: MessageReader<WorldUndo>,
+    mut redos: MessageReader<WorldRedo>,
     mut worlds: Query<(Entity, &mut TerrainWorld)>,
     mut terrains: Query<&mut Terrain>,
-    mut undone: MessageWriter<WorldUndone>,
-    mut rejected: MessageWriter<WorldUndoRejected>,
+    mut answers: WorldUndoAnswers,
 ) {
     for (_, mut world) in &mut worlds {
         // What the chunks' jobs applied, noted: bookkeeping.
@@ -466,61 +239,64 @@ pub fn undo_world_carves(
             }
         }
     }
-    for undo in undos.read() {
-        let Ok((_, mut world)) = worlds.get_mut(undo.world) else {
-            refuse(&mut rejected, undo.world, WorldUndoRefusal::NoSuchWorld);
+    let requests = (undos.read().map(|u| (u.world, WorldOp::Undo)))
+        .chain(redos.read().map(|r| (r.world, WorldOp::Redo)));
+    for (entity, op) in requests {
+        let Ok((_, mut world)) = worlds.get_mut(entity) else {
+            answers.refuse(entity, op, WorldUndoRefusal::NoSuchWorld);
             continue;
         };
         if world.debris_role != DebrisRole::Local {
-            refuse(&mut rejected, undo.world, WorldUndoRefusal::Networked);
+            answers.refuse(entity, op, WorldUndoRefusal::Networked);
             continue;
         }
-        let claimed = world.history.undos.len();
-        let Some(index) = world.history.steps.len().checked_sub(claimed + 1) else {
-            refuse(&mut rejected, undo.world, WorldUndoRefusal::NothingToUndo);
-            continue;
-        };
-        // A claimed undo marks the world changed; a refused one does not.
-        let history = &mut world.history;
-        let request = history.steps[index].request;
-        history.undos.push_back(WaitingUndo {
-            request,
-            held: BTreeSet::new(),
-        });
+        // A claimed request marks the world changed; a refused one does not.
+        if !world.bypass_change_detection().history.claim(op) {
+            answers.refuse(entity, op, WorldUndoRefusal::NothingToUndo);
+        }
     }
     for (world_entity, mut world_mut) in &mut worlds {
-        // Waiting is bookkeeping: the world is marked changed when an undo
-        // is carried out or refused, or the carves it held are routed.
+        // Waiting is bookkeeping: the world is marked changed when a
+        // request is carried out or refused, or the carves it held are
+        // routed.
         let world = world_mut.bypass_change_detection();
         let mut changed = false;
-        while !world.history.undos.is_empty() {
+        while let Some(op) = world.history.waiting.front().map(|w| w.op) {
             let outcome = advance(world, &mut terrains);
             changed |= !matches!(outcome, Progress::Waiting);
             match outcome {
                 Progress::Waiting => break,
-                Progress::Undone(done) => {
-                    undone.write(WorldUndone {
-                        world: world_entity,
-                        request: done.0,
-                        chunks: done.1,
+                Progress::Done(request, chunks) if op == WorldOp::Undo => {
+                    let world = world_entity;
+                    answers.undone.write(WorldUndone {
+                        world,
+                        request,
+                        chunks,
+                    });
+                }
+                Progress::Done(request, chunks) => {
+                    let world = world_entity;
+                    answers.redone.write(WorldRedone {
+                        world,
+                        request,
+                        chunks,
                     });
                 }
                 Progress::Refused(reason) => {
-                    warn!("terrain world: undo refused: {reason}");
-                    refuse(&mut rejected, world_entity, reason);
-                    for undo in std::mem::take(&mut world.history.undos) {
-                        release_holds(world, &mut terrains, &undo);
-                        refuse(
-                            &mut rejected,
-                            world_entity,
-                            WorldUndoRefusal::EarlierUndoRefused,
-                        );
+                    let what = if op == WorldOp::Undo { "undo" } else { "redo" };
+                    warn!("terrain world: {what} refused: {reason}");
+                    answers.refuse(world_entity, op, reason);
+                    for later in std::mem::take(&mut world.history.waiting) {
+                        release_holds(world, &mut terrains, &later);
+                        let reason = WorldUndoRefusal::EarlierUndoRefused;
+                        answers.refuse(world_entity, later.op, reason);
                     }
                 }
             }
         }
-        if world.history.undos.is_empty() && !world.history.held.is_empty() {
-            for (tool, edit, coords) in std::mem::take(&mut world.history.held) {
+        let held = world.history.take_held();
+        if !held.is_empty() {
+            for (tool, edit, coords) in held {
                 let request = world.next_request;
                 world.route(&tool, edit, request, &coords);
             }
@@ -532,33 +308,49 @@ pub fn undo_world_carves(
     }
 }
 
-fn refuse(
-    rejected: &mut MessageWriter<WorldUndoRejected>,
-    world: Entity,
-    reason: WorldUndoRefusal,
-) {
-    rejected.write(WorldUndoRejected { world, reason });
-}
-
-enum Progress {
+/// What became of the first waiting request.
+pub(super) enum Progress {
     Waiting,
-    Undone((u64, Vec<ChunkCoord>)),
+    /// Carried out: the step's request id and the chunks changed.
+    Done(u64, Vec<ChunkCoord>),
     Refused(WorldUndoRefusal),
 }
 
-/// Holds the chunks of every waiting undo that are live, and carries out
-/// the first when all its chunks reached its hold.
+/// Holds the chunks of every waiting request that are live, and carries
+/// out the first when all its chunks reached its hold.
 fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Progress {
-    // Later undos hold their live chunks now too, so that requests made
+    // Later requests hold their live chunks now too, so that requests made
     // after them wait behind them; a chunk that cannot come back refuses
-    // an undo when it is the first.
-    for i in 0..world.history.undos.len() {
+    // a request when it is the first.
+    for i in 0..world.history.waiting.len() {
         let held = hold_chunks(world, terrains, i);
         if let (0, Err(reason)) = (i, held) {
             return refuse_first(world, terrains, reason);
         }
     }
-    let Some(request) = world.history.undos.front().map(|u| u.request) else {
+    let Some(first) = world.history.waiting.front() else {
+        return Progress::Waiting;
+    };
+    match first.op {
+        WorldOp::Undo => undo_first(world, terrains),
+        WorldOp::Redo => super::redo::redo_first(world, terrains),
+    }
+}
+
+/// Whether the chunk of `terrain` has reached the hold `hold`, with no
+/// job running.
+pub(super) fn at_hold(terrain: &Terrain, hold: u64) -> bool {
+    terrain.runtime.task.is_none()
+        && matches!(
+            terrain.runtime.queue.front(),
+            Some(Job::HoldForWorldUndo { hold: h }) if *h == hold
+        )
+}
+
+/// Carries out the first waiting request, an undo, once every chunk of
+/// its step reached its hold.
+fn undo_first(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Progress {
+    let Some((request, hold)) = (world.history.waiting.front()).map(|w| (w.request, w.hold)) else {
         return Progress::Waiting;
     };
     let Some(position) = (world.history.steps.iter()).rposition(|s| s.request == request) else {
@@ -574,19 +366,13 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
         let Some(terrain) = (world.chunk_entity(coord)).and_then(|e| terrains.get(e).ok()) else {
             return Progress::Waiting;
         };
-        let at_hold = terrain.runtime.task.is_none()
-            && matches!(
-                terrain.runtime.queue.front(),
-                Some(Job::HoldForWorldUndo { request: r }) if *r == request
-            );
-        if !at_hold {
+        if !at_hold(terrain, hold) {
             return Progress::Waiting;
         }
         // Every chunk holds every earlier request: check them all before
         // changing any.
         if chunk.carve == CarveState::Waiting && chunk.detach.is_none() {
             // Its carve never reached the chunk's jobs: nothing to undo.
-            targets.push((coord, false));
             continue;
         }
         let same = terrain.hash.value() == chunk.after && terrain.journal.len() == chunk.journal;
@@ -595,7 +381,7 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
         } else if chunk.carve == CarveState::Landed && terrain.history.is_empty() {
             refusal.get_or_insert(WorldUndoRefusal::HistoryTrimmed { coord });
         }
-        targets.push((coord, true));
+        targets.push(coord);
     }
     if let Some(reason) = refusal {
         return refuse_first(world, terrains, reason);
@@ -605,32 +391,38 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
     };
     // A chunk held while its carve waited, that then refused the carve,
     // has nothing to undo: its hold is taken out with the others.
-    if let Some(undo) = world.history.undos.pop_front() {
+    if let Some(undo) = world.history.waiting.pop_front() {
         release_holds(world, terrains, &undo);
     }
     let mut changed = Vec::new();
-    for (coord, undoes) in targets {
+    let mut redo = Vec::new();
+    for coord in targets {
         let Some(mut chunk_terrain) =
             (world.chunk_entity(coord)).and_then(|e| terrains.get_mut(e).ok())
         else {
             continue;
         };
-        let Some(chunk) = step.chunks.get(&coord).filter(|_| undoes) else {
+        let Some(chunk) = step.chunks.get(&coord) else {
             continue;
         };
         let terrain = chunk_terrain.bypass_change_detection();
+        // The chunk as the step left it, for the world's redo.
+        let mut kept = RedoChunk::before_undo(terrain);
         let mut keys = Vec::new();
         let mut undone = false;
         if chunk.carve == CarveState::Landed {
+            let entry = terrain.journal.last().cloned();
+            let undo_step = terrain.history.back().cloned();
             match terrain.undo_now() {
                 Ok(cells) => {
                     keys.extend(cells);
+                    kept.took_step(entry, undo_step);
                     undone = true;
                 }
                 Err(error) => warn!("terrain world: chunk undo: {error}"),
             }
         }
-        // A world has no redo: the chunk's undo is not redone on its own.
+        // The chunk's own redo steps go: the world redoes this undo.
         terrain.redo.clear();
         if let Some(before) = &chunk.detach {
             terrain.octree = before.octree.clone();
@@ -641,6 +433,7 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
         }
         keys.sort_unstable();
         keys.dedup();
+        redo.push((coord, kept.after_undo(terrain, keys.clone())));
         terrain.runtime.queue.push_front(Job::Detached {
             keys,
             pieces: Vec::new(),
@@ -652,42 +445,45 @@ fn advance(world: &mut TerrainWorld, terrains: &mut Query<&mut Terrain>) -> Prog
     }
     // The seeds its detaches searched from go back to their chunks, live
     // or not.
-    for (coord, seeds) in step.seeds {
-        world.give_seeds_back(coord, seeds, terrains);
+    for (coord, seeds) in &step.seeds {
+        world.give_seeds_back(*coord, seeds.clone(), terrains);
     }
-    Progress::Undone((request, changed))
+    world.history.undone.push(UndoneStep::new(step, redo));
+    Progress::Done(request, changed)
 }
 
-/// Drops the first waiting undo, taking its holds out, refused for
+/// Drops the first waiting request, taking its holds out, refused for
 /// `reason`.
-fn refuse_first(
+pub(super) fn refuse_first(
     world: &mut TerrainWorld,
     terrains: &mut Query<&mut Terrain>,
     reason: WorldUndoRefusal,
 ) -> Progress {
-    if let Some(undo) = world.history.undos.pop_front() {
-        release_holds(world, terrains, &undo);
+    if let Some(first) = world.history.waiting.pop_front() {
+        release_holds(world, terrains, &first);
     }
     Progress::Refused(reason)
 }
 
-/// Puts the hold of waiting undo `index` in every chunk of its step that
-/// is live with no world carve waiting for it; fails, holding none, for a
-/// chunk that cannot come back.
+/// Puts the hold of waiting request `index` in every chunk of its step
+/// that is live with no world carve waiting for it; fails, holding none,
+/// for a chunk that cannot come back.
 fn hold_chunks(
     world: &mut TerrainWorld,
     terrains: &mut Query<&mut Terrain>,
     index: usize,
 ) -> Result<(), WorldUndoRefusal> {
-    let request = world.history.undos[index].request;
-    let Some(step) = world.history.steps.iter().find(|s| s.request == request) else {
+    let waiting = &world.history.waiting[index];
+    let (request, hold, op) = (waiting.request, waiting.hold, waiting.op);
+    let Some(step) = world.history.step(request) else {
         return Ok(());
     };
-    let held = &world.history.undos[index].held;
+    let held = &waiting.held;
     let chunks = (step.chunks.iter()).filter(|&(c, chunk)| chunk.needs_hold() && !held.contains(c));
     let mut live = Vec::new();
-    // Every chunk is looked at before any is held: a refused undo takes
-    // out only the holds it noted (`release_holds`), so it notes them all.
+    // Every chunk is looked at before any is held: a refused request
+    // takes out only the holds it noted (`release_holds`), so it notes
+    // them all.
     for (&coord, _) in chunks {
         match world.chunks.get(&coord) {
             Some(Chunk::Live(entity)) if !world.pending.contains_key(&coord) => {
@@ -696,30 +492,37 @@ fn hold_chunks(
             Some(Chunk::Failed) => return Err(WorldUndoRefusal::ChunkLost { coord }),
             Some(_) => {}
             None if world.stored.contains_key(&coord) || world.pending.contains_key(&coord) => {}
-            // Neither live nor stored: unedited, the source's again, so its
-            // own undo took the carve back (as a live chunk would answer).
+            // Neither live nor stored: unedited, the source's again. An
+            // undo finds its carve gone (its own undo took it back, as a
+            // live chunk would answer); a redo may find the state its
+            // undo left, and builds it to check.
+            None if op == WorldOp::Redo => {}
             None => return Err(WorldUndoRefusal::ChunkChanged { coord }),
         }
     }
     for (coord, entity) in live {
         if let Ok(mut terrain) = terrains.get_mut(entity) {
             (terrain.bypass_change_detection().runtime.queue)
-                .push_back(Job::HoldForWorldUndo { request });
-            world.history.undos[index].held.insert(coord);
+                .push_back(Job::HoldForWorldUndo { hold });
+            world.history.waiting[index].held.insert(coord);
         }
     }
     Ok(())
 }
 
-/// Takes a refused undo's holds out of its chunks' queues.
-fn release_holds(world: &TerrainWorld, terrains: &mut Query<&mut Terrain>, undo: &WaitingUndo) {
-    for &coord in &undo.held {
+/// Takes a request's holds out of its chunks' queues.
+pub(super) fn release_holds(
+    world: &TerrainWorld,
+    terrains: &mut Query<&mut Terrain>,
+    waiting: &Waiting,
+) {
+    for &coord in &waiting.held {
         let Some(entity) = world.chunk_entity(coord) else {
             continue;
         };
         if let Ok(mut terrain) = terrains.get_mut(entity) {
             (terrain.bypass_change_detection().runtime.queue).retain(
-                |job| !matches!(job, Job::HoldForWorldUndo { request } if *request == undo.request),
+                |job| !matches!(job, Job::HoldForWorldUndo { hold } if *hold == waiting.hold),
             );
         }
     }
