@@ -118,9 +118,7 @@ pub(crate) enum Job {
     /// Holds the queue until the world's undo or redo whose hold is
     /// `hold` is carried out in every chunk it changes (`world::undo`,
     /// `world::redo`): the jobs behind it were asked for after it.
-    HoldForWorldUndo {
-        hold: u64,
-    },
+    HoldForWorldUndo { hold: u64 },
     /// Seal the cells again at new outside points (the wall points of
     /// neighbouring chunks on the cube's sides), and shade them again with
     /// new outside wedges (those chunks' surface around the points).
