@@ -12,7 +12,9 @@
 //! everyone else. `--server [ADDR]` listens without a window (a dedicated
 //! server). `--client ADDR` opens a window and joins. In a window, left
 //! click blasts a crater and right click heaps up dirt, and the server
-//! sends every player's carve to everyone. The HUD shows the carves in the
+//! sends every player's carve to everyone. Z undoes your latest carve and
+//! Y redoes it (the host may undo anyone's): undos go through the
+//! server's order too. The HUD shows the carves in the
 //! terrain, its state hash, and the hash checks passed (a client) or the
 //! carves ordered (the host).
 //!
@@ -43,12 +45,14 @@ use bevy_chisel::bsp::octree::{CellBox, Edit, OctreeConfig};
 use bevy_chisel::bsp::tools::Quantization;
 use bevy_chisel::net::{
     NetCarveRequest, NetCarveResult, NetClientPlugin, NetClientSettings, NetClientStats,
-    NetServerPlugin, NetServerStats, NetTerrain, Outcome, WireTool, start_client, start_server,
+    NetServerPlugin, NetServerStats, NetTerrain, NetUndoResult, Outcome, WireTool, start_client,
+    start_server,
 };
 use bevy_chisel::presentation::{HeadlessConfig, HoldCaptures, Presentation};
 use bevy_chisel::terrain::{
-    CarveShape, CarveTool, CellOutput, Terrain, TerrainBase, TerrainPlugin, TerrainSettings,
-    TerrainSurface, TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin, surface_table,
+    CarveShape, CarveTool, CellOutput, RedoCarve, Terrain, TerrainBase, TerrainPlugin,
+    TerrainSettings, TerrainSurface, TerrainSystems, TriplanarMaterial, TriplanarMaterialPlugin,
+    UndoCarve, surface_table,
 };
 use bevy_chisel::viewer::{
     CursorPick, ORBIT_HELP, OrbitCamera, Overlay, ViewerPlugin, blast, overlay_text,
@@ -60,7 +64,7 @@ const GRASS: u8 = 3;
 const BLAST_RADIUS: f32 = 1.2;
 const HEAP_RADIUS: f32 = 0.8;
 /// Undo steps a terrain keeps: more than the predictions a client has
-/// pending at once.
+/// pending at once, with room for the players' undos (Z).
 const PREDICTION_UNDO: usize = 16;
 /// Craters each scripted player blasts in the headless run.
 const SCRIPTED: usize = 6;
@@ -139,7 +143,8 @@ fn slab() -> Result<Terrain, BevyError> {
     // The layers are no undo steps; carves keep a few, which the snapshot
     // hands to the clients: a client takes back the predictions another
     // player's carve overtook by undo (with too few steps it would ask for
-    // a snapshot instead).
+    // a snapshot instead), and follows the undos of carves made since it
+    // joined.
     Ok(terrain.with_max_undo(PREDICTION_UNDO))
 }
 
@@ -280,7 +285,7 @@ fn player_app(presentation: Presentation, player: Player) -> App {
     .add_systems(
         Update,
         (
-            (click, scripted).before(TerrainSystems::Carve),
+            (click, undo_keys, scripted).before(TerrainSystems::Carve),
             hud.after(TerrainSystems::Mesh),
         ),
     );
@@ -411,6 +416,34 @@ fn click(
         tool: WireTool::from(&tool),
         edit,
     });
+}
+
+/// Z undoes a carve, Y redoes it, for every player: the server orders the
+/// undo among the carves and every player applies it. A client may undo
+/// only its own latest carve and redo only its own latest undone one (the
+/// server's default `UndoPolicy::OwnLatest`); the host may undo any.
+fn undo_keys(
+    keys: Option<Res<ButtonInput<KeyCode>>>,
+    terrains: Query<Entity, With<NetTerrain>>,
+    mut undos: MessageWriter<UndoCarve>,
+    mut redos: MessageWriter<RedoCarve>,
+    mut answers: MessageReader<NetUndoResult>,
+) {
+    for answer in answers.read() {
+        if let Outcome::Rejected(reason) = &answer.outcome {
+            let what = if answer.redo { "redo" } else { "undo" };
+            info!("{what} refused: {reason}");
+        }
+    }
+    let (Some(keys), Ok(terrain)) = (keys, terrains.single()) else {
+        return;
+    };
+    if keys.just_pressed(KeyCode::KeyZ) {
+        undos.write(UndoCarve { terrain });
+    }
+    if keys.just_pressed(KeyCode::KeyY) {
+        redos.write(RedoCarve { terrain });
+    }
 }
 
 /// A scripted player blasts its craters along a line of its own, all at

@@ -3,7 +3,7 @@
 //! compares hashes and asks for a snapshot when its terrain differs.
 //!
 //! A client sends the request's floats ([`super::wire::WireTool::World`])
-//! and keeps only the integer [`NetCarve`]s the server sends back: it
+//! and keeps only the integer [`NetCarve`](super::NetCarve)s the server sends back: it
 //! queues each on the terrain as a carve tracked by its sequence number
 //! (what a [`GridCarve`](crate::terrain::GridCarve) with that request id
 //! queues), directly, so that it keeps its place among the client's
@@ -25,16 +25,16 @@
 //! `Connected`, what was being followed is dropped (the terrains stay);
 //! the next connection starts again from snapshots.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use bevy::prelude::*;
 use bevy_replicon::prelude::ClientState;
 use chisel_bsp::octree::Edit;
 
-use super::predict::{self, NetClientSettings, Predictions};
+use super::predict::{self, NetClientSettings, Op, Predictions};
 use super::wire::{
-    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, RejectReason, ServerPacket,
-    TerrainId, WireTool,
+    ClientPacket, ClientRequest, NetTerrain, Outcome, RejectReason, ServerPacket, TerrainId,
+    WireTool,
 };
 use crate::terrain::{CarveApplied, CarveRejected, Terrain, TerrainCell, TerrainSystems};
 
@@ -109,8 +109,10 @@ struct Follow {
     entity: Option<Entity>,
     /// The next carve to hand to the terrain.
     next_seq: u64,
-    /// Carves received but not handed over yet.
-    waiting: BTreeMap<u64, NetCarve>,
+    /// Carves (and undos) received but not handed over yet.
+    waiting: BTreeMap<u64, Op>,
+    /// Undos handed over whose jobs have not reported yet.
+    undos: BTreeSet<u64>,
     /// A snapshot being received: its last carve and its bytes so far.
     assembling: Option<(u64, Vec<u8>)>,
     /// The hash after each recent carve (and after the snapshot).
@@ -164,6 +166,12 @@ pub struct NetClientStats {
     /// Times the undo history could not hold the predictions to take
     /// back, so that they were dropped and a snapshot asked for.
     pub prediction_resyncs: u64,
+    /// The server's undos and redos handed to the terrains (module
+    /// [`super::undo`]).
+    pub undos: u64,
+    /// Times a terrain could not apply the server's undo or redo (its
+    /// history was shorter), so that a snapshot was asked for.
+    pub undo_resyncs: u64,
 }
 
 /// The client side of networked carving; connect with
@@ -181,6 +189,7 @@ impl Plugin for NetClientPlugin {
             app.add_plugins(super::NetProtocolPlugin);
         }
         app.init_resource::<ClientLedger>()
+            .init_resource::<super::undo::UndoRequests>()
             .init_resource::<NetClientStats>()
             .init_resource::<NetClientSettings>()
             .init_resource::<predict::PredictedDebris>()
@@ -200,8 +209,8 @@ impl Plugin for NetClientPlugin {
             Update,
             (
                 (
-                    send_requests,
-                    receive_packets,
+                    (send_requests, super::undo::send_undo_requests),
+                    (receive_packets, super::undo::receive_undo_results),
                     hand_over.run_if(connected.clone()),
                 )
                     .chain()
@@ -210,7 +219,10 @@ impl Plugin for NetClientPlugin {
                 predict::take_back_debris.after(TerrainSystems::Mesh),
             ),
         )
-        .add_systems(OnExit(ClientState::Connected), stop_following);
+        .add_systems(
+            OnExit(ClientState::Connected),
+            (stop_following, super::undo::forget_undo_requests),
+        );
     }
 }
 
@@ -353,7 +365,13 @@ fn receive_packets(
                     follow
                         .waiting
                         .entry(carve.seq)
-                        .or_insert_with(|| carve.clone());
+                        .or_insert_with(|| Op::Carve(carve.clone()));
+                }
+            }
+            ServerPacket::Undo(undo) => {
+                let follow = ledger.terrains.entry(undo.terrain).or_default();
+                if undo.seq >= follow.next_seq {
+                    follow.waiting.entry(undo.seq).or_insert(Op::Undo(*undo));
                 }
             }
             ServerPacket::Result { request, outcome } => {
@@ -381,6 +399,8 @@ fn receive_packets(
             | ServerPacket::WorldCheck { .. }
             | ServerPacket::WorldSnapshot(_)
             | ServerPacket::WorldDetach(_) => {}
+            // Answers to undo requests: `super::undo`.
+            ServerPacket::UndoResult { .. } => {}
             ServerPacket::Snapshot(part) => {
                 let follow = ledger.terrains.entry(part.terrain).or_default();
                 let (seq, bytes) = match assemble(
@@ -425,6 +445,7 @@ fn receive_packets(
                 follow.next_seq = seq + 1;
                 follow.waiting.retain(|&s, _| s > seq);
                 follow.hashes.clear();
+                follow.undos.clear();
                 follow.hashes.insert(seq, hash);
                 follow.resyncing = false;
                 // The snapshot replaces the terrain, predictions and all.
@@ -528,6 +549,8 @@ fn hand_over(
             &mut rejected,
         );
         stats.carves += done.carves;
+        stats.undos += done.undos.len() as u64;
+        follow.undos.extend(done.undos);
         stats.predictions_confirmed += done.confirmed;
         stats.predictions_refused += done.refused;
         stats.rollbacks += done.rollbacks;
@@ -564,9 +587,8 @@ fn compare_hashes(
     mut packets: MessageWriter<ClientPacket>,
     mut desynced: MessageWriter<Desynced>,
 ) {
-    let predicted = refused
-        .read()
-        .filter_map(|r| Some((r.terrain, r.predicted?, None)));
+    let refused: Vec<&CarveRejected> = refused.read().collect();
+    let predicted = (refused.iter()).filter_map(|r| Some((r.terrain, r.predicted?, None)));
     let reports: Vec<(Entity, Option<u64>, Option<u64>, Option<u64>)> = applied
         .read()
         .filter(|r| r.edit.is_some() || r.predicted.is_none())
@@ -596,10 +618,35 @@ fn compare_hashes(
             (None, None) => None,
         };
         if let Some((seq, hash)) = seq_hash {
+            follow.undos.remove(&seq);
             follow.hashes.insert(seq, hash);
             while follow.hashes.len() > KEPT_HASHES {
                 follow.hashes.pop_first();
             }
+        }
+    }
+    for report in &refused {
+        // The server's undo (or redo), which this terrain could not apply:
+        // its history is shorter than the server's there.
+        let (Some(seq), Ok((id, terrain))) = (report.request, terrains.get(report.terrain)) else {
+            continue;
+        };
+        let Some(follow) = ledger.terrains.get_mut(&id.0) else {
+            continue;
+        };
+        if follow.undos.remove(&seq) && !follow.resyncing {
+            stats.undo_resyncs += 1;
+            follow.resyncing = true;
+            warn!(
+                "terrain {}: undo {seq} of the server's order is not in this client's undo \
+                 history ({}); asking for a snapshot",
+                id.0, report.error
+            );
+            packets.write(ClientPacket::Request(ClientRequest::Desync {
+                terrain: id.0,
+                seq,
+                hash: terrain.state_hash(),
+            }));
         }
     }
     for (&id, follow) in &mut ledger.terrains {

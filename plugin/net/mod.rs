@@ -12,7 +12,11 @@
 //! octree and the rules a carve depends on, without the journal) and then
 //! the carves after it. The server sends its state hash ([`crate::terrain::Terrain::state_hash`])
 //! every [`NetLimits::check_interval`]; a client whose hash after the same
-//! carve differs reports it and gets a fresh snapshot.
+//! carve differs reports it and gets a fresh snapshot. Undos and redos
+//! ([`crate::terrain::UndoCarve`], [`crate::terrain::RedoCarve`]) of a
+//! networked terrain are ops of the same order ([`undo`]): the server's
+//! reach every client, a client's are requests the server's
+//! [`UndoPolicy`] allows or refuses.
 //!
 //! ## Roles
 //!
@@ -59,6 +63,8 @@
 //!   snapshots, hash comparison.
 //! - [`predict`] — [`NetClientSettings`]: a client's own carves applied
 //!   ahead of the server, confirmed or rolled back when its order comes.
+//! - [`undo`] — [`UndoPolicy`]: undos and redos of replicated terrains
+//!   in their order of carves; a client's are requests.
 //! - [`secure`] — connect tokens and the secure transport.
 //! - [`world`] — streamed worlds ([`crate::terrain::TerrainWorld`]) with a
 //!   [`NetWorld`]: world carves in order, edited chunks in snapshots,
@@ -69,6 +75,7 @@ pub mod client;
 pub mod predict;
 pub mod secure;
 pub mod server;
+pub mod undo;
 pub mod wire;
 pub mod world;
 pub mod world_client;
@@ -96,17 +103,18 @@ pub use secure::{
     start_secure_server,
 };
 pub use server::{DesyncReported, NetLimits, NetServerPlugin, NetServerStats, RequestRejected};
+pub use undo::{NetUndoResult, UndoPolicy};
 pub use wire::{
-    ChunkCheck, ChunkSnapshotPart, ClientPacket, ClientRequest, NetCarve, NetTerrain, NetWorld,
-    NetWorldCarve, Outcome, RejectReason, ServerPacket, SnapshotPart, TerrainId, WirePiece,
-    WirePose, WireShape, WireTool, WorldId, WorldSnapshotPart,
+    ChunkCheck, ChunkSnapshotPart, ClientPacket, ClientRequest, NetCarve, NetTerrain, NetUndo,
+    NetWorld, NetWorldCarve, Outcome, RejectReason, ServerPacket, SnapshotPart, TerrainId,
+    WirePiece, WirePose, WireShape, WireTool, WorldId, WorldSnapshotPart,
 };
 pub use world::world_state_hash;
 pub use world_client::{NetWorldCarveRequest, WorldDesynced, WorldSynced};
 
 /// The netcode protocol id of this wire format: peers with another id do
 /// not connect.
-pub const PROTOCOL_ID: u64 = 0xC415_E100_0000_0003;
+pub const PROTOCOL_ID: u64 = 0xC415_E100_0000_0004;
 
 /// Most bytes a peer keeps in flight on one channel (snapshots and large
 /// hull requests are single messages of a few megabytes at most).
@@ -131,7 +139,11 @@ impl Plugin for NetProtocolPlugin {
             app.add_plugins((RepliconPlugins, RepliconRenetPlugins));
         }
         wire::register(app);
-        app.register_type::<NetTerrain>();
+        app.register_type::<NetTerrain>()
+            .add_message::<NetUndoResult>()
+            .register_type::<NetUndoResult>()
+            .register_type::<UndoPolicy>()
+            .add_observer(undo::on_net_terrain);
     }
 }
 
@@ -263,6 +275,8 @@ mod tests {
             (TypeId::of::<NetWorldCarveRequest>(), "NetWorldCarveRequest"),
             (TypeId::of::<WorldSynced>(), "WorldSynced"),
             (TypeId::of::<WorldDesynced>(), "WorldDesynced"),
+            (TypeId::of::<NetUndoResult>(), "NetUndoResult"),
+            (TypeId::of::<UndoPolicy>(), "UndoPolicy"),
         ];
         let missing: Vec<&str> = types
             .iter()

@@ -24,6 +24,14 @@
 //!   with [`Terrain::max_undo`] under `k` the client drops its
 //!   predictions and asks for a snapshot instead, as after a desync.
 //!
+//! The server's undo or redo (module [`super::undo`]) matches no
+//! prediction: the predictions are rolled back the same way, the undo
+//! applied, and they are queued again on top of it. A prediction's undo
+//! step keeps the redo steps its carve cleared, so that a roll back leaves
+//! them as they were for the server's redos; a confirmed prediction's
+//! step is undone (and redone) by the server's order like any carve's.
+//! The undo itself is never predicted.
+//!
 //! A [`RejectReason`](super::RejectReason) answer for a request whose
 //! prediction is pending rolls the predictions back the same way, without
 //! that one (the oldest pending prediction of that request id: a game
@@ -50,7 +58,7 @@ use std::time::Instant;
 use bevy::prelude::*;
 use chisel_bsp::octree::Edit;
 
-use super::wire::NetCarve;
+use super::wire::{NetCarve, NetUndo};
 use crate::terrain::jobs::Job;
 use crate::terrain::{CarveApplied, CarveRejected, DebrisDetached, GridTool, Terrain};
 
@@ -129,11 +137,21 @@ pub(super) struct Predictions {
     pub refused: Vec<u64>,
 }
 
+/// An op of a terrain's order, received and waiting for its turn.
+pub(super) enum Op {
+    /// A carve.
+    Carve(NetCarve),
+    /// An undo or redo (module [`super::undo`]).
+    Undo(NetUndo),
+}
+
 /// What [`hand_over`] did to one terrain.
 #[derive(Default)]
 pub(super) struct HandedOver {
     /// Server carves queued.
     pub carves: u64,
+    /// Server undos and redos queued, by their place in the order.
+    pub undos: Vec<u64>,
     /// Predictions confirmed.
     pub confirmed: u64,
     /// Predictions refused by the server and taken off.
@@ -229,6 +247,7 @@ fn lift(terrain: &mut Terrain, predictions: &Predictions) -> bool {
     for prediction in pending.iter().take(applied).rev() {
         queue.push_back(Job::Undo {
             requested: Instant::now(),
+            request: None,
             predicted: Some(prediction.number),
         });
     }
@@ -313,7 +332,7 @@ impl Lifter {
 pub(super) fn hand_over(
     entity: Entity,
     terrain: &mut Terrain,
-    waiting: &mut BTreeMap<u64, NetCarve>,
+    waiting: &mut BTreeMap<u64, Op>,
     next_seq: &mut u64,
     hashes: &mut BTreeMap<u64, u64>,
     predictions: &mut Predictions,
@@ -323,11 +342,14 @@ pub(super) fn hand_over(
     let mut done = HandedOver::default();
     let mut lifter = Lifter { lifted: false };
     let mut failed = false;
-    while !failed && let Some(carve) = waiting.get(next_seq) {
-        let matches = predictions
-            .pending
-            .front()
-            .is_some_and(|p| p.tool == carve.tool && p.edit == carve.edit);
+    while !failed && let Some(op) = waiting.get(next_seq) {
+        // An undo matches no prediction: they are rolled back, the undo
+        // applied, and they go on top again, as after another's carve.
+        let matches = match op {
+            Op::Carve(carve) => (predictions.pending.front())
+                .is_some_and(|p| p.tool == carve.tool && p.edit == carve.edit),
+            Op::Undo(_) => false,
+        };
         if !matches
             && !predictions.pending.is_empty()
             && !lifter.lift(terrain, predictions, &mut done)
@@ -335,8 +357,15 @@ pub(super) fn hand_over(
             failed = true;
             break;
         }
-        let Some(carve) = waiting.remove(next_seq) else {
-            break;
+        let carve = match waiting.remove(next_seq) {
+            None => break,
+            Some(Op::Undo(undo)) => {
+                *next_seq += 1;
+                super::undo::queue_undo(terrain, undo.seq, undo.redo);
+                done.undos.push(undo.seq);
+                continue;
+            }
+            Some(Op::Carve(carve)) => carve,
         };
         *next_seq += 1;
         if matches {

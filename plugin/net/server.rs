@@ -3,12 +3,14 @@
 //! carves with their sequence numbers, answers every request, sends hash
 //! checks, and snapshots to clients that join or fall out of step.
 //!
-//! Per terrain, accepted carves are numbered 1, 2, … in the order they are
-//! queued, which is the order the terrain applies them in. A carve is sent
-//! as a [`GridCarve`] whose request id is its sequence number, so the
-//! terrain's [`Terrain::last_request`] names the last carve in its octree:
-//! a snapshot taken at any moment holds exactly carves `1..=last_request`,
-//! and the carves after it are kept in a log until the terrain has them.
+//! Per terrain, accepted carves and undos (module [`super::undo`]) are
+//! numbered 1, 2, … and queued on the terrain as they are numbered, which
+//! is the order the terrain applies them in. A carve is queued as a
+//! [`GridCarve`](crate::terrain::GridCarve) whose request id is its
+//! sequence number would be, an undo with its number likewise, so the
+//! terrain's [`Terrain::last_request`] names the last op in its octree:
+//! a snapshot taken at any moment holds exactly ops `1..=last_request`,
+//! and the ops after it are kept in a log until the terrain has them.
 //!
 //! These systems hold the authority: they run while the app is no
 //! connected client (`ClientState::Disconnected`), on a dedicated server,
@@ -27,11 +29,13 @@ use bevy::prelude::*;
 use bevy_replicon::prelude::*;
 use bevy_replicon::server::AuthorizedClient;
 
+use super::undo::{UndoModel, UndoPolicy};
 use super::wire::{
-    ClientPacket, ClientRequest, NetCarve, NetTerrain, Outcome, RejectReason, ServerPacket,
-    SnapshotPart, TerrainId, WirePose, WireTool,
+    ClientPacket, ClientRequest, NetCarve, NetTerrain, NetUndo, Outcome, RejectReason,
+    ServerPacket, SnapshotPart, TerrainId, WirePose, WireTool,
 };
-use crate::terrain::{CarveApplied, CarveRejected, GridCarve, GridTool, Terrain, TerrainSystems};
+use crate::terrain::jobs::Job;
+use crate::terrain::{CarveApplied, CarveRejected, GridTool, Terrain, TerrainSystems};
 
 /// What the server accepts from one client.
 ///
@@ -62,6 +66,10 @@ pub struct NetLimits {
     /// beyond), so that no client makes the server build and keep chunks
     /// without bound.
     pub max_world_chunk: i64,
+    /// Who may undo and redo what on the replicated terrains (module
+    /// [`super::undo`]); a client's undo requests count against its rate
+    /// of carves.
+    pub undo: UndoPolicy,
 }
 
 impl Default for NetLimits {
@@ -75,6 +83,7 @@ impl Default for NetLimits {
             check_interval: Duration::from_millis(250),
             snapshot_part_bytes: 256 << 10,
             max_world_chunk: 1 << 16,
+            undo: UndoPolicy::OwnLatest,
         }
     }
 }
@@ -121,20 +130,44 @@ pub struct NetServerStats {
     pub snapshots: u64,
     /// Encoded bytes of every snapshot sent.
     pub snapshot_bytes: u64,
+    /// Undos and redos of replicated terrains ordered and broadcast
+    /// (module [`super::undo`]).
+    pub undos: u64,
 }
 
-/// One terrain's order of carves on the server.
+/// One terrain's order of carves (and undos) on the server.
 #[derive(Default)]
-struct Ledger {
-    next_seq: u64,
-    /// Accepted carves the terrain may not have applied yet.
-    log: BTreeMap<u64, NetCarve>,
+pub(super) struct Ledger {
+    pub(super) next_seq: u64,
+    /// Accepted carves and undos the terrain may not have applied yet.
+    log: BTreeMap<u64, ServerPacket>,
     /// Who asked for which accepted carve.
     pending: HashMap<u64, (ClientId, u64)>,
     /// The latest applied carve and the hash after it.
     latest: Option<(u64, u64)>,
     /// The last carve whose hash was sent.
     checked: Option<u64>,
+    /// Who made the carves its undos and redos would take back.
+    pub(super) undo: UndoModel,
+}
+
+impl Ledger {
+    /// Keeps an ordered undo until the terrain has it, and sends it to
+    /// every client.
+    pub(super) fn broadcast_undo(
+        &mut self,
+        undo: NetUndo,
+        stats: &mut NetServerStats,
+        out: &mut MessageWriter<ToClients<ServerPacket>>,
+    ) {
+        let packet = ServerPacket::Undo(undo);
+        self.log.insert(undo.seq, packet.clone());
+        stats.undos += 1;
+        out.write(ToClients {
+            targets: SendTargets::CLIENTS_ONLY,
+            message: packet,
+        });
+    }
 }
 
 /// A client's allowance of carves (a token bucket).
@@ -145,7 +178,7 @@ struct Allowance {
 
 #[derive(Resource, Default)]
 pub(super) struct ServerLedger {
-    terrains: HashMap<TerrainId, Ledger>,
+    pub(super) terrains: HashMap<TerrainId, Ledger>,
     allowance: HashMap<ClientId, Allowance>,
     /// Clients that need a snapshot of every terrain.
     joining: Vec<ClientId>,
@@ -191,7 +224,11 @@ impl Plugin for NetServerPlugin {
         app.add_systems(
             Update,
             (
-                (receive_requests, send_snapshots)
+                (
+                    receive_requests,
+                    super::undo::order_own_undos,
+                    send_snapshots,
+                )
                     .chain()
                     .before(TerrainSystems::Carve),
                 report_results.after(TerrainSystems::Mesh),
@@ -309,26 +346,26 @@ pub(super) fn allow(ledger: &mut ServerLedger, client: ClientId, limits: &NetLim
 #[allow(clippy::too_many_arguments)]
 fn receive_requests(
     mut packets: MessageReader<FromClient<ClientPacket>>,
-    terrains: Query<(Entity, &NetTerrain, &Terrain)>,
+    mut terrains: Query<(Entity, &NetTerrain, &mut Terrain)>,
     limits: Res<NetLimits>,
     mut ledger: ResMut<ServerLedger>,
     mut stats: ResMut<NetServerStats>,
-    mut carves: MessageWriter<GridCarve>,
     mut out: MessageWriter<ToClients<ServerPacket>>,
     mut rejected: MessageWriter<RequestRejected>,
     mut desyncs: MessageWriter<DesyncReported>,
 ) {
-    let ids: HashMap<TerrainId, (Entity, &Terrain)> =
-        terrains.iter().map(|(e, id, t)| (id.0, (e, t))).collect();
+    let ids: HashMap<TerrainId, Entity> = terrains.iter().map(|(e, id, _)| (id.0, e)).collect();
     for packet in packets.read() {
         let client = packet.client_id;
-        let mut reject = |request: Option<u64>, reason: RejectReason| {
+        let mut reject = |request: Option<u64>, reason: RejectReason, undo: bool| {
+            let outcome = Outcome::Rejected(reason.clone());
+            let message = match (undo, request) {
+                (true, Some(request)) => ServerPacket::UndoResult { request, outcome },
+                _ => ServerPacket::Result { request, outcome },
+            };
             out.write(ToClients {
                 targets: SendTargets::Single(client),
-                message: ServerPacket::Result {
-                    request,
-                    outcome: Outcome::Rejected(reason.clone()),
-                },
+                message,
             });
             rejected.write(RequestRejected {
                 client,
@@ -339,7 +376,7 @@ fn receive_requests(
         match &packet.message {
             ClientPacket::Malformed { reason } => {
                 stats.rejected += 1;
-                reject(None, RejectReason::Malformed(reason.clone()));
+                reject(None, RejectReason::Malformed(reason.clone()), false);
             }
             ClientPacket::Request(ClientRequest::Desync { terrain, seq, hash }) => {
                 warn!(
@@ -359,6 +396,48 @@ fn receive_requests(
             ClientPacket::Request(
                 ClientRequest::CarveWorld { .. } | ClientRequest::WorldDesync { .. },
             ) => {}
+            ClientPacket::Request(ClientRequest::Undo {
+                request,
+                terrain,
+                redo,
+            }) => {
+                let (id, request) = (*request, Some(*request));
+                if !allow(&mut ledger, client, &limits) {
+                    stats.rejected += 1;
+                    reject(request, RejectReason::RateLimited, true);
+                    continue;
+                }
+                let Some(Ok((_, _, mut target))) = ids.get(terrain).map(|&e| terrains.get_mut(e))
+                else {
+                    stats.rejected += 1;
+                    reject(request, RejectReason::UnknownTerrain(*terrain), true);
+                    continue;
+                };
+                let order = ledger.terrains.entry(*terrain).or_default();
+                order.undo.seed(&target);
+                if let Err(reason) = order.undo.check(client, *redo, limits.undo) {
+                    stats.rejected += 1;
+                    reject(request, reason, true);
+                    continue;
+                }
+                // A request, not a change of the terrain's content yet.
+                let target = target.bypass_change_detection();
+                let undo = super::undo::order_undo(
+                    target,
+                    &mut order.next_seq,
+                    &mut order.undo,
+                    *terrain,
+                    *redo,
+                );
+                order.broadcast_undo(undo, &mut stats, &mut out);
+                out.write(ToClients {
+                    targets: SendTargets::Single(client),
+                    message: ServerPacket::UndoResult {
+                        request: id,
+                        outcome: Outcome::Applied { seq: undo.seq },
+                    },
+                });
+            }
             ClientPacket::Request(ClientRequest::Carve {
                 request,
                 terrain,
@@ -368,43 +447,52 @@ fn receive_requests(
                 let request = Some(*request);
                 if !allow(&mut ledger, client, &limits) {
                     stats.rejected += 1;
-                    reject(request, RejectReason::RateLimited);
+                    reject(request, RejectReason::RateLimited, false);
                     continue;
                 }
-                let Some(&(entity, target)) = ids.get(terrain) else {
+                let Some(Ok((_, _, mut target))) = ids.get(terrain).map(|&e| terrains.get_mut(e))
+                else {
                     stats.rejected += 1;
-                    reject(request, RejectReason::UnknownTerrain(*terrain));
+                    reject(request, RejectReason::UnknownTerrain(*terrain), false);
                     continue;
                 };
-                let tool = match validate(tool, *edit, target, &limits) {
+                let tool = match validate(tool, *edit, &target, &limits) {
                     Ok(tool) => tool,
                     Err(reason) => {
                         stats.rejected += 1;
-                        reject(request, reason);
+                        reject(request, reason, false);
                         continue;
                     }
                 };
                 let order = ledger.terrains.entry(*terrain).or_default();
+                order.undo.seed(&target);
                 let base = target.last_request().unwrap_or(0);
                 order.next_seq = order.next_seq.max(base) + 1;
                 let seq = order.next_seq;
+                order.undo.carve(seq, client, target.max_undo());
                 let carve = NetCarve {
                     terrain: *terrain,
                     seq,
                     tool: tool.clone(),
                     edit: *edit,
                 };
-                order.log.insert(seq, carve.clone());
+                let packet = ServerPacket::Carve(carve);
+                order.log.insert(seq, packet.clone());
                 if let Some(request) = request {
                     order.pending.insert(seq, (client, request));
                 }
-                carves.write(GridCarve {
-                    terrain: entity,
+                // Queued at once, as a grid carve with its number would be
+                // (its labels are checked): in the order it is numbered,
+                // among the undos (module `super::undo`). A request, not a
+                // change of the terrain's content yet.
+                let queue = &mut target.bypass_change_detection().runtime.queue;
+                queue.push_back(Job::Carve {
                     tool,
                     edit: *edit,
-                    request: seq,
+                    requested: Instant::now(),
+                    request: Some(seq),
+                    predicted: None,
                 });
-                let packet = ServerPacket::Carve(carve);
                 stats.accepted += 1;
                 stats.carve_bytes += postcard::to_allocvec(&packet).map_or(0, |b| b.len() as u64);
                 out.write(ToClients {
@@ -450,6 +538,7 @@ fn report_results(
             continue;
         };
         let order = ledger.terrains.entry(id.0).or_default();
+        order.undo.refused(seq);
         if let Some((client, request)) = order.pending.remove(&seq) {
             stats.rejected += 1;
             let reason = RejectReason::Invalid(report.error.to_string());
@@ -523,7 +612,7 @@ fn send_snapshots(
                     pose,
                 })
                 .collect();
-        let log: Vec<NetCarve> = ledger
+        let log: Vec<ServerPacket> = ledger
             .terrains
             .get(&id.0)
             .map(|order| order.log.range(seq + 1..).map(|(_, c)| c.clone()).collect())
@@ -540,10 +629,10 @@ fn send_snapshots(
                     message: ServerPacket::Snapshot(part.clone()),
                 });
             }
-            for carve in log {
+            for op in log {
                 out.write(ToClients {
                     targets: SendTargets::Single(client),
-                    message: ServerPacket::Carve(carve.clone()),
+                    message: op.clone(),
                 });
             }
         }

@@ -80,6 +80,7 @@ pub struct GridCarve {
 /// Undo the last carve of a terrain. For a world carve over several chunks
 /// of a [`super::TerrainWorld`], send [`super::WorldUndo`] instead: it
 /// undoes the carve in every chunk at once, with its debris across borders.
+/// On a replicated terrain (feature `net`), see [`RedoCarve`].
 #[derive(Message, Reflect, Clone, Copy, Debug)]
 pub struct UndoCarve {
     /// The terrain entity.
@@ -105,12 +106,11 @@ pub struct UndoCarve {
 /// [`DebrisDetached`](super::DebrisDetached); its
 /// [`CarveApplied::volume_change`] counts the piece in what it took out.
 ///
-/// On a replicated terrain (`NetTerrain`, feature `net`) a redo is what an
-/// undo is there: nothing refuses it, and it is not replicated. On a
-/// client it changes the local octree only, so the hash check of the next
-/// replicated carve finds the client out of step and it asks for a
-/// snapshot (`Desynced`); on the server, the clients' next hash check
-/// does the same, and the snapshot carries the redo to them. A
+/// On a replicated terrain (`NetTerrain`, feature `net`) undos and redos
+/// are ops of the terrain's network order, like its carves (module
+/// `bevy_chisel::net::undo`): the server's go to every client, which
+/// applies them exactly; a client's are requests the server allows or
+/// refuses (`NetLimits::undo`), answered by a `NetUndoResult`. A
 /// [`super::WorldUndo`] is redone with [`super::WorldRedo`], not with
 /// this. A chunk of a world keeps its redo steps when it streams out and
 /// back in unchanged (`world::redo`, "Streaming").

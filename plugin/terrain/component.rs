@@ -39,6 +39,10 @@ pub(crate) struct UndoStep {
     /// The number of the networked client's prediction this carve was
     /// (`None` for any other carve).
     pub(crate) predicted: Option<u64>,
+    /// A prediction's carve: the redo steps it cleared, back when it is
+    /// taken back, so that a roll back leaves the redo steps as they were
+    /// (empty for any other carve).
+    pub(crate) redo: Vec<RedoStep>,
 }
 
 /// The state after one undone carve, kept for redo: the octree the undo
@@ -286,7 +290,8 @@ impl Terrain {
 
     /// The request id of the latest tracked carve ([`super::GridCarve`])
     /// the octree includes, whether the kernel applied or refused it
-    /// (`None` before the first). A snapshot taken now ([`Terrain::to_bytes`])
+    /// (`None` before the first); on a replicated terrain (feature `net`),
+    /// of the latest op of its network order, carve or undo. A snapshot taken now ([`Terrain::to_bytes`])
     /// holds exactly the tracked carves up to this one.
     #[must_use]
     pub fn last_request(&self) -> Option<u64> {
@@ -424,7 +429,7 @@ impl Terrain {
     /// # Errors
     /// [`TerrainError::NothingToUndo`].
     pub fn undo_now(&mut self) -> Result<Vec<CellKey>, TerrainError> {
-        self.undo_now_from().map(|(_, keys)| keys)
+        self.undo_now_from(false).map(|(_, keys)| keys)
     }
 
     /// The prediction number of the last undo step (`None` when that step
@@ -440,18 +445,23 @@ impl Terrain {
     }
 
     /// [`Terrain::undo_now`], also handing back the octree it undid. The
-    /// undone carve becomes the next one to redo; a networked client's
-    /// prediction taken back leaves nothing to redo.
-    pub(crate) fn undo_now_from(&mut self) -> Result<(Octree, Vec<CellKey>), TerrainError> {
+    /// undone carve becomes the next one to redo, but for a networked
+    /// client's roll back (`rollback`: the step is the prediction's own,
+    /// taken back), which leaves the redo steps as they were before the
+    /// prediction.
+    pub(crate) fn undo_now_from(
+        &mut self,
+        rollback: bool,
+    ) -> Result<(Octree, Vec<CellKey>), TerrainError> {
         let step = self.history.pop_back().ok_or(TerrainError::NothingToUndo)?;
         let entry = self.journal.pop();
         let undone = std::mem::replace(&mut self.octree, step.before);
         let keys = changed_keys(&step.changes);
         self.hash.update(&self.octree, &keys);
-        if step.predicted.is_some() {
-            // A prediction rolled back is not redone: the server's carves
-            // follow.
-            self.redo.clear();
+        if rollback {
+            // A prediction rolled back is not redone (the server's carves
+            // follow); the redo steps it cleared are back.
+            self.redo = step.redo;
         } else {
             self.redo.push(RedoStep {
                 after: undone.clone(),
@@ -488,7 +498,7 @@ impl Terrain {
         if let Some(entry) = step.entry {
             self.journal.push(entry);
         }
-        self.push_undo(before.clone(), step.changes, None);
+        self.push_undo(before.clone(), step.changes, None, Vec::new());
         Ok((before, keys, edit))
     }
 
@@ -504,18 +514,30 @@ impl Terrain {
         predicted: Option<u64>,
     ) {
         self.journal.push(JournalEntry { tool, edit });
-        self.redo.clear();
-        self.push_undo(before, changes, predicted);
+        let cleared = std::mem::take(&mut self.redo);
+        let stashed = if predicted.is_some() {
+            cleared
+        } else {
+            Vec::new()
+        };
+        self.push_undo(before, changes, predicted, stashed);
     }
 
-    /// Keeps an undo step (of prediction `predicted`, if any), within the
-    /// depth limit.
-    fn push_undo(&mut self, before: Octree, changes: Changes, predicted: Option<u64>) {
+    /// Keeps an undo step (of prediction `predicted`, if any, with the
+    /// redo steps it cleared), within the depth limit.
+    fn push_undo(
+        &mut self,
+        before: Octree,
+        changes: Changes,
+        predicted: Option<u64>,
+        redo: Vec<RedoStep>,
+    ) {
         if self.max_undo > 0 {
             self.history.push_back(UndoStep {
                 before,
                 changes,
                 predicted,
+                redo,
             });
             while self.history.len() > self.max_undo {
                 self.history.pop_front();
@@ -598,8 +620,15 @@ mod tests {
         assert_eq!((plain.octree.to_bytes(), plain.state_hash()), after);
         // A prediction taken back is not.
         let mut predicted = carved(Some(7));
-        predicted.undo_now().expect("undoes");
+        predicted.undo_now_from(true).expect("undoes");
         assert_eq!(predicted.redo_depth(), 0);
         assert_eq!(predicted.redo_now(), Err(TerrainError::NothingToRedo));
+        // A prediction confirmed and then undone in the server's order is
+        // redone like any carve.
+        let mut confirmed = carved(Some(8));
+        confirmed.undo_now().expect("undoes");
+        assert_eq!(confirmed.redo_depth(), 1);
+        confirmed.redo_now().expect("redoes");
+        assert_eq!((confirmed.octree.to_bytes(), confirmed.state_hash()), after);
     }
 }

@@ -208,6 +208,7 @@ impl Terrain {
                 before,
                 changes,
                 predicted: None,
+                redo: Vec::new(),
             })
             .collect();
         Ok(Terrain {

@@ -101,6 +101,10 @@ pub(crate) enum Job {
     },
     Undo {
         requested: Instant,
+        /// A replicated undo's place in its terrain's order (`net`):
+        /// [`Terrain::last_request`](super::Terrain::last_request) moves
+        /// to it whether it applies or not; `None` for an untracked undo.
+        request: Option<u64>,
         /// Undo only the step of this prediction, if it is the last
         /// step (a prediction the kernel refused left none); `None`:
         /// the last step, whatever it is.
@@ -108,13 +112,13 @@ pub(crate) enum Job {
     },
     Redo {
         requested: Instant,
+        /// As [`Job::Undo`]'s `request`.
+        request: Option<u64>,
     },
     /// Holds the queue until the world's undo or redo whose hold is
     /// `hold` is carried out in every chunk it changes (`world::undo`,
     /// `world::redo`): the jobs behind it were asked for after it.
-    HoldForWorldUndo {
-        hold: u64,
-    },
+    HoldForWorldUndo { hold: u64 },
     /// Seal the cells again at new outside points (the wall points of
     /// neighbouring chunks on the cube's sides), and shade them again with
     /// new outside wedges (those chunks' surface around the points).
@@ -277,6 +281,8 @@ pub(crate) enum StepOutcome {
         /// (`None` when not measured).
         volume_change: Option<BTreeMap<Label, f64>>,
         requested: Instant,
+        /// The replicated undo's place in its terrain's order (`net`).
+        request: Option<u64>,
         /// The prediction it took back (`None` for a plain undo).
         predicted: Option<u64>,
     },
@@ -457,7 +463,8 @@ pub(crate) fn carve_batch(
 
 /// The step of an undo (or of a redo, `redone`) that turned `before`
 /// into `after`, changing the cells `keys` (taking back prediction
-/// `predicted`, if any).
+/// `predicted`, if any; replicated as `request`, if any).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn undone_step(
     before: &Octree,
     after: &Octree,
@@ -465,6 +472,7 @@ pub(crate) fn undone_step(
     context: &JobContext,
     requested: Instant,
     redone: Option<Option<Edit>>,
+    request: Option<u64>,
     predicted: Option<u64>,
 ) -> StepOutcome {
     let changes = Changes {
@@ -480,6 +488,7 @@ pub(crate) fn undone_step(
                 .to_world_volumes(changes.volume_change(before, after))
         }),
         requested,
+        request,
         predicted,
     }
 }

@@ -40,7 +40,7 @@ pub fn read_requests(
     mut carves: MessageReader<Carve>,
     mut undos: MessageReader<UndoCarve>,
     mut redos: MessageReader<RedoCarve>,
-    mut terrains: Query<&mut Terrain>,
+    mut terrains: Query<(&mut Terrain, Has<UndoRouted>)>,
     mut rejected: MessageWriter<CarveRejected>,
 ) {
     let now = Instant::now();
@@ -49,7 +49,7 @@ pub fn read_requests(
         let queued = terrains
             .get_mut(carve.terrain)
             .map_err(|_| TerrainError::NoSuchTerrain)
-            .and_then(|mut terrain| {
+            .and_then(|(mut terrain, _)| {
                 terrain.check_label(carve.edit)?;
                 // A request, not a change of the terrain's content yet.
                 let runtime = &mut terrain.bypass_change_detection().runtime;
@@ -72,7 +72,7 @@ pub fn read_requests(
         }
     }
     for carve in carves.read() {
-        let Ok(mut terrain) = terrains.get_mut(carve.terrain) else {
+        let Ok((mut terrain, _)) = terrains.get_mut(carve.terrain) else {
             rejected.write(CarveRejected {
                 terrain: carve.terrain,
                 request: None,
@@ -108,16 +108,26 @@ pub fn read_requests(
     let undos = undos.read().map(|u| {
         let job = Job::Undo {
             requested: now,
+            request: None,
             predicted: None,
         };
         (u.terrain, job)
     });
-    let redos = redos
-        .read()
-        .map(|r| (r.terrain, Job::Redo { requested: now }));
+    let redos = redos.read().map(|r| {
+        let job = Job::Redo {
+            requested: now,
+            request: None,
+        };
+        (r.terrain, job)
+    });
     for (entity, job) in undos.chain(redos) {
         match terrains.get_mut(entity) {
-            Ok(mut terrain) => (terrain.bypass_change_detection().runtime.queue).push_back(job),
+            // A replicated terrain's undos go through its network order
+            // (`crate::net`), which queues them itself.
+            Ok((_, true)) => {}
+            Ok((mut terrain, false)) => {
+                (terrain.bypass_change_detection().runtime.queue).push_back(job);
+            }
             Err(_) => {
                 rejected.write(CarveRejected {
                     terrain: entity,
@@ -129,6 +139,12 @@ pub fn read_requests(
         }
     }
 }
+
+/// Marks a terrain whose [`UndoCarve`]s and [`RedoCarve`]s another part
+/// of the plugin takes in and queues (a replicated terrain, feature
+/// `net`): [`read_requests`] leaves them alone.
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct UndoRouted;
 
 /// Starts the next job of every terrain that has none running.
 pub fn start_jobs(
@@ -281,12 +297,23 @@ fn start_next(
         }) if terrain.top_prediction() != Some(prediction) => {
             // The kernel refused that prediction: it left no step to undo.
         }
-        Some(job @ (Job::Undo { requested, .. } | Job::Redo { requested })) => {
+        Some(
+            job @ (Job::Undo {
+                requested, request, ..
+            }
+            | Job::Redo { requested, request }),
+        ) => {
             let (redo, predicted) = match job {
                 Job::Undo { predicted, .. } => (false, predicted),
                 _ => (true, None),
             };
-            match undo_or_redo(terrain, redo) {
+            let outcome = undo_or_redo(terrain, redo, predicted.is_some());
+            if request.is_some() {
+                // A replicated undo is in the octree now (or refused):
+                // the terrain holds its terrain's order up to it.
+                terrain.last_request = request;
+            }
+            match outcome {
                 Ok((before, keys, redone)) => {
                     let octree = terrain.octree.clone();
                     let mesher = std::mem::take(&mut terrain.runtime.mesher);
@@ -294,7 +321,8 @@ fn start_next(
                     terrain.runtime.task = Some(spawn_in_order(order, async move {
                         on_pool(pool, || {
                             let step = undone_step(
-                                &before, &octree, &keys, &context, requested, redone, predicted,
+                                &before, &octree, &keys, &context, requested, redone, request,
+                                predicted,
                             );
                             remesh(
                                 octree,
@@ -312,10 +340,11 @@ fn start_next(
                 Err(error) => {
                     rejected.write(CarveRejected {
                         terrain: entity,
-                        request: None,
+                        request,
                         predicted: None,
                         error,
                     });
+                    return request.is_some();
                 }
             }
         }
@@ -403,11 +432,16 @@ fn start_next(
 /// The octree before, the cells changed and (for a redo) the edit redone.
 type UndoneNow = (Octree, Vec<CellKey>, Option<Option<Edit>>);
 
-/// Applies an undo (or a redo) to `terrain` at once.
-fn undo_or_redo(terrain: &mut Terrain, redo: bool) -> Result<UndoneNow, TerrainError> {
+/// Applies an undo (or a redo) to `terrain` at once (an undo that rolls
+/// a prediction back: `rollback`).
+fn undo_or_redo(
+    terrain: &mut Terrain,
+    redo: bool,
+    rollback: bool,
+) -> Result<UndoneNow, TerrainError> {
     if redo {
         (terrain.redo_now_from()).map(|(before, keys, edit)| (before, keys, Some(edit)))
     } else {
-        (terrain.undo_now_from()).map(|(before, keys)| (before, keys, None))
+        (terrain.undo_now_from(rollback)).map(|(before, keys)| (before, keys, None))
     }
 }

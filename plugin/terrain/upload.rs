@@ -146,6 +146,7 @@ fn finish_job(
                 cells,
                 volume_change,
                 requested,
+                request,
                 predicted,
             } => {
                 let hash = terrain.hash.value();
@@ -153,7 +154,7 @@ fn finish_job(
                 let undone = report(
                     edit,
                     redo,
-                    None,
+                    request,
                     predicted,
                     hash,
                     cells,

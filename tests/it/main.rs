@@ -132,6 +132,8 @@ mod net_predict;
 #[cfg(feature = "net")]
 mod net_replication;
 #[cfg(feature = "net")]
+mod net_undo;
+#[cfg(feature = "net")]
 mod net_world;
 #[cfg(feature = "net")]
 mod net_world_debris;

@@ -94,6 +94,18 @@ pub enum ClientRequest {
         /// The client's hash of the chunk there.
         hash: u64,
     },
+    /// Undo the terrain's last undoable carve (`redo: false`), or redo
+    /// its last undone one (`redo: true`), if the server's
+    /// [`super::UndoPolicy`] lets this client; answered by
+    /// [`ServerPacket::UndoResult`] with the same request id.
+    Undo {
+        /// Chosen by the client.
+        request: u64,
+        /// The terrain.
+        terrain: TerrainId,
+        /// A redo rather than an undo.
+        redo: bool,
+    },
 }
 
 /// A client packet as the server received it.
@@ -175,6 +187,19 @@ pub struct NetCarve {
     pub edit: Edit,
 }
 
+/// An accepted undo (or redo) of a terrain, in its order of carves:
+/// every peer undoes (or redoes) its last carve (or undo) there, exactly
+/// as the server did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NetUndo {
+    /// The terrain.
+    pub terrain: TerrainId,
+    /// Its place in the terrain's order, shared with the carves.
+    pub seq: u64,
+    /// A redo rather than an undo.
+    pub redo: bool,
+}
+
 /// Why the server refused a request.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
 pub enum RejectReason {
@@ -232,6 +257,24 @@ pub enum RejectReason {
     /// answered locally, never by a server.
     #[error("not connected yet; the request was not sent")]
     NotConnected,
+    /// An undo with no carve left to undo on the terrain (variants are
+    /// only ever appended).
+    #[error("nothing to undo")]
+    NothingToUndo,
+    /// A redo with no undo left to redo on the terrain.
+    #[error("nothing to redo")]
+    NothingToRedo,
+    /// The carve the undo (or redo) would take back (or put back) is not
+    /// the client's own ([`super::UndoPolicy::OwnLatest`]).
+    #[error("carve {seq} is not yours to undo or redo")]
+    NotYourCarve {
+        /// The carve's place in the terrain's order (0: one ordered
+        /// before the server kept track).
+        seq: u64,
+    },
+    /// The server lets no client undo ([`super::UndoPolicy::Nobody`]).
+    #[error("the server lets no client undo or redo")]
+    UndoForbidden,
 }
 
 /// What became of a request.
@@ -456,6 +499,16 @@ pub enum ServerPacket {
     WorldSnapshot(WorldSnapshotPart),
     /// A detach across chunk borders in a world's order, to every client.
     WorldDetach(NetWorldDetach),
+    /// An accepted undo or redo in a terrain's order, to every client.
+    Undo(NetUndo),
+    /// The answer to one client's [`ClientRequest::Undo`].
+    UndoResult {
+        /// The client's request id.
+        request: u64,
+        /// What became of it: [`Outcome::Applied`] names the undo's place
+        /// in its terrain's order.
+        outcome: Outcome,
+    },
 }
 
 /// Registers the messages, in the same order on every peer.
@@ -579,6 +632,51 @@ mod tests {
         lying.pop();
         lying.extend_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF, 0x0F]);
         assert!(decode(&lying).is_err(), "a lying length");
+    }
+
+    /// The undo messages come after the older variants (postcard writes
+    /// the variant index first), so older encodings keep their meaning;
+    /// a truncated or unknown request is malformed, not a panic.
+    #[test]
+    fn undo_messages_are_appended_and_hostile_bytes_refused() {
+        let undo = ServerPacket::Undo(NetUndo {
+            terrain: 1,
+            seq: 2,
+            redo: true,
+        });
+        let bytes = postcard::to_allocvec(&undo).unwrap();
+        assert_eq!(bytes, [8, 1, 2, 1]);
+        assert_eq!(postcard::from_bytes::<ServerPacket>(&bytes).unwrap(), undo);
+        let answer = ServerPacket::UndoResult {
+            request: 3,
+            outcome: Outcome::Rejected(RejectReason::NotYourCarve { seq: 4 }),
+        };
+        let bytes = postcard::to_allocvec(&answer).unwrap();
+        assert_eq!(bytes, [9, 3, 1, 12, 4]);
+        assert_eq!(
+            postcard::from_bytes::<ServerPacket>(&bytes).unwrap(),
+            answer
+        );
+        let request = ClientRequest::Undo {
+            request: 5,
+            terrain: 6,
+            redo: false,
+        };
+        let bytes = postcard::to_allocvec(&request).unwrap();
+        assert_eq!(bytes, [4, 5, 6, 0]);
+        assert_eq!(
+            client_packet_from_bytes(&bytes),
+            ClientPacket::Request(request)
+        );
+        for hostile in [&bytes[..3], &[4, 5, 6, 2], &[5, 0]] {
+            assert!(
+                matches!(
+                    client_packet_from_bytes(hostile),
+                    ClientPacket::Malformed { .. }
+                ),
+                "{hostile:?}"
+            );
+        }
     }
 
     #[test]
