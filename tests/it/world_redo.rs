@@ -12,12 +12,12 @@ use std::collections::BTreeMap;
 use bevy::prelude::*;
 use bevy_chisel::bsp::octree::{Edit, StateHash};
 use bevy_chisel::terrain::{
-    Carve, CarveTool, ChunkCoord, RedoCarve, TerrainWorld, UndoCarve, WorldCarve, WorldRedo,
-    WorldRedoRefusal, WorldRedoRejected, WorldRedone, WorldUndo, WorldUndone,
+    Carve, CarveTool, ChunkCoord, RedoCarve, TerrainWorld, UndoCarve, WorldRedo, WorldRedoRefusal,
+    WorldRedoRejected, WorldRedone, WorldUndo, WorldUndone,
 };
 
 use super::terrain_world::{app_with, settle, the_world, world as new_world};
-use super::world_undo::{CUT, PILLAR, SLAB, at, chunk, cuboid, debris, sphere};
+use super::world_undo::{CUT, PILLAR, SLAB, at, carve, chunk, cuboid, debris, sphere, undo};
 
 /// What the undo and redo messages said so far.
 #[derive(Resource, Default)]
@@ -48,17 +48,6 @@ fn redo_app(world: TerrainWorld, focus: Vec3) -> (App, Entity, Entity) {
 
 fn heard(app: &App) -> &Heard {
     app.world().resource::<Heard>()
-}
-
-fn carve(app: &mut App, world: Entity, tool: CarveTool, edit: Edit) {
-    app.world_mut()
-        .write_message(WorldCarve { world, tool, edit });
-    settle(app, world);
-}
-
-fn undo(app: &mut App, world: Entity) {
-    app.world_mut().write_message(WorldUndo { world });
-    settle(app, world);
 }
 
 fn redo(app: &mut App, world: Entity) {

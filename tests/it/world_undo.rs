@@ -69,13 +69,15 @@ fn heard(app: &App) -> &Heard {
     app.world().resource::<Heard>()
 }
 
-fn carve(app: &mut App, world: Entity, tool: CarveTool, edit: Edit) {
+/// Carves the world and runs frames until it settles.
+pub(super) fn carve(app: &mut App, world: Entity, tool: CarveTool, edit: Edit) {
     app.world_mut()
         .write_message(WorldCarve { world, tool, edit });
     settle(app, world);
 }
 
-fn undo(app: &mut App, world: Entity) {
+/// Undoes the world's last carve and runs frames until it settles.
+pub(super) fn undo(app: &mut App, world: Entity) {
     app.world_mut().write_message(WorldUndo { world });
     settle(app, world);
 }
